@@ -1,1 +1,43 @@
-"""handsynth.db"""
+"""Features and pose databases of the back-of-hand camera estimator (SPEC.md section 1).
+
+Features (identical for database renders and live frames):
+
+* :func:`contour` -- inner boundary of the 64x64 silhouette;
+* :func:`hlac` -- 25 HLAC masks (Otsu & Kurita 1988) per 8x8 block, 1600 uint8;
+* :func:`hilditch_thinning` -- ridge lines (Hilditch 1969);
+* :func:`pack_mask` / :func:`count_outside` -- bit-packed masks for the
+  P1/P2 pixel counts of the two-stage search;
+* :func:`extract_features` / :func:`extract_features_batch` -- all of them.
+"""
+
+from ._bits import (
+    complement_bits,
+    count_outside,
+    count_outside_batch,
+    pack_mask,
+    popcount_bits,
+    unpack_mask,
+)
+from ._contour import contour
+from ._features import Features, extract_features, extract_features_batch
+from ._hlac import HLAC_PATTERNS, HLAC_SIZE, hlac
+from ._thinning import hilditch_thinning
+from ._validation import IMAGE_SIZE
+
+__all__ = [
+    "IMAGE_SIZE",
+    "HLAC_PATTERNS",
+    "HLAC_SIZE",
+    "contour",
+    "hlac",
+    "hilditch_thinning",
+    "pack_mask",
+    "unpack_mask",
+    "complement_bits",
+    "popcount_bits",
+    "count_outside",
+    "count_outside_batch",
+    "Features",
+    "extract_features",
+    "extract_features_batch",
+]
