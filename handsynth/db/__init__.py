@@ -8,6 +8,9 @@ Features (identical for database renders and live frames):
 * :func:`pack_mask` / :func:`count_outside` -- bit-packed masks for the
   P1/P2 pixel counts of the two-stage search;
 * :func:`extract_features` / :func:`extract_features_batch` -- all of them.
+
+Databases (one HDF5 file per hand shape): :func:`write_database`,
+:func:`open_database`, :func:`verify`, :class:`Database`.
 """
 
 from ._bits import (
@@ -21,6 +24,14 @@ from ._bits import (
 from ._contour import contour
 from ._features import Features, extract_features, extract_features_batch
 from ._hlac import HLAC_PATTERNS, HLAC_SIZE, hlac
+from ._store import (
+    FORMAT_VERSION,
+    KEYPOINT_SCALE_M,
+    Database,
+    open_database,
+    verify,
+    write_database,
+)
 from ._thinning import hilditch_thinning
 from ._validation import IMAGE_SIZE
 
@@ -40,4 +51,10 @@ __all__ = [
     "Features",
     "extract_features",
     "extract_features_batch",
+    "FORMAT_VERSION",
+    "KEYPOINT_SCALE_M",
+    "Database",
+    "write_database",
+    "open_database",
+    "verify",
 ]

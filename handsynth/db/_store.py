@@ -1,0 +1,544 @@
+"""Pose database files: one HDF5 file per hand shape (SPEC.md section 1, "Database").
+
+Layout (format version 1)
+-------------------------
+Datasets, all with ``N`` rows (one per rendered pose), gzip level 4, the
+multi-byte ones byte-shuffled, chunks of at most 1 MiB:
+
+============== ============== ====== ==============================================
+name           shape          dtype  content
+============== ============== ====== ==============================================
+``angles``     (N, 20)        <f4    joint angles in degrees, order ``JOINT_NAMES``
+``hlac``       (N, 1600)      u1     block HLAC of the contour (:func:`hlac`)
+``sil_bits``   (N, 64)        <u8    packed silhouette, pixel (r, c) = bit c of word r
+``ridge_bits`` (N, 64)        <u8    packed Hilditch ridge lines, same bit order
+``ridge_area`` (N,)           <u2    number of ridge pixels
+``keypoints``  (N, 21, 3)     <i2    21 hand keypoints in the hand frame, units of
+                                     :data:`KEYPOINT_SCALE_M` (10 micrometres)
+============== ============== ====== ==============================================
+
+Keypoints are stored as int16 multiples of 10 um (range +/-327.67 mm, error at
+most 5 um) instead of float32 metres so that a 20,448-entry database stays
+under 60 MB in memory: 20,448 x 2,832 bytes = 57.9 MB (float32 would need
+60.5 MB).  :meth:`Database.keypoints_m` converts to float32 metres.
+
+Root attributes: ``format`` (``"handsynth.pose_database"``), ``format_version``,
+``n_entries``, ``meta`` (the caller's metadata as canonical JSON: sorted keys,
+no spaces), ``checksum`` (``"sha256:<hex>"``) and, written last, ``complete``.
+
+The checksum is SHA-256 over, in this order: the format name and version,
+then for each dataset in the table order its name, dtype, shape and raw
+C-order little-endian bytes, then the canonical metadata JSON.  It covers the
+uncompressed content, so it does not depend on the HDF5 filters.
+
+Writes are atomic and deterministic: the file is written to
+``<name>.tmp-<pid>`` in the same folder with fixed HDF5 options (no
+timestamps, fixed library version bounds, fixed dataset order), fsynced, then
+renamed with :func:`os.replace`.  Identical inputs give identical bytes.
+Files whose name contains ``.tmp-`` are never opened.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from ..errors import (
+    DatabaseCorruptError,
+    DatabaseError,
+    DatabaseMismatchError,
+    InvalidInputError,
+)
+from ..models import JOINT_NAMES
+from ._hlac import HLAC_SIZE
+from ._validation import IMAGE_SIZE
+
+__all__ = [
+    "FORMAT_VERSION",
+    "KEYPOINT_SCALE_M",
+    "Database",
+    "write_database",
+    "open_database",
+    "verify",
+]
+
+#: Version of the file layout described in this module.
+FORMAT_VERSION: int = 1
+#: Size in metres of one unit of the stored int16 keypoints (10 um).
+KEYPOINT_SCALE_M: float = 1e-5
+N_KEYPOINTS: int = 21
+
+_FORMAT_NAME = "handsynth.pose_database"
+_TMP_MARK = ".tmp-"
+_TMP_RE = re.compile(r"\.tmp-\d*$")
+_CHUNK_BYTES = 1 << 20
+_GZIP_LEVEL = 4
+_MAX_META_BYTES = 60_000  # HDF5 compact attribute storage holds < 64 KiB
+_KEYPOINT_LIMIT = np.iinfo(np.int16).max
+
+# name, per-entry shape, on-disk dtype, units/description attribute
+_DATASETS: tuple[tuple[str, tuple[int, ...], str, str], ...] = (
+    ("angles", (len(JOINT_NAMES),), "<f4", "degree; columns in handsynth JOINT_NAMES order"),
+    ("hlac", (HLAC_SIZE,), "|u1", "count; (block_row*8 + block_col)*25 + pattern"),
+    ("sil_bits", (IMAGE_SIZE,), "<u8", "packed mask; pixel (r, c) = bit c (LSB first) of word r"),
+    ("ridge_bits", (IMAGE_SIZE,), "<u8", "packed mask; pixel (r, c) = bit c (LSB first) of word r"),
+    ("ridge_area", (), "<u2", "pixel count of ridge_bits"),
+    ("keypoints", (N_KEYPOINTS, 3), "<i2", "1e-5 metre; hand frame"),
+)
+_NATIVE = {"<f4": np.float32, "|u1": np.uint8, "<u8": np.uint64, "<u2": np.uint16, "<i2": np.int16}
+
+
+@dataclass(frozen=True, eq=False)
+class Database:
+    """A pose database loaded fully into memory; all arrays are read-only.
+
+    Attributes
+    ----------
+    path : pathlib.Path
+        File it was read from.
+    meta : dict
+        The metadata passed to :func:`write_database` (after a JSON round trip).
+    angles : ndarray of float32, shape (N, 20)
+        Joint angles in degrees, canonical ``JOINT_NAMES`` order.
+    hlac : ndarray of uint8, shape (N, 1600)
+        Block HLAC vectors.
+    sil_bits, ridge_bits : ndarray of uint64, shape (N, 64)
+        Packed silhouettes and ridge lines (bit ``c`` of word ``r`` = pixel (r, c)).
+    ridge_area : ndarray of uint16, shape (N,)
+        Ridge pixel counts.
+    keypoints_raw : ndarray of int16, shape (N, 21, 3)
+        Keypoints in the hand frame in units of :data:`KEYPOINT_SCALE_M`.
+    """
+
+    path: Path
+    meta: dict
+    angles: np.ndarray
+    hlac: np.ndarray
+    sil_bits: np.ndarray
+    ridge_bits: np.ndarray
+    ridge_area: np.ndarray
+    keypoints_raw: np.ndarray
+
+    def __len__(self) -> int:
+        return self.angles.shape[0]
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes held by the arrays."""
+        return sum(getattr(self, name if name != "keypoints" else "keypoints_raw").nbytes
+                   for name, *_ in _DATASETS)
+
+    def keypoints_m(self, index=slice(None)) -> np.ndarray:
+        """Keypoints of entries `index` in metres.
+
+        Parameters
+        ----------
+        index : int, slice or array_like of int, optional
+            Entries to convert (default all).
+
+        Returns
+        -------
+        ndarray of float32, shape (21, 3) or (M, 21, 3)
+            Hand-frame coordinates in metres (resolution 10 um).
+        """
+        return self.keypoints_raw[index].astype(np.float32) * np.float32(KEYPOINT_SCALE_M)
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def _canonical_json(value, name: str) -> str:
+    try:
+        return json.dumps(value, sort_keys=True, separators=(",", ":"),
+                          ensure_ascii=False, allow_nan=False)
+    except (TypeError, ValueError) as exc:
+        raise InvalidInputError(f"{name} must be JSON-serialisable without NaN/inf: {exc}") from None
+
+
+def _is_tmp_name(path: Path) -> bool:
+    return _TMP_MARK in path.name
+
+
+def _rows_per_chunk(n: int, row_shape: tuple[int, ...], dtype: str) -> int:
+    row_bytes = int(np.prod(row_shape, dtype=np.int64)) * np.dtype(dtype).itemsize
+    return max(1, min(n, _CHUNK_BYTES // row_bytes))
+
+
+def _hash_header(hasher) -> None:
+    hasher.update(f"{_FORMAT_NAME}\0{FORMAT_VERSION}\0".encode())
+
+
+def _hash_dataset_header(hasher, name: str, dtype: str, shape: tuple[int, ...]) -> None:
+    hasher.update(f"{name}\0{np.dtype(dtype).str}\0{shape}\0".encode())
+
+
+def _hash_meta(hasher, meta_json: str) -> None:
+    hasher.update(b"meta\0" + meta_json.encode("utf-8"))
+
+
+# --------------------------------------------------------------------------- writing
+
+
+def _as_rows(value, name: str, n: int | None, row_shape: tuple[int, ...]) -> np.ndarray:
+    arr = np.asarray(value)
+    expected = ("N",) + row_shape if n is None else (n,) + row_shape
+    if arr.ndim != 1 + len(row_shape) or arr.shape[1:] != row_shape or (n is not None and arr.shape[0] != n):
+        raise InvalidInputError(
+            f"{name} must have shape ({', '.join(map(str, expected))}), "
+            f"got array of shape {arr.shape} and dtype {arr.dtype}"
+        )
+    return arr
+
+
+def _check_int_range(arr: np.ndarray, name: str, lo: int, hi: int) -> None:
+    if arr.dtype.kind not in "iu":
+        raise InvalidInputError(f"{name} must be an integer array, got dtype {arr.dtype}")
+    if arr.size and (arr.min() < lo or arr.max() > hi):
+        bad = arr[(arr < lo) | (arr > hi)][0]
+        raise InvalidInputError(f"{name} must lie in [{lo}, {hi}], got {bad.item()}")
+
+
+def _prepare(angles, hlac, sil_bits, ridge_bits, ridge_area, keypoints) -> dict[str, np.ndarray]:
+    """Validate the arrays and convert them to their on-disk dtypes."""
+    ang = _as_rows(angles, "angles", None, (len(JOINT_NAMES),))
+    n = ang.shape[0]
+    if n == 0:
+        raise InvalidInputError("angles must hold at least one entry, got shape (0, 20)")
+    if ang.dtype.kind not in "iuf":
+        raise InvalidInputError(f"angles must be numbers (degrees), got dtype {ang.dtype}")
+    if not np.isfinite(ang).all():
+        i, j = (int(v) for v in np.argwhere(~np.isfinite(ang))[0])
+        raise InvalidInputError(f"angles must be finite, got {ang[i, j].item()} at index ({i}, {j})")
+    hl = _as_rows(hlac, "hlac", n, (HLAC_SIZE,))
+    _check_int_range(hl, "hlac", 0, 255)
+    bits = {}
+    for name, value in (("sil_bits", sil_bits), ("ridge_bits", ridge_bits)):
+        arr = _as_rows(value, name, n, (IMAGE_SIZE,))
+        if arr.dtype != np.uint64:
+            raise InvalidInputError(f"{name} must have dtype uint64, got {arr.dtype}")
+        bits[name] = arr
+    area = _as_rows(ridge_area, "ridge_area", n, ())
+    _check_int_range(area, "ridge_area", 0, IMAGE_SIZE * IMAGE_SIZE)
+    counted = np.bitwise_count(bits["ridge_bits"]).sum(axis=1, dtype=np.int64)
+    wrong = np.nonzero(counted != area)[0]
+    if wrong.size:
+        i = int(wrong[0])
+        raise InvalidInputError(
+            f"ridge_area[{i}] is {area[i].item()} but ridge_bits[{i}] has {counted[i]} pixels set"
+        )
+    kp = _as_rows(keypoints, "keypoints", n, (N_KEYPOINTS, 3))
+    if kp.dtype.kind not in "iuf" or not np.isfinite(kp).all():
+        raise InvalidInputError(
+            f"keypoints must be finite numbers (metres), got dtype {kp.dtype}"
+            + ("" if kp.dtype.kind not in "iuf" else " with non-finite values")
+        )
+    kp_q = np.rint(np.asarray(kp, dtype=np.float64) / KEYPOINT_SCALE_M)
+    if np.abs(kp_q).max() > _KEYPOINT_LIMIT:
+        raise InvalidInputError(
+            f"keypoints must lie within +/-{_KEYPOINT_LIMIT * KEYPOINT_SCALE_M:.5f} m of the hand "
+            f"frame origin, got {np.abs(kp).max():.5f} m"
+        )
+    values = {
+        "angles": ang, "hlac": hl, "sil_bits": bits["sil_bits"], "ridge_bits": bits["ridge_bits"],
+        "ridge_area": area, "keypoints": kp_q,
+    }
+    return {name: np.ascontiguousarray(values[name], dtype=dtype) for name, _, dtype, _ in _DATASETS}
+
+
+def _fsync_path(path: Path, *, directory: bool = False) -> None:
+    flags = os.O_RDONLY | (getattr(os, "O_DIRECTORY", 0) if directory else 0)
+    try:
+        fd = os.open(path, flags)
+    except OSError:
+        if directory:  # not every platform can open a folder
+            return
+        raise
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+def write_database(path, *, angles, hlac, sil_bits, ridge_bits, ridge_area, keypoints,
+                   meta: Mapping) -> Path:
+    """Write one hand shape's pose database, atomically and deterministically.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Final file name (conventionally ``*.h5``); its folder must exist.
+        Must not contain ``.tmp-``.
+    angles : array_like of float, shape (N, 20)
+        Joint angles in degrees, canonical ``JOINT_NAMES`` order; stored float32.
+    hlac : array_like of int, shape (N, 1600)
+        Block HLAC vectors, values 0..255; stored uint8.
+    sil_bits, ridge_bits : ndarray of uint64, shape (N, 64)
+        Packed silhouettes and ridge lines (:func:`pack_mask`).
+    ridge_area : array_like of int, shape (N,)
+        Ridge pixel counts; must equal the popcount of `ridge_bits`.
+    keypoints : array_like of float, shape (N, 21, 3)
+        Hand-frame keypoints in metres, within +/-0.32767 m; stored as int16
+        multiples of :data:`KEYPOINT_SCALE_M`.
+    meta : mapping
+        JSON-serialisable description of how the database was built (hand
+        shape ratios, camera mount, model and feature parameters, pose set
+        and seed, handsynth version...).  Read back by :func:`open_database`
+        and compared with its `expect`.
+
+    Returns
+    -------
+    pathlib.Path
+        `path`.
+
+    Raises
+    ------
+    InvalidInputError
+        An array with the wrong shape, dtype or range, or `meta` not JSON-able.
+    DatabaseError
+        The file could not be written (the temporary file is removed).
+    """
+    path = Path(path)
+    if _is_tmp_name(path):
+        raise InvalidInputError(f"path must not contain {_TMP_MARK!r}, got {str(path)!r}")
+    if not isinstance(meta, Mapping):
+        raise InvalidInputError(f"meta must be a mapping, got {type(meta).__name__}")
+    meta_json = _canonical_json(dict(meta), "meta")
+    if len(meta_json.encode("utf-8")) > _MAX_META_BYTES:
+        raise InvalidInputError(
+            f"meta must serialise to at most {_MAX_META_BYTES} bytes of JSON, "
+            f"got {len(meta_json.encode('utf-8'))}"
+        )
+    arrays = _prepare(angles, hlac, sil_bits, ridge_bits, ridge_area, keypoints)
+    n = arrays["angles"].shape[0]
+
+    hasher = hashlib.sha256()
+    _hash_header(hasher)
+    for name, _, dtype, _ in _DATASETS:
+        _hash_dataset_header(hasher, name, dtype, arrays[name].shape)
+        hasher.update(memoryview(arrays[name]).cast("B"))
+    _hash_meta(hasher, meta_json)
+    checksum = "sha256:" + hasher.hexdigest()
+
+    if not path.parent.is_dir():
+        raise DatabaseError(f"cannot write database {path}: folder {path.parent} does not exist")
+    tmp = path.with_name(f"{path.name}{_TMP_MARK}{os.getpid()}")
+    try:
+        with h5py.File(tmp, "w", libver=("earliest", "v110"), track_order=False) as f:
+            f.attrs["format"] = _FORMAT_NAME
+            f.attrs["format_version"] = np.int64(FORMAT_VERSION)
+            f.attrs["n_entries"] = np.int64(n)
+            f.attrs["meta"] = meta_json
+            for name, row_shape, dtype, units in _DATASETS:
+                data = arrays[name]
+                ds = f.create_dataset(
+                    name,
+                    data=data,
+                    chunks=(_rows_per_chunk(n, row_shape, dtype),) + row_shape,
+                    compression="gzip",
+                    compression_opts=_GZIP_LEVEL,
+                    shuffle=data.dtype.itemsize > 1,
+                    track_times=False,
+                )
+                ds.attrs["units"] = units
+            f["angles"].attrs["joint_names"] = json.dumps(list(JOINT_NAMES))
+            f.attrs["checksum"] = checksum
+            f.flush()
+            f.attrs["complete"] = True  # last: marks a finished write
+        _fsync_path(tmp)
+        os.replace(tmp, path)
+        _fsync_path(path.parent, directory=True)
+    except BaseException as exc:
+        tmp.unlink(missing_ok=True)
+        if isinstance(exc, OSError):
+            raise DatabaseError(f"cannot write database {path}: {exc}") from exc
+        raise
+    return path
+
+
+# --------------------------------------------------------------------------- reading
+
+
+def _first_difference(stored, expected, key: str):
+    """Return (key path, stored, expected) of the first difference, or None."""
+    if isinstance(expected, dict) and isinstance(stored, dict):
+        for k in sorted(expected):
+            sub = f"{key}.{k}" if key else k
+            if k not in stored:
+                return sub, "<missing>", expected[k]
+            diff = _first_difference(stored[k], expected[k], sub)
+            if diff is not None:
+                return diff
+        return None
+    if stored != expected or (type(stored) is bool) != (type(expected) is bool):
+        return key, stored, expected
+    return None
+
+
+def _read(path, expect: Mapping | None, *, keep: bool):
+    """Check a database file; return (meta, arrays or None)."""
+    path = Path(path)
+    if _is_tmp_name(path):
+        raise DatabaseCorruptError(
+            f"database {path} is the temporary file of an unfinished write "
+            f"(name contains {_TMP_MARK!r}); it is never read"
+        )
+    if expect is not None:
+        if not isinstance(expect, Mapping):
+            raise InvalidInputError(f"expect must be a mapping or None, got {type(expect).__name__}")
+        expect = json.loads(_canonical_json(dict(expect), "expect"))
+    if not path.is_file():
+        raise DatabaseError(f"database {path} does not exist")
+    try:
+        f = h5py.File(path, "r")
+    except OSError as exc:
+        raise DatabaseCorruptError(
+            f"database {path} is not a readable HDF5 file (truncated or damaged): {exc}"
+        ) from None
+    with f:
+        attrs = f.attrs
+        if attrs.get("format") != _FORMAT_NAME:
+            raise DatabaseCorruptError(
+                f"database {path} is not a handsynth pose database "
+                f"(attribute 'format' is {attrs.get('format')!r})"
+            )
+        if not bool(attrs.get("complete", False)):
+            raise DatabaseCorruptError(
+                f"database {path} has no complete mark: its write did not finish"
+            )
+        version = int(attrs.get("format_version", -1))
+        if version != FORMAT_VERSION:
+            raise DatabaseMismatchError(
+                f"database {path}: key 'format_version' is {version} in the file "
+                f"but {FORMAT_VERSION} is expected"
+            )
+        try:
+            meta_json = str(attrs["meta"])
+            meta = json.loads(meta_json)
+            n = int(attrs["n_entries"])
+            stored_checksum = str(attrs["checksum"])
+        except (KeyError, ValueError) as exc:
+            raise DatabaseCorruptError(f"database {path} has damaged attributes: {exc}") from None
+
+        hasher = hashlib.sha256()
+        _hash_header(hasher)
+        arrays = {}
+        for name, row_shape, dtype, _ in _DATASETS:
+            if name not in f or not isinstance(f[name], h5py.Dataset):
+                raise DatabaseCorruptError(f"database {path} has no dataset {name!r}")
+            ds = f[name]
+            shape = (n,) + row_shape
+            if ds.shape != shape or ds.dtype != np.dtype(dtype):
+                raise DatabaseCorruptError(
+                    f"database {path}: dataset {name!r} has shape {ds.shape} and dtype "
+                    f"{ds.dtype}, expected shape {shape} and dtype {np.dtype(dtype)}"
+                )
+            _hash_dataset_header(hasher, name, dtype, shape)
+            out = np.empty(shape, dtype=_NATIVE[dtype]) if keep else None
+            step = ds.chunks[0] if ds.chunks else max(n, 1)
+            for start in range(0, n, step):
+                stop = min(n, start + step)
+                try:
+                    block = np.ascontiguousarray(ds[start:stop], dtype=dtype)
+                except (OSError, ValueError, RuntimeError) as exc:
+                    raise DatabaseCorruptError(
+                        f"database {path}: dataset {name!r} rows {start}-{stop - 1} "
+                        f"cannot be read (damaged): {exc}"
+                    ) from None
+                hasher.update(memoryview(block).cast("B"))
+                if keep:
+                    out[start:stop] = block
+            if keep:
+                out.setflags(write=False)
+                arrays[name] = out
+        _hash_meta(hasher, meta_json)
+        computed = "sha256:" + hasher.hexdigest()
+        if computed != stored_checksum:
+            raise DatabaseCorruptError(
+                f"database {path} fails its checksum (stored {stored_checksum}, "
+                f"computed {computed}): the file is damaged"
+            )
+    if expect is not None:
+        diff = _first_difference(meta, expect, "")
+        if diff is not None:
+            key, stored, wanted = diff
+            raise DatabaseMismatchError(
+                f"database {path}: meta key {key!r} is {json.dumps(stored)} in the file "
+                f"but {json.dumps(wanted)} is expected"
+            )
+    return meta, (arrays if keep else None)
+
+
+def open_database(path, *, expect: Mapping | None = None) -> Database:
+    """Read a pose database fully into memory after checking it.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        File written by :func:`write_database`.
+    expect : mapping, optional
+        Metadata the caller requires.  Every key of `expect` (recursively for
+        nested mappings) must be present in the stored metadata with an equal
+        value (after a JSON round trip, so tuples equal lists); keys the
+        file has in addition are ignored.
+
+    Returns
+    -------
+    Database
+        Read-only, C-contiguous arrays and the metadata.
+
+    Raises
+    ------
+    DatabaseCorruptError
+        Temporary file name, missing complete mark, truncated or unreadable
+        file, missing or misshapen dataset, or checksum mismatch.
+    DatabaseMismatchError
+        A key of `expect` differs from the stored metadata (the message names
+        the key, both values and the file), or another format version.
+    DatabaseError
+        The file does not exist.
+    """
+    meta, arrays = _read(path, expect, keep=True)
+    return Database(
+        path=Path(path),
+        meta=meta,
+        angles=arrays["angles"],
+        hlac=arrays["hlac"],
+        sil_bits=arrays["sil_bits"],
+        ridge_bits=arrays["ridge_bits"],
+        ridge_area=arrays["ridge_area"],
+        keypoints_raw=arrays["keypoints"],
+    )
+
+
+def verify(path, *, expect: Mapping | None = None) -> dict:
+    """Check a database file's completeness and checksum without keeping its arrays.
+
+    Reads the datasets one chunk at a time (memory stays near 1 MiB), so a
+    resumable build can decide cheaply whether a file may be skipped.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    expect : mapping, optional
+        As in :func:`open_database`.
+
+    Returns
+    -------
+    dict
+        The stored metadata.
+
+    Raises
+    ------
+    DatabaseCorruptError, DatabaseMismatchError, DatabaseError
+        As :func:`open_database`.
+    """
+    meta, _ = _read(path, expect, keep=False)
+    return meta

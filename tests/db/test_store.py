@@ -1,0 +1,201 @@
+import os
+import shutil
+
+import h5py
+import numpy as np
+import pytest
+
+from handsynth.db import (
+    KEYPOINT_SCALE_M,
+    Database,
+    extract_features_batch,
+    open_database,
+    verify,
+    write_database,
+)
+from handsynth.errors import (
+    DatabaseCorruptError,
+    DatabaseError,
+    DatabaseMismatchError,
+    InvalidInputError,
+)
+
+META = {
+    "shape": {"r_length": 1.05, "r_width": 0.9, "r_palm": 1.0, "r_thumb": 1.1},
+    "camera": {"distance_mm": 120.0, "fov_deg": 90.0},
+    "pose_set": "paper-20448",
+    "seed": 7,
+    "handsynth_version": "0.1.0",
+}
+
+
+@pytest.fixture(scope="module")
+def arrays(shapes):
+    names = sorted(shapes)
+    sils = np.stack([shapes[n] for n in names] * 3)
+    n = len(sils)
+    feats = extract_features_batch(sils)
+    rng = np.random.default_rng(0)
+    return {
+        "angles": rng.uniform(-20, 90, (n, 20)).astype(np.float32),
+        "hlac": feats["hlac"],
+        "sil_bits": feats["sil_bits"],
+        "ridge_bits": feats["ridge_bits"],
+        "ridge_area": feats["ridge_area"],
+        "keypoints": rng.uniform(-0.15, 0.25, (n, 21, 3)),
+    }
+
+
+@pytest.fixture
+def db_path(tmp_path, arrays):
+    return write_database(tmp_path / "standard.h5", meta=META, **arrays)
+
+
+def test_round_trip(db_path, arrays):
+    db = open_database(db_path, expect=META)
+    assert isinstance(db, Database)
+    assert len(db) == len(arrays["angles"])
+    assert db.meta == META
+    for name in ("angles", "hlac", "sil_bits", "ridge_bits", "ridge_area"):
+        got = getattr(db, name)
+        np.testing.assert_array_equal(got, arrays[name])
+        assert got.dtype == arrays[name].dtype, name
+        assert got.flags.c_contiguous and not got.flags.writeable, name
+    assert db.keypoints_raw.dtype == np.int16
+    kp = db.keypoints_m()
+    assert kp.dtype == np.float32 and kp.shape == arrays["keypoints"].shape
+    np.testing.assert_array_equal(
+        db.keypoints_raw, np.rint(arrays["keypoints"] / KEYPOINT_SCALE_M).astype(np.int16)
+    )
+    # quantisation (half a unit) plus float32 rounding of metres below 0.25 m
+    assert np.abs(kp - arrays["keypoints"]).max() <= 0.5 * KEYPOINT_SCALE_M + 3e-8
+    np.testing.assert_array_equal(db.keypoints_m(3), kp[3])
+    assert verify(db_path, expect=META) == META
+    assert not list(db_path.parent.glob("*.tmp-*"))
+
+
+def test_expect_subset_and_json_normalisation(db_path):
+    open_database(db_path, expect={"shape": {"r_width": 0.9}, "seed": 7})
+    with pytest.raises(DatabaseMismatchError):
+        open_database(db_path, expect={"seed": True})  # JSON true is not 7
+
+
+def test_writes_are_byte_identical(tmp_path, arrays):
+    a = write_database(tmp_path / "a.h5", meta=META, **arrays)
+    b = write_database(tmp_path / "b.h5", meta=dict(reversed(list(META.items()))), **arrays)
+    assert a.read_bytes() == b.read_bytes()
+    changed = dict(arrays, angles=arrays["angles"] + np.float32(1))
+    c = write_database(tmp_path / "c.h5", meta=META, **changed)
+    assert c.read_bytes() != a.read_bytes()
+
+
+def test_mismatch_names_key_values_and_path(db_path):
+    expect = dict(META, shape=dict(META["shape"], r_length=1.0))
+    with pytest.raises(DatabaseMismatchError) as info:
+        open_database(db_path, expect=expect)
+    msg = str(info.value)
+    assert "'shape.r_length'" in msg and "1.05" in msg and "1.0 is expected" in msg
+    assert str(db_path) in msg
+    with pytest.raises(DatabaseMismatchError, match=r"'pose_set'.*\"paper-20448\".*\"other\""):
+        verify(db_path, expect={"pose_set": "other"})
+    with pytest.raises(DatabaseMismatchError, match=r"'feature_params' is \"<missing>\""):
+        open_database(db_path, expect={"feature_params": {"block": 8}})
+
+
+def test_truncated_file_is_refused(db_path):
+    data = db_path.read_bytes()
+    db_path.write_bytes(data[: len(data) // 2])
+    for fn in (open_database, verify):
+        with pytest.raises(DatabaseCorruptError, match=r"truncated or damaged") as info:
+            fn(db_path)
+        assert str(db_path) in str(info.value)
+
+
+@pytest.mark.parametrize("name", ["angles", "hlac", "sil_bits", "keypoints"])
+def test_flipped_byte_in_a_dataset_is_refused(db_path, name):
+    with h5py.File(db_path, "r") as f:
+        info = f[name].id.get_chunk_info(0)
+    offset = info.byte_offset + info.size // 2
+    with open(db_path, "r+b") as fh:
+        fh.seek(offset)
+        byte = fh.read(1)
+        fh.seek(offset)
+        fh.write(bytes([byte[0] ^ 0x10]))
+    for fn in (open_database, verify):
+        with pytest.raises(DatabaseCorruptError, match=r"checksum|cannot be read") as err:
+            fn(db_path)
+        assert str(db_path) in str(err.value)
+
+
+def test_changed_metadata_fails_checksum(db_path):
+    with h5py.File(db_path, "r+") as f:
+        f.attrs["meta"] = str(f.attrs["meta"]).replace('"seed":7', '"seed":8')
+    with pytest.raises(DatabaseCorruptError, match=r"fails its checksum"):
+        open_database(db_path)
+
+
+def test_missing_complete_mark_is_refused(db_path):
+    with h5py.File(db_path, "r+") as f:
+        del f.attrs["complete"]
+    with pytest.raises(DatabaseCorruptError, match=r"no complete mark"):
+        verify(db_path)
+
+
+def test_missing_or_misshapen_dataset_is_refused(db_path, tmp_path):
+    other = tmp_path / "other.h5"
+    shutil.copy(db_path, other)
+    with h5py.File(db_path, "r+") as f:
+        del f["ridge_area"]
+    with pytest.raises(DatabaseCorruptError, match=r"no dataset 'ridge_area'"):
+        open_database(db_path)
+    with h5py.File(other, "r+") as f:
+        data = f["hlac"][:, :800]
+        del f["hlac"]
+        f["hlac"] = data
+    with pytest.raises(DatabaseCorruptError, match=r"'hlac' has shape \(\d+, 800\)"):
+        open_database(other)
+
+
+def test_temporary_file_is_never_accepted(db_path):
+    tmp = db_path.with_name(db_path.name + ".tmp-12345")
+    shutil.copy(db_path, tmp)  # even a complete, valid copy
+    for fn in (open_database, verify):
+        with pytest.raises(DatabaseCorruptError, match=r"temporary file"):
+            fn(tmp)
+
+
+def test_failed_write_leaves_no_file(tmp_path, arrays, monkeypatch):
+    def boom(src, dst):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(os, "replace", boom)
+    target = tmp_path / "x.h5"
+    with pytest.raises(DatabaseError, match=r"disk full"):
+        write_database(target, meta=META, **arrays)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_missing_file(tmp_path):
+    with pytest.raises(DatabaseError, match=r"does not exist"):
+        open_database(tmp_path / "nope.h5")
+
+
+def test_write_validates_inputs(tmp_path, arrays):
+    bad_meta = {"x": float("nan")}
+    with pytest.raises(InvalidInputError, match=r"meta"):
+        write_database(tmp_path / "m.h5", meta=bad_meta, **arrays)
+    bad = dict(arrays, hlac=arrays["hlac"][:, :100])
+    with pytest.raises(InvalidInputError, match=r"hlac must have shape \(\d+, 1600\), got .*\(\d+, 100\)"):
+        write_database(tmp_path / "m.h5", meta=META, **bad)
+    bad = dict(arrays, ridge_area=arrays["ridge_area"] + 1)
+    with pytest.raises(InvalidInputError, match=r"ridge_area\[0\] is \d+ but ridge_bits\[0\] has"):
+        write_database(tmp_path / "m.h5", meta=META, **bad)
+    angles = arrays["angles"].copy()
+    angles[2, 5] = np.nan
+    with pytest.raises(InvalidInputError, match=r"angles must be finite, got nan at index \(2, 5\)"):
+        write_database(tmp_path / "m.h5", meta=META, **dict(arrays, angles=angles))
+    with pytest.raises(InvalidInputError, match=r"keypoints must lie within .* got 0\.50000 m"):
+        write_database(tmp_path / "m.h5", meta=META, **dict(arrays, keypoints=arrays["keypoints"] * 2))
+    with pytest.raises(InvalidInputError, match=r"path must not contain"):
+        write_database(tmp_path / "m.h5.tmp-1", meta=META, **arrays)
+    assert list(tmp_path.iterdir()) == []
