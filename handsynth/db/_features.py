@@ -78,12 +78,24 @@ def _features_into(sil, cont, hl, ridge, sil_bits, ridge_bits, work, lut, nb_dr,
 
 
 @njit(cache=True, nogil=True)
-def _features_batch_into(sils, cont, hl, ridge, sil_bits, ridge_bits, area, lut, nb_dr, nb_dc, dr, dc):
+def _features_batch_into(
+    sils, cont, hl, ridge, sil_bits, ridge_bits, area, lut, nb_dr, nb_dc, dr, dc
+):
     work = np.empty((sils.shape[1] + 2, sils.shape[2] + 2), dtype=np.int8)
     for i in range(sils.shape[0]):
         area[i] = _features_into(
-            sils[i], cont[i], hl[i], ridge[i], sil_bits[i], ridge_bits[i],
-            work, lut, nb_dr, nb_dc, dr, dc,
+            sils[i],
+            cont[i],
+            hl[i],
+            ridge[i],
+            sil_bits[i],
+            ridge_bits[i],
+            work,
+            lut,
+            nb_dr,
+            nb_dc,
+            dr,
+            dc,
         )
 
 
@@ -168,7 +180,17 @@ def extract_features_batch(silhouettes) -> dict[str, np.ndarray]:
         "ridge_area": np.empty(count, dtype=np.uint16),
     }
     _features_batch_into(
-        sils, out["contour"], out["hlac"], out["ridge"], out["sil_bits"],
-        out["ridge_bits"], out["ridge_area"], _LUT, _NB_DR, _NB_DC, _DR, _DC,
+        sils,
+        out["contour"],
+        out["hlac"],
+        out["ridge"],
+        out["sil_bits"],
+        out["ridge_bits"],
+        out["ridge_area"],
+        _LUT,
+        _NB_DR,
+        _NB_DC,
+        _DR,
+        _DC,
     )
     return out

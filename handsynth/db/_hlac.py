@@ -87,9 +87,7 @@ def _pattern_lut() -> np.ndarray:
     """(256, 25) uint8: entry [code, k] is 1 when mask k is inside neighbourhood `code`."""
     masks = [sum(1 << _NEIGHBOURS.index(o) for o in p) for p in HLAC_PATTERNS]
     codes = np.arange(256)[:, None]
-    return ((codes & np.array(masks)[None, :]) == np.array(masks)[None, :]).astype(
-        np.uint8
-    )
+    return ((codes & np.array(masks)[None, :]) == np.array(masks)[None, :]).astype(np.uint8)
 
 
 _LUT = _pattern_lut()

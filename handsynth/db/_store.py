@@ -133,8 +133,15 @@ class Database:
     @property
     def nbytes(self) -> int:
         """Bytes held by the arrays."""
-        return sum(getattr(self, name if name != "keypoints" else "keypoints_raw").nbytes
-                   for name, *_ in _DATASETS)
+        arrays = (
+            self.angles,
+            self.hlac,
+            self.sil_bits,
+            self.ridge_bits,
+            self.ridge_area,
+            self.keypoints_raw,
+        )
+        return sum(a.nbytes for a in arrays)
 
     def keypoints_m(self, index=slice(None)) -> np.ndarray:
         """Keypoints of entries `index` in metres.
@@ -157,10 +164,13 @@ class Database:
 
 def _canonical_json(value, name: str) -> str:
     try:
-        return json.dumps(value, sort_keys=True, separators=(",", ":"),
-                          ensure_ascii=False, allow_nan=False)
+        return json.dumps(
+            value, sort_keys=True, separators=(",", ":"), ensure_ascii=False, allow_nan=False
+        )
     except (TypeError, ValueError) as exc:
-        raise InvalidInputError(f"{name} must be JSON-serialisable without NaN/inf: {exc}") from None
+        raise InvalidInputError(
+            f"{name} must be JSON-serialisable without NaN/inf: {exc}"
+        ) from None
 
 
 def _is_tmp_name(path: Path) -> bool:
@@ -190,7 +200,11 @@ def _hash_meta(hasher, meta_json: str) -> None:
 def _as_rows(value, name: str, n: int | None, row_shape: tuple[int, ...]) -> np.ndarray:
     arr = np.asarray(value)
     expected = ("N",) + row_shape if n is None else (n,) + row_shape
-    if arr.ndim != 1 + len(row_shape) or arr.shape[1:] != row_shape or (n is not None and arr.shape[0] != n):
+    if (
+        arr.ndim != 1 + len(row_shape)
+        or arr.shape[1:] != row_shape
+        or (n is not None and arr.shape[0] != n)
+    ):
         raise InvalidInputError(
             f"{name} must have shape ({', '.join(map(str, expected))}), "
             f"got array of shape {arr.shape} and dtype {arr.dtype}"
@@ -216,7 +230,9 @@ def _prepare(angles, hlac, sil_bits, ridge_bits, ridge_area, keypoints) -> dict[
         raise InvalidInputError(f"angles must be numbers (degrees), got dtype {ang.dtype}")
     if not np.isfinite(ang).all():
         i, j = (int(v) for v in np.argwhere(~np.isfinite(ang))[0])
-        raise InvalidInputError(f"angles must be finite, got {ang[i, j].item()} at index ({i}, {j})")
+        raise InvalidInputError(
+            f"angles must be finite, got {ang[i, j].item()} at index ({i}, {j})"
+        )
     hl = _as_rows(hlac, "hlac", n, (HLAC_SIZE,))
     _check_int_range(hl, "hlac", 0, 255)
     bits = {}
@@ -247,10 +263,16 @@ def _prepare(angles, hlac, sil_bits, ridge_bits, ridge_area, keypoints) -> dict[
             f"frame origin, got {np.abs(kp).max():.5f} m"
         )
     values = {
-        "angles": ang, "hlac": hl, "sil_bits": bits["sil_bits"], "ridge_bits": bits["ridge_bits"],
-        "ridge_area": area, "keypoints": kp_q,
+        "angles": ang,
+        "hlac": hl,
+        "sil_bits": bits["sil_bits"],
+        "ridge_bits": bits["ridge_bits"],
+        "ridge_area": area,
+        "keypoints": kp_q,
     }
-    return {name: np.ascontiguousarray(values[name], dtype=dtype) for name, _, dtype, _ in _DATASETS}
+    return {
+        name: np.ascontiguousarray(values[name], dtype=dtype) for name, _, dtype, _ in _DATASETS
+    }
 
 
 def _fsync_path(path: Path, *, directory: bool = False) -> None:
@@ -267,8 +289,9 @@ def _fsync_path(path: Path, *, directory: bool = False) -> None:
         os.close(fd)
 
 
-def write_database(path, *, angles, hlac, sil_bits, ridge_bits, ridge_area, keypoints,
-                   meta: Mapping) -> Path:
+def write_database(
+    path, *, angles, hlac, sil_bits, ridge_bits, ridge_area, keypoints, meta: Mapping
+) -> Path:
     """Write one hand shape's pose database, atomically and deterministically.
 
     Parameters
@@ -392,7 +415,9 @@ def _read(path, expect: Mapping | None, *, keep: bool):
         )
     if expect is not None:
         if not isinstance(expect, Mapping):
-            raise InvalidInputError(f"expect must be a mapping or None, got {type(expect).__name__}")
+            raise InvalidInputError(
+                f"expect must be a mapping or None, got {type(expect).__name__}"
+            )
         expect = json.loads(_canonical_json(dict(expect), "expect"))
     if not path.is_file():
         raise DatabaseError(f"database {path} does not exist")

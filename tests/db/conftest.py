@@ -57,7 +57,8 @@ def make_shapes() -> dict[str, np.ndarray]:
         "disc": _disc(32, 32, 20),
         "small_disc": _disc(10, 50, 4),
         "ring": _disc(32, 32, 22) & ~_disc(32, 32, 12),
-        "two_rings": (_disc(20, 20, 12) & ~_disc(20, 20, 5)) | (_disc(44, 44, 14) & ~_disc(44, 44, 6)),
+        "two_rings": (_disc(20, 20, 12) & ~_disc(20, 20, 5))
+        | (_disc(44, 44, 14) & ~_disc(44, 44, 6)),
         "border_touching": _rect(np.zeros((N, N), bool), 0, 20, 0, 64),
     }
     for spread in (0, 4):

@@ -42,8 +42,9 @@ def test_complement_and_popcount():
     np.testing.assert_array_equal(unpack_mask(complement_bits(bits)), ~mask)
     assert popcount_bits(bits) == mask.sum()
     assert isinstance(popcount_bits(bits), int)
-    np.testing.assert_array_equal(popcount_bits(pack_mask(np.stack([mask, ~mask]))),
-                                  [mask.sum(), 4096 - mask.sum()])
+    np.testing.assert_array_equal(
+        popcount_bits(pack_mask(np.stack([mask, ~mask]))), [mask.sum(), 4096 - mask.sum()]
+    )
 
 
 def test_count_outside_matches_boolean_definition():

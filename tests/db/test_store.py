@@ -127,6 +127,15 @@ def test_flipped_byte_in_a_dataset_is_refused(db_path, name):
         assert str(db_path) in str(err.value)
 
 
+def test_changed_dataset_value_fails_checksum(db_path):
+    # rewritten through HDF5, so the chunk decompresses fine: only the
+    # checksum can notice
+    with h5py.File(db_path, "r+") as f:
+        f["hlac"][5, 17] = f["hlac"][5, 17] ^ 1
+    with pytest.raises(DatabaseCorruptError, match=r"fails its checksum \(stored sha256:"):
+        open_database(db_path)
+
+
 def test_changed_metadata_fails_checksum(db_path):
     with h5py.File(db_path, "r+") as f:
         f.attrs["meta"] = str(f.attrs["meta"]).replace('"seed":7', '"seed":8')
@@ -185,17 +194,23 @@ def test_write_validates_inputs(tmp_path, arrays):
     with pytest.raises(InvalidInputError, match=r"meta"):
         write_database(tmp_path / "m.h5", meta=bad_meta, **arrays)
     bad = dict(arrays, hlac=arrays["hlac"][:, :100])
-    with pytest.raises(InvalidInputError, match=r"hlac must have shape \(\d+, 1600\), got .*\(\d+, 100\)"):
+    with pytest.raises(
+        InvalidInputError, match=r"hlac must have shape \(\d+, 1600\), got .*\(\d+, 100\)"
+    ):
         write_database(tmp_path / "m.h5", meta=META, **bad)
     bad = dict(arrays, ridge_area=arrays["ridge_area"] + 1)
     with pytest.raises(InvalidInputError, match=r"ridge_area\[0\] is \d+ but ridge_bits\[0\] has"):
         write_database(tmp_path / "m.h5", meta=META, **bad)
     angles = arrays["angles"].copy()
     angles[2, 5] = np.nan
-    with pytest.raises(InvalidInputError, match=r"angles must be finite, got nan at index \(2, 5\)"):
+    with pytest.raises(
+        InvalidInputError, match=r"angles must be finite, got nan at index \(2, 5\)"
+    ):
         write_database(tmp_path / "m.h5", meta=META, **dict(arrays, angles=angles))
     with pytest.raises(InvalidInputError, match=r"keypoints must lie within .* got 0\.50000 m"):
-        write_database(tmp_path / "m.h5", meta=META, **dict(arrays, keypoints=arrays["keypoints"] * 2))
+        write_database(
+            tmp_path / "m.h5", meta=META, **dict(arrays, keypoints=arrays["keypoints"] * 2)
+        )
     with pytest.raises(InvalidInputError, match=r"path must not contain"):
         write_database(tmp_path / "m.h5.tmp-1", meta=META, **arrays)
     assert list(tmp_path.iterdir()) == []

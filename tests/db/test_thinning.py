@@ -24,8 +24,10 @@ def blocks_2x2(mask):
 
 def crossing_number(mask, r, c):
     p = np.pad(mask, 1)
-    ring = [p[r + 1 + dr, c + 1 + dc] for dr, dc in
-            ((0, 1), (-1, 1), (-1, 0), (-1, -1), (0, -1), (1, -1), (1, 0), (1, 1))]
+    ring = [
+        p[r + 1 + dr, c + 1 + dc]
+        for dr, dc in ((0, 1), (-1, 1), (-1, 0), (-1, -1), (0, -1), (1, -1), (1, 0), (1, 1))
+    ]
     b = [1 - int(v) for v in ring]
     return sum(b[k] * (1 - b[(k + 1) % 8] * b[(k + 2) % 8]) for k in (0, 2, 4, 6))
 
@@ -63,8 +65,12 @@ def test_topology_kept_on_noise_and_2x2_blocks_only_at_junctions():
         padded = np.pad(ridge, 1)
         for r, c in np.argwhere(blocks_2x2(ridge)):
             for rr, cc in ((r, c), (r + 1, c), (r, c + 1), (r + 1, c + 1)):
-                interior = (padded[rr, cc + 1] and padded[rr + 2, cc + 1]
-                            and padded[rr + 1, cc] and padded[rr + 1, cc + 2])
+                interior = (
+                    padded[rr, cc + 1]
+                    and padded[rr + 2, cc + 1]
+                    and padded[rr + 1, cc]
+                    and padded[rr + 1, cc + 2]
+                )
                 assert interior or crossing_number(ridge, rr, cc) >= 2
 
 
