@@ -1,6 +1,14 @@
-"""handsynth: a MuJoCo hand as ground truth for hand and finger pose measurement."""
+"""handsynth: a MuJoCo hand as ground truth for hand and finger pose measurement.
 
-from .models import JOINT_NAMES
+The flow of one frame: :mod:`handsynth.models` (hand model, shapes, poses) ->
+:mod:`handsynth.render` (camera, renderer, preprocessing) ->
+:mod:`handsynth.db` (features, database files) -> :mod:`handsynth.estimate`
+(database selection, search, live loop).  :mod:`handsynth.sensors` feeds the
+same hand to the sensor-based methods.
+"""
+
+from .models import JOINT_NAMES, HandModel, HandShape
+from .render import CameraMount
 
 __version__ = "0.1.0"
-__all__ = ["JOINT_NAMES", "__version__"]
+__all__ = ["CameraMount", "HandModel", "HandShape", "JOINT_NAMES", "__version__"]

@@ -1,1 +1,21 @@
-"""handsynth.render"""
+"""Camera, off-screen renderer and the preprocessing shared by database and live frames."""
+
+from ._camera import CameraMount
+from ._gl import backend, ensure_backend
+from ._preprocess import binarize, crop_resize, largest_component, preprocess, wrist_cut_keep
+from ._renderer import SilhouetteRenderer, render_rgb
+from ._sheet import contact_sheet
+
+__all__ = [
+    "CameraMount",
+    "SilhouetteRenderer",
+    "backend",
+    "binarize",
+    "contact_sheet",
+    "crop_resize",
+    "ensure_backend",
+    "largest_component",
+    "preprocess",
+    "render_rgb",
+    "wrist_cut_keep",
+]

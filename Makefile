@@ -1,0 +1,37 @@
+# Set-up on a fresh Debian machine, as root (see README):
+#   make demo   installs everything (system packages too) and runs the demo
+#   make test   installs what the tests need and runs them
+# Both are idempotent.
+
+VENV ?= .venv
+APT_PKGS := python3 python3-venv python3-pip libegl1 libgl1 libegl-mesa0 libgl1-mesa-dri libosmesa6
+# Headless MuJoCo rendering through Mesa's EGL software device; MUJOCO_GL=osmesa also works.
+export MUJOCO_GL ?= egl
+
+.PHONY: demo test system clean
+
+system:
+	@if ! dpkg -s $(APT_PKGS) >/dev/null 2>&1; then \
+	  apt-get update -qq && DEBIAN_FRONTEND=noninteractive \
+	  apt-get install -y -qq --no-install-recommends $(APT_PKGS); fi
+
+$(VENV)/bin/python: | system
+	python3 -m venv $(VENV)
+	$(VENV)/bin/python -m pip install -q --upgrade pip
+
+$(VENV)/.runtime: pyproject.toml | $(VENV)/bin/python
+	$(VENV)/bin/python -m pip install -q -e .
+	touch $@
+
+$(VENV)/.test: pyproject.toml $(VENV)/.runtime
+	$(VENV)/bin/python -m pip install -q -e '.[test]'
+	touch $@
+
+demo: $(VENV)/.runtime
+	$(VENV)/bin/handsynth demo --out demo_out
+
+test: $(VENV)/.test
+	$(VENV)/bin/python -m pytest -q
+
+clean:
+	rm -rf $(VENV) demo_out

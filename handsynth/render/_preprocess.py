@@ -1,0 +1,176 @@
+"""The preprocessing of SPEC.md section 1, shared by database renders and live frames.
+
+Steps, in order:
+
+1. *Binarize*: a boolean mask is taken as it is; a grey or BGR uint8 frame
+   is thresholded with Otsu's method on its grey values (the hand is
+   brighter than a dark background, as with the device's backlit skin), or
+   with a fixed ``threshold`` when given.
+2. *Wrist cut*: pixels that see the hand frame's ``y < mount.wrist_cut_mm``
+   at dorsum height are cleared (see :func:`wrist_cut_keep`).  The cut is a
+   fixed straight line in the image, because the camera is fixed to the
+   wrist, so database renders (with the model's forearm stub) and live
+   frames (with a real forearm) lose the same part.
+3. *Largest connected component* (8-connectivity) is kept as the hand.
+4. *Crop* to its bounding box and *resize* to ``size x size``: the longer
+   side of the box is scaled to `size` and the shorter side is centred with
+   background padding, so the aspect ratio of the hand is kept.  Resizing
+   uses area averaging and a 0.5 threshold.
+
+A hand cut by the frame border keeps its straight cut edge through every
+step; the features then see the same cut edge in database and live frames
+(the database is rendered with the same camera), and the cut is never
+mistaken for a fingertip because no step closes or rounds it.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+
+from ..errors import InvalidInputError
+from ..models import DORSUM_Z_MM
+from ._camera import CameraMount
+
+__all__ = ["binarize", "wrist_cut_keep", "largest_component", "crop_resize", "preprocess"]
+
+
+def binarize(frame: np.ndarray, *, threshold: int | None = None) -> np.ndarray:
+    """Foreground mask of a frame.
+
+    Parameters
+    ----------
+    frame : ndarray, shape (H, W) or (H, W, 3)
+        bool mask (returned as is), or uint8 grey / BGR image.
+    threshold : int, keyword-only, optional
+        Grey level above which a pixel is hand; Otsu's threshold by default.
+
+    Returns
+    -------
+    ndarray, shape (H, W), bool
+    """
+    import cv2
+
+    frame = _check_frame(frame)
+    if frame.dtype == bool:
+        return frame
+    grey = frame if frame.ndim == 2 else cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+    if threshold is None:
+        if grey.min() == grey.max():
+            return np.zeros(grey.shape, dtype=bool)
+        _, out = cv2.threshold(grey, 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
+    else:
+        _, out = cv2.threshold(grey, int(threshold), 255, cv2.THRESH_BINARY)
+    return out > 0
+
+
+def _check_frame(frame) -> np.ndarray:
+    if not isinstance(frame, np.ndarray):
+        raise InvalidInputError(f"frame must be a numpy array, got {type(frame).__name__}")
+    if frame.ndim not in (2, 3) or (frame.ndim == 3 and frame.shape[2] != 3):
+        raise InvalidInputError(
+            f"frame must have shape (H, W) or (H, W, 3), got {frame.shape}")
+    if frame.shape[0] < 8 or frame.shape[1] < 8:
+        raise InvalidInputError(f"frame is too small to hold a hand: shape {frame.shape}")
+    if frame.dtype not in (np.bool_, np.uint8):
+        raise InvalidInputError(
+            f"frame must be a bool mask or a uint8 image, got dtype {frame.dtype}")
+    return frame
+
+
+@lru_cache(maxsize=32)
+def _keep_cached(mount: CameraMount, side: str, w: int, h: int) -> np.ndarray:
+    y_cut = mount.wrist_cut_mm * 1e-3
+    z = DORSUM_Z_MM * 1e-3
+    p = mount.project(np.array([[-0.2, y_cut, z], [0.2, y_cut, z], [0.0, y_cut - 0.05, z]]),
+                      side=side, width_px=w, height_px=h)
+    (u0, v0), (u1, v1), (uf, vf) = p
+    vv, uu = np.mgrid[0:h, 0:w]
+    side_of = lambda u, v: (u1 - u0) * (v - v0) - (v1 - v0) * (u - u0)  # noqa: E731
+    forearm_sign = np.sign(side_of(uf, vf))
+    keep = np.sign(side_of(uu, vv)) != forearm_sign
+    keep.setflags(write=False)
+    return keep
+
+
+def wrist_cut_keep(mount: CameraMount, *, side: str = "right",
+                   width_px: int | None = None, height_px: int | None = None) -> np.ndarray | None:
+    """Pixels kept by the wrist cut of `mount`, or ``None`` when the mount has no cut.
+
+    The cut line is the image of the line ``y = mount.wrist_cut_mm`` across
+    the hand at dorsum height; the side where the forearm projects is cleared.
+
+    Returns
+    -------
+    ndarray, shape (height_px, width_px), bool, read-only, or None
+    """
+    if mount.wrist_cut_mm is None:
+        return None
+    w, h = mount.size(width_px, height_px)
+    return _keep_cached(mount, side, w, h)
+
+
+def largest_component(mask: np.ndarray) -> np.ndarray:
+    """The largest 8-connected foreground component of `mask` (all False if none)."""
+    import cv2
+
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(mask.view(np.uint8), connectivity=8)
+    if n <= 1:
+        return np.zeros(mask.shape, dtype=bool)
+    best = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
+    return labels == best
+
+
+def crop_resize(mask: np.ndarray, *, size: int = 64) -> np.ndarray:
+    """Crop `mask` to its bounding box and fit it into ``size x size``, aspect kept.
+
+    Returns an all-False image when `mask` is empty.
+    """
+    import cv2
+
+    out = np.zeros((size, size), dtype=bool)
+    rows = np.flatnonzero(mask.any(axis=1))
+    if rows.size == 0:
+        return out
+    cols = np.flatnonzero(mask.any(axis=0))
+    box = mask[rows[0]:rows[-1] + 1, cols[0]:cols[-1] + 1]
+    bh, bw = box.shape
+    scale = size / max(bh, bw)
+    nh, nw = max(1, round(bh * scale)), max(1, round(bw * scale))
+    small = cv2.resize(box.astype(np.float32), (nw, nh), interpolation=cv2.INTER_AREA) >= 0.5
+    r0, c0 = (size - nh) // 2, (size - nw) // 2
+    out[r0:r0 + nh, c0:c0 + nw] = small
+    return out
+
+
+def preprocess(frame: np.ndarray, mount: CameraMount | None = None, *, side: str = "right",
+               size: int = 64, threshold: int | None = None) -> np.ndarray:
+    """The silhouette of SPEC.md section 1: binarize, wrist cut, largest component, crop, resize.
+
+    Parameters
+    ----------
+    frame : ndarray, shape (H, W) bool, or (H, W) / (H, W, 3) uint8
+        A rendered mask or a camera frame (BGR) of any size.
+    mount : CameraMount, optional
+        The camera that took the frame (for the wrist cut); the paper's device
+        by default.  The frame may have any size: the cut is computed for it.
+    side : {"right", "left"}, keyword-only
+    size : int, keyword-only
+        Output side, 64 in the paper.
+    threshold : int, keyword-only, optional
+        Fixed grey threshold for uint8 frames (Otsu by default).
+
+    Returns
+    -------
+    ndarray, shape (size, size), bool
+        The silhouette; all False when the frame shows no hand.
+    """
+    if isinstance(size, bool) or not isinstance(size, (int, np.integer)) or size < 8:
+        raise InvalidInputError(f"size must be an integer >= 8, got {size!r}")
+    mask = binarize(frame, threshold=threshold)
+    keep = wrist_cut_keep(mount or CameraMount(), side=side,
+                          width_px=mask.shape[1], height_px=mask.shape[0])
+    if keep is not None:
+        mask = mask & keep
+    return crop_resize(largest_component(mask), size=size)

@@ -1,0 +1,83 @@
+"""A scene around the hand: the device camera, lights and off-screen settings."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..models import HandShape, hand_mjcf
+from ._camera import CameraMount
+
+__all__ = ["scene_mjcf", "scene_include_mjcf", "mujoco_camera_xyaxes"]
+
+
+def mujoco_camera_xyaxes(pose_cv: np.ndarray) -> np.ndarray:
+    """MuJoCo ``xyaxes`` (6,) of a camera whose OpenCV-axes pose is `pose_cv` (4x4).
+
+    MuJoCo cameras look along their -z axis with +y up; OpenCV's y points down.
+    """
+    r = pose_cv[:3, :3]
+    return np.concatenate([r[:, 0], -r[:, 1]])
+
+
+def _scene_parts(mount: CameraMount | None, side: str, silhouette: bool,
+                 width_px: int | None, height_px: int | None) -> tuple[str, str]:
+    """The ``<visual>`` element and the worldbody lights and cameras of a scene."""
+    mount = mount or CameraMount()
+    w, h = mount.size(width_px, height_px)
+    pose = mount.pose_in_hand(side=side)
+    xy = mujoco_camera_xyaxes(pose)
+    fmt = lambda a: " ".join(f"{v:.9g}" for v in a)  # noqa: E731
+    light = "" if silhouette else (
+        '    <light name="key" pos="0.05 0.05 0.5" dir="-0.1 -0.1 -1" diffuse="0.6 0.6 0.6" '
+        'castshadow="false"/>\n')
+    head = ('<headlight active="0" ambient="0 0 0" diffuse="0 0 0" specular="0 0 0"/>'
+            if silhouette else '<headlight ambient="0.35 0.35 0.35" diffuse="0.45 0.45 0.45"/>')
+    cameras = (
+        f'    <camera name="device" pos="{fmt(pose[:3, 3])}" xyaxes="{fmt(xy)}" '
+        f'fovy="{mount.fovy_deg(w, h):.9g}"/>\n'
+        # a view from the thumb side (looking along +x), and one from far above
+        '    <camera name="side" pos="-0.4 0.08 -0.01" xyaxes="0 -1 0 0 0 1" fovy="32"/>\n'
+        '    <camera name="top" pos="0 0.08 0.45" xyaxes="0 1 0 -1 0 0" fovy="40"/>\n'
+    )
+    visual = (
+        f'  <visual>\n    <global offwidth="{w}" offheight="{h}"/>\n'
+        f'    <quality offsamples="0" shadowsize="0"/>\n    {head}\n'
+        '    <rgba haze="0 0 0 1"/>\n    <map znear="0.01" zfar="50"/>\n  </visual>\n'
+    )
+    return visual, light + cameras
+
+
+def scene_mjcf(shape: HandShape | None = None, mount: CameraMount | None = None, *,
+               side: str = "right", forearm: bool = True, silhouette: bool = False,
+               width_px: int | None = None, height_px: int | None = None) -> str:
+    """MJCF of the hand with the device camera ``"device"``, a side camera and lights.
+
+    Parameters
+    ----------
+    shape, mount : optional
+        Hand shape and camera mount (standard hand, paper device by default).
+    side : {"right", "left"}, keyword-only
+    forearm : bool, keyword-only
+        Include the forearm stub.
+    silhouette : bool, keyword-only
+        Flat unlit white hand on black, no lights: a mask is one channel > 0.
+    width_px, height_px : int, keyword-only
+        Off-screen buffer size (the render size; the mount's frame size by default).
+
+    Returns
+    -------
+    str
+        A complete MJCF document.
+    """
+    visual, world = _scene_parts(mount, side, silhouette, width_px, height_px)
+    hand = hand_mjcf(shape, side=side, forearm=forearm, silhouette=silhouette)
+    hand = hand.replace("  <compiler ", visual + "  <compiler ", 1)
+    return hand.replace("  </worldbody>", world + "  </worldbody>", 1)
+
+
+def scene_include_mjcf(hand_file: str, mount: CameraMount | None = None, *,
+                       side: str = "right") -> str:
+    """A scene document that includes the hand document `hand_file` (Menagerie layout)."""
+    visual, world = _scene_parts(mount, side, False, None, None)
+    return (f'<mujoco model="handsynth_{side}_scene">\n  <include file="{hand_file}"/>\n'
+            f"{visual}  <worldbody>\n{world}  </worldbody>\n</mujoco>\n")

@@ -1,0 +1,51 @@
+"""Contact sheets of rendered hands (the demo's pictures)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..models import HandShape, named_pose
+from ._camera import CameraMount
+from ._renderer import render_rgb
+
+__all__ = ["contact_sheet"]
+
+
+def contact_sheet(shapes: dict[str, HandShape], poses: tuple[str, ...] = ("open", "fist", "pinch"),
+                  mount: CameraMount | None = None, *, tile_width_px: int = 360,
+                  side_view: bool = True) -> np.ndarray:
+    """A labelled grid of device-camera pictures: one row per shape, one column per pose.
+
+    With `side_view`, a last column shows the pinch from the thumb side.
+
+    Returns
+    -------
+    ndarray, shape (H, W, 3), uint8
+        RGB.
+    """
+    import cv2
+
+    mount = mount or CameraMount()
+    tw = tile_width_px
+    th = round(tw * mount.height_px / mount.width_px)
+    rows = []
+    for label, shape in shapes.items():
+        tiles = []
+        for p in poses:
+            img = render_rgb(named_pose(p), shape, mount, width_px=tw, height_px=th)
+            tiles.append(_label(img, f"{label}: {p}"))
+        if side_view:
+            img = render_rgb(named_pose("pinch"), shape, mount, camera="side", width_px=tw, height_px=th)
+            tiles.append(_label(img, f"{label}: pinch, side view"))
+        rows.append(np.hstack(tiles))
+    sheet = np.vstack(rows)
+    return cv2.copyMakeBorder(sheet, 2, 2, 2, 2, cv2.BORDER_CONSTANT, value=(255, 255, 255))
+
+
+def _label(img: np.ndarray, text: str) -> np.ndarray:
+    import cv2
+
+    img = np.ascontiguousarray(img)
+    cv2.putText(img, text, (6, 18), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (255, 255, 255), 1, cv2.LINE_AA)
+    cv2.rectangle(img, (0, 0), (img.shape[1] - 1, img.shape[0] - 1), (90, 90, 90), 1)
+    return img

@@ -1,0 +1,20 @@
+"""Write the standard hands and their scenes to assets/hand_mjcf/ (Menagerie layout).
+
+The files are generated from :func:`handsynth.models.hand_mjcf`; a test checks
+that the committed files equal the generator's output.  Run after changing
+the hand model: ``python scripts/write_mjcf_assets.py``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from handsynth.assets import standard_assets
+
+OUT = Path(__file__).resolve().parents[1] / "assets" / "hand_mjcf"
+
+if __name__ == "__main__":
+    OUT.mkdir(parents=True, exist_ok=True)
+    for name, text in standard_assets().items():
+        (OUT / name).write_text(text)
+        print(f"wrote {OUT / name}")

@@ -1,0 +1,56 @@
+import numpy as np
+import pytest
+
+from handsynth import CameraMount, HandModel
+from handsynth.errors import InvalidCameraError
+from handsynth.models import DORSUM_Z_MM
+
+
+def test_paper_device_defaults():
+    m = CameraMount.paper()
+    assert (m.fov_deg, m.width_px, m.height_px, m.height_mm) == (90.0, 720, 480, 120.0)
+    pose = m.pose_in_hand()
+    # optical axis perpendicular to the back of the hand, looking down at it
+    np.testing.assert_allclose(pose[:3, 2], [0, 0, -1], atol=1e-12)
+    assert pose[2, 3] == pytest.approx((DORSUM_Z_MM + 120) * 1e-3)
+    assert pose[0, 3] < 0  # thumb side of a right hand
+    assert np.linalg.det(pose[:3, :3]) == pytest.approx(1.0)
+
+
+def test_intrinsics_match_field_of_view():
+    m = CameraMount()
+    k = m.intrinsics()
+    assert k[0, 0] == pytest.approx(360.0)  # 90 deg across 720 px
+    assert k[0, 2] == pytest.approx(359.5) and k[1, 2] == pytest.approx(239.5)
+    assert m.fovy_deg() == pytest.approx(2 * np.degrees(np.arctan(240 / 360)))
+
+
+def test_projection_puts_the_hand_where_the_renderer_does():
+    from handsynth.models import named_pose
+    from handsynth.render import SilhouetteRenderer
+
+    m = CameraMount.whole_hand()
+    r = SilhouetteRenderer(mount=m, width_px=360, height_px=240, forearm=False)
+    mask = r.mask(named_pose("spread"))
+    h = HandModel()
+    h.set_pose(named_pose("spread"))
+    uv = m.project(h.keypoints(), width_px=360, height_px=240)
+    for u, v in np.round(uv).astype(int):  # every joint centre lies on the hand
+        assert mask[v - 1:v + 2, u - 1:u + 2].any()
+
+
+def test_tilt_turns_the_axis_toward_the_fingers():
+    pose = CameraMount(tilt_deg=20).pose_in_hand()
+    assert pose[1, 2] > 0.3 and pose[2, 2] < -0.9
+
+
+def test_left_mount_is_mirrored():
+    r, l = CameraMount().pose_in_hand(side="right"), CameraMount().pose_in_hand(side="left")
+    assert l[0, 3] == -r[0, 3] and l[1, 3] == r[1, 3]
+
+
+@pytest.mark.parametrize("field, value", [("height_mm", 0), ("fov_deg", 180), ("width_px", 0),
+                                          ("height_px", 2.5), ("tilt_deg", float("nan"))])
+def test_bad_mount_names_the_field(field, value):
+    with pytest.raises(InvalidCameraError, match=f"CameraMount.{field}"):
+        CameraMount(**{field: value})
