@@ -22,6 +22,7 @@ from ._bits import (
     unpack_mask,
 )
 from ._contour import contour
+from ._entries import DEFAULT_RENDER_SIZE, database_meta, render_entries
 from ._features import Features, extract_features, extract_features_batch
 from ._hlac import HLAC_PATTERNS, HLAC_SIZE, hlac
 from ._store import (
@@ -57,4 +58,7 @@ __all__ = [
     "write_database",
     "open_database",
     "verify",
+    "DEFAULT_RENDER_SIZE",
+    "render_entries",
+    "database_meta",
 ]

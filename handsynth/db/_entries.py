@@ -1,0 +1,84 @@
+"""Database entries: render poses, preprocess, extract features, record keypoints.
+
+This is the one function that turns poses into database rows; the build job
+(:mod:`handsynth.db._build`) and in-memory databases for tests and
+evaluation both call it, so database rows and live frames go through exactly
+the same preprocessing and features.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..models import HandShape, as_angles
+from ..render import CameraMount, SilhouetteRenderer, preprocess
+from ._features import extract_features_batch
+from ._validation import IMAGE_SIZE
+
+__all__ = ["DEFAULT_RENDER_SIZE", "render_entries", "database_meta"]
+
+#: Render size (width, height) of database masks before preprocessing: a
+#: third of the device's 720x480 per side.  The 64x64 silhouette is made from
+#: the hand's bounding box, which spans most of the frame, so this keeps more
+#: than two source pixels per silhouette pixel.
+DEFAULT_RENDER_SIZE: tuple[int, int] = (240, 160)
+
+
+def render_entries(angles, shape: HandShape | None = None, mount: CameraMount | None = None, *,
+                   side: str = "right", render_size: tuple[int, int] = DEFAULT_RENDER_SIZE,
+                   renderer: SilhouetteRenderer | None = None) -> dict[str, np.ndarray]:
+    """Database rows for the poses `angles`.
+
+    Parameters
+    ----------
+    angles : array_like, shape (N, 20)
+        Degrees, canonical order.
+    shape, mount : optional
+        Standard hand and paper device by default (ignored when `renderer` is given).
+    side : {"right", "left"}, keyword-only
+    render_size : (int, int), keyword-only
+        (width, height) of the masks before preprocessing.
+    renderer : SilhouetteRenderer, keyword-only, optional
+        Reuse an open renderer (one model load for many calls).
+
+    Returns
+    -------
+    dict of str to ndarray
+        ``angles`` (N, 20) float64, ``keypoints`` (N, 21, 3) float64 metres,
+        ``silhouette`` (N, 64, 64) bool, and the fields of
+        :func:`extract_features_batch` (``hlac``, ``sil_bits``, ``ridge_bits``,
+        ``ridge_area``, ``contour``, ``ridge``).
+    """
+    a = as_angles(angles)
+    if a.ndim == 1:
+        a = a[None]
+    r = renderer or SilhouetteRenderer(shape, mount, side=side, width_px=render_size[0],
+                                       height_px=render_size[1])
+    sils = np.empty((len(a), IMAGE_SIZE, IMAGE_SIZE), dtype=bool)
+    keypoints = np.empty((len(a), 21, 3))
+    for i, pose in enumerate(a):
+        m = r.mask(pose)
+        keypoints[i] = r.hand.keypoints()
+        sils[i] = preprocess(m, r.mount, side=r.side, size=IMAGE_SIZE)
+    out = extract_features_batch(sils)
+    out.update(angles=a, keypoints=keypoints, silhouette=sils)
+    return out
+
+
+def database_meta(shape: HandShape, mount: CameraMount, *, side: str, pose_set: str,
+                  count: int, seed: int, render_size: tuple[int, int]) -> dict:
+    """The self-describing attributes of a database file (compared when it is opened)."""
+    from .. import __version__
+    from ._hlac import HLAC_SIZE
+
+    return {
+        "shape": shape.as_dict(),
+        "shape_name": shape.name,
+        "side": side,
+        "mount": mount.as_dict(),
+        "model": {"generator": "handsynth.models.hand_mjcf", "forearm": True},
+        "features": {"image_size": IMAGE_SIZE, "hlac_size": HLAC_SIZE, "contour": "4-neighbour",
+                     "thinning": "hilditch", "render_size": list(render_size)},
+        "pose_set": {"name": pose_set, "count": int(count), "seed": int(seed)},
+        "handsynth_version": __version__,
+    }
