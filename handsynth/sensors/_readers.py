@@ -76,7 +76,7 @@ def _parse_lines(path: Path, n_cols: int) -> tuple[np.ndarray, np.ndarray]:
 def read_polhemus(
     path: str | os.PathLike,
     *,
-    columns: tuple[str, ...] = DEFAULT_COLUMNS,
+    columns: tuple[str, ...] | None = None,
     units: str = "cm",
     angles: str = "euler",
     euler_order: str = "ZYX",
@@ -91,8 +91,10 @@ def read_polhemus(
     Parameters
     ----------
     path : path-like
-    columns : tuple of str
-        Name of each leading column; extra columns are ignored.  Required:
+    columns : tuple of str, optional
+        Name of each leading column; extra columns are ignored.  Default
+        :data:`DEFAULT_COLUMNS`, or ``("sensor", "x", "y", "z", "qw", "qx",
+        "qy", "qz")`` with ``angles="quaternion"``.  Required:
         ``"x", "y", "z"`` and either ``"a1", "a2", "a3"`` (Euler angles in
         degrees, applied in `euler_order`) or ``"qw", "qx", "qy", "qz"``.
         ``"sensor"`` (station number) marks a one-sensor-per-line file;
@@ -137,6 +139,9 @@ def read_polhemus(
         raise InvalidInputError(f"on_invalid: expected 'raise' or 'drop', got {on_invalid!r}")
     if not (np.isfinite(rate_hz) and rate_hz > 0):
         raise InvalidInputError(f"rate_hz must be > 0, got {rate_hz!r}")
+    if columns is None:
+        columns = DEFAULT_COLUMNS if angles == "euler" else (
+            "sensor", "x", "y", "z", "qw", "qx", "qy", "qz")
     columns = tuple(columns)
     if len(set(columns)) != len(columns):
         raise InvalidInputError(f"columns: duplicate names in {columns!r}")
@@ -154,7 +159,7 @@ def read_polhemus(
     data, line_no = _parse_lines(path, len(columns))
     col = {c: i for i, c in enumerate(columns)}
 
-    def pose(rows: np.ndarray, suffix: str = "") -> tuple[np.ndarray, np.ndarray]:
+    def pose(rows: np.ndarray, lines: np.ndarray, suffix: str = "") -> tuple[np.ndarray, np.ndarray]:
         pos = rows[:, [col[c + suffix] for c in ("x", "y", "z")]] * _UNITS_M[units]
         a = rows[:, [col[c + suffix] for c in ang]]
         finite = np.isfinite(a).all(axis=1)
@@ -168,7 +173,7 @@ def read_polhemus(
                 i = int(np.flatnonzero(np.abs(norm - 1) > 1e-2)[0])
                 raise RecordingError(
                     f"{path.name}: quaternion with norm {norm[i]:.4f} != 1 at line "
-                    f"{line_no[finite][i]}; is the angle format really 'quaternion'?"
+                    f"{lines[finite][i]}; is the angle format really 'quaternion'?"
                 )
             rot[finite] = Rotation.from_quat(q[:, [1, 2, 3, 0]]).as_matrix()
         return pos, rot
@@ -192,7 +197,7 @@ def read_polhemus(
             if not rows.any():
                 raise RecordingError(f"{path.name}: no line of sensor (station) {st}")
             k = np.searchsorted(frames, frame_id[rows])
-            p, r = pose(data[rows])
+            p, r = pose(data[rows], line_no[rows])
             positions[k, s], rotations[k, s] = p, r
             if "time" in col and s == 0:
                 times = np.full(n, np.nan)
@@ -202,7 +207,7 @@ def read_polhemus(
         positions = np.empty((n, 2, 3))
         rotations = np.empty((n, 2, 3, 3))
         for s, k in enumerate(("1", "2")):
-            positions[:, s], rotations[:, s] = pose(data, k)
+            positions[:, s], rotations[:, s] = pose(data, line_no, k)
         if "time" in col:
             times = data[:, col["time"]]
         elif "frame" in col:
