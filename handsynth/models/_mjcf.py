@@ -313,14 +313,17 @@ def hand_mjcf(shape: HandShape | None = None, *, side: str = "right",
 
 def _qpos_order(angles_deg: np.ndarray) -> np.ndarray:
     """Reorder canonical angles into MuJoCo qpos order (depth-first body order)."""
-    order = qpos_joint_order()
-    return np.array([angles_deg[JOINT_NAMES.index(n)] for n in order])
+    return np.array([angles_deg[JOINT_NAMES.index(n)] for n in qpos_joint_order()])
 
 
-def qpos_joint_order() -> tuple[str, ...]:
-    """Joint names in the order MuJoCo assigns qpos (bodies depth-first)."""
-    out = []
-    for f in FINGERS[1:]:
-        out += [f"{f}_mcp_abd", f"{f}_mcp_flex", f"{f}_pip_flex", f"{f}_dip_flex"]
-    out += ["thumb_cmc_flex", "thumb_cmc_abd", "thumb_mcp_flex", "thumb_ip_flex"]
+def qpos_joint_order(side: str = "right") -> tuple[str, ...]:
+    """Joint names in the order MuJoCo assigns qpos: bodies depth-first, as emitted."""
+    out: list[str] = []
+
+    def walk(b: _Body) -> None:
+        out.extend(n for n, _ in b.joints)
+        for ch in b.children:
+            walk(ch)
+
+    walk(hand_spec(HandShape(), side=side).root)
     return tuple(out)

@@ -11,13 +11,14 @@ worker process).
 from __future__ import annotations
 
 import os
+import sys
 
 __all__ = ["ensure_backend", "backend"]
 
 
 def ensure_backend() -> str:
     """Set a headless default for ``MUJOCO_GL`` if none is set; return the backend."""
-    if "mujoco" not in __import__("sys").modules:
+    if "mujoco" not in sys.modules:
         if not os.environ.get("MUJOCO_GL") and not os.environ.get("DISPLAY"):
             os.environ["MUJOCO_GL"] = "egl"
     return backend()

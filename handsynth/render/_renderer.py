@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 
 from ..errors import InvalidCameraError, RenderError
@@ -21,7 +23,7 @@ def _renderer(model, w: int, h: int):
     except Exception as exc:  # GL context creation failures come in many types
         raise RenderError(
             f"could not create a {w}x{h} off-screen renderer with MUJOCO_GL="
-            f"{__import__('os').environ.get('MUJOCO_GL')!r}: {exc}. On a machine without a "
+            f"{os.environ.get('MUJOCO_GL')!r}: {exc}. On a machine without a "
             "display install Mesa (libegl1 libgl1-mesa-dri) and use MUJOCO_GL=egl or osmesa."
         ) from None
 
