@@ -84,3 +84,24 @@ def test_recording_rejects_bad_arrays(finger_rec):
     with pytest.raises(RecordingError, match="shape"):
         Recording(**{**good, "positions": np.zeros((n, 3))})
     assert not finger_rec.positions.flags.writeable
+
+
+def test_geometry_from_mujoco_hand_matches_its_keypoints():
+    models = pytest.importorskip("handsynth.models")
+    if not hasattr(models, "HandModel"):
+        pytest.skip("HandModel not available")
+    from handsynth.sensors import joint_geometry
+
+    hand = models.HandModel(models.HandShape())
+    hand.set_pose(np.zeros(20))
+    kp = np.asarray(hand.keypoints())
+    g = joint_geometry("index_dip", hand=hand)
+    assert g.source == "model"
+    # index: keypoints 5..8 = MCP, PIP, DIP, tip
+    assert g.upper_length == pytest.approx(np.linalg.norm(kp[7] - kp[6]), abs=1e-6)
+    assert g.lower_length == pytest.approx(np.linalg.norm(kp[8] - kp[7]), abs=1e-6)
+    np.testing.assert_allclose(g.upper_rotation.T @ g.upper_rotation, np.eye(3), atol=1e-12)
+    assert g.upper_rotation[2, 2] > 0.99  # segment +z is the hand's dorsal +z
+    rec = simulate_recording("index_dip", hand=hand, noise=NO_NOISE,
+                             motion=FlexionMotion(duration_s=2.0), seed=0)
+    np.testing.assert_allclose(rec.truth.centre_world[0], kp[7], atol=1e-9)
