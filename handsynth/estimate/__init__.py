@@ -3,8 +3,12 @@
 * Database selection from hand measurements, formulas (1)-(4):
   :class:`HandMeasurements`, :func:`model_measurements`, :func:`shape_ratios`,
   :func:`select_shape`.
+* The paper's two-stage pruned search: :class:`SearchOptions`,
+  :class:`SearchTables`, :func:`search` (compiled) and
+  :func:`search_reference` (numpy, the specification).
 """
 
+from ._search import SearchOptions, SearchResult, SearchTables, search, search_reference
 from ._selection import (
     SEGMENTS,
     HandMeasurements,
@@ -19,10 +23,15 @@ from ._selection import (
 __all__ = [
     "SEGMENTS",
     "HandMeasurements",
+    "SearchOptions",
+    "SearchResult",
+    "SearchTables",
     "Selection",
     "SelectionOptions",
     "database_path",
     "model_measurements",
+    "search",
+    "search_reference",
     "select_shape",
     "shape_ratios",
 ]

@@ -62,12 +62,12 @@ from ..models import FINGERS, HandShape
 __all__ = [
     "SEGMENTS",
     "HandMeasurements",
-    "SelectionOptions",
     "Selection",
-    "model_measurements",
-    "shape_ratios",
-    "select_shape",
+    "SelectionOptions",
     "database_path",
+    "model_measurements",
+    "select_shape",
+    "shape_ratios",
 ]
 
 #: The 14 segments of ``L1..L14`` / ``W1..W14`` in order, as (finger, segment).

@@ -1,0 +1,126 @@
+"""The two-stage pruned search: thresholds of SPEC.md, fast == reference, self-match."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from handsynth.db import Features, extract_features, pack_mask
+from handsynth.errors import InvalidInputError
+from handsynth.estimate import SearchOptions, SearchTables, search, search_reference
+
+
+def _tables(rows):
+    return SearchTables.from_arrays(hlac=rows["hlac"], sil_bits=rows["sil_bits"],
+                                    ridge_bits=rows["ridge_bits"], ridge_area=rows["ridge_area"])
+
+
+def _feat(sil, ridge, hlac):
+    sil_bits, ridge_bits = pack_mask(sil), pack_mask(ridge)
+    return Features(silhouette=sil, contour=sil, hlac=np.full(1600, hlac, np.uint8), ridge=ridge,
+                    sil_bits=sil_bits, ridge_bits=ridge_bits, ridge_area=int(ridge.sum()))
+
+
+def _line(cols, row=10):
+    m = np.zeros((64, 64), bool)
+    m[row, cols] = True
+    return m
+
+
+def _hand_made_tables(entries):
+    """entries: list of (sil, ridge, hlac value) -> SearchTables."""
+    sil = np.stack([e[0] for e in entries])
+    ridge = np.stack([e[1] for e in entries])
+    hl = np.stack([np.full(1600, e[2], np.uint8) for e in entries])
+    return SearchTables.from_arrays(hlac=hl, sil_bits=pack_mask(sil), ridge_bits=pack_mask(ridge),
+                                    ridge_area=ridge.sum(axis=(1, 2)))
+
+
+def test_stage_1_threshold_is_c_times_input_ridge_area():
+    # input ridge: 10 pixels in row 10 -> th1 = 0.2 * 10 = 2 pixels
+    q = _feat(np.ones((64, 64), bool), _line(slice(0, 10)), 0)
+    empty = np.zeros((64, 64), bool)
+    sil_p1_2 = np.ones((64, 64), bool)
+    sil_p1_2[10, 0:2] = False  # 2 input ridge pixels outside -> P1 = 2 (kept)
+    sil_p1_3 = np.ones((64, 64), bool)
+    sil_p1_3[10, 0:3] = False  # P1 = 3 > th1 (dropped although its HLAC matches exactly)
+    t = _hand_made_tables([(sil_p1_3, empty, 0), (sil_p1_2, empty, 1)])
+    r = search(q, t)
+    assert (r.index, r.p1, r.low_confidence, r.survivors) == (1, 2, False, 1)
+    assert r.error == 1600 + 800 * 2
+    assert search_reference(q, t) == r
+
+
+def test_stage_2_threshold_is_quadratic_in_entry_ridge_area():
+    # entry ridge A_ds = 50 -> th2 = 0.002 * 2500 + 0.03 * 50 = 6.5 pixels
+    q_sil = np.ones((64, 64), bool)
+    q_sil[20, 0:7] = False  # 7 input-background pixels in row 20
+    q = _feat(q_sil, np.zeros((64, 64), bool), 0)
+    ridge = np.zeros((64, 64), bool)
+    ridge[30, 0:44] = True
+    r7, r6 = ridge.copy(), ridge.copy()
+    r7[20, 0:6] = True
+    r7[31, 0] = True
+    r7[20, 6] = True  # 7 pixels outside the input silhouette, area 51
+    r7[31, 0] = False
+    r6[20, 0:6] = True  # 6 pixels outside, area 50
+    assert r6.sum() == 50 and r7.sum() == 51
+    full = np.ones((64, 64), bool)
+    # A=51 -> th2 = 5.202 + 1.53 = 6.732 < 7 (dropped); A=50 -> 6.5 >= 6 (kept)
+    t = _hand_made_tables([(full, r7, 0), (full, r6, 3)])
+    r = search(q, t)
+    assert (r.index, r.p2, r.survivors) == (1, 6, 1)
+    assert search_reference(q, t) == r
+
+
+def test_fallback_when_pruning_leaves_nothing_is_low_confidence():
+    q = _feat(np.ones((64, 64), bool), _line(slice(0, 10)), 0)
+    sil_a, sil_b = np.ones((64, 64), bool), np.ones((64, 64), bool)
+    sil_a[10, 0:5] = False  # P1 = 5
+    sil_b[10, 0:4] = False  # P1 = 4, both > th1 = 2
+    t = _hand_made_tables([(sil_a, np.zeros((64, 64), bool), 0),
+                           (sil_b, np.zeros((64, 64), bool), 2)])
+    r = search(q, t)
+    assert r.low_confidence and r.survivors == 0
+    # E_a = 0 + 800*5 = 4000 ; E_b = 1600*4 + 800*4 = 9600 -> a
+    assert (r.index, r.error) == (0, 4000.0)
+    assert search_reference(q, t) == r
+
+
+def test_fast_search_equals_reference_on_rendered_frames(small_rows, query_rows):
+    t = _tables(small_rows)
+    options = [SearchOptions(), SearchOptions(prune=False), SearchOptions(c=0.05, c1=0.0, c2=0.02),
+               SearchOptions(c3=10.0, c4=3000.0)]
+    low = 0
+    for sil in query_rows["silhouette"]:
+        f = extract_features(sil)
+        for opt in options:
+            fast, ref = search(f, t, options=opt), search_reference(f, t, options=opt)
+            assert fast == ref
+            low += fast.low_confidence
+            assert search(f, t, options=opt, seed=7) == ref  # temporal seed: same answer
+    assert 0 < low < len(query_rows["silhouette"]) * len(options)  # both branches ran
+
+
+def test_entry_own_features_return_that_entry(small_rows):
+    t = _tables(small_rows)
+    for i in (0, 17, 101, 239):
+        f = extract_features(small_rows["silhouette"][i])
+        r = search(f, t)
+        same = np.flatnonzero((small_rows["hlac"] == f.hlac).all(1)
+                              & (small_rows["sil_bits"] == f.sil_bits).all(1)
+                              & (small_rows["ridge_bits"] == f.ridge_bits).all(1))
+        assert r.error == 0.0 and r.index == same[0] and not r.low_confidence
+
+
+def test_options_and_arguments_are_checked(small_rows):
+    with pytest.raises(TypeError):
+        SearchOptions(c5=1.0)
+    with pytest.raises(InvalidInputError, match="c1"):
+        SearchOptions(c1=-1.0)
+    with pytest.raises(InvalidInputError, match="prune"):
+        SearchOptions(prune=1)
+    t = _tables(small_rows)
+    f = extract_features(small_rows["silhouette"][0])
+    with pytest.raises(InvalidInputError, match="seed"):
+        search(f, t, seed=len(t))
