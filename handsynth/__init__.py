@@ -8,7 +8,8 @@ same hand to the sensor-based methods.
 """
 
 from .models import JOINT_NAMES, HandModel, HandShape
+from .estimate import PoseLookup
 from .render import CameraMount
 
 __version__ = "0.1.0"
-__all__ = ["CameraMount", "HandModel", "HandShape", "JOINT_NAMES", "__version__"]
+__all__ = ["CameraMount", "HandModel", "HandShape", "JOINT_NAMES", "PoseLookup", "__version__"]

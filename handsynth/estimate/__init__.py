@@ -6,8 +6,11 @@
 * The paper's two-stage pruned search: :class:`SearchOptions`,
   :class:`SearchTables`, :func:`search` (compiled) and
   :func:`search_reference` (numpy, the specification).
+* :class:`PoseLookup`, the pose-lookup service (frame in, :class:`PoseEstimate`
+  out), implementing the :class:`PoseEstimator` protocol.
 """
 
+from ._lookup import PoseEstimate, PoseEstimator, PoseLookup
 from ._search import SearchOptions, SearchResult, SearchTables, search, search_reference
 from ._selection import (
     SEGMENTS,

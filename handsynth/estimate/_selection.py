@@ -48,6 +48,7 @@ choice is a field of :class:`SelectionOptions`.
 from __future__ import annotations
 
 import csv
+import itertools
 import json
 import math
 from dataclasses import dataclass, field
@@ -321,7 +322,7 @@ def model_measurements(shape: HandShape | None = None) -> HandMeasurements:
                                       for k, f in enumerate(FINGERS[1:])}}
     lengths = []
     for f, seg_rows in chains.items():
-        for a, b in zip(seg_rows[:-1], seg_rows[1:]):
+        for a, b in itertools.pairwise(seg_rows):
             lengths.append(float(np.linalg.norm(kp[b] - kp[a])))
 
     spec = hand_spec(shape)

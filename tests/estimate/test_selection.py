@@ -86,10 +86,10 @@ def test_files_json_and_csv(tmp_path):
 @pytest.mark.parametrize(
     "kwargs, match",
     [
-        (dict(L=[10.0] * 13), "L must hold 14"),
-        (dict(W=[2.0] * 13 + [float("nan")]), "W14"),
-        (dict(P_width=-1.0), "P_width"),
-        (dict(T_height="x"), "T_height"),
+        ({"L": [10.0] * 13}, "L must hold 14"),
+        ({"W": [2.0] * 13 + [float("nan")]}, "W14"),
+        ({"P_width": -1.0}, "P_width"),
+        ({"T_height": "x"}, "T_height"),
     ],
 )
 def test_bad_measurements_name_the_value(kwargs, match):

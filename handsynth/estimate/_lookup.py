@@ -1,0 +1,260 @@
+"""PoseLookup: the importable pose-lookup service (frame in, joint angles out).
+
+One :class:`PoseLookup` holds one database in memory (read-only arrays,
+loaded once) and may be shared by any number of threads: :meth:`estimate`
+allocates its own scratch per call and the compiled search releases the
+GIL.  Frames go through exactly the preprocessing the database was built
+with (:func:`handsynth.render.preprocess` with the database's camera mount)
+and the same features (:func:`handsynth.db.extract_features`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+from ..db import Database, extract_features, open_database
+from ..errors import DatabaseError, InvalidInputError
+from ..models import JOINT_NAMES, HandShape
+from ..render import CameraMount, preprocess
+from ._search import SearchOptions, SearchTables, search
+from ._selection import HandMeasurements, SelectionOptions, database_path, select_shape
+
+__all__ = ["PoseEstimate", "PoseEstimator", "PoseLookup"]
+
+_MIN_SIDE = 8
+
+
+@dataclass(frozen=True, eq=False)
+class PoseEstimate:
+    """The pose found for one frame.
+
+    Attributes
+    ----------
+    angles : ndarray of float64, shape (20,)
+        Joint angles in degrees, canonical :data:`~handsynth.JOINT_NAMES`
+        order; all NaN when `no_hand`.
+    keypoints : ndarray of float32, shape (21, 3)
+        Wrist, then base to tip per finger (thumb first), hand frame,
+        metres; all NaN when `no_hand`.
+    confidence : float
+        In [0, 1]: ``exp(-E / (C3 * A_input))``, i.e. 1 for a perfect match
+        and 1/e when the error equals every input ridge pixel lying outside
+        the match; halved when the search had to fall back (no entry passed
+        the pruning).  0 when `no_hand`.  A heuristic, not a probability.
+    entry : int
+        Index of the matched database entry, -1 when `no_hand`.
+    error : float
+        The search's ``E`` of that entry (inf when `no_hand`).
+    low_confidence : bool
+        No entry passed both pruning stages (SPEC.md section 1).
+    no_hand : bool
+        The frame shows no hand (empty silhouette after preprocessing).
+    """
+
+    angles: np.ndarray
+    keypoints: np.ndarray
+    confidence: float
+    entry: int
+    error: float
+    low_confidence: bool
+    no_hand: bool
+
+    def as_row(self) -> dict:
+        """One flat row: ``entry, no_hand, confidence, low_confidence`` and the 20 angles."""
+        row = {"entry": self.entry, "no_hand": self.no_hand,
+               "confidence": round(self.confidence, 6), "low_confidence": self.low_confidence}
+        row.update({n: (None if np.isnan(v) else round(float(v), 4))
+                    for n, v in zip(JOINT_NAMES, self.angles, strict=True)})
+        return row
+
+
+@runtime_checkable
+class PoseEstimator(Protocol):
+    """The interface every frame-based hand pose estimator of handsynth implements."""
+
+    def estimate(self, frame: np.ndarray) -> PoseEstimate:
+        """Pose of the hand in one frame (BGR uint8 image or bool mask)."""
+        ...
+
+
+def _check_frame(frame) -> np.ndarray:
+    if not isinstance(frame, np.ndarray):
+        raise InvalidInputError(f"frame must be a numpy array, got {type(frame).__name__}")
+    if frame.dtype.kind == "f":
+        if not np.isfinite(frame).all():
+            raise InvalidInputError("frame must not contain NaN or inf; give a uint8 image or "
+                                    "a bool mask")
+        raise InvalidInputError(f"frame must be a uint8 image or a bool mask, got dtype "
+                                f"{frame.dtype}")
+    if frame.dtype not in (np.bool_, np.uint8):
+        raise InvalidInputError(f"frame must be a uint8 image or a bool mask, got dtype "
+                                f"{frame.dtype}")
+    if frame.ndim not in (2, 3) or (frame.ndim == 3 and frame.shape[2] != 3):
+        raise InvalidInputError(f"frame must have shape (H, W) or (H, W, 3), got {frame.shape}")
+    if min(frame.shape[:2]) < _MIN_SIDE:
+        raise InvalidInputError(
+            f"frame must be at least {_MIN_SIDE}x{_MIN_SIDE} pixels, got shape {frame.shape}")
+    return frame
+
+
+class PoseLookup:
+    """Hand pose from one camera frame by database lookup (SPEC.md section 1).
+
+    Parameters
+    ----------
+    database : handsynth.db.Database
+        An opened database (see :meth:`open` to open one from a folder).
+    options : SearchOptions, keyword-only, optional
+        Search constants (the paper's by default).
+    temporal : bool, keyword-only
+        Score the previous frame's answer first (same answers, often faster).
+        The previous answer is the only state; it is a plain int, so sharing
+        one instance between threads stays safe (each thread may seed from
+        another thread's last answer, which changes no result).
+
+    Examples
+    --------
+    >>> lookup = PoseLookup.open("dbs/", shape=HandShape())      # doctest: +SKIP
+    >>> est = lookup.estimate(frame)                              # doctest: +SKIP
+    >>> est.angles.shape, est.no_hand                             # doctest: +SKIP
+    ((20,), False)
+    """
+
+    def __init__(self, database: Database, *, options: SearchOptions | None = None,
+                 temporal: bool = True) -> None:
+        if not isinstance(database, Database):
+            raise InvalidInputError(
+                f"database must be a handsynth.db.Database, got {type(database).__name__}")
+        if options is not None and not isinstance(options, SearchOptions):
+            raise InvalidInputError(
+                f"options must be SearchOptions, got {type(options).__name__}")
+        self.database = database
+        self.options = options or SearchOptions()
+        self.temporal = bool(temporal)
+        meta = database.meta
+        try:
+            self.mount = CameraMount(**meta["mount"])
+            self.side = meta.get("side", "right")
+            self.image_size = int(meta.get("features", {}).get("image_size", 64))
+        except (KeyError, TypeError) as exc:
+            raise DatabaseError(f"database {database.path} has no usable camera mount in its "
+                                f"metadata: {exc}") from None
+        self.shape = HandShape(**meta["shape"]) if "shape" in meta else None
+        self.tables = SearchTables.from_arrays(
+            hlac=database.hlac, sil_bits=database.sil_bits, ridge_bits=database.ridge_bits,
+            ridge_area=database.ridge_area)
+        self._angles = np.asarray(database.angles, dtype=np.float64)
+        self._angles.setflags(write=False)
+        self._last = -1
+
+    @classmethod
+    def open(cls, folder, *, shape: HandShape | None = None,
+             measurements: HandMeasurements | None = None,
+             selection: SelectionOptions | None = None, **kwargs) -> PoseLookup:
+        """Open the database of a hand from a folder of ``<HandShape.name>.h5`` files.
+
+        Parameters
+        ----------
+        folder : str or os.PathLike
+        shape : HandShape, keyword-only, optional
+            Use the database of the grid shape nearest to `shape`.
+        measurements : HandMeasurements, keyword-only, optional
+            Choose the shape by formulas (1)-(4) (:func:`select_shape`).
+            Give `shape` or `measurements`; the standard hand if neither.
+        selection : SelectionOptions, keyword-only, optional
+            Options of the selection from `measurements`.
+        **kwargs
+            Passed to :class:`PoseLookup` (``options``, ``temporal``).
+
+        Raises
+        ------
+        DatabaseError
+            The folder or the chosen database file does not exist.
+        """
+        if shape is not None and measurements is not None:
+            raise InvalidInputError("give shape or measurements, not both")
+        if measurements is not None:
+            grid = select_shape(measurements, options=selection).shape
+        else:
+            if shape is not None and not isinstance(shape, HandShape):
+                raise InvalidInputError(f"shape must be a HandShape, got {type(shape).__name__}")
+            grid = (shape or HandShape()).nearest_grid()
+        folder = Path(folder)
+        if not folder.is_dir():
+            raise DatabaseError(f"database folder {str(folder)!r} does not exist")
+        path = database_path(folder, grid)
+        if not path.is_file():
+            have = sorted(p.stem for p in folder.glob("*.h5"))
+            raise DatabaseError(f"no database for shape {grid.name} in {folder} (have: "
+                                f"{', '.join(have) or 'none'})")
+        return cls(open_database(path), **kwargs)
+
+    @classmethod
+    def from_rows(cls, rows: dict, *, mount: CameraMount | None = None, shape: HandShape | None = None,
+                  side: str = "right", **kwargs) -> PoseLookup:
+        """An in-memory lookup from rows of :func:`handsynth.db.render_entries`.
+
+        The rows must have been made with `mount` (the paper's by default).
+        """
+        mount = mount or CameraMount()
+        meta = {"mount": mount.as_dict(), "side": side,
+                "shape": (shape or HandShape()).as_dict(), "features": {"image_size": 64}}
+        db = Database(
+            path=Path("<memory>"), meta=meta,
+            angles=np.asarray(rows["angles"], np.float32),
+            hlac=np.asarray(rows["hlac"], np.uint8),
+            sil_bits=np.asarray(rows["sil_bits"], np.uint64),
+            ridge_bits=np.asarray(rows["ridge_bits"], np.uint64),
+            ridge_area=np.asarray(rows["ridge_area"], np.uint16),
+            keypoints_raw=np.rint(np.asarray(rows["keypoints"]) / 1e-5).astype(np.int16),
+        )
+        return cls(db, **kwargs)
+
+    def __len__(self) -> int:
+        return len(self.tables)
+
+    def silhouette(self, frame: np.ndarray) -> np.ndarray:
+        """The 64x64 bool silhouette of `frame` as the database sees it."""
+        return preprocess(_check_frame(frame), self.mount, side=self.side, size=self.image_size)
+
+    def estimate(self, frame: np.ndarray) -> PoseEstimate:
+        """Pose of the hand in one frame.
+
+        Parameters
+        ----------
+        frame : ndarray, shape (H, W) or (H, W, 3)
+            A BGR uint8 camera frame, a grey uint8 frame or a bool mask, of
+            any size (at least 8x8) taken by the database's camera mount.
+
+        Returns
+        -------
+        PoseEstimate
+            ``no_hand=True`` (NaN angles) when the frame shows no hand.
+
+        Raises
+        ------
+        InvalidInputError
+            A frame that is not an image: not an array, wrong dtype (float,
+            NaN...), wrong shape, smaller than 8x8.
+        """
+        sil = self.silhouette(frame)
+        if not sil.any():
+            return PoseEstimate(angles=np.full(len(JOINT_NAMES), np.nan),
+                                keypoints=np.full((21, 3), np.nan, np.float32), confidence=0.0,
+                                entry=-1, error=float("inf"), low_confidence=True, no_hand=True)
+        f = extract_features(sil)
+        seed = self._last if self.temporal and self._last >= 0 else None
+        r = search(f, self.tables, options=self.options, seed=seed)
+        self._last = r.index
+        scale = self.options.c3 * max(f.ridge_area, 1)
+        conf = float(np.exp(-r.error / scale)) if scale > 0 else float(r.error == 0)
+        if r.low_confidence:
+            conf *= 0.5
+        return PoseEstimate(angles=self._angles[r.index].copy(),
+                            keypoints=self.database.keypoints_m(r.index), confidence=conf,
+                            entry=r.index, error=r.error, low_confidence=r.low_confidence,
+                            no_hand=False)

@@ -1,0 +1,93 @@
+"""PoseLookup: self-match from a rendered frame, no hand, garbage input, threads."""
+
+from __future__ import annotations
+
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+import pytest
+
+import handsynth
+from handsynth.errors import DatabaseError, InvalidInputError
+from handsynth.estimate import PoseEstimator, PoseLookup, model_measurements
+from handsynth.models import JOINT_NAMES, HandShape
+from handsynth.render import CameraMount, SilhouetteRenderer
+
+from .conftest import RENDER_SIZE
+
+
+@pytest.fixture(scope="module")
+def lookup(db_folder):
+    return PoseLookup.open(db_folder, shape=HandShape(length=1.02, thumb=0.97))
+
+
+def test_top_level_export_and_protocol(lookup):
+    assert handsynth.PoseLookup is PoseLookup
+    assert isinstance(lookup, PoseEstimator)
+
+
+def test_frame_rendered_from_an_entry_returns_that_entry(lookup, small_rows):
+    r = SilhouetteRenderer(HandShape(), CameraMount(), width_px=RENDER_SIZE[0],
+                           height_px=RENDER_SIZE[1])
+    for i in (3, 50, 200):
+        mask = r.mask(small_rows["angles"][i])
+        # a BGR frame: bright hand on a dark background
+        bgr = np.where(mask[..., None], np.uint8([120, 160, 210]), np.uint8([15, 20, 25]))
+        for frame in (mask, bgr):
+            est = lookup.estimate(frame)
+            assert not est.no_hand and est.error == 0.0 and est.confidence == 1.0
+            np.testing.assert_array_equal(est.angles, lookup.database.angles[est.entry])
+            np.testing.assert_allclose(est.angles, small_rows["angles"][i], atol=1e-4) \
+                if est.entry == i else None
+            assert est.entry == i or (lookup.database.hlac[est.entry]
+                                      == small_rows["hlac"][i]).all()
+            assert est.keypoints.shape == (21, 3)
+    assert list(est.as_row())[4:] == list(JOINT_NAMES)
+
+
+def test_no_hand_frame_gives_no_hand(lookup):
+    for frame in (np.zeros((480, 720, 3), np.uint8), np.zeros((120, 180), bool),
+                  np.full((60, 90, 3), 77, np.uint8)):
+        est = lookup.estimate(frame)
+        assert est.no_hand and est.entry == -1 and np.isnan(est.angles).all()
+        assert est.confidence == 0.0
+
+
+@pytest.mark.parametrize(
+    "frame, match",
+    [
+        (np.zeros((1, 1, 3), np.uint8), "at least 8x8"),
+        (np.full((64, 64), np.nan), "NaN"),
+        (np.zeros((64, 64), np.float32), "dtype float32"),
+        (np.zeros((64, 64), np.int64), "dtype int64"),
+        (np.zeros((64, 64, 4), np.uint8), "shape"),
+        ([[0, 1]], "numpy array"),
+    ],
+)
+def test_garbage_input_raises_a_clear_error(lookup, frame, match):
+    with pytest.raises(InvalidInputError, match=match):
+        lookup.estimate(frame)
+
+
+def test_open_by_measurements_and_missing_database(db_folder, tmp_path):
+    lk = PoseLookup.open(db_folder, measurements=model_measurements(HandShape(width=1.03)))
+    assert lk.shape == HandShape() and len(lk) == 240
+    with pytest.raises(DatabaseError, match="L1.050"):
+        PoseLookup.open(db_folder, shape=HandShape(length=1.05))
+    with pytest.raises(DatabaseError, match="does not exist"):
+        PoseLookup.open(tmp_path / "nope")
+
+
+def test_threads_share_one_lookup(lookup, query_rows):
+    frames = list(query_rows["silhouette"])
+    serial = [lookup.estimate(f).entry for f in frames]
+    with ThreadPoolExecutor(4) as pool:
+        parallel = list(pool.map(lambda f: lookup.estimate(f).entry, frames * 3))
+    assert parallel == serial * 3
+
+
+def test_in_memory_rows(small_rows):
+    lk = PoseLookup.from_rows(small_rows)
+    r = SilhouetteRenderer(width_px=RENDER_SIZE[0], height_px=RENDER_SIZE[1])
+    est = lk.estimate(r.mask(small_rows["angles"][9]))
+    assert est.error == 0.0 and not est.low_confidence
