@@ -7,9 +7,9 @@ The flow of one frame: :mod:`handsynth.models` (hand model, shapes, poses) ->
 same hand to the sensor-based methods.
 """
 
-from .models import JOINT_NAMES, HandModel, HandShape
 from .estimate import PoseLookup
+from .models import JOINT_NAMES, HandModel, HandShape
 from .render import CameraMount
 
 __version__ = "0.1.0"
-__all__ = ["CameraMount", "HandModel", "HandShape", "JOINT_NAMES", "PoseLookup", "__version__"]
+__all__ = ["JOINT_NAMES", "CameraMount", "HandModel", "HandShape", "PoseLookup", "__version__"]

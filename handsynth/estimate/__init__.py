@@ -26,6 +26,9 @@ from ._selection import (
 __all__ = [
     "SEGMENTS",
     "HandMeasurements",
+    "PoseEstimate",
+    "PoseEstimator",
+    "PoseLookup",
     "SearchOptions",
     "SearchResult",
     "SearchTables",
