@@ -1,0 +1,104 @@
+"""End-to-end speed of PoseLookup on one core: 720x480 BGR frame in -> 20 angles out.
+
+Usage::
+
+    python scripts/bench_estimate.py [--db FOLDER] [--entries 20448] [--frames 2000]
+
+The database of the standard hand is read from ``FOLDER/<HandShape().name>.h5``
+or, without ``--db``, rendered into a temporary folder (about 30 s for
+20,448 entries).  Frames show an off-grid hand (not the database's shape)
+in natural poses, rendered as bright skin on a dark background and reused
+cyclically.  The process is pinned to one CPU and OpenCV to one thread.
+The last line is machine-readable:
+``estimate_fps_median=<number> latency_p99_ms=<number>``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+
+def _build(folder: Path, n: int) -> None:
+    from handsynth.db import database_meta, render_entries, write_database
+    from handsynth.models import HandShape, paper_pose_set
+    from handsynth.render import CameraMount
+
+    shape, mount = HandShape(), CameraMount()
+    rows = render_entries(paper_pose_set(n, seed=0), shape, mount, render_size=(240, 160))
+    write_database(folder / f"{shape.name}.h5", angles=rows["angles"], hlac=rows["hlac"],
+                   sil_bits=rows["sil_bits"], ridge_bits=rows["ridge_bits"],
+                   ridge_area=rows["ridge_area"], keypoints=rows["keypoints"],
+                   meta=database_meta(shape, mount, side="right", pose_set="paper", count=n,
+                                      seed=0, render_size=(240, 160)))
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--db", type=Path, help="folder of <shape>.h5 databases")
+    ap.add_argument("--entries", type=int, default=20448, help="entries when rendering a database")
+    ap.add_argument("--frames", type=int, default=2000, help="timed frames")
+    args = ap.parse_args()
+
+    import cv2
+
+    if hasattr(os, "sched_setaffinity"):
+        os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
+    cv2.setNumThreads(1)
+
+    from handsynth import HandShape, PoseLookup
+    from handsynth.models import natural_pose_set
+    from handsynth.render import SilhouetteRenderer
+
+    tmp = None
+    folder = args.db
+    if folder is None:
+        tmp = tempfile.TemporaryDirectory()
+        folder = Path(tmp.name)
+        t0 = time.perf_counter()
+        _build(folder, args.entries)
+        print(f"rendered a {args.entries}-entry database in {time.perf_counter() - t0:.1f} s")
+    lookup = PoseLookup.open(folder, shape=HandShape())
+    print(f"database: {len(lookup)} entries, {lookup.database.nbytes / 1e6:.1f} MB")
+
+    renderer = SilhouetteRenderer(HandShape(length=1.03, width=1.06, palm=0.98, thumb=1.04),
+                                  lookup.mount, width_px=720, height_px=480)
+    rng = np.random.default_rng(0)
+    frames = []
+    for pose in natural_pose_set(64, seed=11):
+        mask = renderer.mask(pose)
+        img = np.where(mask[..., None], np.uint8([120, 160, 210]), np.uint8([15, 20, 25]))
+        noise = rng.integers(0, 12, img.shape, dtype=np.uint8)
+        frames.append(np.ascontiguousarray(img + noise))
+
+    for f in frames[:8]:  # warm-up (compilation)
+        lookup.estimate(f)
+    lat = np.empty(args.frames)
+    stages = {"preprocess": [], "search": []}
+    for k in range(args.frames):
+        f = frames[k % len(frames)]
+        t0 = time.perf_counter()
+        est = lookup.estimate(f)
+        lat[k] = time.perf_counter() - t0
+        assert est.angles.shape == (20,)
+    for f in frames:  # stage split, separately so it does not disturb the timing above
+        t0 = time.perf_counter()
+        lookup.silhouette(f)
+        stages["preprocess"].append(time.perf_counter() - t0)
+    med = float(np.median(lat))
+    p99 = float(np.percentile(lat, 99))
+    pre = float(np.median(stages["preprocess"]))
+    print(f"frames: {args.frames} of 720x480 BGR; median latency {med * 1e3:.3f} ms "
+          f"(preprocessing {pre * 1e3:.3f} ms), p99 {p99 * 1e3:.3f} ms")
+    print(f"estimate_fps_median={1.0 / med:.1f} latency_p99_ms={p99 * 1e3:.3f}")
+    if tmp is not None:
+        tmp.cleanup()
+
+
+if __name__ == "__main__":
+    main()
