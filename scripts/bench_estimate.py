@@ -48,7 +48,7 @@ def main() -> None:
     import cv2
 
     if hasattr(os, "sched_setaffinity"):
-        os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
+        os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
     cv2.setNumThreads(1)
 
     from handsynth import HandShape, PoseLookup
