@@ -11,6 +11,9 @@ Features (identical for database renders and live frames):
 
 Databases (one HDF5 file per hand shape): :func:`write_database`,
 :func:`open_database`, :func:`verify`, :class:`Database`.
+
+Building them (resumable, parallel, optionally on Ray): :func:`build_database`,
+:func:`build_databases`, :func:`build_default_database`.
 """
 
 from ._bits import (
@@ -20,6 +23,16 @@ from ._bits import (
     pack_mask,
     popcount_bits,
     unpack_mask,
+)
+from ._build import (
+    DEFAULT_DATABASE,
+    BuildOptions,
+    BuildProgress,
+    BuildSummary,
+    build_database,
+    build_databases,
+    build_default_database,
+    database_path,
 )
 from ._contour import contour
 from ._entries import DEFAULT_RENDER_SIZE, database_meta, render_entries
@@ -61,4 +74,12 @@ __all__ = [
     "DEFAULT_RENDER_SIZE",
     "render_entries",
     "database_meta",
+    "BuildOptions",
+    "BuildProgress",
+    "BuildSummary",
+    "DEFAULT_DATABASE",
+    "build_database",
+    "build_databases",
+    "build_default_database",
+    "database_path",
 ]

@@ -1,0 +1,495 @@
+"""The database build job: many hand shapes, many poses, in parallel, resumable.
+
+One HDF5 file per hand shape, ``<out_dir>/<shape.name>.h5``
+(:func:`database_path`), written by :func:`write_database` (atomic,
+deterministic, checksummed).
+
+How a build runs
+----------------
+1. For every shape the expected metadata (:func:`database_meta`) is
+   computed.  A file that already exists is *checked*, not assumed: it is
+   skipped only if :func:`verify` accepts it with that metadata (complete
+   mark, checksum, same parameters); otherwise it is rebuilt.  Temporary
+   files ``<name>.h5.tmp-<pid>`` left by killed builds are removed.
+2. The pose set is drawn once (``pose_set(name, count, seed=seed)``, the
+   same poses for every shape) and each shape's poses are cut into chunks;
+   the chunks are the tasks of the executor.  A worker keeps one
+   :class:`SilhouetteRenderer` per shape (one model load for many poses).
+3. When all chunks of a shape are back they are joined in pose order and
+   written.  Rendering is a pure function of (shape, pose), so the bytes do
+   not depend on the chunking, the number of workers or the executor: same
+   seed, same bytes.
+
+Interrupting at any moment leaves finished files and, at worst, a
+temporary file that no reader opens; the next run resumes from there.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import DatabaseError, InvalidInputError
+from ..models import HandShape
+from ..models import pose_set as make_pose_set
+from ..models._posesets import PAPER_SIZE
+from ..render import CameraMount
+from ._entries import DEFAULT_RENDER_SIZE, database_meta, render_entries
+from ._executors import EXECUTORS, run_tasks
+from ._store import verify, write_database
+
+__all__ = [
+    "DEFAULT_DATABASE",
+    "BuildOptions",
+    "BuildProgress",
+    "BuildSummary",
+    "build_database",
+    "build_databases",
+    "build_default_database",
+    "database_path",
+]
+
+_STORED = ("angles", "hlac", "sil_bits", "ridge_bits", "ridge_area", "keypoints")
+_MAX_CHUNK = 4096  # poses per task: progress granularity and parent memory
+_MIN_CHUNK = 128
+
+
+@dataclass(frozen=True)
+class BuildOptions:
+    """What every database of a build is made of.
+
+    Parameters
+    ----------
+    side : {"right", "left"}
+        Hand side.
+    pose_set : {"paper", "natural"}
+        Pose set (:func:`handsynth.models.pose_set`).
+    count : int
+        Poses per shape (20,448 in the paper).
+    seed : int
+        Seed of the pose set; same seed, same bytes.
+    render_size : (int, int)
+        (width, height) in pixels of the masks before preprocessing.
+
+    Raises
+    ------
+    InvalidInputError
+        A field with an unusable value; the message names it.
+    """
+
+    side: str = "right"
+    pose_set: str = "paper"
+    count: int = PAPER_SIZE
+    seed: int = 0
+    render_size: tuple[int, int] = DEFAULT_RENDER_SIZE
+
+    def __post_init__(self) -> None:
+        if self.side not in ("right", "left"):
+            raise InvalidInputError(f"side must be 'right' or 'left', got {self.side!r}")
+        from ..models import POSE_SETS
+
+        if self.pose_set not in POSE_SETS:
+            raise InvalidInputError(
+                f"pose_set must be one of {', '.join(POSE_SETS)}, got {self.pose_set!r}")
+        for name in ("count", "seed"):
+            v = getattr(self, name)
+            lo = 1 if name == "count" else 0
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < lo:
+                raise InvalidInputError(f"{name} must be an integer >= {lo}, got {v!r}")
+            object.__setattr__(self, name, int(v))
+        size = self.render_size
+        try:
+            w, h = (int(s) for s in size)
+            ok = (w, h) == tuple(size) and 16 <= w <= 4096 and 16 <= h <= 4096
+        except (TypeError, ValueError):
+            ok = False
+        if not ok:
+            raise InvalidInputError(
+                f"render_size must be (width, height) with integers in [16, 4096], got {size!r}")
+        object.__setattr__(self, "render_size", (w, h))
+
+    def meta(self, shape: HandShape, mount: CameraMount) -> dict:
+        """The metadata a database of `shape` built with these options carries."""
+        return database_meta(shape, mount, side=self.side, pose_set=self.pose_set,
+                             count=self.count, seed=self.seed, render_size=self.render_size)
+
+
+@dataclass(frozen=True)
+class BuildProgress:
+    """State of a running build, passed to the ``progress`` callback.
+
+    Attributes
+    ----------
+    entries_done, entries_total : int
+        Entries rendered so far and to render in this run (skipped shapes
+        are not counted).
+    shapes_done, shapes_total : int
+        Databases written or skipped so far, and all shapes of the build.
+    elapsed_s : float
+        Seconds since rendering started.
+    finished : bool
+        True for the last call.
+    """
+
+    entries_done: int
+    entries_total: int
+    shapes_done: int
+    shapes_total: int
+    elapsed_s: float
+    finished: bool = False
+
+    @property
+    def rate(self) -> float:
+        """Entries per second so far (0 before the first chunk)."""
+        return self.entries_done / self.elapsed_s if self.elapsed_s > 0 else 0.0
+
+    @property
+    def eta_s(self) -> float | None:
+        """Estimated seconds left, ``None`` until a rate is known."""
+        if self.entries_done == 0 or self.elapsed_s <= 0:
+            return None
+        return (self.entries_total - self.entries_done) / self.rate
+
+    @property
+    def fraction(self) -> float:
+        """Share of the entries done, 0..1."""
+        return 1.0 if self.entries_total == 0 else self.entries_done / self.entries_total
+
+
+@dataclass(frozen=True)
+class BuildSummary:
+    """Outcome of :func:`build_databases`.
+
+    Attributes
+    ----------
+    paths : tuple of pathlib.Path
+        One database per requested shape, in the order of the shapes.
+    built, skipped : tuple of str
+        Shape names written in this run, and those whose file was verified
+        and kept.
+    rebuilt : dict of str to str
+        Shapes whose existing file was refused, with the reason (they are
+        also in `built`).
+    entries : int
+        Entries rendered in this run.
+    seconds : float
+        Wall time of the run.
+    workers : int
+    executor : str
+    """
+
+    paths: tuple[Path, ...]
+    built: tuple[str, ...]
+    skipped: tuple[str, ...]
+    rebuilt: dict = field(default_factory=dict)
+    entries: int = 0
+    seconds: float = 0.0
+    workers: int = 1
+    executor: str = "process"
+
+    def format(self) -> str:
+        """A short human-readable report (several lines)."""
+        rate = self.entries / self.seconds if self.seconds > 0 else 0.0
+        lines = [
+            (f"{len(self.paths)} database(s) in {self.paths[0].parent if self.paths else '-'}: "
+             f"{len(self.built)} built, {len(self.skipped)} verified and kept"),
+            (f"{self.entries} entries in {self.seconds:.1f} s ({rate:.0f} entries/s, "
+             f"{self.workers} worker(s), executor {self.executor})"),
+        ]
+        for name, reason in self.rebuilt.items():
+            lines.append(f"rebuilt {name}: {reason}")
+        return "\n".join(lines)
+
+
+#: The small database the demo builds: the standard shape, 3000 paper poses.
+DEFAULT_DATABASE: dict = {"shape": HandShape(), "pose_set": "paper", "count": 3000, "seed": 0}
+
+
+def database_path(out_dir, shape: HandShape) -> Path:
+    """File of `shape`'s database in `out_dir`: ``<out_dir>/<shape.name>.h5``."""
+    return Path(out_dir) / f"{shape.name}.h5"
+
+
+# --------------------------------------------------------------------------- workers
+
+# One open renderer per worker process, reused while tasks are of one shape.
+_RENDERER: dict = {}
+
+
+def _renderer_for(key):
+    from ..render import SilhouetteRenderer
+
+    r = _RENDERER.get(key)
+    if r is None:
+        for old in _RENDERER.values():
+            old.close()
+        _RENDERER.clear()
+        shape, mount, side, (w, h) = key
+        r = _RENDERER[key] = SilhouetteRenderer(shape, mount, side=side, width_px=w, height_px=h)
+    return r
+
+
+def _render_chunk(task) -> dict[str, np.ndarray]:
+    """Worker: the stored rows of one chunk of poses of one shape."""
+    key, angles = task
+    rows = render_entries(angles, render_size=key[3], renderer=_renderer_for(key))
+    return {k: rows[k] for k in _STORED}
+
+
+# --------------------------------------------------------------------------- planning
+
+
+def _remove_stale_tmp(path: Path) -> None:
+    for tmp in path.parent.glob(f"{path.name}.tmp-*"):
+        pid = tmp.name.rsplit("-", 1)[-1]
+        if pid.isdigit() and int(pid) != os.getpid() and _alive(int(pid)):
+            continue  # another build is writing it right now
+        tmp.unlink(missing_ok=True)
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def _check_existing(path: Path, meta: dict) -> tuple[bool, str | None]:
+    """(keep, reason it is refused) for an existing file."""
+    if not path.exists():
+        return False, None
+    try:
+        verify(path, expect=meta)
+    except DatabaseError as exc:
+        return False, str(exc)
+    return True, None
+
+
+def _chunk_size(count: int, n_shapes: int, workers: int, chunk_size: int | None) -> int:
+    if chunk_size is not None:
+        if isinstance(chunk_size, bool) or not isinstance(chunk_size, (int, np.integer)) \
+                or chunk_size < 1:
+            raise InvalidInputError(f"chunk_size must be a positive integer, got {chunk_size!r}")
+        return int(chunk_size)
+    # enough tasks to keep every worker busy to the end, few enough to keep
+    # per-task overhead small
+    want_tasks = max(1, -(-4 * workers // n_shapes))
+    return int(min(count, _MAX_CHUNK, max(_MIN_CHUNK, -(-count // want_tasks))))
+
+
+def _as_shapes(shapes) -> list[HandShape]:
+    if isinstance(shapes, HandShape):
+        shapes = [shapes]
+    out = []
+    for s in shapes:
+        if isinstance(s, str):
+            s = HandShape.from_name(s)
+        if not isinstance(s, HandShape):
+            raise InvalidInputError(
+                f"shapes must hold HandShape objects or shape names, got {type(s).__name__}")
+        out.append(s)
+    if not out:
+        raise InvalidInputError("shapes must name at least one hand shape, got none")
+    names = [s.name for s in out]
+    dup = {n for n in names if names.count(n) > 1}
+    if dup:
+        raise InvalidInputError(f"shapes must be distinct, got {min(dup)} more than once")
+    return out
+
+
+# --------------------------------------------------------------------------- public
+
+
+def build_databases(out_dir, shapes: Sequence[HandShape | str], mount: CameraMount | None = None,
+                    *, options: BuildOptions | None = None, workers: int | None = None,
+                    executor: str = "process", chunk_size: int | None = None,
+                    force: bool = False,
+                    progress: Callable[[BuildProgress], None] | None = None,
+                    **option_fields) -> BuildSummary:
+    """Build (or resume building) the databases of several hand shapes in parallel.
+
+    Parameters
+    ----------
+    out_dir : str or os.PathLike
+        Output folder, created if missing.
+    shapes : sequence of HandShape or str
+        Shapes (or their :attr:`HandShape.name`), e.g. ``HandShape.grid()``.
+    mount : CameraMount, optional
+        The paper's device by default.
+    options : BuildOptions, keyword-only, optional
+        Side, pose set, count, seed and render size.  Instead, the same
+        fields may be given as keywords (``count=3000, seed=1``).
+    workers : int, keyword-only, optional
+        Worker processes; all cores (``os.cpu_count()``) by default.  One
+        worker renders in this process.
+    executor : {"process", "ray"}, keyword-only
+        A local process pool, or Ray (optional dependency; a local instance
+        with `workers` CPUs, or the cluster of ``RAY_ADDRESS``).
+    chunk_size : int, keyword-only, optional
+        Poses per task; chosen from the work and `workers` by default.  It
+        does not change the result.
+    force : bool, keyword-only
+        Rebuild even the files that verify.
+    progress : callable, keyword-only, optional
+        Called with a :class:`BuildProgress` after each finished chunk and
+        once at the end.
+
+    Returns
+    -------
+    BuildSummary
+        Paths, built / skipped / rebuilt shapes, entries and time.
+
+    Raises
+    ------
+    InvalidInputError
+        Bad shapes, options, workers or executor (the message names it).
+    DatabaseError
+        A database could not be written.
+    """
+    if options is None:
+        options = BuildOptions(**option_fields)
+    elif option_fields:
+        raise InvalidInputError(
+            f"give either options or option keywords, got both (keywords {sorted(option_fields)})")
+    if not isinstance(options, BuildOptions):
+        raise InvalidInputError(f"options must be a BuildOptions, got {type(options).__name__}")
+    if workers is None:
+        workers = os.cpu_count() or 1
+    if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1:
+        raise InvalidInputError(f"workers must be a positive integer, got {workers!r}")
+    workers = int(workers)
+    if executor not in EXECUTORS:
+        raise InvalidInputError(
+            f"executor must be one of {', '.join(EXECUTORS)}, got {executor!r}")
+    mount = mount or CameraMount()
+    if not isinstance(mount, CameraMount):
+        raise InvalidInputError(f"mount must be a CameraMount, got {type(mount).__name__}")
+    shape_list = _as_shapes(shapes)
+    out = Path(out_dir)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise DatabaseError(f"cannot create output folder {out}: {exc}") from None
+
+    t0 = time.perf_counter()
+    paths, todo, skipped, rebuilt = [], [], [], {}
+    for shape in shape_list:
+        path = database_path(out, shape)
+        paths.append(path)
+        _remove_stale_tmp(path)
+        meta = options.meta(shape, mount)
+        keep, reason = (False, None) if force else _check_existing(path, meta)
+        if keep:
+            skipped.append(shape.name)
+            continue
+        if reason is not None:
+            rebuilt[shape.name] = reason
+        todo.append((shape, path, meta))
+
+    total = len(todo) * options.count
+    done_entries, done_shapes = 0, len(skipped)
+    t_render = time.perf_counter()
+
+    def report(finished: bool = False) -> None:
+        if progress is not None:
+            progress(BuildProgress(done_entries, total, done_shapes, len(shape_list),
+                                   time.perf_counter() - t_render, finished))
+
+    report()
+    if todo:
+        angles = make_pose_set(options.pose_set, options.count, seed=options.seed)
+        step = _chunk_size(options.count, len(todo), workers, chunk_size)
+        bounds = [(a, min(a + step, options.count)) for a in range(0, options.count, step)]
+        tasks, owner = [], []
+        for k, (shape, _, _) in enumerate(todo):
+            key = (shape, mount, options.side, options.render_size)
+            for a, b in bounds:
+                tasks.append((key, angles[a:b]))
+                owner.append((k, a))
+        parts: dict[int, dict[int, dict]] = {k: {} for k in range(len(todo))}
+        for i, rows in run_tasks(_render_chunk, tasks, workers=workers, executor=executor):
+            k, start = owner[i]
+            parts[k][start] = rows
+            done_entries += len(rows["angles"])
+            if len(parts[k]) == len(bounds):
+                shape, path, meta = todo[k]
+                got = parts.pop(k)
+                chunks = [got[a] for a, _ in bounds]
+                joined = {name: np.concatenate([c[name] for c in chunks]) for name in _STORED}
+                write_database(path, meta=meta, **joined)
+                done_shapes += 1
+            report()
+    summary = BuildSummary(paths=tuple(paths), built=tuple(s.name for s, _, _ in todo),
+                           skipped=tuple(skipped), rebuilt=rebuilt, entries=total,
+                           seconds=time.perf_counter() - t0, workers=workers, executor=executor)
+    report(finished=True)
+    return summary
+
+
+def build_database(out_dir, shape: HandShape | str | None = None,
+                   mount: CameraMount | None = None, *, workers: int = 1,
+                   executor: str = "process", force: bool = False,
+                   progress: Callable[[BuildProgress], None] | None = None,
+                   **option_fields) -> Path:
+    """Build the database of one hand shape (or keep the verified existing one).
+
+    Parameters
+    ----------
+    out_dir : str or os.PathLike
+        Output folder, created if missing; the file is
+        ``<out_dir>/<shape.name>.h5``.
+    shape : HandShape or str, optional
+        The standard hand by default.
+    mount : CameraMount, optional
+        The paper's device by default.
+    workers : int, keyword-only
+        1 (default) renders in this process with one model load; more split
+        the poses across worker processes.
+    executor, force, progress : keyword-only
+        As in :func:`build_databases`.
+    **option_fields
+        Fields of :class:`BuildOptions`: ``side``, ``pose_set``, ``count``,
+        ``seed``, ``render_size``.
+
+    Returns
+    -------
+    pathlib.Path
+        The database file.
+    """
+    summary = build_databases(out_dir, [shape or HandShape()], mount, workers=workers,
+                              executor=executor, force=force, progress=progress,
+                              **option_fields)
+    return summary.paths[0]
+
+
+def build_default_database(out_dir, *, workers: int | None = None,
+                           progress: Callable[[BuildProgress], None] | None = None) -> Path:
+    """Build the small embedded default database (:data:`DEFAULT_DATABASE`).
+
+    The standard hand shape, 3000 paper poses, seed 0, the paper's device,
+    right hand: a few seconds on a laptop.  Reused when it already exists and
+    verifies.
+
+    Parameters
+    ----------
+    out_dir : str or os.PathLike
+    workers : int, keyword-only, optional
+        All cores by default.
+    progress : callable, keyword-only, optional
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    d = DEFAULT_DATABASE
+    return build_database(out_dir, d["shape"], CameraMount.paper(), workers=workers or
+                          (os.cpu_count() or 1), progress=progress, pose_set=d["pose_set"],
+                          count=d["count"], seed=d["seed"])

@@ -1,0 +1,130 @@
+"""Executors of the database build: in-process, a local process pool, or Ray.
+
+Each executor runs a picklable function over a list of tasks and yields
+``(index, result)`` pairs as the tasks finish, in any order.  Workers pin
+Mesa's llvmpipe to one rendering thread (``LP_NUM_THREADS=1``) before their
+first render, so ``workers`` processes use ``workers`` cores.
+
+Ray is imported here and nowhere else; it is an optional dependency (``pip
+install handsynth[ray]``).  Without an address Ray starts a local instance
+with ``num_cpus=workers``; with ``RAY_ADDRESS`` set (or ``ray.init`` already
+called by the user) the tasks go to that cluster.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+
+from ..errors import InvalidInputError
+
+__all__ = ["EXECUTORS", "run_tasks"]
+
+#: Names accepted by ``executor=``.
+EXECUTORS: tuple[str, ...] = ("process", "ray")
+
+#: Rendering threads per worker process.
+_WORKER_ENV = {"LP_NUM_THREADS": "1"}
+
+
+def _init_worker(env: dict[str, str]) -> None:
+    # Runs in the fresh (spawned) worker before any task, hence before the
+    # first GL context is created.
+    os.environ.update(env)
+
+
+def _run_inline(fn: Callable, tasks: Sequence) -> Iterator[tuple[int, object]]:
+    for i, task in enumerate(tasks):
+        yield i, fn(task)
+
+
+def _run_process(fn: Callable, tasks: Sequence, workers: int) -> Iterator[tuple[int, object]]:
+    # "spawn": a worker must not inherit the parent's GL state or threads.
+    ctx = multiprocessing.get_context("spawn")
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx,
+                               initializer=_init_worker, initargs=(dict(_WORKER_ENV),))
+    # Keep at most 2 tasks per worker queued so that results stream back in
+    # roughly the task order (bounded memory in the parent).
+    pending: dict = {}
+    next_task = 0
+    try:
+        while next_task < len(tasks) or pending:
+            while next_task < len(tasks) and len(pending) < 2 * workers:
+                pending[pool.submit(fn, tasks[next_task])] = next_task
+                next_task += 1
+            done, _ = wait(pending, return_when=FIRST_COMPLETED)
+            for fut in done:
+                yield pending.pop(fut), fut.result()
+    finally:
+        pool.shutdown(wait=not pending, cancel_futures=True)
+
+
+def _import_ray():
+    try:
+        import ray
+    except ImportError:
+        raise InvalidInputError(
+            "executor='ray' needs the optional dependency Ray: pip install 'handsynth[ray]'"
+        ) from None
+    return ray
+
+
+def _run_ray(fn: Callable, tasks: Sequence, workers: int) -> Iterator[tuple[int, object]]:
+    ray = _import_ray()
+    started_here = False
+    if not ray.is_initialized():
+        kwargs = {"runtime_env": {"env_vars": dict(_WORKER_ENV)},
+                  "include_dashboard": False, "log_to_driver": False}
+        if not os.environ.get("RAY_ADDRESS"):
+            kwargs["num_cpus"] = workers
+        ray.init(**kwargs)
+        started_here = True
+    remote = ray.remote(num_cpus=1, max_retries=2)(fn)
+    pending: dict = {}
+    next_task = 0
+    try:
+        while next_task < len(tasks) or pending:
+            while next_task < len(tasks) and len(pending) < 2 * workers:
+                pending[remote.remote(tasks[next_task])] = next_task
+                next_task += 1
+            done, _ = ray.wait(list(pending), num_returns=1)
+            for ref in done:
+                yield pending.pop(ref), ray.get(ref)
+    finally:
+        for ref in pending:
+            ray.cancel(ref, force=True)
+        if started_here:
+            ray.shutdown()
+
+
+def run_tasks(fn: Callable, tasks: Sequence, *, workers: int,
+              executor: str = "process") -> Iterator[tuple[int, object]]:
+    """Run ``fn(task)`` for every task; yield ``(task index, result)`` as they finish.
+
+    Parameters
+    ----------
+    fn : callable
+        Module-level (picklable) function of one task.
+    tasks : sequence
+        Picklable task descriptions.
+    workers : int, keyword-only
+        Worker processes (Ray: CPUs of a local instance, or tasks in flight
+        on an existing cluster).  With ``executor="process"`` and
+        ``workers=1`` the tasks run in this process.
+    executor : {"process", "ray"}, keyword-only
+
+    Yields
+    ------
+    (int, object)
+        Index into `tasks` and the value ``fn`` returned.
+    """
+    if executor not in EXECUTORS:
+        raise InvalidInputError(
+            f"executor must be one of {', '.join(EXECUTORS)}, got {executor!r}")
+    if executor == "ray":
+        return _run_ray(fn, tasks, workers)
+    if workers == 1:
+        return _run_inline(fn, tasks)
+    return _run_process(fn, tasks, workers)

@@ -1,0 +1,144 @@
+"""The database build job: build, open, resume, rebuild, determinism, executors."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import pytest
+
+from handsynth.db import (
+    BuildOptions,
+    build_database,
+    build_databases,
+    database_path,
+    open_database,
+    render_entries,
+    verify,
+)
+from handsynth.errors import DatabaseCorruptError, InvalidInputError
+from handsynth.models import HandShape, pose_set
+from handsynth.render import CameraMount
+
+SMALL = {"count": 200, "render_size": (120, 80), "seed": 3}
+SHAPE = HandShape()
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    out = tmp_path_factory.mktemp("db")
+    path = build_database(out, SHAPE, **SMALL)
+    return path, path.read_bytes()
+
+
+def test_build_writes_a_database_that_opens_with_its_meta(built):
+    path, _ = built
+    assert path == database_path(path.parent, SHAPE)
+    meta = BuildOptions(**SMALL).meta(SHAPE, CameraMount())
+    db = open_database(path, expect=meta)
+    assert len(db) == 200
+    poses = pose_set("paper", 200, seed=3)
+    np.testing.assert_allclose(db.angles, poses.astype(np.float32))
+    rows = render_entries(poses[:20], SHAPE, render_size=(120, 80))
+    np.testing.assert_array_equal(db.hlac[:20], rows["hlac"])
+    np.testing.assert_array_equal(db.sil_bits[:20], rows["sil_bits"])
+    np.testing.assert_allclose(db.keypoints_m(slice(0, 20)), rows["keypoints"], atol=6e-6)
+    assert db.sil_bits.any(axis=1).all(), "every entry must show a hand"
+
+
+def test_rerun_verifies_and_does_not_rewrite(built):
+    path, data = built
+    before = os.stat(path)
+    summary = build_databases(path.parent, [SHAPE], workers=1, **SMALL)
+    after = os.stat(path)
+    assert summary.skipped == (SHAPE.name,) and summary.built == ()
+    assert (after.st_ino, after.st_mtime_ns) == (before.st_ino, before.st_mtime_ns)
+    assert path.read_bytes() == data
+
+
+def test_corrupted_file_is_rebuilt_to_the_same_bytes(built, tmp_path):
+    _, data = built
+    path = database_path(tmp_path, SHAPE)
+    damaged = bytearray(data)
+    damaged[len(damaged) // 2] ^= 0xFF
+    path.write_bytes(bytes(damaged))
+    with pytest.raises(DatabaseCorruptError):
+        verify(path)
+    summary = build_databases(tmp_path, [SHAPE], workers=1, **SMALL)
+    assert summary.built == (SHAPE.name,)
+    assert SHAPE.name in summary.rebuilt
+    assert path.read_bytes() == data
+
+
+def test_other_parameters_are_rebuilt_not_kept(built, tmp_path):
+    _, data = built
+    path = database_path(tmp_path, SHAPE)
+    path.write_bytes(data)
+    summary = build_databases(tmp_path, [SHAPE], workers=1, **{**SMALL, "seed": 4})
+    assert "seed" in summary.rebuilt[SHAPE.name]
+    assert verify(path)["pose_set"]["seed"] == 4
+
+
+def test_stale_temporary_files_are_removed(tmp_path):
+    path = database_path(tmp_path, SHAPE)
+    stale = path.with_name(path.name + ".tmp-999999999")
+    stale.write_bytes(b"half a file")
+    build_databases(tmp_path, [SHAPE], workers=1, **{**SMALL, "count": 40})
+    assert not stale.exists()
+    verify(path)
+
+
+def test_bytes_do_not_depend_on_chunks_or_workers(built, tmp_path):
+    _, data = built
+    a = build_databases(tmp_path / "a", [SHAPE], workers=1, chunk_size=37, **SMALL).paths[0]
+    b = build_databases(tmp_path / "b", [SHAPE], workers=2, **SMALL).paths[0]
+    assert a.read_bytes() == data
+    assert b.read_bytes() == data
+
+
+def test_progress_reports_every_chunk_and_finishes(tmp_path):
+    seen = []
+    shapes = [SHAPE, HandShape(length=1.05)]
+    summary = build_databases(tmp_path, shapes, workers=1, chunk_size=25, progress=seen.append,
+                              **{**SMALL, "count": 50})
+    done = [p.entries_done for p in seen]
+    assert done == sorted(done) and done[-1] == 100
+    assert all(p.entries_total == 100 and p.shapes_total == 2 for p in seen)
+    assert seen[-1].finished and seen[-1].shapes_done == 2 and seen[-1].eta_s == 0
+    assert not any(p.finished for p in seen[:-1])
+    assert summary.entries == 100 and len(summary.paths) == 2
+
+
+@pytest.mark.parametrize("kwargs, word", [
+    ({"count": 0}, "count"),
+    ({"seed": -1}, "seed"),
+    ({"pose_set": "yoga"}, "pose_set"),
+    ({"side": "middle"}, "side"),
+    ({"render_size": (120,)}, "render_size"),
+    ({"render_size": (8, 8)}, "render_size"),
+    ({"workers": 0}, "workers"),
+    ({"executor": "dask"}, "executor"),
+    ({"chunk_size": 0}, "chunk_size"),
+])
+def test_bad_options_name_the_argument_and_value(tmp_path, kwargs, word):
+    with pytest.raises(InvalidInputError, match=word) as info:
+        build_databases(tmp_path, [SHAPE], **{"count": 10, **kwargs})
+    value = next(iter(kwargs.values()))
+    assert repr(value) in str(info.value) or str(value) in str(info.value)
+    assert not any(tmp_path.iterdir())
+
+
+def test_bad_shapes_are_refused(tmp_path):
+    with pytest.raises(InvalidInputError, match="hand-shape name"):
+        build_databases(tmp_path, ["L1.0"], count=10)
+    with pytest.raises(InvalidInputError, match="distinct"):
+        build_databases(tmp_path, [SHAPE, SHAPE.name], count=10)
+    with pytest.raises(InvalidInputError, match="at least one"):
+        build_databases(tmp_path, [], count=10)
+
+
+def test_ray_executor_gives_the_same_bytes(built, tmp_path):
+    pytest.importorskip("ray", reason="Ray is optional: pip install 'handsynth[ray]'")
+    _, data = built
+    path = build_database(tmp_path, SHAPE, workers=2, executor="ray", **SMALL)
+    assert path.read_bytes() == data
