@@ -1,0 +1,93 @@
+"""Benchmark of the database build: entries per second per core, full-grid time, quality, size.
+
+1. Builds one complete 20,448-entry paper database (standard shape) with
+   :func:`handsynth.db.build_databases` on all cores (process pool, one
+   llvmpipe thread per worker): render + preprocessing + features + HDF5
+   write, wall time including the start of the workers.  Entries per second
+   per core = entries / (wall x workers); the full-grid projection is
+   81 x 20,448 entries at that rate on all cores.
+2. Prints the file size on disk and the bytes the opened database holds in
+   memory (target <= 60 MB each).
+3. Silhouette quality: the mean IoU of the 64x64 silhouettes rendered at
+   the build's render size and at high quality (720x480 and 1440x960) over
+   a few hundred paper poses (target >= 0.99).
+
+The last line is machine-readable:
+``build_entries_per_s_per_core=<number> full_grid_minutes=<number>``.
+
+Usage: python scripts/bench_build.py [--render-size 240x160] [--workers N] [--iou-poses 300]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import tempfile
+import time
+
+import numpy as np
+
+GRID_SHAPES = 81
+PAPER_COUNT = 20_448
+
+
+def _silhouettes(poses, size):
+    from handsynth.render import SilhouetteRenderer, preprocess
+
+    with SilhouetteRenderer(width_px=size[0], height_px=size[1]) as r:
+        return np.stack([preprocess(m, r.mount) for m in r.masks(poses)])
+
+
+def _iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    inter = (a & b).sum(axis=(1, 2))
+    union = (a | b).sum(axis=(1, 2))
+    return np.where(union > 0, inter / np.maximum(union, 1), 1.0)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--render-size", default=None, help="WIDTHxHEIGHT (build default if unset)")
+    ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    ap.add_argument("--iou-poses", type=int, default=300)
+    a = ap.parse_args()
+    os.environ.setdefault("MUJOCO_GL", "egl")
+    from handsynth.db import DEFAULT_RENDER_SIZE, build_databases, open_database
+    from handsynth.models import HandShape, paper_pose_set
+
+    size = tuple(int(v) for v in a.render_size.split("x")) if a.render_size \
+        else DEFAULT_RENDER_SIZE
+    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+          f"MUJOCO_GL={os.environ['MUJOCO_GL']}, {a.workers} worker(s), "
+          f"render size {size[0]}x{size[1]}")
+
+    with tempfile.TemporaryDirectory() as tmp:
+        t = time.perf_counter()
+        summary = build_databases(tmp, [HandShape()], workers=a.workers, count=PAPER_COUNT,
+                                  render_size=size)
+        wall = time.perf_counter() - t
+        path = summary.paths[0]
+        disk_mb = path.stat().st_size / 1e6
+        db = open_database(path)
+        mem_mb = db.nbytes / 1e6
+    per_core = PAPER_COUNT / (wall * a.workers)
+    grid_min = GRID_SHAPES * PAPER_COUNT / (per_core * a.workers) / 60
+    print(f"one {PAPER_COUNT}-entry database on {a.workers} worker(s): {wall:.1f} s wall "
+          f"(render + preprocessing + features + write, worker start-up included)")
+    print(f"  {per_core:.0f} entries/s per core = {1e3 / per_core:.3f} ms per entry per core")
+    print(f"  full grid ({GRID_SHAPES} shapes x {PAPER_COUNT} poses) on {a.workers} core(s): "
+          f"{grid_min:.1f} min (target <= 15)")
+    print(f"  size: {disk_mb:.1f} MB on disk, {mem_mb:.1f} MB in memory (target <= 60 each)")
+
+    poses = paper_pose_set(PAPER_COUNT, seed=0)[:: PAPER_COUNT // a.iou_poses][: a.iou_poses]
+    ours = _silhouettes(poses, size)
+    for ref_size in ((720, 480), (1440, 960)):
+        iou = _iou(ours, _silhouettes(poses, ref_size))
+        print(f"  silhouette IoU {size[0]}x{size[1]} vs {ref_size[0]}x{ref_size[1]} over "
+              f"{len(poses)} paper poses: mean {iou.mean():.4f}, 5th percentile "
+              f"{np.percentile(iou, 5):.4f}, min {iou.min():.4f} (target mean >= 0.99)")
+    print(f"build_entries_per_s_per_core={per_core:.0f} full_grid_minutes={grid_min:.1f}")
+
+
+if __name__ == "__main__":
+    main()
