@@ -1,0 +1,22 @@
+import cv2
+from click.testing import CliRunner
+
+from handsynth.cli._main import cli
+from handsynth.db import open_database
+
+
+def test_demo_writes_pictures_and_looks_up_frames(tmp_path):
+    res = CliRunner().invoke(cli, ["demo", "--out", str(tmp_path), "--tile-width", "96",
+                                   "--frames", "20"])
+    assert res.exit_code == 0, res.output
+    for name in ("hands_paper_mount.png", "hands_whole_hand_mount.png"):
+        img = cv2.imread(str(tmp_path / name))
+        assert img is not None and img.shape[1] == 4 * 96 + 4 and img.std() > 10
+    db = open_database(next((tmp_path / "db").glob("*.h5")))
+    assert len(db) == 3000
+    assert "looked up 20 frames" in res.output and "mean absolute error" in res.output
+
+
+def test_demo_bad_option_is_one_line(tmp_path):
+    res = CliRunner().invoke(cli, ["demo", "--out", str(tmp_path), "--tile-width", "5"])
+    assert res.exit_code == 2 and "tile-width" in res.output
