@@ -128,16 +128,18 @@ def hand_spec(shape: HandShape, *, side: str = "right") -> HandSpec:
         "palm", sites=[("wrist", np.zeros(3))],
     )
 
-    def chain(finger: str, base: _Body, lengths: list[float], breadths: list[float],
-              joint_names: list[list[str]], axes: list[list[np.ndarray]],
-              site_names: list[str], bodies: tuple[str, ...], classes: list[str]):
-        parent = base
+    def chain(base_pos: np.ndarray, base_rot: np.ndarray, lengths: list[float],
+              breadths: list[float], joint_names: list[list[str]],
+              axes: list[list[np.ndarray]], site_names: list[str], bodies: tuple[str, ...],
+              classes: list[str]) -> None:
+        """Append a digit of ``len(bodies)`` segments to the palm, base first."""
+        parent = palm
         for k, body_name in enumerate(bodies):
             tip = k == len(bodies) - 1
             b = _Body(
                 body_name,
-                parent.pos_mm if k == 0 else np.array([0.0, lengths[k - 1], 0.0]),
-                parent.rot if k == 0 else np.eye(3),
+                base_pos if k == 0 else np.array([0.0, lengths[k - 1], 0.0]),
+                base_rot if k == 0 else np.eye(3),
                 phalanx_vertices(lengths[k], breadths[k], breadths[k + 1],
                                  depth_ratio=DEPTH_TO_BREADTH, tip=tip),
                 classes[k],
@@ -146,10 +148,7 @@ def hand_spec(shape: HandShape, *, side: str = "right") -> HandSpec:
             )
             if tip:
                 b.sites.append((site_names[k + 1], np.array([0.0, lengths[k], 0.0])))
-            if k == 0:
-                palm.children.append(b)
-            else:
-                parent.children.append(b)
+            parent.children.append(b)
             parent = b
 
     for f in FINGERS[1:]:
@@ -157,9 +156,8 @@ def hand_spec(shape: HandShape, *, side: str = "right") -> HandSpec:
         lengths = [hl * ci * shape.length for ci in c[1:]]
         b_prox, b_dist = (b * shape.width for b in FINGER_BREADTH_MM[f])
         breadths = [1.05 * b_prox, b_prox, b_dist, 0.85 * b_dist]
-        anchor = _Body("", mcp_scaled[f], _rot("z", lay.finger_yaw_deg[f]), np.empty((0, 3)), "")
         chain(
-            f, anchor, lengths, breadths,
+            mcp_scaled[f], _rot("z", lay.finger_yaw_deg[f]), lengths, breadths,
             [[f"{f}_mcp_abd", f"{f}_mcp_flex"], [f"{f}_pip_flex"], [f"{f}_dip_flex"]],
             [[abd_axis, flex_axis], [flex_axis], [flex_axis]],
             [f"{f}_mcp", f"{f}_pip", f"{f}_dip", f"{f}_tip"],
@@ -176,9 +174,8 @@ def hand_spec(shape: HandShape, *, side: str = "right") -> HandSpec:
     cmc_abd /= np.linalg.norm(cmc_abd)
     b_mcp, b_ip = (b * shape.width for b in FINGER_BREADTH_MM["thumb"])
     lengths = [hl * c[0], hl * c[1] * shape.length, hl * c[2] * shape.length]
-    anchor = _Body("", cmc, rest, np.empty((0, 3)), "")
     chain(
-        "thumb", anchor, lengths, [1.25 * b_mcp, b_mcp, b_ip, 0.85 * b_ip],
+        cmc, rest, lengths, [1.25 * b_mcp, b_mcp, b_ip, 0.85 * b_ip],
         [["thumb_cmc_flex", "thumb_cmc_abd"], ["thumb_mcp_flex"], ["thumb_ip_flex"]],
         [[rest.T @ cmc_flex, rest.T @ cmc_abd], [flex_axis], [flex_axis]],
         ["thumb_cmc", "thumb_mcp", "thumb_ip", "thumb_tip"],
@@ -250,7 +247,7 @@ def hand_mjcf(shape: HandShape | None = None, *, side: str = "right",
     def emit(b: _Body, depth: int) -> None:
         ind = "  " * depth
         attrs = f'name="{b.name}"'
-        if depth > 2 or b.name != "palm":
+        if b is not spec.root:
             attrs += f' pos="{_fmt(b.pos_mm, 1e-3)}"'
         if not np.allclose(b.rot, np.eye(3)):
             attrs += f' quat="{_quat(b.rot)}"'
@@ -272,8 +269,9 @@ def hand_mjcf(shape: HandShape | None = None, *, side: str = "right",
         meshes.append(f'    <mesh name="forearm" vertex="{_fmt(spec.forearm, 1e-3)}"/>')
         lines.insert(0, '    <body name="forearm" childclass="hand"><geom class="forearm" '
                         'name="forearm" mesh="forearm"/></body>')
+    order = [JOINT_NAMES.index(n) for n in _joint_order(spec.root)]
     keys = "\n".join(
-        f'    <key name="{n}" qpos="{_fmt(np.radians(_qpos_order(p)), digits=12)}"/>'
+        f'    <key name="{n}" qpos="{_fmt(np.radians(p[order]), digits=12)}"/>'
         for n, p in NAMED_POSES.items()
     )
     skin = ('rgba="1 1 1 1" emission="1" specular="0" shininess="0"' if silhouette
@@ -311,19 +309,9 @@ def hand_mjcf(shape: HandShape | None = None, *, side: str = "right",
 """
 
 
-def _qpos_order(angles_deg: np.ndarray) -> np.ndarray:
-    """Reorder canonical angles into MuJoCo qpos order (depth-first body order)."""
-    return np.array([angles_deg[JOINT_NAMES.index(n)] for n in qpos_joint_order()])
-
-
-def qpos_joint_order(side: str = "right") -> tuple[str, ...]:
-    """Joint names in the order MuJoCo assigns qpos: bodies depth-first, as emitted."""
-    out: list[str] = []
-
-    def walk(b: _Body) -> None:
-        out.extend(n for n, _ in b.joints)
-        for ch in b.children:
-            walk(ch)
-
-    walk(hand_spec(HandShape(), side=side).root)
+def _joint_order(root: _Body) -> tuple[str, ...]:
+    """Joint names of a segment tree in MuJoCo's qpos order (bodies depth-first)."""
+    out: list[str] = [n for n, _ in root.joints]
+    for ch in root.children:
+        out.extend(_joint_order(ch))
     return tuple(out)
