@@ -25,7 +25,6 @@ from ._selection import HandMeasurements, SelectionOptions, database_path, selec
 
 __all__ = ["PoseEstimate", "PoseEstimator", "PoseLookup"]
 
-_MIN_SIDE = 8
 
 
 @dataclass(frozen=True, eq=False)
@@ -79,26 +78,6 @@ class PoseEstimator(Protocol):
     def estimate(self, frame: np.ndarray) -> PoseEstimate:
         """Pose of the hand in one frame (BGR uint8 image or bool mask)."""
         ...
-
-
-def _check_frame(frame) -> np.ndarray:
-    if not isinstance(frame, np.ndarray):
-        raise InvalidInputError(f"frame must be a numpy array, got {type(frame).__name__}")
-    if frame.dtype.kind == "f":
-        if not np.isfinite(frame).all():
-            raise InvalidInputError("frame must not contain NaN or inf; give a uint8 image or "
-                                    "a bool mask")
-        raise InvalidInputError(f"frame must be a uint8 image or a bool mask, got dtype "
-                                f"{frame.dtype}")
-    if frame.dtype not in (np.bool_, np.uint8):
-        raise InvalidInputError(f"frame must be a uint8 image or a bool mask, got dtype "
-                                f"{frame.dtype}")
-    if frame.ndim not in (2, 3) or (frame.ndim == 3 and frame.shape[2] != 3):
-        raise InvalidInputError(f"frame must have shape (H, W) or (H, W, 3), got {frame.shape}")
-    if min(frame.shape[:2]) < _MIN_SIDE:
-        raise InvalidInputError(
-            f"frame must be at least {_MIN_SIDE}x{_MIN_SIDE} pixels, got shape {frame.shape}")
-    return frame
 
 
 class PoseLookup:
@@ -219,7 +198,7 @@ class PoseLookup:
 
     def silhouette(self, frame: np.ndarray) -> np.ndarray:
         """The 64x64 bool silhouette of `frame` as the database sees it."""
-        return preprocess(_check_frame(frame), self.mount, side=self.side, size=self.image_size)
+        return preprocess(frame, self.mount, side=self.side, size=self.image_size)
 
     def estimate(self, frame: np.ndarray) -> PoseEstimate:
         """Pose of the hand in one frame.

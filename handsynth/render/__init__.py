@@ -2,7 +2,14 @@
 
 from ._camera import CameraMount
 from ._gl import backend, ensure_backend
-from ._preprocess import binarize, crop_resize, largest_component, preprocess, wrist_cut_keep
+from ._preprocess import (
+    binarize,
+    check_frame,
+    crop_resize,
+    largest_component,
+    preprocess,
+    wrist_cut_keep,
+)
 from ._renderer import SilhouetteRenderer, render_rgb
 from ._sheet import contact_sheet
 
@@ -11,6 +18,7 @@ __all__ = [
     "SilhouetteRenderer",
     "backend",
     "binarize",
+    "check_frame",
     "contact_sheet",
     "crop_resize",
     "ensure_backend",

@@ -33,7 +33,15 @@ from ..errors import InvalidInputError
 from ..models import DORSUM_Z_MM
 from ._camera import CameraMount
 
-__all__ = ["binarize", "wrist_cut_keep", "largest_component", "crop_resize", "preprocess"]
+__all__ = [
+    "MIN_FRAME_SIDE",
+    "binarize",
+    "check_frame",
+    "crop_resize",
+    "largest_component",
+    "preprocess",
+    "wrist_cut_keep",
+]
 
 
 def binarize(frame: np.ndarray, *, threshold: int | None = None) -> np.ndarray:
@@ -52,7 +60,7 @@ def binarize(frame: np.ndarray, *, threshold: int | None = None) -> np.ndarray:
     """
     import cv2
 
-    frame = _check_frame(frame)
+    frame = check_frame(frame)
     if frame.dtype == bool:
         return frame
     grey = frame if frame.ndim == 2 else cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
@@ -65,14 +73,32 @@ def binarize(frame: np.ndarray, *, threshold: int | None = None) -> np.ndarray:
     return out > 0
 
 
-def _check_frame(frame) -> np.ndarray:
+#: Smallest frame side, pixels, that can hold a hand.
+MIN_FRAME_SIDE = 8
+
+
+def check_frame(frame) -> np.ndarray:
+    """Validate a camera frame or mask and return it unchanged.
+
+    Raises
+    ------
+    InvalidInputError
+        If `frame` is not a numpy array, has a shape other than (H, W) or
+        (H, W, 3), a side under :data:`MIN_FRAME_SIDE` pixels, NaN/inf
+        values, or a dtype other than bool or uint8; the message names it.
+    """
     if not isinstance(frame, np.ndarray):
         raise InvalidInputError(f"frame must be a numpy array, got {type(frame).__name__}")
     if frame.ndim not in (2, 3) or (frame.ndim == 3 and frame.shape[2] != 3):
         raise InvalidInputError(
             f"frame must have shape (H, W) or (H, W, 3), got {frame.shape}")
-    if frame.shape[0] < 8 or frame.shape[1] < 8:
-        raise InvalidInputError(f"frame is too small to hold a hand: shape {frame.shape}")
+    if min(frame.shape[:2]) < MIN_FRAME_SIDE:
+        raise InvalidInputError(
+            f"frame is too small to hold a hand: must be at least "
+            f"{MIN_FRAME_SIDE}x{MIN_FRAME_SIDE} pixels, got shape {frame.shape}")
+    if frame.dtype.kind == "f" and not np.isfinite(frame).all():
+        raise InvalidInputError("frame must not contain NaN or inf; give a uint8 image or "
+                                "a bool mask")
     if frame.dtype not in (np.bool_, np.uint8):
         raise InvalidInputError(
             f"frame must be a bool mask or a uint8 image, got dtype {frame.dtype}")
