@@ -34,7 +34,7 @@ def _register() -> None:
     # that ``handsynth --help`` stays fast.
     import importlib
 
-    for mod in ("demo", "build_db", "estimate", "joints"):
+    for mod in ("demo", "build_db", "estimate", "eval", "measure", "joints"):
         try:
             importlib.import_module(f"{__package__}._{mod}")
         except ModuleNotFoundError as exc:  # sub-command not written yet
