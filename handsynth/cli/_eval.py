@@ -1,0 +1,89 @@
+"""``handsynth eval``: the paper's accuracy experiment, standard vs selected database."""
+
+from __future__ import annotations
+
+import sys
+
+import click
+
+from ..errors import InvalidInputError
+from ._main import cli
+
+
+def _parse_size(text: str, option: str) -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise InvalidInputError(
+            f"{option} must be WIDTHxHEIGHT in pixels, e.g. 720x480, got {text!r}") from None
+    return w, h
+
+
+def _parse_list(text: str, option: str) -> tuple[str, ...]:
+    items = tuple(t.strip() for t in text.split(",") if t.strip())
+    if not items:
+        raise InvalidInputError(f"{option} must name at least one item, got {text!r}")
+    return items
+
+
+@cli.command("eval")
+@click.option("--db", "db_folder", type=click.Path(file_okay=False), required=True,
+              help="Database folder; the databases needed are built there when missing.")
+@click.option("--out", "out_dir", type=click.Path(file_okay=False), default=None,
+              help="Folder for the plots (eval_*.png); none written if not given.")
+@click.option("--json", "json_path", type=click.Path(dir_okay=False), default=None,
+              help="Write the per-joint figures (and hands, databases, targets) as JSON.")
+@click.option("--json-frames", is_flag=True, help="Also put every frame's truth and estimates "
+              "into the JSON file (large).")
+@click.option("--hands", "n_hands", type=int, default=8, show_default=True,
+              help="Test hands with random off-grid ratios.")
+@click.option("--frames", "frames", type=int, default=100, show_default=True,
+              help="Test frames per hand and per pose set.")
+@click.option("--pose-sets", default="paper,natural", show_default=True,
+              help="Pose sets of the test frames, comma-separated.")
+@click.option("--hand", type=click.Choice(["model", "mesh"]), default="model", show_default=True,
+              help="Test hands: MuJoCo model hands, or the realistic glTF mesh hand.")
+@click.option("--conditions", default="standard,selected,selected_none,own_shape",
+              show_default=True, help="Databases to compare, comma-separated.")
+@click.option("--count", type=int, default=20448, show_default=True,
+              help="Entries per database.")
+@click.option("--seed", type=int, default=0, show_default=True,
+              help="Seed of the test hands and poses.")
+@click.option("--ratio-margin", type=float, default=0.5, show_default=True,
+              help="How far (in grid steps) the random ratios may lie beyond the grid.")
+@click.option("--mount", type=click.Choice(["paper", "whole-hand"]), default="paper",
+              show_default=True, help="Camera mount of databases and test frames.")
+@click.option("--frame-size", default="720x480", show_default=True,
+              help="WIDTHxHEIGHT of the test frames (the live camera's).")
+@click.option("--render-size", default=None,
+              help="WIDTHxHEIGHT of database renders [default: the library's].")
+@click.option("--workers", type=int, default=1, show_default=True,
+              help="Worker processes for building missing databases.")
+@click.option("--quiet", "-q", is_flag=True, help="No progress lines.")
+def eval_(db_folder, out_dir, json_path, json_frames, n_hands, frames, pose_sets, hand,
+          conditions, count, seed, ratio_margin, mount, frame_size, render_size, workers,
+          quiet) -> None:
+    """Accuracy on synthetic ground truth: standard vs selected database.
+
+    Test hands of random off-grid shape are rendered in known poses at the
+    camera's resolution and looked up in the standard database and in the
+    database chosen by formulas (1)-(4) from their measurements.  Prints
+    mean +- s.d. (MAE) of the signed error per joint and the targets.
+    """
+    from ..estimate._eval import EvalOptions, evaluate
+
+    options = EvalOptions(
+        db_folder=db_folder, n_hands=n_hands, frames_per_hand=frames,
+        pose_sets=_parse_list(pose_sets, "--pose-sets"), seed=seed, ratio_margin=ratio_margin,
+        hand=hand, conditions=_parse_list(conditions, "--conditions"), count=count,
+        render_size=_parse_size(render_size, "--render-size") if render_size else None,
+        mount=mount, frame_size=_parse_size(frame_size, "--frame-size"), workers=workers)
+    say = None if quiet else (lambda line: click.echo(line, err=True))
+    report = evaluate(options, progress=say)
+    click.echo(report.format())
+    if json_path:
+        click.echo(f"json: {report.write_json(json_path, frames=json_frames)}")
+    if out_dir:
+        for path in report.write_plots(out_dir):
+            click.echo(f"plot: {path}")
+    sys.stdout.flush()
