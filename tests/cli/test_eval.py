@@ -55,8 +55,23 @@ def test_bad_options_give_one_line_errors(tmp_path, args, word):
     assert len(lines) == 1 and lines[0].startswith("handsynth: error:") and word in lines[0]
 
 
-def test_mesh_hand_without_its_module_is_one_line(tmp_path):
-    if importlib.util.find_spec("handsynth.render._mesh_hand") is not None:
-        pytest.skip("the mesh hand is installed; covered by the estimate tests")
-    res = _run("--db", str(tmp_path), "--hand", "mesh")
-    assert res.exit_code == 2 and "mesh" in res.output and len(res.output.splitlines()) == 1
+def test_mesh_hand_is_pluggable(tmp_path):
+    js = tmp_path / "mesh.json"
+    res = _run("--db", str(tmp_path / "dbs"), "--hand", "mesh", "--json", str(js), "-q",
+               "--conditions", "standard,selected", *SMALL[:6], "--hands", "1", "--frames", "4")
+    if importlib.util.find_spec("handsynth.render._mesh_hand") is None:
+        assert res.exit_code == 2 and "mesh" in res.output
+        assert len(res.output.strip().splitlines()) == 1
+        return
+    from handsynth.render._mesh_hand import default_mesh_path
+
+    if not default_mesh_path().is_file():  # the module is there but not its glTF file
+        assert res.exit_code == 2 and len(res.output.strip().splitlines()) == 1
+        return
+    assert res.exit_code == 0, res.output
+    d = json.loads(js.read_text())
+    hand = d["hands"][0]
+    assert hand["kind"] == "mesh" and d["options"]["hand"] == "mesh"
+    assert hand["databases"]["standard"] == "L1.000_W1.000_P1.000_T1.000"
+    assert set(d["targets"]["all"]) == {"index_pip_sd_deg", "selected_beats_standard"}
+    assert d["conditions"]["selected"]["all"]["frames"] == 8
