@@ -1,0 +1,193 @@
+"""``handsynth estimate``: the live pose-lookup loop (camera, video file or a synthetic hand)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+
+from ..errors import EstimationError, InvalidInputError
+from ._main import cli
+
+#: Off-grid hand rendered by ``--synthetic`` unless ``--synthetic-shape`` says otherwise.
+SYNTHETIC_SHAPE = "L1.02_W0.97_P1.01_T1.03"
+#: Frames of a ``--synthetic`` run without ``--frames`` or ``--seconds``.
+SYNTHETIC_FRAMES = 300
+
+
+def _parse_size(text: str, flag: str) -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise InvalidInputError(f"{flag} must be WIDTHxHEIGHT in pixels, e.g. 720x480, "
+                                f"got {text!r}") from None
+    if w < 8 or h < 8:
+        raise InvalidInputError(f"{flag} must be at least 8x8 pixels, got {text!r}")
+    return w, h
+
+
+def _check_limits(frames, seconds, max_dead, fps) -> None:
+    if frames is not None and frames < 0:
+        raise InvalidInputError(f"--frames must be a non-negative integer, got {frames}")
+    if seconds is not None and not seconds > 0:
+        raise InvalidInputError(f"--seconds must be a positive number, got {seconds}")
+    if max_dead < 1:
+        raise InvalidInputError(f"--max-dead must be a positive integer, got {max_dead}")
+    if not fps > 0:
+        raise InvalidInputError(f"--fps must be a positive number, got {fps}")
+
+
+def _open_lookup(db_dir, shape_name, measurements, temporal, err):
+    import time
+
+    from ..estimate import HandMeasurements, PoseLookup
+    from ..models import HandShape
+
+    shape = meas = None
+    if shape_name is not None and measurements is not None:
+        raise InvalidInputError("give --shape or --measurements, not both")
+    if shape_name is not None:
+        shape = HandShape() if shape_name == "standard" else HandShape.from_name(shape_name)
+    if measurements is not None:
+        meas = HandMeasurements.from_file(measurements)
+    if db_dir is None:
+        from ..db import build_default_database
+        from ..estimate._live import default_database_dir
+
+        db_dir = default_database_dir()
+        t = time.perf_counter()
+        path = build_default_database(db_dir)
+        click.echo(f"default database {path} ready in {time.perf_counter() - t:.1f} s", err=err)
+    return PoseLookup.open(db_dir, shape=shape, measurements=meas, temporal=temporal)
+
+
+def _progress(stream):
+    def show(s) -> None:
+        stream.write(f"\r{s.frames} frames, dropped {s.dropped}, lookup {s.fps_lookup:.0f} fps, "
+                     f"loop {s.fps_loop:.0f} fps   ")
+        stream.flush()
+
+    return show
+
+
+@cli.command()
+@click.option("--camera", type=int, default=None, metavar="INDEX",
+              help="Read an OpenCV camera (0 for the first one).")
+@click.option("--video", "video_in", default=None, metavar="FILE", help="Read a video file.")
+@click.option("--synthetic", is_flag=True,
+              help="Render a moving hand of --synthetic-shape (no camera needed).")
+@click.option("--db", "db_dir", default=None, metavar="FOLDER",
+              help="Database folder (<shape>.h5 files) [default: build or verify the embedded "
+                   "default database in ~/.cache/handsynth/db].")
+@click.option("--shape", "shape_name", default=None, metavar="NAME",
+              help="Use the database of the grid shape nearest to this hand shape "
+                   "(e.g. L1.050_W0.900_P1.000_T1.000, or 'standard').")
+@click.option("--measurements", default=None, metavar="FILE",
+              help="Choose the database from hand measurements in mm (.json or .csv).")
+@click.option("--frames", type=int, default=None, metavar="N",
+              help=f"Stop after N frames [--synthetic default: {SYNTHETIC_FRAMES}].")
+@click.option("--seconds", type=float, default=None, metavar="S", help="Stop after S seconds.")
+@click.option("--out", default=None, metavar="FILE",
+              help="Write one row per frame (.csv or .jsonl; '-' for standard output).")
+@click.option("--format", "fmt", type=click.Choice(["csv", "jsonl"]), default=None,
+              help="Row format [default: from the --out suffix].")
+@click.option("--keypoints", is_flag=True, help="Add the 21 keypoints (metres) to the rows.")
+@click.option("--video-out", default=None, metavar="FILE",
+              help="Write input and matched render side by side (.mp4 or .avi).")
+@click.option("--synthetic-shape", default=SYNTHETIC_SHAPE, show_default=True, metavar="NAME",
+              help="Hand shape rendered by --synthetic (off the grid by default).")
+@click.option("--synthetic-motion", type=click.Choice(["paper", "natural", "named"]),
+              default="paper", show_default=True,
+              help="Key poses the synthetic hand moves through.")
+@click.option("--synthetic-size", default="720x480", show_default=True, metavar="WxH",
+              help="Frame size of --synthetic.")
+@click.option("--fps", type=float, default=30.0, show_default=True,
+              help="Media frame rate of --synthetic (timestamps and speed of the motion).")
+@click.option("--no-temporal", is_flag=True,
+              help="Do not score the previous frame's answer first.")
+@click.option("--max-dead", type=int, default=100, show_default=True, metavar="N",
+              help="Stop when N consecutive reads give no usable frame.")
+@click.option("--quiet", "-q", is_flag=True, help="No progress line.")
+def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, frames, seconds, out,
+             fmt, keypoints, video_out, synthetic_shape, synthetic_motion, synthetic_size, fps,
+             no_temporal, max_dead, quiet) -> None:
+    """Look up the hand pose of every frame of a camera, a video file or a synthetic hand.
+
+    Prints the frame rate of the lookup alone and of the whole loop; with
+    --out writes one row per frame (frame, timestamp_s, no_hand,
+    confidence, low_confidence, entry, the 20 joint angles in degrees,
+    optionally the keypoints; synthetic runs add the true angles and report
+    the mean absolute error).  Dropped or unreadable frames are counted and
+    skipped; a source that gives nothing usable for --max-dead reads in a
+    row ends the run with an error.  Ctrl-C stops the run cleanly.
+    """
+    from ..estimate._live import (
+        CameraSource,
+        LiveOptions,
+        SideBySideWriter,
+        SyntheticMotion,
+        SyntheticSource,
+        VideoSource,
+        live_columns,
+        open_row_writer,
+        run_live,
+    )
+    from ..models import HandShape
+
+    chosen = [n for n, on in (("--camera", camera is not None), ("--video", video_in is not None),
+                              ("--synthetic", synthetic)) if on]
+    if len(chosen) != 1:
+        raise InvalidInputError("give exactly one source: --camera INDEX, --video FILE or "
+                                f"--synthetic (got {', '.join(chosen) or 'none'})")
+    _check_limits(frames, seconds, max_dead, fps)
+    to_stdout = out == "-"
+    info_err = to_stdout  # keep standard output for the rows
+    if to_stdout and fmt is None:
+        raise InvalidInputError("--out - (standard output) needs --format csv or jsonl")
+    size = _parse_size(synthetic_size, "--synthetic-size") if synthetic else None
+    user_shape = HandShape.from_name(synthetic_shape) if synthetic else None
+    if synthetic and frames is None and seconds is None:
+        frames = SYNTHETIC_FRAMES
+
+    source = sink = video = None
+    try:
+        if camera is not None:
+            source, what = CameraSource(camera), f"camera {camera}"
+        elif video_in is not None:
+            source, what = VideoSource(video_in), f"video {video_in}"
+        lookup = _open_lookup(db_dir, shape_name, measurements, not no_temporal, info_err)
+        if synthetic:
+            source = SyntheticSource(user_shape, lookup.mount, side=lookup.side,
+                                     motion=SyntheticMotion(poses=synthetic_motion), fps=fps,
+                                     width_px=size[0], height_px=size[1])
+            what = f"synthetic hand {user_shape.name} ({synthetic_motion} poses)"
+        if out is not None:
+            sink = open_row_writer(out, format=fmt,
+                                   columns=live_columns(keypoints=keypoints, truth=synthetic))
+        if video_out is not None:
+            video = SideBySideWriter(video_out, lookup, fps=source.fps or fps)
+        options = LiveOptions(max_frames=frames, max_seconds=seconds, max_dead_reads=max_dead,
+                              keypoints=keypoints)
+        click.echo(f"estimating {what} against {lookup.database.path.name} "
+                   f"({len(lookup)} entries)", err=info_err)
+        show = None if quiet or not sys.stderr.isatty() else _progress(sys.stderr)
+        summary = run_live(lookup, source, sink=sink, video_out=video, options=options,
+                           progress=show)
+    finally:
+        if video is not None:
+            video.close()
+        if sink is not None:
+            sink.close()
+        if source is not None:
+            source.close()
+    if show is not None:
+        sys.stderr.write("\n")
+    click.echo(summary.format(), err=info_err)
+    if out is not None and not to_stdout:
+        click.echo(f"rows: {Path(out)} ({sink.rows} rows, {sink.format})", err=info_err)
+    if video_out is not None:
+        click.echo(f"video: {Path(video_out)} ({video.frames} frames, input | matched entry)",
+                   err=info_err)
+    if summary.stop_reason == "dead":
+        raise EstimationError(f"{what}: {summary.message}; stopped after {summary.frames} frames")

@@ -1,0 +1,226 @@
+"""``handsynth estimate`` on the real command: synthetic, video in/out, default database, errors."""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from handsynth.cli._main import cli
+from handsynth.db import (
+    database_meta,
+    database_path,
+    open_database,
+    render_entries,
+    write_database,
+)
+from handsynth.estimate._live import KEYPOINT_COLUMNS, TRUTH_COLUMNS, live_columns
+from handsynth.models import JOINT_LIMITS_DEG, JOINT_NAMES, HandShape, paper_pose_set
+from handsynth.render import CameraMount, SilhouetteRenderer
+
+W, H = 180, 120
+SMALL = ["--synthetic-size", f"{W}x{H}", "--fps", "8", "-q"]
+
+
+@pytest.fixture(scope="module")
+def db(tmp_path_factory):
+    """A folder with a 200-entry paper database of the standard hand (small renders)."""
+    folder = tmp_path_factory.mktemp("estimate_db")
+    shape, mount = HandShape(), CameraMount()
+    rows = render_entries(paper_pose_set(200, seed=1), shape, mount, render_size=(W, H))
+    write_database(database_path(folder, shape),
+                   **{k: rows[k] for k in ("angles", "hlac", "sil_bits", "ridge_bits",
+                                           "ridge_area", "keypoints")},
+                   meta=database_meta(shape, mount, side="right", pose_set="paper", count=200,
+                                      seed=1, render_size=(W, H)))
+    return folder
+
+
+@pytest.fixture(scope="module")
+def masks():
+    """Eight masks of an off-grid hand in paper poses (the frames of a fake video)."""
+    with SilhouetteRenderer(HandShape(length=1.02, thumb=1.03), width_px=W, height_px=H) as r:
+        return r.masks(paper_pose_set(8, seed=7))
+
+
+def _run(*args, env=None):
+    return CliRunner(env=env).invoke(cli, ["estimate", *args], catch_exceptions=False)
+
+
+def _read_csv(path):
+    with open(path, newline="", encoding="utf-8") as f:
+        reader = csv.reader(f)
+        header = next(reader)
+        return header, [dict(zip(header, r, strict=True)) for r in reader]
+
+
+def test_synthetic_run_writes_csv_and_prints_rates_and_error(tmp_path, db):
+    out = tmp_path / "rows.csv"
+    res = _run("--synthetic", "--db", str(db), "--frames", "24", "--out", str(out), *SMALL)
+    assert res.exit_code == 0, res.output
+    header, rows = _read_csv(out)
+    assert tuple(header) == live_columns(truth=True)
+    assert len(rows) == 24
+    est = np.array([[float(r[n]) for n in JOINT_NAMES] for r in rows])
+    truth = np.array([[float(r[c]) for c in TRUTH_COLUMNS] for r in rows])
+    assert ((est >= JOINT_LIMITS_DEG[:, 0] - 1e-3) & (est <= JOINT_LIMITS_DEG[:, 1] + 1e-3)).all()
+    text = res.stdout
+    fps = re.search(r"lookup ([\d.]+) fps alone .* whole loop ([\d.]+) fps", text)
+    assert fps and float(fps[1]) > float(fps[2]) > 0, text
+    mae = re.search(r"mean absolute error vs truth ([\d.]+) deg over 24 frames", text)
+    assert mae, text
+    assert float(mae[1]) == pytest.approx(np.abs(est - truth).mean(), abs=0.01)
+    assert float(mae[1]) < 6.0  # measured 2.1 deg (200 paper entries, default off-grid hand)
+    assert "stopped: reached 24 frames" in text
+    assert f"rows: {out} (24 rows, csv)" in text
+    assert "L1.020_W0.970_P1.010_T1.030" in text  # the off-grid default hand
+
+
+def test_jsonl_with_keypoints_to_a_file_and_to_stdout(tmp_path, db):
+    out = tmp_path / "rows.jsonl"
+    res = _run("--synthetic", "--db", str(db), "--frames", "5", "--out", str(out), "--keypoints",
+               "--synthetic-motion", "named", "--no-temporal", *SMALL)
+    assert res.exit_code == 0, res.output
+    rows = [json.loads(line) for line in out.read_text().splitlines()]
+    assert len(rows) == 5
+    assert all(tuple(r) == live_columns(keypoints=True, truth=True) for r in rows)
+    assert all(isinstance(r[KEYPOINT_COLUMNS[-1]], float) for r in rows)
+    assert rows[0]["frame"] == 0 and rows[-1]["timestamp_s"] == pytest.approx(4 / 8)
+
+    res = _run("--synthetic", "--db", str(db), "--frames", "3", "--out", "-", "--format",
+               "jsonl", *SMALL)
+    assert res.exit_code == 0, res.output
+    lines = res.stdout.splitlines()
+    assert len(lines) == 3 and [json.loads(x)["frame"] for x in lines] == [0, 1, 2]
+    assert "whole loop" in res.stderr
+
+
+def test_video_in_and_side_by_side_video_out(tmp_path, db, masks):
+    import cv2
+
+    video = tmp_path / "hand.avi"
+    writer = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"MJPG"), 15.0, (W, H))
+    for m in masks:
+        writer.write(np.repeat(m.view(np.uint8)[:, :, None] * np.uint8(255), 3, axis=2))
+    writer.release()
+    out, video_out = tmp_path / "rows.csv", tmp_path / "side.mp4"
+    res = _run("--video", str(video), "--db", str(db), "--out", str(out), "--video-out",
+               str(video_out), "-q")
+    assert res.exit_code == 0, res.output
+    _, rows = _read_csv(out)
+    assert len(rows) == len(masks)
+    assert all(r["no_hand"] == "0" for r in rows)
+    assert [float(r["timestamp_s"]) for r in rows] == pytest.approx(np.arange(8) / 15.0, abs=1e-5)
+    assert "stopped: the source has no more frames" in res.stdout
+    assert "mean absolute error" not in res.stdout  # no truth for a video
+    cap = cv2.VideoCapture(str(video_out))
+    size = (cap.get(cv2.CAP_PROP_FRAME_WIDTH), cap.get(cv2.CAP_PROP_FRAME_HEIGHT))
+    n = 0
+    while cap.read()[0]:
+        n += 1
+    cap.release()
+    assert size == (2 * W, H) and n == len(masks)
+
+
+def test_flaky_then_dead_camera_is_counted_and_ends_with_one_error_line(tmp_path, db, masks,
+                                                                        monkeypatch):
+    import handsynth.estimate._live as live
+
+    class FakeCamera:
+        def __init__(self, index):
+            self.index, self.n = index, 0
+
+        def read(self):
+            self.n += 1
+            if self.n > 12:
+                return None  # unplugged
+            return [masks[self.n % 8], None, np.empty((0, 0, 3), np.uint8)][self.n % 3]
+
+        def close(self):
+            pass
+
+    monkeypatch.setattr(live, "CameraSource", FakeCamera)
+    out = tmp_path / "rows.csv"
+    res = _run("--camera", "0", "--db", str(db), "--out", str(out), "--max-dead", "6", "-q")
+    assert res.exit_code == 2
+    # reads 3, 6, 9, 12 are frames; 1, 2, 4, 5, 7, 8, 10, 11 drops; 13-18 the dead end
+    assert "frames 4 (reads 18, dropped 14, invalid 0)" in res.stdout
+    err = res.stderr.strip().splitlines()
+    assert len(err) == 1
+    assert err[0].startswith("handsynth: error: camera 0: no usable frame in 6 consecutive reads")
+    _, rows = _read_csv(out)
+    assert [int(r["frame"]) for r in rows] == [2, 5, 8, 11]
+
+
+def test_default_database_is_built_in_the_cache_folder(tmp_path):
+    res = _run("--synthetic", "--frames", "3", *SMALL,
+               env={"HANDSYNTH_CACHE_DIR": str(tmp_path)})
+    assert res.exit_code == 0, res.output
+    path = database_path(tmp_path / "db", HandShape())
+    assert len(open_database(path)) == 3000
+    assert f"default database {path} ready" in res.stdout
+    assert "frames 3 " in res.stdout
+
+
+def test_killed_run_leaves_complete_lines(tmp_path, db):
+    out = tmp_path / "rows.jsonl"
+    cmd = [sys.executable, "-c", "from handsynth.cli import main; main()", "estimate",
+           "--synthetic", "--db", str(db), "--frames", "100000", "--out", str(out), *SMALL]
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                            env={**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")})
+    deadline = time.monotonic() + 60
+    try:
+        while time.monotonic() < deadline and proc.poll() is None:
+            if out.exists() and out.stat().st_size > 20_000:
+                break
+            time.sleep(0.02)
+    finally:
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait()
+    assert proc.returncode == -signal.SIGKILL, "the run ended before it could be killed"
+    text = out.read_text()
+    assert text.endswith("\n")
+    frames = [json.loads(line)["frame"] for line in text.splitlines()]
+    assert len(frames) >= 10 and frames == list(range(len(frames)))
+
+
+@pytest.mark.parametrize("args, word", [
+    ([], "exactly one source"),
+    (["--camera", "0", "--synthetic"], "exactly one source"),
+    (["--camera", "99"], "camera 99 could not be opened"),
+    (["--video", "{tmp}/missing.mp4"], "missing.mp4"),
+    (["--synthetic", "--frames", "-1"], "--frames"),
+    (["--synthetic", "--seconds", "0"], "--seconds"),
+    (["--synthetic", "--max-dead", "0"], "--max-dead"),
+    (["--synthetic", "--out", "{tmp}/rows.txt"], "rows.txt"),
+    (["--synthetic", "--out", "-"], "--format"),
+    (["--synthetic", "--synthetic-shape", "L1.0_bogus"], "L1.0_bogus"),
+    (["--synthetic", "--synthetic-size", "180"], "--synthetic-size"),
+    (["--synthetic", "--video-out", "{tmp}/side.gif"], "side.gif"),
+    (["--synthetic", "--shape", "L0.950_W0.900_P0.950_T0.900"], "no database for shape"),
+    (["--synthetic", "--measurements", "{tmp}/hand.json"], "hand.json"),
+    (["--synthetic", "--shape", "standard", "--measurements", "{tmp}/m.json"], "not both"),
+])
+def test_bad_options_give_one_line_errors(tmp_path, db, args, word):
+    args = [a.replace("{tmp}", str(tmp_path)) for a in args]
+    res = _run("--db", str(db), *SMALL, *args)
+    assert res.exit_code == 2, res.output
+    lines = res.output.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("handsynth: error:"), res.output
+    assert word in lines[0]
+
+
+def test_missing_database_folder(tmp_path):
+    res = _run("--synthetic", "--db", str(tmp_path / "nowhere"), *SMALL)
+    assert res.exit_code == 2
+    assert res.output.strip() == (f"handsynth: error: database folder "
+                                  f"{str(tmp_path / 'nowhere')!r} does not exist")
