@@ -83,6 +83,10 @@ def test_synthetic_run_writes_rows_with_sane_angles(tmp_path, lookup, small_rows
     assert s.mae_deg < MAE_BOUND_DEG
     assert s.mae_deg < 0.5 * np.abs(truth - db.mean(axis=0)).mean()
     assert s.fps_lookup > s.fps_loop > 0
+    # rates leave the first frame (one-off costs) out
+    assert 0 < s.steady_wall_s < s.wall_s and s.first_lookup_ms > 0
+    assert s.fps_loop == pytest.approx(39 / s.steady_wall_s)
+    assert s.lookup_s < s.steady_wall_s
 
 
 def test_jsonl_rows_with_keypoints_read_back(tmp_path, lookup, small_rows):
