@@ -105,6 +105,9 @@ _MOUNTS = {"paper": CameraMount.paper, "whole-hand": CameraMount.whole_hand}
 _MESH_MODULE = "handsynth.render._mesh_hand"
 SCHEMA = "handsynth.eval/1"
 
+#: A joint counts as moving in a frame when its true angle is farther than this from 0, degrees.
+MOVING_DEG = 1.0
+
 #: Targets of issue 4 for the ``selected`` condition, degrees, per test-hand kind: off-grid
 #: model hands, and the realistic mesh hand.
 TARGETS = {
@@ -569,9 +572,27 @@ class EvalReport:
                 f"pose_set must be one of {self.options.pose_sets}, got {pose_set!r}")
         return self.pose_set == pose_set
 
-    def stats(self, condition: str, *, pose_set: str | None = None) -> JointStats:
-        """:func:`joint_stats` of one condition (all frames, or one pose set's)."""
-        return joint_stats(self.errors(condition, pose_set=pose_set))
+    def stats(self, condition: str, *, pose_set: str | None = None,
+              moving: bool = False) -> JointStats:
+        """:func:`joint_stats` of one condition (all frames, or one pose set's).
+
+        Parameters
+        ----------
+        condition : str
+        pose_set : str, keyword-only, optional
+            Only that pose set's frames.
+        moving : bool, keyword-only
+            Per joint, only the frames where its true angle is away from the
+            open hand (``|truth| > MOVING_DEG``).  In the paper's set one
+            finger moves at a time, so most frames hold a joint at 0, where
+            the lookup is nearly always right; this shows the error where
+            the joint actually moves.
+        """
+        e = self.errors(condition, pose_set=pose_set)
+        if moving:
+            t = self.truth_deg if pose_set is None else self.truth_deg[self._set_rows(pose_set)]
+            e = np.where(np.abs(t) > MOVING_DEG, e, np.nan)
+        return joint_stats(e)
 
     def targets(self, *, pose_set: str | None = None) -> dict:
         """The issue's targets (:data:`TARGETS` of the hand kind) on the ``selected`` condition.
@@ -623,6 +644,9 @@ class EvalReport:
                "all": block(np.ones(len(self.truth_deg), bool))}
         for name in self.options.pose_sets:
             out[name] = block(self.pose_set == name)
+        out["moving"] = {"note": f"per joint, frames where |truth| > {MOVING_DEG} deg",
+                         **{ps or "all": self.stats(cond, pose_set=ps, moving=True).as_dict()
+                            for ps in (None, *self.options.pose_sets)}}
         return out
 
     def to_dict(self, *, frames: bool = False) -> dict:
@@ -640,7 +664,9 @@ class EvalReport:
             ``conditions`` (per condition: ``description``, ``databases``,
             and for ``all`` frames and each pose set: ``frames``,
             ``no_hand``, ``low_confidence``, ``overall_mae_deg`` and
-            ``joints`` -> name -> ``mean_deg, sd_deg, mae_deg, n``),
+            ``joints`` -> name -> ``mean_deg, sd_deg, mae_deg, n``; and
+            ``moving``: the same per-joint figures over the frames where the
+            joint moves, for all frames and each pose set),
             ``targets`` (for ``all`` frames and each pose set), ``paper``, ``timing_s`` and optionally ``frames``.
         """
         out = {
@@ -731,6 +757,14 @@ class EvalReport:
                 f"{self.stats(c, pose_set=ps).overall_mae_deg:>{width}.2f}" for c in conds))
         lines.append("mean ± s.d. (MAE) of estimate - truth, degrees; "
                      f"{len(self.truth_deg)} frames of {len(self.hands)} hand(s)")
+        for ps in self.options.pose_sets:
+            moving = {c: self.stats(c, pose_set=ps, moving=True) for c in conds}
+            for name in ("index_pip_flex", "thumb_cmc_flex"):
+                j = JOINT_NAMES.index(name)
+                cells = [f"{m.mean_deg[j]:+6.2f} ±{m.sd_deg[j]:6.2f} ({m.mae_deg[j]:5.2f})"
+                         for m in moving.values()]
+                label = f"{ps} poses, {name} where it moves (n={moving[conds[0]].n[j]})"
+                lines.append(f"{label}:\n{'':<16}" + "".join(f"{x:>{width}}" for x in cells))
         for ps in (None, *self.options.pose_sets):
             where = "all frames" if ps is None else f"{ps} poses"
             for name, t in self.targets(pose_set=ps).items():

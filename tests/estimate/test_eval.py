@@ -162,6 +162,13 @@ def test_frames_truth_and_statistics(report):
         paper = report.stats(cond, pose_set="paper")
         np.testing.assert_allclose(paper.sd_deg, np.std(e[report.pose_set == "paper"], axis=0,
                                                        ddof=1))
+        moving = report.stats(cond, pose_set="paper", moving=True)
+        p = report.pose_set == "paper"
+        for j in (0, JOINT_NAMES.index("index_pip_flex")):
+            rows = p & (np.abs(report.truth_deg[:, j]) > 1.0)
+            assert moving.n[j] == rows.sum()
+            if rows.any():
+                assert moving.mae_deg[j] == pytest.approx(np.abs(e[rows, j]).mean())
     assert report.errors("selected").shape == (n, 20)
     with pytest.raises(InvalidInputError, match="condition"):
         report.errors("best")
@@ -183,6 +190,8 @@ def test_report_json_schema(report):
             exp = report.stats(cond, pose_set=None if part == "all" else part)
             assert b["joints"]["index_pip_flex"]["mae_deg"] == pytest.approx(
                 exp.mae_deg[JOINT_NAMES.index("index_pip_flex")], abs=1e-4)
+        assert set(block["moving"]) == {"note", "all", "paper", "natural"}
+        assert list(block["moving"]["paper"]) == list(JOINT_NAMES)
     t = d["targets"]["all"]
     assert set(t) == {"index_pip_abs_mean_deg", "index_pip_sd_deg", "thumb_cmc_sd_deg",
                       "selected_beats_standard"}
