@@ -321,10 +321,14 @@ class SyntheticMotion:
 
     Parameters
     ----------
-    poses : {"natural", "paper", "named"}
-        Key poses: `count` poses of the natural or paper pose set
+    poses : {"paper", "natural", "named"}
+        Key poses: `count` poses of the paper or natural pose set
         (:func:`handsynth.models.pose_set`, seed `seed`), or the named
-        poses in the order of :data:`NAMED_CYCLE`.
+        poses in the order of :data:`NAMED_CYCLE`.  ``"paper"`` by default,
+        the pose set of the default databases: multi-finger motions
+        (``"natural"``, ``"named"``) are poorly covered by a paper-set
+        database (measured on the 3,000-entry default: 27.6 deg mean
+        absolute error for ``"natural"``, 2.2-2.7 deg for ``"paper"``).
     seconds_per_pose : float
         Media time from one key pose to the next, seconds.
     count : int
@@ -338,7 +342,7 @@ class SyntheticMotion:
         A value of the wrong type or range (the message names the field).
     """
 
-    poses: str = "natural"
+    poses: str = "paper"
     seconds_per_pose: float = 1.0
     count: int = 16
     seed: int = 0
