@@ -1,0 +1,699 @@
+"""Approximate search for large databases (10^5-10^6 entries): inverted lists over HLAC.
+
+Beyond the paper (SPEC.md section 1, "Search"), switchable and compared
+against the exact search of :mod:`handsynth.estimate._search`.
+
+Method
+------
+An inverted-file (IVF) index chooses *which* entries are scored; the
+scoring itself is the paper's, unchanged:
+
+1. **Coarse quantizer.**  The 1600-dimensional HLAC vectors are projected
+   onto their first ``dims`` principal directions, ``y = A h`` (PCA trained
+   by faiss on a float32 sample of the database), and the projections are
+   clustered by k-means (faiss) into ``nlist`` cells.  Each entry belongs to
+   the cell of its nearest centroid; the entries of a cell form its inverted
+   list (entry indices, ascending).
+2. **Probe.**  A query's HLAC is projected the same way and the ``nprobe``
+   cells with the nearest centroids are chosen.
+3. **Exact scoring of the candidates.**  Every entry of the probed lists
+   goes through the paper's two stages (P1, P2 pruning) and the smallest
+   ``E = |h - h_i|^2 + C3 P1 + C4 P2`` among the survivors wins (ties: the
+   lowest entry index).  The HLAC distances use the exact search's compiled
+   helper (int32 arithmetic, early abandon).  Most of them are skipped by a
+   lower bound: the rows of ``A`` are orthonormal, so
+   ``|h - h_i|^2 >= |A h - A h_i|^2 / s^2`` (``s`` the largest singular
+   value of the stored float32 ``A``, 1 up to rounding).  ``A h_i`` is kept
+   as int16 codes with a per-dimension scale; the bound subtracts the
+   quantisation error (half a step) from each coordinate difference, so it
+   stays a true lower bound and skipping by it never changes the answer.
+   Scoring starts from the survivor with the smallest bound.
+4. **Widening and fallback.**  When no candidate survives both stages,
+   the probe doubles (next-nearest cells) up to ``max_nprobe`` cells.  If
+   still none survives, the answer is the smallest ``E`` over the
+   candidates, marked ``low_confidence`` (the exact search does the same
+   over all entries).
+
+Consequences: with ``nprobe >= nlist`` the candidates are all entries and
+the answer equals the exact search's (the same :class:`SearchResult`).
+With fewer probes the answer's ``E`` is never smaller than the exact one's,
+except when the approximate answer is a fallback (``low_confidence``) and
+the exact search found survivors; with ``max_nprobe=None`` (widen up to
+every cell before falling back) that case cannot happen.
+
+Why not "the k nearest by HLAC, then E": scoring the whole probed lists by
+``E`` costs little more (the bound skips most HLAC distances) and its
+candidates include the k HLAC-nearest entries of those lists, so its answer
+is never worse.
+
+Memory
+------
+The index keeps no copy of the database rows.  For ``N`` entries it holds
+the int16 codes (``2 * dims`` bytes per entry: 128 MB for 10^6 entries at
+``dims=64``), the list order and the cell of each entry (8 bytes per entry),
+``A`` (``dims x 1600`` float32) and the centroids (``nlist x dims``
+float64).  Building it converts at most ``train_size`` rows to float32 for
+training and 16,384 rows at a time to float64 for the projection, and keeps
+the float64 projections of all entries until they are quantised
+(``8 * dims`` bytes per entry, 512 MB for 10^6 at ``dims=64``).
+
+Persistence
+-----------
+:meth:`ApproximateIndex.open` keeps the trained index next to the database
+file as ``<database>.ann.npz`` (written to a temporary name, fsynced and
+renamed).  The file is keyed by a SHA-256 of the searched columns (HLAC,
+packed masks, ridge areas), the build options and the seed; a file with
+another key (another or a rebuilt database, other options) is rebuilt and
+replaced.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+from dataclasses import asdict, dataclass, fields
+from pathlib import Path
+
+import numpy as np
+from numba import njit
+
+from ..db import HLAC_SIZE, count_outside
+from ..errors import DatabaseError, InvalidInputError
+from ._search import SearchOptions, SearchResult, SearchTables, _hlac_distance, _query
+
+__all__ = ["ApproximateIndex", "ApproximateOptions", "ann_path", "tables_fingerprint"]
+
+_FORMAT = "handsynth.ann_index"
+_FORMAT_VERSION = 1
+_MAX_DIMS = 256
+_CHUNK_ROWS = 16384  # rows projected at a time when building
+_CODE_MAX = 32767.0  # int16 code range
+_SUFFIX = ".ann.npz"
+
+
+@dataclass(frozen=True)
+class ApproximateOptions:
+    """Parameters of the approximate (IVF) search.
+
+    Parameters
+    ----------
+    nlist : int or None
+        Number of cells (inverted lists).  ``None``: ``sqrt(N)`` rounded to
+        a power of two (1024 for 10^6 entries, 256 for 10^5).
+    nprobe : int
+        Cells whose entries are scored per query (nearest centroids first);
+        values of ``nlist`` or more probe every cell (the exact answer).
+    max_nprobe : int or None
+        When no candidate survives the pruning, the probe doubles up to this
+        many cells before falling back; ``None``: up to every cell.
+    dims : int
+        PCA dimensions of the coarse quantizer and of the lower-bound codes,
+        1 to 256.
+    train_size : int
+        At most this many database rows (a random sample drawn with the
+        build's seed) train the PCA and k-means; at least ``nlist``.
+    niter : int
+        k-means iterations.
+
+    Raises
+    ------
+    InvalidInputError
+        A value of the wrong type or out of range, naming the field and the
+        value received.  Unknown keywords raise ``TypeError`` in the
+        constructor (as for every dataclass) and ``InvalidInputError``
+        naming the key in :meth:`from_dict`.
+    """
+
+    nlist: int | None = None
+    nprobe: int = 16
+    max_nprobe: int | None = 64
+    dims: int = 64
+    train_size: int = 65536
+    niter: int = 20
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            v = getattr(self, f.name)
+            optional = f.name in ("nlist", "max_nprobe")
+            if v is None and optional:
+                continue
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
+                what = "an integer >= 1" + (" or None" if optional else "")
+                raise InvalidInputError(f"ApproximateOptions.{f.name} must be {what}, got {v!r}")
+            object.__setattr__(self, f.name, int(v))
+        if self.dims > _MAX_DIMS:
+            raise InvalidInputError(
+                f"ApproximateOptions.dims must be at most {_MAX_DIMS}, got {self.dims!r}")
+        if self.max_nprobe is not None and self.max_nprobe < self.nprobe:
+            raise InvalidInputError(
+                f"ApproximateOptions.max_nprobe must be >= nprobe ({self.nprobe}) or None, "
+                f"got {self.max_nprobe!r}")
+
+    @classmethod
+    def from_dict(cls, values) -> ApproximateOptions:
+        """Options from a mapping (configuration file, command-line keywords).
+
+        Raises
+        ------
+        InvalidInputError
+            An unknown key (named, with the known ones) or a bad value.
+        """
+        if not hasattr(values, "keys"):
+            raise InvalidInputError(
+                f"ApproximateOptions values must be a mapping, got {type(values).__name__}")
+        known = [f.name for f in fields(cls)]
+        unknown = sorted(str(k) for k in set(values) - set(known))
+        if unknown:
+            raise InvalidInputError(
+                f"unknown ApproximateOptions key {unknown[0]!r} (known: {', '.join(known)})")
+        return cls(**dict(values))
+
+
+def ann_path(database_path) -> Path:
+    """File of the persisted index of a database file: ``<database>.ann.npz``."""
+    p = Path(database_path)
+    return p.with_name(p.name + _SUFFIX)
+
+
+def tables_fingerprint(tables: SearchTables) -> str:
+    """SHA-256 of the searched columns (HLAC, packed masks, ridge areas) and their shapes.
+
+    Reads every byte once (about 2.7 GB, a few seconds, for 10^6 entries).
+    """
+    h = hashlib.sha256()
+    for name in ("hlac", "sil_bits", "ridge_bits", "ridge_area"):
+        arr = np.ascontiguousarray(getattr(tables, name))
+        h.update(f"{name}\0{arr.dtype.str}\0{arr.shape}\0".encode())
+        h.update(memoryview(arr).cast("B"))
+    return "sha256:" + h.hexdigest()
+
+
+def _default_nlist(n: int) -> int:
+    return max(1, min(n, 2 ** round(math.log2(max(1.0, math.sqrt(n))))))
+
+
+def _resolve(options: ApproximateOptions, n: int) -> ApproximateOptions:
+    """`options` with ``nlist`` filled in for `n` entries; checks ``nlist <= n``."""
+    nlist = _default_nlist(n) if options.nlist is None else options.nlist
+    if nlist > n:
+        raise InvalidInputError(
+            f"ApproximateOptions.nlist must be at most the number of entries ({n}), got {nlist}")
+    return ApproximateOptions(**{**asdict(options), "nlist": nlist})
+
+
+def _index_key(fingerprint: str, options: ApproximateOptions, seed: int) -> str:
+    build = {k: getattr(options, k) for k in ("nlist", "dims", "train_size", "niter")}
+    text = json.dumps({"tables": fingerprint, "build": build, "seed": int(seed),
+                       "version": _FORMAT_VERSION}, sort_keys=True)
+    return "sha256:" + hashlib.sha256(text.encode()).hexdigest()
+
+
+# --------------------------------------------------------------------------- training
+
+
+def _train(sample: np.ndarray, *, dims: int, nlist: int, niter: int, seed: int):
+    """PCA and k-means (faiss) on float32 rows (M, 1600).
+
+    Returns ``A`` (dims, 1600) float32 with orthonormal rows and the
+    centroids (nlist, dims) of the projections ``A h`` (the PCA's centring
+    is left out: it shifts every point alike).  faiss uses its current
+    OpenMP thread count.
+    """
+    import faiss  # the one place handsynth imports faiss
+
+    pca = faiss.PCAMatrix(HLAC_SIZE, dims)
+    pca.train(sample)
+    a = faiss.vector_to_array(pca.A).astype(np.float32).reshape(dims, HLAC_SIZE)
+    y = np.ascontiguousarray(sample @ a.T, dtype=np.float32)
+    km = faiss.Kmeans(dims, nlist, niter=niter, seed=int(seed) % (2**31), verbose=False,
+                      max_points_per_centroid=max(1, -(-y.shape[0] // nlist)))
+    km.train(y)
+    return a, np.ascontiguousarray(km.centroids, dtype=np.float64)
+
+
+def _nearest(y: np.ndarray, centroids: np.ndarray, c_norms: np.ndarray) -> np.ndarray:
+    """Squared L2 distance ranks: nearest centroid of each row of `y` (float64)."""
+    return np.argmin(c_norms[None, :] - 2.0 * (y @ centroids.T), axis=1).astype(np.int32)
+
+
+# --------------------------------------------------------------------------- kernels
+
+
+@njit(cache=True, nogil=True)
+def _gather(order, offsets, cells, seed, extra, idx):
+    """Write the entries of `cells` (then `extra` when >= 0) to `idx`.
+
+    Returns their count and the position of entry `seed` among them (-1 if absent).
+    """
+    m = 0
+    at = -1
+    for c in cells:
+        for j in range(offsets[c], offsets[c + 1]):
+            idx[m] = order[j]
+            if order[j] == seed:
+                at = m
+            m += 1
+    if extra >= 0:
+        idx[m] = extra
+        if extra == seed:
+            at = m
+        m += 1
+    return m, at
+
+
+@njit(cache=True, nogil=True, fastmath=True)
+def _code_bound(q_y, code, step, band):
+    """Lower bound of ``|A h_q - A h_i|^2`` from the int16 code of ``A h_i``.
+
+    Branch-free so that it vectorises (the reassociated float64 sum differs
+    from the ordered one by far less than the quantisation band).
+    """
+    acc = 0.0
+    for k in range(q_y.shape[0]):
+        diff = max(abs(q_y[k] - code[k] * step[k]) - band[k], 0.0)
+        acc += diff * diff
+    return acc
+
+
+@njit(cache=True, nogil=True)
+def _pool_penalties(idx, m, q_sil, q_ridge, q_y, sil_bits, ridge_bits, ridge_area, codes, step,
+                    band, inv_gain, th1, c1, c2, c3, c4, prune, pen, low, p1s, p2s):
+    """Pass 1 over the candidates ``idx[:m]``: penalties, pruning, lower bounds of E.
+
+    ``pen[k] = C3 P1 + C4 P2`` (-1 if pruned) and ``low[k] = pen[k]`` plus the
+    code bound of the HLAC distance.  Returns the number of survivors and
+    the position of the survivor with the smallest bound (ties: lowest entry).
+    """
+    survivors = 0
+    best = -1
+    for k in range(m):
+        i = idx[k]
+        p1 = count_outside(q_ridge, sil_bits[i])
+        p1s[k] = p1
+        p2s[k] = -1
+        pen[k] = -1.0
+        if prune and p1 > th1:
+            continue
+        a = ridge_area[i]
+        p2 = count_outside(ridge_bits[i], q_sil)
+        p2s[k] = p2
+        if prune and p2 > c1 * a * a + c2 * a:
+            continue
+        pen[k] = c3 * p1 + c4 * p2
+        low[k] = pen[k] + _code_bound(q_y, codes[i], step, band) * inv_gain
+        survivors += 1
+        if best < 0 or low[k] < low[best] or (low[k] == low[best] and i < idx[best]):
+            best = k
+    return survivors, best
+
+
+@njit(cache=True, nogil=True)
+def _pool_kernel(q_hlac, q_sil, q_ridge, q_area, q_y, hlac, sil_bits, ridge_bits, ridge_area,
+                 codes, step, band, inv_gain, c, c1, c2, c3, c4, prune, idx, m, seed_k,
+                 fallback_ok, pen, low, p1s, p2s):
+    """Best candidate of ``idx[:m]``; returns (entry, E, d, p1, p2, survivors, fallback).
+
+    Starts from position `seed_k` (when it survives) or the survivor with
+    the smallest lower bound, then scores every survivor whose lower bound
+    does not exceed the best E so far, abandoning HLAC distances that cannot
+    win.  Ties go to the lowest entry index.  With no survivor: entry -1
+    unless `fallback_ok`, then the best E over all candidates (fallback).
+    """
+    survivors, first = _pool_penalties(idx, m, q_sil, q_ridge, q_y, sil_bits, ridge_bits,
+                                       ridge_area, codes, step, band, inv_gain, c * q_area, c1,
+                                       c2, c3, c4, prune, pen, low, p1s, p2s)
+    fallback = survivors == 0
+    if fallback:
+        if not fallback_ok:
+            return -1, 0.0, 0, 0, 0, 0, True
+        survivors, first = _pool_penalties(idx, m, q_sil, q_ridge, q_y, sil_bits, ridge_bits,
+                                           ridge_area, codes, step, band, inv_gain, 0.0, c1, c2,
+                                           c3, c4, False, pen, low, p1s, p2s)
+        survivors = 0
+    start = seed_k if seed_k >= 0 and pen[seed_k] >= 0.0 else first
+    best_k = start
+    best_i = idx[start]
+    best_d = _hlac_distance(q_hlac, hlac[best_i], np.iinfo(np.int64).max)
+    best_e = best_d + pen[start]
+    for k in range(m):
+        p = pen[k]
+        if p < 0.0 or low[k] > best_e or k == start:
+            continue
+        i = idx[k]
+        d = _hlac_distance(q_hlac, hlac[i], best_e - p)
+        e = d + p
+        if e < best_e or (e == best_e and i < best_i):
+            best_e, best_i, best_d, best_k = e, i, d, k
+    return best_i, best_e, best_d, p1s[best_k], p2s[best_k], survivors, fallback
+
+
+# --------------------------------------------------------------------------- the index
+
+
+class ApproximateIndex:
+    """Inverted lists over PCA-projected HLAC for the search of large databases.
+
+    Build with :meth:`build`, or :meth:`open` to load it from or save it
+    next to the database file.  Read-only afterwards and safe to share
+    between threads (:meth:`search` allocates its scratch per call; the
+    compiled kernel releases the GIL).
+
+    Attributes
+    ----------
+    tables : SearchTables
+        The database columns it searches (referenced, not copied).
+    options : ApproximateOptions
+        Options it was built with, ``nlist`` filled in.
+    seed : int
+        Seed of the training sample and of k-means.
+    projection : ndarray of float32, shape (dims, 1600)
+        ``A``, orthonormal rows (PCA directions).
+    centroids : ndarray of float64, shape (nlist, dims)
+        Cell centres in the projected space.
+    order : ndarray of int32, shape (N,)
+        Entry indices grouped by cell, ascending within a cell.
+    offsets : ndarray of int64, shape (nlist + 1,)
+        Cell ``c`` holds ``order[offsets[c]:offsets[c + 1]]``.
+    cell : ndarray of int32, shape (N,)
+        Cell of each entry.
+    codes : ndarray of int16, shape (N, dims)
+        ``A h_i`` in units of `step`.
+    step : ndarray of float64, shape (dims,)
+        Size of one code unit per dimension.
+    key : str
+        Fingerprint of the tables, build options and seed (see :meth:`open`).
+    """
+
+    def __init__(self, tables: SearchTables, *, options: ApproximateOptions, seed: int,
+                 projection, centroids, order, offsets, cell, codes, step, key: str) -> None:
+        self.tables = tables
+        self.options = options
+        self.seed = int(seed)
+        self.projection = np.ascontiguousarray(projection, dtype=np.float32)
+        self.centroids = np.ascontiguousarray(centroids, dtype=np.float64)
+        self.order = np.ascontiguousarray(order, dtype=np.int32)
+        self.offsets = np.ascontiguousarray(offsets, dtype=np.int64)
+        self.cell = np.ascontiguousarray(cell, dtype=np.int32)
+        self.codes = np.ascontiguousarray(codes, dtype=np.int16)
+        self.step = np.ascontiguousarray(step, dtype=np.float64)
+        self.key = key
+        self._a64 = self.projection.astype(np.float64)
+        self._c_norms = (self.centroids ** 2).sum(axis=1)
+        # half a code step, plus a margin for the float64 rounding of A h
+        self._band = 0.5 * self.step + 1e-9 * (1.0 + np.abs(self.codes).max(axis=0) * self.step)
+        # |A x|^2 <= gain |x|^2 with gain the largest eigenvalue of A A^T (1 up to rounding)
+        gain = float(np.linalg.eigvalsh(self._a64 @ self._a64.T).max()) * (1.0 + 1e-9)
+        self._inv_gain = (1.0 - 1e-12) / max(gain, 1.0)
+        for arr in (self.projection, self.centroids, self.order, self.offsets, self.cell,
+                    self.codes, self.step, self._a64, self._c_norms, self._band):
+            arr.setflags(write=False)
+
+    # ----------------------------------------------------------------- construction
+
+    @classmethod
+    def build(cls, tables: SearchTables, *, options: ApproximateOptions | None = None,
+              seed: int = 0, key: str | None = None) -> ApproximateIndex:
+        """Train the coarse quantizer on `tables`, fill the lists and the codes.
+
+        Parameters
+        ----------
+        tables : SearchTables
+            The database columns (referenced, not copied).
+        options : ApproximateOptions, keyword-only, optional
+        seed : int, keyword-only
+            Seed of the training sample and of k-means.
+        key : str, keyword-only, optional
+            Fingerprint to record (:meth:`open` passes it; computed when
+            omitted, reading every searched column once).
+
+        Returns
+        -------
+        ApproximateIndex
+
+        Raises
+        ------
+        InvalidInputError
+            `tables` is not :class:`SearchTables`, `options` not
+            :class:`ApproximateOptions`, ``options.nlist`` exceeds the number
+            of entries, or `seed` is not an integer >= 0.
+        """
+        opts = _check_options(options)
+        _check_tables(tables)
+        seed = _check_seed(seed)
+        n = len(tables)
+        used = _resolve(opts, n)
+        nlist = used.nlist
+        m = min(n, max(used.train_size, nlist))
+        pick = np.arange(n) if m >= n else np.sort(
+            np.random.default_rng(seed).choice(n, size=m, replace=False))
+        a, centroids = _train(tables.hlac[pick].astype(np.float32), dims=used.dims, nlist=nlist,
+                              niter=used.niter, seed=seed)
+        a64 = a.astype(np.float64)
+        c_norms = (centroids ** 2).sum(axis=1)
+        y = np.empty((n, used.dims), np.float64)
+        cell = np.empty(n, np.int32)
+        for s in range(0, n, _CHUNK_ROWS):
+            y[s:s + _CHUNK_ROWS] = tables.hlac[s:s + _CHUNK_ROWS].astype(np.float64) @ a64.T
+            cell[s:s + _CHUNK_ROWS] = _nearest(y[s:s + _CHUNK_ROWS], centroids, c_norms)
+        peak = np.abs(y).max(axis=0)
+        step = np.where(peak > 0, peak / _CODE_MAX, 1.0)
+        codes = np.empty((n, used.dims), np.int16)
+        for s in range(0, n, _CHUNK_ROWS):
+            codes[s:s + _CHUNK_ROWS] = np.rint(y[s:s + _CHUNK_ROWS] / step)
+        del y
+        order = np.argsort(cell, kind="stable").astype(np.int32)
+        offsets = np.zeros(nlist + 1, np.int64)
+        np.cumsum(np.bincount(cell, minlength=nlist), out=offsets[1:])
+        if key is None:
+            key = _index_key(tables_fingerprint(tables), used, seed)
+        return cls(tables, options=used, seed=seed, projection=a, centroids=centroids,
+                   order=order, offsets=offsets, cell=cell, codes=codes, step=step, key=key)
+
+    @classmethod
+    def open(cls, database, tables: SearchTables | None = None, *,
+             options: ApproximateOptions | None = None, seed: int = 0,
+             path=None) -> ApproximateIndex:
+        """The index of a database, loaded from ``<database>.ann.npz`` or built and saved there.
+
+        Parameters
+        ----------
+        database : handsynth.db.Database
+            An opened database; the index file goes next to its file.
+        tables : SearchTables, optional
+            The database's search columns (made from `database` when omitted).
+        options : ApproximateOptions, keyword-only, optional
+        seed : int, keyword-only
+        path : str or os.PathLike, keyword-only, optional
+            Index file; default :func:`ann_path` of ``database.path``.  For a
+            database without a file (in memory) nothing is saved unless
+            `path` is given.
+
+        Returns
+        -------
+        ApproximateIndex
+            Loaded when the file's key matches the tables, the build options
+            (``nlist``, ``dims``, ``train_size``, ``niter``) and the seed;
+            otherwise built and written atomically (replacing a stale or
+            damaged file).  ``nprobe`` and ``max_nprobe`` come from `options`.
+
+        Raises
+        ------
+        InvalidInputError
+            As :meth:`build`.
+        DatabaseError
+            The index file cannot be written.
+        """
+        opts = _check_options(options)
+        seed = _check_seed(seed)
+        if tables is None:
+            tables = SearchTables.from_arrays(hlac=database.hlac, sil_bits=database.sil_bits,
+                                              ridge_bits=database.ridge_bits,
+                                              ridge_area=database.ridge_area)
+        _check_tables(tables)
+        if path is None:
+            db_path = Path(str(getattr(database, "path", "")))
+            path = ann_path(db_path) if db_path.is_file() else None
+        used = _resolve(opts, len(tables))
+        key = _index_key(tables_fingerprint(tables), used, seed)
+        if path is not None:
+            loaded = cls._load(Path(path), tables, key=key, options=used, seed=seed)
+            if loaded is not None:
+                return loaded
+        index = cls.build(tables, options=used, seed=seed, key=key)
+        if path is not None:
+            index.save(path)
+        return index
+
+    def save(self, path) -> Path:
+        """Write the index (not the database) to `path` atomically; returns the path.
+
+        Raises
+        ------
+        DatabaseError
+            The file cannot be written.
+        """
+        path = Path(path)
+        meta = {"format": _FORMAT, "version": _FORMAT_VERSION, "key": self.key,
+                "options": asdict(self.options), "seed": self.seed, "entries": len(self.tables)}
+        arrays = {"projection": self.projection, "centroids": self.centroids, "order": self.order,
+                  "offsets": self.offsets, "cell": self.cell, "codes": self.codes,
+                  "step": self.step,
+                  "meta": np.frombuffer(json.dumps(meta, sort_keys=True).encode(), np.uint8)}
+        tmp = path.with_name(f"{path.name}.tmp-{os.getpid()}")
+        try:
+            with open(tmp, "wb") as f:
+                np.savez(f, **arrays)
+                f.flush()
+                os.fsync(f.fileno())
+            os.replace(tmp, path)
+        except OSError as exc:
+            tmp.unlink(missing_ok=True)
+            raise DatabaseError(f"cannot write the approximate index {path}: {exc}") from None
+        return path
+
+    @classmethod
+    def _load(cls, path: Path, tables: SearchTables, *, key: str, options: ApproximateOptions,
+              seed: int) -> ApproximateIndex | None:
+        """The index stored at `path` if its key is `key`; ``None`` if missing, stale or damaged."""
+        if not path.is_file():
+            return None
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                meta = json.loads(bytes(z["meta"]).decode())
+                if (meta.get("format") != _FORMAT or meta.get("version") != _FORMAT_VERSION
+                        or meta.get("key") != key):
+                    return None
+                arrays = {k: z[k] for k in z.files if k != "meta"}
+        except (OSError, ValueError, KeyError, EOFError, UnicodeDecodeError):
+            return None
+        n, nlist, dims = len(tables), options.nlist, options.dims
+        shapes = {"projection": (dims, HLAC_SIZE), "centroids": (nlist, dims), "order": (n,),
+                  "offsets": (nlist + 1,), "cell": (n,), "codes": (n, dims), "step": (dims,)}
+        if any(name not in arrays or arrays[name].shape != shape
+               for name, shape in shapes.items()) or arrays["offsets"][-1] != n:
+            return None
+        return cls(tables, options=options, seed=seed, key=key, **arrays)
+
+    # ----------------------------------------------------------------- queries
+
+    def __len__(self) -> int:
+        return len(self.tables)
+
+    @property
+    def nlist(self) -> int:
+        """Number of cells."""
+        return self.centroids.shape[0]
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes the index holds besides the database."""
+        arrays = (self.projection, self.centroids, self.order, self.offsets, self.cell,
+                  self.codes, self.step, self._a64, self._c_norms, self._band)
+        return sum(a.nbytes for a in arrays)
+
+    def cells(self, hlac) -> np.ndarray:
+        """All cells, nearest centroid first, for one HLAC vector.
+
+        Parameters
+        ----------
+        hlac : array_like of uint8, shape (1600,)
+
+        Returns
+        -------
+        ndarray of int64, shape (nlist,)
+        """
+        y = self._a64 @ np.asarray(hlac, dtype=np.float64)
+        return np.argsort(self._c_norms - 2.0 * (self.centroids @ y), kind="stable")
+
+    def search(self, features, options: SearchOptions | None = None, *,
+               nprobe: int | None = None, seed: int | None = None) -> SearchResult:
+        """The database entry of an input: the paper's search over the probed cells.
+
+        Parameters
+        ----------
+        features : handsynth.db.Features
+            Features of the input silhouette (``hlac``, ``sil_bits``,
+            ``ridge_bits``, ``ridge_area``).
+        options : SearchOptions, optional
+            Search constants (the paper's by default).
+        nprobe : int, keyword-only, optional
+            Cells to probe (``self.options.nprobe`` by default).
+        seed : int, keyword-only, optional
+            An entry (the previous frame's answer) added to the candidates
+            and scored first; the answer's E can only get smaller.
+
+        Returns
+        -------
+        SearchResult
+            As :func:`handsynth.estimate.search`; ``survivors`` counts the
+            candidates left after both stages.
+
+        Raises
+        ------
+        InvalidInputError
+            `options` not :class:`SearchOptions`, `nprobe` not an integer
+            >= 1, `seed` outside ``[0, N)``.
+        """
+        opts = SearchOptions() if options is None else options
+        if not isinstance(opts, SearchOptions):
+            raise InvalidInputError(f"options must be SearchOptions, got {type(options).__name__}")
+        probe = self.options.nprobe if nprobe is None else nprobe
+        if isinstance(probe, bool) or not isinstance(probe, (int, np.integer)) or probe < 1:
+            raise InvalidInputError(f"nprobe must be an integer >= 1, got {nprobe!r}")
+        n, nlist = len(self.tables), self.nlist
+        s = -1 if seed is None else seed
+        if isinstance(s, bool) or not isinstance(s, (int, np.integer)) or not -1 <= s < n:
+            raise InvalidInputError(f"seed must be an entry index in [0, {n}), got {seed!r}")
+        s = int(s)
+        probe = min(int(probe), nlist)
+        cap = self.options.max_nprobe
+        limit = max(probe, nlist if cap is None else min(nlist, cap))
+        h, sb, rb, area = _query(features)
+        q_y = self._a64 @ h.astype(np.float64)
+        ranked = (np.argsort(self._c_norms - 2.0 * (self.centroids @ q_y), kind="stable")
+                  if probe < nlist else np.arange(nlist))
+        t = self.tables
+        while True:
+            cells = np.ascontiguousarray(ranked[:probe], dtype=np.int64)
+            size = int((self.offsets[cells + 1] - self.offsets[cells]).sum())
+            extra = s if s >= 0 and self.cell[s] not in cells else -1
+            idx = np.empty(size + 1, np.int64)
+            m, seed_k = _gather(self.order, self.offsets, cells, s, extra, idx)
+            if m == 0:  # only empty cells so far: widen, up to every cell
+                limit = nlist if probe >= limit else limit
+                probe = min(2 * probe, limit)
+                continue
+            pen, low = np.empty(m, np.float64), np.empty(m, np.float64)
+            p1s, p2s = np.empty(m, np.int64), np.empty(m, np.int64)
+            i, e, d, p1, p2, surv, fb = _pool_kernel(
+                h, sb, rb, area, q_y, t.hlac, t.sil_bits, t.ridge_bits, t.ridge_area,
+                self.codes, self.step, self._band, self._inv_gain, opts.c, opts.c1, opts.c2,
+                opts.c3, opts.c4, opts.prune, idx, m, seed_k, probe >= limit, pen, low, p1s,
+                p2s)
+            if i >= 0:
+                return SearchResult(index=int(i), error=float(e), hlac_distance=int(d),
+                                    p1=int(p1), p2=int(p2), survivors=int(surv),
+                                    low_confidence=bool(fb))
+            probe = min(2 * probe, limit)
+
+
+def _check_options(options) -> ApproximateOptions:
+    if options is None:
+        return ApproximateOptions()
+    if not isinstance(options, ApproximateOptions):
+        raise InvalidInputError(
+            f"options must be ApproximateOptions, got {type(options).__name__}")
+    return options
+
+
+def _check_tables(tables) -> None:
+    if not isinstance(tables, SearchTables):
+        raise InvalidInputError(f"tables must be SearchTables, got {type(tables).__name__}")
+
+
+def _check_seed(seed) -> int:
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise InvalidInputError(f"seed must be an integer >= 0, got {seed!r}")
+    return int(seed)

@@ -1,0 +1,185 @@
+"""The approximate (IVF) search: exact when every cell is probed, never better than exact."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from handsynth.db import extract_features, render_entries
+from handsynth.errors import InvalidInputError
+from handsynth.estimate._ann import (
+    ApproximateIndex,
+    ApproximateOptions,
+    _code_bound,
+    ann_path,
+)
+from handsynth.estimate._search import SearchOptions, SearchTables, search
+from handsynth.models import HandShape, natural_pose_set
+from handsynth.render import CameraMount
+
+from .conftest import RENDER_SIZE
+
+
+def _tables(rows):
+    return SearchTables.from_arrays(hlac=rows["hlac"], sil_bits=rows["sil_bits"],
+                                    ridge_bits=rows["ridge_bits"], ridge_area=rows["ridge_area"])
+
+
+@pytest.fixture(scope="module")
+def natural_rows():
+    """1,200 natural poses of the standard hand (more entries than the shared fixture)."""
+    return render_entries(natural_pose_set(1200, seed=3), HandShape(), CameraMount(),
+                          render_size=RENDER_SIZE)
+
+
+@pytest.fixture(scope="module")
+def queries(query_rows):
+    return [extract_features(s) for s in query_rows["silhouette"]]
+
+
+@pytest.fixture(scope="module")
+def small_index(small_rows):
+    return ApproximateIndex.build(_tables(small_rows), options=ApproximateOptions(nlist=16),
+                                  seed=0)
+
+
+@pytest.fixture(scope="module")
+def natural_index(natural_rows):
+    opts = ApproximateOptions(nlist=32, nprobe=2, max_nprobe=None, dims=32)
+    return ApproximateIndex.build(_tables(natural_rows), options=opts, seed=1)
+
+
+def test_probing_every_cell_gives_the_exact_answer(small_index, queries):
+    t = small_index.tables
+    options = [SearchOptions(), SearchOptions(prune=False), SearchOptions(c=0.05, c1=0.0, c2=0.02),
+               SearchOptions(c3=10.0, c4=3000.0)]
+    low = 0
+    for f in queries:
+        for opt in options:
+            exact = search(f, t, options=opt)
+            assert small_index.search(f, opt, nprobe=small_index.nlist) == exact
+            assert small_index.search(f, opt, nprobe=10**6, seed=7) == exact
+            low += exact.low_confidence
+    assert 0 < low < len(queries) * len(options)  # the fallback branch ran too
+
+
+def test_probing_every_cell_is_exact_on_a_larger_natural_database(natural_index, queries):
+    for f in queries:
+        assert natural_index.search(f, nprobe=natural_index.nlist) == search(
+            f, natural_index.tables)
+
+
+def test_fewer_probes_never_beat_the_exact_error(natural_index, queries):
+    t = natural_index.tables
+    differ = 0
+    for f in queries:
+        exact = search(f, t)
+        for nprobe in (1, 2, 4):
+            approx = natural_index.search(f, nprobe=nprobe)
+            assert approx.error >= exact.error
+            assert approx.low_confidence == exact.low_confidence  # widened before falling back
+            differ += approx.index != exact.index
+        for nprobe in (1, 3):  # a seed adds a candidate: never worse than without it
+            seeded = natural_index.search(f, nprobe=nprobe, seed=exact.index)
+            assert exact.error <= seeded.error <= natural_index.search(f, nprobe=nprobe).error
+            assert seeded.index == exact.index
+    assert differ > 0  # one probe out of 32 cells does miss some answers
+
+
+def test_an_entry_finds_itself(natural_index, natural_rows):
+    for i in (0, 77, 1199):
+        f = extract_features(natural_rows["silhouette"][i])
+        r = natural_index.search(f, nprobe=1)
+        assert r.error == 0.0 and not r.low_confidence
+        assert (natural_rows["hlac"][r.index] == f.hlac).all()
+
+
+def test_code_bound_never_exceeds_the_hlac_distance(natural_index, queries):
+    idx = natural_index
+    hlac = idx.tables.hlac.astype(np.int64)
+    tight = []
+    for f in queries:
+        q_y = idx._a64 @ f.hlac.astype(np.float64)
+        d = ((hlac - f.hlac.astype(np.int64)) ** 2).sum(axis=1)
+        b = np.array([_code_bound(q_y, idx.codes[i], idx.step, idx._band) for i in range(len(d))])
+        b *= idx._inv_gain
+        assert (b <= d).all()
+        tight.append(np.median(b / np.maximum(d, 1)))
+    assert np.median(tight) > 0.3  # and it is not trivially loose
+
+
+def test_lists_partition_the_database(natural_index):
+    idx = natural_index
+    assert np.array_equal(np.sort(idx.order), np.arange(len(idx)))
+    for c in range(idx.nlist):
+        members = idx.order[idx.offsets[c]:idx.offsets[c + 1]]
+        assert (idx.cell[members] == c).all() and (np.diff(members) > 0).all()
+
+
+def test_index_is_saved_loaded_and_rebuilt_when_stale(tmp_path, small_rows, natural_rows, queries,
+                                                     monkeypatch):
+    from handsynth.db import Database
+
+    path = tmp_path / "db.h5.ann.npz"
+    t_small = _tables(small_rows)
+    opts = ApproximateOptions(nlist=8, nprobe=2)
+    first = ApproximateIndex.open(None, t_small, options=opts, seed=2, path=path)
+    assert path.is_file() and not list(tmp_path.glob("*.tmp-*"))
+
+    def no_build(*args, **kwargs):
+        raise AssertionError("rebuilt although the saved index matches")
+
+    with monkeypatch.context() as m:
+        m.setattr(ApproximateIndex, "build", classmethod(no_build))
+        again = ApproximateIndex.open(None, t_small, options=ApproximateOptions(nlist=8, nprobe=3),
+                                      seed=2, path=path)
+    assert again.key == first.key and again.options.nprobe == 3
+    assert np.array_equal(again.codes, first.codes) and np.array_equal(again.order, first.order)
+    assert [again.search(f, nprobe=2) for f in queries] == [first.search(f) for f in queries]
+
+    # another database, other build options or another seed: rebuilt and replaced
+    other = ApproximateIndex.open(None, _tables(natural_rows), options=opts, seed=2, path=path)
+    assert other.key != first.key and len(other) == len(natural_rows["hlac"])
+    assert ApproximateIndex.open(None, t_small, options=opts, seed=3, path=path).key != first.key
+    # a damaged file is rebuilt too
+    path.write_bytes(b"not an index")
+    assert ApproximateIndex.open(None, t_small, options=opts, seed=2, path=path).key == first.key
+
+    # next to a database file by default
+    db_file = tmp_path / "hand.h5"
+    db_file.write_bytes(b"")
+    db = Database(path=db_file, meta={}, angles=small_rows["angles"], hlac=small_rows["hlac"],
+                  sil_bits=small_rows["sil_bits"], ridge_bits=small_rows["ridge_bits"],
+                  ridge_area=small_rows["ridge_area"], keypoints_raw=np.zeros((240, 21, 3)))
+    ApproximateIndex.open(db, options=opts, seed=2)
+    assert ann_path(db_file).is_file() and ann_path(db_file).name == "hand.h5.ann.npz"
+
+
+def test_options_and_arguments_are_checked(small_index, small_rows, queries):
+    for bad, name in (({"nprobe": 0}, "nprobe"), ({"nlist": True}, "nlist"),
+                      ({"dims": 0}, "dims"), ({"dims": 1601}, "dims"),
+                      ({"train_size": 2.5}, "train_size"), ({"niter": -1}, "niter"),
+                      ({"nprobe": 8, "max_nprobe": 4}, "max_nprobe")):
+        with pytest.raises(InvalidInputError, match=name):
+            ApproximateOptions(**bad)
+    with pytest.raises(InvalidInputError, match="'nprob'"):
+        ApproximateOptions.from_dict({"nprob": 4})
+    assert ApproximateOptions.from_dict({"nprobe": 4}).nprobe == 4
+    with pytest.raises(TypeError):
+        ApproximateOptions(nprob=4)
+    t = _tables(small_rows)
+    with pytest.raises(InvalidInputError, match="nlist"):
+        ApproximateIndex.build(t, options=ApproximateOptions(nlist=241))
+    with pytest.raises(InvalidInputError, match="tables"):
+        ApproximateIndex.build(small_rows)
+    with pytest.raises(InvalidInputError, match="options"):
+        ApproximateIndex.build(t, options={"nprobe": 2})
+    with pytest.raises(InvalidInputError, match="seed"):
+        ApproximateIndex.build(t, seed=-1)
+    f = queries[0]
+    with pytest.raises(InvalidInputError, match="nprobe"):
+        small_index.search(f, nprobe=0)
+    with pytest.raises(InvalidInputError, match="seed"):
+        small_index.search(f, seed=240)
+    with pytest.raises(InvalidInputError, match="options"):
+        small_index.search(f, ApproximateOptions())
