@@ -876,6 +876,9 @@ class LiveSummary:
         synthetic frames, lookup, writing).
     steady_wall_s : float
         The part of `wall_s` after the first frame was done, seconds.
+    read_s : float
+        Time spent in the source's ``read`` (waiting for the camera,
+        decoding, rendering synthetic frames) after the first frame, seconds.
     first_lookup_ms : float
         Lookup time of the first frame, milliseconds (it pays one-off
         costs: loading compiled code, first-touch of the database), left out
@@ -909,6 +912,7 @@ class LiveSummary:
     lookup_s: float
     wall_s: float
     steady_wall_s: float
+    read_s: float
     first_lookup_ms: float
     lookup_ms_median: float
     lookup_ms_p99: float
@@ -930,6 +934,9 @@ class LiveSummary:
         n = self.frames - 1
         return n / self.steady_wall_s if n > 0 and self.steady_wall_s > 0 else float("nan")
 
+    def _per_frame_ms(self, seconds: float) -> float:
+        return 1e3 * seconds / (self.frames - 1) if self.frames > 1 else float("nan")
+
     def format(self) -> str:
         """A few human-readable lines."""
         lines = [
@@ -938,6 +945,9 @@ class LiveSummary:
             (f"lookup {self.fps_lookup:.1f} fps alone (median {self.lookup_ms_median:.2f} ms, "
              f"p99 {self.lookup_ms_p99:.2f} ms); whole loop {self.fps_loop:.1f} fps "
              f"({self.wall_s:.2f} s; first frame {self.first_lookup_ms:.1f} ms, not counted)"),
+            (f"per frame after the first: reading the source {self._per_frame_ms(self.read_s):.2f}"
+             f" ms, lookup {self._per_frame_ms(self.lookup_s):.2f} ms, whole loop "
+             f"{self._per_frame_ms(self.steady_wall_s):.2f} ms"),
         ]
         if self.mae_deg is not None:
             j = self.mae_per_joint_deg
@@ -956,6 +966,7 @@ class _Tally:
         self.latencies = array("d")
         self.abs_err = np.zeros(len(JOINT_NAMES))
         self.first_done_s = None  # loop time when the first frame was done
+        self.read_s = 0.0  # time in read() after the first frame
 
     def summary(self, wall_s: float, stop_reason: str, message: str) -> LiveSummary:
         lat = np.frombuffer(self.latencies, dtype=np.float64)
@@ -971,7 +982,7 @@ class _Tally:
         return LiveSummary(
             reads=self.reads, frames=self.frames, dropped=self.dropped, invalid=self.invalid,
             no_hand=self.no_hand, low_confidence=self.low_confidence,
-            lookup_s=float(lat.sum()), wall_s=wall_s, steady_wall_s=steady,
+            lookup_s=float(lat.sum()), wall_s=wall_s, steady_wall_s=steady, read_s=self.read_s,
             first_lookup_ms=first_ms, lookup_ms_median=med, lookup_ms_p99=p99, stop_reason=stop_reason,
             message=message, truth_frames=self.truth_frames, mae_deg=mae,
             mae_per_joint_deg=per_joint)
@@ -1060,7 +1071,10 @@ def run_live(lookup, source: FrameSource, *, sink=None, video_out=None,
             if opts.max_seconds is not None and clock() - t0 >= opts.max_seconds:
                 stop, message = "seconds", f"reached {opts.max_seconds:g} s"
                 break
+            t = clock()
             frame = source.read()
+            if tally.frames:
+                tally.read_s += clock() - t
             index = tally.reads
             tally.reads += 1
             if not _usable(frame):
