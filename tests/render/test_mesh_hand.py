@@ -155,6 +155,14 @@ def test_masks_are_deterministic_and_batch_equals_single(paper):
     assert (batch[0] ^ batch[1]).sum() > 100
 
 
+def test_mujoco_skin_equals_the_numpy_skinning(paper):
+    pose = named_pose("grasp")
+    paper.mask(pose)
+    skinned = np.array(paper._renderer.scene.skinvert).reshape(-1, 3)[: len(paper.rig.vertices)]
+    np.testing.assert_allclose(skinned, paper.vertices(pose), atol=1e-6)
+    assert np.abs(paper.vertices(pose) - paper.vertices(named_pose("open"))).max() > 0.05
+
+
 def test_left_hand_is_the_mirror_image():
     kw = {"width_px": W, "height_px": H}
     with MeshHandRenderer(**kw) as r, MeshHandRenderer(side="left", **kw) as left:
@@ -162,6 +170,9 @@ def test_left_hand_is_the_mirror_image():
             a, b = r.mask(named_pose(pose)), left.mask(named_pose(pose))
             assert _iou(a, b[::-1]) > 0.98
             assert _iou(a, b) < 0.9
+            skinned = np.array(left._renderer.scene.skinvert).reshape(-1, 3)
+            np.testing.assert_allclose(skinned[: len(left.rig.vertices)],
+                                       left.vertices(named_pose(pose)), atol=1e-6)
         np.testing.assert_allclose(left.keypoints()[:, 0], -r.keypoints()[:, 0])
 
 
