@@ -66,7 +66,9 @@ Notes
 -----
 Measured on the default mesh: the open hand is 216 mm from the wrist node to
 the middle fingertip (handsynth's standard hand: 187 mm); its MCP joints lie
-about 25 mm farther from the wrist than the model's.  The mesh's thumb nail
+about 25 mm farther from the wrist than the model's, its proximal phalanges
+are shorter and its distal ones longer (index 38/31/28 mm against the
+model's 50/27/18 mm, joint nodes of the rig).  The mesh's thumb nail
 faces radially (twist -63 deg about the thumb's axis from an untwisted
 thumb), the model's thumb nail faces the index finger (+50 deg), so thumb
 MCP/IP flexion curls the mesh thumb across the palm and the model's thumb
@@ -92,6 +94,7 @@ from ..errors import (
     RenderError,
 )
 from ..models import FINGERS, JOINT_NAMES, as_angles
+from ..models._anthropometry import standard_layout_mm
 from ._camera import CameraMount
 from ._gl import ensure_backend
 
@@ -103,15 +106,9 @@ MESH_ENV = "HANDSYNTH_MESH_HAND"
 _FINGER_BONES = ("metacarpal", "proximal", "intermediate", "distal", "tip")
 _THUMB_BONES = ("metacarpal", "proximal", "distal", "tip")
 
-# handsynth's rest fan of the fingers and rest direction of the thumb
-# metacarpal (handsynth.models._anthropometry.standard_layout_mm and
-# handsynth.models._mjcf): degrees toward the thumb / palmar.
-_FINGER_YAW_DEG = {"index": 2.0, "middle": 0.0, "ring": -2.0, "little": -5.0}
-_THUMB_YAW_DEG = 40.0
-_THUMB_PITCH_DEG = 12.0
 # Which of the two senses of the thumb's nail-width axis is the nail: the
-# side facing radially and dorsally (a relaxed thumb's nail faces away from
-# the palm and the index finger), hand frame of a right hand.
+# radial-dorsal side, hand frame of a right hand (the thumb's pulp faces the
+# index finger, as in a key pinch).
 _THUMB_NAIL_SIDE = np.array([-1.0, 0.0, 1.0]) / np.sqrt(2.0)
 
 _MIRROR = np.diag([-1.0, 1.0, 1.0])
@@ -560,7 +557,13 @@ def _thumb_flexion_axis(v, f, j, w, names, tchain) -> np.ndarray:
 
 
 def _thumb_rest_direction() -> np.ndarray:
-    """handsynth's rest direction (3,) of the right thumb metacarpal, hand frame."""
+    """handsynth's rest direction (3,) of the right thumb metacarpal, hand frame.
+
+    Turned ``_THUMB_YAW_DEG`` (40) from +y toward the thumb side and
+    ``_THUMB_PITCH_DEG`` (12) palmar, as in :func:`handsynth.models.hand_mjcf`.
+    """
+    from ..models._mjcf import _THUMB_PITCH_DEG, _THUMB_YAW_DEG
+
     rz = _rot(np.array([0.0, 0.0, 1.0]), np.radians(_THUMB_YAW_DEG))
     rx = _rot(np.array([1.0, 0.0, 0.0]), np.radians(-_THUMB_PITCH_DEG))
     return rz @ rx @ np.array([0.0, 1.0, 0.0])
@@ -592,7 +595,9 @@ class _Poser:
         self._cmc_abd_axis = _unit(np.cross(d_rest, -ez))  # palmar abduction (handsynth)
         meta = rig.frames["thumb_metacarpal"]
         self._thumb_zero = _swing(meta[:, 1], d_rest) @ meta
-        self._finger_zero = {f: _rot(ez, np.radians(_FINGER_YAW_DEG[f])) for f in FINGERS[1:]}
+        # handsynth's rest fan of the fingers (degrees toward the thumb)
+        yaw = standard_layout_mm().finger_yaw_deg
+        self._finger_zero = {f: _rot(ez, np.radians(yaw[f])) for f in FINGERS[1:]}
         self._mats = np.zeros((nb, 3, 4))
         self._mats[:, :, :3] = np.eye(3)
         self._v1 = np.hstack([rig.vertices, np.ones((len(rig.vertices), 1))])
@@ -769,7 +774,8 @@ class MeshHandRenderer:
     >>> r = MeshHandRenderer(width_px=180, height_px=120)
     >>> r.mask(named_pose("fist")).shape
     (120, 180)
-    >>> r.hand_length_mm  # wrist node to the middle fingertip, open hand
+    >>> round(r.hand_length_mm)  # wrist node to the middle fingertip, open hand
+    216
     """
 
     def __init__(self, mount: CameraMount | None = None, *, side: str = "right",
