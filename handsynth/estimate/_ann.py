@@ -61,8 +61,10 @@ Persistence
 -----------
 :meth:`ApproximateIndex.open` keeps the trained index next to the database
 file as ``<database>.ann.npz`` (written to a temporary name, fsynced and
-renamed).  The file is keyed by a SHA-256 of the searched columns (HLAC,
-packed masks, ridge areas), the build options and the seed; a file with
+renamed).  The file is keyed by the database file's checksum (which covers all its
+datasets) together with a hash of a sample of the rows in memory -- or, for
+a database without a file, a SHA-256 of all searched columns (HLAC, packed
+masks, ridge areas) -- and by the build options and the seed; a file with
 another key (another or a rebuilt database, other options) is rebuilt and
 replaced.
 """
@@ -188,6 +190,45 @@ def tables_fingerprint(tables: SearchTables) -> str:
         h.update(f"{name}\0{arr.dtype.str}\0{arr.shape}\0".encode())
         h.update(memoryview(arr).cast("B"))
     return "sha256:" + h.hexdigest()
+
+
+def _sample_fingerprint(tables: SearchTables, rows: int = 4096) -> str:
+    """SHA-256 of `rows` evenly spaced rows of the searched columns (milliseconds)."""
+    n = len(tables)
+    pick = np.unique(np.linspace(0, n - 1, min(n, rows)).astype(np.int64))
+    h = hashlib.sha256(f"{n}\0".encode())
+    for name in ("hlac", "sil_bits", "ridge_bits", "ridge_area"):
+        h.update(np.ascontiguousarray(getattr(tables, name)[pick]).tobytes())
+    return "sha256:" + h.hexdigest()
+
+
+def _file_checksum(path) -> str | None:
+    """The ``checksum`` attribute of a database file (see :mod:`handsynth.db._store`), or None."""
+    if path is None or not Path(str(path)).is_file():
+        return None
+    try:
+        import h5py
+
+        with h5py.File(path, "r") as f:
+            value = f.attrs.get("checksum")
+            complete = bool(f.attrs.get("complete", False))
+    except (OSError, ValueError):
+        return None
+    return str(value) if value is not None and complete else None
+
+
+def _database_fingerprint(database, tables: SearchTables) -> str:
+    """Key of the searched data: the database file's checksum and a row sample, or all bytes.
+
+    With a database file, its stored checksum (which covers every dataset)
+    plus a sample of the rows actually held (so tables that do not come
+    from that file's current content do not match); without one, the
+    SHA-256 of all searched columns (:func:`tables_fingerprint`).
+    """
+    checksum = _file_checksum(getattr(database, "path", None))
+    if checksum is None:
+        return tables_fingerprint(tables)
+    return f"file:{checksum}:rows:{_sample_fingerprint(tables)}"
 
 
 def _default_nlist(n: int) -> int:
@@ -493,7 +534,8 @@ class ApproximateIndex:
         Returns
         -------
         ApproximateIndex
-            Loaded when the file's key matches the tables, the build options
+            Loaded when the file's key matches the database (its file's
+            checksum and a sample of `tables`), the build options
             (``nlist``, ``dims``, ``train_size``, ``niter``) and the seed;
             otherwise built and written atomically (replacing a stale or
             damaged file).  ``nprobe`` and ``max_nprobe`` come from `options`.
@@ -516,7 +558,7 @@ class ApproximateIndex:
             db_path = Path(str(getattr(database, "path", "")))
             path = ann_path(db_path) if db_path.is_file() else None
         used = _resolve(opts, len(tables))
-        key = _index_key(tables_fingerprint(tables), used, seed)
+        key = _index_key(_database_fingerprint(database, tables), used, seed)
         if path is not None:
             loaded = cls._load(Path(path), tables, key=key, options=used, seed=seed)
             if loaded is not None:

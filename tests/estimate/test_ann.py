@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import shutil
+
 import numpy as np
 import pytest
 
@@ -128,8 +130,6 @@ def test_lists_partition_the_database(natural_index):
 
 
 def test_index_is_saved_loaded_and_rebuilt_when_stale(tmp_path, small_rows, queries, monkeypatch):
-    from handsynth.db import Database
-
     path = tmp_path / "db.h5.ann.npz"
     t_small = _tables(small_rows)
     opts = ApproximateOptions(nlist=8, nprobe=2)
@@ -160,14 +160,36 @@ def test_index_is_saved_loaded_and_rebuilt_when_stale(tmp_path, small_rows, quer
     path.write_bytes(b"not an index")
     assert ApproximateIndex.open(None, t_small, options=opts, seed=2, path=path).key == first.key
 
-    # next to a database file by default
+
+
+def test_index_next_to_a_database_file_follows_its_checksum(tmp_path, db_folder, small_rows,
+                                                           monkeypatch):
+    from handsynth.db import open_database, write_database
+
+    src = next(db_folder.glob("*.h5"))
     db_file = tmp_path / "hand.h5"
-    db_file.write_bytes(b"")
-    db = Database(path=db_file, meta={}, angles=small_rows["angles"], hlac=small_rows["hlac"],
-                  sil_bits=small_rows["sil_bits"], ridge_bits=small_rows["ridge_bits"],
-                  ridge_area=small_rows["ridge_area"], keypoints_raw=np.zeros((240, 21, 3)))
-    ApproximateIndex.open(db, options=opts, seed=2)
+    shutil.copyfile(src, db_file)
+    opts = ApproximateOptions(nlist=8)
+    db = open_database(db_file)
+    first = ApproximateIndex.open(db, options=opts)
     assert ann_path(db_file).is_file() and ann_path(db_file).name == "hand.h5.ann.npz"
+
+    def no_build(*args, **kwargs):
+        raise AssertionError("rebuilt although the saved index matches")
+
+    with monkeypatch.context() as m:
+        m.setattr(ApproximateIndex, "build", classmethod(no_build))
+        assert ApproximateIndex.open(open_database(db_file), options=opts).key == first.key
+
+    # the database file is rebuilt with other rows: its index is stale
+    rows = {k: np.ascontiguousarray(v[::-1]) for k, v in small_rows.items()}
+    write_database(db_file, angles=rows["angles"], hlac=rows["hlac"], sil_bits=rows["sil_bits"],
+                   ridge_bits=rows["ridge_bits"], ridge_area=rows["ridge_area"],
+                   keypoints=rows["keypoints"], meta=db.meta)
+    rebuilt = ApproximateIndex.open(open_database(db_file), options=opts)
+    assert rebuilt.key != first.key
+    # tables still holding the old rows do not match the new file's index either
+    assert ApproximateIndex.open(db, options=opts).key not in (rebuilt.key, first.key)
 
 
 def test_options_and_arguments_are_checked(small_index, small_rows, queries):
