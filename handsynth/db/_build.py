@@ -14,7 +14,7 @@ How a build runs
 2. The pose set is drawn once (``pose_set(name, count, seed=seed)``, the
    same poses for every shape) and each shape's poses are cut into chunks;
    the chunks are the tasks of the executor.  A worker keeps one
-   :class:`SilhouetteRenderer` per shape (one model load for many poses).
+   :class:`SilhouetteRasterizer` per shape (one model load for many poses).
 3. When all chunks of a shape are back they are joined in pose order and
    written.  Rendering is a pure function of (shape, pose), so the bytes do
    not depend on the chunking, the number of workers or the executor: same
@@ -222,7 +222,7 @@ _RENDERER: dict = {}
 
 
 def _renderer_for(key):
-    from ..render import SilhouetteRenderer
+    from ..render import SilhouetteRasterizer
 
     r = _RENDERER.get(key)
     if r is None:
@@ -230,7 +230,8 @@ def _renderer_for(key):
             old.close()
         _RENDERER.clear()
         shape, mount, side, (w, h) = key
-        r = _RENDERER[key] = SilhouetteRenderer(shape, mount, side=side, width_px=w, height_px=h)
+        r = _RENDERER[key] = SilhouetteRasterizer(shape, mount, side=side, width_px=w,
+                                                  height_px=h)
     return r
 
 

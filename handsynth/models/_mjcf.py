@@ -68,7 +68,7 @@ _MIRROR = np.diag([-1.0, 1.0, 1.0])
 def _rot(axis: str, deg: float) -> np.ndarray:
     c, s = np.cos(np.radians(deg)), np.sin(np.radians(deg))
     i = "xyz".index(axis)
-    j, k = [a for a in range(3) if a != i]
+    j, k = (i + 1) % 3, (i + 2) % 3  # cyclic, so that the rotation is right-handed
     r = np.eye(3)
     r[j, j], r[j, k], r[k, j], r[k, k] = c, -s, s, c
     return r

@@ -8,13 +8,16 @@ from ._preprocess import (
     crop_resize,
     largest_component,
     preprocess,
+    preprocess_reference,
     wrist_cut_keep,
 )
+from ._raster import SilhouetteRasterizer
 from ._renderer import SilhouetteRenderer, render_rgb
 from ._sheet import contact_sheet
 
 __all__ = [
     "CameraMount",
+    "SilhouetteRasterizer",
     "SilhouetteRenderer",
     "backend",
     "binarize",
@@ -24,6 +27,7 @@ __all__ = [
     "ensure_backend",
     "largest_component",
     "preprocess",
+    "preprocess_reference",
     "render_rgb",
     "wrist_cut_keep",
 ]

@@ -12,10 +12,21 @@ Steps, in order:
    wrist, so database renders (with the model's forearm stub) and live
    frames (with a real forearm) lose the same part.
 3. *Largest connected component* (8-connectivity) is kept as the hand.
-4. *Crop* to its bounding box and *resize* to ``size x size``: the longer
-   side of the box is scaled to `size` and the shorter side is centred with
-   background padding, so the aspect ratio of the hand is kept.  Resizing
-   uses area averaging and a 0.5 threshold.
+4. *Crop* to its bounding box and *resize* to ``size x size``: the box of
+   ``bw x bh`` pixels is scaled by ``s = size / max(bw, bh)`` (the longer
+   side becomes `size`) and centred, the shorter side padded with
+   background, so the aspect ratio of the hand is kept.  The mapping is
+   continuous (no rounding of the scaled box or its offset): an output
+   cell is hand when at least half of its area is covered by the scaled
+   component (exact area resampling, 0.5 threshold).  The result therefore
+   converges as the frame resolution grows, so masks of different sizes
+   of the same view agree (``scripts/bench_build.py`` measures it).
+
+:func:`preprocess` runs steps 2-4 in one compiled pass over the mask's row
+runs (:mod:`handsynth.render._runs`); :func:`preprocess_reference` chains
+the plain steps (:func:`wrist_cut_keep`, :func:`largest_component`,
+:func:`crop_resize`) and is kept as the specification the tests compare
+against.
 
 A hand cut by the frame border keeps its straight cut edge through every
 step; the features then see the same cut edge in database and live frames
@@ -40,6 +51,7 @@ __all__ = [
     "crop_resize",
     "largest_component",
     "preprocess",
+    "preprocess_reference",
     "wrist_cut_keep",
 ]
 
@@ -137,37 +149,75 @@ def wrist_cut_keep(mount: CameraMount, *, side: str = "right",
     return _keep_cached(mount, side, w, h)
 
 
+@lru_cache(maxsize=32)
+def _keep_rows(mount: CameraMount, side: str, w: int, h: int) -> tuple[np.ndarray, np.ndarray]:
+    """The wrist cut as one kept column interval ``[lo[y], hi[y])`` per row."""
+    keep = _keep_cached(mount, side, w, h) if mount.wrist_cut_mm is not None \
+        else np.ones((h, w), dtype=bool)
+    any_ = keep.any(axis=1)
+    lo = np.where(any_, keep.argmax(axis=1), 0).astype(np.int32)
+    hi = np.where(any_, w - keep[:, ::-1].argmax(axis=1), 0).astype(np.int32)
+    if not (keep.sum(axis=1) == hi - lo).all():  # a half-plane keeps one interval per row
+        raise AssertionError("wrist cut is not one interval per row")
+    lo.setflags(write=False)
+    hi.setflags(write=False)
+    return lo, hi
+
+
 def largest_component(mask: np.ndarray) -> np.ndarray:
-    """The largest 8-connected foreground component of `mask` (all False if none)."""
+    """The largest 8-connected foreground component of `mask` (all False if none).
+
+    Ties (components of equal pixel count) go to the component whose first
+    pixel comes first in raster order.
+    """
     import cv2
 
-    n, labels, stats, _ = cv2.connectedComponentsWithStats(mask.view(np.uint8), connectivity=8)
+    n, labels = cv2.connectedComponents(mask.view(np.uint8), connectivity=8)
     if n <= 1:
         return np.zeros(mask.shape, dtype=bool)
-    best = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
+    flat = labels.ravel()
+    area = np.bincount(flat, minlength=n)
+    _, first = np.unique(flat, return_index=True)  # first raster index of each label
+    area[0] = -1
+    best = int(np.lexsort((first, -area))[0])
     return labels == best
+
+
+def _cell_weights(n_src: int, scale: float, offset: float, size: int) -> np.ndarray:
+    """(size, n_src) overlap, in cell units, of source pixel k (``[offset + k*scale,
+    offset + (k+1)*scale)``) with output cell j (``[j, j+1)``)."""
+    a = offset + np.arange(n_src) * scale
+    j = np.arange(size)[:, None]
+    return np.clip(np.minimum(a + scale, j + 1.0) - np.maximum(a, j), 0.0, None)
 
 
 def crop_resize(mask: np.ndarray, *, size: int = 64) -> np.ndarray:
     """Crop `mask` to its bounding box and fit it into ``size x size``, aspect kept.
 
+    The box (``bw x bh`` pixels) is scaled by ``s = size / max(bw, bh)`` and
+    centred; a cell is True when the scaled mask covers at least half of
+    it (exact area resampling with dense weight matrices; the plain
+    statement of what :func:`preprocess` computes in compiled form).
+
     Returns an all-False image when `mask` is empty.
     """
-    import cv2
-
     out = np.zeros((size, size), dtype=bool)
     rows = np.flatnonzero(mask.any(axis=1))
     if rows.size == 0:
         return out
     cols = np.flatnonzero(mask.any(axis=0))
-    box = mask[rows[0]:rows[-1] + 1, cols[0]:cols[-1] + 1]
+    box = mask[rows[0]:rows[-1] + 1, cols[0]:cols[-1] + 1].astype(np.float64)
     bh, bw = box.shape
-    scale = size / max(bh, bw)
-    nh, nw = max(1, round(bh * scale)), max(1, round(bw * scale))
-    small = cv2.resize(box.astype(np.float32), (nw, nh), interpolation=cv2.INTER_AREA) >= 0.5
-    r0, c0 = (size - nh) // 2, (size - nw) // 2
-    out[r0:r0 + nh, c0:c0 + nw] = small
-    return out
+    s = size / max(bh, bw)
+    wy = _cell_weights(bh, s, 0.5 * (size - bh * s), size)
+    wx = _cell_weights(bw, s, 0.5 * (size - bw * s), size)
+    return wy @ box @ wx.T >= 0.5 - 1e-9
+
+
+def _check_size(size) -> int:
+    if isinstance(size, bool) or not isinstance(size, (int, np.integer)) or size < 8:
+        raise InvalidInputError(f"size must be an integer >= 8, got {size!r}")
+    return int(size)
 
 
 def preprocess(frame: np.ndarray, mount: CameraMount | None = None, *, side: str = "right",
@@ -192,8 +242,19 @@ def preprocess(frame: np.ndarray, mount: CameraMount | None = None, *, side: str
     ndarray, shape (size, size), bool
         The silhouette; all False when the frame shows no hand.
     """
-    if isinstance(size, bool) or not isinstance(size, (int, np.integer)) or size < 8:
-        raise InvalidInputError(f"size must be an integer >= 8, got {size!r}")
+    from ._runs import silhouette_from_mask
+
+    size = _check_size(size)
+    mask = binarize(frame, threshold=threshold)
+    lo, hi = _keep_rows(mount or CameraMount(), side, mask.shape[1], mask.shape[0])
+    return silhouette_from_mask(mask, lo, hi, size)
+
+
+def preprocess_reference(frame: np.ndarray, mount: CameraMount | None = None, *,
+                         side: str = "right", size: int = 64,
+                         threshold: int | None = None) -> np.ndarray:
+    """:func:`preprocess` as the plain chain of its steps (slow; the specification)."""
+    size = _check_size(size)
     mask = binarize(frame, threshold=threshold)
     keep = wrist_cut_keep(mount or CameraMount(), side=side,
                           width_px=mask.shape[1], height_px=mask.shape[0])

@@ -47,6 +47,9 @@ class SilhouetteRenderer:
         view is kept and pixels are square.
     forearm : bool, keyword-only
         Render the forearm stub behind the wrist, as the real camera sees it.
+    samples : int, keyword-only
+        Multisample anti-aliasing (0, 2 or 4 on Mesa's llvmpipe); a pixel is
+        hand when at least half of its samples are (a high-quality reference).
 
     Examples
     --------
@@ -57,7 +60,7 @@ class SilhouetteRenderer:
 
     def __init__(self, shape: HandShape | None = None, mount: CameraMount | None = None, *,
                  side: str = "right", width_px: int | None = None, height_px: int | None = None,
-                 forearm: bool = True) -> None:
+                 forearm: bool = True, samples: int = 0) -> None:
         ensure_backend()
         import mujoco
 
@@ -66,7 +69,7 @@ class SilhouetteRenderer:
         self.side = side
         self.width_px, self.height_px = self.mount.size(width_px, height_px)
         xml = scene_mjcf(self.shape, self.mount, side=side, forearm=forearm, silhouette=True,
-                         width_px=self.width_px, height_px=self.height_px)
+                         width_px=self.width_px, height_px=self.height_px, samples=samples)
         self.hand = HandModel(self.shape, side=side, xml=xml)
         self._renderer = _renderer(self.hand.model, self.width_px, self.height_px)
         self._cam = mujoco.mj_name2id(self.hand.model, mujoco.mjtObj.mjOBJ_CAMERA, "device")

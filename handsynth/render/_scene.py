@@ -20,7 +20,8 @@ def mujoco_camera_xyaxes(pose_cv: np.ndarray) -> np.ndarray:
 
 
 def _scene_parts(mount: CameraMount | None, side: str, silhouette: bool,
-                 width_px: int | None, height_px: int | None) -> tuple[str, str]:
+                 width_px: int | None, height_px: int | None,
+                 samples: int = 0) -> tuple[str, str]:
     """The ``<visual>`` element and the worldbody lights and cameras of a scene."""
     mount = mount or CameraMount()
     w, h = mount.size(width_px, height_px)
@@ -41,7 +42,7 @@ def _scene_parts(mount: CameraMount | None, side: str, silhouette: bool,
     )
     visual = (
         f'  <visual>\n    <global offwidth="{w}" offheight="{h}"/>\n'
-        f'    <quality offsamples="0" shadowsize="0"/>\n    {head}\n'
+        f'    <quality offsamples="{int(samples)}" shadowsize="0"/>\n    {head}\n'
         '    <rgba haze="0 0 0 1"/>\n    <map znear="0.01" zfar="50"/>\n  </visual>\n'
     )
     return visual, light + cameras
@@ -49,7 +50,8 @@ def _scene_parts(mount: CameraMount | None, side: str, silhouette: bool,
 
 def scene_mjcf(shape: HandShape | None = None, mount: CameraMount | None = None, *,
                side: str = "right", forearm: bool = True, silhouette: bool = False,
-               width_px: int | None = None, height_px: int | None = None) -> str:
+               width_px: int | None = None, height_px: int | None = None,
+               samples: int = 0) -> str:
     """MJCF of the hand with the device camera ``"device"``, a side camera and lights.
 
     Parameters
@@ -63,13 +65,15 @@ def scene_mjcf(shape: HandShape | None = None, mount: CameraMount | None = None,
         Flat unlit white hand on black, no lights: a mask is one channel > 0.
     width_px, height_px : int, keyword-only
         Off-screen buffer size (the render size; the mount's frame size by default).
+    samples : int, keyword-only
+        Multisample anti-aliasing samples of the off-screen buffer (0: none).
 
     Returns
     -------
     str
         A complete MJCF document.
     """
-    visual, world = _scene_parts(mount, side, silhouette, width_px, height_px)
+    visual, world = _scene_parts(mount, side, silhouette, width_px, height_px, samples)
     hand = hand_mjcf(shape, side=side, forearm=forearm, silhouette=silhouette)
     hand = hand.replace("  <compiler ", visual + "  <compiler ", 1)
     return hand.replace("  </worldbody>", world + "  </worldbody>", 1)
