@@ -31,6 +31,8 @@ def _parse_list(text: str, option: str) -> tuple[str, ...]:
               help="Database folder; the databases needed are built there when missing.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), default=None,
               help="Folder for the plots (eval_*.png); none written if not given.")
+@click.option("--prefix", default=None,
+              help="File-name prefix of the plots [default: eval_, or eval_mesh_ for --hand mesh].")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False), default=None,
               help="Write the per-joint figures (and hands, databases, targets) as JSON.")
 @click.option("--json-frames", is_flag=True, help="Also put every frame's truth and estimates "
@@ -60,7 +62,7 @@ def _parse_list(text: str, option: str) -> tuple[str, ...]:
 @click.option("--workers", type=int, default=1, show_default=True,
               help="Worker processes for building missing databases.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress lines.")
-def eval_(db_folder, out_dir, json_path, json_frames, n_hands, frames, pose_sets, hand,
+def eval_(db_folder, out_dir, prefix, json_path, json_frames, n_hands, frames, pose_sets, hand,
           conditions, count, seed, ratio_margin, mount, frame_size, render_size, workers,
           quiet) -> None:
     """Accuracy on synthetic ground truth: standard vs selected database.
@@ -84,6 +86,8 @@ def eval_(db_folder, out_dir, json_path, json_frames, n_hands, frames, pose_sets
     if json_path:
         click.echo(f"json: {report.write_json(json_path, frames=json_frames)}")
     if out_dir:
-        for path in report.write_plots(out_dir):
+        if prefix is None:
+            prefix = "eval_mesh_" if hand == "mesh" else "eval_"
+        for path in report.write_plots(out_dir, prefix=prefix):
             click.echo(f"plot: {path}")
     sys.stdout.flush()

@@ -58,6 +58,7 @@ def test_bad_options_give_one_line_errors(tmp_path, args, word):
 def test_mesh_hand_is_pluggable(tmp_path):
     js = tmp_path / "mesh.json"
     res = _run("--db", str(tmp_path / "dbs"), "--hand", "mesh", "--json", str(js), "-q",
+               "--out", str(tmp_path / "plots"),
                "--conditions", "standard,selected", *SMALL[:6], "--hands", "1", "--frames", "4")
     if importlib.util.find_spec("handsynth.render._mesh_hand") is None:
         assert res.exit_code == 2 and "mesh" in res.output
@@ -75,3 +76,4 @@ def test_mesh_hand_is_pluggable(tmp_path):
     assert hand["databases"]["standard"] == "L1.000_W1.000_P1.000_T1.000"
     assert set(d["targets"]["all"]) == {"index_pip_sd_deg", "selected_beats_standard"}
     assert d["conditions"]["selected"]["all"]["frames"] == 8
+    assert (tmp_path / "plots" / "eval_mesh_error_hist.png").is_file()
