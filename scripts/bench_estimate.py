@@ -30,12 +30,12 @@ def _build(folder: Path, n: int) -> None:
     from handsynth.render import CameraMount
 
     shape, mount = HandShape(), CameraMount()
-    rows = render_entries(paper_pose_set(n, seed=0), shape, mount, render_size=(240, 160))
+    rows = render_entries(paper_pose_set(n, seed=0), shape, mount, render_size=(720, 480))
     write_database(folder / f"{shape.name}.h5", angles=rows["angles"], hlac=rows["hlac"],
                    sil_bits=rows["sil_bits"], ridge_bits=rows["ridge_bits"],
                    ridge_area=rows["ridge_area"], keypoints=rows["keypoints"],
                    meta=database_meta(shape, mount, side="right", pose_set="paper", count=n,
-                                      seed=0, render_size=(240, 160)))
+                                      seed=0, render_size=(720, 480)))
 
 
 def main() -> None:

@@ -16,36 +16,44 @@ entries and the result is marked ``low_confidence``.
 
 Implementation
 --------------
-:func:`search` runs one compiled loop over the entries: P1 from the packed
-masks first (64 AND-NOT-popcounts), P2 only for stage-1 survivors, and the
-HLAC distance (int32 arithmetic on the uint8 vectors) only for stage-2
-survivors.  The penalties of all entries are computed in a first pass; the second pass
-skips every survivor whose penalty plus a block-sum lower bound of its HLAC
-distance exceeds the best ``E`` so far, and abandons each distance as soon
-as its partial sum does; neither can change the answer.  Nothing is copied
-per survivor.
-:func:`search_reference` is the plain numpy statement of the same method,
-kept for tests.
+:func:`search` is exact (same answer as :func:`search_reference`) but reads
+far less than every entry's masks.  Each entry also carries its silhouette
+and ridge lines at 4x4-block resolution (one bit per block, 256 bits), and
+the input its ridge pixel count per block.  These give lower bounds that
+never exceed the true penalties:
 
-Beyond the paper: ``seed`` (temporal coherence) scores the previous frame's
-answer first, so the early exits are tight from the first entry on; the
-answer is unchanged (exact), only the time changes.  An approximate index
-(faiss IVF over HLAC) for 10^5-10^6 entries is not implemented yet.
+* ``P1 >= sum of the input's ridge pixels in blocks where the entry's
+  silhouette has no pixel``;
+* ``P2 >= number of blocks holding an entry ridge pixel and no input
+  silhouette pixel``.
 
-Cost: pass 1 streams both packed masks of every entry (1 KiB per entry,
-20 MiB for 20,448 entries), which is memory-bound at a few hundred
-microseconds per frame; pass 2 is usually smaller.
+A first pass over these 64-byte summaries drops every entry whose bound
+already fails a pruning stage and keeps ``C3 lb1 + C4 lb2`` as a lower bound
+of its penalty.  The entry with the smallest bound (or the previous frame's
+answer, ``seed``) is scored first; then, in index order, an entry is scored
+exactly only when its bound does not exceed the best ``E`` so far: P1 (its
+popcount abandoned as soon as it fails stage 1 or alone exceeds the best E),
+P2, then the HLAC distance with its block-sum lower bound and early exit.
+Ties go to the lowest index.  When no entry passes both stages the same
+pass runs without pruning (the fallback).  Nothing is copied per entry.
+``survivors`` of the result counts the entries that passed both stages
+among those scored exactly (a lower bound of the total, which
+:func:`search_reference` reports).
+
+Cost: the first pass reads 64 bytes per entry (1.3 MB for 20,448
+entries); the exact scoring touches a few hundred entries per frame.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 from numba import njit
 
 from ..db import HLAC_SIZE, count_outside
+from ..db._bits import _popcount64
 from ..errors import InvalidInputError
 
 __all__ = ["SearchOptions", "SearchResult", "SearchTables", "search", "search_reference"]
@@ -113,6 +121,9 @@ class SearchResult:
         Its penalties (pixels).
     survivors : int
         Entries left after both pruning stages (0: fallback was used).
+        :func:`search` counts only the survivors it scored (a lower bound
+        of the total; it skips entries that cannot win),
+        :func:`search_reference` all of them.  Not compared by ``==``.
     low_confidence : bool
         ``True`` when pruning left nothing and the answer is the best ``E``
         over all entries.
@@ -123,7 +134,7 @@ class SearchResult:
     hlac_distance: int
     p1: int
     p2: int
-    survivors: int
+    survivors: int = field(compare=False)  # diagnostic: not part of the answer
     low_confidence: bool
 
 
@@ -142,6 +153,11 @@ class SearchTables:
         ``|h - h_i|^2 >= sum_b (s_b - s_i,b)^2 / 25`` (Cauchy-Schwarz) that
         lets the search skip most HLAC distances.  Computed by
         :meth:`from_arrays`.
+    sil_coarse, ridge_coarse : ndarray of uint64, shape (N, 4)
+        Silhouette and ridge lines at 4x4-block resolution, one bit per
+        block (set when the block holds a pixel), 16x16 blocks in row-major
+        order, bit ``k % 64`` of word ``k // 64``.  Computed by
+        :meth:`from_arrays`.
     """
 
     hlac: np.ndarray
@@ -149,6 +165,8 @@ class SearchTables:
     ridge_bits: np.ndarray
     ridge_area: np.ndarray
     block_sums: np.ndarray
+    sil_coarse: np.ndarray
+    ridge_coarse: np.ndarray
 
     @classmethod
     def from_arrays(cls, *, hlac, sil_bits, ridge_bits, ridge_area) -> SearchTables:
@@ -165,9 +183,11 @@ class SearchTables:
             if arr.shape != shape:
                 raise InvalidInputError(f"{name} must have shape {shape}, got {arr.shape}")
         sums = _block_sums(h)
-        for arr in (h, s, r, a, sums):
+        sc, rc = _coarse_presence_batch(s), _coarse_presence_batch(r)
+        for arr in (h, s, r, a, sums, sc, rc):
             arr.setflags(write=False)
-        return cls(hlac=h, sil_bits=s, ridge_bits=r, ridge_area=a, block_sums=sums)
+        return cls(hlac=h, sil_bits=s, ridge_bits=r, ridge_area=a, block_sums=sums,
+                   sil_coarse=sc, ridge_coarse=rc)
 
     def __len__(self) -> int:
         return self.hlac.shape[0]
@@ -206,68 +226,163 @@ def _hlac_distance(q_hlac, row, bound):
     return d
 
 
-@njit(cache=True, nogil=True)
-def _penalties(q_sil, q_ridge, sil_bits, ridge_bits, ridge_area, th1, c1, c2, c3, c4,
-               prune, pen, p1s, p2s):
-    """Pass 1 over all entries: P1, P2 and the pruning; pen[i] = C3 P1 + C4 P2 or -1 if pruned.
+_NIBBLE_BITS = np.array([bin(i).count("1") for i in range(16)], dtype=np.int64)
 
-    Returns the number of survivors and the survivor with the smallest penalty.
-    """
-    survivors = 0
-    best_i = -1
-    for i in range(sil_bits.shape[0]):
-        p1 = count_outside(q_ridge, sil_bits[i])
-        p1s[i] = p1
-        p2s[i] = -1
-        pen[i] = -1.0
-        if prune and p1 > th1:
+
+@njit(cache=True, nogil=True)
+def _block_counts(bits):
+    """Pixels per 4x4 block (16, 16) of a packed 64x64 mask."""
+    counts = np.zeros((16, 16), np.int64)
+    for r in range(64):
+        w = bits[r]
+        for cx in range(16):
+            counts[r >> 2, cx] += _NIBBLE_BITS[(w >> np.uint64(4 * cx)) & np.uint64(15)]
+    return counts
+
+
+@njit(cache=True, nogil=True)
+def _pack_blocks(flags):
+    """(16, 16) bool -> (4,) uint64, block k = 16 * row + col at bit k % 64 of word k // 64."""
+    out = np.zeros(4, np.uint64)
+    for cy in range(16):
+        for cx in range(16):
+            if flags[cy, cx]:
+                k = 16 * cy + cx
+                out[k >> 6] |= np.uint64(1) << np.uint64(k & 63)
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _coarse_presence_batch(bits):
+    out = np.empty((bits.shape[0], 4), np.uint64)
+    for i in range(bits.shape[0]):
+        out[i] = _pack_blocks(_block_counts(bits[i]) > 0)
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _count_planes(bits):
+    """Bit planes (5, 4) of the per-block pixel counts (0..16) of a packed mask."""
+    counts = _block_counts(bits)
+    planes = np.empty((5, 4), np.uint64)
+    for k in range(5):
+        planes[k] = _pack_blocks(((counts >> k) & 1) == 1)
+    return planes
+
+
+@njit(cache=True, nogil=True)
+def _count_outside_limited(a_bits, b_bits, limit):
+    """``count_outside(a_bits, b_bits)``, abandoned (returned) once it exceeds `limit`."""
+    total = 0
+    for r in range(a_bits.shape[0]):
+        total += _popcount64(a_bits[r] & ~b_bits[r])
+        if total > limit:
+            return total
+    return total
+
+
+@njit(cache=True, nogil=True)
+def _bounds(q_planes, q_sil_coarse, sil_coarse, ridge_coarse, ridge_area, th1, c1, c2, c3, c4,
+            prune, key):
+    """Pass 1: key[i] = C3 lb1 + C4 lb2 (a lower bound of the penalty), -1 when a bound
+    already fails a pruning stage.  Returns the entry with the smallest key (-1: none)."""
+    best = -1
+    for i in range(sil_coarse.shape[0]):
+        lb1 = 0
+        for k in range(5):
+            for w in range(4):
+                lb1 += _popcount64(q_planes[k, w] & ~sil_coarse[i, w]) << k
+        key[i] = -1.0
+        if prune and lb1 > th1:
             continue
+        lb2 = 0
+        for w in range(4):
+            lb2 += _popcount64(ridge_coarse[i, w] & ~q_sil_coarse[w])
         a = ridge_area[i]
-        p2 = count_outside(ridge_bits[i], q_sil)
-        p2s[i] = p2
-        if prune and p2 > c1 * a * a + c2 * a:
+        if prune and lb2 > c1 * a * a + c2 * a:
             continue
-        pen[i] = c3 * p1 + c4 * p2
+        key[i] = c3 * lb1 + c4 * lb2
+        if best < 0 or key[i] < key[best]:
+            best = i
+    return best
+
+
+@njit(cache=True, nogil=True)
+def _score(i, q_hlac, q_sums, q_sil, q_ridge, hlac, sums, sil_bits, ridge_bits, ridge_area,
+           th1, c1, c2, c3, c4, prune, best_e):
+    """Entry i against the best E so far: (status, E, d, p1, p2).
+
+    status 0: fails pruning; 1: passes both stages, E exact or, when it
+    cannot beat `best_e`, some value above it; 2: cannot beat `best_e`,
+    abandoned before its stage-1 test was decided.
+    """
+    limit = th1 if prune else np.inf
+    if c3 > 0.0:
+        limit = min(limit, best_e / c3)
+    p1 = _count_outside_limited(q_ridge, sil_bits[i], limit)
+    if prune and p1 > th1:
+        return 0, 0.0, 0, p1, 0
+    pen = c3 * p1
+    if pen > best_e:
+        return 2, pen, 0, p1, 0
+    p2 = count_outside(ridge_bits[i], q_sil)
+    a = ridge_area[i]
+    if prune and p2 > c1 * a * a + c2 * a:
+        return 0, 0.0, 0, p1, p2
+    pen += c4 * p2
+    if pen > best_e or pen + _distance_bound(q_sums, sums[i]) > best_e:
+        return 1, np.inf, 0, p1, p2
+    d = _hlac_distance(q_hlac, hlac[i], best_e - pen)
+    return 1, d + pen, d, p1, p2
+
+
+@njit(cache=True, nogil=True)
+def _best(q_hlac, q_sums, q_sil, q_ridge, q_planes, q_sil_coarse, hlac, sums, sil_bits,
+          ridge_bits, ridge_area, sil_coarse, ridge_coarse, th1, c1, c2, c3, c4, prune, seed, key):
+    """Best entry over the entries that pass pruning (all when `prune` is False).
+
+    Returns (index, E, d, p1, p2, scored survivors); index -1 when none passes.
+    """
+    first = _bounds(q_planes, q_sil_coarse, sil_coarse, ridge_coarse, ridge_area, th1, c1, c2,
+                    c3, c4, prune, key)
+    best_i, best_e, best_d, best_p1, best_p2 = -1, np.inf, 0, 0, 0
+    survivors = 0
+    start = seed if seed >= 0 and key[seed] >= 0.0 else first
+    if start >= 0:
+        st, e, d, p1, p2 = _score(start, q_hlac, q_sums, q_sil, q_ridge, hlac, sums, sil_bits,
+                                  ridge_bits, ridge_area, th1, c1, c2, c3, c4, prune, np.inf)
+        if st == 1:
+            best_i, best_e, best_d, best_p1, best_p2 = start, e, d, p1, p2
+            survivors += 1
+    for i in range(sil_coarse.shape[0]):
+        k = key[i]
+        if k < 0.0 or k > best_e or i == start:
+            continue
+        st, e, d, p1, p2 = _score(i, q_hlac, q_sums, q_sil, q_ridge, hlac, sums, sil_bits,
+                                  ridge_bits, ridge_area, th1, c1, c2, c3, c4, prune, best_e)
+        if st != 1:
+            continue
         survivors += 1
-        if best_i < 0 or pen[i] < pen[best_i]:
-            best_i = i
-    return survivors, best_i
+        if e < best_e or (e == best_e and i < best_i):
+            best_i, best_e, best_d, best_p1, best_p2 = i, e, d, p1, p2
+    return best_i, best_e, best_d, best_p1, best_p2, survivors
 
 
 @njit(cache=True, nogil=True)
 def _search_kernel(q_hlac, q_sums, q_sil, q_ridge, q_area, hlac, sums, sil_bits, ridge_bits,
-                   ridge_area, c, c1, c2, c3, c4, prune, seed, pen, p1s, p2s):
-    """Best entry; returns (index, E, d, p1, p2, survivors, fallback).
-
-    Pass 1 computes the penalties of every entry (:func:`_penalties`).  Pass
-    2 starts from the previous answer `seed` (when it survives) or the
-    survivor with the smallest penalty, then scores only survivors whose
-    penalty alone does not exceed the best E so far, abandoning each HLAC
-    distance as soon as it cannot win.  Ties go to the lowest index.
-    """
-    n = hlac.shape[0]
-    survivors, first = _penalties(q_sil, q_ridge, sil_bits, ridge_bits, ridge_area, c * q_area,
-                                  c1, c2, c3, c4, prune, pen, p1s, p2s)
-    fallback = survivors == 0
-    if fallback:  # best E over all entries
-        survivors, first = _penalties(q_sil, q_ridge, sil_bits, ridge_bits, ridge_area, 0.0,
-                                      c1, c2, c3, c4, False, pen, p1s, p2s)
-        survivors = 0
-    start = seed if seed >= 0 and pen[seed] >= 0.0 else first
-    best_i = start
-    best_d = _hlac_distance(q_hlac, hlac[start], np.iinfo(np.int64).max)
-    best_e = best_d + pen[start]
-    for i in range(n):
-        p = pen[i]
-        if p < 0.0 or p > best_e or i == start:
-            continue
-        if p + _distance_bound(q_sums, sums[i]) > best_e:
-            continue
-        d = _hlac_distance(q_hlac, hlac[i], best_e - p)
-        e = d + p
-        if e < best_e or (e == best_e and i < best_i):
-            best_e, best_i, best_d = e, i, d
-    return best_i, best_e, best_d, p1s[best_i], p2s[best_i], survivors, fallback
+                   ridge_area, sil_coarse, ridge_coarse, c, c1, c2, c3, c4, prune, seed, key):
+    """Best entry; returns (index, E, d, p1, p2, survivors, fallback)."""
+    q_planes = _count_planes(q_ridge)
+    q_sil_coarse = _pack_blocks(_block_counts(q_sil) > 0)
+    i, e, d, p1, p2, surv = _best(q_hlac, q_sums, q_sil, q_ridge, q_planes, q_sil_coarse, hlac,
+                                  sums, sil_bits, ridge_bits, ridge_area, sil_coarse,
+                                  ridge_coarse, c * q_area, c1, c2, c3, c4, prune, seed, key)
+    if i >= 0:
+        return i, e, d, p1, p2, surv, False
+    i, e, d, p1, p2, surv = _best(q_hlac, q_sums, q_sil, q_ridge, q_planes, q_sil_coarse, hlac,
+                                  sums, sil_bits, ridge_bits, ridge_area, sil_coarse,
+                                  ridge_coarse, 0.0, c1, c2, c3, c4, False, seed, key)
+    return i, e, d, p1, p2, 0, True
 
 
 def _query(features) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
@@ -309,14 +424,11 @@ def search(features, tables: SearchTables, *, options: SearchOptions | None = No
     if not -1 <= s < n:
         raise InvalidInputError(f"seed must be an entry index in [0, {n}), got {seed!r}")
     h, sb, rb, area = _query(features)
-    # per-call scratch (never shared: the search is thread-safe)
-    pen = np.empty(n, np.float64)
-    p1s = np.empty(n, np.int64)
-    p2s = np.empty(n, np.int64)
+    key = np.empty(n, np.float64)  # per-call scratch (never shared: the search is thread-safe)
     i, e, d, p1, p2, surv, fallback = _search_kernel(
         h, _block_sums(h[None])[0], sb, rb, area, tables.hlac, tables.block_sums,
-        tables.sil_bits, tables.ridge_bits, tables.ridge_area,
-        opts.c, opts.c1, opts.c2, opts.c3, opts.c4, opts.prune, s, pen, p1s, p2s)
+        tables.sil_bits, tables.ridge_bits, tables.ridge_area, tables.sil_coarse,
+        tables.ridge_coarse, opts.c, opts.c1, opts.c2, opts.c3, opts.c4, opts.prune, s, key)
     return SearchResult(index=int(i), error=float(e), hlac_distance=int(d), p1=int(p1),
                         p2=int(p2), survivors=int(surv), low_confidence=bool(fallback))
 
