@@ -1,0 +1,120 @@
+"""``handsynth measure PHOTO``: measure a hand on a top-down photo and choose its database."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from ..errors import InvalidInputError
+from ._main import cli
+
+
+def _read_image(path: Path):
+    """The photo as a uint8 grey (H, W) or BGR (H, W, 3) array."""
+    import cv2
+    import numpy as np
+
+    img = cv2.imread(str(path), cv2.IMREAD_UNCHANGED) if path.is_file() else None
+    if img is None:
+        raise InvalidInputError(f"cannot read the photo {str(path)!r}: no such file or not an "
+                                "image OpenCV can decode")
+    if img.dtype == np.uint16:
+        img = (img >> 8).astype(np.uint8)
+    if img.dtype != np.uint8:
+        raise InvalidInputError(f"photo {str(path)!r} has {img.dtype} pixels; give an 8- or "
+                                "16-bit image")
+    if img.ndim == 3 and img.shape[2] == 4:
+        img = cv2.cvtColor(img, cv2.COLOR_BGRA2BGR)
+    elif img.ndim == 3 and img.shape[2] == 1:
+        img = img[..., 0]
+    return img
+
+
+def _format(result) -> str:
+    m = result.measurements
+    q = result.selection.ratios
+    lines = [f"scale: {result.mm_per_px:.5g} mm/px ({result.scale_source})"]
+    for f in result.fingers:
+        lengths = " ".join(f"{v:6.1f}" for v in f.segment_lengths_mm)
+        widths = " ".join(f"{v:5.1f}" for v in f.widths_mm)
+        lines.append(f"{f.name:7s} lengths {lengths:<20s} widths {widths}  (mm)")
+    lines.append(f"palm    P_width {m.P_width:.1f}  P_height {m.P_height:.1f}  "
+                 f"T_width {m.T_width:.1f}  T_height {m.T_height:.1f}  (mm)")
+    lines.append(f"ratios  length {q.length:.3f}  width {q.width:.3f}  palm {q.palm:.3f}  "
+                 f"thumb {q.thumb:.3f}  (formulas (1)-(4))")
+    lines.append(f"database: {result.selection.name}")
+    return "\n".join(lines)
+
+
+@cli.command()
+@click.argument("photo", type=click.Path(path_type=Path))
+@click.option("--mm-per-px", type=float, default=None,
+              help="Scale at the plane of the hand, mm per pixel.")
+@click.option("--reference-width-mm", type=float, default=None,
+              help="Instead of --mm-per-px: the longer side, in mm, of a reference object "
+                   "lying beside the hand (the second-largest object in the photo), e.g. 85.6 "
+                   "for a bank card.")
+@click.option("--out", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="Write the measurements to FILE.json or FILE.csv (the format "
+                   "--measurements of 'handsynth estimate' reads).")
+@click.option("--details", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="Write everything found (joints, axes, valleys, wrist, fit quality, the "
+                   "selection) to FILE.json.")
+@click.option("--annotate", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="Write the photo with what was found drawn on it to OUT.png.")
+@click.option("--normalize", type=click.Choice(["none", "palm_width"]), default="none",
+              show_default=True,
+              help="Normalisation of formulas (1)-(4): 'none' uses true millimetres, "
+                   "'palm_width' the paper's scale-free normalisation.")
+@click.option("--raw", is_flag=True,
+              help="No correction from the standard model (MeasureCalibration).")
+def measure(photo, mm_per_px, reference_width_mm, out, details, annotate, normalize,
+            raw) -> None:
+    """Measure the open hand on PHOTO and print the database it selects.
+
+    PHOTO shows one open hand, fingers spread, lying flat on a plain
+    background, taken from straight above (a forearm may leave the picture
+    at the border).  A scale is required: --mm-per-px, or
+    --reference-width-mm with a reference object of known size beside the
+    hand.
+    """
+    import json
+
+    from ..estimate._measure import (
+        NO_CALIBRATION,
+        MeasureOptions,
+        annotate_measurement,
+        measure_photo,
+        write_measurement_file,
+    )
+    from ..render._io import write_png
+
+    for path, suffixes, name in ((out, (".json", ".csv"), "--out"),
+                                 (details, (".json",), "--details"),
+                                 (annotate, (".png",), "--annotate")):
+        if path is not None and path.suffix.lower() not in suffixes:
+            raise InvalidInputError(f"{name} must end in {' or '.join(suffixes)}, "
+                                    f"got {str(path)!r}")
+    if (mm_per_px is None) == (reference_width_mm is None):
+        raise InvalidInputError(
+            "give the photo's scale: exactly one of --mm-per-px X (mm per pixel at the hand) "
+            "or --reference-width-mm W (the longer side of a reference object beside the hand)")
+    image = _read_image(photo)
+    options = MeasureOptions(normalize=normalize)
+    if raw:
+        options = MeasureOptions(normalize=normalize, calibration=NO_CALIBRATION)
+    result = measure_photo(image, mm_per_px=mm_per_px, reference_width_mm=reference_width_mm,
+                           options=options)
+    click.echo(_format(result))
+    for w in result.warnings:
+        click.echo(f"handsynth: warning: {w}", err=True)
+    if out is not None:
+        write_measurement_file(out, result.measurements)
+        click.echo(f"wrote {out}")
+    if details is not None:
+        details.write_text(json.dumps(result.as_dict(), indent=1) + "\n", encoding="utf-8")
+        click.echo(f"wrote {details}")
+    if annotate is not None:
+        write_png(annotate, annotate_measurement(image, result)[..., ::-1])
+        click.echo(f"wrote {annotate}")
