@@ -8,8 +8,26 @@
   :func:`search_reference` (numpy, the specification).
 * :class:`PoseLookup`, the pose-lookup service (frame in, :class:`PoseEstimate`
   out), implementing the :class:`PoseEstimator` protocol.
+* The live loop: frame sources (:class:`CameraSource`, :class:`VideoSource`,
+  :class:`SyntheticSource`, all :class:`FrameSource`), :func:`run_live`,
+  row writers (:func:`open_row_writer`) and :class:`SideBySideWriter`.
 """
 
+from ._live import (
+    CameraSource,
+    CsvRowWriter,
+    FrameSource,
+    JsonlRowWriter,
+    LiveOptions,
+    LiveSummary,
+    SideBySideWriter,
+    SyntheticMotion,
+    SyntheticSource,
+    VideoSource,
+    live_columns,
+    open_row_writer,
+    run_live,
+)
 from ._lookup import PoseEstimate, PoseEstimator, PoseLookup
 from ._search import SearchOptions, SearchResult, SearchTables, search, search_reference
 from ._selection import (
@@ -25,6 +43,19 @@ from ._selection import (
 
 __all__ = [
     "SEGMENTS",
+    "CameraSource",
+    "CsvRowWriter",
+    "FrameSource",
+    "JsonlRowWriter",
+    "LiveOptions",
+    "LiveSummary",
+    "SideBySideWriter",
+    "SyntheticMotion",
+    "SyntheticSource",
+    "VideoSource",
+    "live_columns",
+    "open_row_writer",
+    "run_live",
     "HandMeasurements",
     "PoseEstimate",
     "PoseEstimator",

@@ -11,12 +11,14 @@ from ._preprocess import (
     preprocess_reference,
     wrist_cut_keep,
 )
+from ._mesh_hand import MeshHandRenderer
 from ._raster import SilhouetteRasterizer
 from ._renderer import SilhouetteRenderer, render_rgb
 from ._sheet import contact_sheet
 
 __all__ = [
     "CameraMount",
+    "MeshHandRenderer",
     "SilhouetteRasterizer",
     "SilhouetteRenderer",
     "backend",
