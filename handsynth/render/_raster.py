@@ -30,36 +30,32 @@ __all__ = ["SilhouetteRasterizer"]
 
 
 @njit(cache=True, nogil=True)
-def _hull(px, py, idx):
-    """Convex hull (counter-clockwise in image axes, no repeated end) of points `idx`.
+def _turns_left(px, py, a, b, p):
+    """Whether a -> b -> p is a strict counter-clockwise turn (image axes)."""
+    return (px[b] - px[a]) * (py[p] - py[a]) - (py[b] - py[a]) * (px[p] - px[a]) > 0
 
-    Andrew's monotone chain; returns the indices of the hull vertices.
+
+@njit(cache=True, nogil=True)
+def _hull(px, py, idx):
+    """Convex hull of points `idx`, as the indices of its vertices in order.
+
+    Andrew's monotone chain: the lower chain over the points sorted by x,
+    then the upper chain back, each keeping only strict turns.
     """
     order = idx[np.argsort(px[idx] + 1e-9 * py[idx])]
     n = order.size
     out = np.empty(2 * n + 1, np.int64)
     k = 0
-    for i in range(n):  # lower chain
-        p = order[i]
-        while k >= 2:
-            a, b = out[k - 2], out[k - 1]
-            if (px[b] - px[a]) * (py[p] - py[a]) - (py[b] - py[a]) * (px[p] - px[a]) <= 0:
-                k -= 1
-            else:
-                break
+    n_lower = 0  # hull size after the lower chain
+    for step in range(2 * n - 1):  # forward over the sorted points, then back
+        p = order[step] if step < n else order[2 * n - 2 - step]
+        floor = 2 if step < n else n_lower + 1
+        while k >= floor and not _turns_left(px, py, out[k - 2], out[k - 1], p):
+            k -= 1
         out[k] = p
         k += 1
-    lower = k + 1
-    for i in range(n - 2, -1, -1):  # upper chain
-        p = order[i]
-        while k >= lower:
-            a, b = out[k - 2], out[k - 1]
-            if (px[b] - px[a]) * (py[p] - py[a]) - (py[b] - py[a]) * (px[p] - px[a]) <= 0:
-                k -= 1
-            else:
-                break
-        out[k] = p
-        k += 1
+        if step == n - 1:
+            n_lower = k
     return out[:k - 1]
 
 
