@@ -71,11 +71,12 @@ replaced.
 
 from __future__ import annotations
 
+import copy
 import hashlib
 import json
 import math
 import os
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 
 import numpy as np
@@ -282,28 +283,6 @@ def _nearest(y: np.ndarray, centroids: np.ndarray, c_norms: np.ndarray) -> np.nd
 # --------------------------------------------------------------------------- kernels
 
 
-@njit(cache=True, nogil=True)
-def _gather(order, offsets, cells, seed, extra, idx):
-    """Write the entries of `cells` (then `extra` when >= 0) to `idx`.
-
-    Returns their count and the position of entry `seed` among them (-1 if absent).
-    """
-    m = 0
-    at = -1
-    for c in cells:
-        for j in range(offsets[c], offsets[c + 1]):
-            idx[m] = order[j]
-            if order[j] == seed:
-                at = m
-            m += 1
-    if extra >= 0:
-        idx[m] = extra
-        if extra == seed:
-            at = m
-        m += 1
-    return m, at
-
-
 @njit(cache=True, nogil=True, fastmath=True)
 def _code_bound(q_y, code, step, band):
     """Lower bound of ``|A h_q - A h_i|^2`` from the int16 code of ``A h_i``.
@@ -319,75 +298,117 @@ def _code_bound(q_y, code, step, band):
 
 
 @njit(cache=True, nogil=True)
-def _pool_penalties(idx, m, q_sil, q_ridge, q_y, sil_bits, ridge_bits, ridge_area, codes, step,
-                    band, inv_gain, th1, c1, c2, c3, c4, prune, pen, low, p1s, p2s):
-    """Pass 1 over the candidates ``idx[:m]``: penalties, pruning, lower bounds of E.
+def _score(i, low, best_e, q_hlac, q_sil, q_ridge, th1, hlac, sil_bits, ridge_bits, ridge_area,
+           c1, c2, c3, c4, prune):
+    """One candidate: (status, p1, p2, d); status -1 pruned, 0 cannot beat `best_e`, 1 scored.
 
-    ``pen[k] = C3 P1 + C4 P2`` (-1 if pruned) and ``low[k] = pen[k]`` plus the
-    code bound of the HLAC distance.  Returns the number of survivors and
-    the position of the survivor with the smallest bound (ties: lowest entry).
+    `low` is the lower bound of its HLAC distance; the distance is abandoned
+    once it cannot reach `best_e` (then status 0).
     """
-    survivors = 0
-    best = -1
-    for k in range(m):
-        i = idx[k]
-        p1 = count_outside(q_ridge, sil_bits[i])
-        p1s[k] = p1
-        p2s[k] = -1
-        pen[k] = -1.0
-        if prune and p1 > th1:
-            continue
-        a = ridge_area[i]
-        p2 = count_outside(ridge_bits[i], q_sil)
-        p2s[k] = p2
-        if prune and p2 > c1 * a * a + c2 * a:
-            continue
-        pen[k] = c3 * p1 + c4 * p2
-        low[k] = pen[k] + _code_bound(q_y, codes[i], step, band) * inv_gain
-        survivors += 1
-        if best < 0 or low[k] < low[best] or (low[k] == low[best] and i < idx[best]):
-            best = k
-    return survivors, best
+    p1 = count_outside(q_ridge, sil_bits[i])
+    if prune and p1 > th1:
+        return -1, p1, 0, 0
+    a = ridge_area[i]
+    p2 = count_outside(ridge_bits[i], q_sil)
+    if prune and p2 > c1 * a * a + c2 * a:
+        return -1, p1, p2, 0
+    pen = c3 * p1 + c4 * p2
+    if pen + low > best_e:
+        return 0, p1, p2, 0
+    d = _hlac_distance(q_hlac, hlac[i], best_e - pen)
+    if d + pen > best_e:
+        return 0, p1, p2, d
+    return 1, p1, p2, d
 
 
 @njit(cache=True, nogil=True)
-def _pool_kernel(q_hlac, q_sil, q_ridge, q_area, q_y, hlac, sil_bits, ridge_bits, ridge_area,
-                 codes, step, band, inv_gain, c, c1, c2, c3, c4, prune, idx, m, seed_k,
-                 fallback_ok, pen, low, p1s, p2s):
-    """Best candidate of ``idx[:m]``; returns (entry, E, d, p1, p2, survivors, fallback).
+def _ivf_kernel(q_hlac, q_sil, q_ridge, q_area, q_y, hlac, sil_bits, ridge_bits, ridge_area,
+                order, codes, step, band, inv_gain, c, c1, c2, c3, c4, prune, starts, stops,
+                extra_j, seed_j, fallback_ok):
+    """Best candidate among the code positions ``[starts[r], stops[r])`` and `extra_j`.
 
-    Starts from position `seed_k` (when it survives) or the survivor with
-    the smallest lower bound, then scores every survivor whose lower bound
-    does not exceed the best E so far, abandoning HLAC distances that cannot
-    win.  Ties go to the lowest entry index.  With no survivor: entry -1
-    unless `fallback_ok`, then the best E over all candidates (fallback).
+    Returns (entry, E, d, p1, p2, survivors, fallback); entry -1 when no
+    candidate survives the pruning and not `fallback_ok`.
+
+    Pass 1 computes the code bound of every candidate (codes are stored in
+    cell order, so this streams).  Pass 2 scores the seed (`seed_j`, a code
+    position, or -1) and then the candidates with the smallest bounds until
+    one survives; pass 3 visits the rest in order and scores only those
+    whose bound does not exceed the best E so far.  ``survivors`` counts
+    the survivors among the candidates scored (as the exact search does).
+    Ties go to the lowest entry index.  With no survivor and `fallback_ok`, the passes run again
+    without pruning and the result is marked as a fallback.
     """
-    survivors, first = _pool_penalties(idx, m, q_sil, q_ridge, q_y, sil_bits, ridge_bits,
-                                       ridge_area, codes, step, band, inv_gain, c * q_area, c1,
-                                       c2, c3, c4, prune, pen, low, p1s, p2s)
-    fallback = survivors == 0
-    if fallback:
-        if not fallback_ok:
-            return -1, 0.0, 0, 0, 0, 0, True
-        survivors, first = _pool_penalties(idx, m, q_sil, q_ridge, q_y, sil_bits, ridge_bits,
-                                           ridge_area, codes, step, band, inv_gain, 0.0, c1, c2,
-                                           c3, c4, False, pen, low, p1s, p2s)
+    m = 0
+    for r in range(starts.shape[0]):
+        m += stops[r] - starts[r]
+    if extra_j >= 0:
+        m += 1
+    js = np.empty(m, np.int64)
+    low = np.empty(m, np.float64)
+    k = 0
+    for r in range(starts.shape[0]):
+        for j in range(starts[r], stops[r]):
+            js[k] = j
+            low[k] = _code_bound(q_y, codes[j], step, band) * inv_gain
+            k += 1
+    if extra_j >= 0:
+        js[k] = extra_j
+        low[k] = _code_bound(q_y, codes[extra_j], step, band) * inv_gain
+    th1 = c * q_area
+    seen = np.zeros(m, np.bool_)
+    for attempt in range(2):
+        pruning = prune and attempt == 0
+        if attempt == 1:
+            if not (prune and fallback_ok):
+                break
+            seen[:] = False
+        best_e = np.inf
+        best_i = -1
+        best_d = best_p1 = best_p2 = 0
         survivors = 0
-    start = seed_k if seed_k >= 0 and pen[seed_k] >= 0.0 else first
-    best_k = start
-    best_i = idx[start]
-    best_d = _hlac_distance(q_hlac, hlac[best_i], np.iinfo(np.int64).max)
-    best_e = best_d + pen[start]
-    for k in range(m):
-        p = pen[k]
-        if p < 0.0 or low[k] > best_e or k == start:
-            continue
-        i = idx[k]
-        d = _hlac_distance(q_hlac, hlac[i], best_e - p)
-        e = d + p
-        if e < best_e or (e == best_e and i < best_i):
-            best_e, best_i, best_d, best_k = e, i, d, k
-    return best_i, best_e, best_d, p1s[best_k], p2s[best_k], survivors, fallback
+        # the seed first, then the smallest bounds until one candidate survives
+        tries = 0
+        while best_i < 0 and tries < 16 and tries < m:
+            kk = -1
+            if tries == 0 and seed_j >= 0:
+                for q in range(m):
+                    if js[q] == seed_j:
+                        kk = q
+                        break
+            if kk < 0:
+                for q in range(m):
+                    if not seen[q] and (kk < 0 or low[q] < low[kk]):
+                        kk = q
+            tries += 1
+            if kk < 0 or seen[kk]:
+                continue
+            seen[kk] = True
+            i = order[js[kk]]
+            st, p1, p2, d = _score(i, low[kk], best_e, q_hlac, q_sil, q_ridge, th1, hlac,
+                                   sil_bits, ridge_bits, ridge_area, c1, c2, c3, c4, pruning)
+            if st >= 0:
+                survivors += 1
+            if st == 1:
+                best_e, best_i, best_d, best_p1, best_p2 = d + c3 * p1 + c4 * p2, i, d, p1, p2
+        for q in range(m):
+            if seen[q] or low[q] > best_e:
+                continue
+            i = order[js[q]]
+            st, p1, p2, d = _score(i, low[q], best_e, q_hlac, q_sil, q_ridge, th1, hlac,
+                                   sil_bits, ridge_bits, ridge_area, c1, c2, c3, c4, pruning)
+            if st < 0:
+                continue
+            survivors += 1
+            if st == 1:
+                e = d + c3 * p1 + c4 * p2
+                if e < best_e or (e == best_e and i < best_i):
+                    best_e, best_i, best_d, best_p1, best_p2 = e, i, d, p1, p2
+        if best_i >= 0:
+            if attempt == 1:
+                survivors = 0
+            return best_i, best_e, best_d, best_p1, best_p2, survivors, attempt == 1
+    return -1, 0.0, 0, 0, 0, 0, True
 
 
 # --------------------------------------------------------------------------- the index
@@ -417,10 +438,11 @@ class ApproximateIndex:
         Entry indices grouped by cell, ascending within a cell.
     offsets : ndarray of int64, shape (nlist + 1,)
         Cell ``c`` holds ``order[offsets[c]:offsets[c + 1]]``.
-    cell : ndarray of int32, shape (N,)
-        Cell of each entry.
+    position : ndarray of int32, shape (N,)
+        Where each entry is in `order` (the inverse permutation).
     codes : ndarray of int16, shape (N, dims)
-        ``A h_i`` in units of `step`.
+        ``A h_i`` in units of `step`, in the order of `order` (row ``j`` is
+        entry ``order[j]``), so that probing a cell streams its codes.
     step : ndarray of float64, shape (dims,)
         Size of one code unit per dimension.
     key : str
@@ -428,7 +450,7 @@ class ApproximateIndex:
     """
 
     def __init__(self, tables: SearchTables, *, options: ApproximateOptions, seed: int,
-                 projection, centroids, order, offsets, cell, codes, step, key: str) -> None:
+                 projection, centroids, order, offsets, codes, step, key: str) -> None:
         self.tables = tables
         self.options = options
         self.seed = int(seed)
@@ -436,7 +458,8 @@ class ApproximateIndex:
         self.centroids = np.ascontiguousarray(centroids, dtype=np.float64)
         self.order = np.ascontiguousarray(order, dtype=np.int32)
         self.offsets = np.ascontiguousarray(offsets, dtype=np.int64)
-        self.cell = np.ascontiguousarray(cell, dtype=np.int32)
+        self.position = np.empty_like(self.order)
+        self.position[self.order] = np.arange(len(self.order), dtype=np.int32)
         self.codes = np.ascontiguousarray(codes, dtype=np.int16)
         self.step = np.ascontiguousarray(step, dtype=np.float64)
         self.key = key
@@ -447,7 +470,7 @@ class ApproximateIndex:
         # |A x|^2 <= gain |x|^2 with gain the largest eigenvalue of A A^T (1 up to rounding)
         gain = float(np.linalg.eigvalsh(self._a64 @ self._a64.T).max()) * (1.0 + 1e-9)
         self._inv_gain = (1.0 - 1e-12) / max(gain, 1.0)
-        for arr in (self.projection, self.centroids, self.order, self.offsets, self.cell,
+        for arr in (self.projection, self.centroids, self.order, self.offsets, self.position,
                     self.codes, self.step, self._a64, self._c_norms, self._band):
             arr.setflags(write=False)
 
@@ -498,19 +521,19 @@ class ApproximateIndex:
         for s in range(0, n, _CHUNK_ROWS):
             y[s:s + _CHUNK_ROWS] = tables.hlac[s:s + _CHUNK_ROWS].astype(np.float64) @ a64.T
             cell[s:s + _CHUNK_ROWS] = _nearest(y[s:s + _CHUNK_ROWS], centroids, c_norms)
+        order = np.argsort(cell, kind="stable").astype(np.int32)
         peak = np.abs(y).max(axis=0)
         step = np.where(peak > 0, peak / _CODE_MAX, 1.0)
         codes = np.empty((n, used.dims), np.int16)
         for s in range(0, n, _CHUNK_ROWS):
-            codes[s:s + _CHUNK_ROWS] = np.rint(y[s:s + _CHUNK_ROWS] / step)
+            codes[s:s + _CHUNK_ROWS] = np.rint(y[order[s:s + _CHUNK_ROWS]] / step)
         del y
-        order = np.argsort(cell, kind="stable").astype(np.int32)
         offsets = np.zeros(nlist + 1, np.int64)
         np.cumsum(np.bincount(cell, minlength=nlist), out=offsets[1:])
         if key is None:
             key = _index_key(tables_fingerprint(tables), used, seed)
         return cls(tables, options=used, seed=seed, projection=a, centroids=centroids,
-                   order=order, offsets=offsets, cell=cell, codes=codes, step=step, key=key)
+                   order=order, offsets=offsets, codes=codes, step=step, key=key)
 
     @classmethod
     def open(cls, database, tables: SearchTables | None = None, *,
@@ -580,8 +603,7 @@ class ApproximateIndex:
         meta = {"format": _FORMAT, "version": _FORMAT_VERSION, "key": self.key,
                 "options": asdict(self.options), "seed": self.seed, "entries": len(self.tables)}
         arrays = {"projection": self.projection, "centroids": self.centroids, "order": self.order,
-                  "offsets": self.offsets, "cell": self.cell, "codes": self.codes,
-                  "step": self.step,
+                  "offsets": self.offsets, "codes": self.codes, "step": self.step,
                   "meta": np.frombuffer(json.dumps(meta, sort_keys=True).encode(), np.uint8)}
         tmp = path.with_name(f"{path.name}.tmp-{os.getpid()}")
         try:
@@ -612,9 +634,14 @@ class ApproximateIndex:
             return None
         n, nlist, dims = len(tables), options.nlist, options.dims
         shapes = {"projection": (dims, HLAC_SIZE), "centroids": (nlist, dims), "order": (n,),
-                  "offsets": (nlist + 1,), "cell": (n,), "codes": (n, dims), "step": (dims,)}
+                  "offsets": (nlist + 1,), "codes": (n, dims), "step": (dims,)}
         if any(name not in arrays or arrays[name].shape != shape
-               for name, shape in shapes.items()) or arrays["offsets"][-1] != n:
+               for name, shape in shapes.items()):
+            return None
+        order, offsets = arrays["order"], arrays["offsets"]
+        if (offsets[0] != 0 or offsets[-1] != n or (np.diff(offsets) < 0).any()
+                or order.min() < 0 or order.max() >= n
+                or (np.bincount(order, minlength=n) != 1).any()):
             return None
         return cls(tables, options=options, seed=seed, key=key, **arrays)
 
@@ -631,9 +658,32 @@ class ApproximateIndex:
     @property
     def nbytes(self) -> int:
         """Bytes the index holds besides the database."""
-        arrays = (self.projection, self.centroids, self.order, self.offsets, self.cell,
+        arrays = (self.projection, self.centroids, self.order, self.offsets, self.position,
                   self.codes, self.step, self._a64, self._c_norms, self._band)
         return sum(a.nbytes for a in arrays)
+
+    def with_options(self, **changes) -> ApproximateIndex:
+        """The same index (arrays shared) with other probing options.
+
+        Parameters
+        ----------
+        **changes
+            ``nprobe`` or ``max_nprobe``.
+
+        Raises
+        ------
+        InvalidInputError
+            Another field (those need a new build) or a bad value.
+        """
+        probing = ("nprobe", "max_nprobe")
+        for name in changes:
+            if name not in probing:
+                raise InvalidInputError(
+                    f"with_options can change {', '.join(probing)}, not {name!r} (build a new "
+                    f"index for that)")
+        twin = copy.copy(self)
+        twin.options = replace(self.options, **changes)
+        return twin
 
     def cells(self, hlac) -> np.ndarray:
         """All cells, nearest centroid first, for one HLAC vector.
@@ -670,7 +720,7 @@ class ApproximateIndex:
         -------
         SearchResult
             As :func:`handsynth.estimate.search`; ``survivors`` counts the
-            candidates left after both stages.
+            surviving candidates among those scored exactly.
 
         Raises
         ------
@@ -697,27 +747,23 @@ class ApproximateIndex:
         ranked = (np.argsort(self._c_norms - 2.0 * (self.centroids @ q_y), kind="stable")
                   if probe < nlist else np.arange(nlist))
         t = self.tables
+        seed_j = int(self.position[s]) if s >= 0 else -1
         while True:
             cells = np.ascontiguousarray(ranked[:probe], dtype=np.int64)
-            size = int((self.offsets[cells + 1] - self.offsets[cells]).sum())
-            extra = s if s >= 0 and self.cell[s] not in cells else -1
-            idx = np.empty(size + 1, np.int64)
-            m, seed_k = _gather(self.order, self.offsets, cells, s, extra, idx)
-            if m == 0:  # only empty cells so far: widen, up to every cell
-                limit = nlist if probe >= limit else limit
-                probe = min(2 * probe, limit)
-                continue
-            pen, low = np.empty(m, np.float64), np.empty(m, np.float64)
-            p1s, p2s = np.empty(m, np.int64), np.empty(m, np.int64)
-            i, e, d, p1, p2, surv, fb = _pool_kernel(
+            starts, stops = self.offsets[cells], self.offsets[cells + 1]
+            inside = seed_j >= 0 and bool(((starts <= seed_j) & (seed_j < stops)).any())
+            extra_j = seed_j if seed_j >= 0 and not inside else -1
+            i, e, d, p1, p2, surv, fb = _ivf_kernel(
                 h, sb, rb, area, q_y, t.hlac, t.sil_bits, t.ridge_bits, t.ridge_area,
-                self.codes, self.step, self._band, self._inv_gain, opts.c, opts.c1, opts.c2,
-                opts.c3, opts.c4, opts.prune, idx, m, seed_k, probe >= limit, pen, low, p1s,
-                p2s)
+                self.order, self.codes, self.step, self._band, self._inv_gain, opts.c, opts.c1,
+                opts.c2, opts.c3, opts.c4, opts.prune, starts, stops, extra_j, seed_j,
+                probe >= limit)
             if i >= 0:
                 return SearchResult(index=int(i), error=float(e), hlac_distance=int(d),
                                     p1=int(p1), p2=int(p2), survivors=int(surv),
                                     low_confidence=bool(fb))
+            # no survivor (or only empty cells): widen, up to every cell
+            limit = nlist if probe >= limit else limit
             probe = min(2 * probe, limit)
 
 

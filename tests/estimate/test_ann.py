@@ -15,7 +15,12 @@ from handsynth.estimate._ann import (
     _code_bound,
     ann_path,
 )
-from handsynth.estimate._search import SearchOptions, SearchTables, search
+from handsynth.estimate._search import (
+    SearchOptions,
+    SearchTables,
+    search,
+    search_reference,
+)
 from handsynth.models import HandShape, natural_pose_set
 from handsynth.render import CameraMount
 
@@ -69,8 +74,10 @@ def test_probing_every_cell_gives_the_exact_answer(small_index, queries):
     low = 0
     for f in queries:
         for opt in options:
-            exact = search(f, t, options=opt)
-            assert small_index.search(f, opt, nprobe=small_index.nlist) == exact
+            exact = search_reference(f, t, options=opt)
+            approx = small_index.search(f, opt, nprobe=small_index.nlist)
+            assert approx == exact  # survivors are not compared
+            assert 1 <= approx.survivors <= exact.survivors or approx.low_confidence
             assert small_index.search(f, opt, nprobe=10**6, seed=7) == exact
             low += exact.low_confidence
     assert 0 < low < len(queries) * len(options)  # the fallback branch ran too
@@ -114,7 +121,8 @@ def test_code_bound_never_exceeds_the_hlac_distance(natural_index, queries):
     for f in queries:
         q_y = idx._a64 @ f.hlac.astype(np.float64)
         d = ((hlac - f.hlac.astype(np.int64)) ** 2).sum(axis=1)
-        b = np.array([_code_bound(q_y, idx.codes[i], idx.step, idx._band) for i in range(len(d))])
+        b = np.array([_code_bound(q_y, idx.codes[idx.position[i]], idx.step, idx._band)
+                      for i in range(len(d))])
         b *= idx._inv_gain
         assert (b <= d).all()
         tight.append(np.median(b / np.maximum(d, 1)))
@@ -124,9 +132,13 @@ def test_code_bound_never_exceeds_the_hlac_distance(natural_index, queries):
 def test_lists_partition_the_database(natural_index):
     idx = natural_index
     assert np.array_equal(np.sort(idx.order), np.arange(len(idx)))
+    assert np.array_equal(idx.order[idx.position], np.arange(len(idx)))
+    y = idx.tables.hlac.astype(np.float64) @ idx._a64.T
+    nearest = np.argmin(((y[:, None, :] - idx.centroids[None]) ** 2).sum(axis=2), axis=1)
     for c in range(idx.nlist):
         members = idx.order[idx.offsets[c]:idx.offsets[c + 1]]
-        assert (idx.cell[members] == c).all() and (np.diff(members) > 0).all()
+        assert (np.diff(members) > 0).all()
+        assert (nearest[members] == c).mean() > 0.99  # rounding may flip near-ties
 
 
 def test_index_is_saved_loaded_and_rebuilt_when_stale(tmp_path, small_rows, queries, monkeypatch):
@@ -220,3 +232,6 @@ def test_options_and_arguments_are_checked(small_index, small_rows, queries):
         small_index.search(f, seed=240)
     with pytest.raises(InvalidInputError, match="options"):
         small_index.search(f, ApproximateOptions())
+    with pytest.raises(InvalidInputError, match="'dims'"):
+        small_index.with_options(dims=8)
+    assert small_index.with_options(nprobe=3).options.nprobe == 3
