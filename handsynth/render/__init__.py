@@ -2,6 +2,7 @@
 
 from ._camera import CameraMount
 from ._gl import backend, ensure_backend
+from ._mesh_hand import MeshHandRenderer
 from ._preprocess import (
     binarize,
     check_frame,
@@ -11,7 +12,6 @@ from ._preprocess import (
     preprocess_reference,
     wrist_cut_keep,
 )
-from ._mesh_hand import MeshHandRenderer
 from ._raster import SilhouetteRasterizer
 from ._renderer import SilhouetteRenderer, render_rgb
 from ._sheet import contact_sheet

@@ -97,6 +97,8 @@ from ..models import FINGERS, JOINT_NAMES, as_angles
 from ..models._anthropometry import standard_layout_mm
 from ._camera import CameraMount
 from ._gl import ensure_backend
+from ._masks import MaskMaker
+from ._renderer import GLContextOwner
 
 __all__ = ["MeshHandRenderer", "MeshRig", "default_mesh_path", "load_mesh_rig", "mesh_hand_sheet"]
 
@@ -740,7 +742,7 @@ def _skin_scene_xml(rig: MeshRig, side: str, mount: CameraMount, w: int, h: int
     return xml, bones
 
 
-class MeshHandRenderer:
+class MeshHandRenderer(GLContextOwner, MaskMaker):
     """Boolean masks of a realistic skinned hand mesh as the device camera sees it.
 
     The same interface as :class:`~handsynth.render.SilhouetteRenderer`, for a
@@ -929,51 +931,8 @@ class MeshHandRenderer:
         )
 
     # -- rendering ------------------------------------------------------------------
-    def mask(self, angles) -> np.ndarray:
-        """Mask of one pose.
-
-        Parameters
-        ----------
-        angles : array_like, shape (20,), or mapping of str to float
-            Joint angles, degrees, canonical order.
-
-        Returns
-        -------
-        ndarray, shape (height_px, width_px), bool
-            True where the camera sees the hand.
-
-        Raises
-        ------
-        InvalidPoseError
-            Unknown joints, NaN, or angles outside the joint limits.
-        """
-        return self._render(self._one(angles))
-
-    def masks(self, angles, *, out: np.ndarray | None = None) -> np.ndarray:
-        """Masks of many poses.
-
-        Parameters
-        ----------
-        angles : array_like, shape (N, 20)
-            Degrees, canonical order; all validated before rendering starts.
-        out : ndarray, shape (N, height_px, width_px), bool, optional
-
-        Returns
-        -------
-        ndarray, shape (N, height_px, width_px), bool
-        """
-        a = as_angles(angles)
-        if a.ndim != 2:
-            a = a[None]
-        shape = (len(a), self.height_px, self.width_px)
-        if out is None:
-            out = np.empty(shape, dtype=bool)
-        elif out.shape != shape or out.dtype != bool:
-            raise InvalidInputError(f"out must be a bool array of shape {shape}, "
-                                    f"got {out.dtype} {out.shape}")
-        for i, pose in enumerate(a):
-            out[i] = self._render(pose)
-        return out
+    def _draw(self, pose: np.ndarray, out: np.ndarray) -> None:
+        out[...] = self._render(pose)
 
     def render_rgb(self, angles, *, camera: str = "device") -> np.ndarray:
         """A lit colour picture of the posed mesh hand (a fresh model per call).
@@ -1030,23 +989,6 @@ class MeshHandRenderer:
         self._renderer.render(out=self._buf)
         return self._buf[:, :, 0] > 127
 
-    def close(self) -> None:
-        """Release the GL context."""
-        if getattr(self, "_renderer", None) is not None:
-            self._renderer.close()
-            self._renderer = None
-
-    def __enter__(self) -> MeshHandRenderer:
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.close()
-
-    def __del__(self) -> None:
-        try:
-            self.close()
-        except Exception:
-            pass
 
 
 def mesh_hand_sheet(poses=("open", "spread", "fist", "point", "pinch", "grasp"),

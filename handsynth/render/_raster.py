@@ -22,8 +22,9 @@ import numpy as np
 from numba import njit
 
 from ..errors import RenderError
-from ..models import HandModel, HandShape, as_angles
+from ..models import HandModel, HandShape
 from ._camera import CameraMount
+from ._masks import MaskMaker
 from ._scene import scene_mjcf
 
 __all__ = ["SilhouetteRasterizer"]
@@ -120,7 +121,7 @@ def _rasterize(verts, starts, geom_of, xpos, xmat, cam_rot, cam_pos, fx, fy, cx,
     return True
 
 
-class SilhouetteRasterizer:
+class SilhouetteRasterizer(MaskMaker):
     """Boolean hand masks as the device camera sees them, without OpenGL.
 
     Same interface and masks as :class:`~handsynth.render.SilhouetteRenderer`
@@ -170,36 +171,10 @@ class SilhouetteRasterizer:
         k = self.mount.intrinsics(self.width_px, self.height_px)
         self._k = (float(k[0, 0]), float(k[1, 1]), float(k[0, 2]), float(k[1, 2]))
 
-    def mask(self, angles) -> np.ndarray:
-        """Mask of one pose.
-
-        Parameters
-        ----------
-        angles : array_like, shape (20,), or mapping of str to float
-            Joint angles, degrees, canonical order.
-
-        Returns
-        -------
-        ndarray, shape (height_px, width_px), bool
-        """
-        self.hand.set_pose(angles)
-        out = np.zeros((self.height_px, self.width_px), dtype=np.uint8)
-        self._fill(out)
-        return out.view(bool)
-
-    def masks(self, angles, *, out: np.ndarray | None = None) -> np.ndarray:
-        """Masks of many poses, shape (N, height_px, width_px), bool (see :meth:`mask`)."""
-        a = as_angles(angles)
-        if a.ndim != 2:
-            a = a[None]
-        if out is None:
-            out = np.zeros((len(a), self.height_px, self.width_px), dtype=bool)
-        else:
-            out[...] = False
-        for i, pose in enumerate(a):
-            self.hand.set_pose(pose, check=False)
-            self._fill(out[i].view(np.uint8))
-        return out
+    def _draw(self, pose: np.ndarray, out: np.ndarray) -> None:
+        self.hand.set_pose(pose, check=False)
+        out[...] = False
+        self._fill(out.view(np.uint8))
 
     def _fill(self, buf: np.ndarray) -> None:
         d = self.hand.data

@@ -7,9 +7,10 @@ import os
 import numpy as np
 
 from ..errors import InvalidCameraError, RenderError
-from ..models import HandModel, HandShape, as_angles
+from ..models import HandModel, HandShape
 from ._camera import CameraMount
 from ._gl import ensure_backend
+from ._masks import MaskMaker
 from ._scene import scene_mjcf
 
 __all__ = ["SilhouetteRenderer", "render_rgb"]
@@ -28,7 +29,32 @@ def _renderer(model, w: int, h: int):
         ) from None
 
 
-class SilhouetteRenderer:
+class GLContextOwner:
+    """Base of the classes that hold a MuJoCo off-screen renderer in ``_renderer``:
+    :meth:`close` releases its GL context; also a context manager."""
+
+    _renderer = None
+
+    def close(self) -> None:
+        """Release the GL context (idempotent)."""
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def __del__(self) -> None:
+        try:
+            self.close()
+        except Exception:
+            pass
+
+
+class SilhouetteRenderer(GLContextOwner, MaskMaker):
     """Boolean hand masks as the device camera sees them.
 
     One compiled model and one GL context are reused for every pose, so a
@@ -75,67 +101,14 @@ class SilhouetteRenderer:
         self._cam = mujoco.mj_name2id(self.hand.model, mujoco.mjtObj.mjOBJ_CAMERA, "device")
         self._buf = np.empty((self.height_px, self.width_px, 3), dtype=np.uint8)
 
-    def mask(self, angles) -> np.ndarray:
-        """Mask of one pose.
-
-        Parameters
-        ----------
-        angles : array_like, shape (20,), or mapping of str to float
-            Joint angles, degrees, canonical order.
-
-        Returns
-        -------
-        ndarray, shape (height_px, width_px), bool
-            True where the camera sees the hand (or the forearm stub).
-        """
-        self.hand.set_pose(angles)
-        return self._render()
-
-    def masks(self, angles, *, out: np.ndarray | None = None) -> np.ndarray:
-        """Masks of many poses.
-
-        Parameters
-        ----------
-        angles : array_like, shape (N, 20)
-            Degrees, canonical order; all validated before rendering starts.
-        out : ndarray, shape (N, height_px, width_px), bool, optional
-
-        Returns
-        -------
-        ndarray, shape (N, height_px, width_px), bool
-        """
-        a = as_angles(angles)
-        if a.ndim != 2:
-            a = a[None]
-        if out is None:
-            out = np.empty((len(a), self.height_px, self.width_px), dtype=bool)
-        for i, pose in enumerate(a):
-            self.hand.set_pose(pose, check=False)
-            out[i] = self._render()
-        return out
-
-    def _render(self) -> np.ndarray:
+    def _draw(self, pose: np.ndarray, out: np.ndarray) -> None:
+        if self._renderer is None:
+            raise RenderError("this SilhouetteRenderer is closed")
+        self.hand.set_pose(pose, check=False)
         self._renderer.update_scene(self.hand.data, camera=self._cam)
         self._renderer.render(out=self._buf)
-        return self._buf[:, :, 0] > 127
+        np.greater(self._buf[:, :, 0], 127, out=out)
 
-    def close(self) -> None:
-        """Release the GL context."""
-        if getattr(self, "_renderer", None) is not None:
-            self._renderer.close()
-            self._renderer = None
-
-    def __enter__(self) -> SilhouetteRenderer:
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.close()
-
-    def __del__(self) -> None:
-        try:
-            self.close()
-        except Exception:
-            pass
 
 
 def render_rgb(angles, shape: HandShape | None = None, mount: CameraMount | None = None, *,
