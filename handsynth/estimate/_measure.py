@@ -497,11 +497,16 @@ def _find_wrist(score: np.ndarray, frame: _HandFrame, px_per_mm: float, shape_hw
         raise InvalidInputError(
             "cannot find the wrist: the hand keeps narrowing up to the picture's border; "
             "the wrist and the start of the forearm must be in the photo")
-    near = np.flatnonzero(prof <= prof[k] + 0.3)
+    # refine: sections every 0.05 mm within 1.5 mm of the coarse minimum; the wrist
+    # is the middle of the stretch within 0.05 mm of the narrowest
+    fine = ys[k] + np.arange(-1.5, 1.5001, 0.05)
+    fw, fl, fr = _section_widths(score, frame, fine, px_per_mm, 150.0)
+    fw = np.where(np.isfinite(fw), fw, np.inf)
+    near = np.flatnonzero(fw <= fw.min() + 0.05)
     runs = np.split(near, np.flatnonzero(np.diff(near) > 1) + 1)
-    run = next(r for r in runs if k in r)
+    run = next(r for r in runs if int(np.argmin(fw)) in r)
     j = round(0.5 * (run[0] + run[-1]))
-    return float(ys[j]), left[j], right[j], "narrowest"
+    return float(fine[j]), fl[j], fr[j], "narrowest"
 
 
 # -- results --------------------------------------------------------------------------
@@ -583,11 +588,12 @@ class MeasureCalibration:
 #: No correction: the raw silhouette measurements.
 NO_CALIBRATION = MeasureCalibration()
 
-#: Corrections read off the standard model in :data:`MEASURE_POSE` at 0.25
-#: mm/px by :func:`calibrate_on_model` (a test checks they still agree).
+#: Corrections read off the standard model in :data:`MEASURE_POSE` by
+#: :func:`calibrate_on_model` (mean over 0.2 to 0.5 mm/px; a test checks
+#: they still agree with the model).
 MODEL_CALIBRATION = MeasureCalibration(
-    wrist_offset_mm=1.215, thumb_axis_shift=-0.0970, thumb_width_factors=(1.108, 1.163),
-    thumb_length_factor=1.040)
+    wrist_offset_mm=1.215, thumb_axis_shift=-0.0948, thumb_width_factors=(1.107, 1.175),
+    thumb_length_factor=1.039)
 
 
 @dataclass(frozen=True)
@@ -876,15 +882,18 @@ def _fit_palm(score: np.ndarray, axes: list[_Axis], px_per_mm: float,
     side = 1.0 if float((fingers[3].c - fingers[0].c) @ n0) > 0 else -1.0
     prior = np.array([a.s_base for a in fingers]) - _PRIOR_WEB_TO_MCP_MM * px_per_mm
     ratio, hand_y = None, None  # first pass: the knuckle fit also finds the palm's scale
-    for _ in range(8):
+    last = None
+    for it in range(10):
         s_mcp, frame, ratio, rms, sd = _fit_knuckles(
             fingers, ratio, px_per_mm, prior, _PRIOR_SD_MM * px_per_mm, side, hand_y)
         y_wrist, w_left, w_right, rule = _find_wrist(score, frame, px_per_mm, (h, w))
         if rule == "narrowest":
             y_wrist -= wrist_offset_mm
-        # the hand axis runs from the middle of the wrist to the middle MCP joint
-        axis = frame.origin - 0.5 * (np.asarray(w_left) + np.asarray(w_right))
-        hand_y = axis / np.hypot(*axis)
+        if it < 2:
+            # the hand axis runs from the middle of the wrist to the middle MCP joint
+            # (then held, so that the remaining loop only settles the palm's scale)
+            axis = frame.origin - 0.5 * (np.asarray(w_left) + np.asarray(w_right))
+            hand_y = axis / np.hypot(*axis)
         x_cmc = (lay.thumb_cmc[0] - lay.mcp["middle"][0]) * ratio
         s_cmc = _axis_x_cross(thumb, frame, x_cmc, px_per_mm)
         cmc_px = thumb.at(s_cmc)
@@ -896,8 +905,9 @@ def _fit_palm(score: np.ndarray, axes: list[_Axis], px_per_mm: float,
             raise InvalidInputError("cannot measure the palm's width: the section across the "
                                     "palm leaves the silhouette")
         new_ratio = float(pw[0]) / std.P_width
-        done = abs(new_ratio - ratio) < 2e-4
-        ratio = new_ratio
+        state = np.array([new_ratio, y_wrist, y_cmc])
+        done = it >= 2 and np.all(np.abs(state - last) < [2e-4, 0.02, 0.02])
+        ratio, last = new_ratio, state
         if done:
             break
     return _Palm(frame=frame, s_mcp=s_mcp, s_cmc=s_cmc, x_cmc=x_cmc, y_cmc=y_cmc,
@@ -1198,21 +1208,26 @@ def annotate_measurement(image, result: PhotoMeasurement) -> np.ndarray:
     return out
 
 
-def calibrate_on_model(shape=None, *, mm_per_px: float = 0.25, angles=None) -> MeasureCalibration:
-    """Read the :class:`MeasureCalibration` off a photo of the model hand of known shape.
+def calibrate_on_model(shape=None, *, mm_per_px=(0.2, 0.25, 0.3, 0.4, 0.5),
+                       angles=None) -> MeasureCalibration:
+    """Read the :class:`MeasureCalibration` off photos of the model hand of known shape.
 
     Renders `shape` (the standard hand by default) with
-    :func:`render_measurement_photo`, measures it without calibration and
-    compares with the model's true values (:func:`model_measurements` and
-    the rendered keypoints): the wrist offset is the error of ``P_height``,
-    the thumb-axis shift is the distance of the true CMC joint from the
-    silhouette's thumb axis over the thumb's breadth, and the thumb factors
-    are true over measured widths and lengths after those two corrections.
+    :func:`render_measurement_photo` at each scale, measures it without
+    calibration and compares with the model's true values
+    (:func:`model_measurements` and the rendered keypoints): the wrist
+    offset is the error of ``P_height``, the thumb-axis shift is the
+    distance of the true CMC joint from the silhouette's thumb axis over the
+    thumb's breadth, and the thumb factors are true over measured widths and
+    lengths after those two corrections.  The values are averaged over the
+    scales (the wrist's narrowest section moves by up to 0.5 mm with the
+    pixel grid).
 
     Parameters
     ----------
     shape : HandShape, optional
-    mm_per_px : float, keyword-only
+    mm_per_px : float or sequence of float, keyword-only
+        Scale(s) of the photos, mm per pixel.
     angles : array_like, shape (20,), optional
         Pose of the photo, :data:`MEASURE_POSE` by default.
 
@@ -1222,24 +1237,28 @@ def calibrate_on_model(shape=None, *, mm_per_px: float = 0.25, angles=None) -> M
     """
     from ._selection import model_measurements
 
-    photo = render_measurement_photo(shape, angles, mm_per_px=mm_per_px)
     truth = model_measurements(shape)
-    raw = measure_photo(photo.image, mm_per_px=mm_per_px,
-                        options=MeasureOptions(calibration=NO_CALIBRATION))
-    wrist = truth.P_height - raw.measurements.P_height if raw.wrist_rule == "narrowest" else 0.0
-    thumb, index = raw.fingers[0], raw.fingers[1]
-    normal = np.array([-thumb.axis[1], thumb.axis[0]])
-    if float((index.joints_px[0] - thumb.joints_px[-1]) @ normal) < 0:
-        normal = -normal
-    off_px = float((photo.keypoints_px[1] - thumb.joints_px[-1]) @ normal)
-    shift = off_px * mm_per_px / thumb.breadth_mm
-    step = MeasureCalibration(wrist_offset_mm=wrist, thumb_axis_shift=shift)
-    mid = measure_photo(photo.image, mm_per_px=mm_per_px, options=MeasureOptions(calibration=step))
-    m = mid.measurements
-    return MeasureCalibration(
-        wrist_offset_mm=wrist, thumb_axis_shift=shift,
-        thumb_width_factors=(truth.W[0] / m.W[0], truth.W[1] / m.W[1]),
-        thumb_length_factor=(truth.L[0] + truth.L[1]) / (m.L[0] + m.L[1]))
+    found = []
+    for scale in np.atleast_1d(np.asarray(mm_per_px, float)):
+        photo = render_measurement_photo(shape, angles, mm_per_px=float(scale))
+        raw = measure_photo(photo.image, mm_per_px=float(scale),
+                            options=MeasureOptions(calibration=NO_CALIBRATION))
+        wrist = truth.P_height - raw.measurements.P_height if raw.wrist_rule == "narrowest" else 0.0
+        thumb, index = raw.fingers[0], raw.fingers[1]
+        normal = np.array([-thumb.axis[1], thumb.axis[0]])
+        if float((index.joints_px[0] - thumb.joints_px[-1]) @ normal) < 0:
+            normal = -normal
+        off_px = float((photo.keypoints_px[1] - thumb.joints_px[-1]) @ normal)
+        shift = off_px * float(scale) / thumb.breadth_mm
+        step = MeasureCalibration(wrist_offset_mm=wrist, thumb_axis_shift=shift)
+        m = measure_photo(photo.image, mm_per_px=float(scale),
+                          options=MeasureOptions(calibration=step)).measurements
+        found.append([wrist, shift, truth.W[0] / m.W[0], truth.W[1] / m.W[1],
+                      (truth.L[0] + truth.L[1]) / (m.L[0] + m.L[1])])
+    wrist, shift, w1, w2, length = np.mean(found, axis=0)
+    return MeasureCalibration(wrist_offset_mm=float(wrist), thumb_axis_shift=float(shift),
+                              thumb_width_factors=(float(w1), float(w2)),
+                              thumb_length_factor=float(length))
 
 
 # -- test photos ----------------------------------------------------------------------

@@ -1,0 +1,83 @@
+"""``handsynth measure`` on the real command: measures a rendered photo, writes what it says."""
+
+from __future__ import annotations
+
+import json
+
+import cv2
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from handsynth.cli._main import cli
+from handsynth.estimate._measure import render_measurement_photo
+from handsynth.estimate._selection import HandMeasurements, model_measurements
+from handsynth.models import HandShape
+
+SHAPE = HandShape(length=1.05, width=0.9, palm=1.0, thumb=1.1)
+
+
+@pytest.fixture(scope="module")
+def photos(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("photos")
+    plain = render_measurement_photo(SHAPE, mm_per_px=0.5)
+    card = render_measurement_photo(SHAPE, mm_per_px=0.5, card=True)
+    cv2.imwrite(str(folder / "hand.png"), plain.image)
+    cv2.imwrite(str(folder / "hand_card.jpg"), card.image, [cv2.IMWRITE_JPEG_QUALITY, 95])
+    cv2.imwrite(str(folder / "blank.png"), np.full((300, 400, 3), 120, np.uint8))
+    return folder
+
+
+def _run(*args):
+    return CliRunner().invoke(cli, ["measure", *[str(a) for a in args]], catch_exceptions=False)
+
+
+def test_measure_prints_writes_and_annotates(tmp_path, photos):
+    out, details, png = tmp_path / "m.json", tmp_path / "d.json", tmp_path / "a.png"
+    res = _run(photos / "hand.png", "--mm-per-px", 0.5, "--out", out, "--details", details,
+               "--annotate", png)
+    assert res.exit_code == 0, res.output
+    assert f"database: {SHAPE.name}" in res.output
+    assert "P_width" in res.output and "thumb" in res.output
+    got, true = HandMeasurements.from_file(out), model_measurements(SHAPE)
+    np.testing.assert_allclose(got.L, true.L, rtol=0.04)
+    np.testing.assert_allclose(got.W, true.W, rtol=0.04)
+    assert abs(got.P_width - true.P_width) < 1.0 and abs(got.T_height - true.T_height) < 1.5
+    data = json.loads(details.read_text())
+    assert data["selection"]["shape"] == SHAPE.name
+    assert data["diagnostics"]["scale_source"] == "mm_per_px"
+    assert [f["name"] for f in data["diagnostics"]["fingers"]] == [
+        "thumb", "index", "middle", "ring", "little"]
+    pic = cv2.imread(str(png))
+    assert pic.shape == (600, 600, 3)
+    assert np.any(pic != cv2.imread(str(photos / "hand.png")))
+
+
+def test_reference_card_and_csv(tmp_path, photos):
+    out = tmp_path / "m.csv"
+    res = _run(photos / "hand_card.jpg", "--reference-width-mm", 85.6, "--out", out)
+    assert res.exit_code == 0, res.output
+    assert "(reference)" in res.output and f"database: {SHAPE.name}" in res.output
+    scale = float(res.output.split("scale: ")[1].split(" mm/px")[0])
+    assert abs(scale - 0.5) < 0.003
+    assert out.read_text().startswith("name,value_mm\nL1,")
+    assert HandMeasurements.from_file(out).P_height > 70
+
+
+@pytest.mark.parametrize("args, words", [
+    (["hand.png"], "--mm-per-px"),
+    (["hand.png", "--mm-per-px", "0.5", "--reference-width-mm", "85.6"], "--mm-per-px"),
+    (["missing.png", "--mm-per-px", "0.5"], "cannot read the photo"),
+    (["blank.png", "--mm-per-px", "0.5"], "no hand found"),
+    (["hand.png", "--mm-per-px", "0.5", "--out", "m.txt"], "--out must end in"),
+    (["hand.png", "--mm-per-px", "0.5", "--annotate", "a.jpg"], "--annotate must end in"),
+    (["hand.png", "--reference-width-mm", "85.6"], "no reference object"),
+    (["hand.png", "--mm-per-px", "-2"], "mm_per_px"),
+])
+def test_bad_input_is_one_line_exit_2(photos, args, words):
+    args = [str(photos / args[0]), *args[1:]]
+    res = _run(*args)
+    assert res.exit_code == 2
+    lines = res.output.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("handsynth: error:"), res.output
+    assert words in lines[0]
