@@ -716,9 +716,10 @@ class EvalReport:
 
         * ``<prefix>error_hist.png`` -- histogram of the signed error per
           joint (5 x 4 panels), standard vs selected database;
-        * ``<prefix>error_vs_distance.png`` -- per hand, mean absolute error
-          against the ratio distance of the hand from the database used,
-          for every database condition (all joints; index PIP);
+        * ``<prefix>error_vs_distance.png`` -- per hand and pose set, mean
+          absolute error against the ratio distance of the hand from the
+          database used, for every database condition (all joints, thumb
+          CMC flexion, index PIP);
         * ``<prefix>joint_mae.png`` -- mean absolute error per joint and
           condition, paper and natural poses side by side.
 
@@ -833,32 +834,42 @@ def _plot_histograms(report: EvalReport, path: Path) -> Path:
 
 def _plot_distance(report: EvalReport, path: Path) -> Path:
     conds = [c for c in report.conditions if c != "own_shape"]
-    pip = JOINT_NAMES.index("index_pip_flex")
-    fig = _figure((11, 4.5))
-    ax_all, ax_pip = fig.subplots(1, 2)
-    for h in range(len(report.hands)):
-        rows = report.hand_index == h
-        pts = {}
-        for c in conds:
-            e = np.abs(report.errors(c)[rows])
-            d = report.ratio_distance[c][rows][0] if rows.any() else np.nan
-            pts[c] = (d, np.nanmean(e), np.nanmean(e[:, pip]))
-        if "standard" in pts and "selected" in pts:
-            for ax, k in ((ax_all, 1), (ax_pip, 2)):
-                ax.plot([pts["standard"][0], pts["selected"][0]],
-                        [pts["standard"][k], pts["selected"][k]], color="0.8", lw=0.8, zorder=1)
-        for c, p in pts.items():
-            for ax, k in ((ax_all, 1), (ax_pip, 2)):
-                ax.scatter(p[0], p[k], color=_COLOURS[c], s=22, zorder=2,
-                           label=c if h == 0 else None)
-    for ax, what in ((ax_all, "all joints"), (ax_pip, "index PIP")):
-        ax.set_xlabel("ratio distance of the hand from the database's grid shape (grid steps)")
-        ax.set_ylabel(f"mean absolute error, {what} (deg)")
-        ax.grid(alpha=0.3)
-    ax_all.legend(fontsize=8)
+    sets = report.options.pose_sets
+    panels = (("all joints", None), ("thumb CMC flexion", JOINT_NAMES.index("thumb_cmc_flex")),
+              ("index PIP", JOINT_NAMES.index("index_pip_flex")))
+    fig = _figure((14, 3.9 * len(sets)))
+    axes = np.asarray(fig.subplots(len(sets), len(panels))).reshape(len(sets), len(panels))
+    for row, ps in enumerate(sets):
+        in_set = report.pose_set == ps
+        for h in range(len(report.hands)):
+            rows = in_set & (report.hand_index == h)
+            if not rows.any():
+                continue
+            pts = {}
+            for c in conds:
+                e = np.abs(report.errors(c)[rows])
+                ys = [np.nanmean(e) if j is None else np.nanmean(e[:, j]) for _, j in panels]
+                pts[c] = (report.ratio_distance[c][rows][0], ys)
+            for k, ax in enumerate(axes[row]):
+                if "standard" in pts and "selected" in pts:
+                    ax.plot([pts["standard"][0], pts["selected"][0]],
+                            [pts["standard"][1][k], pts["selected"][1][k]],
+                            color="0.8", lw=0.8, zorder=1)
+                for c, (d, ys) in pts.items():
+                    ax.scatter(d, ys[k], color=_COLOURS[c], s=22, zorder=2,
+                               label=c if h == 0 else None)
+        for ax, (what, _) in zip(axes[row], panels):
+            ax.set_title(f"{ps} poses, {what}", fontsize=9)
+            ax.set_ylabel("mean absolute error (deg)", fontsize=8)
+            ax.grid(alpha=0.3)
+            ax.tick_params(labelsize=7)
+    for ax in axes[-1]:
+        ax.set_xlabel("ratio distance of the hand from the database's grid shape (grid steps)",
+                      fontsize=8)
+    axes[0, 0].legend(fontsize=7)
     fig.suptitle("error vs ratio distance, one point per hand and database "
                  "(grey lines join a hand's standard and selected databases)", fontsize=10)
-    fig.tight_layout(rect=(0, 0, 1, 0.95))
+    fig.tight_layout(rect=(0, 0, 1, 0.97))
     return _save(fig, path)
 
 
