@@ -18,6 +18,8 @@ from ._selection import HandMeasurements, Selection, SelectionOptions, select_sh
 
 _FINGER_ORDER = ("thumb", "index", "middle", "ring", "little")
 _LIGHTNESS_WEIGHT = 0.35
+_RIM_FRACTION = 0.004   # rim band around the object, fraction of the picture's side
+_RIM_THRESHOLD = 0.7    # fraction of Otsu's threshold enough within the rim band
 
 
 # -- segmentation -----------------------------------------------------------------
@@ -50,7 +52,17 @@ def _foreground(image: np.ndarray) -> np.ndarray:
             "no hand found: the photo is plain (every pixel is within "
             f"{top:.0f} grey levels of the background colour)")
     scaled = np.round(dist * (255.0 / top)).astype(np.uint8)
-    _, out = cv2.threshold(scaled, 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
+    otsu, strong = cv2.threshold(scaled, 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
+    # a dimly lit rim (skin turning away from the light) may fall under Otsu's
+    # threshold: within a thin band around the object 0.7 of it is enough
+    # (less would take in the halo of a blurred or JPEG-compressed edge),
+    # unless the background itself varies that much (its 90th
+    # percentile on the border: a forearm may cover a little of the border)
+    border_dist = np.sqrt(((border - background) ** 2).sum(axis=1)) * (255.0 / top)
+    weak_t = max(_RIM_THRESHOLD * otsu, 2.0 * float(np.percentile(border_dist, 90)) + 2.0)
+    r = max(1, round(_RIM_FRACTION * min(img.shape[:2])))
+    band = cv2.dilate(strong, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1)))
+    out = np.where((scaled > weak_t) & (band > 0), 255, strong).astype(np.uint8)
     kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (3, 3))
     out = cv2.morphologyEx(out, cv2.MORPH_OPEN, kernel)
     out = cv2.morphologyEx(out, cv2.MORPH_CLOSE, kernel)
