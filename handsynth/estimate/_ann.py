@@ -16,18 +16,21 @@ scoring itself is the paper's, unchanged:
    list (entry indices, ascending).
 2. **Probe.**  A query's HLAC is projected the same way and the ``nprobe``
    cells with the nearest centroids are chosen.
-3. **Exact scoring of the candidates.**  Every entry of the probed lists
-   goes through the paper's two stages (P1, P2 pruning) and the smallest
-   ``E = |h - h_i|^2 + C3 P1 + C4 P2`` among the survivors wins (ties: the
-   lowest entry index).  The HLAC distances use the exact search's compiled
-   helper (int32 arithmetic, early abandon).  Most of them are skipped by a
-   lower bound: the rows of ``A`` are orthonormal, so
-   ``|h - h_i|^2 >= |A h - A h_i|^2 / s^2`` (``s`` the largest singular
-   value of the stored float32 ``A``, 1 up to rounding).  ``A h_i`` is kept
-   as int16 codes with a per-dimension scale; the bound subtracts the
-   quantisation error (half a step) from each coordinate difference, so it
-   stays a true lower bound and skipping by it never changes the answer.
-   Scoring starts from the survivor with the smallest bound.
+3. **Exact scoring of the candidates.**  Among the entries of the probed
+   lists the answer is the paper's: the smallest
+   ``E = |h - h_i|^2 + C3 P1 + C4 P2`` over the candidates that pass both
+   stages (P1, P2 pruning), ties to the lowest entry index.  Most
+   candidates are never read: the rows of ``A`` are orthonormal, so
+   ``|h - h_i|^2 >= |A h - A h_i|^2 / g`` (``g`` the largest eigenvalue of
+   ``A A^T`` for the stored float32 ``A``, 1 up to rounding).  ``A h_i`` is
+   kept as int16 codes with a per-dimension step, stored cell by cell; the
+   bound subtracts half a step from each coordinate difference, so it stays
+   a true lower bound and skipping by it never changes the answer.  The
+   codes of the probed cells are streamed once; the candidates with the
+   smallest bounds are scored until one survives the pruning, then every
+   candidate whose bound does not exceed the best E so far is scored with
+   the exact search's compiled helpers (P1, P2 from the packed masks, HLAC
+   distance in int32 with early abandon).
 4. **Widening and fallback.**  When no candidate survives both stages,
    the probe doubles (next-nearest cells) up to ``max_nprobe`` cells.  If
    still none survives, the answer is the smallest ``E`` over the
@@ -35,27 +38,29 @@ scoring itself is the paper's, unchanged:
    over all entries).
 
 Consequences: with ``nprobe >= nlist`` the candidates are all entries and
-the answer equals the exact search's (the same :class:`SearchResult`).
-With fewer probes the answer's ``E`` is never smaller than the exact one's,
-except when the approximate answer is a fallback (``low_confidence``) and
-the exact search found survivors; with ``max_nprobe=None`` (widen up to
-every cell before falling back) that case cannot happen.
+the answer equals the exact search's (the same :class:`SearchResult`;
+``survivors``, not compared by ``==``, counts the survivors among the
+candidates scored).  With fewer probes the answer's ``E`` is never smaller
+than the exact one's, except when the approximate answer is a fallback
+(``low_confidence``) while the exact search found survivors; with
+``max_nprobe=None`` (widen up to every cell before falling back) that case
+cannot happen.
 
 Why not "the k nearest by HLAC, then E": scoring the whole probed lists by
-``E`` costs little more (the bound skips most HLAC distances) and its
-candidates include the k HLAC-nearest entries of those lists, so its answer
-is never worse.
+``E`` costs little more (the bound skips nearly all of them) and its
+candidates include the k HLAC-nearest entries of those lists, so its
+answer is never worse.
 
 Memory
 ------
 The index keeps no copy of the database rows.  For ``N`` entries it holds
 the int16 codes (``2 * dims`` bytes per entry: 128 MB for 10^6 entries at
-``dims=64``), the list order and the cell of each entry (8 bytes per entry),
-``A`` (``dims x 1600`` float32) and the centroids (``nlist x dims``
-float64).  Building it converts at most ``train_size`` rows to float32 for
-training and 16,384 rows at a time to float64 for the projection, and keeps
-the float64 projections of all entries until they are quantised
-(``8 * dims`` bytes per entry, 512 MB for 10^6 at ``dims=64``).
+``dims=64``), the list order and its inverse (8 bytes per entry), ``A``
+(``dims x 1600``, float32 and float64) and the centroids (``nlist x dims``
+float64).  Per query it allocates 16 bytes and one flag per candidate.
+Building it converts at most ``train_size`` rows to float32 for training
+and keeps the float64 projections of all entries until they are quantised
+(``8 * dims`` bytes per entry, 512 MB for 10^6 entries at ``dims=64``).
 
 Persistence
 -----------
@@ -89,7 +94,7 @@ from ._search import SearchOptions, SearchResult, SearchTables, _hlac_distance, 
 __all__ = ["ApproximateIndex", "ApproximateOptions", "ann_path", "tables_fingerprint"]
 
 _FORMAT = "handsynth.ann_index"
-_FORMAT_VERSION = 1
+_FORMAT_VERSION = 2  # 2: codes stored in cell order
 _MAX_DIMS = 256
 _CHUNK_ROWS = 16384  # rows projected at a time when building
 _CODE_MAX = 32767.0  # int16 code range
@@ -110,7 +115,9 @@ class ApproximateOptions:
         values of ``nlist`` or more probe every cell (the exact answer).
     max_nprobe : int or None
         When no candidate survives the pruning, the probe doubles up to this
-        many cells before falling back; ``None``: up to every cell.
+        many cells before falling back.  ``None`` (default): up to every
+        cell, so the answer is marked ``low_confidence`` exactly when the
+        exact search's is (such frames cost up to an exact search).
     dims : int
         PCA dimensions of the coarse quantizer and of the lower-bound codes,
         1 to 256.
@@ -131,7 +138,7 @@ class ApproximateOptions:
 
     nlist: int | None = None
     nprobe: int = 16
-    max_nprobe: int | None = 64
+    max_nprobe: int | None = None
     dims: int = 64
     train_size: int = 65536
     niter: int = 20
@@ -629,7 +636,8 @@ class ApproximateIndex:
                 if (meta.get("format") != _FORMAT or meta.get("version") != _FORMAT_VERSION
                         or meta.get("key") != key):
                     return None
-                arrays = {k: z[k] for k in z.files if k != "meta"}
+                wanted = ("projection", "centroids", "order", "offsets", "codes", "step")
+                arrays = {k: z[k] for k in wanted if k in z.files}
         except (OSError, ValueError, KeyError, EOFError, UnicodeDecodeError):
             return None
         n, nlist, dims = len(tables), options.nlist, options.dims
@@ -661,6 +669,23 @@ class ApproximateIndex:
         arrays = (self.projection, self.centroids, self.order, self.offsets, self.position,
                   self.codes, self.step, self._a64, self._c_norms, self._band)
         return sum(a.nbytes for a in arrays)
+
+    def check_matches(self, tables: SearchTables) -> None:
+        """Check that `tables` hold the rows this index was built on (cheap: a row sample).
+
+        Raises
+        ------
+        InvalidInputError
+            Another number of entries or other rows, naming both sizes.
+        """
+        _check_tables(tables)
+        if tables is self.tables:
+            return
+        if len(tables) != len(self.tables) or (
+                _sample_fingerprint(tables) != _sample_fingerprint(self.tables)):
+            raise InvalidInputError(
+                f"the approximate index was built on other database rows ({len(self.tables)} "
+                f"entries) than the tables given ({len(tables)} entries)")
 
     def with_options(self, **changes) -> ApproximateIndex:
         """The same index (arrays shared) with other probing options.

@@ -235,3 +235,7 @@ def test_options_and_arguments_are_checked(small_index, small_rows, queries):
     with pytest.raises(InvalidInputError, match="'dims'"):
         small_index.with_options(dims=8)
     assert small_index.with_options(nprobe=3).options.nprobe == 3
+    small_index.check_matches(_tables(small_rows))  # same rows, other object: fine
+    rows = {k: v[::-1] for k, v in small_rows.items()}
+    with pytest.raises(InvalidInputError, match="other database rows"):
+        small_index.check_matches(_tables(rows))
