@@ -49,6 +49,8 @@ def _parse_list(text: str, option: str) -> tuple[str, ...]:
               show_default=True, help="Databases to compare, comma-separated.")
 @click.option("--count", type=int, default=20448, show_default=True,
               help="Entries per database.")
+@click.option("--db-pose-set", type=click.Choice(["paper", "natural"]), default="paper",
+              show_default=True, help="Pose set the databases are built from.")
 @click.option("--seed", type=int, default=0, show_default=True,
               help="Seed of the test hands and poses.")
 @click.option("--ratio-margin", type=float, default=0.5, show_default=True,
@@ -63,7 +65,7 @@ def _parse_list(text: str, option: str) -> tuple[str, ...]:
               help="Worker processes for building missing databases.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress lines.")
 def eval_(db_folder, out_dir, prefix, json_path, json_frames, n_hands, frames, pose_sets, hand,
-          conditions, count, seed, ratio_margin, mount, frame_size, render_size, workers,
+          conditions, count, db_pose_set, seed, ratio_margin, mount, frame_size, render_size, workers,
           quiet) -> None:
     """Accuracy on synthetic ground truth: standard vs selected database.
 
@@ -78,6 +80,7 @@ def eval_(db_folder, out_dir, prefix, json_path, json_frames, n_hands, frames, p
         db_folder=db_folder, n_hands=n_hands, frames_per_hand=frames,
         pose_sets=_parse_list(pose_sets, "--pose-sets"), seed=seed, ratio_margin=ratio_margin,
         hand=hand, conditions=_parse_list(conditions, "--conditions"), count=count,
+        db_pose_set=db_pose_set,
         render_size=_parse_size(render_size, "--render-size") if render_size else None,
         mount=mount, frame_size=_parse_size(frame_size, "--frame-size"), workers=workers)
     say = None if quiet else (lambda line: click.echo(line, err=True))

@@ -35,6 +35,7 @@ def test_eval_prints_table_and_writes_json_and_plots(tmp_path):
     assert "frames" not in d
     for name in ("eval_error_hist.png", "eval_error_vs_distance.png", "eval_joint_mae.png"):
         assert (out / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert d["options"]["db_pose_set"] == "paper"
     # a second run reuses the databases (verified, not rebuilt) and reports progress
     again = _run("--db", str(tmp_path / "dbs"), "--conditions", "standard,selected", *SMALL)
     assert again.exit_code == 0 and "0 built" in again.stderr
@@ -47,6 +48,7 @@ def test_eval_prints_table_and_writes_json_and_plots(tmp_path):
     (["--pose-sets", "paper,random"], "pose_sets"),
     (["--frame-size", "720"], "--frame-size"),
     (["--ratio-margin", "9"], "ratio_margin"),
+    (["--seed", "-2"], "seed"),
 ])
 def test_bad_options_give_one_line_errors(tmp_path, args, word):
     res = _run("--db", str(tmp_path), *args)
