@@ -86,7 +86,7 @@ def _time_lookup(frames, mount, find, repeat: int):
 
     for f in frames[:4]:  # warm-up (compilation)
         find(extract_features(preprocess(f, mount)))
-    lat, answers = [], []
+    lat, answers, low = [], [], 0
     for rep in range(repeat):
         for f in frames:
             t0 = time.perf_counter()
@@ -95,7 +95,8 @@ def _time_lookup(frames, mount, find, repeat: int):
             lat.append(time.perf_counter() - t0)
             if rep == 0:
                 answers.append(-1 if r is None else r.index)
-    return np.asarray(lat), np.asarray(answers)
+                low += r is not None and r.low_confidence
+    return np.asarray(lat), np.asarray(answers), low
 
 
 def _mae(angles, answers, truth) -> float:
@@ -161,8 +162,13 @@ def main() -> None:
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
 
     n_exact = args.exact_frames or len(frames)
-    lat_a, ans_a = _time_lookup(frames, mount, index.search, args.repeat)
-    lat_e, ans_e = _time_lookup(frames[:n_exact], mount, lambda f: search(f, tables), 1)
+    lat_a, ans_a, low_a = _time_lookup(frames, mount, index.search, args.repeat)
+    lat_e, ans_e, low_e = _time_lookup(frames[:n_exact], mount, lambda f: search(f, tables), 1)
+    t_pre = []
+    for f in frames:
+        t1 = time.perf_counter()
+        extract_features(preprocess(f, mount))
+        t_pre.append(time.perf_counter() - t1)
     angles = np.asarray(db.angles, np.float64)
     truth_e = truth[:n_exact]
     mae_e = _mae(angles, ans_e, truth_e)
@@ -175,8 +181,13 @@ def main() -> None:
 
     # search only, over nprobe values (features computed once)
     feats = [extract_features(s) for s in (preprocess(f, mount) for f in frames[:n_exact])]
-    exact_res = [search(f, tables) for f in feats]
-    print("search only (same frames), one core:")
+    t_ex, exact_res = [], []
+    for f in feats:
+        t1 = time.perf_counter()
+        exact_res.append(search(f, tables))
+        t_ex.append(time.perf_counter() - t1)
+    print(f"search only (same frames), one core: exact median {np.median(t_ex) * 1e3:.3f} ms, "
+          f"p99 {np.percentile(t_ex, 99) * 1e3:.3f} ms")
     for nprobe in sorted({int(v) for v in args.sweep.split(",") if v} | {args.nprobe}):
         index.search(feats[0], nprobe=nprobe)
         t = []
@@ -194,12 +205,14 @@ def main() -> None:
 
     med_a, med_e = float(np.median(lat_a)), float(np.median(lat_e))
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e3
-    print(f"end to end (preprocess + features + search), one core, load average {load:.2f}:")
+    print(f"end to end (preprocess + features + search), one core, load average {load:.2f} "
+          f"before timing, {os.getloadavg()[0]:.2f} after; preprocess + features alone: "
+          f"median {np.median(t_pre) * 1e3:.3f} ms:")
     print(f"  exact:       median {med_e * 1e3:.3f} ms ({1 / med_e:.1f} fps), p99 "
-          f"{np.percentile(lat_e, 99) * 1e3:.3f} ms, {n_exact} frames")
+          f"{np.percentile(lat_e, 99) * 1e3:.3f} ms, {n_exact} frames, {low_e} low-confidence")
     print(f"  approximate: median {med_a * 1e3:.3f} ms ({1 / med_a:.1f} fps), p99 "
           f"{np.percentile(lat_a, 99) * 1e3:.3f} ms ({1 / np.percentile(lat_a, 99):.1f} fps), "
-          f"{len(lat_a)} lookups, nprobe {args.nprobe}")
+          f"{len(lat_a)} lookups, nprobe {args.nprobe}, {low_a} low-confidence")
     print(f"MAE vs truth: exact {mae_e:.3f} deg, approximate {mae_a_sub:.3f} deg "
           f"(all {len(frames)} frames: {mae_a:.3f}); extra {extra:+.3f} deg; same answer "
           f"{same:.3f}; exact vs approximate answers differ by {between:.3f} deg on average")
