@@ -94,6 +94,11 @@ class PoseLookup:
         The previous answer is the only state; it is a plain int, so sharing
         one instance between threads stays safe (each thread may seed from
         another thread's last answer, which changes no result).
+    approximate : ApproximateIndex, ApproximateOptions or bool, keyword-only, optional
+        Search with the approximate (IVF) index instead of the exact search
+        (for databases of 10^5-10^6 entries; see
+        :mod:`handsynth.estimate._ann`).  ``True`` or options: open the
+        index kept next to the database file, building it if needed.
 
     Examples
     --------
@@ -104,7 +109,7 @@ class PoseLookup:
     """
 
     def __init__(self, database: Database, *, options: SearchOptions | None = None,
-                 temporal: bool = True) -> None:
+                 temporal: bool = True, approximate=None) -> None:
         if not isinstance(database, Database):
             raise InvalidInputError(
                 f"database must be a handsynth.db.Database, got {type(database).__name__}")
@@ -126,9 +131,25 @@ class PoseLookup:
         self.tables = SearchTables.from_arrays(
             hlac=database.hlac, sil_bits=database.sil_bits, ridge_bits=database.ridge_bits,
             ridge_area=database.ridge_area)
+        self.approximate = self._approximate_index(approximate)
         self._angles = np.asarray(database.angles, dtype=np.float64)
         self._angles.setflags(write=False)
         self._last = -1
+
+    def _approximate_index(self, approximate):
+        if approximate is None or approximate is False:
+            return None
+        from ._ann import ApproximateIndex, ApproximateOptions
+
+        if approximate is True:
+            approximate = ApproximateOptions()
+        if isinstance(approximate, ApproximateOptions):
+            return ApproximateIndex.open(self.database, self.tables, options=approximate)
+        if isinstance(approximate, ApproximateIndex):
+            approximate.check_matches(self.tables)
+            return approximate
+        raise InvalidInputError("approximate must be an ApproximateIndex, ApproximateOptions, "
+                                f"True or None, got {type(approximate).__name__}")
 
     @classmethod
     def open(cls, folder, *, shape: HandShape | None = None,
@@ -147,7 +168,8 @@ class PoseLookup:
         selection : SelectionOptions, keyword-only, optional
             Options of the selection from `measurements`.
         **kwargs
-            Passed to :class:`PoseLookup` (``options``, ``temporal``).
+            Passed to :class:`PoseLookup` (``options``, ``temporal``,
+            ``approximate``).
 
         Raises
         ------
@@ -227,7 +249,10 @@ class PoseLookup:
                                 entry=-1, error=float("inf"), low_confidence=True, no_hand=True)
         f = extract_features(sil)
         seed = self._last if self.temporal and self._last >= 0 else None
-        r = search(f, self.tables, options=self.options, seed=seed)
+        if self.approximate is not None:
+            r = self.approximate.search(f, self.options, seed=seed)
+        else:
+            r = search(f, self.tables, options=self.options, seed=seed)
         self._last = r.index
         scale = self.options.c3 * max(f.ridge_area, 1)
         conf = float(np.exp(-r.error / scale)) if scale > 0 else float(r.error == 0)

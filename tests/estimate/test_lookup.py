@@ -91,3 +91,17 @@ def test_in_memory_rows(small_rows):
     r = SilhouetteRenderer(width_px=RENDER_SIZE[0], height_px=RENDER_SIZE[1])
     est = lk.estimate(r.mask(small_rows["angles"][9]))
     assert est.error == 0.0 and not est.low_confidence
+
+
+def test_approximate_lookup_probing_every_cell_equals_exact(db_folder, query_rows):
+    from handsynth.estimate._ann import ApproximateOptions
+
+    exact = PoseLookup.open(db_folder, shape=HandShape())
+    approx = PoseLookup.open(db_folder, shape=HandShape(),
+                             approximate=ApproximateOptions(nlist=8, nprobe=8, dims=16))
+    assert approx.approximate is not None and exact.approximate is None
+    for sil in query_rows["silhouette"][:8]:
+        a, b = exact.estimate(sil), approx.estimate(sil)
+        assert (a.entry, a.error, a.low_confidence) == (b.entry, b.error, b.low_confidence)
+    with pytest.raises(InvalidInputError, match="approximate"):
+        PoseLookup(exact.database, approximate="ivf")
