@@ -85,12 +85,13 @@ def main() -> None:
         for f in frames[:8]:  # warm-up (compilation)
             lookup.estimate(f)
         lat = np.empty(args.frames)
+        cpu = np.empty(args.frames)
         low = 0
         for k in range(args.frames):
             f = frames[k % len(frames)]
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             est = lookup.estimate(f)
-            lat[k] = time.perf_counter() - t0
+            lat[k], cpu[k] = time.perf_counter() - t0, time.process_time() - c0
             low += est.low_confidence
         pre = []
         for f in frames:  # stage split, separately so it does not disturb the timing above
@@ -102,7 +103,9 @@ def main() -> None:
         print(f"{name} poses: {args.frames} frames of 720x480 BGR; median latency "
               f"{med * 1e3:.3f} ms ({1 / med:.0f} fps; preprocessing "
               f"{np.median(pre) * 1e3:.3f} ms), p99 {p99 * 1e3:.3f} ms, "
-              f"{low / args.frames:.0%} low-confidence (fallback) frames")
+              f"{low / args.frames:.0%} low-confidence (fallback) frames; CPU time per frame "
+              f"median {np.median(cpu) * 1e3:.3f} ms ({1 / np.median(cpu):.0f} fps on an idle "
+              f"core); load average {os.getloadavg()[0]:.1f}")
     med, p99 = results["paper"]
     print(f"estimate_fps_median={1.0 / med:.1f} latency_p99_ms={p99 * 1e3:.3f}")
     if tmp is not None:
