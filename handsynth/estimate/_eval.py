@@ -445,6 +445,8 @@ class _TestHand:
     note: str = ""
 
     def distance(self, condition: str) -> float:
+        if condition == "own_shape":
+            return 0.0  # its frames are rendered from the database's own grid shape
         if self.ratios is None:
             return float("nan")
         return ratio_distance(self.ratios, self.databases[condition])
@@ -535,7 +537,8 @@ class EvalReport:
         Estimated angles per condition (NaN rows where no hand was found).
     entry, confidence, low_confidence, no_hand, ratio_distance : dict of str to ndarray (F,)
         Per condition and frame: matched entry, confidence, fall-back flag,
-        no-hand flag, and the hand's ratio distance from the database used.
+        no-hand flag, and the ratio distance of the rendered hand from the
+        database used (0 for ``own_shape``).
     timing_s : dict of str to float
         Seconds spent building databases, rendering and looking up.
     """

@@ -131,9 +131,10 @@ def test_conditions_use_the_right_databases(report):
         assert dbs["selected_none"] == none.shape.name == shape.nearest_grid().name
         assert dbs["own_shape"] == dbs["selected"]
         assert hand["ratios"] == shape.as_dict()  # ratios beyond the grid are accepted
-        for cond in CONDITIONS:
+        for cond in ("standard", "selected", "selected_none"):
             assert hand["ratio_distance"][cond] == pytest.approx(
                 ratio_distance(shape, HandShape.from_name(dbs[cond])), abs=1e-4)
+        assert hand["ratio_distance"]["own_shape"] == 0.0
     # the palm-width normalisation moves the first hand to another database than the
     # nearest grid shape of its true ratios
     assert report.hands[0]["databases"]["selected"] != report.hands[0]["databases"]["selected_none"]
