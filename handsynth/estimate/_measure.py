@@ -1,6 +1,112 @@
 """Measuring a hand on a top-down photo (SPEC.md section 1, "Choosing the database").
 
-WORK IN PROGRESS
+The paper measures the user's open hand on a photo by hand, about 2 minutes
+with the photo; :func:`measure_photo` finds the same values (``L1..L14``,
+``W1..W14``, ``P_width``, ``P_height``, ``T_width``, ``T_height``; see
+:mod:`handsynth.estimate._selection`) on the silhouette in a fraction of a
+second and applies formulas (1)-(4) (:func:`select_shape`).
+
+The photo
+---------
+One open hand lying flat on a plain background, fingers spread, the thumb
+flat and spread away from the index finger, taken from straight above
+(dorsal or palmar side, left or right hand, any rotation).  A forearm may
+leave the picture at the border; nothing else of the hand may touch it.  A
+scale is required: ``mm_per_px`` at the plane of the hand, or a reference
+object of known size lying beside the hand (see :func:`measure_photo`).
+Colour photos work on any background unlike skin in colour; grey photos
+need a background clearly darker or lighter than the hand.  A flatbed
+scanner gives an orthographic picture with a known scale (25.4 / dpi mm per
+pixel); a camera should be far away (perspective scales parts nearer the
+lens up, see the accuracy below).
+
+Method
+------
+1. *Silhouette*: distance of every pixel's colour to the background colour
+   (median of the picture's border; CIELAB with lightness weighted 0.35 for
+   colour, grey level for grey photos), Otsu's threshold (0.7 of it in a
+   thin band around the object, for dimly lit rims), 3x3 opening and
+   closing.  The largest object, holes filled, is the hand; the second
+   largest is the reference object.
+2. *Fingertips and valleys*: outline points where the outline, followed
+   22 mm each way, forms a narrow convex protrusion (chord at most 32 mm,
+   apex at least 10 mm and half the chord beyond it).  The five tips split
+   the outline; the longest arc runs round the wrist, and of the two end
+   digits the thumb is the one farther from its neighbour.  A valley is the
+   outline point between neighbouring tips farthest from their chord.
+3. *Finger axes*: the line through the midpoints of 15 sections across the
+   digit between its base (the valleys) and its tip, fitted three times
+   (total least squares); the fingertip is where the axis leaves the
+   silhouette (sub-pixel).
+4. *MCP joints* (not visible on a silhouette): each finger of a spread hand
+   turns about its MCP joint, so its axis passes through it.  The standard
+   hand's knuckle layout (:func:`~handsynth.models._anthropometry.standard_layout_mm`:
+   MCP spacing a quarter of the hand breadth, heights from the metacarpal
+   lengths of Buchholz et al. 1992), scaled across by the palm ratio, is
+   rotated and moved onto the fan of axes (least squares, with weak priors
+   4 +- 8 mm below the valleys for nearly parallel fingers).
+5. *Hand frame and wrist*: origin at the middle MCP; the hand axis runs from
+   the middle of the wrist section to it.  The wrist is the narrowest section
+   across the hand 40-160 mm below the knuckles (the middle of the stretch
+   within 1 mm of the narrowest breadth, sections every 0.05 mm), or the
+   silhouette's end when no forearm is in the picture.
+6. *Thumb CMC* (hidden under the thenar): on the thumb's axis where it is
+   ``T_width`` from the middle finger's axis; ``T_width`` is the standard
+   hand's (23.5 mm, 0.28 hand breadths) scaled by the palm ratio, so it is
+   not measured independently.  The thumb's MCP joint lies one metacarpal
+   (0.251 hand lengths, Buchholz et al. 1992) further along.
+7. *Phalanx lengths*: a silhouette shows no creases (rendered hands have
+   none), so each digit's length from its MCP joint to its tip is split in
+   the proportions of Buchholz et al. (1992) Table 1: the split is
+   proportional, and ``r_length`` of formula (1) is in effect the mean
+   ratio of the five digit lengths.
+8. *Breadths*: median of five sections across the axis within +-10 % of
+   each phalanx around its middle.
+9. *Palm*: ``P_width`` is the section across the hand midway between the CMC
+   and the mean MCP height; the palm ratio of steps 4 and 6 is ``P_width``
+   over the standard hand's, iterated with steps 4-6 until it settles.
+   ``P_height`` runs from the wrist to the middle MCP, ``T_height`` from the
+   wrist to the CMC, along the hand axis.
+10. *Calibration*: four things a silhouette cannot show are read off the
+    standard model measured the same way (SPEC.md: "measure the same on the
+    standard model"; :class:`MeasureCalibration`, :func:`calibrate_on_model`):
+    the wrist line lies 1.2 mm below the narrowest section, the thumb's bone
+    axis lies 0.095 thumb breadths off its silhouette's midline, and the
+    thumb, seen from its side and 12 deg out of the palm's plane, shows 0.90
+    and 0.85 of its phalanges' breadth and 0.96 of their length.  On a human
+    hand these corrections are the model's, not the person's.
+11. *Formulas (1)-(4)* with ``normalize="none"`` (the photo has a scale, so
+    the values are true millimetres).
+
+Accuracy on rendered hands of known shape
+-----------------------------------------
+Photos of the model hand in :data:`MEASURE_POSE` from
+:func:`render_measurement_photo` (orthographic, exact scale), each at a
+random rotation; off-grid shapes drawn uniformly from length and palm
+0.93-1.07, width and thumb 0.86-1.14; error = measured - true ratio (half a
+level step is 0.025 for length and palm, 0.05 for width and thumb):
+
+==================  ========  ==========================  ==========================
+photos              selected  mean abs error               max abs error
+                    = nearest (length, width, palm, thumb)  (length, width, palm, thumb)
+==================  ========  ==========================  ==========================
+81 grid, 0.25 mm/px 81/81     .002 .002 .004 .013         .006 .007 .010 .027
+60 off, 0.25 mm/px  51/60     .003 .002 .004 .015         .007 .006 .010 .036
+81 grid, 0.5 mm/px  81/81     .004 .002 .005 .016         .010 .009 .013 .040
+60 off, 0.5 mm/px   50/60     .004 .003 .005 .015         .012 .008 .011 .051
+==================  ========  ==========================  ==========================
+
+Every off-grid miss is a shape near a level boundary: within 0.01 of it for
+length and palm, within 0.03 for the thumb, the least precise ratio (its CMC
+joint is hidden).  Per ratio at 0.25 mm/px: length 56/60, width 60/60,
+palm 58/60, thumb 57/60.
+With the scene's perspective "top" camera (450 mm up, fovy 40 deg) the
+scale at the joints' plane leaves errors of about -0.015 (length), -0.02
+(width) and +0.03 (thumb): parts nearer the lens look larger.  Blur (2 px)
+and JPEG (quality 60) move the width ratio by up to +0.01.  A thumb raised
+off the table (the ``spread`` pose) or a fist is refused, not measured.
+Time per photo (one core of a busy machine): 0.1-0.2 s at 600 x 600 pixels,
+0.2-0.5 s at 1200 x 1200; the first call adds about 1 s of imports.
 """
 
 from __future__ import annotations
@@ -16,10 +122,27 @@ import numpy as np
 from ..errors import InvalidInputError
 from ._selection import HandMeasurements, Selection, SelectionOptions, select_shape
 
+__all__ = [
+    "MEASURE_POSE",
+    "MODEL_CALIBRATION",
+    "NO_CALIBRATION",
+    "FingerFit",
+    "MeasureCalibration",
+    "MeasureOptions",
+    "PhotoMeasurement",
+    "RenderedPhoto",
+    "annotate_measurement",
+    "calibrate_on_model",
+    "measure_photo",
+    "render_measurement_photo",
+    "write_measurement_file",
+]
+
 _FINGER_ORDER = ("thumb", "index", "middle", "ring", "little")
 _LIGHTNESS_WEIGHT = 0.35
 _RIM_FRACTION = 0.004   # rim band around the object, fraction of the picture's side
 _RIM_THRESHOLD = 0.7    # fraction of Otsu's threshold enough within the rim band
+_WRIST_BAND_MM = 1.0    # the wrist: middle of the sections within this of the narrowest
 
 
 # -- segmentation -----------------------------------------------------------------
@@ -111,7 +234,10 @@ def _fill_holes(blob: np.ndarray) -> np.ndarray:
 
 
 def _reference_scale(ref: np.ndarray, width_mm: float) -> tuple[float, np.ndarray]:
-    """mm per pixel from the reference blob: its longer minimum-area-rectangle side is `width_mm`."""
+    """mm per pixel from the reference blob (its longer min-area-rectangle side is `width_mm`).
+
+    Returns the scale and the rectangle's corners (4, 2) px.
+    """
     import cv2
 
     contours, _ = cv2.findContours(ref.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
@@ -179,9 +305,10 @@ def _fingertips(contour: np.ndarray, shape_hw: tuple[int, int], px_per_mm: float
     A contour point is a fingertip candidate where the contour, followed
     `arc_mm` both ways, forms a narrow convex protrusion: the chord between
     the two end points is at most `max_width_mm` and the point lies at least
-    `min_depth_mm`, and at least half the chord, beyond the chord's midpoint.  Windows touching the image
-    border are skipped (a forearm cut by the border is not a finger).  Each
-    run of candidates gives one tip, its deepest point.
+    `min_depth_mm`, and at least half the chord, beyond the chord's midpoint.
+    Windows touching the image border are skipped (a forearm cut by the
+    border is not a finger).  Each run of candidates gives one tip, its
+    deepest point.
     """
     from scipy.ndimage import gaussian_filter1d, maximum_filter1d
 
@@ -195,7 +322,8 @@ def _fingertips(contour: np.ndarray, shape_hw: tuple[int, int], px_per_mm: float
     depth = np.hypot(*(sm - 0.5 * (a + b)).T) / px_per_mm
     x, y = contour.T
     area2 = float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
-    turn = (sm[:, 0] - a[:, 0]) * (b[:, 1] - sm[:, 1]) - (sm[:, 1] - a[:, 1]) * (b[:, 0] - sm[:, 0])
+    da, db = sm - a, b - sm
+    turn = da[:, 0] * db[:, 1] - da[:, 1] * db[:, 0]
     convex = np.sign(turn) == np.sign(area2)
     h, w = shape_hw
     on_border = (x < 1.0) | (y < 1.0) | (x > w - 2.0) | (y > h - 2.0)
@@ -255,7 +383,7 @@ def _order_fingers(contour: np.ndarray, tips: np.ndarray):
 
 
 def _side_point(contour: np.ndarray, tip: int, step: int, distance_px: float) -> int:
-    """First contour index walking from `tip` by `step` whose distance to the tip reaches `distance_px`."""
+    """First contour index from `tip` (walking by `step`) at least `distance_px` from the tip."""
     n = len(contour)
     idx = (tip + step * np.arange(1, n)) % n
     d = np.hypot(*(contour[idx] - contour[tip]).T)
@@ -302,7 +430,14 @@ class _Axis:
 
 def _fit_axis(score: np.ndarray, tip: np.ndarray, base_a: np.ndarray, base_b: np.ndarray,
               max_width_px: float, *, t_range=(0.15, 0.85), n_sections: int = 15) -> _Axis:
-    """Fit a finger's axis: line through the midpoints of cross-sections between base and tip."""
+    """Fit a digit's axis: the line through the midpoints of sections across it.
+
+    `n_sections` sections perpendicular to the current axis, spread over
+    `t_range` of the way from the base (midpoint of `base_a`, `base_b`, px)
+    to the `tip` (px); the line through their midpoints (total least
+    squares) is the new axis; three rounds.  Sections wider than
+    `max_width_px` (into a neighbour) are dropped.
+    """
     m = 0.5 * (base_a + base_b)
     u = tip - m
     u = u / np.hypot(*u)
@@ -337,8 +472,6 @@ def _fit_axis(score: np.ndarray, tip: np.ndarray, base_a: np.ndarray, base_b: np
                  width_px=float(np.median(widths)))
 
 
-
-
 # -- knuckles, wrist, thumb base ------------------------------------------------------
 
 
@@ -357,22 +490,22 @@ class _HandFrame:
 
     def to_px(self, xy_mm, px_per_mm: float) -> np.ndarray:
         xy = np.asarray(xy_mm, float) * px_per_mm
-        return self.origin + np.multiply.outer(xy[..., 0], self.n) + np.multiply.outer(xy[..., 1], self.u)
+        return (self.origin + np.multiply.outer(xy[..., 0], self.n)
+                + np.multiply.outer(xy[..., 1], self.u))
 
 
-def _knuckle_template_mm(palm_ratio: float) -> np.ndarray:
-    """MCP joint centres (4, 2) of index..little, mm, relative to the middle MCP.
+def _knuckle_template_mm() -> np.ndarray:
+    """MCP joint centres (4, 2) of index..little, (across, along) mm from the middle MCP.
 
     The standard hand's layout (:func:`handsynth.models._anthropometry.standard_layout_mm`:
-    spacing of a quarter hand breadth, heights from Buchholz et al. 1992
-    metacarpal lengths) with the across-hand coordinate scaled by `palm_ratio`.
+    spacing of a quarter hand breadth, heights from the metacarpal lengths of
+    Buchholz et al. 1992).
     """
     from ..models._anthropometry import standard_layout_mm
 
     mcp = standard_layout_mm().mcp
     mid = mcp["middle"]
-    return np.array([[(mcp[f][0] - mid[0]) * palm_ratio, mcp[f][1] - mid[1]]
-                     for f in _FINGER_ORDER[1:]])
+    return np.array([[mcp[f][0] - mid[0], mcp[f][1] - mid[1]] for f in _FINGER_ORDER[1:]])
 
 
 def _fit_knuckles(axes: list[_Axis], palm_ratio: float | None, px_per_mm: float,
@@ -405,7 +538,7 @@ def _fit_knuckles(axes: list[_Axis], palm_ratio: float | None, px_per_mm: float,
     """
     from scipy.optimize import minimize_scalar
 
-    tm = _knuckle_template_mm(1.0) * px_per_mm      # (4, 2) px: x across, y along
+    tm = _knuckle_template_mm() * px_per_mm      # (4, 2) px: x across, y along
     c = np.array([a.c for a in axes])
     u = np.array([a.u for a in axes])
     phi0 = math.atan2(u[1, 1], u[1, 0])
@@ -509,12 +642,13 @@ def _find_wrist(score: np.ndarray, frame: _HandFrame, px_per_mm: float, shape_hw
         raise InvalidInputError(
             "cannot find the wrist: the hand keeps narrowing up to the picture's border; "
             "the wrist and the start of the forearm must be in the photo")
-    # refine: sections every 0.05 mm within 1.5 mm of the coarse minimum; the wrist
-    # is the middle of the stretch within 0.05 mm of the narrowest
-    fine = ys[k] + np.arange(-1.5, 1.5001, 0.05)
+    # refine: sections every 0.05 mm within 3 mm of the coarse minimum; the wrist is
+    # the middle of the stretch within _WRIST_BAND_MM of the narrowest (steadier
+    # than the narrowest section itself, which wanders along a flat bottom)
+    fine = ys[k] + np.arange(-3.0, 3.0001, 0.05)
     fw, fl, fr = _section_widths(score, frame, fine, px_per_mm, 150.0)
     fw = np.where(np.isfinite(fw), fw, np.inf)
-    near = np.flatnonzero(fw <= fw.min() + 0.05)
+    near = np.flatnonzero(fw <= fw.min() + _WRIST_BAND_MM)
     runs = np.split(near, np.flatnonzero(np.diff(near) > 1) + 1)
     run = next(r for r in runs if int(np.argmin(fw)) in r)
     j = round(0.5 * (run[0] + run[-1]))
@@ -578,7 +712,8 @@ class MeasureCalibration:
             try:
                 v = float(v)
             except (TypeError, ValueError):
-                raise InvalidInputError(f"MeasureCalibration.{name} must be a number, got {v!r}") from None
+                raise InvalidInputError(
+                    f"MeasureCalibration.{name} must be a number, got {v!r}") from None
             if not math.isfinite(v):
                 raise InvalidInputError(f"MeasureCalibration.{name} must be finite, got {v!r}")
             object.__setattr__(self, name, v)
@@ -593,7 +728,8 @@ class MeasureCalibration:
         for name, v in (("thumb_width_factors", wf[0]), ("thumb_width_factors", wf[1]),
                         ("thumb_length_factor", self.thumb_length_factor)):
             if not (isinstance(v, (int, float)) and 0.5 < float(v) < 2.0):
-                raise InvalidInputError(f"MeasureCalibration.{name} must lie in (0.5, 2), got {v!r}")
+                raise InvalidInputError(
+                    f"MeasureCalibration.{name} must lie in (0.5, 2), got {v!r}")
         object.__setattr__(self, "thumb_length_factor", float(self.thumb_length_factor))
 
 
@@ -604,8 +740,8 @@ NO_CALIBRATION = MeasureCalibration()
 #: :func:`calibrate_on_model` (mean over 0.2 to 0.5 mm/px; a test checks
 #: they still agree with the model).
 MODEL_CALIBRATION = MeasureCalibration(
-    wrist_offset_mm=1.215, thumb_axis_shift=-0.0948, thumb_width_factors=(1.107, 1.175),
-    thumb_length_factor=1.039)
+    wrist_offset_mm=1.215, thumb_axis_shift=-0.0948, thumb_width_factors=(1.106, 1.175),
+    thumb_length_factor=1.040)
 
 
 @dataclass(frozen=True)
@@ -643,7 +779,8 @@ class MeasureOptions:
     def __post_init__(self) -> None:
         for name in ("tip_arc_mm", "max_finger_width_mm", "min_tip_depth_mm",
                      "min_hand_area_mm2"):
-            object.__setattr__(self, name, _positive(getattr(self, name), f"MeasureOptions.{name}"))
+            value = _positive(getattr(self, name), f"MeasureOptions.{name}")
+            object.__setattr__(self, name, value)
         if self.normalize not in _NORMALIZE:
             raise InvalidInputError(
                 f"MeasureOptions.normalize must be one of {_NORMALIZE}, got {self.normalize!r}")
@@ -693,7 +830,8 @@ class FingerFit:
                 "axis": np.round(self.axis, 5).tolist(),
                 "segment_lengths_mm": [round(v, 3) for v in self.segment_lengths_mm],
                 "widths_mm": [round(v, 3) for v in self.widths_mm],
-                "breadth_mm": round(self.breadth_mm, 3), "rms_px": round(self.rms_px, 3), "n_sections": self.n_sections}
+                "breadth_mm": round(self.breadth_mm, 3), "rms_px": round(self.rms_px, 3),
+                "n_sections": self.n_sections}
 
 
 @dataclass(frozen=True, eq=False)
@@ -1108,7 +1246,7 @@ def measure_photo(image, *, mm_per_px: float | None = None,
 
 
 def write_measurement_file(path, measurements: HandMeasurements) -> Path:
-    """Write `measurements` as ``.json`` or ``.csv`` (the format :meth:`HandMeasurements.from_file` reads).
+    """Write `measurements` to ``.json`` or ``.csv`` (read back by ``HandMeasurements.from_file``).
 
     The file appears complete or not at all (written to a temporary name,
     then renamed).
@@ -1255,7 +1393,8 @@ def calibrate_on_model(shape=None, *, mm_per_px=(0.2, 0.25, 0.3, 0.4, 0.5),
         photo = render_measurement_photo(shape, angles, mm_per_px=float(scale))
         raw = measure_photo(photo.image, mm_per_px=float(scale),
                             options=MeasureOptions(calibration=NO_CALIBRATION))
-        wrist = truth.P_height - raw.measurements.P_height if raw.wrist_rule == "narrowest" else 0.0
+        wrist = (truth.P_height - raw.measurements.P_height
+                 if raw.wrist_rule == "narrowest" else 0.0)
         thumb, index = raw.fingers[0], raw.fingers[1]
         normal = np.array([-thumb.axis[1], thumb.axis[0]])
         if float((index.joints_px[0] - thumb.joints_px[-1]) @ normal) < 0:
@@ -1389,8 +1528,8 @@ def render_measurement_photo(shape=None, angles=None, *, mm_per_px: float = 0.4,
     xml = re.sub(r'<light name="key"[^>]*/>',
                  '<light name="key" directional="true" dir="0.3 0.2 -1" diffuse="0.35 0.35 0.35" '
                  'specular="0 0 0" castshadow="false"/>', xml, count=1)
-    xml = re.sub(r'<headlight [^>]*/>', '<headlight ambient="0.5 0.5 0.5" diffuse="0.25 0.25 0.25" '
-                 'specular="0 0 0"/>', xml, count=1)
+    xml = re.sub(r'<headlight [^>]*/>', '<headlight ambient="0.5 0.5 0.5" '
+                 'diffuse="0.25 0.25 0.25" specular="0 0 0"/>', xml, count=1)
     xml = xml.replace("  <asset>\n", '  <asset>\n    <material name="cloth" specular="0" '
                       'shininess="0" reflectance="0"/>\n', 1)
     hand = HandModel(shape, side=side, xml=xml)
@@ -1404,7 +1543,8 @@ def render_measurement_photo(shape=None, angles=None, *, mm_per_px: float = 0.4,
         geom = r.render()[..., 0]
     finally:
         r.close()
-    others = [mujoco.mj_name2id(hand.model, mujoco.mjtObj.mjOBJ_GEOM, g) for g in ("table", "card")]
+    others = [mujoco.mj_name2id(hand.model, mujoco.mjtObj.mjOBJ_GEOM, g)
+              for g in ("table", "card")]
     mask = (geom >= 0) & ~np.isin(geom, [g for g in others if g >= 0])
     rel = hand.keypoints() * 1e3 - np.array([cx_mm, cy_mm, 0.0])
     kp = np.stack([rel @ right, rel @ down], axis=1) / mm_per_px + (n_px / 2.0 - 0.5)

@@ -70,6 +70,23 @@ def test_ratios_and_selection_of_known_shapes(shape, roll_deg, side):
     assert result.selection.shape == shape.nearest_grid()
 
 
+def test_perspective_top_camera_of_the_scene():
+    """The scene's own "top" camera (perspective, 450 mm up, spot-lit, black background)."""
+    import math
+
+    from handsynth.render import render_rgb
+
+    shape = HandShape(width=1.1, thumb=0.9)
+    rgb = render_rgb(MEASURE_POSE, shape, camera="top", width_px=800, height_px=800)
+    # scale at the plane of the finger joints (z = 0), 450 mm below the camera, fovy 40 deg
+    mm_per_px = 450.0 * 2.0 * math.tan(math.radians(20.0)) / 800
+    result = measure_photo(np.ascontiguousarray(rgb[..., ::-1]), mm_per_px=mm_per_px)
+    # parts nearer the lens (back of the palm) or farther (the thumb, 12 deg below
+    # the palm) are scaled differently: errors are larger than with an orthographic view
+    assert np.all(np.abs(_errors(result, shape)) < [0.03, 0.04, 0.02, 0.06])
+    assert result.selection.shape == shape
+
+
 def test_without_calibration_the_thumb_is_off(standard):
     raw = measure_photo(standard.image, mm_per_px=MM,
                         options=MeasureOptions(calibration=NO_CALIBRATION))
