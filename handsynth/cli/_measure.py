@@ -62,7 +62,7 @@ def _format(result) -> str:
               help="Write everything found (joints, axes, valleys, wrist, fit quality, the "
                    "selection) to FILE.json.")
 @click.option("--annotate", type=click.Path(dir_okay=False, path_type=Path), default=None,
-              help="Write the photo with what was found drawn on it to OUT.png.")
+              help="Write the photo with what was found drawn on it to FILE.png.")
 @click.option("--normalize", type=click.Choice(["none", "palm_width"]), default="none",
               show_default=True,
               help="Normalisation of formulas (1)-(4): 'none' uses true millimetres, "

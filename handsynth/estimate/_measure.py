@@ -86,27 +86,27 @@ random rotation; off-grid shapes drawn uniformly from length and palm
 0.93-1.07, width and thumb 0.86-1.14; error = measured - true ratio (half a
 level step is 0.025 for length and palm, 0.05 for width and thumb):
 
-==================  ========  ==========================  ==========================
-photos              selected  mean abs error               max abs error
-                    = nearest (length, width, palm, thumb)  (length, width, palm, thumb)
-==================  ========  ==========================  ==========================
-81 grid, 0.25 mm/px 81/81     .002 .002 .004 .013         .006 .007 .010 .027
-60 off, 0.25 mm/px  51/60     .003 .002 .004 .015         .007 .006 .010 .036
-81 grid, 0.5 mm/px  81/81     .004 .002 .005 .016         .010 .009 .013 .040
-60 off, 0.5 mm/px   50/60     .004 .003 .005 .015         .012 .008 .011 .051
-==================  ========  ==========================  ==========================
+====================  ========  =======================  =======================
+photos                selected  mean abs error           max abs error
+                      =nearest  length width palm thumb  length width palm thumb
+====================  ========  =======================  =======================
+81 grid, 0.25 mm/px   81/81     .002  .002  .004  .015   .006  .007  .010  .036
+60 off, 0.25 mm/px    52/60     .003  .002  .005  .016   .006  .006  .011  .039
+81 grid, 0.5 mm/px    81/81     .003  .002  .005  .017   .010  .010  .013  .042
+60 off, 0.5 mm/px     54/60     .004  .003  .005  .015   .012  .008  .011  .036
+====================  ========  =======================  =======================
 
 Every off-grid miss is a shape near a level boundary: within 0.01 of it for
 length and palm, within 0.03 for the thumb, the least precise ratio (its CMC
-joint is hidden).  Per ratio at 0.25 mm/px: length 56/60, width 60/60,
-palm 58/60, thumb 57/60.
+joint is hidden).  Per ratio at 0.25 mm/px: length 58/60, width 60/60,
+palm 58/60, thumb 56/60.
 With the scene's perspective "top" camera (450 mm up, fovy 40 deg) the
 scale at the joints' plane leaves errors of about -0.015 (length), -0.02
 (width) and +0.03 (thumb): parts nearer the lens look larger.  Blur (2 px)
 and JPEG (quality 60) move the width ratio by up to +0.01.  A thumb raised
 off the table (the ``spread`` pose) or a fist is refused, not measured.
-Time per photo (one core of a busy machine): 0.1-0.2 s at 600 x 600 pixels,
-0.2-0.5 s at 1200 x 1200; the first call adds about 1 s of imports.
+Time per photo (one core of a shared, busy machine): 0.1-0.3 s at 600 x 600
+pixels, 0.2-0.6 s at 1200 x 1200; the first call adds about 1 s of imports.
 """
 
 from __future__ import annotations
@@ -1493,6 +1493,8 @@ def render_measurement_photo(shape=None, angles=None, *, mm_per_px: float = 0.4,
 
     ensure_backend()
     shape = shape or HandShape()
+    mm_per_px = _positive(mm_per_px, "mm_per_px")
+    size_mm = _positive(size_mm, "size_mm")
     n_px = round(size_mm / mm_per_px)
     if not 32 <= n_px <= 4096:
         raise InvalidInputError(
