@@ -11,6 +11,8 @@
 * The live loop: frame sources (:class:`CameraSource`, :class:`VideoSource`,
   :class:`SyntheticSource`, all :class:`FrameSource`), :func:`run_live`,
   row writers (:func:`open_row_writer`) and :class:`SideBySideWriter`.
+* :func:`measure_photo`: the measurements of formulas (1)-(4) from a
+  top-down photo of the open hand.
 """
 
 from ._live import (
@@ -29,6 +31,7 @@ from ._live import (
     run_live,
 )
 from ._lookup import PoseEstimate, PoseEstimator, PoseLookup
+from ._measure import PhotoMeasurement, annotate_measurement, measure_photo
 from ._search import SearchOptions, SearchResult, SearchTables, search, search_reference
 from ._selection import (
     SEGMENTS,
@@ -53,7 +56,10 @@ __all__ = [
     "SyntheticMotion",
     "SyntheticSource",
     "VideoSource",
+    "PhotoMeasurement",
+    "annotate_measurement",
     "live_columns",
+    "measure_photo",
     "open_row_writer",
     "run_live",
     "HandMeasurements",
