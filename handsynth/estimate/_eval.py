@@ -89,6 +89,7 @@ __all__ = [
     "evaluate",
     "joint_stats",
     "ratio_distance",
+    "silhouette_ambiguity",
 ]
 
 #: Conditions of the experiment, in report order (module docstring).
@@ -395,6 +396,49 @@ def ratio_distance(shape: HandShape, grid: HandShape) -> float:
     return math.sqrt(total)
 
 
+def silhouette_ambiguity(database, *, spread_deg: float = 20.0) -> dict:
+    """How far a database's silhouettes can tell its poses apart.
+
+    Entries are grouped by identical 64x64 silhouettes (the packed bits);
+    within a group the search has nothing to choose by but the HLAC of the
+    same contour (identical too), so any of the group's poses may come back.
+
+    Parameters
+    ----------
+    database : handsynth.db.Database
+    spread_deg : float, keyword-only
+        A joint is *ambiguous* in an entry when the entry's group spans more
+        than this (max - min of the joint's angle), degrees.
+
+    Returns
+    -------
+    dict
+        ``entries``, ``distinct_silhouettes``, ``entries_sharing`` (entries
+        whose silhouette another entry has too), ``ambiguous_entries``
+        (entries with at least one ambiguous joint), ``spread_deg`` and
+        ``per_joint``: canonical joint name -> number of entries in which it
+        is ambiguous.
+    """
+    bits = np.ascontiguousarray(np.asarray(database.sil_bits, dtype=np.uint64))
+    if bits.ndim != 2 or len(bits) == 0:
+        raise InvalidInputError(f"database.sil_bits must be (N, words) with N >= 1, "
+                                f"got shape {bits.shape}")
+    rows = bits.view(np.dtype((np.void, bits.dtype.itemsize * bits.shape[1]))).ravel()
+    _, inverse, counts = np.unique(rows, return_inverse=True, return_counts=True)
+    inverse = inverse.ravel()
+    angles = np.asarray(database.angles, dtype=np.float64)
+    hi = np.full((len(counts), angles.shape[1]), -np.inf)
+    lo = np.full((len(counts), angles.shape[1]), np.inf)
+    np.maximum.at(hi, inverse, angles)
+    np.minimum.at(lo, inverse, angles)
+    ambiguous = (hi - lo)[inverse] > spread_deg
+    return {"entries": len(angles), "distinct_silhouettes": len(counts),
+            "entries_sharing": int((counts[inverse] > 1).sum()),
+            "ambiguous_entries": int(ambiguous.any(axis=1).sum()),
+            "spread_deg": float(spread_deg),
+            "per_joint": {n: int(ambiguous[:, j].sum()) for j, n in enumerate(JOINT_NAMES)}}
+
+
 # --------------------------------------------------------------------------- test hands
 
 
@@ -541,6 +585,8 @@ class EvalReport:
         database used (0 for ``own_shape``).
     timing_s : dict of str to float
         Seconds spent building databases, rendering and looking up.
+    ambiguity : dict of str to dict
+        :func:`silhouette_ambiguity` of every database used, by shape name.
     """
 
     options: EvalOptions
@@ -555,6 +601,7 @@ class EvalReport:
     no_hand: dict
     ratio_distance: dict
     timing_s: dict
+    ambiguity: dict = field(default_factory=dict)
 
     @property
     def conditions(self) -> tuple[str, ...]:
@@ -670,7 +717,8 @@ class EvalReport:
             ``joints`` -> name -> ``mean_deg, sd_deg, mae_deg, n``; and
             ``moving``: the same per-joint figures over the frames where the
             joint moves, for all frames and each pose set),
-            ``targets`` (for ``all`` frames and each pose set), ``paper``, ``timing_s`` and optionally ``frames``.
+            ``targets`` (for ``all`` frames and each pose set), ``paper``, ``timing_s``,
+            ``ambiguity`` (:func:`silhouette_ambiguity` per database) and optionally ``frames``.
         """
         out = {
             "schema": SCHEMA,
@@ -683,6 +731,7 @@ class EvalReport:
             "paper": {c: {j: {"mean_deg": m, "sd_deg": s} for j, (m, s) in v.items()}
                       for c, v in PAPER.items()},
             "timing_s": {k: round(v, 3) for k, v in self.timing_s.items()},
+            "ambiguity": self.ambiguity,
         }
         if frames:
             rows = []
@@ -779,6 +828,14 @@ class EvalReport:
                 else:
                     lines.append(f"target ({where}) selected beats standard: MAE "
                                  f"{t['selected_mae_deg']} vs {t['standard_mae_deg']} ({verdict})")
+        std = self.ambiguity.get(HandShape().name)
+        if std:
+            lines.append(
+                f"standard database: {std['entries_sharing']} of {std['entries']} entries share "
+                f"their 64x64 silhouette with another entry; {std['ambiguous_entries']} with a "
+                f"pose differing by > {std['spread_deg']:g} deg (index PIP "
+                f"{std['per_joint']['index_pip_flex']}, thumb CMC flexion "
+                f"{std['per_joint']['thumb_cmc_flex']})")
         return "\n".join(lines)
 
 
@@ -906,6 +963,7 @@ class _Lookups:
     def __init__(self, paths: dict, keep: int = 4) -> None:
         self.paths, self.keep = paths, keep
         self._open: OrderedDict[str, PoseLookup] = OrderedDict()
+        self.ambiguity: dict[str, dict] = {}
 
     def __getitem__(self, shape: HandShape) -> PoseLookup:
         from ..db import open_database
@@ -914,7 +972,10 @@ class _Lookups:
         if name in self._open:
             self._open.move_to_end(name)
             return self._open[name]
-        lookup = PoseLookup(open_database(self.paths[name]), temporal=False)
+        db = open_database(self.paths[name])
+        if name not in self.ambiguity:
+            self.ambiguity[name] = silhouette_ambiguity(db)
+        lookup = PoseLookup(db, temporal=False)
         self._open[name] = lookup
         while len(self._open) > self.keep:
             self._open.popitem(last=False)
@@ -1038,4 +1099,4 @@ def evaluate(options: EvalOptions, *,
         hand_index=np.concatenate(hand_index), pose_set=np.concatenate(set_names),
         truth_deg=np.vstack(truth), estimates_deg=cat("est"), entry=cat("entry"),
         confidence=cat("conf"), low_confidence=cat("low"), no_hand=cat("none"),
-        ratio_distance=cat("dist"), timing_s=timing)
+        ratio_distance=cat("dist"), timing_s=timing, ambiguity=dict(lookups.ambiguity))

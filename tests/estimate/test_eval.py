@@ -19,6 +19,7 @@ from handsynth.estimate._eval import (
     joint_stats,
     random_hand_shapes,
     ratio_distance,
+    silhouette_ambiguity,
 )
 from handsynth.estimate._selection import (
     SelectionOptions,
@@ -88,6 +89,22 @@ def test_random_hands_are_off_grid_within_margin_and_reproducible():
     assert outside > 0
     inside = random_hand_shapes(50, seed=3, margin=0.0)
     assert all(GRID_LEVELS["width"][0] <= s.width <= GRID_LEVELS["width"][2] for s in inside)
+
+
+def test_silhouette_ambiguity_on_hand_made_database():
+    from types import SimpleNamespace
+
+    a, b = np.arange(64, dtype=np.uint64), np.arange(64, dtype=np.uint64)[::-1].copy()
+    angles = np.zeros((4, 20))
+    pip = JOINT_NAMES.index("index_pip_flex")
+    angles[:, pip] = [0, 30, 50, 10]  # rows 0, 1, 3 share silhouette a: spread 30
+    angles[:, 0] = [0, 5, 90, 2]      # thumb CMC spread 5 within a
+    db = SimpleNamespace(sil_bits=np.stack([a, a, b, a]), angles=angles)
+    r = silhouette_ambiguity(db, spread_deg=20)
+    assert (r["entries"], r["distinct_silhouettes"], r["entries_sharing"]) == (4, 2, 3)
+    assert r["ambiguous_entries"] == 3 and r["per_joint"]["index_pip_flex"] == 3
+    assert r["per_joint"]["thumb_cmc_flex"] == 0 and list(r["per_joint"]) == list(JOINT_NAMES)
+    assert silhouette_ambiguity(db, spread_deg=40)["ambiguous_entries"] == 0
 
 
 # --------------------------------------------------------------------------- options
@@ -198,6 +215,9 @@ def test_report_json_schema(report):
                       "selected_beats_standard"}
     assert t["index_pip_sd_deg"]["met"] == (t["index_pip_sd_deg"]["value"] <= 8.0)
     assert set(d["targets"]) == {"all", "paper", "natural"}
+    amb = d["ambiguity"]
+    assert set(amb) == {n for h in d["hands"] for n in h["databases"].values()}
+    assert all(a["entries"] == SMALL["count"] for a in amb.values())
     full = report.to_dict(frames=True)
     assert len(full["frames"]) == 40
     f0 = full["frames"][0]
