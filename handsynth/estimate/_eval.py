@@ -760,6 +760,9 @@ class EvalReport:
         with os.fdopen(fd, "w", encoding="utf-8") as f:
             f.write(self.to_json(frames=frames))
             f.write("\n")
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)  # mkstemp's 0600 would hide the results from others
         os.replace(tmp, target)
         return target
 
