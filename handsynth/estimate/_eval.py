@@ -172,7 +172,8 @@ class EvalOptions:
         Folder of the databases (``<shape.name>.h5``); the ones needed are
         built there on demand and reused when they verify.
     n_hands : int
-        Test hands (random off-grid ratios for ``hand="model"``).
+        Test hands (random off-grid ratios for ``hand="model"``; for
+        ``hand="mesh"`` the one mesh, each "hand" with its own poses).
     frames_per_hand : int
         Test frames per hand *and per pose set*.
     pose_sets : tuple of str
