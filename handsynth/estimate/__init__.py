@@ -15,6 +15,8 @@
   top-down photo of the open hand.
 """
 
+from ._ann import ApproximateIndex, ApproximateOptions
+from ._eval import EvalOptions, EvalReport, evaluate
 from ._live import (
     CameraSource,
     CsvRowWriter,
@@ -46,6 +48,11 @@ from ._selection import (
 
 __all__ = [
     "SEGMENTS",
+    "ApproximateIndex",
+    "ApproximateOptions",
+    "EvalOptions",
+    "EvalReport",
+    "evaluate",
     "CameraSource",
     "CsvRowWriter",
     "FrameSource",
