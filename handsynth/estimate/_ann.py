@@ -37,14 +37,20 @@ scoring itself is the paper's, unchanged:
    candidates, marked ``low_confidence`` (the exact search does the same
    over all entries).
 
-Consequences: with ``nprobe >= nlist`` the candidates are all entries and
-the answer equals the exact search's (the same :class:`SearchResult`;
-``survivors``, not compared by ``==``, counts the survivors among the
-candidates scored).  With fewer probes the answer's ``E`` is never smaller
-than the exact one's, except when the approximate answer is a fallback
-(``low_confidence``) while the exact search found survivors; with
-``max_nprobe=None`` (widen up to every cell before falling back) that case
-cannot happen.
+   At most ``max_scored`` candidates are scored exactly per query (once
+   one survives): frames of compact poses (a fist seen from the back) can
+   have tens of thousands of near-identical candidates whose HLAC
+   differences lie outside the PCA subspace, so the bound cannot skip
+   them; the cap keeps such frames at a few milliseconds.
+
+Consequences: with ``nprobe >= nlist`` and ``max_scored=None`` the
+candidates are all entries and the answer equals the exact search's (the
+same :class:`SearchResult`; ``survivors``, not compared by ``==``, counts
+the survivors among the candidates scored).  Otherwise the answer's ``E``
+is never smaller than the exact one's, except when the approximate answer
+is a fallback (``low_confidence``) while the exact search found survivors;
+with ``max_nprobe=None`` (the default: widen up to every cell before
+falling back) that case cannot happen.
 
 Why not "the k nearest by HLAC, then E": scoring the whole probed lists by
 ``E`` costs little more (the bound skips nearly all of them) and its
@@ -118,6 +124,13 @@ class ApproximateOptions:
         many cells before falling back.  ``None`` (default): up to every
         cell, so the answer is marked ``low_confidence`` exactly when the
         exact search's is (such frames cost up to an exact search).
+    max_scored : int or None
+        At most this many candidates are scored exactly (masks and HLAC
+        read) per query, once one of them survives the pruning; the best so
+        far is then the answer.  Bounds the time of frames whose probed
+        cells hold thousands of near-identical entries (compact poses whose
+        HLAC differences the PCA codes cannot tell apart).  ``None``: no
+        limit, so that probing every cell gives the exact answer.
     dims : int
         PCA dimensions of the coarse quantizer and of the lower-bound codes,
         1 to 256.
@@ -139,6 +152,7 @@ class ApproximateOptions:
     nlist: int | None = None
     nprobe: int = 16
     max_nprobe: int | None = None
+    max_scored: int | None = 2048
     dims: int = 64
     train_size: int = 65536
     niter: int = 20
@@ -146,7 +160,7 @@ class ApproximateOptions:
     def __post_init__(self) -> None:
         for f in fields(self):
             v = getattr(self, f.name)
-            optional = f.name in ("nlist", "max_nprobe")
+            optional = f.name in ("nlist", "max_nprobe", "max_scored")
             if v is None and optional:
                 continue
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
@@ -331,7 +345,7 @@ def _score(i, low, best_e, q_hlac, q_sil, q_ridge, th1, hlac, sil_bits, ridge_bi
 @njit(cache=True, nogil=True)
 def _ivf_kernel(q_hlac, q_sil, q_ridge, q_area, q_y, hlac, sil_bits, ridge_bits, ridge_area,
                 order, codes, step, band, inv_gain, c, c1, c2, c3, c4, prune, starts, stops,
-                extra_j, seed_j, fallback_ok):
+                extra_j, seed_j, fallback_ok, max_scored):
     """Best candidate among the code positions ``[starts[r], stops[r])`` and `extra_j`.
 
     Returns (entry, E, d, p1, p2, survivors, fallback); entry -1 when no
@@ -341,8 +355,10 @@ def _ivf_kernel(q_hlac, q_sil, q_ridge, q_area, q_y, hlac, sil_bits, ridge_bits,
     cell order, so this streams).  Pass 2 scores the seed (`seed_j`, a code
     position, or -1) and then the candidates with the smallest bounds until
     one survives; pass 3 visits the rest in order and scores only those
-    whose bound does not exceed the best E so far.  ``survivors`` counts
-    the survivors among the candidates scored (as the exact search does).
+    whose bound does not exceed the best E so far, stopping after
+    `max_scored` scored candidates (when > 0) once one survivor is known.
+    ``survivors`` counts the survivors among the candidates scored (as the
+    exact search does).
     Ties go to the lowest entry index.  With no survivor and `fallback_ok`, the passes run again
     without pruning and the result is marked as a fallback.
     """
@@ -376,6 +392,7 @@ def _ivf_kernel(q_hlac, q_sil, q_ridge, q_area, q_y, hlac, sil_bits, ridge_bits,
         survivors = 0
         # the seed first, then the smallest bounds until one candidate survives
         tries = 0
+        scored = 0
         while best_i < 0 and tries < 16 and tries < m:
             kk = -1
             if tries == 0 and seed_j >= 0:
@@ -391,6 +408,7 @@ def _ivf_kernel(q_hlac, q_sil, q_ridge, q_area, q_y, hlac, sil_bits, ridge_bits,
             if kk < 0 or seen[kk]:
                 continue
             seen[kk] = True
+            scored += 1
             i = order[js[kk]]
             st, p1, p2, d = _score(i, low[kk], best_e, q_hlac, q_sil, q_ridge, th1, hlac,
                                    sil_bits, ridge_bits, ridge_area, c1, c2, c3, c4, pruning)
@@ -401,6 +419,9 @@ def _ivf_kernel(q_hlac, q_sil, q_ridge, q_area, q_y, hlac, sil_bits, ridge_bits,
         for q in range(m):
             if seen[q] or low[q] > best_e:
                 continue
+            if max_scored > 0 and scored >= max_scored and best_i >= 0:
+                break  # enough candidates scored: keep the best so far
+            scored += 1
             i = order[js[q]]
             st, p1, p2, d = _score(i, low[q], best_e, q_hlac, q_sil, q_ridge, th1, hlac,
                                    sil_bits, ridge_bits, ridge_area, c1, c2, c3, c4, pruning)
@@ -693,14 +714,14 @@ class ApproximateIndex:
         Parameters
         ----------
         **changes
-            ``nprobe`` or ``max_nprobe``.
+            ``nprobe``, ``max_nprobe`` or ``max_scored``.
 
         Raises
         ------
         InvalidInputError
             Another field (those need a new build) or a bad value.
         """
-        probing = ("nprobe", "max_nprobe")
+        probing = ("nprobe", "max_nprobe", "max_scored")
         for name in changes:
             if name not in probing:
                 raise InvalidInputError(
@@ -782,7 +803,7 @@ class ApproximateIndex:
                 h, sb, rb, area, q_y, t.hlac, t.sil_bits, t.ridge_bits, t.ridge_area,
                 self.order, self.codes, self.step, self._band, self._inv_gain, opts.c, opts.c1,
                 opts.c2, opts.c3, opts.c4, opts.prune, starts, stops, extra_j, seed_j,
-                probe >= limit)
+                probe >= limit, self.options.max_scored or 0)
             if i >= 0:
                 return SearchResult(index=int(i), error=float(e), hlac_distance=int(d),
                                     p1=int(p1), p2=int(p2), survivors=int(surv),

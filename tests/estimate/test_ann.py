@@ -57,13 +57,13 @@ def queries(query_rows):
 
 @pytest.fixture(scope="module")
 def small_index(small_rows):
-    return ApproximateIndex.build(_tables(small_rows), options=ApproximateOptions(nlist=16),
-                                  seed=0)
+    opts = ApproximateOptions(nlist=16, max_scored=None)
+    return ApproximateIndex.build(_tables(small_rows), options=opts, seed=0)
 
 
 @pytest.fixture(scope="module")
 def natural_index(natural_rows):
-    opts = ApproximateOptions(nlist=32, nprobe=2, max_nprobe=None, dims=32, train_size=500)
+    opts = ApproximateOptions(nlist=32, nprobe=2, dims=32, train_size=500, max_scored=None)
     return ApproximateIndex.build(_tables(natural_rows), options=opts, seed=1)
 
 
@@ -104,6 +104,19 @@ def test_fewer_probes_never_beat_the_exact_error(natural_index, queries):
             assert exact.error <= seeded.error <= natural_index.search(f, nprobe=nprobe).error
             assert seeded.index == exact.index
     assert differ > 0  # one probe out of 32 cells does miss some answers
+
+
+def test_capped_scoring_still_answers_a_survivor(natural_index, queries):
+    capped = natural_index.with_options(max_scored=3)
+    t = natural_index.tables
+    changed = 0
+    for f in queries:
+        exact = search(f, t)
+        r = capped.search(f, nprobe=natural_index.nlist)
+        assert r.error >= exact.error and r.low_confidence == exact.low_confidence
+        assert 1 <= r.survivors <= 3 or r.low_confidence
+        changed += r.index != exact.index
+    assert changed > 0  # three scorings per frame are not enough for every frame
 
 
 def test_an_entry_finds_itself(natural_index, natural_rows):
