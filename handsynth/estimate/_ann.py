@@ -95,7 +95,14 @@ from numba import njit
 
 from ..db import HLAC_SIZE, count_outside
 from ..errors import DatabaseError, InvalidInputError
-from ._search import SearchOptions, SearchResult, SearchTables, _hlac_distance, _query
+from ._search import (
+    SearchOptions,
+    SearchResult,
+    SearchTables,
+    _count_outside_limited,
+    _hlac_distance,
+    _query,
+)
 
 __all__ = ["ApproximateIndex", "ApproximateOptions", "ann_path", "tables_fingerprint"]
 
@@ -319,22 +326,31 @@ def _code_bound(q_y, code, step, band):
 
 
 @njit(cache=True, nogil=True)
-def _score(i, low, best_e, q_hlac, q_sil, q_ridge, th1, hlac, sil_bits, ridge_bits, ridge_area,
-           c1, c2, c3, c4, prune):
-    """One candidate: (status, p1, p2, d); status -1 pruned, 0 cannot beat `best_e`, 1 scored.
+def _score(i, best_e, q_hlac, q_sil, q_ridge, th1, hlac, sil_bits, ridge_bits, ridge_area, c1,
+           c2, c3, c4, prune):
+    """One candidate against the best E so far: (status, p1, p2, d).
 
-    `low` is the lower bound of its HLAC distance; the distance is abandoned
-    once it cannot reach `best_e` (then status 0).
+    Status -1: pruned; 0: survives but cannot beat `best_e`; 1: survives
+    with ``E = d + C3 p1 + C4 p2 <= best_e``; 2: cannot beat `best_e`
+    (its P1 penalty alone exceeds it), stage 1 not decided.  P1 is counted
+    with the exact search's abandoning popcount, the HLAC distance last
+    with early exit.
     """
-    p1 = count_outside(q_ridge, sil_bits[i])
+    limit = th1 if prune else np.inf
+    if c3 > 0.0:
+        limit = min(limit, best_e / c3)
+    p1 = _count_outside_limited(q_ridge, sil_bits[i], limit)
     if prune and p1 > th1:
         return -1, p1, 0, 0
+    pen = c3 * p1
+    if pen > best_e:
+        return 2, p1, 0, 0
     a = ridge_area[i]
     p2 = count_outside(ridge_bits[i], q_sil)
     if prune and p2 > c1 * a * a + c2 * a:
         return -1, p1, p2, 0
-    pen = c3 * p1 + c4 * p2
-    if pen + low > best_e:
+    pen += c4 * p2
+    if pen > best_e:
         return 0, p1, p2, 0
     d = _hlac_distance(q_hlac, hlac[i], best_e - pen)
     if d + pen > best_e:
@@ -410,9 +426,9 @@ def _ivf_kernel(q_hlac, q_sil, q_ridge, q_area, q_y, hlac, sil_bits, ridge_bits,
             seen[kk] = True
             scored += 1
             i = order[js[kk]]
-            st, p1, p2, d = _score(i, low[kk], best_e, q_hlac, q_sil, q_ridge, th1, hlac,
-                                   sil_bits, ridge_bits, ridge_area, c1, c2, c3, c4, pruning)
-            if st >= 0:
+            st, p1, p2, d = _score(i, best_e, q_hlac, q_sil, q_ridge, th1, hlac, sil_bits,
+                                   ridge_bits, ridge_area, c1, c2, c3, c4, pruning)
+            if st == 0 or st == 1:
                 survivors += 1
             if st == 1:
                 best_e, best_i, best_d, best_p1, best_p2 = d + c3 * p1 + c4 * p2, i, d, p1, p2
@@ -423,9 +439,9 @@ def _ivf_kernel(q_hlac, q_sil, q_ridge, q_area, q_y, hlac, sil_bits, ridge_bits,
                 break  # enough candidates scored: keep the best so far
             scored += 1
             i = order[js[q]]
-            st, p1, p2, d = _score(i, low[q], best_e, q_hlac, q_sil, q_ridge, th1, hlac,
-                                   sil_bits, ridge_bits, ridge_area, c1, c2, c3, c4, pruning)
-            if st < 0:
+            st, p1, p2, d = _score(i, best_e, q_hlac, q_sil, q_ridge, th1, hlac, sil_bits,
+                                   ridge_bits, ridge_area, c1, c2, c3, c4, pruning)
+            if st != 0 and st != 1:
                 continue
             survivors += 1
             if st == 1:
