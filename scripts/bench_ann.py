@@ -4,6 +4,7 @@ Usage::
 
     python scripts/bench_ann.py [--entries 1000000] [--db-dir ~/.cache/handsynth/bench]
                                 [--frames 300] [--nprobe 16] [--sweep 4,8,16,32,64]
+                                [--max-scored 2048|none]
 
 1. Builds (once; reused while it verifies) a database of ``--entries``
    natural-set poses of the standard hand into ``<db-dir>/natural-<entries>/``
@@ -53,7 +54,7 @@ def _build_database(folder: Path, n: int, workers: int) -> Path:
 
     def progress(p) -> None:
         now = time.perf_counter()
-        if p.finished or now - last[0] > 60:
+        if p.entries_total and (p.finished or now - last[0] > 60):
             last[0] = now
             print(f"  build: {p.entries_done}/{p.entries_total} entries, "
                   f"{now - t0:.0f} s", flush=True)
@@ -117,6 +118,8 @@ def main() -> None:
     ap.add_argument("--nlist", type=int, default=None, help="cells (default sqrt(N), power of 2)")
     ap.add_argument("--nprobe", type=int, default=16, help="cells probed per query")
     ap.add_argument("--dims", type=int, default=64, help="PCA dimensions")
+    ap.add_argument("--max-scored", default="2048",
+                    help="exact scorings per frame at most ('none': no limit)")
     ap.add_argument("--sweep", default="4,8,16,32,64", help="nprobe values for the search-only sweep")
     args = ap.parse_args()
 
@@ -143,7 +146,9 @@ def main() -> None:
     print(f"opened {len(db)} entries in {time.perf_counter() - t0:.1f} s: database "
           f"{db.nbytes / 1e6:.0f} MB + search block sums {tables.block_sums.nbytes / 1e6:.0f} MB",
           flush=True)
-    options = ApproximateOptions(nlist=args.nlist, nprobe=args.nprobe, dims=args.dims)
+    cap = None if args.max_scored.lower() == "none" else int(args.max_scored)
+    options = ApproximateOptions(nlist=args.nlist, nprobe=args.nprobe, dims=args.dims,
+                                 max_scored=cap)
     had = ann_path(db_path).is_file()
     t0 = time.perf_counter()
     index = ApproximateIndex.open(db, tables, options=options, seed=0)
@@ -212,7 +217,8 @@ def main() -> None:
           f"{np.percentile(lat_e, 99) * 1e3:.3f} ms, {n_exact} frames, {low_e} low-confidence")
     print(f"  approximate: median {med_a * 1e3:.3f} ms ({1 / med_a:.1f} fps), p99 "
           f"{np.percentile(lat_a, 99) * 1e3:.3f} ms ({1 / np.percentile(lat_a, 99):.1f} fps), "
-          f"{len(lat_a)} lookups, nprobe {args.nprobe}, {low_a} low-confidence")
+          f"{len(lat_a)} lookups, nprobe {args.nprobe}, max_scored {cap}, {low_a} "
+          f"low-confidence")
     print(f"MAE vs truth: exact {mae_e:.3f} deg, approximate {mae_a_sub:.3f} deg "
           f"(all {len(frames)} frames: {mae_a:.3f}); extra {extra:+.3f} deg; same answer "
           f"{same:.3f}; exact vs approximate answers differ by {between:.3f} deg on average")
