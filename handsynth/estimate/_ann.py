@@ -758,7 +758,10 @@ class ApproximateIndex:
         -------
         ndarray of int64, shape (nlist,)
         """
-        y = self._a64 @ np.asarray(hlac, dtype=np.float64)
+        return self._rank(self._a64 @ np.asarray(hlac, dtype=np.float64))
+
+    def _rank(self, y: np.ndarray) -> np.ndarray:
+        """Cells by squared distance of their centroid to the projection `y`."""
         return np.argsort(self._c_norms - 2.0 * (self.centroids @ y), kind="stable")
 
     def search(self, features, options: SearchOptions | None = None, *,
@@ -806,8 +809,7 @@ class ApproximateIndex:
         limit = max(probe, nlist if cap is None else min(nlist, cap))
         h, sb, rb, area = _query(features)
         q_y = self._a64 @ h.astype(np.float64)
-        ranked = (np.argsort(self._c_norms - 2.0 * (self.centroids @ q_y), kind="stable")
-                  if probe < nlist else np.arange(nlist))
+        ranked = self._rank(q_y) if probe < nlist else np.arange(nlist)
         t = self.tables
         seed_j = int(self.position[s]) if s >= 0 else -1
         while True:
