@@ -226,9 +226,6 @@ def _hlac_distance(q_hlac, row, bound):
     return d
 
 
-_NIBBLE_BITS = np.array([bin(i).count("1") for i in range(16)], dtype=np.int64)
-
-
 @njit(cache=True, nogil=True)
 def _block_counts(bits):
     """Pixels per 4x4 block (16, 16) of a packed 64x64 mask."""
@@ -236,7 +233,7 @@ def _block_counts(bits):
     for r in range(64):
         w = bits[r]
         for cx in range(16):
-            counts[r >> 2, cx] += _NIBBLE_BITS[(w >> np.uint64(4 * cx)) & np.uint64(15)]
+            counts[r >> 2, cx] += _popcount64((w >> np.uint64(4 * cx)) & np.uint64(15))
     return counts
 
 

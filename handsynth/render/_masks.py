@@ -13,12 +13,29 @@ __all__ = ["MaskMaker"]
 class MaskMaker:
     """Base class: boolean masks of posed hands as the device camera sees them.
 
-    Subclasses set ``width_px`` and ``height_px`` and implement
-    :meth:`_draw`, which poses the hand and writes one mask.
+    Subclasses set ``width_px`` and ``height_px`` (the model hands through
+    :meth:`_load_hand`) and implement :meth:`_draw`, which poses the hand and
+    writes one mask.
     """
 
     width_px: int
     height_px: int
+
+    def _load_hand(self, shape, mount, *, side: str, width_px: int | None,
+                   height_px: int | None, forearm: bool, samples: int = 0) -> None:
+        """Set ``shape, mount, side, width_px, height_px`` and ``hand``: the model hand
+        in its silhouette scene (flat white, device camera at the mask size)."""
+        from ..models import HandModel, HandShape
+        from ._camera import CameraMount
+        from ._scene import scene_mjcf
+
+        self.shape = shape or HandShape()
+        self.mount = mount or CameraMount()
+        self.side = side
+        self.width_px, self.height_px = self.mount.size(width_px, height_px)
+        xml = scene_mjcf(self.shape, self.mount, side=side, forearm=forearm, silhouette=True,
+                         width_px=self.width_px, height_px=self.height_px, samples=samples)
+        self.hand = HandModel(self.shape, side=side, xml=xml)
 
     def _draw(self, pose: np.ndarray, out: np.ndarray) -> None:
         """Write the mask of `pose` ((20,) validated degrees) into `out` ((H, W) bool)."""

@@ -22,10 +22,9 @@ import numpy as np
 from numba import njit
 
 from ..errors import RenderError
-from ..models import HandModel, HandShape
+from ..models import HandShape
 from ._camera import CameraMount
 from ._masks import MaskMaker
-from ._scene import scene_mjcf
 
 __all__ = ["SilhouetteRasterizer"]
 
@@ -144,13 +143,8 @@ class SilhouetteRasterizer(MaskMaker):
     def __init__(self, shape: HandShape | None = None, mount: CameraMount | None = None, *,
                  side: str = "right", width_px: int | None = None, height_px: int | None = None,
                  forearm: bool = True) -> None:
-        self.shape = shape or HandShape()
-        self.mount = mount or CameraMount()
-        self.side = side
-        self.width_px, self.height_px = self.mount.size(width_px, height_px)
-        xml = scene_mjcf(self.shape, self.mount, side=side, forearm=forearm, silhouette=True,
-                         width_px=self.width_px, height_px=self.height_px)
-        self.hand = HandModel(self.shape, side=side, xml=xml)
+        self._load_hand(shape, mount, side=side, width_px=width_px, height_px=height_px,
+                        forearm=forearm)
         m = self.hand.model
         geoms = [g for g in range(m.ngeom) if m.geom_rgba[g, 3] > 0 and m.geom_group[g] <= 2]
         if any(m.geom_type[g] != 7 for g in geoms):  # mjGEOM_MESH
@@ -161,7 +155,6 @@ class SilhouetteRasterizer(MaskMaker):
             a, n = m.mesh_vertadr[mid], m.mesh_vertnum[mid]
             verts.append(np.asarray(m.mesh_vert[a:a + n], dtype=np.float64))
             owner.append(np.full(n, g, dtype=np.int64))
-        self._geoms = np.asarray(geoms, dtype=np.int64)
         self._verts = np.ascontiguousarray(np.concatenate(verts))
         self._owner = np.concatenate(owner)
         self._starts = np.concatenate([[0], np.cumsum([len(v) for v in verts])]).astype(np.int64)

@@ -90,13 +90,8 @@ class SilhouetteRenderer(GLContextOwner, MaskMaker):
         ensure_backend()
         import mujoco
 
-        self.shape = shape or HandShape()
-        self.mount = mount or CameraMount()
-        self.side = side
-        self.width_px, self.height_px = self.mount.size(width_px, height_px)
-        xml = scene_mjcf(self.shape, self.mount, side=side, forearm=forearm, silhouette=True,
-                         width_px=self.width_px, height_px=self.height_px, samples=samples)
-        self.hand = HandModel(self.shape, side=side, xml=xml)
+        self._load_hand(shape, mount, side=side, width_px=width_px, height_px=height_px,
+                        forearm=forearm, samples=samples)
         self._renderer = _renderer(self.hand.model, self.width_px, self.height_px)
         self._cam = mujoco.mj_name2id(self.hand.model, mujoco.mjtObj.mjOBJ_CAMERA, "device")
         self._buf = np.empty((self.height_px, self.width_px, 3), dtype=np.uint8)

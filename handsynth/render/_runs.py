@@ -171,7 +171,7 @@ def _kernel(mask, words, lo, hi, size):
     ry, rx0, rx1 = _scan_runs(mask, words, lo, hi)
     out = np.zeros((size, size), np.bool_)
     if ry.size == 0:
-        return out, False
+        return out
     keep = _largest_component(ry, rx0, rx1)
     xmin = 1 << 30
     xmax = -1
@@ -208,7 +208,7 @@ def _kernel(mask, words, lo, hi, size):
         for j in range(size):
             run += diff[i, j]
             out[i, j] = direct[i, j] + run >= 0.5 - 1e-9
-    return out, True
+    return out
 
 
 def silhouette_from_mask(mask: np.ndarray, lo: np.ndarray, hi: np.ndarray,
@@ -231,5 +231,4 @@ def silhouette_from_mask(mask: np.ndarray, lo: np.ndarray, hi: np.ndarray,
         words = m.view(np.uint64)
     else:
         words = np.empty((m.shape[0], 0), np.uint64)
-    out, _ = _kernel(m, words, lo, hi, int(size))
-    return out
+    return _kernel(m, words, lo, hi, int(size))
