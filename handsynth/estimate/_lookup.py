@@ -132,6 +132,8 @@ class PoseLookup:
             hlac=database.hlac, sil_bits=database.sil_bits, ridge_bits=database.ridge_bits,
             ridge_area=database.ridge_area)
         self.approximate = self._approximate_index(approximate)
+        if self.approximate is None:
+            self.tables.prepare()  # the exact search's index, before the first frame
         self._angles = np.asarray(database.angles, dtype=np.float64)
         self._angles.setflags(write=False)
         self._last = -1

@@ -16,37 +16,47 @@ entries and the result is marked ``low_confidence``.
 
 Implementation
 --------------
-:func:`search` is exact (same answer as :func:`search_reference`) but reads
-far less than every entry's masks.  Each entry also carries its silhouette
-and ridge lines at 4x4-block resolution (one bit per block, 256 bits), and
-the input its ridge pixel count per block.  These give lower bounds that
-never exceed the true penalties:
+:func:`search` is exact (same answer as :func:`search_reference`) but
+scores only the few entries whose lower bound of ``E`` does not exceed the
+best ``E`` found.  :meth:`SearchTables.prepare` builds, once per database:
 
-* ``P1 >= sum of the input's ridge pixels in blocks where the entry's
-  silhouette has no pixel``;
-* ``P2 >= number of blocks holding an entry ridge pixel and no input
-  silhouette pixel``.
+* *Distinct rows.*  Entries whose features (HLAC, silhouette, ridge lines)
+  are all equal have equal ``E`` for every input, so only the first of
+  each group (the lowest index, which the tie rule picks) is searched.  In
+  a 20,448-entry paper-set database about 44 % of the entries repeat
+  another's features (a finger folded behind the palm is invisible from
+  the dorsum).
+* *Penalty bounds.*  Silhouette and ridge lines at 4x4-block resolution
+  (one bit per block, 256 bits): ``P1 >= sum of the input's ridge pixels
+  in blocks where the entry's silhouette has no pixel`` and ``P2 >= number
+  of blocks holding an entry ridge pixel and no input silhouette pixel``.
+* *HLAC bound.*  An orthonormal basis ``U`` (k = 16 principal directions
+  of the HLAC vectors, by randomized subspace iteration) splits
+  ``h - m = U^T p + r`` with ``r`` orthogonal to ``U``; then
+  ``|h - h_i|^2 = |p - p_i|^2 + |r - r_i|^2 >= |p - p_i|^2 + (|r| - |r_i|)^2``.
+  Each entry stores ``p_i`` and ``|r_i|`` (float64).  The bound is lowered
+  by a relative margin of 1e-4 so that float64 rounding (below 1e-9 of the
+  vector norms) can never make it exceed the true distance; any basis
+  gives a valid bound, a good one a tight one.
 
-A first pass over these 64-byte summaries drops every entry whose bound
-already fails a pruning stage and keeps ``C3 lb1 + C4 lb2`` as a lower bound
-of its penalty.  The entry with the smallest bound (or the previous frame's
-answer, ``seed``) is scored first; then, in index order, an entry is scored
-exactly only when its bound does not exceed the best ``E`` so far: P1 (its
-popcount abandoned as soon as it fails stage 1 or alone exceeds the best E),
-P2, then the HLAC distance with its block-sum lower bound and early exit.
-Ties go to the lowest index.  When no entry passes both stages the same
-pass runs without pruning (the fallback).  Nothing is copied per entry.
-``survivors`` of the result counts the entries that passed both stages
-among those scored exactly (a lower bound of the total, which
-:func:`search_reference` reports).
-
-Cost: the first pass reads 64 bytes per entry (1.3 MB for 20,448
-entries); the exact scoring touches a few hundred entries per frame.
+A search then (1) scores the previous frame's answer (``seed``) if given,
+(2) computes ``C3 lb1 + C4 lb2 + hlac bound`` for every distinct row in one
+pass over 216 bytes per row, dropping rows whose penalty bounds already
+fail a pruning stage, (3) scores the 8 rows with the smallest bounds, which
+brings the best ``E`` near its final value, (4) scores, in index order,
+every other row whose bound does not exceed the best ``E`` so far.
+Scoring counts P1 (its popcount abandoned as soon as it fails stage 1 or
+can no longer win), P2, then the HLAC distance with early exit.  Nothing is
+copied per entry.  ``survivors`` of the result counts the entries (with
+their repeats) that passed both stages among those scored (a lower bound of
+the total, which :func:`search_reference` reports).  When no row passes
+both stages the same steps run without pruning (the fallback).
 """
 
 from __future__ import annotations
 
 import math
+import threading
 from dataclasses import dataclass, field, fields
 
 import numpy as np
@@ -58,8 +68,11 @@ from ..errors import InvalidInputError
 
 __all__ = ["SearchOptions", "SearchResult", "SearchTables", "search", "search_reference"]
 
-_BLOCK = 200  # HLAC dims between early-exit checks (8 blocks of 25 patterns)
-_PATTERNS = 25  # HLAC patterns per 8x8 block
+_BLOCK = 200  # HLAC dims between early-exit checks (divides HLAC_SIZE)
+_BASIS_DIMS = 16  # principal directions of the HLAC bound
+_BASIS_SAMPLE = 4096  # distinct rows used to find them
+_BOUND_MARGIN = 1e-2  # relative margin of the float32 HLAC bound
+_TOP = 8  # rows scored first, by smallest bound
 
 
 @dataclass(frozen=True)
@@ -148,25 +161,20 @@ class SearchTables:
     sil_bits, ridge_bits : ndarray of uint64, shape (N, 64)
     ridge_area : ndarray, shape (N,)
         Integer ridge pixel counts (stored here as float64 for the threshold).
-    block_sums : ndarray of int32, shape (N, 64)
-        Sum of each 25-pattern HLAC block; gives the lower bound
-        ``|h - h_i|^2 >= sum_b (s_b - s_i,b)^2 / 25`` (Cauchy-Schwarz) that
-        lets the search skip most HLAC distances.  Computed by
-        :meth:`from_arrays`.
-    sil_coarse, ridge_coarse : ndarray of uint64, shape (N, 4)
-        Silhouette and ridge lines at 4x4-block resolution, one bit per
-        block (set when the block holds a pixel), 16x16 blocks in row-major
-        order, bit ``k % 64`` of word ``k // 64``.  Computed by
-        :meth:`from_arrays`.
+
+    Notes
+    -----
+    The exact search's index (distinct rows and lower bounds, see the
+    module docstring) is built by :meth:`prepare`, at most once, on first
+    use; about 0.2 s for 20,448 entries.
     """
 
     hlac: np.ndarray
     sil_bits: np.ndarray
     ridge_bits: np.ndarray
     ridge_area: np.ndarray
-    block_sums: np.ndarray
-    sil_coarse: np.ndarray
-    ridge_coarse: np.ndarray
+    _index: list = field(default_factory=list, repr=False)
+    _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
     @classmethod
     def from_arrays(cls, *, hlac, sil_bits, ridge_bits, ridge_area) -> SearchTables:
@@ -182,48 +190,209 @@ class SearchTables:
                                  ("ridge_area", a, (n,))):
             if arr.shape != shape:
                 raise InvalidInputError(f"{name} must have shape {shape}, got {arr.shape}")
-        sums = _block_sums(h)
-        sc, rc = _coarse_presence_batch(s), _coarse_presence_batch(r)
-        for arr in (h, s, r, a, sums, sc, rc):
+        for arr in (h, s, r, a):
             arr.setflags(write=False)
-        return cls(hlac=h, sil_bits=s, ridge_bits=r, ridge_area=a, block_sums=sums,
-                   sil_coarse=sc, ridge_coarse=rc)
+        return cls(hlac=h, sil_bits=s, ridge_bits=r, ridge_area=a)
 
     def __len__(self) -> int:
         return self.hlac.shape[0]
 
+    def prepare(self) -> _ExactIndex:
+        """Build (once, thread-safe) and return the exact search's index."""
+        if not self._index:
+            with self._lock:
+                if not self._index:
+                    self._index.append(_ExactIndex.build(self))
+        return self._index[0]
 
-def _block_sums(hlac: np.ndarray) -> np.ndarray:
-    n = hlac.shape[0]
-    return np.ascontiguousarray(
-        hlac.reshape(n, -1, _PATTERNS).sum(axis=2, dtype=np.int32), dtype=np.int32)
+
+@dataclass(frozen=True, eq=False)
+class _ExactIndex:
+    """Distinct rows of a :class:`SearchTables` and their bounds (module docstring).
+
+    Attributes
+    ----------
+    rows : ndarray of int64, shape (U,)
+        Entry index of each distinct row (the lowest of its group), ascending.
+    group : ndarray of int64, shape (N,)
+        Distinct row of each entry.
+    sizes : ndarray of int64, shape (U,)
+        Entries per distinct row.
+    sil_coarse_t, ridge_coarse_t : ndarray of uint64, shape (4, U)
+        Masks at 4x4-block resolution, block ``k = 16 * row + col`` at bit
+        ``k % 64`` of word ``k // 64`` (word first: column-major).
+    ridge_area : ndarray of float64, shape (U,)
+    mean : ndarray of float64, shape (1600,)
+    basis : ndarray of float64, shape (k, 1600)
+        Orthonormal rows.
+    proj_t : ndarray of float32, shape (k, U)
+        ``basis @ (h_i - mean)``, column-major.
+    resid : ndarray of float32, shape (U,)
+        ``|h_i - mean - basis.T @ proj_i|``.
+    """
+
+    rows: np.ndarray
+    group: np.ndarray
+    sizes: np.ndarray
+    sil_coarse_t: np.ndarray
+    ridge_coarse_t: np.ndarray
+    ridge_area: np.ndarray
+    mean: np.ndarray
+    basis: np.ndarray
+    proj_t: np.ndarray
+    resid: np.ndarray
+
+    @classmethod
+    def build(cls, tables: SearchTables) -> _ExactIndex:
+        h64 = tables.hlac.view(np.uint64)
+        hashes = _row_hashes(h64, tables.sil_bits, tables.ridge_bits)
+        first = _first_equal(h64, tables.sil_bits, tables.ridge_bits,
+                             np.argsort(hashes, kind="stable"), hashes)
+        is_row = first == np.arange(len(first))
+        rows = np.flatnonzero(is_row)
+        group = (np.cumsum(is_row) - 1)[first]
+        mean, basis = _hlac_basis(tables.hlac, rows)
+        proj, resid = _project_rows(tables.hlac, rows, mean, basis)
+        out = cls(rows=rows, group=group, sizes=np.bincount(group, minlength=rows.size),
+                  sil_coarse_t=_coarse_presence_rows(tables.sil_bits, rows).T.copy(),
+                  ridge_coarse_t=_coarse_presence_rows(tables.ridge_bits, rows).T.copy(),
+                  ridge_area=np.ascontiguousarray(tables.ridge_area[rows]), mean=mean,
+                  basis=basis, proj_t=np.ascontiguousarray(proj.T, dtype=np.float32),
+                  resid=resid.astype(np.float32))
+        for f in fields(out):
+            getattr(out, f.name).setflags(write=False)
+        return out
 
 
 @njit(cache=True, nogil=True)
-def _distance_bound(q_sums, sums):
-    """Lower bound of the squared HLAC distance from block sums (Cauchy-Schwarz)."""
-    acc = 0
-    for b in range(q_sums.shape[0]):
-        diff = q_sums[b] - sums[b]
-        acc += diff * diff
-    return acc / _PATTERNS
+def _row_hashes(h64, sil_bits, ridge_bits):
+    """A 64-bit hash (FNV-1a over words) of each entry's features."""
+    prime = np.uint64(1099511628211)
+    out = np.empty(h64.shape[0], np.uint64)
+    for i in range(h64.shape[0]):
+        x = np.uint64(14695981039346656037)
+        for w in range(h64.shape[1]):
+            x = (x ^ h64[i, w]) * prime
+        for w in range(sil_bits.shape[1]):
+            x = (x ^ sil_bits[i, w]) * prime
+            x = (x ^ ridge_bits[i, w]) * prime
+        out[i] = x
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _same_row(h64, sil_bits, ridge_bits, i, j):
+    for w in range(h64.shape[1]):
+        if h64[i, w] != h64[j, w]:
+            return False
+    for w in range(sil_bits.shape[1]):
+        if sil_bits[i, w] != sil_bits[j, w] or ridge_bits[i, w] != ridge_bits[j, w]:
+            return False
+    return True
+
+
+@njit(cache=True, nogil=True)
+def _first_equal(h64, sil_bits, ridge_bits, order, hashes):
+    """Per entry, the lowest index of an entry with equal features.
+
+    `order` sorts the entries by hash, ascending index within equal hashes;
+    rows of a run of equal hashes are compared word by word.
+    """
+    n = order.shape[0]
+    first = np.empty(n, np.int64)
+    k = 0
+    while k < n:
+        m = k + 1
+        while m < n and hashes[order[m]] == hashes[order[k]]:
+            m += 1
+        for a in range(k, m):
+            i = order[a]
+            first[i] = i
+            for b in range(k, a):
+                j = order[b]
+                if first[j] == j and _same_row(h64, sil_bits, ridge_bits, i, j):
+                    first[i] = j
+                    break
+        k = m
+    return first
+
+
+def _hlac_basis(hlac: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Mean and orthonormal principal directions of the HLAC vectors of `rows`.
+
+    Randomized subspace iteration with two power steps (N. Halko,
+    P.-G. Martinsson and J. A. Tropp, "Finding structure with randomness",
+    SIAM Review 53(2), 2011, algorithm 4.4) on at most 4,096 evenly spaced
+    rows; deterministic (fixed generator seed).
+    """
+    pick = rows[np.unique(np.linspace(0, rows.size - 1, min(rows.size, _BASIS_SAMPLE))
+                          .astype(np.int64))]
+    x = hlac[pick].astype(np.float64)
+    mean = x.mean(axis=0)
+    x -= mean
+    k = min(_BASIS_DIMS, x.shape[0] - 1)
+    if k <= 0:
+        return mean, np.zeros((0, HLAC_SIZE))
+    q = x.T @ (x @ np.random.default_rng(0).standard_normal((HLAC_SIZE, k + 8)))
+    for _ in range(3):
+        q = np.linalg.qr(q)[0]
+        q = x.T @ (x @ q)
+    q = np.linalg.qr(q)[0]
+    vt = np.linalg.svd(x @ q, full_matrices=False)[2]
+    basis = np.ascontiguousarray((q @ vt.T).T[:k])
+    return mean, basis
+
+
+def _project_rows(hlac, rows, mean, basis, chunk: int = 8192):
+    """``proj`` and ``resid`` of :class:`_ExactIndex` for `rows`, in chunks."""
+    proj = np.empty((rows.size, basis.shape[0]))
+    resid = np.empty(rows.size)
+    for s in range(0, rows.size, chunk):
+        x = hlac[rows[s:s + chunk]].astype(np.float64) - mean
+        p = x @ basis.T
+        x -= p @ basis
+        proj[s:s + chunk] = p
+        resid[s:s + chunk] = np.sqrt(np.einsum("ij,ij->i", x, x))
+    return proj, resid
 
 
 @njit(cache=True, nogil=True)
 def _hlac_distance(q_hlac, row, bound):
-    """Squared distance (int32 arithmetic), abandoned once it exceeds `bound` (returns it then)."""
+    """Squared distance of two (1600,) uint8 vectors, abandoned once it exceeds `bound`.
+
+    Returns the partial sum then (a value above `bound`).  Blocks of a fixed
+    200 dims (int32 sums) keep the inner loop vectorized.
+    """
     d = 0
-    n = row.shape[0]
-    for start in range(0, n, _BLOCK):
-        stop = min(start + _BLOCK, n)
+    for start in range(0, HLAC_SIZE, _BLOCK):
         acc = np.int32(0)
-        for k in range(start, stop):
-            diff = np.int32(q_hlac[k]) - np.int32(row[k])
+        for k in range(_BLOCK):
+            diff = np.int32(q_hlac[start + k]) - np.int32(row[start + k])
             acc += diff * diff
         d += acc
         if d > bound:
             return d
     return d
+
+
+@njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def _query_projection(q_hlac, mean, basis):
+    """``(p, |r|)`` of the input's HLAC vector (see :class:`_ExactIndex`)."""
+    k, n = basis.shape
+    qc = np.empty(n)
+    total = 0.0
+    for j in range(n):
+        qc[j] = q_hlac[j] - mean[j]
+        total += qc[j] * qc[j]
+    p = np.empty(k)
+    explained = 0.0
+    for a in range(k):
+        s = 0.0
+        for j in range(n):
+            s += basis[a, j] * qc[j]
+        p[a] = s
+        explained += s * s
+    return p, math.sqrt(max(total - explained, 0.0))
 
 
 @njit(cache=True, nogil=True)
@@ -250,10 +419,10 @@ def _pack_blocks(flags):
 
 
 @njit(cache=True, nogil=True)
-def _coarse_presence_batch(bits):
-    out = np.empty((bits.shape[0], 4), np.uint64)
-    for i in range(bits.shape[0]):
-        out[i] = _pack_blocks(_block_counts(bits[i]) > 0)
+def _coarse_presence_rows(bits, rows):
+    out = np.empty((rows.shape[0], 4), np.uint64)
+    for u in range(rows.shape[0]):
+        out[u] = _pack_blocks(_block_counts(bits[rows[u]]) > 0)
     return out
 
 
@@ -278,108 +447,159 @@ def _count_outside_limited(a_bits, b_bits, limit):
     return total
 
 
-@njit(cache=True, nogil=True)
-def _bounds(q_planes, q_sil_coarse, sil_coarse, ridge_coarse, ridge_area, th1, c1, c2, c3, c4,
-            prune, key):
-    """Pass 1: key[i] = C3 lb1 + C4 lb2 (a lower bound of the penalty), -1 when a bound
-    already fails a pruning stage.  Returns the entry with the smallest key (-1: none)."""
-    best = -1
-    for i in range(sil_coarse.shape[0]):
-        lb1 = 0
-        for k in range(5):
-            for w in range(4):
-                lb1 += _popcount64(q_planes[k, w] & ~sil_coarse[i, w]) << k
-        key[i] = -1.0
-        if prune and lb1 > th1:
-            continue
-        lb2 = 0
+@njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def _bounds(q_planes, q_sil_coarse, q_proj, q_resid, sil_coarse_t, ridge_coarse_t, ridge_area,
+            proj_t, resid, th1, c1, c2, c3, c4, prune, cap, key, lb, top):
+    """Pass over the distinct rows: bounds, and the rows with the smallest ones.
+
+    ``key[u] = C3 lb1 + C4 lb2`` (-1 when a penalty bound already fails a
+    pruning stage); ``lb[u] = key[u] + HLAC bound`` (inf when ``key[u]``
+    exceeds `cap`, a known E).  `top` receives the rows with the smallest
+    ``lb``, ascending; returns how many.  The tables are column-major
+    (word or dimension first) so that the loops over rows vectorize.
+    """
+    n = sil_coarse_t.shape[1]
+    lb1 = np.zeros(n, np.int32)
+    lb2 = np.zeros(n, np.int32)
+    for k in range(q_planes.shape[0]):
         for w in range(4):
-            lb2 += _popcount64(ridge_coarse[i, w] & ~q_sil_coarse[w])
-        a = ridge_area[i]
-        if prune and lb2 > c1 * a * a + c2 * a:
+            qw = q_planes[k, w]
+            if qw == 0:
+                continue
+            col = sil_coarse_t[w]
+            for u in range(n):
+                lb1[u] += np.int32(_popcount64(qw & ~col[u])) << k
+    for w in range(4):
+        qw = ~q_sil_coarse[w]
+        col = ridge_coarse_t[w]
+        for u in range(n):
+            lb2[u] += np.int32(_popcount64(col[u] & qw))
+    hb = np.zeros(n, np.float32)
+    for j in range(proj_t.shape[0]):
+        qj = np.float32(q_proj[j])
+        col32 = proj_t[j]
+        for u in range(n):
+            t = col32[u] - qj
+            hb[u] += t * t
+    qr = np.float32(q_resid)
+    for u in range(n):
+        t = resid[u] - qr
+        hb[u] += t * t
+    ntop = 0
+    ntop_max = top.shape[0]
+    for u in range(n):
+        key[u] = -1.0
+        if prune and lb1[u] > th1:
             continue
-        key[i] = c3 * lb1 + c4 * lb2
-        if best < 0 or key[i] < key[best]:
-            best = i
-    return best
+        a = ridge_area[u]
+        if prune and lb2[u] > c1 * a * a + c2 * a:
+            continue
+        kk = c3 * lb1[u] + c4 * lb2[u]
+        key[u] = kk
+        d = np.float64(hb[u])
+        b = kk + max(d - _BOUND_MARGIN * (1.0 + d), 0.0)
+        if b > cap:
+            lb[u] = np.inf
+            continue
+        lb[u] = b
+        if ntop < ntop_max or b < lb[top[ntop - 1]]:
+            pos = ntop if ntop < ntop_max else ntop_max - 1
+            while pos > 0 and lb[top[pos - 1]] > b:
+                top[pos] = top[pos - 1]
+                pos -= 1
+            top[pos] = u
+            if ntop < ntop_max:
+                ntop += 1
+    return ntop
 
 
 @njit(cache=True, nogil=True)
-def _score(i, q_hlac, q_sums, q_sil, q_ridge, hlac, sums, sil_bits, ridge_bits, ridge_area,
-           th1, c1, c2, c3, c4, prune, best_e):
-    """Entry i against the best E so far: (status, E, d, p1, p2).
+def _score(i, q_hlac, q_sil, q_ridge, hlac, sil_bits, ridge_bits, a, hl_bound, th1, c1, c2, c3,
+           c4, prune, best_e):
+    """Entry i (ridge area `a`, HLAC lower bound `hl_bound`) against the best E so far.
 
-    status 0: fails pruning; 1: passes both stages, E exact or, when it
-    cannot beat `best_e`, some value above it; 2: cannot beat `best_e`,
-    abandoned before its stage-1 test was decided.
+    Returns (status, E, d, p1, p2).  Status 0: fails pruning; 1: passes
+    both stages, E exact or, when it cannot beat `best_e`, inf; 2: cannot
+    beat `best_e`, abandoned before its stage-1 test was decided.
     """
     limit = th1 if prune else np.inf
     if c3 > 0.0:
-        limit = min(limit, best_e / c3)
+        limit = min(limit, (best_e - hl_bound) / c3)
     p1 = _count_outside_limited(q_ridge, sil_bits[i], limit)
     if prune and p1 > th1:
         return 0, 0.0, 0, p1, 0
     pen = c3 * p1
-    if pen > best_e:
-        return 2, pen, 0, p1, 0
+    if pen + hl_bound > best_e:
+        return 2, np.inf, 0, p1, 0
     p2 = count_outside(ridge_bits[i], q_sil)
-    a = ridge_area[i]
     if prune and p2 > c1 * a * a + c2 * a:
         return 0, 0.0, 0, p1, p2
     pen += c4 * p2
-    if pen > best_e or pen + _distance_bound(q_sums, sums[i]) > best_e:
+    if pen + hl_bound > best_e:
         return 1, np.inf, 0, p1, p2
     d = _hlac_distance(q_hlac, hlac[i], best_e - pen)
     return 1, d + pen, d, p1, p2
 
 
 @njit(cache=True, nogil=True)
-def _best(q_hlac, q_sums, q_sil, q_ridge, q_planes, q_sil_coarse, hlac, sums, sil_bits,
-          ridge_bits, ridge_area, sil_coarse, ridge_coarse, th1, c1, c2, c3, c4, prune, seed, key):
-    """Best entry over the entries that pass pruning (all when `prune` is False).
-
-    Returns (index, E, d, p1, p2, scored survivors); index -1 when none passes.
-    """
-    first = _bounds(q_planes, q_sil_coarse, sil_coarse, ridge_coarse, ridge_area, th1, c1, c2,
-                    c3, c4, prune, key)
-    best_i, best_e, best_d, best_p1, best_p2 = -1, np.inf, 0, 0, 0
-    survivors = 0
-    start = seed if seed >= 0 and key[seed] >= 0.0 else first
-    if start >= 0:
-        st, e, d, p1, p2 = _score(start, q_hlac, q_sums, q_sil, q_ridge, hlac, sums, sil_bits,
-                                  ridge_bits, ridge_area, th1, c1, c2, c3, c4, prune, np.inf)
-        if st == 1:
-            best_i, best_e, best_d, best_p1, best_p2 = start, e, d, p1, p2
-            survivors += 1
-    for i in range(sil_coarse.shape[0]):
-        k = key[i]
-        if k < 0.0 or k > best_e or i == start:
-            continue
-        st, e, d, p1, p2 = _score(i, q_hlac, q_sums, q_sil, q_ridge, hlac, sums, sil_bits,
-                                  ridge_bits, ridge_area, th1, c1, c2, c3, c4, prune, best_e)
-        if st != 1:
-            continue
-        survivors += 1
-        if e < best_e or (e == best_e and i < best_i):
-            best_i, best_e, best_d, best_p1, best_p2 = i, e, d, p1, p2
-    return best_i, best_e, best_d, best_p1, best_p2, survivors
+def _among(u, top, ntop):
+    for t in range(ntop):
+        if top[t] == u:
+            return True
+    return False
 
 
 @njit(cache=True, nogil=True)
-def _search_kernel(q_hlac, q_sums, q_sil, q_ridge, q_area, hlac, sums, sil_bits, ridge_bits,
-                   ridge_area, sil_coarse, ridge_coarse, c, c1, c2, c3, c4, prune, seed, key):
+def _best(q_hlac, q_sil, q_ridge, q_planes, q_sil_coarse, q_proj, q_resid, hlac, sil_bits,
+          ridge_bits, rows, sizes, sil_coarse_t, ridge_coarse_t, ridge_area, proj_t, resid, th1,
+          c1, c2, c3, c4, prune, seed, key, lb, top):
+    """Best distinct row over the rows that pass pruning (all when `prune` is False).
+
+    Returns (row, E, d, p1, p2, scored survivors); row -1 when none passes.
+    """
+    best_u, best_e, best_d, best_p1, best_p2 = -1, np.inf, 0, 0, 0
+    survivors = 0
+    if seed >= 0:
+        st, e, d, p1, p2 = _score(rows[seed], q_hlac, q_sil, q_ridge, hlac, sil_bits, ridge_bits,
+                                  ridge_area[seed], 0.0, th1, c1, c2, c3, c4, prune, np.inf)
+        if st == 1:
+            best_u, best_e, best_d, best_p1, best_p2 = seed, e, d, p1, p2
+            survivors += sizes[seed]
+    ntop = _bounds(q_planes, q_sil_coarse, q_proj, q_resid, sil_coarse_t, ridge_coarse_t,
+                   ridge_area, proj_t, resid, th1, c1, c2, c3, c4, prune, best_e, key, lb, top)
+    for t in range(ntop + rows.shape[0]):
+        # the rows with the smallest bounds first, then every row that may still win
+        u = top[t] if t < ntop else t - ntop
+        if key[u] < 0.0 or lb[u] > best_e or u == seed:
+            continue
+        if t >= ntop and _among(u, top, ntop):
+            continue  # scored already
+        st, e, d, p1, p2 = _score(rows[u], q_hlac, q_sil, q_ridge, hlac, sil_bits, ridge_bits,
+                                  ridge_area[u], lb[u] - key[u], th1, c1, c2, c3, c4, prune,
+                                  best_e)
+        if st != 1:
+            continue
+        survivors += sizes[u]
+        if e < best_e or (e == best_e and u < best_u):
+            best_u, best_e, best_d, best_p1, best_p2 = u, e, d, p1, p2
+    return best_u, best_e, best_d, best_p1, best_p2, survivors
+
+
+@njit(cache=True, nogil=True)
+def _search_kernel(q_hlac, q_sil, q_ridge, q_area, hlac, sil_bits, ridge_bits, rows, sizes,
+                   sil_coarse_t, ridge_coarse_t, ridge_area, mean, basis, proj_t, resid, c, c1, c2,
+                   c3, c4, prune, seed, key, lb, top):
     """Best entry; returns (index, E, d, p1, p2, survivors, fallback)."""
     q_planes = _count_planes(q_ridge)
     q_sil_coarse = _pack_blocks(_block_counts(q_sil) > 0)
-    i, e, d, p1, p2, surv = _best(q_hlac, q_sums, q_sil, q_ridge, q_planes, q_sil_coarse, hlac,
-                                  sums, sil_bits, ridge_bits, ridge_area, sil_coarse,
-                                  ridge_coarse, c * q_area, c1, c2, c3, c4, prune, seed, key)
-    if i >= 0:
-        return i, e, d, p1, p2, surv, False
-    i, e, d, p1, p2, surv = _best(q_hlac, q_sums, q_sil, q_ridge, q_planes, q_sil_coarse, hlac,
-                                  sums, sil_bits, ridge_bits, ridge_area, sil_coarse,
-                                  ridge_coarse, 0.0, c1, c2, c3, c4, False, seed, key)
-    return i, e, d, p1, p2, 0, True
+    q_proj, q_resid = _query_projection(q_hlac, mean, basis)
+    args = (q_hlac, q_sil, q_ridge, q_planes, q_sil_coarse, q_proj, q_resid, hlac, sil_bits,
+            ridge_bits, rows, sizes, sil_coarse_t, ridge_coarse_t, ridge_area, proj_t, resid)
+    u, e, d, p1, p2, surv = _best(*args, c * q_area, c1, c2, c3, c4, prune, seed, key, lb, top)
+    if u >= 0:
+        return rows[u], e, d, p1, p2, surv, False
+    u, e, d, p1, p2, surv = _best(*args, 0.0, c1, c2, c3, c4, False, seed, key, lb, top)
+    return rows[u], e, d, p1, p2, 0, True
 
 
 def _query(features) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
@@ -421,11 +641,14 @@ def search(features, tables: SearchTables, *, options: SearchOptions | None = No
     if not -1 <= s < n:
         raise InvalidInputError(f"seed must be an entry index in [0, {n}), got {seed!r}")
     h, sb, rb, area = _query(features)
-    key = np.empty(n, np.float64)  # per-call scratch (never shared: the search is thread-safe)
+    ix = tables.prepare()
+    u = ix.rows.size
+    key, lb = np.empty(u), np.empty(u)  # per-call scratch (never shared: thread-safe)
     i, e, d, p1, p2, surv, fallback = _search_kernel(
-        h, _block_sums(h[None])[0], sb, rb, area, tables.hlac, tables.block_sums,
-        tables.sil_bits, tables.ridge_bits, tables.ridge_area, tables.sil_coarse,
-        tables.ridge_coarse, opts.c, opts.c1, opts.c2, opts.c3, opts.c4, opts.prune, s, key)
+        h, sb, rb, area, tables.hlac, tables.sil_bits, tables.ridge_bits, ix.rows, ix.sizes,
+        ix.sil_coarse_t, ix.ridge_coarse_t, ix.ridge_area, ix.mean, ix.basis, ix.proj_t, ix.resid,
+        opts.c, opts.c1, opts.c2, opts.c3, opts.c4, opts.prune,
+        -1 if s < 0 else int(ix.group[s]), key, lb, np.empty(_TOP, np.int64))
     return SearchResult(index=int(i), error=float(e), hlac_distance=int(d), p1=int(p1),
                         p2=int(p2), survivors=int(surv), low_confidence=bool(fallback))
 

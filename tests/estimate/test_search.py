@@ -127,3 +127,84 @@ def test_options_and_arguments_are_checked(small_rows):
     f = extract_features(small_rows["silhouette"][0])
     with pytest.raises(InvalidInputError, match="seed"):
         search(f, t, seed=len(t))
+
+
+def _stack(rows, index):
+    return SearchTables.from_arrays(hlac=rows["hlac"][index], sil_bits=rows["sil_bits"][index],
+                                    ridge_bits=rows["ridge_bits"][index],
+                                    ridge_area=rows["ridge_area"][index])
+
+
+def test_repeated_rows_are_searched_once_and_ties_go_to_the_lowest_index(small_rows, query_rows):
+    n = len(small_rows["hlac"])
+    index = np.concatenate([[100], np.arange(n), [5, 17, 100, 5]])  # entry 100 at 0, 101, 243
+    t = _stack(small_rows, index)
+    ix = t.prepare()
+    assert t.prepare() is ix  # built once
+    # every entry maps to a row with equal features, and that row is its group's lowest index
+    same = ((t.hlac[ix.rows[ix.group]] == t.hlac).all(1)
+            & (t.sil_bits[ix.rows[ix.group]] == t.sil_bits).all(1)
+            & (t.ridge_bits[ix.rows[ix.group]] == t.ridge_bits).all(1))
+    assert same.all() and (ix.rows[ix.group] <= np.arange(len(t))).all()
+    assert ix.group[0] == ix.group[101] == ix.group[243] and ix.sizes[ix.group[0]] >= 3
+    assert ix.sizes.sum() == len(t) and np.all(np.diff(ix.rows) > 0)
+    f = extract_features(small_rows["silhouette"][100])
+    for seed in (None, 101, 243, 7):
+        r = search(f, t, seed=seed)
+        assert r.index == 0 and r.error == 0.0 and r == search_reference(f, t)
+    for sil in query_rows["silhouette"][::3]:
+        q = extract_features(sil)
+        for opt in (SearchOptions(), SearchOptions(prune=False)):
+            ref = search_reference(q, t, options=opt)
+            assert search(q, t, options=opt) == ref
+            assert search(q, t, options=opt, seed=244) == ref
+
+
+def test_near_ties_give_the_reference_answer(small_rows, query_rows):
+    # many rows one HLAC count apart: the bounds must keep every candidate that can tie
+    rng = np.random.default_rng(3)
+    base = rng.choice(len(small_rows["hlac"]), 60)
+    hl = small_rows["hlac"][base].astype(np.int16)
+    hl[np.arange(60), rng.integers(0, 1600, 60)] += rng.choice([-1, 1], 60)
+    hl = np.clip(hl, 0, 255).astype(np.uint8)
+    t = SearchTables.from_arrays(
+        hlac=np.vstack([small_rows["hlac"], hl]),
+        sil_bits=np.vstack([small_rows["sil_bits"], small_rows["sil_bits"][base]]),
+        ridge_bits=np.vstack([small_rows["ridge_bits"], small_rows["ridge_bits"][base]]),
+        ridge_area=np.concatenate([small_rows["ridge_area"], small_rows["ridge_area"][base]]))
+    for sil in list(query_rows["silhouette"]) + list(small_rows["silhouette"][base[:8]]):
+        q = extract_features(sil)
+        ref = search_reference(q, t)
+        assert search(q, t) == ref
+        assert search(q, t, seed=int(rng.integers(len(t)))) == ref
+
+
+@pytest.mark.parametrize("kind", ["rendered", "uniform", "extreme"])
+def test_hlac_lower_bound_never_exceeds_the_distance(small_rows, kind):
+    from handsynth.estimate._search import _bounds, _query_projection
+
+    rng = np.random.default_rng(11)
+    if kind == "rendered":
+        hl = small_rows["hlac"]
+    elif kind == "uniform":
+        hl = rng.integers(0, 256, (300, 1600), dtype=np.uint8)
+    else:  # far from the mean in every direction: the largest rounding errors
+        hl = np.where(rng.random((300, 1600)) < 0.5, 0, 255).astype(np.uint8)
+    n = len(hl)
+    t = SearchTables.from_arrays(hlac=hl, sil_bits=np.zeros((n, 64), np.uint64),
+                                 ridge_bits=np.zeros((n, 64), np.uint64), ridge_area=np.zeros(n))
+    ix = t.prepare()
+    queries = np.vstack([hl[:20], rng.integers(0, 256, (20, 1600), dtype=np.uint8),
+                         np.full((1, 1600), 255, np.uint8), np.zeros((1, 1600), np.uint8)])
+    u = ix.rows.size
+    key, lb, top = np.empty(u), np.empty(u), np.empty(8, np.int64)
+    zero4 = np.zeros(4, np.uint64)
+    for q in queries:
+        qp, qr = _query_projection(q, ix.mean, ix.basis)
+        _bounds(np.zeros((5, 4), np.uint64), zero4, qp, qr, ix.sil_coarse_t, ix.ridge_coarse_t,
+                ix.ridge_area, ix.proj_t, ix.resid, 0.0, 0.0, 0.0, 0.0, 0.0, False, np.inf, key,
+                lb, top)
+        d = ((hl[ix.rows].astype(np.int64) - q.astype(np.int64)) ** 2).sum(axis=1)
+        assert np.all(key == 0.0) and np.all(lb <= d)
+        if kind == "rendered":  # and it is tight enough to prune: most rows above half
+            assert np.mean(lb >= 0.5 * d) > 0.5
