@@ -63,10 +63,13 @@ def _parse_list(text: str, option: str) -> tuple[str, ...]:
               help="WIDTHxHEIGHT of database renders [default: the library's].")
 @click.option("--workers", type=int, default=1, show_default=True,
               help="Worker processes for building missing databases.")
+@click.option("--ties", type=click.Choice(["mean", "first"]), default="mean", show_default=True,
+              help="Pose reported when several entries match equally well: their mean, or "
+                   "the first entry's.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress lines.")
 def eval_(db_folder, out_dir, prefix, json_path, json_frames, n_hands, frames, pose_sets, hand,
           conditions, count, db_pose_set, seed, ratio_margin, mount, frame_size, render_size, workers,
-          quiet) -> None:
+          ties, quiet) -> None:
     """Accuracy on synthetic ground truth: standard vs selected database.
 
     Test hands of random off-grid shape are rendered in known poses at the
@@ -82,7 +85,8 @@ def eval_(db_folder, out_dir, prefix, json_path, json_frames, n_hands, frames, p
         hand=hand, conditions=_parse_list(conditions, "--conditions"), count=count,
         db_pose_set=db_pose_set,
         render_size=_parse_size(render_size, "--render-size") if render_size else None,
-        mount=mount, frame_size=_parse_size(frame_size, "--frame-size"), workers=workers)
+        mount=mount, frame_size=_parse_size(frame_size, "--frame-size"), workers=workers,
+        ties=ties)
     say = None if quiet else (lambda line: click.echo(line, err=True))
     report = evaluate(options, progress=say)
     click.echo(report.format())

@@ -205,6 +205,9 @@ class EvalOptions:
     workers : int
         Worker processes for building missing databases.
     side : {"right", "left"}
+    ties : {"mean", "first"}
+        What the lookups report when several entries match equally well
+        (:class:`PoseLookup`'s `ties`).
 
     Raises
     ------
@@ -230,6 +233,7 @@ class EvalOptions:
     frame_size: tuple[int, int] = (720, 480)
     workers: int = 1
     side: str = "right"
+    ties: str = "mean"
 
     def __post_init__(self) -> None:
         from ..models import POSE_SETS
@@ -289,6 +293,8 @@ class EvalOptions:
                 f"EvalOptions.mount must be one of {tuple(_MOUNTS)}, got {self.mount!r}")
         if self.side not in ("right", "left"):
             raise InvalidInputError(f"EvalOptions.side must be 'right' or 'left', got {self.side!r}")
+        if self.ties not in ("mean", "first"):
+            raise InvalidInputError(f"EvalOptions.ties must be 'mean' or 'first', got {self.ties!r}")
 
     def camera(self) -> CameraMount:
         """The :class:`CameraMount` of the `mount` preset."""
@@ -986,8 +992,8 @@ def _plot_joint_mae(report: EvalReport, path: Path) -> Path:
 class _Lookups:
     """Opened databases by grid shape, the few most recent kept in memory."""
 
-    def __init__(self, paths: dict, keep: int = 4) -> None:
-        self.paths, self.keep = paths, keep
+    def __init__(self, paths: dict, *, ties: str, keep: int = 4) -> None:
+        self.paths, self.keep, self.ties = paths, keep, ties
         self._open: OrderedDict[str, PoseLookup] = OrderedDict()
         self.ambiguity: dict[str, dict] = {}
 
@@ -1001,7 +1007,7 @@ class _Lookups:
         db = open_database(self.paths[name])
         if name not in self.ambiguity:
             self.ambiguity[name] = silhouette_ambiguity(db)
-        lookup = PoseLookup(db, temporal=False)
+        lookup = PoseLookup(db, temporal=False, ties=self.ties)
         self._open[name] = lookup
         while len(self._open) > self.keep:
             self._open.popitem(last=False)
@@ -1073,7 +1079,8 @@ def evaluate(options: EvalOptions, *,
     timing["build"] = time.perf_counter() - t
     say(f"databases: {len(summary.built)} built, {len(summary.skipped)} verified and kept "
         f"({timing['build']:.1f} s)")
-    lookups = _Lookups({n: database_path(options.db_folder, s) for n, s in needed.items()})
+    lookups = _Lookups({n: database_path(options.db_folder, s) for n, s in needed.items()},
+                       ties=options.ties)
 
     conds = options.conditions
     rec = {k: {c: [] for c in conds}

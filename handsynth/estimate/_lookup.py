@@ -94,6 +94,15 @@ class PoseLookup:
         The previous answer is the only state; it is a plain int, so sharing
         one instance between threads stays safe (each thread may seed from
         another thread's last answer, which changes no result).
+    ties : {"mean", "first"}, keyword-only
+        What to report when several entries match equally well (the same
+        smallest ``E``: mostly entries whose features are identical because
+        a finger is folded out of the camera's view).  ``"mean"``
+        (default): the mean of their angles and keypoints, the answer with
+        the smallest expected error when each is equally likely;
+        ``"first"``: the first entry's, as a plain reading of the paper.
+        ``entry`` is the first either way.  The approximate index tracks no
+        ties (its answers are always ``"first"``).
     approximate : ApproximateIndex, ApproximateOptions or bool, keyword-only, optional
         Search with the approximate (IVF) index instead of the exact search
         (for databases of 10^5-10^6 entries; see
@@ -109,7 +118,7 @@ class PoseLookup:
     """
 
     def __init__(self, database: Database, *, options: SearchOptions | None = None,
-                 temporal: bool = True, approximate=None) -> None:
+                 temporal: bool = True, ties: str = "mean", approximate=None) -> None:
         if not isinstance(database, Database):
             raise InvalidInputError(
                 f"database must be a handsynth.db.Database, got {type(database).__name__}")
@@ -117,8 +126,11 @@ class PoseLookup:
             raise InvalidInputError(
                 f"options must be SearchOptions, got {type(options).__name__}")
         self.database = database
+        if ties not in ("mean", "first"):
+            raise InvalidInputError(f"ties must be 'mean' or 'first', got {ties!r}")
         self.options = options or SearchOptions()
         self.temporal = bool(temporal)
+        self.ties = ties
         meta = database.meta
         try:
             self.mount = CameraMount(**meta["mount"])
@@ -170,7 +182,7 @@ class PoseLookup:
         selection : SelectionOptions, keyword-only, optional
             Options of the selection from `measurements`.
         **kwargs
-            Passed to :class:`PoseLookup` (``options``, ``temporal``,
+            Passed to :class:`PoseLookup` (``options``, ``temporal``, ``ties``,
             ``approximate``).
 
         Raises
@@ -260,7 +272,12 @@ class PoseLookup:
         conf = float(np.exp(-r.error / scale)) if scale > 0 else float(r.error == 0)
         if r.low_confidence:
             conf *= 0.5
-        return PoseEstimate(angles=self._angles[r.index].copy(),
-                            keypoints=self.database.keypoints_m(r.index), confidence=conf,
+        tied = r.tied if self.ties == "mean" and r.tied is not None else None
+        if tied is None or tied.size == 1:
+            angles, keypoints = self._angles[r.index].copy(), self.database.keypoints_m(r.index)
+        else:
+            angles = self._angles[tied].mean(axis=0)
+            keypoints = self.database.keypoints_m(tied).mean(axis=0)
+        return PoseEstimate(angles=angles, keypoints=keypoints, confidence=conf,
                             entry=r.index, error=r.error, low_confidence=r.low_confidence,
                             no_hand=False)

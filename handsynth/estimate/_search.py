@@ -140,6 +140,14 @@ class SearchResult:
     low_confidence : bool
         ``True`` when pruning left nothing and the answer is the best ``E``
         over all entries.
+    tied : ndarray of int64, shape (M,), or None
+        Every entry (among those that passed pruning, or all in the
+        fallback) whose ``E`` equals `error`, ascending; ``index`` is the
+        first.  Usually entries with the same features as ``index`` (a
+        finger folded out of the camera's view); their angles differ, so
+        :class:`~handsynth.estimate.PoseLookup` can report their mean.
+        ``None`` where the search does not track ties (the approximate
+        index).  Not compared by ``==``.
     """
 
     index: int
@@ -149,6 +157,7 @@ class SearchResult:
     p2: int
     survivors: int = field(compare=False)  # diagnostic: not part of the answer
     low_confidence: bool
+    tied: np.ndarray | None = field(default=None, compare=False, repr=False)
 
 
 @dataclass(frozen=True, eq=False)
@@ -218,6 +227,9 @@ class _ExactIndex:
         Distinct row of each entry.
     sizes : ndarray of int64, shape (U,)
         Entries per distinct row.
+    members, starts : ndarray of int64, shapes (N,) and (U + 1,)
+        The entries of row ``u`` are ``members[starts[u]:starts[u + 1]]``,
+        ascending.
     sil_coarse_t, ridge_coarse_t : ndarray of uint64, shape (4, U)
         Masks at 4x4-block resolution, block ``k = 16 * row + col`` at bit
         ``k % 64`` of word ``k // 64`` (word first: column-major).
@@ -234,6 +246,8 @@ class _ExactIndex:
     rows: np.ndarray
     group: np.ndarray
     sizes: np.ndarray
+    members: np.ndarray
+    starts: np.ndarray
     sil_coarse_t: np.ndarray
     ridge_coarse_t: np.ndarray
     ridge_area: np.ndarray
@@ -253,7 +267,9 @@ class _ExactIndex:
         group = (np.cumsum(is_row) - 1)[first]
         mean, basis = _hlac_basis(tables.hlac, rows)
         proj, resid = _project_rows(tables.hlac, rows, mean, basis)
-        out = cls(rows=rows, group=group, sizes=np.bincount(group, minlength=rows.size),
+        sizes = np.bincount(group, minlength=rows.size)
+        out = cls(rows=rows, group=group, sizes=sizes, members=np.argsort(group, kind="stable"),
+                  starts=np.concatenate([[0], np.cumsum(sizes)]),
                   sil_coarse_t=_coarse_presence_rows(tables.sil_bits, rows).T.copy(),
                   ridge_coarse_t=_coarse_presence_rows(tables.ridge_bits, rows).T.copy(),
                   ridge_area=np.ascontiguousarray(tables.ridge_area[rows]), mean=mean,
@@ -262,6 +278,14 @@ class _ExactIndex:
         for f in fields(out):
             getattr(out, f.name).setflags(write=False)
         return out
+
+    def entries_of(self, rows: np.ndarray) -> np.ndarray:
+        """All entries of distinct rows `rows` (positions in the row list), ascending."""
+        if rows.size == 1:
+            u = rows[0]
+            return self.members[self.starts[u]:self.starts[u + 1]].copy()
+        return np.sort(np.concatenate([self.members[self.starts[u]:self.starts[u + 1]]
+                                       for u in rows]))
 
 
 @njit(cache=True, nogil=True)
@@ -552,19 +576,24 @@ def _among(u, top, ntop):
 @njit(cache=True, nogil=True)
 def _best(q_hlac, q_sil, q_ridge, q_planes, q_sil_coarse, q_proj, q_resid, hlac, sil_bits,
           ridge_bits, rows, sizes, sil_coarse_t, ridge_coarse_t, ridge_area, proj_t, resid, th1,
-          c1, c2, c3, c4, prune, seed, key, lb, top):
+          c1, c2, c3, c4, prune, seed, key, lb, top, ties):
     """Best distinct row over the rows that pass pruning (all when `prune` is False).
 
-    Returns (row, E, d, p1, p2, scored survivors); row -1 when none passes.
+    Returns (row, E, d, p1, p2, scored survivors, number of tied rows); row
+    -1 when none passes.  ``ties[:n]`` receives the rows whose E equals the
+    best (the best row among them), in no particular order.
     """
     best_u, best_e, best_d, best_p1, best_p2 = -1, np.inf, 0, 0, 0
     survivors = 0
+    nties = 0
     if seed >= 0:
         st, e, d, p1, p2 = _score(rows[seed], q_hlac, q_sil, q_ridge, hlac, sil_bits, ridge_bits,
                                   ridge_area[seed], 0.0, th1, c1, c2, c3, c4, prune, np.inf)
         if st == 1:
             best_u, best_e, best_d, best_p1, best_p2 = seed, e, d, p1, p2
             survivors += sizes[seed]
+            ties[0] = seed
+            nties = 1
     ntop = _bounds(q_planes, q_sil_coarse, q_proj, q_resid, sil_coarse_t, ridge_coarse_t,
                    ridge_area, proj_t, resid, th1, c1, c2, c3, c4, prune, best_e, key, lb, top)
     for t in range(ntop + rows.shape[0]):
@@ -580,26 +609,34 @@ def _best(q_hlac, q_sil, q_ridge, q_planes, q_sil_coarse, q_proj, q_resid, hlac,
         if st != 1:
             continue
         survivors += sizes[u]
-        if e < best_e or (e == best_e and u < best_u):
+        if e < best_e:
             best_u, best_e, best_d, best_p1, best_p2 = u, e, d, p1, p2
-    return best_u, best_e, best_d, best_p1, best_p2, survivors
+            ties[0] = u
+            nties = 1
+        elif e == best_e:  # E is exact here: early exits only drop rows above best_e
+            ties[nties] = u
+            nties += 1
+            if u < best_u:
+                best_u, best_d, best_p1, best_p2 = u, d, p1, p2
+    return best_u, best_e, best_d, best_p1, best_p2, survivors, nties
 
 
 @njit(cache=True, nogil=True)
 def _search_kernel(q_hlac, q_sil, q_ridge, q_area, hlac, sil_bits, ridge_bits, rows, sizes,
                    sil_coarse_t, ridge_coarse_t, ridge_area, mean, basis, proj_t, resid, c, c1, c2,
-                   c3, c4, prune, seed, key, lb, top):
-    """Best entry; returns (index, E, d, p1, p2, survivors, fallback)."""
+                   c3, c4, prune, seed, key, lb, top, ties):
+    """Best entry; returns (index, E, d, p1, p2, survivors, fallback, tied rows)."""
     q_planes = _count_planes(q_ridge)
     q_sil_coarse = _pack_blocks(_block_counts(q_sil) > 0)
     q_proj, q_resid = _query_projection(q_hlac, mean, basis)
     args = (q_hlac, q_sil, q_ridge, q_planes, q_sil_coarse, q_proj, q_resid, hlac, sil_bits,
             ridge_bits, rows, sizes, sil_coarse_t, ridge_coarse_t, ridge_area, proj_t, resid)
-    u, e, d, p1, p2, surv = _best(*args, c * q_area, c1, c2, c3, c4, prune, seed, key, lb, top)
+    u, e, d, p1, p2, surv, nt = _best(*args, c * q_area, c1, c2, c3, c4, prune, seed, key, lb,
+                                      top, ties)
     if u >= 0:
-        return rows[u], e, d, p1, p2, surv, False
-    u, e, d, p1, p2, surv = _best(*args, 0.0, c1, c2, c3, c4, False, seed, key, lb, top)
-    return rows[u], e, d, p1, p2, 0, True
+        return rows[u], e, d, p1, p2, surv, False, nt
+    u, e, d, p1, p2, surv, nt = _best(*args, 0.0, c1, c2, c3, c4, False, seed, key, lb, top, ties)
+    return rows[u], e, d, p1, p2, 0, True, nt
 
 
 def _query(features) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
@@ -643,14 +680,15 @@ def search(features, tables: SearchTables, *, options: SearchOptions | None = No
     h, sb, rb, area = _query(features)
     ix = tables.prepare()
     u = ix.rows.size
-    key, lb = np.empty(u), np.empty(u)  # per-call scratch (never shared: thread-safe)
-    i, e, d, p1, p2, surv, fallback = _search_kernel(
+    key, lb, ties = np.empty(u), np.empty(u), np.empty(u, np.int64)  # per-call scratch
+    i, e, d, p1, p2, surv, fallback, nt = _search_kernel(
         h, sb, rb, area, tables.hlac, tables.sil_bits, tables.ridge_bits, ix.rows, ix.sizes,
         ix.sil_coarse_t, ix.ridge_coarse_t, ix.ridge_area, ix.mean, ix.basis, ix.proj_t, ix.resid,
         opts.c, opts.c1, opts.c2, opts.c3, opts.c4, opts.prune,
-        -1 if s < 0 else int(ix.group[s]), key, lb, np.empty(_TOP, np.int64))
+        -1 if s < 0 else int(ix.group[s]), key, lb, np.empty(_TOP, np.int64), ties)
     return SearchResult(index=int(i), error=float(e), hlac_distance=int(d), p1=int(p1),
-                        p2=int(p2), survivors=int(surv), low_confidence=bool(fallback))
+                        p2=int(p2), survivors=int(surv), low_confidence=bool(fallback),
+                        tied=ix.entries_of(ties[:nt]))
 
 
 def search_reference(features, tables: SearchTables, *,
@@ -675,4 +713,4 @@ def search_reference(features, tables: SearchTables, *,
     i = int(np.flatnonzero(pool)[np.argmin(e[pool])])
     return SearchResult(index=i, error=float(e[i]), hlac_distance=int(d[i]), p1=int(p1[i]),
                         p2=int(p2[i]), survivors=0 if fallback else int(keep.sum()),
-                        low_confidence=fallback)
+                        low_confidence=fallback, tied=np.flatnonzero(pool & (e == e[i])))

@@ -26,7 +26,8 @@ def test_top_level_export_and_protocol(lookup):
     assert isinstance(lookup, PoseEstimator)
 
 
-def test_frame_rendered_from_an_entry_returns_that_entry(lookup, small_rows):
+def test_frame_rendered_from_an_entry_returns_that_entry(db_folder, small_rows):
+    lookup = PoseLookup.open(db_folder, shape=HandShape(length=1.02, thumb=0.97), ties="first")
     r = SilhouetteRenderer(HandShape(), CameraMount(), width_px=RENDER_SIZE[0],
                            height_px=RENDER_SIZE[1])
     for i in (3, 50, 200):
@@ -91,6 +92,28 @@ def test_in_memory_rows(small_rows):
     r = SilhouetteRenderer(width_px=RENDER_SIZE[0], height_px=RENDER_SIZE[1])
     est = lk.estimate(r.mask(small_rows["angles"][9]))
     assert est.error == 0.0 and not est.low_confidence
+
+
+def test_equally_good_entries_report_their_mean_pose(small_rows):
+    # entry 9 repeated twice with other angles: the three match the frame equally well
+    index = np.concatenate([np.arange(len(small_rows["angles"])), [9, 9]])
+    rows = {k: np.asarray(v)[index] for k, v in small_rows.items()}
+    rows["angles"] = rows["angles"].copy()
+    rows["angles"][-2:] += np.float32([[10.0], [-4.0]])
+    r = SilhouetteRenderer(width_px=RENDER_SIZE[0], height_px=RENDER_SIZE[1])
+    mask = r.mask(small_rows["angles"][9])
+    mean = PoseLookup.from_rows(rows).estimate(mask)
+    first = PoseLookup.from_rows(rows, ties="first").estimate(mask)
+    assert mean.entry == first.entry == 9 and mean.error == 0.0
+    np.testing.assert_allclose(first.angles, rows["angles"][9])
+    same = np.flatnonzero((rows["hlac"] == rows["hlac"][9]).all(1)
+                          & (rows["sil_bits"] == rows["sil_bits"][9]).all(1)
+                          & (rows["ridge_bits"] == rows["ridge_bits"][9]).all(1))
+    assert {9, len(index) - 2, len(index) - 1} <= set(same.tolist())
+    np.testing.assert_allclose(mean.angles, rows["angles"][same].mean(axis=0), atol=1e-4)
+    assert not np.allclose(mean.angles, first.angles)
+    with pytest.raises(InvalidInputError, match="ties"):
+        PoseLookup.from_rows(rows, ties="median")
 
 
 def test_approximate_lookup_probing_every_cell_equals_exact(db_folder, query_rows):

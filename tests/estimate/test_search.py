@@ -98,6 +98,7 @@ def test_fast_search_equals_reference_on_rendered_frames(small_rows, query_rows)
             fast, ref = search(f, t, options=opt), search_reference(f, t, options=opt)
             # the fast search counts only the survivors it had to score
             assert fast == ref  # survivors are not compared
+            assert np.array_equal(fast.tied, ref.tied) and fast.tied[0] == fast.index
             assert 0 <= fast.survivors <= ref.survivors
             assert (fast.survivors > 0) == (ref.survivors > 0)
             low += fast.low_confidence
@@ -152,6 +153,8 @@ def test_repeated_rows_are_searched_once_and_ties_go_to_the_lowest_index(small_r
     for seed in (None, 101, 243, 7):
         r = search(f, t, seed=seed)
         assert r.index == 0 and r.error == 0.0 and r == search_reference(f, t)
+        assert np.array_equal(r.tied, search_reference(f, t).tied)
+        assert {0, 101, 243} <= set(r.tied.tolist())
     for sil in query_rows["silhouette"][::3]:
         q = extract_features(sil)
         for opt in (SearchOptions(), SearchOptions(prune=False)):
@@ -175,8 +178,9 @@ def test_near_ties_give_the_reference_answer(small_rows, query_rows):
     for sil in list(query_rows["silhouette"]) + list(small_rows["silhouette"][base[:8]]):
         q = extract_features(sil)
         ref = search_reference(q, t)
-        assert search(q, t) == ref
-        assert search(q, t, seed=int(rng.integers(len(t)))) == ref
+        for seed in (None, int(rng.integers(len(t)))):
+            r = search(q, t, seed=seed)
+            assert r == ref and np.array_equal(r.tied, ref.tied)
 
 
 @pytest.mark.parametrize("kind", ["rendered", "uniform", "extreme"])
