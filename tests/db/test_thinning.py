@@ -139,3 +139,127 @@ def test_empty_and_full():
 def test_rejects_wrong_shape():
     with pytest.raises(InvalidInputError, match=r"silhouette.*\(64, 64, 3\)"):
         hilditch_thinning(np.zeros((64, 64, 3), bool))
+
+
+# --- The fast thinning gives exactly the reference's result -----------------
+
+
+def thin_both(sil):
+    """Ridge lines of `sil` by the fast `_thin_into` and by the reference."""
+    from handsynth.db._thinning import _DC, _DR, _thin_into, _thin_into_reference
+
+    sil = np.ascontiguousarray(sil, dtype=bool)
+    results = []
+    for thin in (_thin_into, _thin_into_reference):
+        out = np.empty_like(sil)
+        work = np.empty((sil.shape[0] + 2, sil.shape[1] + 2), np.int8)
+        thin(sil, out, work, _DR, _DC)
+        results.append(out)
+    return results
+
+
+def assert_same_as_reference(sil, msg=""):
+    fast, reference = thin_both(sil)
+    np.testing.assert_array_equal(fast, reference, err_msg=msg)
+
+
+def special_images(h, w):
+    """Lines, checkerboards, border pixels and isolated pixels on an (h, w) image."""
+    yy, xx = np.mgrid[:h, :w]
+    images = {
+        "empty": np.zeros((h, w), bool),
+        "full": np.ones((h, w), bool),
+        "checkerboard": (yy + xx) % 2 == 0,
+        "checkerboard_2x2": (yy // 2 + xx // 2) % 2 == 0,
+        "stripes_1px": yy % 2 == 0,
+        "stripes_2px": yy % 4 < 2,
+        "columns_2px": xx % 3 < 2,
+        "border_frame": (yy == 0) | (yy == h - 1) | (xx == 0) | (xx == w - 1),
+        "border_frame_2px": (yy < 2) | (yy >= h - 2) | (xx < 2) | (xx >= w - 2),
+        "corners": ((yy == 0) | (yy == h - 1)) & ((xx == 0) | (xx == w - 1)),
+        "isolated": (yy % 3 == 1) & (xx % 4 == 2),
+        "diagonal_1px": yy == xx,
+        "diagonal_2px": (xx - yy >= 0) & (xx - yy < 2),
+        "anti_diagonal_2px": (xx + yy >= w // 2) & (xx + yy < w // 2 + 2),
+        "full_minus_centre": (yy != h // 2) | (xx != w // 2),
+    }
+    cross = np.zeros((h, w), bool)
+    cross[h // 2 : h // 2 + 2, :] = True
+    cross[:, w // 2 : w // 2 + 2] = True
+    images["cross_2px"] = cross
+    return images
+
+
+@pytest.mark.parametrize(
+    "h, w", [(64, 64), (1, 1), (1, 64), (64, 1), (2, 2), (3, 7), (17, 64), (64, 40), (40, 63), (5, 33)]
+)
+def test_fast_thinning_matches_reference_on_special_images(h, w):
+    for name, sil in special_images(h, w).items():
+        assert_same_as_reference(sil, f"{name} {h}x{w}")
+
+
+@pytest.mark.parametrize("density", [0.05, 0.2, 0.4, 0.5, 0.6, 0.8, 0.95])
+def test_fast_thinning_matches_reference_on_noise(density):
+    rng = np.random.default_rng(int(density * 100))
+    for h, w in [(64, 64)] * 20 + [(7, 64), (64, 9), (33, 50), (3, 3), (1, 20), (20, 1)]:
+        sil = rng.random((h, w)) < density
+        assert_same_as_reference(sil, f"{h}x{w}")
+
+
+@pytest.mark.parametrize("sigma", [0.7, 1.5, 3.0, 6.0])
+def test_fast_thinning_matches_reference_on_blobs(sigma):
+    rng = np.random.default_rng(int(sigma * 10))
+    for i in range(25):
+        h, w = (64, 64) if i < 18 else tuple(int(n) for n in rng.integers(2, 65, 2))
+        field = ndimage.gaussian_filter(rng.standard_normal((h, w)), sigma)
+        sil = field > rng.uniform(-1.0, 1.0) * field.std()
+        if i % 3 == 0:  # speckle: isolated pixels and pinholes
+            sil ^= rng.random((h, w)) < 0.02
+        assert_same_as_reference(sil, f"{i} {h}x{w}")
+
+
+def test_fast_thinning_matches_reference_on_rectangles_and_lines():
+    # Overlapping bars of width 1..6 and 1-px lines, many touching the border.
+    rng = np.random.default_rng(7)
+    for i in range(200):
+        sil = np.zeros((64, 64), bool)
+        for _ in range(rng.integers(1, 8)):
+            r0, c0 = rng.integers(-4, 64, 2)
+            height, width = rng.integers(1, 7), rng.integers(1, 64)
+            if rng.random() < 0.5:
+                height, width = width, height
+            sil[max(r0, 0) : r0 + height, max(c0, 0) : c0 + width] = True
+        assert_same_as_reference(sil, str(i))
+
+
+def test_fast_thinning_matches_reference_on_test_shapes(shapes):
+    for name, sil in shapes.items():
+        assert_same_as_reference(sil, name)
+        assert_same_as_reference(sil.T, name + " transposed")
+        assert_same_as_reference(sil[::-1, ::-1], name + " rotated")
+        np.testing.assert_array_equal(hilditch_thinning(sil), thin_both(sil)[1], err_msg=name)
+
+
+@pytest.fixture(scope="module")
+def hand_silhouettes():
+    from handsynth.db import render_entries
+    from handsynth.models import paper_pose_set
+
+    return render_entries(paper_pose_set(24, seed=11), render_size=(180, 120))["silhouette"]
+
+
+def test_fast_thinning_matches_reference_on_rendered_hands(hand_silhouettes):
+    assert hand_silhouettes.sum(axis=(1, 2)).min() > 200
+    for i, sil in enumerate(hand_silhouettes):
+        assert_same_as_reference(sil, str(i))
+        np.testing.assert_array_equal(hilditch_thinning(sil), thin_both(sil)[1], err_msg=str(i))
+
+
+def test_wide_images_fall_back_to_the_reference():
+    from handsynth.db._thinning import _thin
+
+    rng = np.random.default_rng(3)
+    field = ndimage.gaussian_filter(rng.standard_normal((40, 100)), 2.0)
+    sil = field > 0
+    np.testing.assert_array_equal(_thin(sil), thin_both(sil)[1])
+    assert_same_as_reference(sil)
