@@ -99,7 +99,6 @@ from ._search import (
     SearchOptions,
     SearchResult,
     SearchTables,
-    _count_outside_limited,
     _hlac_distance,
     _query,
 )
@@ -332,14 +331,10 @@ def _score(i, best_e, q_hlac, q_sil, q_ridge, th1, hlac, sil_bits, ridge_bits, r
 
     Status -1: pruned; 0: survives but cannot beat `best_e`; 1: survives
     with ``E = d + C3 p1 + C4 p2 <= best_e``; 2: cannot beat `best_e`
-    (its P1 penalty alone exceeds it), stage 1 not decided.  P1 is counted
-    with the exact search's abandoning popcount, the HLAC distance last
-    with early exit.
+    (its P1 penalty alone exceeds it), stage 2 not decided.  The HLAC
+    distance comes last, with early exit.
     """
-    limit = th1 if prune else np.inf
-    if c3 > 0.0:
-        limit = min(limit, best_e / c3)
-    p1 = _count_outside_limited(q_ridge, sil_bits[i], limit)
+    p1 = count_outside(q_ridge, sil_bits[i])
     if prune and p1 > th1:
         return -1, p1, 0, 0
     pen = c3 * p1
