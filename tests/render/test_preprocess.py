@@ -104,3 +104,140 @@ def test_crop_resize_area_rule():
     bar[4:6, 0:10] = True
     s = crop_resize(bar, size=8)
     np.testing.assert_array_equal(np.flatnonzero(s.any(axis=1)), [3, 4])
+
+
+# ---- binarization of uint8 frames (step 1): exact grey levels, Otsu on the sample
+
+def _bright_hand_frame(mask, rng):
+    """The mask as a camera frame: skin-coloured hand on a dark background, with noise."""
+    img = np.where(mask[..., None], np.uint8([120, 160, 210]), np.uint8([15, 20, 25]))
+    return np.ascontiguousarray(img + rng.integers(0, 12, img.shape, dtype=np.uint8))
+
+
+def test_grey_levels_are_opencvs_bgr2gray_for_every_colour():
+    import cv2
+
+    from handsynth.render import binarize
+
+    colours = np.arange(1 << 24, dtype=np.uint32).view(np.uint8).reshape(4096, 4096, 4)
+    frame = np.ascontiguousarray(colours[..., :3])  # every (B, G, R) once
+    grey = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+    for t in (0, 31, 32, 127, 128, 200, 254):
+        np.testing.assert_array_equal(binarize(frame, threshold=t), grey > t)
+
+
+def _bimodal_frames():
+    rng = np.random.default_rng(11)
+    out = []
+    for h, w, frac, fg, bg, noise in [(480, 720, 0.35, (120, 160, 210), (15, 20, 25), 12),
+                                      (37, 53, 0.5, (200, 200, 200), (30, 40, 50), 40),
+                                      (100, 129, 0.1, (90, 130, 200), (60, 60, 60), 25),
+                                      (64, 64, 0.8, (250, 240, 230), (0, 0, 0), 5)]:
+        yy, xx = np.mgrid[0:h, 0:w]
+        blob = (yy - h / 2) ** 2 / h ** 2 + (xx - w / 3) ** 2 / w ** 2 < frac / 3
+        img = np.where(blob[..., None], np.uint8(fg), np.uint8(bg)).astype(np.int16)
+        img += rng.integers(-noise // 2, noise // 2 + 1, img.shape).astype(np.int16)
+        out.append(np.clip(img, 0, 255).astype(np.uint8))
+    # overlapping modes: full image, this sample and a shifted one give different thresholds
+    g = np.where(rng.random((90, 131)) < 0.4, rng.normal(150, 30, (90, 131)),
+                 rng.normal(80, 30, (90, 131)))
+    out.append(np.repeat(np.clip(g, 0, 255).astype(np.uint8)[..., None], 3, axis=2))
+    return out
+
+
+@pytest.mark.parametrize("k", range(5))
+@pytest.mark.parametrize("grey_input", [False, True])
+def test_sampled_otsu_threshold_is_opencvs_otsu_on_the_sample(k, grey_input):
+    import cv2
+
+    from handsynth.render import binarize
+    from handsynth.render._preprocess import OTSU_STEP, otsu_threshold
+
+    frame = _bimodal_frames()[k]
+    grey = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+    sample = np.ascontiguousarray(grey[::OTSU_STEP, ::OTSU_STEP])
+    expected, _ = cv2.threshold(sample, 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
+    t = otsu_threshold(grey if grey_input else frame)
+    assert t == int(expected)
+    assert 0 < t < 255
+    # (the whole image's Otsu threshold differs for some of these: the sample defines it)
+    np.testing.assert_array_equal(binarize(grey if grey_input else frame), grey > t)
+
+
+def test_otsu_of_a_uniform_histogram_is_opencvs_and_the_frame_is_empty():
+    import cv2
+
+    from handsynth.render import binarize
+    from handsynth.render._preprocess import otsu_threshold
+    from handsynth.render._runs import _grey_histogram, _otsu
+
+    for level in (0, 77, 255):
+        frame = np.full((48, 72, 3), level, np.uint8)
+        grey = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+        hist = _grey_histogram(frame.reshape(-1), 48, 72, 3)
+        cv_t, _ = cv2.threshold(grey[::4, ::4].copy(), 0, 255,
+                                cv2.THRESH_BINARY + cv2.THRESH_OTSU)
+        assert _otsu(hist) == int(cv_t)
+        assert otsu_threshold(frame) == -1  # no hand: all samples at one level
+        assert not binarize(frame).any()
+        assert not preprocess(frame).any()
+        assert not preprocess(frame[..., 0].copy()).any()
+
+
+def test_bright_hand_on_dark_frame_gives_the_silhouette_of_its_mask():
+    import cv2
+
+    from handsynth.models import paper_pose_set
+    from handsynth.render import binarize, preprocess_reference
+
+    r = SilhouetteRenderer(width_px=360, height_px=240)
+    rng = np.random.default_rng(4)
+    for pose in [named_pose("spread"), named_pose("fist"), *paper_pose_set(4, seed=1)]:
+        mask = r.mask(pose)
+        frame = _bright_hand_frame(mask, rng)
+        np.testing.assert_array_equal(binarize(frame), mask)
+        expected = preprocess(mask, r.mount)
+        np.testing.assert_array_equal(preprocess(frame, r.mount), expected)
+        np.testing.assert_array_equal(preprocess_reference(frame, r.mount), expected)
+        grey = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+        np.testing.assert_array_equal(preprocess(grey, r.mount), expected)
+
+
+def test_fixed_threshold_keyword():
+    import cv2
+
+    from handsynth.render import binarize, preprocess_reference
+
+    rng = np.random.default_rng(5)
+    frame = rng.integers(0, 256, (60, 90, 3), dtype=np.uint8)
+    grey = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+    for t in (-1, 0, 100, 254, 255):
+        np.testing.assert_array_equal(binarize(frame, threshold=t), grey > t)
+        np.testing.assert_array_equal(binarize(grey, threshold=t), grey > t)
+        for mount in (NO_CUT, CameraMount()):
+            expected = preprocess(grey > t, mount)
+            np.testing.assert_array_equal(preprocess(frame, mount, threshold=t), expected)
+            np.testing.assert_array_equal(preprocess(grey, mount, threshold=t), expected)
+            np.testing.assert_array_equal(preprocess_reference(frame, mount, threshold=t),
+                                          expected)
+    assert binarize(frame, threshold=-7).all() and not binarize(frame, threshold=300).any()
+    flat = np.full((40, 40), 200, np.uint8)  # a fixed threshold skips the no-hand rule
+    assert binarize(flat, threshold=100).all() and not binarize(flat).any()
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_fast_preprocess_equals_the_reference_on_random_frames(seed):
+    from handsynth.render import preprocess_reference
+
+    rng = np.random.default_rng(100 + seed)
+    for i in range(40):
+        h, w = rng.integers(8, 120, size=2)
+        blocks = rng.integers(0, 256, (h // 4 + 1, w // 4 + 1, 3), dtype=np.uint8)
+        frame = np.ascontiguousarray(np.repeat(np.repeat(blocks, 4, 0), 4, 1)[:h, :w])
+        frame = frame if i % 2 else np.ascontiguousarray(frame[..., 1])
+        mount = (NO_CUT, CameraMount(), CameraMount.whole_hand())[i % 3]
+        side = ("right", "left")[i % 2]
+        for size in (8, 64):
+            np.testing.assert_array_equal(preprocess(frame, mount, side=side, size=size),
+                                          preprocess_reference(frame, mount, side=side,
+                                                               size=size))
