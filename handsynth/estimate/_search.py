@@ -73,6 +73,7 @@ _BASIS_DIMS = 16  # principal directions of the HLAC bound
 _BASIS_SAMPLE = 4096  # distinct rows used to find them
 _BOUND_MARGIN = 1e-2  # relative margin of the float32 HLAC bound
 _TOP = 8  # rows scored first, by smallest bound
+_COMPACT_MAX_BYTES = 512 * 2**20  # largest compact copy of the distinct rows
 
 
 @dataclass(frozen=True)
@@ -184,6 +185,7 @@ class SearchTables:
     ridge_area: np.ndarray
     _index: list = field(default_factory=list, repr=False)
     _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
+    _scratch: threading.local = field(default_factory=threading.local, repr=False)
 
     @classmethod
     def from_arrays(cls, *, hlac, sil_bits, ridge_bits, ridge_area) -> SearchTables:
@@ -206,6 +208,16 @@ class SearchTables:
     def __len__(self) -> int:
         return self.hlac.shape[0]
 
+    def _buffers(self, n: int) -> tuple[np.ndarray, ...]:
+        """Scratch arrays of one search, reused by each thread (allocating them per call
+        costs page faults of the order of the search itself)."""
+        bufs = getattr(self._scratch, "bufs", None)
+        if bufs is None or bufs[0].size != n:
+            bufs = (np.empty(n), np.empty(n), np.empty(n, np.int64), np.empty(_TOP, np.int64),
+                    np.empty(n, np.int32), np.empty(n, np.int32), np.empty(n, np.float32))
+            self._scratch.bufs = bufs
+        return bufs
+
     def prepare(self) -> _ExactIndex:
         """Build (once, thread-safe) and return the exact search's index."""
         if not self._index:
@@ -219,17 +231,29 @@ class SearchTables:
 class _ExactIndex:
     """Distinct rows of a :class:`SearchTables` and their bounds (module docstring).
 
+    The distinct rows are laid out in *layout order*: sorted by their first
+    two principal coordinates (the first in bins of 20), so that rows with
+    similar HLAC vectors, which a frame's search tends to score together,
+    lie together in memory (measured: a third less time per frame when the
+    caches are cold).  Position ``u`` below is a place in that order.
+
     Attributes
     ----------
     rows : ndarray of int64, shape (U,)
-        Entry index of each distinct row (the lowest of its group), ascending.
+        Entry index of the distinct row at ``u`` (the lowest of its group).
     group : ndarray of int64, shape (N,)
-        Distinct row of each entry.
+        Position of each entry's distinct row.
     sizes : ndarray of int64, shape (U,)
         Entries per distinct row.
     members, starts : ndarray of int64, shapes (N,) and (U + 1,)
         The entries of row ``u`` are ``members[starts[u]:starts[u + 1]]``,
         ascending.
+    hlac : ndarray of uint8, shape (U', 1600)
+    sil_bits, ridge_bits : ndarray of uint64, shape (U', 64)
+    source : ndarray of int64, shape (U,)
+        Row of the three arrays above holding the row at ``u``: a compact copy in
+        layout order (``source = arange(U)``) when it takes at most
+        :data:`_COMPACT_MAX_BYTES`, else the database's own rows.
     sil_coarse_t, ridge_coarse_t : ndarray of uint64, shape (4, U)
         Masks at 4x4-block resolution, block ``k = 16 * row + col`` at bit
         ``k % 64`` of word ``k // 64`` (word first: column-major).
@@ -248,6 +272,10 @@ class _ExactIndex:
     sizes: np.ndarray
     members: np.ndarray
     starts: np.ndarray
+    hlac: np.ndarray
+    sil_bits: np.ndarray
+    ridge_bits: np.ndarray
+    source: np.ndarray
     sil_coarse_t: np.ndarray
     ridge_coarse_t: np.ndarray
     ridge_area: np.ndarray
@@ -262,14 +290,26 @@ class _ExactIndex:
         hashes = _row_hashes(h64, tables.sil_bits, tables.ridge_bits)
         first = _first_equal(h64, tables.sil_bits, tables.ridge_bits,
                              np.argsort(hashes, kind="stable"), hashes)
-        is_row = first == np.arange(len(first))
-        rows = np.flatnonzero(is_row)
-        group = (np.cumsum(is_row) - 1)[first]
-        mean, basis = _hlac_basis(tables.hlac, rows)
-        proj, resid = _project_rows(tables.hlac, rows, mean, basis)
+        distinct = np.flatnonzero(first == np.arange(len(first)))
+        mean, basis = _hlac_basis(tables.hlac, distinct)
+        proj, resid = _project_rows(tables.hlac, distinct, mean, basis)
+        layout = np.lexsort((proj[:, 1], np.round(proj[:, 0] / 20.0))) if proj.shape[1] >= 2 \
+            else np.arange(distinct.size)
+        rows, proj, resid = distinct[layout], proj[layout], resid[layout]
+        position = np.empty(len(first), np.int64)
+        position[rows] = np.arange(rows.size)
+        group = position[first]
         sizes = np.bincount(group, minlength=rows.size)
+        source = np.arange(rows.size)
+        if rows.size * (HLAC_SIZE + 128 * 8) > _COMPACT_MAX_BYTES:
+            source = rows  # no copy: read the database's rows
+        compact = source is not rows
         out = cls(rows=rows, group=group, sizes=sizes, members=np.argsort(group, kind="stable"),
                   starts=np.concatenate([[0], np.cumsum(sizes)]),
+                  hlac=tables.hlac[rows] if compact else tables.hlac,
+                  sil_bits=tables.sil_bits[rows] if compact else tables.sil_bits,
+                  ridge_bits=tables.ridge_bits[rows] if compact else tables.ridge_bits,
+                  source=source,
                   sil_coarse_t=_coarse_presence_rows(tables.sil_bits, rows).T.copy(),
                   ridge_coarse_t=_coarse_presence_rows(tables.ridge_bits, rows).T.copy(),
                   ridge_area=np.ascontiguousarray(tables.ridge_area[rows]), mean=mean,
@@ -280,7 +320,7 @@ class _ExactIndex:
         return out
 
     def entries_of(self, rows: np.ndarray) -> np.ndarray:
-        """All entries of distinct rows `rows` (positions in the row list), ascending."""
+        """All entries of distinct rows at positions `rows`, ascending."""
         if rows.size == 1:
             u = rows[0]
             return self.members[self.starts[u]:self.starts[u + 1]].copy()
@@ -462,18 +502,20 @@ def _count_planes(bits):
 
 @njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
 def _bounds(q_planes, q_sil_coarse, q_proj, q_resid, sil_coarse_t, ridge_coarse_t, ridge_area,
-            proj_t, resid, th1, c1, c2, c3, c4, prune, cap, key, lb, top):
+            proj_t, resid, th1, c1, c2, c3, c4, prune, cap, key, lb, top, lb1, lb2, hb):
     """Pass over the distinct rows: bounds, and the rows with the smallest ones.
 
     ``key[u] = C3 lb1 + C4 lb2`` (-1 when a penalty bound already fails a
     pruning stage); ``lb[u] = key[u] + HLAC bound``, a lower bound of E (inf
     when the row fails pruning or the bound exceeds `cap`, a known E).  `top` receives the rows with the smallest
     ``lb``, ascending; returns how many.  The tables are column-major
-    (word or dimension first) so that the loops over rows vectorize.
+    (word or dimension first) so that the loops over rows vectorize;
+    `lb1`, `lb2` (int32) and `hb` (float32) are scratch arrays.
     """
     n = sil_coarse_t.shape[1]
-    lb1 = np.zeros(n, np.int32)
-    lb2 = np.zeros(n, np.int32)
+    lb1[:] = 0
+    lb2[:] = 0
+    hb[:] = 0.0
     for k in range(q_planes.shape[0]):
         for w in range(4):
             qw = q_planes[k, w]
@@ -487,7 +529,6 @@ def _bounds(q_planes, q_sil_coarse, q_proj, q_resid, sil_coarse_t, ridge_coarse_
         col = ridge_coarse_t[w]
         for u in range(n):
             lb2[u] += np.int32(_popcount64(col[u] & qw))
-    hb = np.zeros(n, np.float32)
     for j in range(proj_t.shape[0]):
         qj = np.float32(q_proj[j])
         col32 = proj_t[j]
@@ -529,7 +570,8 @@ def _bounds(q_planes, q_sil_coarse, q_proj, q_resid, sil_coarse_t, ridge_coarse_
 @njit(cache=True, nogil=True)
 def _score(i, q_hlac, q_sil, q_ridge, hlac, sil_bits, ridge_bits, a, hl_bound, th1, c1, c2, c3,
            c4, prune, best_e):
-    """Entry i (ridge area `a`, HLAC lower bound `hl_bound`) against the best E so far.
+    """Row i of the tables (ridge area `a`, HLAC lower bound `hl_bound`) against the
+    best E so far.
 
     Returns (status, E, d, p1, p2).  Status 0: fails pruning; 1: passes
     both stages, E exact or, when it cannot beat `best_e`, inf; 2: cannot
@@ -553,8 +595,8 @@ def _score(i, q_hlac, q_sil, q_ridge, hlac, sil_bits, ridge_bits, a, hl_bound, t
 
 @njit(cache=True, nogil=True)
 def _best(q_hlac, q_sil, q_ridge, q_planes, q_sil_coarse, q_proj, q_resid, hlac, sil_bits,
-          ridge_bits, rows, sizes, sil_coarse_t, ridge_coarse_t, ridge_area, proj_t, resid, th1,
-          c1, c2, c3, c4, prune, seed, key, lb, top, ties):
+          ridge_bits, source, rows, sizes, sil_coarse_t, ridge_coarse_t, ridge_area, proj_t, resid, th1,
+          c1, c2, c3, c4, prune, seed, key, lb, top, ties, lb1, lb2, hb):
     """Best distinct row over the rows that pass pruning (all when `prune` is False).
 
     Returns (row, E, d, p1, p2, scored survivors, number of tied rows); row
@@ -565,15 +607,16 @@ def _best(q_hlac, q_sil, q_ridge, q_planes, q_sil_coarse, q_proj, q_resid, hlac,
     survivors = 0
     nties = 0
     if seed >= 0:
-        st, e, d, p1, p2 = _score(rows[seed], q_hlac, q_sil, q_ridge, hlac, sil_bits, ridge_bits,
-                                  ridge_area[seed], 0.0, th1, c1, c2, c3, c4, prune, np.inf)
+        st, e, d, p1, p2 = _score(source[seed], q_hlac, q_sil, q_ridge, hlac, sil_bits,
+                                  ridge_bits, ridge_area[seed], 0.0, th1, c1, c2, c3, c4, prune, np.inf)
         if st == 1:
             best_u, best_e, best_d, best_p1, best_p2 = seed, e, d, p1, p2
             survivors += sizes[seed]
             ties[0] = seed
             nties = 1
     ntop = _bounds(q_planes, q_sil_coarse, q_proj, q_resid, sil_coarse_t, ridge_coarse_t,
-                   ridge_area, proj_t, resid, th1, c1, c2, c3, c4, prune, best_e, key, lb, top)
+                   ridge_area, proj_t, resid, th1, c1, c2, c3, c4, prune, best_e, key, lb, top,
+                   lb1, lb2, hb)
     if seed >= 0:
         lb[seed] = np.inf  # scored
     for t in range(ntop + rows.shape[0]):
@@ -583,7 +626,7 @@ def _best(q_hlac, q_sil, q_ridge, q_planes, q_sil_coarse, q_proj, q_resid, hlac,
             continue
         hl_bound = lb[u] - key[u]
         lb[u] = np.inf  # scored
-        st, e, d, p1, p2 = _score(rows[u], q_hlac, q_sil, q_ridge, hlac, sil_bits, ridge_bits,
+        st, e, d, p1, p2 = _score(source[u], q_hlac, q_sil, q_ridge, hlac, sil_bits, ridge_bits,
                                   ridge_area[u], hl_bound, th1, c1, c2, c3, c4, prune, best_e)
         if st != 1:
             continue
@@ -595,26 +638,26 @@ def _best(q_hlac, q_sil, q_ridge, q_planes, q_sil_coarse, q_proj, q_resid, hlac,
         elif e == best_e:  # E is exact here: early exits only drop rows above best_e
             ties[nties] = u
             nties += 1
-            if u < best_u:
+            if rows[u] < rows[best_u]:  # ties: the lowest entry index
                 best_u, best_d, best_p1, best_p2 = u, d, p1, p2
     return best_u, best_e, best_d, best_p1, best_p2, survivors, nties
 
 
 @njit(cache=True, nogil=True)
-def _search_kernel(q_hlac, q_sil, q_ridge, q_area, hlac, sil_bits, ridge_bits, rows, sizes,
+def _search_kernel(q_hlac, q_sil, q_ridge, q_area, hlac, sil_bits, ridge_bits, source, rows, sizes,
                    sil_coarse_t, ridge_coarse_t, ridge_area, mean, basis, proj_t, resid, c, c1, c2,
-                   c3, c4, prune, seed, key, lb, top, ties):
+                   c3, c4, prune, seed, key, lb, top, ties, lb1, lb2, hb):
     """Best entry; returns (index, E, d, p1, p2, survivors, fallback, tied rows)."""
     q_planes = _count_planes(q_ridge)
     q_sil_coarse = _pack_blocks(_block_counts(q_sil) > 0)
     q_proj, q_resid = _query_projection(q_hlac, mean, basis)
     args = (q_hlac, q_sil, q_ridge, q_planes, q_sil_coarse, q_proj, q_resid, hlac, sil_bits,
-            ridge_bits, rows, sizes, sil_coarse_t, ridge_coarse_t, ridge_area, proj_t, resid)
-    u, e, d, p1, p2, surv, nt = _best(*args, c * q_area, c1, c2, c3, c4, prune, seed, key, lb,
-                                      top, ties)
+            ridge_bits, source, rows, sizes, sil_coarse_t, ridge_coarse_t, ridge_area, proj_t, resid)
+    scratch = (key, lb, top, ties, lb1, lb2, hb)
+    u, e, d, p1, p2, surv, nt = _best(*args, c * q_area, c1, c2, c3, c4, prune, seed, *scratch)
     if u >= 0:
         return rows[u], e, d, p1, p2, surv, False, nt
-    u, e, d, p1, p2, surv, nt = _best(*args, 0.0, c1, c2, c3, c4, False, seed, key, lb, top, ties)
+    u, e, d, p1, p2, surv, nt = _best(*args, 0.0, c1, c2, c3, c4, False, seed, *scratch)
     return rows[u], e, d, p1, p2, 0, True, nt
 
 
@@ -659,12 +702,12 @@ def search(features, tables: SearchTables, *, options: SearchOptions | None = No
     h, sb, rb, area = _query(features)
     ix = tables.prepare()
     u = ix.rows.size
-    key, lb, ties = np.empty(u), np.empty(u), np.empty(u, np.int64)  # per-call scratch
+    key, lb, ties, top, lb1, lb2, hb = tables._buffers(u)
     i, e, d, p1, p2, surv, fallback, nt = _search_kernel(
-        h, sb, rb, area, tables.hlac, tables.sil_bits, tables.ridge_bits, ix.rows, ix.sizes,
+        h, sb, rb, area, ix.hlac, ix.sil_bits, ix.ridge_bits, ix.source, ix.rows, ix.sizes,
         ix.sil_coarse_t, ix.ridge_coarse_t, ix.ridge_area, ix.mean, ix.basis, ix.proj_t, ix.resid,
         opts.c, opts.c1, opts.c2, opts.c3, opts.c4, opts.prune,
-        -1 if s < 0 else int(ix.group[s]), key, lb, np.empty(_TOP, np.int64), ties)
+        -1 if s < 0 else int(ix.group[s]), key, lb, top, ties, lb1, lb2, hb)
     return SearchResult(index=int(i), error=float(e), hlac_distance=int(d), p1=int(p1),
                         p2=int(p2), survivors=int(surv), low_confidence=bool(fallback),
                         tied=ix.entries_of(ties[:nt]))

@@ -136,7 +136,13 @@ def _stack(rows, index):
                                     ridge_area=rows["ridge_area"][index])
 
 
-def test_repeated_rows_are_searched_once_and_ties_go_to_the_lowest_index(small_rows, query_rows):
+@pytest.mark.parametrize("compact", [True, False])
+def test_repeated_rows_are_searched_once_and_ties_go_to_the_lowest_index(small_rows, query_rows,
+                                                                        compact, monkeypatch):
+    from handsynth.estimate import _search
+
+    if not compact:  # the index reads the database's own rows instead of a compact copy
+        monkeypatch.setattr(_search, "_COMPACT_MAX_BYTES", 0)
     n = len(small_rows["hlac"])
     index = np.concatenate([[100], np.arange(n), [5, 17, 100, 5]])  # entry 100 at 0, 101, 243
     t = _stack(small_rows, index)
@@ -148,7 +154,11 @@ def test_repeated_rows_are_searched_once_and_ties_go_to_the_lowest_index(small_r
             & (t.ridge_bits[ix.rows[ix.group]] == t.ridge_bits).all(1))
     assert same.all() and (ix.rows[ix.group] <= np.arange(len(t))).all()
     assert ix.group[0] == ix.group[101] == ix.group[243] and ix.sizes[ix.group[0]] >= 3
-    assert ix.sizes.sum() == len(t) and np.all(np.diff(ix.rows) > 0)
+    assert ix.sizes.sum() == len(t) and np.unique(ix.rows).size == ix.rows.size
+    assert (ix.source is ix.rows) != compact
+    # the rows the kernel reads are the distinct rows, in layout order
+    np.testing.assert_array_equal(ix.hlac[ix.source], t.hlac[ix.rows])
+    np.testing.assert_array_equal(ix.ridge_bits[ix.source], t.ridge_bits[ix.rows])
     f = extract_features(small_rows["silhouette"][100])
     for seed in (None, 101, 243, 7):
         r = search(f, t, seed=seed)
@@ -207,7 +217,7 @@ def test_hlac_lower_bound_never_exceeds_the_distance(small_rows, kind):
         qp, qr = _query_projection(q, ix.mean, ix.basis)
         _bounds(np.zeros((5, 4), np.uint64), zero4, qp, qr, ix.sil_coarse_t, ix.ridge_coarse_t,
                 ix.ridge_area, ix.proj_t, ix.resid, 0.0, 0.0, 0.0, 0.0, 0.0, False, np.inf, key,
-                lb, top)
+                lb, top, np.empty(u, np.int32), np.empty(u, np.int32), np.empty(u, np.float32))
         d = ((hl[ix.rows].astype(np.int64) - q.astype(np.int64)) ** 2).sum(axis=1)
         assert np.all(key == 0.0) and np.all(lb <= d)
         if kind == "rendered":  # and it is tight enough to prune: most rows above half
