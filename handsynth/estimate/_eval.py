@@ -55,12 +55,13 @@ Measured
 With 20,448-entry paper-set databases, 8 off-grid model hands x 200 frames per
 pose set (``docs/eval/model_hands_20448.json``):
 
-* Paper poses: the MAE over all joints is 3.60 deg with the standard
-  database, 3.06 with the selected one, 2.67 selected without normalisation
-  and 1.76 on ``own_shape``.  Index PIP is -2.15 +- 15.08 deg selected and
-  -0.34 +- 9.24 on ``own_shape``.  Thumb CMC flexion is +0.06 +- 10.35
-  selected and +0.13 +- 4.05 on ``own_shape``.  Selection helps.  Both the
-  shape grid and the silhouette limit the result.
+* Paper poses, ties averaged (``ties="mean"``; ``"first"`` in brackets): the
+  MAE over all joints is 3.47 (3.60) deg with the standard database, 2.91
+  (3.06) with the selected one, 2.47 (2.67) selected without normalisation
+  and 1.45 (1.76) on ``own_shape``.  Index PIP is -2.07 +- 14.47 deg selected
+  and +0.09 +- 6.32 on ``own_shape``.  Thumb CMC flexion is -0.10 +- 10.07
+  selected and -0.03 +- 3.44 on ``own_shape``.  Selection helps; the shape
+  grid limits the result.
 * Natural (multi-finger) poses: the MAE is about 29 deg in every condition.
   The paper-set databases hold one moving finger at a time, so those poses
   are not in them.  Natural-set databases bring it to 10.2 deg.
