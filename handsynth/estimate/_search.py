@@ -34,22 +34,23 @@ best ``E`` found.  :meth:`SearchTables.prepare` builds, once per database:
   of the HLAC vectors, by randomized subspace iteration) splits
   ``h - m = U^T p + r`` with ``r`` orthogonal to ``U``; then
   ``|h - h_i|^2 = |p - p_i|^2 + |r - r_i|^2 >= |p - p_i|^2 + (|r| - |r_i|)^2``.
-  Each entry stores ``p_i`` and ``|r_i|`` (float64).  The bound is lowered
-  by a relative margin of 1e-4 so that float64 rounding (below 1e-9 of the
-  vector norms) can never make it exceed the true distance; any basis
-  gives a valid bound, a good one a tight one.
+  Each entry stores ``p_i`` and ``|r_i|`` (float32).  The bound is lowered
+  by a relative margin of 1 % (:data:`_BOUND_MARGIN`), far more than float32
+  rounding of uint8 HLAC vectors can take away, so it never exceeds the true
+  distance (tested); any basis gives a valid bound, a good one a tight one.
 
 A search then (1) scores the previous frame's answer (``seed``) if given,
 (2) computes ``C3 lb1 + C4 lb2 + hlac bound`` for every distinct row in one
-pass over 216 bytes per row, dropping rows whose penalty bounds already
-fail a pruning stage, (3) scores the 8 rows with the smallest bounds, which
-brings the best ``E`` near its final value, (4) scores, in index order,
-every other row whose bound does not exceed the best ``E`` so far.
-Scoring counts P1 (its popcount abandoned as soon as it fails stage 1 or
-can no longer win), P2, then the HLAC distance with early exit.  Nothing is
-copied per entry.  ``survivors`` of the result counts the entries (with
-their repeats) that passed both stages among those scored (a lower bound of
-the total, which :func:`search_reference` reports).  When no row passes
+vectorized pass over column-major tables (140 bytes per row), dropping rows
+whose penalty bounds already fail a pruning stage, (3) scores the 8 rows
+with the smallest bounds, which brings the best ``E`` near its final
+value, (4) scores, in layout order (:class:`_ExactIndex`), every other row
+whose bound does not exceed the best ``E`` so far.  Scoring counts P1, P2,
+then the HLAC distance with early exit, stopping as soon as the bound with
+the exact penalties exceeds the best ``E``.  Nothing is copied per entry.
+``survivors`` of the result counts the entries (with their repeats) that
+passed both stages among those scored (a lower bound of the total, which
+:func:`search_reference` reports).  When no row passes
 both stages the same steps run without pruning (the fallback).
 """
 
@@ -300,10 +301,8 @@ class _ExactIndex:
         position[rows] = np.arange(rows.size)
         group = position[first]
         sizes = np.bincount(group, minlength=rows.size)
-        source = np.arange(rows.size)
-        if rows.size * (HLAC_SIZE + 128 * 8) > _COMPACT_MAX_BYTES:
-            source = rows  # no copy: read the database's rows
-        compact = source is not rows
+        compact = rows.size * (HLAC_SIZE + 128 * 8) <= _COMPACT_MAX_BYTES
+        source = np.arange(rows.size) if compact else rows  # else read the database's rows
         out = cls(rows=rows, group=group, sizes=sizes, members=np.argsort(group, kind="stable"),
                   starts=np.concatenate([[0], np.cumsum(sizes)]),
                   hlac=tables.hlac[rows] if compact else tables.hlac,
@@ -507,8 +506,9 @@ def _bounds(q_planes, q_sil_coarse, q_proj, q_resid, sil_coarse_t, ridge_coarse_
 
     ``key[u] = C3 lb1 + C4 lb2`` (-1 when a penalty bound already fails a
     pruning stage); ``lb[u] = key[u] + HLAC bound``, a lower bound of E (inf
-    when the row fails pruning or the bound exceeds `cap`, a known E).  `top` receives the rows with the smallest
-    ``lb``, ascending; returns how many.  The tables are column-major
+    when the row fails pruning or the bound exceeds `cap`, a known E).
+    `top` receives the rows with the smallest ``lb``, ascending; returns how
+    many.  The tables are column-major
     (word or dimension first) so that the loops over rows vectorize;
     `lb1`, `lb2` (int32) and `hb` (float32) are scratch arrays.
     """
@@ -574,8 +574,8 @@ def _score(i, q_hlac, q_sil, q_ridge, hlac, sil_bits, ridge_bits, a, hl_bound, t
     best E so far.
 
     Returns (status, E, d, p1, p2).  Status 0: fails pruning; 1: passes
-    both stages, E exact or, when it cannot beat `best_e`, inf; 2: cannot
-    beat `best_e`, abandoned before its stage-1 test was decided.
+    both stages, E exact or, when it cannot beat `best_e`, inf; 2: passes
+    stage 1 but cannot beat `best_e`, abandoned before stage 2 was decided.
     """
     p1 = count_outside(q_ridge, sil_bits[i])  # in full: 12 ns, less than checking a limit
     if prune and p1 > th1:
@@ -595,8 +595,8 @@ def _score(i, q_hlac, q_sil, q_ridge, hlac, sil_bits, ridge_bits, a, hl_bound, t
 
 @njit(cache=True, nogil=True)
 def _best(q_hlac, q_sil, q_ridge, q_planes, q_sil_coarse, q_proj, q_resid, hlac, sil_bits,
-          ridge_bits, source, rows, sizes, sil_coarse_t, ridge_coarse_t, ridge_area, proj_t, resid, th1,
-          c1, c2, c3, c4, prune, seed, key, lb, top, ties, lb1, lb2, hb):
+          ridge_bits, source, rows, sizes, sil_coarse_t, ridge_coarse_t, ridge_area, proj_t,
+          resid, th1, c1, c2, c3, c4, prune, seed, key, lb, top, ties, lb1, lb2, hb):
     """Best distinct row over the rows that pass pruning (all when `prune` is False).
 
     Returns (row, E, d, p1, p2, scored survivors, number of tied rows); row
@@ -608,7 +608,8 @@ def _best(q_hlac, q_sil, q_ridge, q_planes, q_sil_coarse, q_proj, q_resid, hlac,
     nties = 0
     if seed >= 0:
         st, e, d, p1, p2 = _score(source[seed], q_hlac, q_sil, q_ridge, hlac, sil_bits,
-                                  ridge_bits, ridge_area[seed], 0.0, th1, c1, c2, c3, c4, prune, np.inf)
+                                  ridge_bits, ridge_area[seed], 0.0, th1, c1, c2, c3, c4, prune,
+                                  np.inf)
         if st == 1:
             best_u, best_e, best_d, best_p1, best_p2 = seed, e, d, p1, p2
             survivors += sizes[seed]
@@ -644,15 +645,16 @@ def _best(q_hlac, q_sil, q_ridge, q_planes, q_sil_coarse, q_proj, q_resid, hlac,
 
 
 @njit(cache=True, nogil=True)
-def _search_kernel(q_hlac, q_sil, q_ridge, q_area, hlac, sil_bits, ridge_bits, source, rows, sizes,
-                   sil_coarse_t, ridge_coarse_t, ridge_area, mean, basis, proj_t, resid, c, c1, c2,
-                   c3, c4, prune, seed, key, lb, top, ties, lb1, lb2, hb):
+def _search_kernel(q_hlac, q_sil, q_ridge, q_area, hlac, sil_bits, ridge_bits, source, rows,
+                   sizes, sil_coarse_t, ridge_coarse_t, ridge_area, mean, basis, proj_t, resid, c,
+                   c1, c2, c3, c4, prune, seed, key, lb, top, ties, lb1, lb2, hb):
     """Best entry; returns (index, E, d, p1, p2, survivors, fallback, tied rows)."""
     q_planes = _count_planes(q_ridge)
     q_sil_coarse = _pack_blocks(_block_counts(q_sil) > 0)
     q_proj, q_resid = _query_projection(q_hlac, mean, basis)
     args = (q_hlac, q_sil, q_ridge, q_planes, q_sil_coarse, q_proj, q_resid, hlac, sil_bits,
-            ridge_bits, source, rows, sizes, sil_coarse_t, ridge_coarse_t, ridge_area, proj_t, resid)
+            ridge_bits, source, rows, sizes, sil_coarse_t, ridge_coarse_t, ridge_area, proj_t,
+            resid)
     scratch = (key, lb, top, ties, lb1, lb2, hb)
     u, e, d, p1, p2, surv, nt = _best(*args, c * q_area, c1, c2, c3, c4, prune, seed, *scratch)
     if u >= 0:
