@@ -38,10 +38,13 @@ def _check_limits(frames, seconds, max_dead, fps) -> None:
         raise InvalidInputError(f"--fps must be a positive number, got {fps}")
 
 
-def _open_lookup(db_dir, shape_name, measurements, temporal, err):
+def _open_lookup(db_dir, shape_name, measurements, temporal, err, personal=False,
+                 personal_count=None):
     import time
 
+    from ..db import BuildOptions
     from ..estimate import HandMeasurements, PoseLookup
+    from ..estimate._live import default_database_dir
     from ..models import HandShape
 
     shape = meas = None
@@ -51,9 +54,20 @@ def _open_lookup(db_dir, shape_name, measurements, temporal, err):
         shape = HandShape() if shape_name == "standard" else HandShape.from_name(shape_name)
     if measurements is not None:
         meas = HandMeasurements.from_file(measurements)
+    if personal_count is not None and not personal:
+        raise InvalidInputError("--personal-count applies to --personal only")
+    if personal:
+        if shape is None and meas is None:
+            raise InvalidInputError("--personal needs --shape NAME or --measurements FILE")
+        build = BuildOptions() if personal_count is None else BuildOptions(count=personal_count)
+        t = time.perf_counter()
+        lookup = PoseLookup.personal(db_dir or default_database_dir(), shape=shape,
+                                     measurements=meas, build=build, temporal=temporal)
+        click.echo(f"personal database {lookup.database.path} ready in "
+                   f"{time.perf_counter() - t:.1f} s", err=err)
+        return lookup
     if db_dir is None:
         from ..db import build_default_database
-        from ..estimate._live import default_database_dir
 
         db_dir = default_database_dir()
         t = time.perf_counter()
@@ -85,6 +99,12 @@ def _progress(stream):
                    "(e.g. L1.050_W0.900_P1.000_T1.000, or 'standard').")
 @click.option("--measurements", default=None, metavar="FILE",
               help="Choose the database from hand measurements in mm (.json or .csv).")
+@click.option("--personal", is_flag=True,
+              help="Use a database of exactly the --shape or --measurements hand (built in "
+                   "--db when missing, 20,448 paper poses, a few seconds) instead of the "
+                   "nearest grid shape's.")
+@click.option("--personal-count", type=int, default=None, metavar="N",
+              help="Poses of a --personal database [default: the paper's 20,448].")
 @click.option("--frames", type=int, default=None, metavar="N",
               help=f"Stop after N frames [--synthetic default: {SYNTHETIC_FRAMES}].")
 @click.option("--seconds", type=float, default=None, metavar="S", help="Stop after S seconds.")
@@ -109,9 +129,10 @@ def _progress(stream):
 @click.option("--max-dead", type=int, default=100, show_default=True, metavar="N",
               help="Stop when N consecutive reads give no usable frame.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress line.")
-def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, frames, seconds, out,
-             fmt, keypoints, video_out, synthetic_shape, synthetic_motion, synthetic_size, fps,
-             no_temporal, max_dead, quiet) -> None:
+def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, personal,
+             personal_count, frames,
+             seconds, out, fmt, keypoints, video_out, synthetic_shape, synthetic_motion,
+             synthetic_size, fps, no_temporal, max_dead, quiet) -> None:
     """Look up the hand pose of every frame of a camera, a video file or a synthetic hand.
 
     Prints the frame rate of the lookup alone and of the whole loop; with
@@ -156,7 +177,8 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, fram
             source, what = CameraSource(camera), f"camera {camera}"
         elif video_in is not None:
             source, what = VideoSource(video_in), f"video {video_in}"
-        lookup = _open_lookup(db_dir, shape_name, measurements, not no_temporal, info_err)
+        lookup = _open_lookup(db_dir, shape_name, measurements, not no_temporal, info_err,
+                              personal=personal, personal_count=personal_count)
         if synthetic:
             source = SyntheticSource(user_shape, lookup.mount, side=lookup.side,
                                      motion=SyntheticMotion(poses=synthetic_motion), fps=fps,

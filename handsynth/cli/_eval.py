@@ -45,7 +45,7 @@ def _parse_list(text: str, option: str) -> tuple[str, ...]:
               help="Pose sets of the test frames, comma-separated.")
 @click.option("--hand", type=click.Choice(["model", "mesh"]), default="model", show_default=True,
               help="Test hands: MuJoCo model hands, or the realistic glTF mesh hand.")
-@click.option("--conditions", default="standard,selected,selected_none,own_shape",
+@click.option("--conditions", default="standard,selected,selected_none,personal,own_shape",
               show_default=True, help="Databases to compare, comma-separated.")
 @click.option("--count", type=int, default=20448, show_default=True,
               help="Entries per database.")
@@ -66,15 +66,18 @@ def _parse_list(text: str, option: str) -> tuple[str, ...]:
 @click.option("--ties", type=click.Choice(["mean", "first"]), default="mean", show_default=True,
               help="Pose reported when several entries match equally well: their mean, or "
                    "the first entry's.")
+@click.option("--photo-mm-per-px", type=float, default=0.25, show_default=True,
+              help="Scale of the photos that measure model hands for the personal condition.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress lines.")
 def eval_(db_folder, out_dir, prefix, json_path, json_frames, n_hands, frames, pose_sets, hand,
           conditions, count, db_pose_set, seed, ratio_margin, mount, frame_size, render_size, workers,
-          ties, quiet) -> None:
+          ties, photo_mm_per_px, quiet) -> None:
     """Accuracy on synthetic ground truth: standard vs selected database.
 
     Test hands of random off-grid shape are rendered in known poses at the
-    camera's resolution and looked up in the standard database and in the
-    database chosen by formulas (1)-(4) from their measurements.  Prints
+    camera's resolution and looked up in the standard database, in the
+    database chosen by formulas (1)-(4) from their measurements and in a
+    database built for the shape measured on a photo of the hand.  Prints
     mean +- s.d. (MAE) of the signed error per joint and the targets.
     """
     from ..estimate._eval import EvalOptions, evaluate
@@ -86,7 +89,7 @@ def eval_(db_folder, out_dir, prefix, json_path, json_frames, n_hands, frames, p
         db_pose_set=db_pose_set,
         render_size=_parse_size(render_size, "--render-size") if render_size else None,
         mount=mount, frame_size=_parse_size(frame_size, "--frame-size"), workers=workers,
-        ties=ties)
+        ties=ties, photo_mm_per_px=photo_mm_per_px)
     say = None if quiet else (lambda line: click.echo(line, err=True))
     report = evaluate(options, progress=say)
     click.echo(report.format())

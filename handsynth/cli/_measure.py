@@ -44,6 +44,8 @@ def _format(result) -> str:
     lines.append(f"ratios  length {q.length:.3f}  width {q.width:.3f}  palm {q.palm:.3f}  "
                  f"thumb {q.thumb:.3f}  (formulas (1)-(4))")
     lines.append(f"database: {result.selection.name}")
+    lines.append(f"model shape: {result.shape.name} (ratios corrected for the photo method; "
+                 f"its own database: handsynth estimate --shape {result.shape.name} --personal)")
     return "\n".join(lines)
 
 
@@ -68,7 +70,7 @@ def _format(result) -> str:
               help="Normalisation of formulas (1)-(4): 'none' uses true millimetres, "
                    "'palm_width' the paper's scale-free normalisation.")
 @click.option("--raw", is_flag=True,
-              help="No correction from the standard model (MeasureCalibration).")
+              help="No corrections from the model (MeasureCalibration, ShapeCorrection).")
 def measure(photo, mm_per_px, reference_width_mm, out, details, annotate, normalize,
             raw) -> None:
     """Measure the open hand on PHOTO and print the database it selects.
@@ -83,6 +85,7 @@ def measure(photo, mm_per_px, reference_width_mm, out, details, annotate, normal
 
     from ..estimate._measure import (
         NO_CALIBRATION,
+        NO_SHAPE_CORRECTION,
         MeasureOptions,
         annotate_measurement,
         measure_photo,
@@ -103,7 +106,8 @@ def measure(photo, mm_per_px, reference_width_mm, out, details, annotate, normal
     image = _read_image(photo)
     options = MeasureOptions(normalize=normalize)
     if raw:
-        options = MeasureOptions(normalize=normalize, calibration=NO_CALIBRATION)
+        options = MeasureOptions(normalize=normalize, calibration=NO_CALIBRATION,
+                                 shape_correction=NO_SHAPE_CORRECTION)
     result = measure_photo(image, mm_per_px=mm_per_px, reference_width_mm=reference_width_mm,
                            options=options)
     click.echo(_format(result))

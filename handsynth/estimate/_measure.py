@@ -120,19 +120,31 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InvalidInputError
-from ._selection import HandMeasurements, Selection, SelectionOptions, select_shape
+from ..models import HandShape
+from ._selection import (
+    HandMeasurements,
+    Selection,
+    SelectionOptions,
+    model_measurements,
+    select_shape,
+    shape_ratios,
+)
 
 __all__ = [
     "MEASURE_POSE",
     "MODEL_CALIBRATION",
+    "MODEL_SHAPE_CORRECTION",
     "NO_CALIBRATION",
+    "NO_SHAPE_CORRECTION",
     "FingerFit",
     "MeasureCalibration",
     "MeasureOptions",
     "PhotoMeasurement",
     "RenderedPhoto",
+    "ShapeCorrection",
     "annotate_measurement",
     "calibrate_on_model",
+    "fit_shape_correction",
     "measure_photo",
     "render_measurement_photo",
     "write_measurement_file",
@@ -744,6 +756,91 @@ MODEL_CALIBRATION = MeasureCalibration(
     thumb_length_factor=1.040)
 
 
+_RATIOS = ("length", "width", "palm", "thumb")
+
+
+@dataclass(frozen=True)
+class ShapeCorrection:
+    """Linear map from a photo's measured ratios to the model shape that made it.
+
+    Formulas (1)-(4) on silhouette measurements give ratios that track the
+    model's but not one for one: the measured palm section includes flesh
+    that the palm ratio does not scale, the phalanx lengths are split by
+    fixed proportions, and the hidden thumb CMC moves with the other
+    ratios.  On photos of model hands of known shape the measured ratios
+    are close to an affine function of the true ones, so a 4 x 5 matrix
+    fitted by least squares (:func:`fit_shape_correction`) maps them back:
+
+    ``shape_k = sum_j coefficients[k][j] * measured_j + coefficients[k][4]``
+
+    with ``j`` and ``k`` over ``length, width, palm, thumb`` and the
+    measured ratios those of formulas (1)-(4) without normalisation.  On a
+    human hand the map gives the model shape whose photo would measure the
+    same, which is what a database built for the hand needs.
+
+    Parameters
+    ----------
+    coefficients : 4 rows of 5 float
+        Row ``k`` gives model ratio ``k`` (length, width, palm, thumb) from
+        the four measured ratios and a constant.
+
+    Raises
+    ------
+    InvalidInputError
+        Not a 4 x 5 table of finite numbers.
+    """
+
+    coefficients: tuple[tuple[float, ...], ...] = (
+        (1.0, 0.0, 0.0, 0.0, 0.0), (0.0, 1.0, 0.0, 0.0, 0.0),
+        (0.0, 0.0, 1.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0, 0.0))
+
+    def __post_init__(self) -> None:
+        try:
+            c = np.array(self.coefficients, dtype=np.float64)
+        except (TypeError, ValueError):
+            c = np.full(0, np.nan)
+        if c.shape != (4, 5) or not np.isfinite(c).all():
+            raise InvalidInputError("ShapeCorrection.coefficients must be 4 rows of 5 finite "
+                                    f"numbers, got {self.coefficients!r}")
+        object.__setattr__(self, "coefficients",
+                           tuple(tuple(float(v) for v in row) for row in c))
+
+    def apply(self, measured):
+        """The model shape for `measured` ratios.
+
+        Parameters
+        ----------
+        measured : HandShape
+            Ratios of formulas (1)-(4) without normalisation.
+
+        Returns
+        -------
+        HandShape
+
+        Raises
+        ------
+        InvalidShapeError
+            The corrected ratios leave the range a :class:`HandShape` allows.
+        """
+        x = np.array([getattr(measured, n) for n in _RATIOS] + [1.0])
+        y = np.array(self.coefficients) @ x
+        return HandShape(**dict(zip(_RATIOS, (float(v) for v in y), strict=True)))
+
+
+#: No correction: the model shape is the formulas' ratios.
+NO_SHAPE_CORRECTION = ShapeCorrection()
+
+#: Fitted by ``python scripts/fit_shape_correction.py`` (:func:`fit_shape_correction`
+#: on 60 random model hands, ratio margin 0.75, seed 1000, photos at 0.15, 0.25
+#: and 0.4 mm/px, random rotations); a test checks it on other hands.
+MODEL_SHAPE_CORRECTION = ShapeCorrection(coefficients=(
+    (1.05103, 0.00743, -0.00322, 0.00414, -0.05849),
+    (-0.01915, 1.02642, -0.00099, -0.00134, -0.00433),
+    (-0.00596, 0.01008, 1.11099, -0.00027, -0.11239),
+    (0.05386, 0.01759, -0.45083, 0.99661, 0.38388),
+))
+
+
 @dataclass(frozen=True)
 class MeasureOptions:
     """Options of :func:`measure_photo`.
@@ -767,6 +864,11 @@ class MeasureOptions:
     calibration : MeasureCalibration
         Corrections found on the standard model (:data:`MODEL_CALIBRATION`);
         :data:`NO_CALIBRATION` gives the raw silhouette measurements.
+    shape_correction : ShapeCorrection
+        Map from the measured ratios to the model shape
+        (:attr:`PhotoMeasurement.shape`), fitted on model hands of known
+        shape (:data:`MODEL_SHAPE_CORRECTION`); :data:`NO_SHAPE_CORRECTION`
+        keeps the formulas' ratios.
     """
 
     tip_arc_mm: float = 22.0
@@ -775,6 +877,7 @@ class MeasureOptions:
     min_hand_area_mm2: float = 6000.0
     normalize: str = "none"
     calibration: MeasureCalibration = MODEL_CALIBRATION
+    shape_correction: ShapeCorrection = MODEL_SHAPE_CORRECTION
 
     def __post_init__(self) -> None:
         for name in ("tip_arc_mm", "max_finger_width_mm", "min_tip_depth_mm",
@@ -787,6 +890,9 @@ class MeasureOptions:
         if not isinstance(self.calibration, MeasureCalibration):
             raise InvalidInputError("MeasureOptions.calibration must be a MeasureCalibration, "
                                     f"got {type(self.calibration).__name__}")
+        if not isinstance(self.shape_correction, ShapeCorrection):
+            raise InvalidInputError("MeasureOptions.shape_correction must be a ShapeCorrection, "
+                                    f"got {type(self.shape_correction).__name__}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -846,6 +952,12 @@ class PhotoMeasurement:
     selection : Selection
         Formulas (1)-(4) applied to `measurements`: continuous ratios and the
         grid shape that names the database.
+    shape : HandShape
+        The model shape of the hand: the formulas' ratios without
+        normalisation mapped by :attr:`MeasureOptions.shape_correction`.
+        Build a database for exactly this shape
+        (:meth:`PoseLookup.personal <handsynth.estimate.PoseLookup.personal>`)
+        rather than use the nearest grid shape.
     mm_per_px : float
         Scale used (given, or from the reference object).
     scale_source : {"mm_per_px", "reference"}
@@ -881,6 +993,7 @@ class PhotoMeasurement:
 
     measurements: HandMeasurements
     selection: Selection
+    shape: HandShape
     mm_per_px: float
     scale_source: str
     reference_px: np.ndarray | None
@@ -899,13 +1012,14 @@ class PhotoMeasurement:
     warnings: tuple[str, ...] = ()
 
     def as_dict(self) -> dict:
-        """JSON-ready form: the measurement file format plus ``selection`` and ``diagnostics``."""
+        """JSON-ready form: the file format, ``selection``, ``shape`` and ``diagnostics``."""
         out = self.measurements.as_dict()
         r = self.selection.ratios
         out["selection"] = {
             "ratios": {"length": r.length, "width": r.width, "palm": r.palm, "thumb": r.thumb},
             "shape": self.selection.name,
         }
+        out["shape"] = {"ratios": self.shape.as_dict(), "name": self.shape.name}
         out["diagnostics"] = {
             "mm_per_px": self.mm_per_px,
             "scale_source": self.scale_source,
@@ -1176,8 +1290,6 @@ def measure_photo(image, *, mm_per_px: float | None = None,
         ambiguous reference object; a hand touching the border; fewer than
         five separated fingers.  The message names the problem.
     """
-    from ._selection import model_measurements
-
     opts = options or MeasureOptions()
     if not isinstance(opts, MeasureOptions):
         raise InvalidInputError(f"options must be MeasureOptions, got {type(opts).__name__}")
@@ -1235,8 +1347,14 @@ def measure_photo(image, *, mm_per_px: float | None = None,
         L=lengths, W=widths, P_width=palm.width_mm, P_height=-palm.y_wrist,
         T_width=abs(palm.x_cmc), T_height=palm.y_cmc - palm.y_wrist)
     selection = select_shape(meas, options=SelectionOptions(normalize=opts.normalize))
+    raw = shape_ratios(meas, model_measurements(), normalize="none")
+    try:
+        shape = opts.shape_correction.apply(raw)
+    except InvalidInputError as exc:
+        raise InvalidInputError(f"the hand's measured ratios {raw.as_dict()} give no usable "
+                                f"model shape: {exc}") from None
     return PhotoMeasurement(
-        measurements=meas, selection=selection, mm_per_px=float(mm_per_px),
+        measurements=meas, selection=selection, shape=shape, mm_per_px=float(mm_per_px),
         scale_source=scale_source, reference_px=reference_px, fingers=tuple(digits),
         valleys_px=con[valleys].copy(), hand_origin_px=palm.frame.origin.copy(),
         hand_y=palm.frame.u.copy(), hand_x=palm.frame.n.copy(), wrist_px=palm.wrist_px,
@@ -1385,8 +1503,6 @@ def calibrate_on_model(shape=None, *, mm_per_px=(0.2, 0.25, 0.3, 0.4, 0.5),
     -------
     MeasureCalibration
     """
-    from ._selection import model_measurements
-
     truth = model_measurements(shape)
     found = []
     for scale in np.atleast_1d(np.asarray(mm_per_px, float)):
@@ -1410,6 +1526,57 @@ def calibrate_on_model(shape=None, *, mm_per_px=(0.2, 0.25, 0.3, 0.4, 0.5),
     return MeasureCalibration(wrist_offset_mm=float(wrist), thumb_axis_shift=float(shift),
                               thumb_width_factors=(float(w1), float(w2)),
                               thumb_length_factor=float(length))
+
+
+def fit_shape_correction(shapes, *, mm_per_px=(0.15, 0.25, 0.4), seed: int = 0,
+                         options: MeasureOptions | None = None) -> ShapeCorrection:
+    """Fit the :class:`ShapeCorrection` on photos of model hands of known shape.
+
+    Each shape is rendered (:func:`render_measurement_photo`, a random
+    rotation per photo) and measured at every scale with `options` but no
+    shape correction; the 4 x 5 matrix is the least-squares fit of the true
+    ratios on the measured ratios (formulas (1)-(4), no normalisation) and 1.
+
+    Parameters
+    ----------
+    shapes : sequence of HandShape
+        At least 10 hands of known shape, spread over the ratios the
+        correction should serve.
+    mm_per_px : float or sequence of float, keyword-only
+        Scales of the photos, mm per pixel.
+    seed : int, keyword-only
+        Seed of the photos' rotations.
+    options : MeasureOptions, keyword-only, optional
+        Measurement options (their `shape_correction` is ignored).
+
+    Returns
+    -------
+    ShapeCorrection
+
+    Raises
+    ------
+    InvalidInputError
+        Fewer than 10 shapes, or something that is not a HandShape.
+    """
+    from dataclasses import replace
+
+    shapes = list(shapes)
+    if len(shapes) < 10 or not all(isinstance(s, HandShape) for s in shapes):
+        raise InvalidInputError(
+            f"shapes must be at least 10 HandShape objects, got {len(shapes)} items")
+    opts = replace(options or MeasureOptions(), shape_correction=NO_SHAPE_CORRECTION)
+    scales = [_positive(v, "mm_per_px") for v in np.atleast_1d(np.asarray(mm_per_px, float))]
+    rng = np.random.default_rng(seed)
+    x, y = [], []
+    for shape in shapes:
+        for scale in scales:
+            photo = render_measurement_photo(shape, mm_per_px=scale,
+                                             roll_deg=float(rng.uniform(-180.0, 180.0)))
+            found = measure_photo(photo.image, mm_per_px=scale, options=opts).shape
+            x.append([getattr(found, n) for n in _RATIOS] + [1.0])
+            y.append([getattr(shape, n) for n in _RATIOS])
+    coef, *_ = np.linalg.lstsq(np.array(x), np.array(y), rcond=None)
+    return ShapeCorrection(coefficients=tuple(tuple(float(v) for v in row) for row in coef.T))
 
 
 # -- test photos ----------------------------------------------------------------------
@@ -1486,7 +1653,7 @@ def render_measurement_photo(shape=None, angles=None, *, mm_per_px: float = 0.4,
     """
     import mujoco
 
-    from ..models import HandModel, HandShape
+    from ..models import HandModel
     from ..render._gl import ensure_backend
     from ..render._renderer import _renderer
     from ..render._scene import scene_mjcf

@@ -224,3 +224,23 @@ def test_missing_database_folder(tmp_path):
     assert res.exit_code == 2
     assert res.output.strip() == (f"handsynth: error: database folder "
                                   f"{str(tmp_path / 'nowhere')!r} does not exist")
+
+
+def test_personal_database_for_a_shape(tmp_path):
+    shape = "L1.020_W0.970_P1.010_T1.030"
+    res = _run("--synthetic", "--frames", "3", "--db", str(tmp_path), "--shape", shape,
+               "--personal", "--personal-count", "40", *SMALL)
+    assert res.exit_code == 0, res.output
+    assert f"personal database {tmp_path / (shape + '.h5')} ready" in res.output
+    db = open_database(tmp_path / f"{shape}.h5")
+    assert len(db) == 40 and HandShape(**db.meta["shape"]).name == shape
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--personal"], "--personal needs --shape NAME or --measurements FILE"),
+    (["--personal-count", "10", "--shape", "standard"], "--personal-count applies to --personal"),
+])
+def test_personal_errors_are_one_line(tmp_path, args, words):
+    res = CliRunner().invoke(cli, ["estimate", "--synthetic", "--frames", "2", "--db",
+                                   str(tmp_path), *args, *SMALL])
+    assert res.exit_code != 0 and words in res.output and "Traceback" not in res.output

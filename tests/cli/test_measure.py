@@ -46,6 +46,11 @@ def test_measure_prints_writes_and_annotates(tmp_path, photos):
     data = json.loads(details.read_text())
     assert data["selection"]["shape"] == SHAPE.name
     assert data["diagnostics"]["scale_source"] == "mm_per_px"
+    # the model shape, corrected for the method, is printed with the command that uses it
+    found = HandShape.from_name(data["shape"]["name"])
+    assert all(abs(getattr(found, n) - getattr(SHAPE, n)) < 0.02
+               for n in ("length", "width", "palm", "thumb"))
+    assert f"--shape {found.name} --personal" in res.output
     assert [f["name"] for f in data["diagnostics"]["fingers"]] == [
         "thumb", "index", "middle", "ring", "little"]
     pic = cv2.imread(str(png))

@@ -154,6 +154,10 @@ def test_conditions_use_the_right_databases(report):
             assert hand["ratio_distance"][cond] == pytest.approx(
                 ratio_distance(shape, HandShape.from_name(dbs[cond])), abs=1e-4)
         assert hand["ratio_distance"]["own_shape"] == 0.0
+        # personal: the shape measured on a photo of the hand, close to its true ratios
+        photo = HandShape(**hand["selection_ratios"]["photo"])
+        assert dbs["personal"] == photo.name != shape.nearest_grid().name
+        assert hand["ratio_distance"]["personal"] < 0.25
     # the palm-width normalisation moves the first hand to another database than the
     # nearest grid shape of its true ratios
     assert report.hands[0]["databases"]["selected"] != report.hands[0]["databases"]["selected_none"]

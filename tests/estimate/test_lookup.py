@@ -9,7 +9,13 @@ import pytest
 
 import handsynth
 from handsynth.errors import DatabaseError, InvalidInputError
-from handsynth.estimate import PoseEstimator, PoseLookup, model_measurements
+from handsynth.estimate import (
+    PoseEstimator,
+    PoseLookup,
+    SelectionOptions,
+    model_measurements,
+    select_shape,
+)
 from handsynth.models import JOINT_NAMES, HandShape
 from handsynth.render import CameraMount, SilhouetteRenderer
 
@@ -128,3 +134,33 @@ def test_approximate_lookup_probing_every_cell_equals_exact(db_folder, query_row
         assert (a.entry, a.error, a.low_confidence) == (b.entry, b.error, b.low_confidence)
     with pytest.raises(InvalidInputError, match="approximate"):
         PoseLookup(exact.database, approximate="ivf")
+
+
+def test_personal_database_is_built_once_for_the_hands_own_shape(tmp_path):
+    from handsynth.db import BuildOptions
+
+    shape = HandShape(length=1.0234, width=0.9712, palm=1.01, thumb=1.03)
+    own = HandShape.from_name(shape.name)  # ratios to the 0.001 of the file name
+    build = BuildOptions(count=60, render_size=(180, 120))
+    lookup = PoseLookup.personal(tmp_path, shape=shape, build=build, workers=1)
+    path = tmp_path / "L1.023_W0.971_P1.010_T1.030.h5"
+    assert lookup.database.path == path and len(lookup) == 60 and lookup.shape == own
+    built = path.stat().st_mtime_ns
+    again = PoseLookup.personal(tmp_path, shape=own, build=build, workers=1)  # reused
+    assert again.database.path == path and path.stat().st_mtime_ns == built
+    # from millimetres: the ratios of formulas (1)-(4) without normalisation, no grid
+    by_mm = PoseLookup.personal(tmp_path, measurements=model_measurements(own), build=build,
+                                workers=1)
+    ratios = select_shape(model_measurements(own), options=SelectionOptions(normalize="none"))
+    assert by_mm.database.path == tmp_path / f"{ratios.ratios.name}.h5"
+    assert by_mm.shape.name == ratios.ratios.name != ratios.shape.name
+    mask = np.zeros((120, 180), bool)
+    mask[40:80, 20:150] = True
+    assert not again.estimate(mask).no_hand
+    for kwargs, words in (({}, "exactly one"),
+                          ({"shape": own, "measurements": model_measurements(own)}, "exactly one"),
+                          ({"shape": "L1.000_W1.000_P1.000_T1.000"}, "shape must be a HandShape"),
+                          ({"measurements": {"L": 1}}, "measurements must be HandMeasurements"),
+                          ({"shape": own, "build": {"count": 5}}, "build must be BuildOptions")):
+        with pytest.raises(InvalidInputError, match=words):
+            PoseLookup.personal(tmp_path, **kwargs)
