@@ -130,9 +130,8 @@ def _progress(stream):
               help="Stop when N consecutive reads give no usable frame.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress line.")
 def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, personal,
-             personal_count, frames,
-             seconds, out, fmt, keypoints, video_out, synthetic_shape, synthetic_motion,
-             synthetic_size, fps, no_temporal, max_dead, quiet) -> None:
+             personal_count, frames, seconds, out, fmt, keypoints, video_out, synthetic_shape,
+             synthetic_motion, synthetic_size, fps, no_temporal, max_dead, quiet) -> None:
     """Look up the hand pose of every frame of a camera, a video file or a synthetic hand.
 
     Prints the frame rate of the lookup alone and of the whole loop; with

@@ -771,6 +771,11 @@ class EvalReport:
                                                   "mae_deg": _num(b), "met": bool(b < a)}
         return out
 
+    def _targets_by_set(self, condition: str) -> dict:
+        return {"all": self.targets(condition=condition),
+                **{ps: self.targets(pose_set=ps, condition=condition)
+                   for ps in self.options.pose_sets}}
+
     def _condition_dict(self, cond: str) -> dict:
         def block(rows) -> dict:
             s = joint_stats((self.estimates_deg[cond] - self.truth_deg)[rows])
@@ -817,12 +822,8 @@ class EvalReport:
             "joint_names": list(JOINT_NAMES),
             "hands": list(self.hands),
             "conditions": {c: self._condition_dict(c) for c in self.conditions},
-            "targets": {"all": self.targets(),
-                        **{ps: self.targets(pose_set=ps) for ps in self.options.pose_sets}},
-            "targets_personal": {
-                "all": self.targets(condition="personal"),
-                **{ps: self.targets(pose_set=ps, condition="personal")
-                   for ps in self.options.pose_sets}},
+            "targets": self._targets_by_set("selected"),
+            "targets_personal": self._targets_by_set("personal"),
             "paper": {c: {j: {"mean_deg": m, "sd_deg": s} for j, (m, s) in v.items()}
                       for c, v in PAPER.items()},
             "timing_s": {k: round(v, 3) for k, v in self.timing_s.items()},

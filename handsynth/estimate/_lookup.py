@@ -16,7 +16,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from ..db import Database, extract_features, open_database
+from ..db import BuildOptions, Database, build_databases, extract_features, open_database
 from ..errors import DatabaseError, InvalidInputError
 from ..models import JOINT_NAMES, HandShape
 from ..render import CameraMount, preprocess
@@ -258,16 +258,9 @@ class PoseLookup:
         DatabaseError
             The database could not be built or read.
         """
-        import os
-
-        from ..db import BuildOptions, build_databases
-
         if (shape is None) == (measurements is None):
             raise InvalidInputError("give exactly one of shape or measurements")
         if measurements is not None:
-            if not isinstance(measurements, HandMeasurements):
-                raise InvalidInputError(
-                    f"measurements must be HandMeasurements, got {type(measurements).__name__}")
             opts = selection or SelectionOptions(normalize="none")
             shape = select_shape(measurements, options=opts).ratios
         elif not isinstance(shape, HandShape):
@@ -277,7 +270,7 @@ class PoseLookup:
             raise InvalidInputError(f"build must be BuildOptions, got {type(build).__name__}")
         shape = HandShape.from_name(shape.name)
         summary = build_databases(folder, [shape], mount or CameraMount.paper(), options=build,
-                                  workers=workers or os.cpu_count() or 1, progress=progress)
+                                  workers=workers, progress=progress)
         return cls(open_database(summary.paths[0]), **kwargs)
 
     @classmethod

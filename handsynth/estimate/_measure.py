@@ -123,7 +123,7 @@ from __future__ import annotations
 import itertools
 import math
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -765,7 +765,7 @@ MODEL_CALIBRATION = MeasureCalibration(
     thumb_length_factor=1.040)
 
 
-_RATIOS = ("length", "width", "palm", "thumb")
+_RATIOS = tuple(HandShape().as_dict())  # length, width, palm, thumb
 
 
 @dataclass(frozen=True)
@@ -1356,7 +1356,7 @@ def measure_photo(image, *, mm_per_px: float | None = None,
         L=lengths, W=widths, P_width=palm.width_mm, P_height=-palm.y_wrist,
         T_width=abs(palm.x_cmc), T_height=palm.y_cmc - palm.y_wrist)
     selection = select_shape(meas, options=SelectionOptions(normalize=opts.normalize))
-    raw = shape_ratios(meas, model_measurements(), normalize="none")
+    raw = shape_ratios(meas, std, normalize="none")
     try:
         shape = opts.shape_correction.apply(raw)
     except InvalidInputError as exc:
@@ -1567,8 +1567,6 @@ def fit_shape_correction(shapes, *, mm_per_px=(0.15, 0.25, 0.4), seed: int = 0,
     InvalidInputError
         Fewer than 10 shapes, or something that is not a HandShape.
     """
-    from dataclasses import replace
-
     shapes = list(shapes)
     if len(shapes) < 10 or not all(isinstance(s, HandShape) for s in shapes):
         raise InvalidInputError(

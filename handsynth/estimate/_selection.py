@@ -290,7 +290,6 @@ def _hull_width_at(points_xy: np.ndarray, y: float) -> float:
     return float(max(xs) - min(xs))
 
 
-@lru_cache(maxsize=128)
 def model_measurements(shape: HandShape | None = None) -> HandMeasurements:
     """The measurements of the built MuJoCo hand of `shape` (right hand, open pose).
 
@@ -312,10 +311,15 @@ def model_measurements(shape: HandShape | None = None) -> HandMeasurements:
     HandMeasurements
         In millimetres.
     """
+    return _model_measurements(shape or HandShape())
+
+
+@lru_cache(maxsize=128)
+def _model_measurements(shape: HandShape) -> HandMeasurements:
+    """:func:`model_measurements`, cached per shape (``None`` and ``HandShape()`` alike)."""
     from ..models import HandModel
     from ..models._mjcf import hand_spec
 
-    shape = shape or HandShape()
     kp = HandModel(shape, forearm=False).keypoints() * 1e3  # (21, 3) mm
     # keypoint rows: 1..4 thumb cmc, mcp, ip, tip; 5 + 4k .. finger k mcp, pip, dip, tip
     chains = {"thumb": [2, 3, 4], **{f: [5 + 4 * k + j for j in range(4)]

@@ -63,8 +63,8 @@ from ..models import DORSUM_Z_MM
 from ._camera import CameraMount
 from ._runs import (
     OTSU_STEP,
+    _frame_threshold,
     binarize_frame,
-    frame_threshold,
     silhouette_from_frame,
     silhouette_from_mask,
 )
@@ -122,7 +122,7 @@ def otsu_threshold(frame: np.ndarray) -> int:
     frame = check_frame(frame)
     if frame.dtype == bool:
         raise InvalidInputError("otsu_threshold needs a uint8 frame, got a bool mask")
-    return frame_threshold(frame)
+    return int(_frame_threshold(np.ascontiguousarray(frame)))
 
 
 #: Smallest frame side, pixels, that can hold a hand.

@@ -45,8 +45,7 @@ from numba import njit, types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
-__all__ = ["OTSU_STEP", "binarize_frame", "frame_threshold", "silhouette_from_frame",
-           "silhouette_from_mask"]
+__all__ = ["OTSU_STEP", "binarize_frame", "silhouette_from_frame", "silhouette_from_mask"]
 
 
 _ONES = np.uint64(0x0101010101010101)  # eight True bytes
@@ -669,33 +668,16 @@ def _threshold(threshold) -> int:
     return min(max(int(threshold), -1), 255)
 
 
-def frame_threshold(frame: np.ndarray) -> int:
-    """Otsu's threshold of a uint8 grey or BGR frame, from its :data:`OTSU_STEP` sample.
-
-    Parameters
-    ----------
-    frame : ndarray, shape (H, W) or (H, W, 3), uint8
-
-    Returns
-    -------
-    int
-        The level `t` (0-255) of OpenCV's ``THRESH_OTSU`` on the grey levels of
-        the pixels ``(y, x)`` with `y` and `x` multiples of :data:`OTSU_STEP`;
-        -1 when those pixels all have the same grey level.
-    """
-    return int(_frame_threshold(np.ascontiguousarray(frame)))
-
-
 def binarize_frame(frame: np.ndarray, *, threshold: int | None = None) -> np.ndarray:
     """``grey > t`` for every pixel of a uint8 frame: `t` is `threshold`, or
-    :func:`frame_threshold` (all False when that is -1).
+    Otsu's threshold of its :data:`OTSU_STEP` sample (all False when that is -1).
 
     Returns
     -------
     ndarray, shape (H, W), bool
     """
     frame = np.ascontiguousarray(frame)
-    t = frame_threshold(frame) if threshold is None else _threshold(threshold)
+    t = int(_frame_threshold(frame)) if threshold is None else _threshold(threshold)
     if threshold is None and t < 0:
         return np.zeros(frame.shape[:2], dtype=bool)
     return _binarize_frame(frame, t).view(np.bool_)
