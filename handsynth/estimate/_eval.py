@@ -654,7 +654,7 @@ class EvalReport:
     options : EvalOptions
     hands : tuple of dict
         Per test hand: true ratios, continuous selection ratios, the
-        database (grid shape name) of each condition and the ratio distance
+        database (shape name) of each condition and the ratio distance
         to it.
     hand_index : ndarray of int64, shape (F,)
         Test hand of each frame.
@@ -1024,7 +1024,7 @@ def _plot_distance(report: EvalReport, path: Path) -> Path:
             ax.grid(alpha=0.3)
             ax.tick_params(labelsize=7)
     for ax in axes[-1]:
-        ax.set_xlabel("ratio distance of the hand from the database's grid shape (grid steps)",
+        ax.set_xlabel("ratio distance of the hand from the database's shape (grid steps)",
                       fontsize=8)
     axes[0, 0].legend(fontsize=7)
     fig.suptitle("error vs ratio distance, one point per hand and database "
@@ -1058,7 +1058,7 @@ def _plot_joint_mae(report: EvalReport, path: Path) -> Path:
 
 
 class _Lookups:
-    """Opened databases by grid shape, the few most recent kept in memory."""
+    """Opened databases by shape, the few most recent kept in memory."""
 
     def __init__(self, paths: dict, *, ties: str, keep: int = 4) -> None:
         self.paths, self.keep, self.ties = paths, keep, ties
