@@ -67,6 +67,15 @@ def _ctz(typingctx, x):
     return types.int64(x), codegen
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _put_run(ry, rx0, rx1, i, y, x0, x1):
+    """Store run ``i`` (row `y`, columns ``[x0, x1)``) and return ``i + 1``."""
+    ry[_U(i)] = y
+    rx0[_U(i)] = x0
+    rx1[_U(i)] = x1
+    return i + 1
+
+
 @njit(cache=True, nogil=True)
 def _byte_runs(words, wb, x0, x1, y, ry, rx0, rx1, n):
     """Append the runs inside ``[x0, x1)`` of one row of 0/1 bytes, as row `y`.
@@ -114,18 +123,12 @@ def _byte_runs(words, wb, x0, x1, y, ry, rx0, rx1, n):
             continue
         p = (k << 3) + (_ctz(w) >> 3)
         if fg:
-            ry[_U(n)] = y
-            rx0[_U(n)] = start
-            rx1[_U(n)] = p
-            n += 1
+            n = _put_run(ry, rx0, rx1, n, y, start, p)
         else:
             start = p
         fg = not fg
     if fg:
-        ry[_U(n)] = y
-        rx0[_U(n)] = start
-        rx1[_U(n)] = x1
-        n += 1
+        n = _put_run(ry, rx0, rx1, n, y, start, x1)
     return n
 
 
@@ -134,6 +137,22 @@ def _grow(a, n, cap):
     b = np.empty(cap, np.int32)
     b[:n] = a[:n]
     return b
+
+
+@njit(cache=True, nogil=True)
+def _run_buffers(cap):
+    """Empty run buffers ``(row, x0, x1)`` for `cap` runs."""
+    return np.empty(cap, np.int32), np.empty(cap, np.int32), np.empty(cap, np.int32)
+
+
+@njit(cache=True, nogil=True)
+def _with_room(ry, rx0, rx1, n, room):
+    """The run buffers, grown (contents ``[:n]`` kept) when fewer than `room`
+    runs fit after run `n`."""
+    if n + room <= ry.size:
+        return ry, rx0, rx1
+    cap = 2 * ry.size + room
+    return _grow(ry, n, cap), _grow(rx0, n, cap), _grow(rx1, n, cap)
 
 
 @njit(cache=True, nogil=True)
@@ -152,17 +171,13 @@ def _scan_runs(mask, words, lo, hi):
         nw = (w + 7) // 8
         wflat = np.zeros(nw, np.uint64)
         row = wflat.view(np.uint8)
-    cap = 4096
-    ry = np.empty(cap, np.int32)
-    rx0 = np.empty(cap, np.int32)
-    rx1 = np.empty(cap, np.int32)
+    room = (w + 1) // 2  # most runs one row can add
+    ry, rx0, rx1 = _run_buffers(4096)
     n = 0
     y = 0
     while y < h:
-        if n + (w + 1) // 2 > cap:  # rare; kept out of the row loop below
-            cap = 2 * cap + (w + 1) // 2
-            ry, rx0, rx1 = _grow(ry, n, cap), _grow(rx0, n, cap), _grow(rx1, n, cap)
-        while y < h and n + (w + 1) // 2 <= cap:
+        ry, rx0, rx1 = _with_room(ry, rx0, rx1, n, room)  # rare; kept out of the row loop
+        while y < h and n + room <= ry.size:
             if words.shape[1] > 0:
                 n = _byte_runs(wflat, y * nw, lo[y], min(hi[y], w), y, ry, rx0, rx1, n)
             else:
@@ -614,18 +629,12 @@ def _bit_runs(words, n, x0, y, ry, rx0, rx1, cnt):
             p = x0 + (k << 6) + _ctz(tr)
             tr &= tr - _U(1)
             if fg:
-                ry[_U(cnt)] = y
-                rx0[_U(cnt)] = start
-                rx1[_U(cnt)] = p
-                cnt += 1
+                cnt = _put_run(ry, rx0, rx1, cnt, y, start, p)
             else:
                 start = p
             fg = not fg
     if fg:
-        ry[_U(cnt)] = y
-        rx0[_U(cnt)] = start
-        rx1[_U(cnt)] = x0 + n
-        cnt += 1
+        cnt = _put_run(ry, rx0, rx1, cnt, y, start, x0 + n)
     return cnt
 
 
@@ -643,17 +652,13 @@ def _frame_kernel(frame, lo, hi, t, size):
     nb = (w + 31) // 32 + 3
     bits = np.zeros(nb + (nb & 1), np.uint32)
     words = bits.view(np.uint64)
-    cap = 4096
-    ry = np.empty(cap, np.int32)
-    rx0 = np.empty(cap, np.int32)
-    rx1 = np.empty(cap, np.int32)
+    room = (w + 1) // 2  # most runs one row can add
+    ry, rx0, rx1 = _run_buffers(4096)
     n = 0
     y = 0
     while y < h:
-        if n + (w + 1) // 2 > cap:  # rare; kept out of the row loop below
-            cap = 2 * cap + (w + 1) // 2
-            ry, rx0, rx1 = _grow(ry, n, cap), _grow(rx0, n, cap), _grow(rx1, n, cap)
-        while y < h and n + (w + 1) // 2 <= cap:
+        ry, rx0, rx1 = _with_room(ry, rx0, rx1, n, room)  # rare; kept out of the row loop
+        while y < h and n + room <= ry.size:
             x0 = max(lo[y], 0)
             x1 = min(hi[y], w)
             if x0 < x1:

@@ -241,3 +241,15 @@ def test_fast_preprocess_equals_the_reference_on_random_frames(seed):
             np.testing.assert_array_equal(preprocess(frame, mount, side=side, size=size),
                                           preprocess_reference(frame, mount, side=side,
                                                                size=size))
+
+
+def test_fast_preprocess_equals_the_reference_past_the_first_run_buffer():
+    # ~22,000 runs: more than the kernels' first buffer of 4,096, so it must grow
+    from handsynth.render import preprocess_reference
+
+    rng = np.random.default_rng(7)
+    mask = rng.random((300, 300)) < 0.5
+    grey = np.where(mask, 200, 20).astype(np.uint8)
+    for frame in (mask, grey):
+        np.testing.assert_array_equal(preprocess(frame, NO_CUT, size=64),
+                                      preprocess_reference(frame, NO_CUT, size=64))
