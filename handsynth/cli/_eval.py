@@ -45,7 +45,8 @@ def _parse_list(text: str, option: str) -> tuple[str, ...]:
               help="Pose sets of the test frames, comma-separated.")
 @click.option("--hand", type=click.Choice(["model", "mesh"]), default="model", show_default=True,
               help="Test hands: MuJoCo model hands, or the realistic glTF mesh hand.")
-@click.option("--conditions", default="standard,selected,selected_none,personal,own_shape",
+@click.option("--conditions",
+              default="standard,selected,selected_none,personal,calibrated,own_shape",
               show_default=True, help="Databases to compare, comma-separated.")
 @click.option("--count", type=int, default=20448, show_default=True,
               help="Entries per database.")

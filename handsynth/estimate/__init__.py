@@ -13,9 +13,21 @@
   row writers (:func:`open_row_writer`) and :class:`SideBySideWriter`.
 * :func:`measure_photo`: the measurements of formulas (1)-(4) from a
   top-down photo of the open hand.
+* Calibration from one open-hand frame (beyond the paper):
+  :func:`select_shape_from_frame`, :class:`Calibration`,
+  :func:`masked_search` / :func:`masked_search_reference`, and
+  :meth:`PoseLookup.calibrated`.
 """
 
 from ._ann import ApproximateIndex, ApproximateOptions
+from ._calibration import (
+    Calibration,
+    FrameSelection,
+    MaskedMatch,
+    masked_search,
+    masked_search_reference,
+    select_shape_from_frame,
+)
 from ._eval import EvalOptions, EvalReport, evaluate
 from ._live import (
     CameraSource,
@@ -50,6 +62,12 @@ __all__ = [
     "SEGMENTS",
     "ApproximateIndex",
     "ApproximateOptions",
+    "Calibration",
+    "FrameSelection",
+    "MaskedMatch",
+    "masked_search",
+    "masked_search_reference",
+    "select_shape_from_frame",
     "EvalOptions",
     "EvalReport",
     "evaluate",

@@ -46,6 +46,12 @@ Conditions (one database lookup per frame each)
     photo's measurement error.  The mesh hand has no photo renderer: its
     ratios come from formulas (1)-(4) on its measurements without
     normalisation.
+``calibrated`` (beyond the paper)
+    One frame of the test hand open and flat (all angles 0) through the
+    device camera chooses the grid database
+    (:func:`~handsynth.estimate.select_shape_from_frame`) and calibrates the
+    lookup (:meth:`PoseLookup.calibrated`, ignore mask grown by 1 pixel):
+    :mod:`handsynth.estimate._calibration`.
 ``own_shape`` (diagnostic)
     The same poses rendered from the *selected grid shape itself* and looked
     up in its own database: no shape mismatch at all, so its error is the
@@ -107,6 +113,7 @@ from ..models import GRID_LEVELS, JOINT_NAMES, HandShape
 from ..models import pose_set as make_pose_set
 from ..models._posesets import PAPER_SIZE
 from ..render import CameraMount
+from ._calibration import select_shape_from_frame
 from ._lookup import PoseLookup
 from ._selection import (
     HandMeasurements,
@@ -129,12 +136,14 @@ __all__ = [
 
 #: Conditions of the experiment, in report order (module docstring).
 CONDITIONS: tuple[str, ...] = ("standard", "selected", "selected_none", "personal",
-                                "own_shape")
+                                "calibrated", "own_shape")
 _CONDITION_TEXT = {
     "standard": "standard database",
     "selected": "selected database (formulas (1)-(4), palm-width normalisation, the paper's)",
     "selected_none": "selected database (formulas (1)-(4), no normalisation)",
     "personal": "database built for the hand's shape as measured on a photo",
+    "calibrated": ("grid database that fits the hand's open-hand frame best, searched with the "
+                   "ignore mask that frame gives (beyond the paper)"),
     "own_shape": "frames of the selected grid shape in its own database (diagnostic floor)",
 }
 _NORMALIZE = {"selected": "palm_width", "selected_none": "none"}
@@ -142,6 +151,9 @@ _HANDS = ("model", "mesh")
 _MOUNTS = {"paper": CameraMount.paper, "whole-hand": CameraMount.whole_hand}
 _MESH_MODULE = "handsynth.render._mesh_hand"
 SCHEMA = "handsynth.eval/1"
+
+#: Growth of the ignore mask of the ``calibrated`` condition, pixels (4-neighbour steps).
+CALIBRATION_DILATION_PX = 1
 
 #: A joint counts as moving in a frame when its true angle is farther than this from 0, degrees.
 MOVING_DEG = 1.0
@@ -153,7 +165,7 @@ TARGETS = {
     "mesh": {"index_pip_sd_deg": 12.0},
 }
 #: Conditions whose figures are checked against :data:`TARGETS`.
-TARGET_CONDITIONS = ("selected", "personal")
+TARGET_CONDITIONS = ("selected", "personal", "calibrated")
 #: The paper's figures (SPEC.md section 1 table), mean and s.d. in degrees.
 PAPER = {
     "standard": {"index_pip_flex": (-3.66, 18.41), "thumb_cmc_flex": (3.76, 11.76)},
@@ -607,6 +619,8 @@ def _plan_hands(options: EvalOptions, mesh_measurements: HandMeasurements | None
             if cond == "personal":
                 hand.databases[cond] = _personal_shape(hand, options)
                 continue
+            if cond == "calibrated":
+                continue  # chosen from the hand's open-hand frame in evaluate()
             norm = _NORMALIZE.get(cond, "palm_width")
             if hand.measurements is None:
                 hand.databases[cond] = standard
@@ -736,7 +750,7 @@ class EvalReport:
         ----------
         pose_set : str, keyword-only, optional
             Check on one pose set's frames; all frames by default.
-        condition : {"selected", "personal"}, keyword-only
+        condition : {"selected", "personal", "calibrated"}, keyword-only
             The condition checked (:data:`TARGET_CONDITIONS`); it must also
             beat ``standard``.
 
@@ -944,7 +958,7 @@ class EvalReport:
 # directly, so the caller's pyplot backend is never touched.
 
 _COLOURS = {"standard": "tab:blue", "selected": "tab:red", "selected_none": "tab:green",
-            "personal": "tab:purple", "own_shape": "tab:grey"}
+            "personal": "tab:purple", "calibrated": "tab:orange", "own_shape": "tab:grey"}
 
 
 def _figure(figsize):
@@ -1082,6 +1096,23 @@ class _Lookups:
         return lookup
 
 
+def _calibration_frames(hands: list[_TestHand], options: EvalOptions, mesh) -> dict:
+    """Render each hand open and flat; choose its ``calibrated`` database from that frame."""
+    zero = np.zeros((1, len(JOINT_NAMES)))
+    frames = {}
+    for hand in hands:
+        if mesh is not None:
+            frame = mesh.masks(zero)[0]
+        else:
+            with _model_renderer(hand.ratios, options) as r:
+                frame = r.masks(zero)[0]
+        sel = select_shape_from_frame(frame, mount=options.camera(), side=options.side)
+        hand.databases["calibrated"] = sel.shape
+        hand.selection["open_frame"] = sel.shape
+        frames[hand.index] = frame
+    return frames
+
+
 def _model_renderer(shape: HandShape, options: EvalOptions):
     from ..render import SilhouetteRenderer
 
@@ -1131,6 +1162,8 @@ def evaluate(options: EvalOptions, *,
         mesh = _mesh_renderer_factory()(mount, side=options.side, width_px=w, height_px=h)
         mesh_meas = _mesh_measurements(mesh)
     hands = _plan_hands(options, mesh_meas)
+    open_frames = _calibration_frames(hands, options, mesh) if "calibrated" in options.conditions \
+        else {}
 
     needed: dict[str, HandShape] = {}
     for hand in hands:
@@ -1174,6 +1207,9 @@ def evaluate(options: EvalOptions, *,
         t = time.perf_counter()
         for cond in conds:
             lookup = lookups[hand.databases[cond]]
+            if cond == "calibrated":
+                lookup = lookup.calibrated(open_frames[hand.index],
+                                           dilation_px=CALIBRATION_DILATION_PX)
             src = own if cond == "own_shape" else frames
             ests = [lookup.estimate(src[i]) for i in range(n)]
             rec["est"][cond].append(np.stack([e.angles for e in ests]))

@@ -10,6 +10,7 @@ and the same features (:func:`handsynth.db.extract_features`).
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Protocol, runtime_checkable
@@ -20,6 +21,7 @@ from ..db import BuildOptions, Database, build_databases, extract_features, open
 from ..errors import DatabaseError, InvalidInputError
 from ..models import JOINT_NAMES, HandShape
 from ..render import CameraMount, preprocess
+from ._calibration import Calibration, masked_search, reference_silhouette
 from ._search import SearchOptions, SearchTables, search
 from ._selection import HandMeasurements, SelectionOptions, database_path, select_shape
 
@@ -43,11 +45,14 @@ class PoseEstimate:
         In [0, 1]: ``exp(-E / (C3 * A_input))``, i.e. 1 for a perfect match
         and 1/e when the error equals every input ridge pixel lying outside
         the match; halved when the search had to fall back (no entry passed
-        the pruning).  0 when `no_hand`.  A heuristic, not a probability.
+        the pruning).  A calibrated lookup reports the IoU of input and match
+        outside the ignore mask.  0 when `no_hand`.  A heuristic, not a
+        probability.
     entry : int
         Index of the matched database entry, -1 when `no_hand`.
     error : float
-        The search's ``E`` of that entry (inf when `no_hand`).
+        The search's ``E`` of that entry; for a calibrated lookup its pixel
+        difference outside the ignore mask (inf when `no_hand`).
     low_confidence : bool
         No entry passed both pruning stages (SPEC.md section 1).
     no_hand : bool
@@ -109,6 +114,13 @@ class PoseLookup:
         :mod:`handsynth.estimate._ann`).  ``True`` or options: open the
         index kept next to the database file, building it if needed.
 
+    Notes
+    -----
+    :meth:`calibrated` gives a lookup that matches frames by the pixels
+    outside a user's ignore mask, learnt from one open-hand frame
+    (:mod:`handsynth.estimate._calibration`, beyond the paper).  It scores
+    every entry (no pruning, no temporal seed, exact search only).
+
     Examples
     --------
     >>> lookup = PoseLookup.open("dbs/", shape=HandShape())      # doctest: +SKIP
@@ -149,6 +161,41 @@ class PoseLookup:
         self._angles = np.asarray(database.angles, dtype=np.float64)
         self._angles.setflags(write=False)
         self._last = -1
+        self.calibration: Calibration | None = None
+
+    def calibrated(self, open_frame, *, dilation_px: int = 1) -> PoseLookup:
+        """A lookup of the same database calibrated to a user's open-hand frame.
+
+        Parameters
+        ----------
+        open_frame : ndarray, shape (H, W) or (H, W, 3)
+            The user's hand open and flat (all joint angles 0) through the
+            database's camera: a frame as :meth:`estimate` takes.
+        dilation_px : int, keyword-only
+            Growth of the ignore mask, 4-neighbour steps (0 to 8).
+
+        Returns
+        -------
+        PoseLookup
+            A new lookup sharing this one's database; this one is unchanged.
+
+        Raises
+        ------
+        InvalidInputError
+            The frame is not an image or shows no hand, the database has no
+            open-hand entry, or the lookup uses the approximate index.
+        """
+        if self.approximate is not None:
+            raise InvalidInputError("a calibrated lookup needs the exact search, "
+                                    "got a lookup with an approximate index")
+        user = self.silhouette(open_frame)
+        if not user.any():
+            raise InvalidInputError("open_frame shows no hand")
+        _, reference = reference_silhouette(self.database)
+        out = copy.copy(self)
+        out._last = -1
+        out.calibration = Calibration.from_silhouettes(user, reference, dilation_px=dilation_px)
+        return out
 
     def _approximate_index(self, approximate):
         if approximate is None or approximate is False:
@@ -326,6 +373,8 @@ class PoseLookup:
             return PoseEstimate(angles=np.full(len(JOINT_NAMES), np.nan),
                                 keypoints=np.full((21, 3), np.nan, np.float32), confidence=0.0,
                                 entry=-1, error=float("inf"), low_confidence=True, no_hand=True)
+        if self.calibration is not None:
+            return self._estimate_calibrated(sil)
         f = extract_features(sil)
         seed = self._last if self.temporal and self._last >= 0 else None
         if self.approximate is not None:
@@ -346,3 +395,11 @@ class PoseLookup:
         return PoseEstimate(angles=angles, keypoints=keypoints, confidence=conf,
                             entry=r.index, error=r.error, low_confidence=r.low_confidence,
                             no_hand=False)
+
+    def _estimate_calibrated(self, sil: np.ndarray) -> PoseEstimate:
+        m = masked_search(sil, self.tables.sil_bits, self.calibration)
+        rows = m.tied if self.ties == "mean" else m.tied[:1]
+        return PoseEstimate(angles=self._angles[rows].mean(axis=0),
+                            keypoints=self.database.keypoints_m(rows).mean(axis=0),
+                            confidence=1.0 - m.error / max(m.union, 1), entry=m.index,
+                            error=float(m.error), low_confidence=False, no_hand=False)

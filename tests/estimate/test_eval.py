@@ -26,7 +26,9 @@ from handsynth.estimate._selection import (
     model_measurements,
     select_shape,
 )
+from handsynth.estimate import select_shape_from_frame
 from handsynth.models import GRID_LEVELS, JOINT_NAMES, HandShape
+from handsynth.render import CameraMount, SilhouetteRasterizer
 
 #: One hand beyond the grid on three ratios, one inside but off the grid.
 HANDS = (HandShape(length=1.02, width=0.85, palm=1.07, thumb=1.13),
@@ -158,6 +160,12 @@ def test_conditions_use_the_right_databases(report):
         photo = HandShape(**hand["selection_ratios"]["photo"])
         assert dbs["personal"] == photo.name != shape.nearest_grid().name
         assert hand["ratio_distance"]["personal"] < 0.25
+        # calibrated: the grid shape whose open hand overlaps the hand's open frame most
+        with SilhouetteRasterizer(shape, CameraMount()) as r:
+            open_frame = r.masks(np.zeros((1, 20)))[0]
+        assert dbs["calibrated"] == select_shape_from_frame(open_frame).shape.name
+        assert hand["selection_ratios"]["open_frame"] == HandShape.from_name(
+            dbs["calibrated"]).as_dict()
     # the palm-width normalisation moves the first hand to another database than the
     # nearest grid shape of its true ratios
     assert report.hands[0]["databases"]["selected"] != report.hands[0]["databases"]["selected_none"]

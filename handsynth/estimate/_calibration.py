@@ -1,0 +1,316 @@
+"""Calibration from one open-hand frame: a user's own ignore mask (beyond the paper).
+
+A user's hand is never the database's model hand: thicker fingers, a longer
+palm, a web between thumb and index show in every frame.  On the realistic
+mesh hand (``handsynth eval --hand mesh``) that fixed mismatch is about 450
+of the 4,096 pixels of the 64x64 silhouette, while an index finger flexing at
+its PIP changes about 100.  The paper's ``E`` then prefers open-hand entries
+whose other fingers are a few degrees off (they happen to fit the mismatch)
+to the entry of the true pose, and never reports the index PIP flexed
+(``docs/eval/README.md``).
+
+Calibration removes the fixed part of the mismatch:
+
+1. The user holds the hand open and flat once (all 20 angles 0, the pose of
+   the database's open-hand entry) and the device takes one frame.
+2. Its 64x64 silhouette ``U`` (the database's preprocessing) is compared
+   with the silhouette ``O`` of the database's open-hand entry.  The pixels
+   where they differ, grown by `dilation_px` steps of 4-neighbour dilation
+   (edges a pixel off from frame to frame), form the *ignore mask* ``M``.
+3. A frame's silhouette ``S`` is then matched by the smallest masked pixel
+   difference ``X_i = |(S xor S_i) & ~M|`` over all entries ``i`` (ties: all
+   entries with the smallest ``X``, as the exact search reports them).
+
+Step 3 replaces the paper's ``E``: its HLAC vector sums over the whole image
+and cannot leave pixels out, and its ridge penalties are built for a
+silhouette that fits.  :func:`select_shape_from_frame` chooses the database
+from the same frame: the shape whose open hand overlaps ``U`` most.
+
+Figures are in the README ("Calibrated lookup") and ``docs/eval``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from ..db import pack_mask, unpack_mask
+from ..db._bits import _popcount64
+from ..errors import InvalidInputError
+from ..models import HandShape
+from ..render import CameraMount, preprocess
+
+__all__ = ["Calibration", "FrameSelection", "MaskedMatch", "masked_search",
+           "masked_search_reference", "select_shape_from_frame"]
+
+_MAX_DILATION_PX = 8
+
+
+@dataclass(frozen=True, eq=False)
+class Calibration:
+    """A user's ignore mask for :func:`masked_search` (module docstring).
+
+    Attributes
+    ----------
+    ignore : ndarray of bool, shape (64, 64)
+        Pixels left out of the match (read-only).
+    keep_bits : ndarray of uint64, shape (64,)
+        The complement of `ignore`, packed as the database's silhouettes.
+    open_iou : float
+        IoU of the user's and the database's open-hand silhouettes before
+        masking (1: the same hand).
+    dilation_px : int
+        4-neighbour dilation steps applied to the mismatch.
+    """
+
+    ignore: np.ndarray
+    keep_bits: np.ndarray
+    open_iou: float
+    dilation_px: int
+
+    @classmethod
+    def from_silhouettes(cls, user, reference, *, dilation_px: int = 1) -> Calibration:
+        """The calibration of a user's open-hand silhouette against the database's.
+
+        Parameters
+        ----------
+        user, reference : array_like of bool, shape (S, S)
+            Preprocessed silhouettes of the user's open hand and of the
+            database's open-hand entry (same size).
+        dilation_px : int, keyword-only
+            Dilation steps of the mismatch, 0 to 8.
+
+        Raises
+        ------
+        InvalidInputError
+            Silhouettes of different or non-square shapes, an empty one, or
+            a `dilation_px` out of range.
+        """
+        u = np.asarray(user)
+        o = np.asarray(reference)
+        if u.dtype != bool or o.dtype != bool or u.ndim != 2 or u.shape != o.shape \
+                or u.shape[0] != u.shape[1]:
+            raise InvalidInputError(
+                "user and reference must be square bool silhouettes of one size, got "
+                f"{u.dtype} {u.shape} and {o.dtype} {o.shape}")
+        if not u.any() or not o.any():
+            which = "user" if not u.any() else "reference"
+            raise InvalidInputError(f"the {which} silhouette shows no hand")
+        if isinstance(dilation_px, bool) or not isinstance(dilation_px, (int, np.integer)) \
+                or not 0 <= dilation_px <= _MAX_DILATION_PX:
+            raise InvalidInputError(
+                f"dilation_px must be an int in [0, {_MAX_DILATION_PX}], got {dilation_px!r}")
+        ignore = u ^ o
+        for _ in range(int(dilation_px)):
+            grown = ignore.copy()
+            grown[1:] |= ignore[:-1]
+            grown[:-1] |= ignore[1:]
+            grown[:, 1:] |= ignore[:, :-1]
+            grown[:, :-1] |= ignore[:, 1:]
+            ignore = grown
+        ignore.setflags(write=False)
+        keep = pack_mask(~ignore)
+        keep.setflags(write=False)
+        iou = float((u & o).sum() / (u | o).sum())
+        return cls(ignore=ignore, keep_bits=keep, open_iou=iou, dilation_px=int(dilation_px))
+
+
+@dataclass(frozen=True)
+class MaskedMatch:
+    """Outcome of :func:`masked_search`.
+
+    Attributes
+    ----------
+    index : int
+        Matched entry (the first of `tied`).
+    error : int
+        Its masked pixel difference ``X``.
+    union : int
+        Kept pixels in the input's or the entry's silhouette (``1 - error /
+        union`` is their IoU outside the ignore mask).
+    tied : ndarray of int64, shape (M,)
+        Every entry with the same ``X``, ascending.
+    """
+
+    index: int
+    error: int
+    union: int
+    tied: np.ndarray
+
+
+@njit(cache=True, nogil=True)
+def _masked_kernel(q, keep, sil_bits, ties):
+    """Smallest popcount((S_i ^ q) & keep) over the rows of `sil_bits`; ties into `ties`."""
+    best = 1 << 62
+    nt = 0
+    for i in range(sil_bits.shape[0]):
+        e = 0
+        for w in range(q.shape[0]):
+            e += _popcount64((sil_bits[i, w] ^ q[w]) & keep[w])
+            if e > best:
+                break
+        if e < best:
+            best = e
+            nt = 0
+        if e == best:
+            ties[nt] = i
+            nt += 1
+    return best, nt
+
+
+def _check_query(silhouette, calibration, sil_bits) -> np.ndarray:
+    if not isinstance(calibration, Calibration):
+        raise InvalidInputError(
+            f"calibration must be a Calibration, got {type(calibration).__name__}")
+    s = np.asarray(silhouette)
+    if s.dtype != bool or s.shape != calibration.ignore.shape:
+        raise InvalidInputError(f"silhouette must be bool of shape {calibration.ignore.shape}, "
+                                f"got {s.dtype} {s.shape}")
+    q = pack_mask(s)
+    if sil_bits.ndim != 2 or sil_bits.shape[1] != q.size:
+        raise InvalidInputError(f"sil_bits must have shape (N, {q.size}), got {sil_bits.shape}")
+    return q
+
+
+def _union(q, keep, row) -> int:
+    return int(np.bitwise_count((q | row) & keep).sum())
+
+
+def masked_search(silhouette, sil_bits, calibration: Calibration) -> MaskedMatch:
+    """The entry whose silhouette differs least from the input outside the ignore mask.
+
+    Parameters
+    ----------
+    silhouette : ndarray of bool, shape (64, 64)
+        The input's preprocessed silhouette.
+    sil_bits : ndarray of uint64, shape (N, 64)
+        The database's packed silhouettes (``Database.sil_bits``).
+    calibration : Calibration
+
+    Returns
+    -------
+    MaskedMatch
+
+    Notes
+    -----
+    Compiled; every entry is scored, with an early exit once its count
+    exceeds the best so far (about 1 ms for 20,448 entries on one core).
+    :func:`masked_search_reference` is the plain numpy specification.
+    """
+    table = np.ascontiguousarray(sil_bits, dtype=np.uint64)
+    q = _check_query(silhouette, calibration, table)
+    ties = np.empty(table.shape[0], np.int64)
+    best, nt = _masked_kernel(q, calibration.keep_bits, table, ties)
+    tied = ties[:nt].copy()
+    return MaskedMatch(index=int(tied[0]), error=int(best),
+                       union=_union(q, calibration.keep_bits, table[tied[0]]), tied=tied)
+
+
+def masked_search_reference(silhouette, sil_bits, calibration: Calibration) -> MaskedMatch:
+    """:func:`masked_search` written plainly with numpy (the specification for tests)."""
+    table = np.asarray(sil_bits, dtype=np.uint64)
+    q = _check_query(silhouette, calibration, table)
+    x = np.bitwise_count((table ^ q[None, :]) & calibration.keep_bits[None, :]).sum(axis=1)
+    tied = np.flatnonzero(x == x.min())
+    return MaskedMatch(index=int(tied[0]), error=int(x[tied[0]]),
+                       union=_union(q, calibration.keep_bits, table[tied[0]]), tied=tied)
+
+
+@dataclass(frozen=True)
+class FrameSelection:
+    """Outcome of :func:`select_shape_from_frame`.
+
+    Attributes
+    ----------
+    shape : HandShape
+        The shape whose open hand overlaps the frame's most.
+    iou : float
+        That overlap (64x64 silhouette IoU).
+    ious : dict
+        Shape name -> IoU, for every candidate.
+    """
+
+    shape: HandShape
+    iou: float
+    ious: dict
+
+
+def open_hand_silhouettes(shapes, mount: CameraMount, *, side: str, width_px: int,
+                          height_px: int, size: int = 64) -> np.ndarray:
+    """Preprocessed open-hand silhouettes of model hands, shape (len(shapes), size, size)."""
+    from ..render import SilhouetteRasterizer
+
+    out = np.empty((len(shapes), size, size), bool)
+    zero = np.zeros((1, 20))
+    for k, shape in enumerate(shapes):
+        with SilhouetteRasterizer(shape, mount, side=side, width_px=width_px,
+                                  height_px=height_px) as r:
+            out[k] = preprocess(r.masks(zero)[0], mount, side=side, size=size)
+    return out
+
+
+def select_shape_from_frame(open_frame, *, mount: CameraMount | None = None,
+                            side: str = "right", shapes=None) -> FrameSelection:
+    """The database shape that fits a user's open-hand frame best (beyond the paper).
+
+    Each candidate model hand is rendered open and flat through `mount` at
+    the frame's size; the one whose 64x64 silhouette has the highest IoU with
+    the frame's is chosen (ties: the first).  The paper chose by measured
+    lengths (:func:`select_shape`); this chooses by what the device sees.
+
+    Parameters
+    ----------
+    open_frame : ndarray, shape (H, W) or (H, W, 3)
+        The user's open, flat hand through the device camera (a frame as
+        :meth:`PoseLookup.estimate` takes).
+    mount : CameraMount, keyword-only, optional
+        The device (the paper's by default).
+    side : {"right", "left"}, keyword-only
+    shapes : sequence of HandShape, keyword-only, optional
+        Candidates; the 81 grid shapes by default (about 3 s).
+
+    Returns
+    -------
+    FrameSelection
+
+    Raises
+    ------
+    InvalidInputError
+        The frame is not an image or shows no hand; `shapes` is empty or
+        holds something else than HandShape objects.
+    """
+    mount = mount or CameraMount()
+    cands = HandShape.grid() if shapes is None else list(shapes)
+    if not cands or not all(isinstance(s, HandShape) for s in cands):
+        raise InvalidInputError(f"shapes must be a non-empty sequence of HandShape, got {shapes!r}")
+    user = preprocess(open_frame, mount, side=side)
+    if not user.any():
+        raise InvalidInputError("open_frame shows no hand")
+    h, w = np.shape(open_frame)[:2]
+    sils = open_hand_silhouettes(cands, mount, side=side, width_px=w, height_px=h)
+    inter = (sils & user[None]).sum(axis=(1, 2))
+    union = (sils | user[None]).sum(axis=(1, 2))
+    ious = inter / np.maximum(union, 1)
+    k = int(np.argmax(ious))
+    return FrameSelection(shape=cands[k], iou=float(ious[k]),
+                          ious={s.name: float(v) for s, v in zip(cands, ious)})
+
+
+def reference_silhouette(database) -> tuple[int, np.ndarray]:
+    """The open-hand entry (all angles 0) of a database and its 64x64 silhouette.
+
+    Raises
+    ------
+    InvalidInputError
+        The database has no entry with all 20 angles 0.
+    """
+    angles = np.asarray(database.angles)
+    rows = np.flatnonzero(np.all(angles == 0, axis=1))
+    if rows.size == 0:
+        raise InvalidInputError(
+            f"database {database.path} has no open-hand entry (all angles 0) to calibrate "
+            "against")
+    i = int(rows[0])
+    return i, unpack_mask(np.asarray(database.sil_bits[i]))
