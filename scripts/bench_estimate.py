@@ -3,6 +3,7 @@
 Usage::
 
     python scripts/bench_estimate.py [--db FOLDER] [--entries 20448] [--frames 2000]
+                                     [--calibrated]
 
 The database of the standard hand is read from ``FOLDER/<HandShape().name>.h5``
 or, without ``--db``, rendered into a temporary folder (about 30 s for
@@ -15,6 +16,10 @@ matches poorly, so the search often has to fall back to scoring every
 entry (the worst case).  The process is pinned to one CPU and OpenCV to
 one thread.  The last line is machine-readable (paper-set frames):
 ``estimate_fps_median=<number> latency_p99_ms=<number>``.
+
+``--calibrated`` times :meth:`PoseLookup.calibrated` instead (calibrated
+with the off-grid hand's open-hand frame: every entry is scored by its
+pixel difference outside the ignore mask).
 """
 
 from __future__ import annotations
@@ -47,6 +52,8 @@ def main() -> None:
     ap.add_argument("--db", type=Path, help="folder of <shape>.h5 databases")
     ap.add_argument("--entries", type=int, default=20448, help="entries when rendering a database")
     ap.add_argument("--frames", type=int, default=2000, help="timed frames")
+    ap.add_argument("--calibrated", action="store_true",
+                    help="time a lookup calibrated with the hand's open-hand frame")
     args = ap.parse_args()
 
     import cv2
@@ -73,15 +80,18 @@ def main() -> None:
     renderer = SilhouetteRenderer(HandShape(length=1.03, width=1.06, palm=0.98, thumb=1.04),
                                   lookup.mount, width_px=720, height_px=480)
     rng = np.random.default_rng(0)
+
+    def bgr(mask):
+        img = np.where(mask[..., None], np.uint8([120, 160, 210]), np.uint8([15, 20, 25]))
+        return np.ascontiguousarray(img + rng.integers(0, 12, img.shape, dtype=np.uint8))
+
+    if args.calibrated:
+        lookup = lookup.calibrated(bgr(renderer.mask(np.zeros(20))))
+        print(f"calibrated: {int(lookup.calibration.ignore.sum())} of 4096 pixels ignored")
     results = {}
     for name, poses in (("natural", natural_pose_set(64, seed=11)),
                         ("paper", paper_pose_set(64, seed=11))):
-        frames = []
-        for pose in poses:
-            mask = renderer.mask(pose)
-            img = np.where(mask[..., None], np.uint8([120, 160, 210]), np.uint8([15, 20, 25]))
-            noise = rng.integers(0, 12, img.shape, dtype=np.uint8)
-            frames.append(np.ascontiguousarray(img + noise))
+        frames = [bgr(renderer.mask(pose)) for pose in poses]
         for f in frames[:8]:  # warm-up (compilation)
             lookup.estimate(f)
         lat = np.empty(args.frames)

@@ -17,7 +17,13 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from ..db import BuildOptions, Database, build_databases, extract_features, open_database
+from ..db import (
+    BuildOptions,
+    Database,
+    build_databases,
+    extract_features,
+    open_database,
+)
 from ..errors import DatabaseError, InvalidInputError
 from ..models import JOINT_NAMES, HandShape
 from ..render import CameraMount, preprocess
