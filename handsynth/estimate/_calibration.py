@@ -32,6 +32,7 @@ Figures are in the README ("Calibrated lookup") and ``docs/eval``.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 from numba import njit
@@ -103,13 +104,10 @@ class Calibration:
             raise InvalidInputError(
                 f"dilation_px must be an int in [0, {_MAX_DILATION_PX}], got {dilation_px!r}")
         ignore = u ^ o
-        for _ in range(int(dilation_px)):
-            grown = ignore.copy()
-            grown[1:] |= ignore[:-1]
-            grown[:-1] |= ignore[1:]
-            grown[:, 1:] |= ignore[:, :-1]
-            grown[:, :-1] |= ignore[:, 1:]
-            ignore = grown
+        if dilation_px > 0:  # scipy's default structure in 2-D is the 4-neighbour cross
+            from scipy.ndimage import binary_dilation
+
+            ignore = binary_dilation(ignore, iterations=int(dilation_px))
         ignore.setflags(write=False)
         keep = pack_mask(~ignore)
         keep.setflags(write=False)
@@ -237,17 +235,22 @@ class FrameSelection:
     ious: dict
 
 
-def _open_hand_silhouettes(shapes, mount: CameraMount, *, side: str, width_px: int,
-                          height_px: int, size: int = 64) -> np.ndarray:
-    """Preprocessed open-hand silhouettes of model hands, shape (len(shapes), size, size)."""
+@lru_cache(maxsize=8)
+def _open_hand_silhouettes(shapes: tuple, mount: CameraMount, side: str, width_px: int,
+                           height_px: int) -> np.ndarray:
+    """Preprocessed open-hand silhouettes of model hands, shape (len(shapes), 64, 64).
+
+    Cached (read-only): every user of one device is compared with the same renders.
+    """
     from ..render import SilhouetteRasterizer
 
-    out = np.empty((len(shapes), size, size), bool)
+    out = np.empty((len(shapes), 64, 64), bool)
     zero = np.zeros((1, 20))
     for k, shape in enumerate(shapes):
         with SilhouetteRasterizer(shape, mount, side=side, width_px=width_px,
                                   height_px=height_px) as r:
-            out[k] = preprocess(r.masks(zero)[0], mount, side=side, size=size)
+            out[k] = preprocess(r.masks(zero)[0], mount, side=side)
+    out.setflags(write=False)
     return out
 
 
@@ -269,7 +272,9 @@ def select_shape_from_frame(open_frame, *, mount: CameraMount | None = None,
         The device (the paper's by default).
     side : {"right", "left"}, keyword-only
     shapes : sequence of HandShape, keyword-only, optional
-        Candidates; the 81 grid shapes by default (about 3 s).
+        Candidates; the 81 grid shapes by default (about 2 s the first time;
+        the renders are kept for later calls with the same mount, side and
+        frame size).
 
     Returns
     -------
@@ -289,7 +294,7 @@ def select_shape_from_frame(open_frame, *, mount: CameraMount | None = None,
     if not user.any():
         raise InvalidInputError("open_frame shows no hand")
     h, w = np.shape(open_frame)[:2]
-    sils = _open_hand_silhouettes(cands, mount, side=side, width_px=w, height_px=h)
+    sils = _open_hand_silhouettes(tuple(cands), mount, side, w, h)
     inter = (sils & user[None]).sum(axis=(1, 2))
     union = (sils | user[None]).sum(axis=(1, 2))
     ious = inter / np.maximum(union, 1)
@@ -298,8 +303,8 @@ def select_shape_from_frame(open_frame, *, mount: CameraMount | None = None,
                           ious={s.name: float(v) for s, v in zip(cands, ious)})
 
 
-def reference_silhouette(database) -> tuple[int, np.ndarray]:
-    """The open-hand entry (all angles 0) of a database and its 64x64 silhouette.
+def reference_silhouette(database) -> np.ndarray:
+    """The 64x64 silhouette of a database's open-hand entry (the first with all angles 0).
 
     Raises
     ------
@@ -312,5 +317,4 @@ def reference_silhouette(database) -> tuple[int, np.ndarray]:
         raise InvalidInputError(
             f"database {database.path} has no open-hand entry (all angles 0) to calibrate "
             "against")
-    i = int(rows[0])
-    return i, unpack_mask(np.asarray(database.sil_bits[i]))
+    return unpack_mask(np.asarray(database.sil_bits[rows[0]]))

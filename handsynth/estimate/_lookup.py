@@ -197,7 +197,7 @@ class PoseLookup:
         user = self.silhouette(open_frame)
         if not user.any():
             raise InvalidInputError("open_frame shows no hand")
-        _, reference = reference_silhouette(self.database)
+        reference = reference_silhouette(self.database)
         out = copy.copy(self)
         out._last = -1
         out.calibration = Calibration.from_silhouettes(user, reference, dilation_px=dilation_px)
@@ -392,20 +392,21 @@ class PoseLookup:
         conf = float(np.exp(-r.error / scale)) if scale > 0 else float(r.error == 0)
         if r.low_confidence:
             conf *= 0.5
-        tied = r.tied if self.ties == "mean" and r.tied is not None else None
-        if tied is None or tied.size == 1:
-            angles, keypoints = self._angles[r.index].copy(), self.database.keypoints_m(r.index)
-        else:
-            angles = self._angles[tied].mean(axis=0)
-            keypoints = self.database.keypoints_m(tied).mean(axis=0)
+        angles, keypoints = self._pose(r.index, r.tied)
         return PoseEstimate(angles=angles, keypoints=keypoints, confidence=conf,
                             entry=r.index, error=r.error, low_confidence=r.low_confidence,
                             no_hand=False)
 
     def _estimate_calibrated(self, sil: np.ndarray) -> PoseEstimate:
         m = masked_search(sil, self.tables.sil_bits, self.calibration)
-        rows = m.tied if self.ties == "mean" else m.tied[:1]
-        return PoseEstimate(angles=self._angles[rows].mean(axis=0),
-                            keypoints=self.database.keypoints_m(rows).mean(axis=0),
+        angles, keypoints = self._pose(m.index, m.tied)
+        return PoseEstimate(angles=angles, keypoints=keypoints,
                             confidence=1.0 - m.error / max(m.union, 1), entry=m.index,
                             error=float(m.error), low_confidence=False, no_hand=False)
+
+    def _pose(self, index: int, tied: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+        """Angles and keypoints reported for a match: entry `index`, or with ``ties="mean"``
+        the mean over the `tied` entries (``None``: not tracked)."""
+        if self.ties != "mean" or tied is None or tied.size == 1:
+            return self._angles[index].copy(), self.database.keypoints_m(index)
+        return self._angles[tied].mean(axis=0), self.database.keypoints_m(tied).mean(axis=0)
