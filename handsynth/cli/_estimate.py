@@ -8,6 +8,7 @@ from pathlib import Path
 import click
 
 from ..errors import EstimationError, InvalidInputError
+from ._io import read_image
 from ._main import cli
 
 #: Off-grid hand rendered by ``--synthetic`` unless ``--synthetic-shape`` says otherwise.
@@ -38,11 +39,9 @@ def _check_limits(frames, seconds, max_dead, fps) -> None:
         raise InvalidInputError(f"--fps must be a positive number, got {fps}")
 
 
-def _open_lookup(db_dir, shape_name, measurements, temporal, err, personal=False,
-                 personal_count=None):
+def _open_lookup(db_dir, shape_name, measurements, temporal, err, personal=False, build=None):
     import time
 
-    from ..db import BuildOptions
     from ..estimate import HandMeasurements, PoseLookup
     from ..estimate._live import default_database_dir
     from ..models import HandShape
@@ -54,12 +53,9 @@ def _open_lookup(db_dir, shape_name, measurements, temporal, err, personal=False
         shape = HandShape() if shape_name == "standard" else HandShape.from_name(shape_name)
     if measurements is not None:
         meas = HandMeasurements.from_file(measurements)
-    if personal_count is not None and not personal:
-        raise InvalidInputError("--personal-count applies to --personal only")
     if personal:
         if shape is None and meas is None:
             raise InvalidInputError("--personal needs --shape NAME or --measurements FILE")
-        build = BuildOptions() if personal_count is None else BuildOptions(count=personal_count)
         t = time.perf_counter()
         lookup = PoseLookup.personal(db_dir or default_database_dir(), shape=shape,
                                      measurements=meas, build=build, temporal=temporal)
@@ -74,6 +70,42 @@ def _open_lookup(db_dir, shape_name, measurements, temporal, err, personal=False
         path = build_default_database(db_dir)
         click.echo(f"default database {path} ready in {time.perf_counter() - t:.1f} s", err=err)
     return PoseLookup.open(db_dir, shape=shape, measurements=meas, temporal=temporal)
+
+
+def _calibrate(lookup, source, open_image, db_dir, mount, side, build, err):
+    """The lookup calibrated to the open hand: `open_image`, or the source's first hand."""
+    import time
+
+    from ..estimate import PoseLookup, first_hand_frame
+    from ..estimate._live import default_database_dir
+
+    if open_image is not None:
+        open_frame, where = open_image, "the calibration image"
+    elif hasattr(source, "open_frame"):
+        open_frame, where = source.open_frame(), "the synthetic hand held open"
+    else:
+        click.echo("calibrating: hold the hand open and flat", err=err)
+        open_frame = first_hand_frame(source, mount=mount, side=side)
+        where = "the first frame showing a hand"
+    t = time.perf_counter()
+    if lookup is None:
+        lookup = PoseLookup.from_open_frame(db_dir or default_database_dir(), open_frame,
+                                            mount=mount, build=build)
+    else:
+        lookup = lookup.calibrated(open_frame)
+    cal = lookup.calibration
+    click.echo(f"calibrated to {where} in {time.perf_counter() - t:.1f} s: database "
+               f"{lookup.database.path.name}, open-hand IoU {cal.open_iou:.3f}, "
+               f"{int(cal.ignore.sum())} of {cal.ignore.size} pixels ignored", err=err)
+    return lookup
+
+
+def _build_options(count: int):
+    from ..db import BuildOptions
+
+    if count < 1:
+        raise InvalidInputError(f"--build-count must be a positive integer, got {count}")
+    return BuildOptions(count=count)
 
 
 def _progress(stream):
@@ -103,8 +135,17 @@ def _progress(stream):
               help="Use a database of exactly the --shape or --measurements hand (built in "
                    "--db when missing, 20,448 paper poses, a few seconds) instead of the "
                    "nearest grid shape's.")
-@click.option("--personal-count", type=int, default=None, metavar="N",
-              help="Poses of a --personal database [default: the paper's 20,448].")
+@click.option("--build-count", "--personal-count", "build_count", type=int, default=None,
+              metavar="N", help="Poses of a database built for --personal or --calibrate "
+                                "[default: the paper's 20,448].")
+@click.option("--calibrate", is_flag=True,
+              help="Calibrate to the hand held open and flat (beyond the paper): the first "
+                   "frame showing a hand (--synthetic: the hand rendered open) chooses the grid "
+                   "database, built in --db when missing, unless --shape, --measurements or "
+                   "--personal chose it, and gives the pixels to ignore.")
+@click.option("--calibrate-image", default=None, metavar="FILE",
+              help="Calibrate with this image of the open, flat hand through the device "
+                   "instead of the first frame (implies --calibrate).")
 @click.option("--frames", type=int, default=None, metavar="N",
               help=f"Stop after N frames [--synthetic default: {SYNTHETIC_FRAMES}].")
 @click.option("--seconds", type=float, default=None, metavar="S", help="Stop after S seconds.")
@@ -130,17 +171,19 @@ def _progress(stream):
               help="Stop when N consecutive reads give no usable frame.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress line.")
 def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, personal,
-             personal_count, frames, seconds, out, fmt, keypoints, video_out, synthetic_shape,
-             synthetic_motion, synthetic_size, fps, no_temporal, max_dead, quiet) -> None:
+             build_count, calibrate, calibrate_image, frames, seconds, out, fmt, keypoints,
+             video_out, synthetic_shape, synthetic_motion, synthetic_size, fps, no_temporal, max_dead, quiet) -> None:
     """Look up the hand pose of every frame of a camera, a video file or a synthetic hand.
 
     Prints the frame rate of the lookup alone and of the whole loop; with
     --out writes one row per frame (frame, timestamp_s, no_hand,
     confidence, low_confidence, entry, the 20 joint angles in degrees,
     optionally the keypoints; synthetic runs add the true angles and report
-    the mean absolute error).  Dropped or unreadable frames are counted and
-    skipped; a source that gives nothing usable for --max-dead reads in a
-    row ends the run with an error.  Ctrl-C stops the run cleanly.
+    the mean absolute error).  With --calibrate the run starts with the
+    hand open and flat; that frame is not a row.  Dropped or unreadable
+    frames are counted and skipped; a source that gives nothing usable for
+    --max-dead reads in a row ends the run with an error.  Ctrl-C stops the
+    run cleanly.
     """
     from ..estimate._live import (
         CameraSource,
@@ -154,6 +197,7 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
         run_live,
     )
     from ..models import HandShape
+    from ..render import CameraMount
 
     chosen = [n for n, on in (("--camera", camera is not None), ("--video", video_in is not None),
                               ("--synthetic", synthetic)) if on]
@@ -169,6 +213,14 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
     user_shape = HandShape.from_name(synthetic_shape) if synthetic else None
     if synthetic and frames is None and seconds is None:
         frames = SYNTHETIC_FRAMES
+    calibrate = calibrate or calibrate_image is not None
+    chosen_db = shape_name is not None or measurements is not None or personal
+    if build_count is not None and not (personal or calibrate and not chosen_db):
+        raise InvalidInputError("--build-count applies to a database built for --personal or "
+                                "--calibrate only")
+    build = None if build_count is None else _build_options(build_count)
+    open_image = read_image(calibrate_image, what="calibration image") \
+        if calibrate_image is not None else None
 
     source = sink = video = None
     try:
@@ -176,13 +228,19 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
             source, what = CameraSource(camera), f"camera {camera}"
         elif video_in is not None:
             source, what = VideoSource(video_in), f"video {video_in}"
-        lookup = _open_lookup(db_dir, shape_name, measurements, not no_temporal, info_err,
-                              personal=personal, personal_count=personal_count)
+        lookup = None
+        if not calibrate or chosen_db:
+            lookup = _open_lookup(db_dir, shape_name, measurements, not no_temporal, info_err,
+                                  personal=personal, build=build)
+        mount = lookup.mount if lookup is not None else CameraMount.paper()
+        side = lookup.side if lookup is not None else "right"
         if synthetic:
-            source = SyntheticSource(user_shape, lookup.mount, side=lookup.side,
+            source = SyntheticSource(user_shape, mount, side=side,
                                      motion=SyntheticMotion(poses=synthetic_motion), fps=fps,
                                      width_px=size[0], height_px=size[1])
             what = f"synthetic hand {user_shape.name} ({synthetic_motion} poses)"
+        if calibrate:
+            lookup = _calibrate(lookup, source, open_image, db_dir, mount, side, build, info_err)
         if out is not None:
             sink = open_row_writer(out, format=fmt,
                                    columns=live_columns(keypoints=keypoints, truth=synthetic))

@@ -7,28 +7,8 @@ from pathlib import Path
 import click
 
 from ..errors import InvalidInputError
+from ._io import read_image
 from ._main import cli
-
-
-def _read_image(path: Path):
-    """The photo as a uint8 grey (H, W) or BGR (H, W, 3) array."""
-    import cv2
-    import numpy as np
-
-    img = cv2.imread(str(path), cv2.IMREAD_UNCHANGED) if path.is_file() else None
-    if img is None:
-        raise InvalidInputError(f"cannot read the photo {str(path)!r}: no such file or not an "
-                                "image OpenCV can decode")
-    if img.dtype == np.uint16:
-        img = (img >> 8).astype(np.uint8)
-    if img.dtype != np.uint8:
-        raise InvalidInputError(f"photo {str(path)!r} has {img.dtype} pixels; give an 8- or "
-                                "16-bit image")
-    if img.ndim == 3 and img.shape[2] == 4:
-        img = cv2.cvtColor(img, cv2.COLOR_BGRA2BGR)
-    elif img.ndim == 3 and img.shape[2] == 1:
-        img = img[..., 0]
-    return img
 
 
 def _format(result) -> str:
@@ -103,7 +83,7 @@ def measure(photo, mm_per_px, reference_width_mm, out, details, annotate, normal
         raise InvalidInputError(
             "give the photo's scale: exactly one of --mm-per-px X (mm per pixel at the hand) "
             "or --reference-width-mm W (the longer side of a reference object beside the hand)")
-    image = _read_image(photo)
+    image = read_image(photo, what="photo")
     options = MeasureOptions(normalize=normalize)
     if raw:
         options = MeasureOptions(normalize=normalize, calibration=NO_CALIBRATION,

@@ -15,8 +15,9 @@
   top-down photo of the open hand.
 * Calibration from one open-hand frame (beyond the paper):
   :func:`select_shape_from_frame`, :class:`Calibration`,
-  :func:`masked_search` / :func:`masked_search_reference`, and
-  :meth:`PoseLookup.calibrated`.
+  :func:`masked_search` / :func:`masked_search_reference`,
+  :meth:`PoseLookup.calibrated`, :meth:`PoseLookup.from_open_frame` and
+  :func:`first_hand_frame`.
 """
 
 from ._ann import ApproximateIndex, ApproximateOptions
@@ -40,6 +41,7 @@ from ._live import (
     SyntheticMotion,
     SyntheticSource,
     VideoSource,
+    first_hand_frame,
     live_columns,
     open_row_writer,
     run_live,
@@ -83,6 +85,7 @@ __all__ = [
     "VideoSource",
     "PhotoMeasurement",
     "annotate_measurement",
+    "first_hand_frame",
     "live_columns",
     "measure_photo",
     "open_row_writer",

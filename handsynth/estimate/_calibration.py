@@ -20,6 +20,14 @@ Calibration removes the fixed part of the mismatch:
 3. A frame's silhouette ``S`` is then matched by the smallest masked pixel
    difference ``X_i = |(S xor S_i) & ~M|`` over all entries ``i`` (ties: all
    entries with the smallest ``X``, as the exact search reports them).
+4. The pose reported is the mean over the entries near the best, weighted
+   ``w_i = exp(-(X_i - X_min) / T)`` with ``T = temperature_px`` (entries
+   with ``X_i - X_min > 10 T`` weigh less than ``e^-10`` and are left out).
+   Read ``X / T`` as a negative log-likelihood: the weighted mean is then
+   the posterior mean of the pose, the estimate of least squared error when
+   several poses explain the frame almost equally well, as a finger flexed
+   at its MCP and one flexed at its PIP do from the back of the hand.
+   ``T = 0`` gives the plain mean of the tied entries.
 
 Step 3 replaces the paper's ``E``: its HLAC vector sums over the whole image
 and cannot leave pixels out, and its ridge penalties are built for a
@@ -47,6 +55,9 @@ __all__ = ["Calibration", "FrameSelection", "MaskedMatch", "masked_search",
            "masked_search_reference", "select_shape_from_frame"]
 
 _MAX_DILATION_PX = 8
+_MAX_TEMPERATURE_PX = 8.0
+#: Entries farther than this many temperatures above the best are left out of the mean.
+WINDOW_TEMPERATURES = 10.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -64,15 +75,25 @@ class Calibration:
         masking (1: the same hand).
     dilation_px : int
         4-neighbour dilation steps applied to the mismatch.
+    temperature_px : float
+        ``T`` of the weighted mean of the entries near the best (module
+        docstring, step 4), pixels; 0: the mean of the tied entries.
     """
 
     ignore: np.ndarray
     keep_bits: np.ndarray
     open_iou: float
     dilation_px: int
+    temperature_px: float
+
+    @property
+    def window_px(self) -> int:
+        """Entries with ``X <= X_min + window_px`` enter the weighted mean."""
+        return int(np.floor(WINDOW_TEMPERATURES * self.temperature_px))
 
     @classmethod
-    def from_silhouettes(cls, user, reference, *, dilation_px: int = 1) -> Calibration:
+    def from_silhouettes(cls, user, reference, *, dilation_px: int = 1,
+                         temperature_px: float = 1.0) -> Calibration:
         """The calibration of a user's open-hand silhouette against the database's.
 
         Parameters
@@ -82,12 +103,17 @@ class Calibration:
             database's open-hand entry (same size).
         dilation_px : int, keyword-only
             Dilation steps of the mismatch, 0 to 8.
+        temperature_px : float, keyword-only
+            ``T`` of the weighted mean (module docstring, step 4), 0 to 8
+            pixels.  The default 1 was chosen on the mesh hand's frames of
+            seeds 2-5, which the recorded evaluations do not use (README,
+            "Calibrated lookup").
 
         Raises
         ------
         InvalidInputError
             Silhouettes of different or non-square shapes, an empty one, or
-            a `dilation_px` out of range.
+            a `dilation_px` or `temperature_px` out of range.
         """
         u = np.asarray(user)
         o = np.asarray(reference)
@@ -103,6 +129,11 @@ class Calibration:
                 or not 0 <= dilation_px <= _MAX_DILATION_PX:
             raise InvalidInputError(
                 f"dilation_px must be an int in [0, {_MAX_DILATION_PX}], got {dilation_px!r}")
+        if isinstance(temperature_px, bool) \
+                or not isinstance(temperature_px, (int, float, np.integer, np.floating)) \
+                or not 0.0 <= temperature_px <= _MAX_TEMPERATURE_PX:
+            raise InvalidInputError(f"temperature_px must be a number in [0, "
+                                    f"{_MAX_TEMPERATURE_PX:g}], got {temperature_px!r}")
         ignore = u ^ o
         if dilation_px > 0:  # scipy's default structure in 2-D is the 4-neighbour cross
             from scipy.ndimage import binary_dilation
@@ -112,7 +143,8 @@ class Calibration:
         keep = pack_mask(~ignore)
         keep.setflags(write=False)
         iou = float((u & o).sum() / (u | o).sum())
-        return cls(ignore=ignore, keep_bits=keep, open_iou=iou, dilation_px=int(dilation_px))
+        return cls(ignore=ignore, keep_bits=keep, open_iou=iou, dilation_px=int(dilation_px),
+                   temperature_px=float(temperature_px))
 
 
 @dataclass(frozen=True)
@@ -130,32 +162,52 @@ class MaskedMatch:
         union`` is their IoU outside the ignore mask).
     tied : ndarray of int64, shape (M,)
         Every entry with the same ``X``, ascending.
+    near : ndarray of int64, shape (K,)
+        Every entry with ``X <= error + calibration.window_px``, ascending
+        (`tied` is among them).
+    weights : ndarray of float64, shape (K,)
+        Weights of `near` in the reported pose, ``exp(-(X - error) / T)``
+        normalised to sum 1 (uniform over the tied entries when ``T = 0``).
     """
 
     index: int
     error: int
     union: int
     tied: np.ndarray
+    near: np.ndarray
+    weights: np.ndarray
 
 
 @njit(cache=True, nogil=True)
-def _masked_kernel(q, keep, sil_bits, ties):
-    """Smallest popcount((S_i ^ q) & keep) over the rows of `sil_bits`; ties into `ties`."""
+def _masked_kernel(q, keep, sil_bits, window, near, near_err):
+    """Entries with popcount((S_i ^ q) & keep) <= best + window into `near`, `near_err`.
+
+    Returns the best count and how many entries were stored (ascending).
+    """
     best = 1 << 62
-    nt = 0
+    n = 0
     for i in range(sil_bits.shape[0]):
+        limit = best + window
         e = 0
         for w in range(q.shape[0]):
             e += _popcount64((sil_bits[i, w] ^ q[w]) & keep[w])
-            if e > best:
+            if e > limit:
                 break
+        if e > limit:
+            continue
         if e < best:
             best = e
-            nt = 0
-        if e == best:
-            ties[nt] = i
-            nt += 1
-    return best, nt
+            m = 0
+            for k in range(n):  # drop what the new best leaves outside the window
+                if near_err[k] <= best + window:
+                    near[m] = near[k]
+                    near_err[m] = near_err[k]
+                    m += 1
+            n = m
+        near[n] = i
+        near_err[n] = e
+        n += 1
+    return best, n
 
 
 def _check_query(silhouette, calibration, sil_bits) -> np.ndarray:
@@ -172,8 +224,16 @@ def _check_query(silhouette, calibration, sil_bits) -> np.ndarray:
     return q
 
 
-def _union(q, keep, row) -> int:
-    return int(np.bitwise_count((q | row) & keep).sum())
+def _match(q, calibration: Calibration, table, near, near_err) -> MaskedMatch:
+    best = int(near_err.min())
+    tied = near[near_err == best]
+    if calibration.temperature_px > 0:
+        w = np.exp(-(near_err - best) / calibration.temperature_px)
+    else:
+        w = (near_err == best).astype(np.float64)
+    union = int(np.bitwise_count((q | table[tied[0]]) & calibration.keep_bits).sum())
+    return MaskedMatch(index=int(tied[0]), error=best, union=union, tied=tied, near=near,
+                       weights=w / w.sum())
 
 
 def masked_search(silhouette, sil_bits, calibration: Calibration) -> MaskedMatch:
@@ -194,16 +254,16 @@ def masked_search(silhouette, sil_bits, calibration: Calibration) -> MaskedMatch
     Notes
     -----
     Compiled; every entry is scored, with an early exit once its count
-    exceeds the best so far (about 0.8 ms for 20,448 entries on one core).
-    :func:`masked_search_reference` is the plain numpy specification.
+    exceeds the best so far plus the window (about 1 ms for 20,448 entries
+    on one core).  :func:`masked_search_reference` is the plain numpy
+    specification.
     """
     table = np.ascontiguousarray(sil_bits, dtype=np.uint64)
     q = _check_query(silhouette, calibration, table)
-    ties = np.empty(table.shape[0], np.int64)
-    best, nt = _masked_kernel(q, calibration.keep_bits, table, ties)
-    tied = ties[:nt].copy()
-    return MaskedMatch(index=int(tied[0]), error=int(best),
-                       union=_union(q, calibration.keep_bits, table[tied[0]]), tied=tied)
+    near = np.empty(table.shape[0], np.int64)
+    near_err = np.empty(table.shape[0], np.int64)
+    _, n = _masked_kernel(q, calibration.keep_bits, table, calibration.window_px, near, near_err)
+    return _match(q, calibration, table, near[:n].copy(), near_err[:n].copy())
 
 
 def masked_search_reference(silhouette, sil_bits, calibration: Calibration) -> MaskedMatch:
@@ -211,9 +271,8 @@ def masked_search_reference(silhouette, sil_bits, calibration: Calibration) -> M
     table = np.asarray(sil_bits, dtype=np.uint64)
     q = _check_query(silhouette, calibration, table)
     x = np.bitwise_count((table ^ q[None, :]) & calibration.keep_bits[None, :]).sum(axis=1)
-    tied = np.flatnonzero(x == x.min())
-    return MaskedMatch(index=int(tied[0]), error=int(x[tied[0]]),
-                       union=_union(q, calibration.keep_bits, table[tied[0]]), tied=tied)
+    near = np.flatnonzero(x <= x.min() + calibration.window_px)
+    return _match(q, calibration, table, near, x[near].astype(np.int64))
 
 
 @dataclass(frozen=True)

@@ -69,6 +69,7 @@ __all__ = [
     "SyntheticSource",
     "VideoSource",
     "default_database_dir",
+    "first_hand_frame",
     "live_columns",
     "open_row_writer",
     "run_live",
@@ -465,6 +466,15 @@ class SyntheticSource(_Source):
         self.truth_deg = truth
         self._count += 1
         return frame
+
+    def open_frame(self) -> np.ndarray:
+        """The hand open and flat (all angles 0), as a user holds it to calibrate.
+
+        Not a frame of the motion: :meth:`read` is not advanced.
+        """
+        if self._renderer is None:
+            raise InvalidInputError("the synthetic source is closed")
+        return self._renderer.mask(np.zeros(len(JOINT_NAMES)))
 
     def close(self) -> None:
         r, self._renderer = getattr(self, "_renderer", None), None
@@ -990,6 +1000,55 @@ class _Tally:
 
 def _usable(frame) -> bool:
     return frame is not None and not (isinstance(frame, np.ndarray) and frame.size == 0)
+
+
+def first_hand_frame(source: FrameSource, *, mount: CameraMount | None = None,
+                     side: str = "right", max_reads: int = 100,
+                     retry_delay_s: float = 0.01) -> np.ndarray:
+    """The first frame of `source` that shows a hand: the open-hand frame of a calibration.
+
+    The user holds the hand open and flat in front of the device before the
+    run (:meth:`PoseLookup.from_open_frame
+    <handsynth.estimate.PoseLookup.from_open_frame>`).  Frames are read
+    until one's silhouette (:func:`handsynth.render.preprocess` with `mount`
+    and `side`) is not empty; empty, dropped or unreadable frames are
+    skipped.  The frames read are consumed.
+
+    Parameters
+    ----------
+    source : FrameSource
+    mount : CameraMount, keyword-only, optional
+        The device (the paper's by default).
+    side : {"right", "left"}, keyword-only
+    max_reads : int, keyword-only
+        Reads before giving up.
+    retry_delay_s : float, keyword-only
+        Pause after a dropped read, seconds.
+
+    Raises
+    ------
+    EstimationError
+        No frame of the first `max_reads` shows a hand, or the source ended.
+    """
+    from ..render import preprocess
+
+    mount = mount or CameraMount()
+    max_reads = _check_int(max_reads, "max_reads", minimum=1)
+    delay = _check_float(retry_delay_s, "retry_delay_s", positive=False)
+    for _ in range(max_reads):
+        frame = source.read()
+        if not _usable(frame):
+            if getattr(source, "ended", False):
+                raise EstimationError("the source ended before a frame showed a hand to "
+                                      "calibrate with")
+            time.sleep(delay)
+            continue
+        try:
+            if preprocess(frame, mount, side=side).any():
+                return frame
+        except InvalidInputError:
+            continue
+    raise EstimationError(f"no frame showed a hand to calibrate with in {max_reads} reads")
 
 
 def run_live(lookup, source: FrameSource, *, sink=None, video_out=None,

@@ -34,6 +34,13 @@ from ._selection import HandMeasurements, SelectionOptions, database_path, selec
 __all__ = ["PoseEstimate", "PoseEstimator", "PoseLookup"]
 
 
+def _build_options(build) -> BuildOptions:
+    if build is None:
+        return BuildOptions()
+    if not isinstance(build, BuildOptions):
+        raise InvalidInputError(f"build must be BuildOptions, got {type(build).__name__}")
+    return build
+
 
 @dataclass(frozen=True, eq=False)
 class PoseEstimate:
@@ -169,7 +176,8 @@ class PoseLookup:
         self._last = -1
         self.calibration: Calibration | None = None
 
-    def calibrated(self, open_frame, *, dilation_px: int = 1) -> PoseLookup:
+    def calibrated(self, open_frame, *, dilation_px: int = 1,
+                   temperature_px: float = 1.0) -> PoseLookup:
         """A lookup of the same database calibrated to a user's open-hand frame.
 
         Parameters
@@ -179,6 +187,11 @@ class PoseLookup:
             database's camera: a frame as :meth:`estimate` takes.
         dilation_px : int, keyword-only
             Growth of the ignore mask, 4-neighbour steps (0 to 8).
+        temperature_px : float, keyword-only
+            Entries near the best enter the reported pose with weights
+            ``exp(-(X - X_min) / temperature_px)`` (0 to 8 pixels; 0: the
+            tied entries only).  With ``ties="first"`` the matched entry's
+            own pose is reported.
 
         Returns
         -------
@@ -200,7 +213,8 @@ class PoseLookup:
         reference = reference_silhouette(self.database)
         out = copy.copy(self)
         out._last = -1
-        out.calibration = Calibration.from_silhouettes(user, reference, dilation_px=dilation_px)
+        out.calibration = Calibration.from_silhouettes(user, reference, dilation_px=dilation_px,
+                                                       temperature_px=temperature_px)
         return out
 
     def _approximate_index(self, approximate):
@@ -318,13 +332,65 @@ class PoseLookup:
             shape = select_shape(measurements, options=opts).ratios
         elif not isinstance(shape, HandShape):
             raise InvalidInputError(f"shape must be a HandShape, got {type(shape).__name__}")
-        build = BuildOptions() if build is None else build
-        if not isinstance(build, BuildOptions):
-            raise InvalidInputError(f"build must be BuildOptions, got {type(build).__name__}")
+        build = _build_options(build)
         shape = HandShape.from_name(shape.name)
         summary = build_databases(folder, [shape], mount or CameraMount.paper(), options=build,
                                   workers=workers, progress=progress)
         return cls(open_database(summary.paths[0]), **kwargs)
+
+    @classmethod
+    def from_open_frame(cls, folder, open_frame, *, mount: CameraMount | None = None,
+                        build=None, workers: int | None = None, progress=None, shapes=None,
+                        dilation_px: int = 1, temperature_px: float = 1.0,
+                        **kwargs) -> PoseLookup:
+        """A calibrated lookup from one frame of the user's open, flat hand (beyond the paper).
+
+        Chooses the database shape whose open hand fits the frame best
+        (:func:`select_shape_from_frame`), opens its database in `folder`
+        (building it first when missing, about 5 s for 20,448 entries on two
+        cores) and calibrates it to the frame (:meth:`calibrated`).  On the
+        realistic mesh hand this is the most accurate lookup handsynth has
+        (README, "Calibrated lookup").
+
+        Parameters
+        ----------
+        folder : str or os.PathLike
+            Database folder, created if missing.
+        open_frame : ndarray, shape (H, W) or (H, W, 3)
+            The user's hand open and flat (all joint angles 0) through the
+            device camera, as :meth:`estimate` takes it.
+        mount : CameraMount, keyword-only, optional
+            The device; the paper's by default.
+        build : handsynth.db.BuildOptions, keyword-only, optional
+            Options of a database that has to be built (the paper's 20,448
+            poses by default); its ``side`` is the hand's side.
+        workers, progress : keyword-only, optional
+            As for :func:`handsynth.db.build_databases`.
+        shapes : sequence of HandShape, keyword-only, optional
+            Candidate shapes; the 81 grid shapes by default.
+        dilation_px, temperature_px : keyword-only
+            As for :meth:`calibrated`.
+        **kwargs
+            Passed to :class:`PoseLookup` (``options``, ``ties``).
+
+        Raises
+        ------
+        InvalidInputError
+            The frame is not an image or shows no hand, or an option is invalid.
+        DatabaseError
+            The database could not be built or read.
+        """
+        from ._calibration import select_shape_from_frame
+
+        build = _build_options(build)
+        mount = mount or CameraMount.paper()
+        chosen = select_shape_from_frame(open_frame, mount=mount, side=build.side,
+                                         shapes=shapes).shape
+        summary = build_databases(folder, [chosen], mount, options=build, workers=workers,
+                                  progress=progress)
+        lookup = cls(open_database(summary.paths[0]), **kwargs)
+        return lookup.calibrated(open_frame, dilation_px=dilation_px,
+                                 temperature_px=temperature_px)
 
     @classmethod
     def from_rows(cls, rows: dict, *, mount: CameraMount | None = None, shape: HandShape | None = None,
@@ -399,14 +465,18 @@ class PoseLookup:
 
     def _estimate_calibrated(self, sil: np.ndarray) -> PoseEstimate:
         m = masked_search(sil, self.tables.sil_bits, self.calibration)
-        angles, keypoints = self._pose(m.index, m.tied)
+        angles, keypoints = self._pose(m.index, m.near, m.weights)
         return PoseEstimate(angles=angles, keypoints=keypoints,
                             confidence=1.0 - m.error / max(m.union, 1), entry=m.index,
                             error=float(m.error), low_confidence=False, no_hand=False)
 
-    def _pose(self, index: int, tied: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+    def _pose(self, index: int, rows: np.ndarray | None,
+              weights: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Angles and keypoints reported for a match: entry `index`, or with ``ties="mean"``
-        the mean over the `tied` entries (``None``: not tracked)."""
-        if self.ties != "mean" or tied is None or tied.size == 1:
+        the mean over `rows` (``None``: not tracked), weighted by `weights` if given."""
+        if self.ties != "mean" or rows is None or rows.size == 1:
             return self._angles[index].copy(), self.database.keypoints_m(index)
-        return self._angles[tied].mean(axis=0), self.database.keypoints_m(tied).mean(axis=0)
+        if weights is None:
+            return self._angles[rows].mean(axis=0), self.database.keypoints_m(rows).mean(axis=0)
+        keypoints = np.tensordot(weights, self.database.keypoints_m(rows), axes=1)
+        return weights @ self._angles[rows], keypoints.astype(np.float32)

@@ -238,9 +238,75 @@ def test_personal_database_for_a_shape(tmp_path):
 
 @pytest.mark.parametrize("args, words", [
     (["--personal"], "--personal needs --shape NAME or --measurements FILE"),
-    (["--personal-count", "10", "--shape", "standard"], "--personal-count applies to --personal"),
+    (["--personal-count", "10", "--shape", "standard"], "--build-count applies to a database"),
+    (["--build-count", "10", "--calibrate", "--shape", "standard"], "--build-count applies"),
+    (["--build-count", "0", "--calibrate"], "--build-count must be a positive integer, got 0"),
+    (["--calibrate-image", "{tmp}/open.png"], "cannot read the calibration image"),
 ])
 def test_personal_errors_are_one_line(tmp_path, args, words):
+    args = [a.replace("{tmp}", str(tmp_path)) for a in args]
     res = CliRunner().invoke(cli, ["estimate", "--synthetic", "--frames", "2", "--db",
                                    str(tmp_path), *args, *SMALL])
     assert res.exit_code != 0 and words in res.output and "Traceback" not in res.output
+
+
+# --------------------------------------------------------------------------- calibration
+
+
+def _open_mask(shape: HandShape | None = None):
+    with SilhouetteRenderer(shape or HandShape(length=1.02, thumb=1.03), width_px=W,
+                            height_px=H) as r:
+        return r.mask(np.zeros(20))
+
+
+def test_calibrate_synthetic_hand_on_a_chosen_database(tmp_path, db):
+    out = tmp_path / "rows.csv"
+    res = _run("--synthetic", "--calibrate", "--shape", "standard", "--db", str(db), "--frames",
+               "6", "--out", str(out), *SMALL)
+    assert res.exit_code == 0, res.output
+    line = re.search(r"calibrated to the synthetic hand held open in [\d.]+ s: database "
+                     r"L1.000_W1.000_P1.000_T1.000.h5, open-hand IoU (0\.\d+), (\d+) of 4096 "
+                     r"pixels ignored", res.stdout)
+    assert line, res.stdout
+    assert 0.8 < float(line[1]) < 1.0 and int(line[2]) > 0  # an off-grid hand: some mismatch
+    _, rows = _read_csv(out)
+    assert len(rows) == 6 and rows[0]["frame"] == "0"
+    assert float(rows[0]["confidence"]) == 1.0  # frame 0 of the paper motion is the open hand
+
+
+def test_calibrate_on_the_first_hand_frame_of_a_video(tmp_path, db, masks):
+    import cv2
+
+    video = tmp_path / "hand.avi"
+    frames = [np.zeros((H, W), bool), _open_mask(), *masks]  # no hand yet, then the open hand
+    writer = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"MJPG"), 15.0, (W, H))
+    for m in frames:
+        writer.write(np.repeat(m.view(np.uint8)[:, :, None] * np.uint8(255), 3, axis=2))
+    writer.release()
+    out = tmp_path / "rows.csv"
+    res = _run("--video", str(video), "--calibrate", "--shape", "standard", "--db", str(db),
+               "--out", str(out), "-q")
+    assert res.exit_code == 0, res.output
+    assert "hold the hand open and flat" in res.stdout
+    assert "calibrated to the first frame showing a hand" in res.stdout
+    _, rows = _read_csv(out)
+    assert len(rows) == len(masks)  # the two calibration reads are not rows
+
+
+def test_calibrate_image_chooses_and_builds_the_database(tmp_path):
+    import cv2
+
+    from handsynth.estimate import select_shape_from_frame
+
+    image = tmp_path / "open.png"
+    user = HandShape(length=1.02, thumb=1.03)
+    cv2.imwrite(str(image), _open_mask(user).view(np.uint8) * np.uint8(255))
+    expect = select_shape_from_frame(_open_mask(user)).shape
+    dbs = tmp_path / "dbs"
+    res = _run("--synthetic", "--synthetic-shape", user.name, "--calibrate-image", str(image),
+               "--build-count", "30", "--db", str(dbs), "--frames", "4", *SMALL)
+    assert res.exit_code == 0, res.output
+    assert "calibrated to the calibration image in" in res.stdout
+    assert f"database {expect.name}.h5, open-hand IoU" in res.stdout
+    assert len(open_database(database_path(dbs, expect))) == 30
+    assert "frames 4 " in res.stdout

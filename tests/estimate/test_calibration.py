@@ -63,6 +63,12 @@ def test_calibration_refuses_bad_dilation(d):
         Calibration.from_silhouettes(_box(0, 5, 0, 5), _box(0, 6, 0, 5), dilation_px=d)
 
 
+@pytest.mark.parametrize("t", [-0.5, 8.5, float("nan"), float("inf"), True, "1", None])
+def test_calibration_refuses_bad_temperature(t):
+    with pytest.raises(InvalidInputError, match="temperature_px"):
+        Calibration.from_silhouettes(_box(0, 5, 0, 5), _box(0, 6, 0, 5), temperature_px=t)
+
+
 # --------------------------------------------------------------------------- masked search
 
 
@@ -70,21 +76,50 @@ def test_masked_search_equals_the_reference_on_random_tables():
     rng = np.random.default_rng(3)
     table = pack_mask(rng.random((500, 64, 64)) < 0.3)
     table[400:410] = table[7]  # ties
+    wider = 0
     for k in range(6):
+        temperature = (0.0, 0.5, 3.0)[k % 3]
         if k < 4:  # random masks: large ignored areas, many ties
             cal = Calibration.from_silhouettes(rng.random((64, 64)) < 0.1,
-                                               rng.random((64, 64)) < 0.1, dilation_px=k % 3)
+                                               rng.random((64, 64)) < 0.1, dilation_px=k % 3,
+                                               temperature_px=temperature)
             sil = rng.random((64, 64)) < 0.3
         else:  # entry 7 itself, a small ignored block
             cal = Calibration.from_silhouettes(_box(0, 9, 0, 9), _box(0, 9, 0, 8),
-                                               dilation_px=k - 4)
+                                               dilation_px=k - 4, temperature_px=temperature)
             sil = np.unpackbits(table[7].view(np.uint8), bitorder="little").astype(bool)
             sil = sil.reshape(64, 64)
         fast = masked_search(sil, table, cal)
         ref = masked_search_reference(sil, table, cal)
         assert (fast.index, fast.error, fast.union) == (ref.index, ref.error, ref.union)
         np.testing.assert_array_equal(fast.tied, ref.tied)
+        np.testing.assert_array_equal(fast.near, ref.near)
+        np.testing.assert_allclose(fast.weights, ref.weights, rtol=1e-12)
+        wider += fast.near.size > fast.tied.size
+    assert wider >= 1  # some windows held more than the ties
     assert fast.error == 0 and list(fast.tied) == [7, *range(400, 410)]
+
+
+def test_masked_search_weights_entries_near_the_best():
+    # entry k differs from the input in k pixels outside the (empty) ignore mask
+    frame = _box(10, 30, 10, 40)
+    masks = np.repeat(frame[None], 40, axis=0)
+    for k in range(40):
+        masks[k, 40, :k] = True
+    masks[5] = masks[3]  # entry 5 ties with entry 3
+    table = pack_mask(masks)
+    x = np.array([k if k != 5 else 3 for k in range(40)])  # extra pixels of each entry
+    for t in (0.0, 0.5, 1.0, 2.5):
+        cal = Calibration.from_silhouettes(frame, frame, temperature_px=t)
+        assert cal.window_px == int(10 * t)
+        m = masked_search(masks[3], table, cal)  # input = entry 3: X_i = |x_i - 3|
+        d = np.abs(x - 3)
+        want = np.flatnonzero(d <= int(10 * t))
+        np.testing.assert_array_equal(m.near, want)
+        np.testing.assert_array_equal(m.tied, [3, 5])
+        w = np.exp(-d[want] / t) if t > 0 else (d[want] == 0).astype(float)
+        np.testing.assert_allclose(m.weights, w / w.sum(), rtol=1e-12)
+        assert m.weights.sum() == pytest.approx(1.0)
 
 
 def test_masked_search_without_mask_is_the_plain_pixel_difference():
@@ -156,6 +191,29 @@ def test_calibrated_lookup_of_another_hand_ignores_its_mismatch(db_folder):
     assert np.all(est.angles == 0.0)
 
 
+def test_calibrated_lookup_reports_the_weighted_mean_of_the_near_entries(db_folder, small_rows):
+    user = HandShape(width=1.1, palm=1.05)
+    with SilhouetteRasterizer(user, CameraMount(), width_px=RENDER_SIZE[0],
+                              height_px=RENDER_SIZE[1]) as r:
+        frame = r.mask(small_rows["angles"][40])
+    soft = PoseLookup.open(db_folder, shape=HandShape()).calibrated(_open_frame(user),
+                                                                    temperature_px=2.0)
+    m = masked_search(soft.silhouette(frame), soft.tables.sil_bits, soft.calibration)
+    assert m.near.size > m.tied.size
+    db = soft.database
+    est = soft.estimate(frame)
+    np.testing.assert_allclose(est.angles, m.weights @ db.angles[m.near].astype(float))
+    np.testing.assert_allclose(est.keypoints, np.tensordot(m.weights, db.keypoints_m(m.near), 1),
+                               atol=1e-6)
+    assert (est.entry, est.error) == (m.index, m.error)
+    hard = PoseLookup.open(db_folder, shape=HandShape()).calibrated(_open_frame(user),
+                                                                    temperature_px=0.0)
+    np.testing.assert_allclose(hard.estimate(frame).angles, db.angles[m.tied].mean(axis=0))
+    first = PoseLookup.open(db_folder, shape=HandShape(), ties="first").calibrated(
+        _open_frame(user), temperature_px=2.0)
+    np.testing.assert_array_equal(first.estimate(frame).angles, db.angles[m.index])
+
+
 def test_calibrated_refuses_what_it_cannot_use(db_folder, small_rows):
     lookup = PoseLookup.open(db_folder, shape=HandShape())
     with pytest.raises(InvalidInputError, match="no hand"):
@@ -170,6 +228,27 @@ def test_calibrated_refuses_what_it_cannot_use(db_folder, small_rows):
                              approximate=ApproximateOptions(nlist=8, nprobe=8, dims=16))
     with pytest.raises(InvalidInputError, match="exact search"):
         approx.calibrated(_open_frame(HandShape()))
+
+
+def test_lookup_from_an_open_frame_builds_and_calibrates_the_best_fitting_shape(tmp_path):
+    from handsynth.db import BuildOptions
+
+    shapes = [HandShape(), HandShape(width=1.1, palm=1.05), HandShape(length=0.95, thumb=0.9)]
+    user = HandShape(width=1.08, palm=1.04)  # off the candidates, nearest the second
+    build = BuildOptions(count=40, render_size=RENDER_SIZE)
+    lookup = PoseLookup.from_open_frame(tmp_path, _open_frame(user), shapes=shapes, build=build,
+                                        workers=1, temperature_px=0.5)
+    assert lookup.database.path == tmp_path / f"{shapes[1].name}.h5" and len(lookup) == 40
+    assert sorted(p.name for p in tmp_path.glob("*.h5")) == [f"{shapes[1].name}.h5"]
+    cal = lookup.calibration
+    assert cal.temperature_px == 0.5 and cal.dilation_px == 1 and 0.8 < cal.open_iou < 1.0
+    est = lookup.estimate(_open_frame(user))
+    assert (est.error, est.confidence) == (0.0, 1.0) and np.all(est.angles == 0.0)
+    with pytest.raises(InvalidInputError, match="no hand"):
+        PoseLookup.from_open_frame(tmp_path, np.zeros((120, 180), bool), shapes=shapes,
+                                   build=build)
+    with pytest.raises(InvalidInputError, match="build must be BuildOptions"):
+        PoseLookup.from_open_frame(tmp_path, _open_frame(user), build={"count": 5})
 
 
 # --------------------------------------------------------------------------- shape from a frame

@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from handsynth.errors import InvalidInputError
+from handsynth.errors import EstimationError, InvalidInputError
 from handsynth.estimate import PoseLookup
 from handsynth.estimate._live import (
     BASE_COLUMNS,
@@ -22,6 +22,7 @@ from handsynth.estimate._live import (
     SyntheticMotion,
     SyntheticSource,
     VideoSource,
+    first_hand_frame,
     interpolate_keyframes,
     live_columns,
     open_row_writer,
@@ -312,3 +313,39 @@ def test_run_live_refuses_what_is_not_a_source(lookup):
         run_live(lookup, object())
     with pytest.raises(InvalidInputError, match="LiveOptions"):
         run_live(lookup, FlakyCamera(None), options={"max_frames": 3})
+
+
+# --------------------------------------------------------------------------- calibration frames
+
+
+class _Frames:
+    """A source reading a fixed list of frames, then ending."""
+
+    def __init__(self, frames):
+        self.frames, self.ended, self.reads = list(frames), False, 0
+
+    def read(self):
+        self.reads += 1
+        if not self.frames:
+            self.ended = True
+            return None
+        return self.frames.pop(0)
+
+    def close(self):
+        pass
+
+
+def test_first_hand_frame_skips_drops_garbage_and_empty_frames(lookup):
+    src = _synthetic(lookup, frames=3)
+    hand = src.open_frame()
+    assert hand.dtype == bool and hand.any() and src.read() is not None  # read() not advanced
+    bad = np.full((H, W), np.nan)
+    src = _Frames([None, np.empty((0, 0, 3), np.uint8), bad, np.zeros((H, W), bool), hand,
+                   np.zeros((H, W), bool)])
+    assert first_hand_frame(src, retry_delay_s=0) is hand and src.reads == 5
+    with pytest.raises(EstimationError, match="ended before a frame showed a hand"):
+        first_hand_frame(_Frames([np.zeros((H, W), bool)]), retry_delay_s=0)
+    with pytest.raises(EstimationError, match="in 3 reads"):
+        first_hand_frame(_Frames([np.zeros((H, W), bool)] * 5), max_reads=3)
+    with pytest.raises(InvalidInputError, match="max_reads"):
+        first_hand_frame(_Frames([hand]), max_reads=0)
