@@ -51,7 +51,7 @@ from ..errors import InvalidInputError
 from ..models import HandShape
 from ..render import CameraMount, preprocess
 
-__all__ = ["Calibration", "FrameSelection", "MaskedMatch", "masked_search",
+__all__ = ["Calibration", "FrameSelection", "MaskedMatch", "masked_band_areas", "masked_search",
            "masked_search_reference", "select_shape_from_frame"]
 
 _MAX_DILATION_PX = 8
@@ -178,16 +178,46 @@ class MaskedMatch:
     weights: np.ndarray
 
 
+#: Row bands of the lower bound of :func:`masked_search` (8 rows, one 64-bit word each).
+_BANDS = 8
+
+
+def masked_band_areas(sil_bits, calibration: Calibration) -> np.ndarray:
+    """Kept pixels of every entry per band of 8 rows, shape (N, 8), int32.
+
+    ``sum_b |area_ib - area_qb|`` bounds the masked difference ``X_i`` of a
+    query ``q`` from below (the pixels of a band that one silhouette has and
+    the other has not).  :func:`masked_search` computes it when not given;
+    :meth:`PoseLookup.calibrated` computes it once per calibration.
+    """
+    table = np.asarray(sil_bits, dtype=np.uint64)
+    if table.ndim != 2 or table.shape[1] % _BANDS:
+        raise InvalidInputError(f"sil_bits must have shape (N, W) with W a multiple of {_BANDS}, "
+                                f"got {table.shape}")
+    counts = np.bitwise_count(table & calibration.keep_bits[None, :]).astype(np.int32)
+    return counts.reshape(len(table), _BANDS, -1).sum(axis=2, dtype=np.int32)
+
+
 @njit(cache=True, nogil=True)
-def _masked_kernel(q, keep, sil_bits, window, near, near_err):
+def _masked_kernel(q, keep, sil_bits, bands, q_bands, window, near, near_err):
     """Entries with popcount((S_i ^ q) & keep) <= best + window into `near`, `near_err`.
 
-    Returns the best count and how many entries were stored (ascending).
+    `bands` / `q_bands` are the kept areas per row band of the entries and of
+    `q`; their absolute difference bounds the count from below, so most
+    entries are skipped without counting.  Returns the best count and how
+    many entries were stored (ascending).
     """
     best = 1 << 62
     n = 0
+    n_bands = bands.shape[1]
     for i in range(sil_bits.shape[0]):
         limit = best + window
+        bound = 0
+        for b in range(n_bands):
+            d = bands[i, b] - q_bands[b]
+            bound += d if d >= 0 else -d
+        if bound > limit:
+            continue
         e = 0
         for w in range(q.shape[0]):
             e += _popcount64((sil_bits[i, w] ^ q[w]) & keep[w])
@@ -236,7 +266,8 @@ def _match(q, calibration: Calibration, table, near, near_err) -> MaskedMatch:
                        weights=w / w.sum())
 
 
-def masked_search(silhouette, sil_bits, calibration: Calibration) -> MaskedMatch:
+def masked_search(silhouette, sil_bits, calibration: Calibration, *,
+                  band_areas: np.ndarray | None = None) -> MaskedMatch:
     """The entry whose silhouette differs least from the input outside the ignore mask.
 
     Parameters
@@ -246,6 +277,9 @@ def masked_search(silhouette, sil_bits, calibration: Calibration) -> MaskedMatch
     sil_bits : ndarray of uint64, shape (N, 64)
         The database's packed silhouettes (``Database.sil_bits``).
     calibration : Calibration
+    band_areas : ndarray of int32, shape (N, 8), keyword-only, optional
+        :func:`masked_band_areas` of `sil_bits` and `calibration`, when the
+        caller keeps them (computed here otherwise).
 
     Returns
     -------
@@ -253,16 +287,23 @@ def masked_search(silhouette, sil_bits, calibration: Calibration) -> MaskedMatch
 
     Notes
     -----
-    Compiled; every entry is scored, with an early exit once its count
-    exceeds the best so far plus the window (about 1 ms for 20,448 entries
-    on one core).  :func:`masked_search_reference` is the plain numpy
-    specification.
+    Compiled.  Every entry is bounded from below by its kept area per band
+    of 8 rows; only entries whose bound is within the window of the best so
+    far are counted, with an early exit once the count leaves it.
+    :func:`masked_search_reference` is the plain numpy specification.
     """
     table = np.ascontiguousarray(sil_bits, dtype=np.uint64)
     q = _check_query(silhouette, calibration, table)
+    bands = masked_band_areas(table, calibration) if band_areas is None else band_areas
+    if not (isinstance(bands, np.ndarray) and bands.dtype == np.int32
+            and bands.shape == (table.shape[0], _BANDS)):
+        raise InvalidInputError(f"band_areas must be int32 of shape ({table.shape[0]}, {_BANDS}) "
+                                "from masked_band_areas")
+    q_bands = masked_band_areas(q[None, :], calibration)[0]
     near = np.empty(table.shape[0], np.int64)
     near_err = np.empty(table.shape[0], np.int64)
-    _, n = _masked_kernel(q, calibration.keep_bits, table, calibration.window_px, near, near_err)
+    _, n = _masked_kernel(q, calibration.keep_bits, table, bands, q_bands,
+                          calibration.window_px, near, near_err)
     return _match(q, calibration, table, near[:n].copy(), near_err[:n].copy())
 
 

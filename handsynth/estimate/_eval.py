@@ -832,7 +832,8 @@ class EvalReport:
             ``joints`` -> name -> ``mean_deg, sd_deg, mae_deg, n``; and
             ``moving``: the same per-joint figures over the frames where the
             joint moves, for all frames and each pose set),
-            ``targets`` (for ``all`` frames and each pose set), ``paper``, ``timing_s``,
+            ``targets`` (for ``all`` frames and each pose set; ``targets_personal``
+            and ``targets_calibrated`` the same on those conditions), ``paper``, ``timing_s``,
             ``ambiguity`` (:func:`silhouette_ambiguity` per database) and optionally ``frames``.
         """
         out = {
@@ -843,6 +844,7 @@ class EvalReport:
             "conditions": {c: self._condition_dict(c) for c in self.conditions},
             "targets": self._targets_by_set("selected"),
             "targets_personal": self._targets_by_set("personal"),
+            "targets_calibrated": self._targets_by_set("calibrated"),
             "paper": {c: {j: {"mean_deg": m, "sd_deg": s} for j, (m, s) in v.items()}
                       for c, v in PAPER.items()},
             "timing_s": {k: round(v, 3) for k, v in self.timing_s.items()},

@@ -27,7 +27,12 @@ from ..db import (
 from ..errors import DatabaseError, InvalidInputError
 from ..models import JOINT_NAMES, HandShape
 from ..render import CameraMount, preprocess
-from ._calibration import Calibration, masked_search, reference_silhouette
+from ._calibration import (
+    Calibration,
+    masked_band_areas,
+    masked_search,
+    reference_silhouette,
+)
 from ._search import SearchOptions, SearchTables, search
 from ._selection import HandMeasurements, SelectionOptions, database_path, select_shape
 
@@ -175,6 +180,7 @@ class PoseLookup:
         self._angles.setflags(write=False)
         self._last = -1
         self.calibration: Calibration | None = None
+        self._band_areas: np.ndarray | None = None  # masked_band_areas of the calibration
 
     def calibrated(self, open_frame, *, dilation_px: int = 1,
                    temperature_px: float = 1.0) -> PoseLookup:
@@ -215,6 +221,7 @@ class PoseLookup:
         out._last = -1
         out.calibration = Calibration.from_silhouettes(user, reference, dilation_px=dilation_px,
                                                        temperature_px=temperature_px)
+        out._band_areas = masked_band_areas(self.tables.sil_bits, out.calibration)
         return out
 
     def _approximate_index(self, approximate):
@@ -464,7 +471,8 @@ class PoseLookup:
                             no_hand=False)
 
     def _estimate_calibrated(self, sil: np.ndarray) -> PoseEstimate:
-        m = masked_search(sil, self.tables.sil_bits, self.calibration)
+        m = masked_search(sil, self.tables.sil_bits, self.calibration,
+                          band_areas=self._band_areas)
         angles, keypoints = self._pose(m.index, m.near, m.weights)
         return PoseEstimate(angles=angles, keypoints=keypoints,
                             confidence=1.0 - m.error / max(m.union, 1), entry=m.index,

@@ -11,6 +11,7 @@ from handsynth.estimate import (
     ApproximateOptions,
     Calibration,
     PoseLookup,
+    masked_band_areas,
     masked_search,
     masked_search_reference,
     select_shape_from_frame,
@@ -98,6 +99,27 @@ def test_masked_search_equals_the_reference_on_random_tables():
         wider += fast.near.size > fast.tied.size
     assert wider >= 1  # some windows held more than the ties
     assert fast.error == 0 and list(fast.tied) == [7, *range(400, 410)]
+
+
+def test_band_areas_bound_the_masked_difference_from_below():
+    rng = np.random.default_rng(5)
+    masks = rng.random((200, 64, 64)) < rng.random((200, 1, 1))
+    masks[:50, :, 20:] = False  # some entries with the same areas in a band, others not
+    cal = Calibration.from_silhouettes(rng.random((64, 64)) < 0.05, rng.random((64, 64)) < 0.05)
+    table = pack_mask(masks)
+    bands = masked_band_areas(table, cal)
+    assert bands.shape == (200, 8) and bands.dtype == np.int32
+    kept = masks & ~cal.ignore[None]
+    np.testing.assert_array_equal(bands, kept.reshape(200, 8, -1).sum(axis=2))
+    for q in masks[::20]:
+        x = ((masks ^ q[None]) & ~cal.ignore[None]).sum(axis=(1, 2))
+        qb = (q & ~cal.ignore).reshape(8, -1).sum(axis=1)
+        bound = np.abs(bands - qb[None]).sum(axis=1)
+        assert (bound <= x).all() and (bound < x).any()
+    with pytest.raises(InvalidInputError, match="band_areas"):
+        masked_search(masks[0], table, cal, band_areas=bands[:10])
+    with pytest.raises(InvalidInputError, match="band_areas"):
+        masked_search(masks[0], table, cal, band_areas=bands.astype(np.int64))
 
 
 def test_masked_search_weights_entries_near_the_best():

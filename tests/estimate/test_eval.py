@@ -229,6 +229,11 @@ def test_report_json_schema(report):
                       "selected_beats_standard"}
     assert t["index_pip_sd_deg"]["met"] == (t["index_pip_sd_deg"]["value"] <= 8.0)
     assert set(d["targets"]) == {"all", "paper", "natural"}
+    for cond in ("personal", "calibrated"):
+        tc = d[f"targets_{cond}"]
+        assert set(tc) == {"all", "paper", "natural"}
+        assert tc["paper"] == report.targets(pose_set="paper", condition=cond)
+        assert f"{cond}_beats_standard" in tc["all"]
     amb = d["ambiguity"]
     assert set(amb) == {n for h in d["hands"] for n in h["databases"].values()}
     assert all(a["entries"] == SMALL["count"] for a in amb.values())
