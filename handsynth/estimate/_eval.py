@@ -81,10 +81,10 @@ pose set (``docs/eval/model_hands_20448.json``):
 * ``personal`` (photos at 0.25 mm/px): MAE 1.54 deg, index PIP +0.05 +- 7.08,
   thumb CMC flexion -0.09 +- 3.67: the issue's targets are met on paper poses.
 * ``calibrated`` (``docs/eval/model_hands_20448_calibrated_paper.json``,
-  paper poses): MAE 1.65 deg, index PIP -0.29 +- 7.90, thumb CMC s.d. 4.87:
+  paper poses): MAE 1.61 deg, index PIP -0.01 +- 7.34, thumb CMC s.d. 4.18:
   the targets are met with grid databases.  On the mesh hand's paper poses
-  it gives MAE 3.78 / 3.85 deg (standard 4.77 / 4.71) and index PIP s.d.
-  10.25 / 13.14 deg on seeds 0 / 1: the mesh target is not met reliably.
+  it gives MAE 3.54 / 3.58 deg (standard 4.77 / 4.71) and index PIP s.d.
+  9.78 / 11.14 deg on seeds 0 / 1: the mesh target is met.
 * Natural (multi-finger) poses: the MAE is about 29 deg in every condition.
   The paper-set databases hold one moving finger at a time, so those poses
   are not in them.  Natural-set databases bring it to 10.2 deg.
