@@ -15,6 +15,8 @@ from ._main import cli
 SYNTHETIC_SHAPE = "L1.02_W0.97_P1.01_T1.03"
 #: Frames of a ``--synthetic`` run without ``--frames`` or ``--seconds``.
 SYNTHETIC_FRAMES = 300
+#: Reads ``--calibrate`` waits for a frame showing a hand (10 s at 30 fps).
+CALIBRATION_READS = 300
 
 
 def _parse_size(text: str, flag: str) -> tuple[int, int]:
@@ -85,7 +87,8 @@ def _calibrate(lookup, source, open_image, db_dir, mount, side, build, err):
         open_frame, where = source.open_frame(), "the synthetic hand held open"
     else:
         click.echo("calibrating: hold the hand open and flat", err=err)
-        open_frame = first_hand_frame(source, mount=mount, side=side)
+        open_frame = first_hand_frame(source, mount=mount, side=side,
+                                      max_reads=CALIBRATION_READS)
         where = "the first frame showing a hand"
     t = time.perf_counter()
     if lookup is None:
@@ -140,7 +143,8 @@ def _progress(stream):
                                 "[default: the paper's 20,448].")
 @click.option("--calibrate", is_flag=True,
               help="Calibrate to the hand held open and flat (beyond the paper): the first "
-                   "frame showing a hand (--synthetic: the hand rendered open) chooses the grid "
+                   f"frame showing a hand within {CALIBRATION_READS} reads (--synthetic: the "
+                   "hand rendered open) chooses the grid "
                    "database, built in --db when missing, unless --shape, --measurements or "
                    "--personal chose it, and gives the pixels to ignore.")
 @click.option("--calibrate-image", default=None, metavar="FILE",
@@ -172,7 +176,8 @@ def _progress(stream):
 @click.option("--quiet", "-q", is_flag=True, help="No progress line.")
 def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, personal,
              build_count, calibrate, calibrate_image, frames, seconds, out, fmt, keypoints,
-             video_out, synthetic_shape, synthetic_motion, synthetic_size, fps, no_temporal, max_dead, quiet) -> None:
+             video_out, synthetic_shape, synthetic_motion, synthetic_size, fps, no_temporal,
+             max_dead, quiet) -> None:
     """Look up the hand pose of every frame of a camera, a video file or a synthetic hand.
 
     Prints the frame rate of the lookup alone and of the whole loop; with

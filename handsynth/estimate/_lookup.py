@@ -32,6 +32,7 @@ from ._calibration import (
     masked_band_areas,
     masked_search,
     reference_silhouette,
+    select_shape_from_frame,
 )
 from ._search import SearchOptions, SearchTables, search
 from ._selection import HandMeasurements, SelectionOptions, database_path, select_shape
@@ -136,8 +137,10 @@ class PoseLookup:
     -----
     :meth:`calibrated` gives a lookup that matches frames by the pixels
     outside a user's ignore mask, learnt from one open-hand frame
-    (:mod:`handsynth.estimate._calibration`, beyond the paper).  It scores
-    every entry (no pruning, no temporal seed, exact search only).
+    (:mod:`handsynth.estimate._calibration`, beyond the paper), and reports
+    the weighted mean of the entries near the best (no temporal seed, exact
+    search only); :meth:`from_open_frame` also chooses the database from
+    that frame.
 
     Examples
     --------
@@ -387,8 +390,6 @@ class PoseLookup:
         DatabaseError
             The database could not be built or read.
         """
-        from ._calibration import select_shape_from_frame
-
         build = _build_options(build)
         mount = mount or CameraMount.paper()
         chosen = select_shape_from_frame(open_frame, mount=mount, side=build.side,
