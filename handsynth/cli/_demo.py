@@ -23,7 +23,8 @@ def demo(out_dir: Path, tile_width: int, frames: int) -> None:
     grid shapes, from the paper mount and the whole-hand mount.  Then the
     standard shape's small default database is built (or verified) in
     OUT/db, and frames of an off-grid hand in paper poses are matched
-    against it; the mean absolute joint-angle error and the rate are printed.
+    against it, plainly and calibrated to the hand's open-hand frame; the
+    mean absolute joint-angle error and the rate are printed.
     """
     import time
 
@@ -62,11 +63,23 @@ def _lookup_demo(db_dir: Path, frames: int) -> None:
     lookup = PoseLookup.open(db_dir, shape=HandShape())
     user = HandShape(length=1.02, width=0.97, palm=1.01, thumb=1.03)  # off the grid
     poses = paper_pose_set(frames, seed=12345)
-    masks = SilhouetteRenderer(user, lookup.mount).masks(poses)
+    with SilhouetteRenderer(user, lookup.mount) as r:
+        masks = r.masks(poses)
+        open_mask = r.mask(np.zeros(len(poses[0])))
+    _report(f"looked up {frames} frames of hand {user.name}", lookup, masks, poses)
+    calibrated = lookup.calibrated(open_mask)
+    ignored = int(calibrated.calibration.ignore.sum())
+    _report(f"calibrated to its open hand ({ignored} pixels ignored)", calibrated, masks, poses)
+
+
+def _report(what: str, lookup, masks, poses) -> None:
+    import time
+
+    import numpy as np
+
     t = time.perf_counter()
     est = np.array([lookup.estimate(m).angles for m in masks])
     dt = time.perf_counter() - t
     err = np.abs(est - poses)
-    click.echo(f"looked up {frames} frames of hand {user.name}: {frames / dt:.0f} frames/s, "
-               f"mean absolute error {err.mean():.2f} deg (index PIP {err[:, 6].mean():.2f}, "
-               f"thumb CMC flex {err[:, 0].mean():.2f})")
+    click.echo(f"{what}: {len(masks) / dt:.0f} frames/s, mean absolute error {err.mean():.2f} "
+               f"deg (index PIP {err[:, 6].mean():.2f}, thumb CMC flex {err[:, 0].mean():.2f})")

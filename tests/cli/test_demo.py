@@ -15,6 +15,8 @@ def test_demo_writes_pictures_and_looks_up_frames(tmp_path):
     db = open_database(next((tmp_path / "db").glob("*.h5")))
     assert len(db) == 3000
     assert "looked up 20 frames" in res.output and "mean absolute error" in res.output
+    line = next(x for x in res.output.splitlines() if x.startswith("calibrated to its open hand"))
+    assert "pixels ignored" in line and "mean absolute error" in line
 
 
 def test_demo_bad_option_is_one_line(tmp_path):
