@@ -77,6 +77,8 @@ def _report(what: str, lookup, masks, poses) -> None:
 
     import numpy as np
 
+    if len(masks):
+        lookup.estimate(masks[0])  # compiles the search on a fresh install; not timed
     t = time.perf_counter()
     est = np.array([lookup.estimate(m).angles for m in masks])
     dt = time.perf_counter() - t
