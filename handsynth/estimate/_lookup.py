@@ -225,6 +225,7 @@ class PoseLookup:
         out.calibration = Calibration.from_silhouettes(user, reference, dilation_px=dilation_px,
                                                        temperature_px=temperature_px)
         out._band_areas = masked_band_areas(self.tables.sil_bits, out.calibration)
+        out._band_areas.setflags(write=False)  # shared by every thread of the lookup
         return out
 
     def _approximate_index(self, approximate):

@@ -85,12 +85,17 @@ def test_open_by_measurements_and_missing_database(db_folder, tmp_path):
         PoseLookup.open(tmp_path / "nope")
 
 
-def test_threads_share_one_lookup(lookup, query_rows):
+@pytest.mark.parametrize("calibrated", [False, True])
+def test_threads_share_one_lookup(lookup, query_rows, calibrated):
     frames = list(query_rows["silhouette"])
-    serial = [lookup.estimate(f).entry for f in frames]
+    if calibrated:
+        lookup = lookup.calibrated(frames[-1])
+    serial = [lookup.estimate(f) for f in frames]
     with ThreadPoolExecutor(4) as pool:
-        parallel = list(pool.map(lambda f: lookup.estimate(f).entry, frames * 3))
-    assert parallel == serial * 3
+        parallel = list(pool.map(lookup.estimate, frames * 3))
+    assert [e.entry for e in parallel] == [e.entry for e in serial] * 3
+    np.testing.assert_array_equal(np.stack([e.angles for e in parallel]),
+                                  np.stack([e.angles for e in serial] * 3))
 
 
 def test_in_memory_rows(small_rows):
