@@ -148,7 +148,9 @@ _CONDITION_TEXT = {
     "selected_none": "selected database (formulas (1)-(4), no normalisation)",
     "personal": "database built for the hand's shape as measured on a photo",
     "calibrated": ("grid database that fits the hand's open-hand frame best, searched with the "
-                   "ignore mask that frame gives (beyond the paper)"),
+                   "ignore mask that frame gives (grown by {dilation} px); the pose is the mean "
+                   "of the entries near the best, weighted exp(-(X - X_min) / {temperature:g} "
+                   "px) (beyond the paper)"),
     "own_shape": "frames of the selected grid shape in its own database (diagnostic floor)",
 }
 _NORMALIZE = {"selected": "palm_width", "selected_none": "none"}
@@ -159,6 +161,8 @@ SCHEMA = "handsynth.eval/1"
 
 #: Growth of the ignore mask of the ``calibrated`` condition, pixels (4-neighbour steps).
 CALIBRATION_DILATION_PX = 1
+#: ``T`` of the ``calibrated`` condition's weighted mean, pixels (the library's default).
+CALIBRATION_TEMPERATURE_PX = 1.0
 
 #: A joint counts as moving in a frame when its true angle is farther than this from 0, degrees.
 MOVING_DEG = 1.0
@@ -804,7 +808,9 @@ class EvalReport:
                     "overall_mae_deg": _num(s.overall_mae_deg),
                     "joints": s.as_dict()}
 
-        out = {"description": _CONDITION_TEXT[cond],
+        text = _CONDITION_TEXT[cond].format(dilation=CALIBRATION_DILATION_PX,
+                                            temperature=CALIBRATION_TEMPERATURE_PX)
+        out = {"description": text,
                "databases": sorted({h["databases"][cond] for h in self.hands}),
                "all": block(np.ones(len(self.truth_deg), bool))}
         for name in self.options.pose_sets:
@@ -1216,7 +1222,8 @@ def evaluate(options: EvalOptions, *,
             lookup = lookups[hand.databases[cond]]
             if cond == "calibrated":
                 lookup = lookup.calibrated(open_frames[hand.index],
-                                           dilation_px=CALIBRATION_DILATION_PX)
+                                           dilation_px=CALIBRATION_DILATION_PX,
+                                           temperature_px=CALIBRATION_TEMPERATURE_PX)
             src = own if cond == "own_shape" else frames
             ests = [lookup.estimate(src[i]) for i in range(n)]
             rec["est"][cond].append(np.stack([e.angles for e in ests]))
