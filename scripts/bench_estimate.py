@@ -18,8 +18,9 @@ one thread.  The last line is machine-readable (paper-set frames):
 ``estimate_fps_median=<number> latency_p99_ms=<number>``.
 
 ``--calibrated`` times :meth:`PoseLookup.calibrated` instead (calibrated
-with the off-grid hand's open-hand frame: every entry is scored by its
-pixel difference outside the ignore mask).
+with the off-grid hand's open-hand frame: entries are bounded, then scored
+by their pixel difference outside the ignore mask, and the weighted mean of
+those near the best is reported).
 """
 
 from __future__ import annotations
