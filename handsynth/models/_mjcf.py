@@ -207,7 +207,12 @@ def _mirror(body: _Body) -> None:
 
 
 def _fmt(values, scale: float = 1.0, *, digits: int = 9) -> str:
-    return " ".join(f"{v * scale:.{digits}g}" for v in np.ravel(values))
+    # Round-off below 1e-12 (e.g. 3e-18 from a rotation on another numpy
+    # build) is written as 0 so the committed MJCF is the same on every
+    # machine; ``+ 0.0`` turns -0.0 into 0.
+    v = np.ravel(values) * scale
+    v = np.where(np.abs(v) < 1e-12, 0.0, v) + 0.0
+    return " ".join(f"{x:.{digits}g}" for x in v)
 
 
 def _quat(rot: np.ndarray) -> str:
