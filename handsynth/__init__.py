@@ -1,15 +1,21 @@
 """handsynth: a MuJoCo hand as ground truth for hand and finger pose measurement.
 
-The flow of one frame: :mod:`handsynth.models` (hand model, shapes, poses) ->
-:mod:`handsynth.render` (camera, renderer, preprocessing) ->
+The flow of one frame: :mod:`handsynth.models` (hand model, shapes, poses,
+measurements) -> :mod:`handsynth.render` (camera, renderer, preprocessing) ->
 :mod:`handsynth.db` (features, database files) -> :mod:`handsynth.estimate`
-(database selection, search, live loop).  :mod:`handsynth.sensors` feeds the
-same hand to the sensor-based methods.
+(frame -> pose: database selection, search, calibration).  Around it:
+:mod:`handsynth.measure` (hand measurements from a photo),
+:mod:`handsynth.live` (frame sources, the live loop, writers),
+:mod:`handsynth.testhands` (realistic glTF hands for testing),
+:mod:`handsynth.eval` (the camera estimator's evaluation) and
+:mod:`handsynth.cli`.  :mod:`handsynth.sensors` feeds the same hand to the
+sensor-based methods.  Each layer imports only the layers below it (the
+import contracts in ``pyproject.toml``).
 """
 
+from ._version import __version__
 from .estimate import PoseLookup
 from .models import JOINT_NAMES, HandModel, HandShape
 from .render import CameraMount
 
-__version__ = "0.1.0"
 __all__ = ["JOINT_NAMES", "CameraMount", "HandModel", "HandShape", "PoseLookup", "__version__"]

@@ -8,17 +8,17 @@ non-zero exit status instead of a traceback.
 from __future__ import annotations
 
 __all__ = [
+    "DatabaseCorruptError",
+    "DatabaseError",
+    "DatabaseMismatchError",
+    "EstimationError",
     "HandsynthError",
+    "InvalidCameraError",
     "InvalidInputError",
     "InvalidPoseError",
     "InvalidShapeError",
-    "InvalidCameraError",
-    "RenderError",
-    "DatabaseError",
-    "DatabaseMismatchError",
-    "DatabaseCorruptError",
     "RecordingError",
-    "EstimationError",
+    "RenderError",
 ]
 
 

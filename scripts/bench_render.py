@@ -40,7 +40,7 @@ def main() -> None:
     a = ap.parse_args()
     os.environ.setdefault("MUJOCO_GL", "egl")
     with ProcessPoolExecutor(a.workers) as ex:
-        single = list(ex.map(_worker, [(a.size, a.count)]))[0]
+        single = next(iter(ex.map(_worker, [(a.size, a.count)])))
         t0 = time.perf_counter()
         res = list(ex.map(_worker, [(a.size, a.count)] * a.workers))
         wall = time.perf_counter() - t0

@@ -14,8 +14,8 @@ import time
 
 import numpy as np
 
-from handsynth.estimate._eval import random_hand_shapes
-from handsynth.estimate._measure import (
+from handsynth.eval import random_hand_shapes
+from handsynth.measure import (
     NO_SHAPE_CORRECTION,
     MeasureOptions,
     ShapeCorrection,

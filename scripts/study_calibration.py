@@ -41,10 +41,10 @@ import json
 import numpy as np
 
 from handsynth import JOINT_NAMES, CameraMount, HandShape, PoseLookup
-from handsynth.estimate._eval import _pose_seed
+from handsynth.eval._hands import _pose_seed
 from handsynth.models import JOINT_LIMITS_DEG, pose_set
 from handsynth.render import SilhouetteRenderer
-from handsynth.render._mesh_hand import MeshHandRenderer
+from handsynth.testhands import MeshHandRenderer
 
 _IP = JOINT_NAMES.index("index_pip_flex")
 _CMC = JOINT_NAMES.index("thumb_cmc_flex")

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from handsynth.assets import standard_assets
+from handsynth.render import standard_assets
 
 OUT = Path(__file__).resolve().parents[1] / "assets" / "hand_mjcf"
 

@@ -1,5 +1,52 @@
+"""Shared fixtures: headless rendering, and a small rendered database (rendered once per session)."""
+
+from __future__ import annotations
+
 import os
+
+import numpy as np
+import pytest
 
 # Headless rendering for the whole suite (the library sets the same default).
 if not os.environ.get("DISPLAY"):
     os.environ.setdefault("MUJOCO_GL", "egl")
+
+from handsynth.db import database_meta, render_entries, write_database
+from handsynth.models import HandShape, paper_pose_set
+from handsynth.render import CameraMount
+
+N_ENTRIES = 240
+RENDER_SIZE = (180, 120)
+
+
+@pytest.fixture(scope="session")
+def small_rows():
+    """Rows of a 240-entry database of the standard hand (paper pose set)."""
+    angles = paper_pose_set(N_ENTRIES, seed=1)
+    return render_entries(angles, HandShape(), CameraMount(), render_size=RENDER_SIZE)
+
+
+@pytest.fixture(scope="session")
+def db_folder(tmp_path_factory, small_rows):
+    """A folder holding the small database as ``<shape.name>.h5``."""
+    folder = tmp_path_factory.mktemp("dbs")
+    shape, mount = HandShape(), CameraMount()
+    write_database(
+        folder / f"{shape.name}.h5",
+        angles=small_rows["angles"], hlac=small_rows["hlac"], sil_bits=small_rows["sil_bits"],
+        ridge_bits=small_rows["ridge_bits"], ridge_area=small_rows["ridge_area"],
+        keypoints=small_rows["keypoints"],
+        meta=database_meta(shape, mount, side="right", pose_set="paper", count=N_ENTRIES, seed=1,
+                           render_size=RENDER_SIZE),
+    )
+    return folder
+
+
+@pytest.fixture(scope="session")
+def query_rows():
+    """Frames of an off-grid hand in other poses (not in the database)."""
+    from handsynth.models import natural_pose_set
+
+    angles = np.vstack([natural_pose_set(12, seed=5), paper_pose_set(12, seed=9)])
+    return render_entries(angles, HandShape(length=1.03, width=1.06, palm=0.98, thumb=1.04),
+                          CameraMount(), render_size=RENDER_SIZE)

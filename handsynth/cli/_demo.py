@@ -29,8 +29,7 @@ def demo(out_dir: Path, tile_width: int, frames: int) -> None:
     import time
 
     from ..models import HandShape
-    from ..render import CameraMount, backend, contact_sheet
-    from ..render._io import write_png
+    from ..render import CameraMount, backend, contact_sheet, write_png
 
     t = time.perf_counter()
     grid = HandShape.grid()

@@ -44,9 +44,9 @@ def _check_limits(frames, seconds, max_dead, fps) -> None:
 def _open_lookup(db_dir, shape_name, measurements, temporal, err, personal=False, build=None):
     import time
 
-    from ..estimate import HandMeasurements, PoseLookup
-    from ..estimate._live import default_database_dir
-    from ..models import HandShape
+    from ..estimate import PoseLookup
+    from ..live import default_database_dir
+    from ..models import HandMeasurements, HandShape
 
     shape = meas = None
     if shape_name is not None and measurements is not None:
@@ -78,8 +78,8 @@ def _calibrate(lookup, source, open_image, db_dir, mount, side, build, err):
     """The lookup calibrated to the open hand: `open_image`, or the source's first hand."""
     import time
 
-    from ..estimate import PoseLookup, first_hand_frame
-    from ..estimate._live import default_database_dir
+    from ..estimate import PoseLookup
+    from ..live import default_database_dir, first_hand_frame
 
     if open_image is not None:
         open_frame, where = open_image, "the calibration image"
@@ -190,7 +190,7 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
     --max-dead reads in a row ends the run with an error.  Ctrl-C stops the
     run cleanly.
     """
-    from ..estimate._live import (
+    from ..live import (
         CameraSource,
         LiveOptions,
         SideBySideWriter,
@@ -220,7 +220,7 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
         frames = SYNTHETIC_FRAMES
     calibrate = calibrate or calibrate_image is not None
     chosen_db = shape_name is not None or measurements is not None or personal
-    if build_count is not None and not (personal or calibrate and not chosen_db):
+    if build_count is not None and not (personal or (calibrate and not chosen_db)):
         raise InvalidInputError("--build-count applies to a database built for --personal or "
                                 "--calibrate only")
     build = None if build_count is None else _build_options(build_count)

@@ -73,7 +73,12 @@ def joints() -> None:
 def estimate(recording, methods, frames, lateral_axis, bins, units, angles, rate_hz,
              drop_invalid, json_out, plot_out) -> None:
     """Estimate the joint centre of RECORDING (.h5 or Polhemus text export)."""
-    from ..sensors import AxisAngleFilter, make_estimator, plot_axis_histogram, read_recording
+    from ..sensors.trackers import (
+        AxisAngleFilter,
+        make_estimator,
+        plot_axis_histogram,
+        read_recording,
+    )
 
     kwargs = {}
     if Path(recording).suffix.lower() not in (".h5", ".hdf5"):
@@ -127,7 +132,7 @@ def estimate(recording, methods, frames, lateral_axis, bins, units, angles, rate
 def eval_(json_out, duration_s, rate_hz, seeds) -> None:
     """Reproduce the patent's table (mock vs finger, all vs filtered) on simulated data."""
     from ..errors import InvalidInputError
-    from ..sensors import evaluate
+    from ..sensors.trackers import evaluate
 
     if seeds < 1:
         raise InvalidInputError(f"--seeds must be >= 1, got {seeds}")

@@ -63,7 +63,7 @@ def measure(photo, mm_per_px, reference_width_mm, out, details, annotate, normal
     """
     import json
 
-    from ..estimate._measure import (
+    from ..measure import (
         NO_CALIBRATION,
         NO_SHAPE_CORRECTION,
         MeasureOptions,
@@ -71,7 +71,7 @@ def measure(photo, mm_per_px, reference_width_mm, out, details, annotate, normal
         measure_photo,
         write_measurement_file,
     )
-    from ..render._io import write_png
+    from ..render import write_png
 
     for path, suffixes, name in ((out, (".json", ".csv"), "--out"),
                                  (details, (".json",), "--details"),

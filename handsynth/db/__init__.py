@@ -1,6 +1,6 @@
 """Features and pose databases of the back-of-hand camera estimator (SPEC.md section 1).
 
-Features (identical for database renders and live frames):
+Features (identical for database renders and live frames; :mod:`handsynth.db.features`):
 
 * :func:`contour` -- inner boundary of the 64x64 silhouette;
 * :func:`hlac` -- 25 HLAC masks (Otsu & Kurita 1988) per 8x8 block, 1600 uint8;
@@ -21,6 +21,7 @@ from ._bits import (
     count_outside,
     count_outside_batch,
     pack_mask,
+    popcount64,
     popcount_bits,
     unpack_mask,
 )
@@ -34,10 +35,7 @@ from ._build import (
     build_default_database,
     database_path,
 )
-from ._contour import contour
 from ._entries import DEFAULT_RENDER_SIZE, database_meta, render_entries
-from ._features import Features, extract_features, extract_features_batch
-from ._hlac import HLAC_PATTERNS, HLAC_SIZE, hlac
 from ._store import (
     FORMAT_VERSION,
     KEYPOINT_SCALE_M,
@@ -46,40 +44,50 @@ from ._store import (
     verify,
     write_database,
 )
-from ._thinning import hilditch_thinning
 from ._validation import IMAGE_SIZE
+from .features import (
+    HLAC_PATTERNS,
+    HLAC_SIZE,
+    Features,
+    contour,
+    extract_features,
+    extract_features_batch,
+    hilditch_thinning,
+    hlac,
+)
 
 __all__ = [
-    "IMAGE_SIZE",
+    "DEFAULT_DATABASE",
+    "DEFAULT_RENDER_SIZE",
+    "FORMAT_VERSION",
     "HLAC_PATTERNS",
     "HLAC_SIZE",
-    "contour",
-    "hlac",
-    "hilditch_thinning",
-    "pack_mask",
-    "unpack_mask",
-    "complement_bits",
-    "popcount_bits",
-    "count_outside",
-    "count_outside_batch",
-    "Features",
-    "extract_features",
-    "extract_features_batch",
-    "FORMAT_VERSION",
+    "IMAGE_SIZE",
     "KEYPOINT_SCALE_M",
-    "Database",
-    "write_database",
-    "open_database",
-    "verify",
-    "DEFAULT_RENDER_SIZE",
-    "render_entries",
-    "database_meta",
     "BuildOptions",
     "BuildProgress",
     "BuildSummary",
-    "DEFAULT_DATABASE",
+    "Database",
+    "Features",
     "build_database",
     "build_databases",
     "build_default_database",
+    "complement_bits",
+    "contour",
+    "count_outside",
+    "count_outside_batch",
+    "database_meta",
     "database_path",
+    "extract_features",
+    "extract_features_batch",
+    "hilditch_thinning",
+    "hlac",
+    "open_database",
+    "pack_mask",
+    "popcount64",
+    "popcount_bits",
+    "render_entries",
+    "unpack_mask",
+    "verify",
+    "write_database",
 ]

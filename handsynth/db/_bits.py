@@ -20,12 +20,13 @@ from ..errors import InvalidInputError
 from ._validation import IMAGE_SIZE, as_silhouette, as_silhouette_batch
 
 __all__ = [
-    "pack_mask",
-    "unpack_mask",
     "complement_bits",
-    "popcount_bits",
     "count_outside",
     "count_outside_batch",
+    "pack_mask",
+    "popcount64",
+    "popcount_bits",
+    "unpack_mask",
 ]
 
 _ALL_ONES = np.uint64(0xFFFFFFFFFFFFFFFF)
@@ -117,8 +118,8 @@ def popcount_bits(bits) -> np.ndarray | int:
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _popcount64(x):
-    # SWAR population count of one uint64 (Hacker's Delight, 5-2).
+def popcount64(x):
+    """Set bits of one uint64, for compiled kernels (SWAR count, Hacker's Delight 5-2)."""
     x = x - ((x >> np.uint64(1)) & np.uint64(0x5555555555555555))
     x = (x & np.uint64(0x3333333333333333)) + ((x >> np.uint64(2)) & np.uint64(0x3333333333333333))
     x = (x + (x >> np.uint64(4))) & np.uint64(0x0F0F0F0F0F0F0F0F)
@@ -145,7 +146,7 @@ def count_outside(a_bits, b_bits):
     """
     total = np.uint64(0)
     for r in range(a_bits.shape[0]):
-        total += _popcount64(a_bits[r] & ~b_bits[r])
+        total += popcount64(a_bits[r] & ~b_bits[r])
     return int(total)
 
 

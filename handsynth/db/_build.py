@@ -35,9 +35,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import DatabaseError, InvalidInputError
-from ..models import HandShape
+from ..models import PAPER_SIZE, HandShape
 from ..models import pose_set as make_pose_set
-from ..models._posesets import PAPER_SIZE
 from ..render import CameraMount
 from ._entries import DEFAULT_RENDER_SIZE, database_meta, render_entries
 from ._executors import EXECUTORS, run_tasks

@@ -12,10 +12,10 @@ import numpy as np
 
 from ..models import HandShape, as_angles
 from ..render import CameraMount, SilhouetteRasterizer, preprocess
-from ._features import extract_features_batch
 from ._validation import IMAGE_SIZE
+from .features import extract_features_batch
 
-__all__ = ["DEFAULT_RENDER_SIZE", "render_entries", "database_meta"]
+__all__ = ["DEFAULT_RENDER_SIZE", "database_meta", "render_entries"]
 
 #: Render size (width, height) of database masks before preprocessing: the
 #: device's own 720x480 frame, so database rows see what live frames see.
@@ -70,8 +70,8 @@ def render_entries(angles, shape: HandShape | None = None, mount: CameraMount | 
 def database_meta(shape: HandShape, mount: CameraMount, *, side: str, pose_set: str,
                   count: int, seed: int, render_size: tuple[int, int]) -> dict:
     """The self-describing attributes of a database file (compared when it is opened)."""
-    from .. import __version__
-    from ._hlac import HLAC_SIZE
+    from .._version import __version__
+    from .features import HLAC_SIZE
 
     return {
         "shape": shape.as_dict(),

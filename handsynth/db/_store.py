@@ -58,16 +58,16 @@ from ..errors import (
     InvalidInputError,
 )
 from ..models import JOINT_NAMES
-from ._hlac import HLAC_SIZE
 from ._validation import IMAGE_SIZE
+from .features import HLAC_SIZE
 
 __all__ = [
     "FORMAT_VERSION",
     "KEYPOINT_SCALE_M",
     "Database",
-    "write_database",
     "open_database",
     "verify",
+    "write_database",
 ]
 
 #: Version of the file layout described in this module.

@@ -21,21 +21,17 @@ from ..db import (
     BuildOptions,
     Database,
     build_databases,
+    database_path,
     extract_features,
     open_database,
 )
 from ..errors import DatabaseError, InvalidInputError
-from ..models import JOINT_NAMES, HandShape
+from ..models import JOINT_NAMES, HandMeasurements, HandShape
 from ..render import CameraMount, preprocess
-from ._calibration import (
-    Calibration,
-    masked_band_areas,
-    masked_search,
-    reference_silhouette,
-    select_shape_from_frame,
-)
+from ._calibration import Calibration, reference_silhouette, select_shape_from_frame
+from ._masked import masked_band_areas, masked_search
 from ._search import SearchOptions, SearchTables, search
-from ._selection import HandMeasurements, SelectionOptions, database_path, select_shape
+from ._selection import SelectionOptions, select_shape
 
 __all__ = ["PoseEstimate", "PoseEstimator", "PoseLookup"]
 

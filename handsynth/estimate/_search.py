@@ -63,8 +63,7 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 from numba import njit
 
-from ..db import HLAC_SIZE, count_outside
-from ..db._bits import _popcount64
+from ..db import HLAC_SIZE, count_outside, popcount64
 from ..errors import InvalidInputError
 
 __all__ = ["SearchOptions", "SearchResult", "SearchTables", "search", "search_reference"]
@@ -465,7 +464,7 @@ def _block_counts(bits):
     for r in range(64):
         w = bits[r]
         for cx in range(16):
-            counts[r >> 2, cx] += _popcount64((w >> np.uint64(4 * cx)) & np.uint64(15))
+            counts[r >> 2, cx] += popcount64((w >> np.uint64(4 * cx)) & np.uint64(15))
     return counts
 
 
@@ -523,12 +522,12 @@ def _bounds(q_planes, q_sil_coarse, q_proj, q_resid, sil_coarse_t, ridge_coarse_
                 continue
             col = sil_coarse_t[w]
             for u in range(n):
-                lb1[u] += np.int32(_popcount64(qw & ~col[u])) << k
+                lb1[u] += np.int32(popcount64(qw & ~col[u])) << k
     for w in range(4):
         qw = ~q_sil_coarse[w]
         col = ridge_coarse_t[w]
         for u in range(n):
-            lb2[u] += np.int32(_popcount64(col[u] & qw))
+            lb2[u] += np.int32(popcount64(col[u] & qw))
     for j in range(proj_t.shape[0]):
         qj = np.float32(q_proj[j])
         col32 = proj_t[j]

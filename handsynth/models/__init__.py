@@ -1,4 +1,4 @@
-"""Hand model: canonical joints, hand shapes, MJCF generation and pose sets.
+"""Hand model: canonical joints, hand shapes, MJCF generation, pose sets and measurements.
 
 The hand frame is public and used everywhere: origin at the wrist joint
 centre, +y from the wrist toward the middle-finger MCP joint, +z out of the
@@ -6,12 +6,28 @@ back of the hand, x = y cross z.  Lengths in metres inside the model,
 angles in degrees at every public interface.
 """
 
-from ._anthropometry import DORSUM_Z_MM, HAND_BREADTH_MM, HAND_LENGTH_MM
+from ._anthropometry import (
+    DORSUM_Z_MM,
+    HAND_BREADTH_MM,
+    HAND_LENGTH_MM,
+    SEGMENT_COEFFICIENTS,
+    StandardLayout,
+    standard_layout_mm,
+)
 from ._hand import HandModel, compile_mjcf
 from ._joints import FINGERS, JOINT_LIMITS_DEG, JOINT_NAMES, joint_index
-from ._mjcf import KEYPOINT_SITES, SEGMENT_BODIES, hand_mjcf
+from ._measurements import SEGMENTS, HandMeasurements, hull_width_at, model_measurements
+from ._mjcf import (
+    KEYPOINT_SITES,
+    SEGMENT_BODIES,
+    THUMB_PITCH_DEG,
+    THUMB_YAW_DEG,
+    HandSpec,
+    hand_mjcf,
+    hand_spec,
+)
 from ._pose import NAMED_POSES, as_angles, named_pose
-from ._posesets import POSE_SETS, natural_pose_set, paper_pose_set, pose_set
+from ._posesets import PAPER_SIZE, POSE_SETS, natural_pose_set, paper_pose_set, pose_set
 from ._shape import GRID_LEVELS, HandShape
 
 __all__ = [
@@ -20,20 +36,32 @@ __all__ = [
     "GRID_LEVELS",
     "HAND_BREADTH_MM",
     "HAND_LENGTH_MM",
-    "HandModel",
-    "HandShape",
     "JOINT_LIMITS_DEG",
     "JOINT_NAMES",
     "KEYPOINT_SITES",
     "NAMED_POSES",
+    "PAPER_SIZE",
     "POSE_SETS",
+    "SEGMENTS",
     "SEGMENT_BODIES",
+    "SEGMENT_COEFFICIENTS",
+    "THUMB_PITCH_DEG",
+    "THUMB_YAW_DEG",
+    "HandMeasurements",
+    "HandModel",
+    "HandShape",
+    "HandSpec",
+    "StandardLayout",
     "as_angles",
     "compile_mjcf",
     "hand_mjcf",
+    "hand_spec",
+    "hull_width_at",
     "joint_index",
+    "model_measurements",
     "named_pose",
     "natural_pose_set",
     "paper_pose_set",
     "pose_set",
+    "standard_layout_mm",
 ]

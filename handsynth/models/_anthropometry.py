@@ -36,12 +36,12 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = [
-    "HAND_LENGTH_MM",
+    "DEPTH_TO_BREADTH",
+    "FINGER_BREADTH_MM",
     "HAND_BREADTH_MM",
+    "HAND_LENGTH_MM",
     "PALM_THICKNESS_MM",
     "SEGMENT_COEFFICIENTS",
-    "FINGER_BREADTH_MM",
-    "DEPTH_TO_BREADTH",
     "StandardLayout",
     "standard_layout_mm",
 ]

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["ellipsoid_points", "phalanx_vertices", "palm_vertices", "forearm_vertices"]
+__all__ = ["ellipsoid_points", "forearm_vertices", "palm_vertices", "phalanx_vertices"]
 
 
 def ellipsoid_points(

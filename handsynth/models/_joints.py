@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["JOINT_NAMES", "FINGERS", "JOINT_LIMITS_DEG", "joint_index"]
+__all__ = ["FINGERS", "JOINT_LIMITS_DEG", "JOINT_NAMES", "joint_index"]
 
 FINGERS: tuple[str, ...] = ("thumb", "index", "middle", "ring", "little")
 

@@ -38,7 +38,7 @@ from ._joints import FINGERS, JOINT_LIMITS_DEG, JOINT_NAMES
 from ._pose import NAMED_POSES
 from ._shape import HandShape
 
-__all__ = ["HandSpec", "hand_spec", "hand_mjcf", "KEYPOINT_SITES", "SEGMENT_BODIES"]
+__all__ = ["KEYPOINT_SITES", "SEGMENT_BODIES", "HandSpec", "hand_mjcf", "hand_spec"]
 
 #: Sites of the 21 keypoints in output order: wrist, then base to tip per
 #: finger, thumb first.
@@ -58,8 +58,8 @@ SEGMENT_BODIES: dict[str, tuple[str, ...]] = {
 # pronated 50 deg about its own axis, the relaxed open-hand posture
 # (Kapandji 2007, "the hand": the thumb column lies about 40 deg from the
 # index in the palm plane at rest).
-_THUMB_YAW_DEG = 40.0
-_THUMB_PITCH_DEG = 12.0
+THUMB_YAW_DEG = 40.0
+THUMB_PITCH_DEG = 12.0
 _THUMB_PRONATION_DEG = -50.0
 _FOREARM_LENGTH_MM = 90.0
 _MIRROR = np.diag([-1.0, 1.0, 1.0])
@@ -167,7 +167,7 @@ def hand_spec(shape: HandShape, *, side: str = "right") -> HandSpec:
     # thumb: metacarpal (CMC, 2 DOF), proximal (MCP), distal (IP)
     c = SEGMENT_COEFFICIENTS["thumb"]
     cmc = lay.thumb_cmc * np.array([shape.palm, shape.thumb, 1.0])
-    rest = _rot("z", _THUMB_YAW_DEG) @ _rot("x", -_THUMB_PITCH_DEG) @ _rot("y", _THUMB_PRONATION_DEG)
+    rest = _rot("z", THUMB_YAW_DEG) @ _rot("x", -THUMB_PITCH_DEG) @ _rot("y", _THUMB_PRONATION_DEG)
     d = rest[:, 1]
     cmc_flex = np.array([0.0, 0.0, -1.0])          # across the palm toward the little finger
     cmc_abd = np.cross(d, [0.0, 0.0, -1.0])        # away from the palm plane, palmar

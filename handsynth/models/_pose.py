@@ -9,7 +9,7 @@ import numpy as np
 from ..errors import InvalidPoseError
 from ._joints import JOINT_LIMITS_DEG, JOINT_NAMES, joint_index
 
-__all__ = ["as_angles", "NAMED_POSES", "named_pose"]
+__all__ = ["NAMED_POSES", "as_angles", "named_pose"]
 
 #: Tolerance on joint limits, degrees: angles this far outside are clipped
 #: silently (float round-off from conversions), farther is an error.

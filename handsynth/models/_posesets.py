@@ -24,7 +24,7 @@ from ..errors import InvalidInputError
 from ._joints import FINGERS, JOINT_LIMITS_DEG, JOINT_NAMES
 from ._pose import NAMED_POSES
 
-__all__ = ["POSE_SETS", "pose_set", "paper_pose_set", "natural_pose_set"]
+__all__ = ["POSE_SETS", "natural_pose_set", "paper_pose_set", "pose_set"]
 
 PAPER_SIZE = 20_448
 #: DIP flexion follows PIP flexion by this factor in coupled poses (seed 004).
@@ -139,7 +139,7 @@ def natural_pose_set(n: int, *, seed: int = 0) -> np.ndarray:
     closure = rng.uniform(0, 1, (n_rand, 1)) + rng.normal(0, 0.15, (n_rand, 4))
     closure = np.clip(closure, 0, 1)
     rand = np.zeros((n_rand, 20))
-    for k, f in enumerate(FINGERS[1:]):
+    for k, _f in enumerate(FINGERS[1:]):
         j = 4 + 4 * k
         c = closure[:, k]
         rand[:, j] = c * 90 + rng.normal(0, 10, n_rand)              # MCP flex

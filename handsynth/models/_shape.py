@@ -8,7 +8,7 @@ from dataclasses import dataclass, fields
 
 from ..errors import InvalidShapeError
 
-__all__ = ["HandShape", "GRID_LEVELS"]
+__all__ = ["GRID_LEVELS", "HandShape"]
 
 #: Levels of each ratio in the paper's grid (SPEC.md section 1, table "Hand
 #: shapes (81)"): (small, standard, large).

@@ -1,8 +1,15 @@
-"""Camera, off-screen renderer and the preprocessing shared by database and live frames."""
+"""Camera, off-screen renderer and the preprocessing shared by database and live frames.
+
+Besides the renderers, the pieces another renderer needs to draw into the
+same scene are public: :class:`GLContextOwner` and :class:`MaskMaker` (the
+GL context and the mask interface of :class:`SilhouetteRenderer`),
+:func:`offscreen_renderer`, :func:`scene_parts` and :func:`label_image`.
+"""
 
 from ._camera import CameraMount
 from ._gl import backend, ensure_backend
-from ._mesh_hand import MeshHandRenderer
+from ._io import write_png
+from ._masks import MaskMaker
 from ._preprocess import (
     binarize,
     check_frame,
@@ -13,12 +20,19 @@ from ._preprocess import (
     wrist_cut_keep,
 )
 from ._raster import SilhouetteRasterizer
-from ._renderer import SilhouetteRenderer, render_rgb
-from ._sheet import contact_sheet
+from ._renderer import (
+    GLContextOwner,
+    SilhouetteRenderer,
+    offscreen_renderer,
+    render_rgb,
+)
+from ._scene import scene_include_mjcf, scene_mjcf, scene_parts, standard_assets
+from ._sheet import contact_sheet, label_image
 
 __all__ = [
     "CameraMount",
-    "MeshHandRenderer",
+    "GLContextOwner",
+    "MaskMaker",
     "SilhouetteRasterizer",
     "SilhouetteRenderer",
     "backend",
@@ -27,9 +41,16 @@ __all__ = [
     "contact_sheet",
     "crop_resize",
     "ensure_backend",
+    "label_image",
     "largest_component",
+    "offscreen_renderer",
     "preprocess",
     "preprocess_reference",
     "render_rgb",
+    "scene_include_mjcf",
+    "scene_mjcf",
+    "scene_parts",
+    "standard_assets",
     "wrist_cut_keep",
+    "write_png",
 ]

@@ -13,14 +13,13 @@ from __future__ import annotations
 import os
 import sys
 
-__all__ = ["ensure_backend", "backend"]
+__all__ = ["backend", "ensure_backend"]
 
 
 def ensure_backend() -> str:
     """Set a headless default for ``MUJOCO_GL`` if none is set; return the backend."""
-    if "mujoco" not in sys.modules:
-        if not os.environ.get("MUJOCO_GL") and not os.environ.get("DISPLAY"):
-            os.environ["MUJOCO_GL"] = "egl"
+    if "mujoco" not in sys.modules and not os.environ.get("MUJOCO_GL") and not os.environ.get("DISPLAY"):
+        os.environ["MUJOCO_GL"] = "egl"
     return backend()
 
 

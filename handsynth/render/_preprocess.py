@@ -165,7 +165,8 @@ def _keep_cached(mount: CameraMount, side: str, w: int, h: int) -> np.ndarray:
                       side=side, width_px=w, height_px=h)
     (u0, v0), (u1, v1), (uf, vf) = p
     vv, uu = np.mgrid[0:h, 0:w]
-    side_of = lambda u, v: (u1 - u0) * (v - v0) - (v1 - v0) * (u - u0)
+    def side_of(u, v):
+        return (u1 - u0) * (v - v0) - (v1 - v0) * (u - u0)
     forearm_sign = np.sign(side_of(uf, vf))
     keep = np.sign(side_of(uu, vv)) != forearm_sign
     keep.setflags(write=False)

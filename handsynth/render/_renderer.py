@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 
 import numpy as np
@@ -16,7 +17,7 @@ from ._scene import scene_mjcf
 __all__ = ["SilhouetteRenderer", "render_rgb"]
 
 
-def _renderer(model, w: int, h: int):
+def offscreen_renderer(model, w: int, h: int):
     import mujoco
 
     try:
@@ -48,10 +49,8 @@ class GLContextOwner:
         self.close()
 
     def __del__(self) -> None:
-        try:
+        with contextlib.suppress(Exception):
             self.close()
-        except Exception:
-            pass
 
 
 class SilhouetteRenderer(GLContextOwner, MaskMaker):
@@ -92,7 +91,7 @@ class SilhouetteRenderer(GLContextOwner, MaskMaker):
 
         self._load_hand(shape, mount, side=side, width_px=width_px, height_px=height_px,
                         forearm=forearm, samples=samples)
-        self._renderer = _renderer(self.hand.model, self.width_px, self.height_px)
+        self._renderer = offscreen_renderer(self.hand.model, self.width_px, self.height_px)
         self._cam = mujoco.mj_name2id(self.hand.model, mujoco.mjtObj.mjOBJ_CAMERA, "device")
         self._buf = np.empty((self.height_px, self.width_px, 3), dtype=np.uint8)
 
@@ -134,7 +133,7 @@ def render_rgb(angles, shape: HandShape | None = None, mount: CameraMount | None
     xml = scene_mjcf(shape, mount, side=side, forearm=forearm, width_px=w, height_px=h)
     hand = HandModel(shape, side=side, xml=xml)
     hand.set_pose(angles)
-    r = _renderer(hand.model, w, h)
+    r = offscreen_renderer(hand.model, w, h)
     try:
         r.update_scene(hand.data, camera=camera)
         return r.render().copy()

@@ -7,7 +7,7 @@ import numpy as np
 from ..models import HandShape, hand_mjcf
 from ._camera import CameraMount
 
-__all__ = ["scene_mjcf", "scene_include_mjcf", "mujoco_camera_xyaxes"]
+__all__ = ["mujoco_camera_xyaxes", "scene_include_mjcf", "scene_mjcf", "scene_parts", "standard_assets"]
 
 
 def mujoco_camera_xyaxes(pose_cv: np.ndarray) -> np.ndarray:
@@ -19,7 +19,7 @@ def mujoco_camera_xyaxes(pose_cv: np.ndarray) -> np.ndarray:
     return np.concatenate([r[:, 0], -r[:, 1]])
 
 
-def _scene_parts(mount: CameraMount | None, side: str, silhouette: bool,
+def scene_parts(mount: CameraMount | None, side: str, silhouette: bool,
                  width_px: int | None, height_px: int | None,
                  samples: int = 0) -> tuple[str, str]:
     """The ``<visual>`` element and the worldbody lights and cameras of a scene."""
@@ -73,7 +73,7 @@ def scene_mjcf(shape: HandShape | None = None, mount: CameraMount | None = None,
     str
         A complete MJCF document.
     """
-    visual, world = _scene_parts(mount, side, silhouette, width_px, height_px, samples)
+    visual, world = scene_parts(mount, side, silhouette, width_px, height_px, samples)
     hand = hand_mjcf(shape, side=side, forearm=forearm, silhouette=silhouette)
     hand = hand.replace("  <compiler ", visual + "  <compiler ", 1)
     return hand.replace("  </worldbody>", world + "  </worldbody>", 1)
@@ -82,6 +82,20 @@ def scene_mjcf(shape: HandShape | None = None, mount: CameraMount | None = None,
 def scene_include_mjcf(hand_file: str, mount: CameraMount | None = None, *,
                        side: str = "right") -> str:
     """A scene document that includes the hand document `hand_file` (Menagerie layout)."""
-    visual, world = _scene_parts(mount, side, False, None, None)
+    visual, world = scene_parts(mount, side, False, None, None)
     return (f'<mujoco model="handsynth_{side}_scene">\n  <include file="{hand_file}"/>\n'
             f"{visual}  <worldbody>\n{world}  </worldbody>\n</mujoco>\n")
+
+
+def standard_assets() -> dict[str, str]:
+    """File name -> MJCF text of the standard right and left hands and their scenes.
+
+    The files committed in ``assets/hand_mjcf/`` (Menagerie layout); a test
+    checks that they equal this output (``scripts/write_mjcf_assets.py``
+    writes them).
+    """
+    out = {}
+    for side in ("right", "left"):
+        out[f"{side}_hand.xml"] = hand_mjcf(HandShape(), side=side)
+        out[f"scene_{side}.xml"] = scene_include_mjcf(f"{side}_hand.xml", side=side)
+    return out

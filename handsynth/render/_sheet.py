@@ -33,16 +33,16 @@ def contact_sheet(shapes: dict[str, HandShape], poses: tuple[str, ...] = ("open"
         tiles = []
         for p in poses:
             img = render_rgb(named_pose(p), shape, mount, width_px=tw, height_px=th)
-            tiles.append(_label(img, f"{label}: {p}"))
+            tiles.append(label_image(img, f"{label}: {p}"))
         if side_view:
             img = render_rgb(named_pose("pinch"), shape, mount, camera="side", width_px=tw, height_px=th)
-            tiles.append(_label(img, f"{label}: pinch, side view"))
+            tiles.append(label_image(img, f"{label}: pinch, side view"))
         rows.append(np.hstack(tiles))
     sheet = np.vstack(rows)
     return cv2.copyMakeBorder(sheet, 2, 2, 2, 2, cv2.BORDER_CONSTANT, value=(255, 255, 255))
 
 
-def _label(img: np.ndarray, text: str) -> np.ndarray:
+def label_image(img: np.ndarray, text: str) -> np.ndarray:
     import cv2
 
     img = np.ascontiguousarray(img)

@@ -23,7 +23,8 @@ from handsynth.db import (
     render_entries,
     write_database,
 )
-from handsynth.estimate._live import KEYPOINT_COLUMNS, TRUTH_COLUMNS, live_columns
+from handsynth.live import live_columns
+from handsynth.live._writers import KEYPOINT_COLUMNS, TRUTH_COLUMNS
 from handsynth.models import JOINT_LIMITS_DEG, JOINT_NAMES, HandShape, paper_pose_set
 from handsynth.render import CameraMount, SilhouetteRenderer
 
@@ -133,7 +134,7 @@ def test_video_in_and_side_by_side_video_out(tmp_path, db, masks):
 
 def test_flaky_then_dead_camera_is_counted_and_ends_with_one_error_line(tmp_path, db, masks,
                                                                         monkeypatch):
-    import handsynth.estimate._live as live
+    import handsynth.live as live
 
     class FakeCamera:
         def __init__(self, index):

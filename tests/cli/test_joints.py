@@ -4,7 +4,7 @@ import pytest
 from click.testing import CliRunner
 
 from handsynth.cli._main import cli
-from handsynth.sensors import FlexionMotion, save_recording, simulate_recording
+from handsynth.sensors.trackers import FlexionMotion, save_recording, simulate_recording
 
 
 @pytest.fixture(scope="module")

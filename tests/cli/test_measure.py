@@ -10,9 +10,8 @@ import pytest
 from click.testing import CliRunner
 
 from handsynth.cli._main import cli
-from handsynth.estimate._measure import render_measurement_photo
-from handsynth.estimate._selection import HandMeasurements, model_measurements
-from handsynth.models import HandShape
+from handsynth.measure import render_measurement_photo
+from handsynth.models import HandMeasurements, HandShape, model_measurements
 
 SHAPE = HandShape(length=1.05, width=0.9, palm=1.0, thumb=1.1)
 

@@ -24,7 +24,7 @@ from handsynth.estimate._search import (
 from handsynth.models import HandShape, natural_pose_set
 from handsynth.render import CameraMount
 
-from .conftest import RENDER_SIZE
+RENDER_SIZE = (180, 120)  # render size of the shared small database (tests/conftest.py)
 
 
 def _tables(rows):

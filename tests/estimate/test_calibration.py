@@ -19,7 +19,7 @@ from handsynth.estimate import (
 from handsynth.models import HandShape
 from handsynth.render import CameraMount, SilhouetteRasterizer
 
-from .conftest import RENDER_SIZE
+RENDER_SIZE = (180, 120)  # render size of the shared small database (tests/conftest.py)
 
 
 def _box(r0, r1, c0, c1) -> np.ndarray:

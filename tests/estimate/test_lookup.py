@@ -9,17 +9,11 @@ import pytest
 
 import handsynth
 from handsynth.errors import DatabaseError, InvalidInputError
-from handsynth.estimate import (
-    PoseEstimator,
-    PoseLookup,
-    SelectionOptions,
-    model_measurements,
-    select_shape,
-)
-from handsynth.models import JOINT_NAMES, HandShape
+from handsynth.estimate import PoseEstimator, PoseLookup, SelectionOptions, select_shape
+from handsynth.models import JOINT_NAMES, HandShape, model_measurements
 from handsynth.render import CameraMount, SilhouetteRenderer
 
-from .conftest import RENDER_SIZE
+RENDER_SIZE = (180, 120)  # render size of the shared small database (tests/conftest.py)
 
 
 @pytest.fixture(scope="module")

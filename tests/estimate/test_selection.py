@@ -8,14 +8,8 @@ import numpy as np
 import pytest
 
 from handsynth.errors import InvalidShapeError
-from handsynth.estimate import (
-    HandMeasurements,
-    SelectionOptions,
-    model_measurements,
-    select_shape,
-    shape_ratios,
-)
-from handsynth.models import HandShape
+from handsynth.estimate import SelectionOptions, select_shape, shape_ratios
+from handsynth.models import HandMeasurements, HandShape, model_measurements
 
 
 def _meas(L=10.0, W=2.0, pw=80.0, ph=80.0, tw=20.0, th=25.0):

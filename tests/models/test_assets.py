@@ -2,7 +2,7 @@ from pathlib import Path
 
 import mujoco
 
-from handsynth.assets import standard_assets
+from handsynth.render import standard_assets
 
 ASSETS = Path(__file__).resolve().parents[2] / "assets" / "hand_mjcf"
 

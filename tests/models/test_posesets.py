@@ -2,7 +2,13 @@ import numpy as np
 import pytest
 
 from handsynth.errors import InvalidInputError
-from handsynth.models import JOINT_LIMITS_DEG, JOINT_NAMES, natural_pose_set, paper_pose_set, pose_set
+from handsynth.models import (
+    JOINT_LIMITS_DEG,
+    JOINT_NAMES,
+    natural_pose_set,
+    paper_pose_set,
+    pose_set,
+)
 
 
 def test_paper_set_moves_one_finger_at_a_time():

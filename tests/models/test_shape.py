@@ -3,7 +3,7 @@ import pytest
 
 from handsynth import HandShape
 from handsynth.errors import InvalidShapeError
-from handsynth.models import HandModel, KEYPOINT_SITES
+from handsynth.models import KEYPOINT_SITES, HandModel
 
 
 def test_grid_has_81_distinct_shapes():

@@ -4,7 +4,12 @@ import pytest
 from handsynth import CameraMount
 from handsynth.errors import InvalidInputError
 from handsynth.models import named_pose
-from handsynth.render import SilhouetteRenderer, crop_resize, largest_component, preprocess
+from handsynth.render import (
+    SilhouetteRenderer,
+    crop_resize,
+    largest_component,
+    preprocess,
+)
 
 NO_CUT = CameraMount(wrist_cut_mm=None)
 
@@ -34,7 +39,8 @@ def test_bgr_frame_gives_the_same_silhouette_as_its_mask():
     r = SilhouetteRenderer(width_px=360, height_px=240)
     mask = r.mask(named_pose("spread"))
     rng = np.random.default_rng(0)
-    frame = np.where(mask[..., None], 200, 30).astype(np.uint8) + rng.integers(0, 20, (240, 360, 3), dtype=np.uint8)
+    noise = rng.integers(0, 20, (240, 360, 3), dtype=np.uint8)
+    frame = np.where(mask[..., None], 200, 30).astype(np.uint8) + noise
     a, b = preprocess(mask, r.mount), preprocess(frame, r.mount)
     assert (a ^ b).sum() <= 10
 

@@ -4,7 +4,12 @@ import numpy as np
 import pytest
 
 from handsynth.models import HandShape, natural_pose_set, paper_pose_set
-from handsynth.render import CameraMount, SilhouetteRasterizer, SilhouetteRenderer, preprocess
+from handsynth.render import (
+    CameraMount,
+    SilhouetteRasterizer,
+    SilhouetteRenderer,
+    preprocess,
+)
 
 POSES = np.vstack([paper_pose_set(2000, seed=4)[::100], natural_pose_set(10, seed=5)])
 

@@ -1,0 +1,152 @@
+"""The side-by-side video of the live loop: the input frame beside the matched entry."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InvalidInputError
+from ..models import JOINT_LIMITS_DEG
+from ._checks import _check_float, _quiet_opencv
+
+__all__ = ["SideBySideWriter"]
+
+
+_CODECS = {".mp4": "mp4v", ".m4v": "mp4v", ".mov": "mp4v", ".avi": "MJPG", ".mkv": "MJPG"}
+_MATCH_BGR = (90, 220, 90)
+
+
+def _to_bgr(frame: np.ndarray) -> np.ndarray:
+    if frame.dtype == bool:
+        grey = frame.view(np.uint8) * np.uint8(255)
+        return np.repeat(grey[:, :, None], 3, axis=2)
+    if frame.ndim == 2:
+        return np.repeat(frame[:, :, None], 3, axis=2)
+    return np.ascontiguousarray(frame)
+
+
+class SideBySideWriter:
+    """A video of the input frames (left) and the matched entries' renders (right).
+
+    The right half is the database hand (the lookup's shape, mount and
+    side) rendered in the matched entry's pose at the input frame's size,
+    in green; black with "no hand" when the frame showed none.  Every
+    output frame is ``2 W x H`` for input frames of ``W x H`` (the first
+    frame's size; later frames of another size are resized).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        ``.mp4``/``.m4v``/``.mov`` (codec ``mp4v``) or ``.avi``/``.mkv``
+        (``MJPG``).
+    lookup : PoseLookup
+        The lookup whose entries are matched (its database, mount, side).
+    fps : float, keyword-only
+    codec : str, keyword-only, optional
+        A four-character code overriding the suffix's codec.
+    labels : bool, keyword-only
+        Draw frame index, entry and confidence on the frames.
+
+    Raises
+    ------
+    InvalidInputError
+        Unknown suffix or codec, or OpenCV cannot open a writer for the file.
+    """
+
+    def __init__(self, path, lookup, *, fps: float = 30.0, codec: str | None = None,
+                 labels: bool = True) -> None:
+        self.path = Path(path)
+        suffix = self.path.suffix.lower()
+        if codec is None:
+            if suffix not in _CODECS:
+                raise InvalidInputError(
+                    f"video output {str(self.path)!r} must end in one of "
+                    f"{', '.join(sorted(_CODECS))}")
+            codec = _CODECS[suffix]
+        if not (isinstance(codec, str) and len(codec) == 4):
+            raise InvalidInputError(f"codec must be a four-character code, got {codec!r}")
+        for attr in ("database", "mount", "side"):
+            if not hasattr(lookup, attr):
+                raise InvalidInputError(
+                    f"lookup must be a PoseLookup (renders of its entries), got "
+                    f"{type(lookup).__name__}")
+        self.lookup = lookup
+        self.fps = _check_float(fps, "fps")
+        self.codec = codec
+        self.labels = bool(labels)
+        self.frames = 0
+        self._writer = None
+        self._renderer = None
+        self._size = None
+
+    def _open(self, w: int, h: int) -> None:
+        import cv2
+
+        from ..render import SilhouetteRenderer
+
+        with _quiet_opencv():
+            writer = cv2.VideoWriter(str(self.path), cv2.VideoWriter_fourcc(*self.codec),
+                                     self.fps, (2 * w, h))
+            opened = writer.isOpened()
+        if not opened:
+            writer.release()
+            raise InvalidInputError(f"OpenCV cannot write video {str(self.path)!r} with codec "
+                                    f"{self.codec!r}")
+        self._writer, self._size = writer, (w, h)
+        self._renderer = SilhouetteRenderer(self.lookup.shape, self.lookup.mount,
+                                            side=self.lookup.side, width_px=w, height_px=h)
+
+    def write(self, frame: np.ndarray, estimate, *, index: int | None = None) -> None:
+        """Append one side-by-side frame.
+
+        Parameters
+        ----------
+        frame : ndarray, shape (H, W) or (H, W, 3), bool or uint8
+            The input frame as the estimator got it.
+        estimate : PoseEstimate
+            Its result.
+        index : int, keyword-only, optional
+            Frame index for the label.
+        """
+        import cv2
+
+        left = _to_bgr(frame)
+        if self._writer is None:
+            self._open(left.shape[1], left.shape[0])
+        w, h = self._size
+        if left.shape[:2] != (h, w):
+            left = cv2.resize(left, (w, h), interpolation=cv2.INTER_NEAREST)
+        right = np.zeros_like(left)
+        if not estimate.no_hand:
+            pose = np.clip(np.asarray(self.lookup.database.angles[estimate.entry], np.float64),
+                           JOINT_LIMITS_DEG[:, 0], JOINT_LIMITS_DEG[:, 1])
+            right[self._renderer.mask(pose)] = _MATCH_BGR
+        if self.labels:
+            scale, thick = max(0.35, h / 600), max(1, round(h / 300))
+            y = max(12, round(22 * scale * 1.6))
+            text = "" if index is None else f"#{index}"
+            cv2.putText(left, f"input {text}", (6, y), cv2.FONT_HERSHEY_SIMPLEX, scale,
+                        (0, 160, 255), thick, cv2.LINE_AA)
+            label = ("no hand" if estimate.no_hand else
+                     f"entry {estimate.entry} conf {estimate.confidence:.2f}"
+                     + (" low" if estimate.low_confidence else ""))
+            cv2.putText(right, label, (6, y), cv2.FONT_HERSHEY_SIMPLEX, scale, (0, 160, 255),
+                        thick, cv2.LINE_AA)
+        self._writer.write(np.hstack([left, right]))
+        self.frames += 1
+
+    def close(self) -> None:
+        """Finish the file and release the renderer."""
+        writer, self._writer = self._writer, None
+        if writer is not None:
+            writer.release()
+        r, self._renderer = self._renderer, None
+        if r is not None:
+            r.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()

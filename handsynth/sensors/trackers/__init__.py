@@ -1,0 +1,73 @@
+"""Finger joint centres from two 6-DOF magnetic trackers.
+
+Simulated and real recordings of two receivers glued on the phalanges either
+side of a finger joint (patent JP2010-88628, SPEC section 2), the patent's
+plane-constrained variance estimator with its axis-angle frame filter, the
+classic baselines (3-D variance, O'Brien et al. 2000, SCoRE), and segment
+lengths L1..L14 from the estimated centres.
+
+Units: metres and seconds in arrays, millimetres in reported errors and
+lengths, degrees at option interfaces.
+"""
+
+from ._axis_filter import AxisAngleFilter, AxisFilterResult
+from ._estimators import (
+    JointCentreEstimator,
+    OBrienEstimator,
+    PlaneVarianceEstimator,
+    VarianceEstimator,
+)
+from ._eval import ESTIMATORS, evaluate, make_estimator
+from ._geometry import SUPPORTED_JOINTS, JointGeometry, joint_geometry
+from ._hdf5 import load_recording, save_recording
+from ._joint_models import FingerJoint, HingeJoint
+from ._lengths import SEGMENT_NAMES, segment_length_mm, segment_lengths_mm
+from ._motion import FlexionMotion
+from ._noise import LIBERTY, LIBERTY_RESOLUTION, NO_NOISE, SensorNoise
+from ._plane import foot_of_perpendicular, plane_coordinates, plane_normal, plane_point
+from ._plot import plot_axis_histogram
+from ._readers import read_polhemus, read_recording
+from ._recording import GroundTruth, Recording
+from ._result import JointCentreResult
+from ._score import ScoreEstimator
+from ._simulate import SensorMount, simulate_recording
+
+__all__ = [
+    "ESTIMATORS",
+    "LIBERTY",
+    "LIBERTY_RESOLUTION",
+    "NO_NOISE",
+    "SEGMENT_NAMES",
+    "SUPPORTED_JOINTS",
+    "AxisAngleFilter",
+    "AxisFilterResult",
+    "FingerJoint",
+    "FlexionMotion",
+    "GroundTruth",
+    "HingeJoint",
+    "JointCentreEstimator",
+    "JointCentreResult",
+    "JointGeometry",
+    "OBrienEstimator",
+    "PlaneVarianceEstimator",
+    "Recording",
+    "ScoreEstimator",
+    "SensorMount",
+    "SensorNoise",
+    "VarianceEstimator",
+    "evaluate",
+    "foot_of_perpendicular",
+    "joint_geometry",
+    "load_recording",
+    "make_estimator",
+    "plane_coordinates",
+    "plane_normal",
+    "plane_point",
+    "plot_axis_histogram",
+    "read_polhemus",
+    "read_recording",
+    "save_recording",
+    "segment_length_mm",
+    "segment_lengths_mm",
+    "simulate_recording",
+]

@@ -1,0 +1,203 @@
+"""A two-sensor 6-DOF recording across one finger joint, and its ground truth.
+
+A :class:`Recording` holds what a Polhemus Liberty (or a simulation of one)
+delivers for the two receivers glued on the phalanges either side of a joint:
+per frame, each sensor's position and orientation in the transmitter frame.
+Sensor 0 is the *upper* (proximal) sensor, sensor 1 the *lower* (distal)
+one, as in the patent JP2010-88628 (upper receiver 1a, lower receiver 1b).
+
+Arrays are validated on construction and made read-only, so a recording that
+exists is usable: finite, strictly increasing times, proper rotations.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+
+from ...errors import RecordingError
+from ..common import check_rotations
+
+__all__ = ["GroundTruth", "Recording"]
+
+
+def _frozen(a: np.ndarray) -> np.ndarray:
+    a = np.array(a, dtype=np.float64, copy=True)
+    a.setflags(write=False)
+    return a
+
+
+def _check_shape(name: str, a: np.ndarray, shape: tuple[int | None, ...]) -> None:
+    ok = a.ndim == len(shape) and all(
+        s is None or s == d for s, d in zip(shape, a.shape)
+    )
+    if not ok:
+        want = "(" + ", ".join("n" if s is None else str(s) for s in shape) + ")"
+        raise RecordingError(f"{name}: expected shape {want}, got {a.shape}")
+
+
+@dataclass(frozen=True)
+class GroundTruth:
+    """Known joint centre of a simulated recording.
+
+    Attributes
+    ----------
+    centre_world : (n, 3) ndarray of float64
+        Instantaneous joint centre per frame in the transmitter frame, metres.
+    centre_sensor : (n, 2, 3) ndarray of float64
+        The same point in the upper (``[:, 0]``) and lower (``[:, 1]``) sensor
+        frames, metres.  Constant for a hinge; it moves in the upper frame for
+        the finger-like joint (the lower bone slides on the upper one).
+    reference_centre : (2, 3) ndarray of float64
+        The joint centre that estimates are scored against, in the upper and
+        lower sensor frames (metres): the centre of the *extended* joint, which
+        is the one that segment lengths measured on an open hand refer to.
+    joint_kind : str
+        ``"hinge"`` or ``"finger"``.
+    """
+
+    centre_world: np.ndarray
+    centre_sensor: np.ndarray
+    reference_centre: np.ndarray
+    joint_kind: str
+
+    def __post_init__(self) -> None:
+        for name in ("centre_world", "centre_sensor", "reference_centre"):
+            object.__setattr__(self, name, _frozen(getattr(self, name)))
+        n = self.centre_world.shape[0]
+        _check_shape("centre_world", self.centre_world, (n, 3))
+        _check_shape("centre_sensor", self.centre_sensor, (n, 2, 3))
+        _check_shape("reference_centre", self.reference_centre, (2, 3))
+
+    def take(self, index: np.ndarray) -> GroundTruth:
+        """Ground truth restricted to the frames `index`."""
+        return dataclasses.replace(
+            self,
+            centre_world=self.centre_world[index],
+            centre_sensor=self.centre_sensor[index],
+        )
+
+
+@dataclass(frozen=True)
+class Recording:
+    """Poses of two 6-DOF sensors across one joint.
+
+    Parameters
+    ----------
+    times : (n,) array_like of float
+        Sample times in seconds, strictly increasing.
+    positions : (n, 2, 3) array_like of float
+        Sensor origins in the transmitter frame, metres; ``[:, 0]`` is the
+        upper (proximal) sensor, ``[:, 1]`` the lower (distal) one.
+    rotations : (n, 2, 3, 3) array_like of float
+        Sensor orientations, mapping sensor-frame vectors to the transmitter
+        frame.  Each must be a proper rotation (see
+        :data:`~handsynth.sensors.common.ROTATION_TOLERANCE`).
+    labels : tuple of str, optional
+        Names of the segments carrying the upper and lower sensor, e.g.
+        ``("index_middle", "index_distal")``; used to chain joints into
+        segment lengths.
+    joint : str, optional
+        Name of the joint between them, e.g. ``"index_dip"``.
+    metadata : mapping, optional
+        Free-form, JSON-serialisable provenance (source file, units, noise).
+    truth : GroundTruth, optional
+        Present for simulated recordings.
+
+    Raises
+    ------
+    RecordingError
+        Wrong shapes, non-finite values (naming the frames), non-increasing
+        times, fewer than 10 frames, or matrices that are not rotations.
+    """
+
+    times: np.ndarray
+    positions: np.ndarray
+    rotations: np.ndarray
+    labels: tuple[str, str] = ("upper", "lower")
+    joint: str = "joint"
+    metadata: Mapping[str, Any] = field(default_factory=dict)
+    truth: GroundTruth | None = None
+
+    def __post_init__(self) -> None:
+        for name in ("times", "positions", "rotations"):
+            object.__setattr__(self, name, _frozen(getattr(self, name)))
+        object.__setattr__(self, "metadata", MappingProxyType(dict(self.metadata)))
+        object.__setattr__(self, "labels", tuple(str(s) for s in self.labels))
+        n = self.times.shape[0] if self.times.ndim == 1 else -1
+        _check_shape("times", self.times, (None,))
+        _check_shape("positions", self.positions, (n, 2, 3))
+        _check_shape("rotations", self.rotations, (n, 2, 3, 3))
+        if len(self.labels) != 2:
+            raise RecordingError(f"labels: expected 2 names, got {self.labels!r}")
+        if n < 10:
+            raise RecordingError(f"recording has {n} frames; at least 10 are needed")
+        bad = ~np.isfinite(self.times)
+        bad |= ~np.isfinite(self.positions).all(axis=(1, 2))
+        bad |= ~np.isfinite(self.rotations).all(axis=(1, 2, 3))
+        if bad.any():
+            where = np.flatnonzero(bad)
+            raise RecordingError(
+                f"{where.size} frames contain NaN or inf (first frames "
+                f"{where[:5].tolist()}); read the file with on_invalid='drop' "
+                f"to skip them"
+            )
+        dt = np.diff(self.times)
+        if not (dt > 0).all():
+            i = int(np.flatnonzero(~(dt > 0))[0])
+            raise RecordingError(
+                f"times must increase strictly; times[{i + 1}] = "
+                f"{self.times[i + 1]!r} <= times[{i}] = {self.times[i]!r}"
+            )
+        check_rotations(self.rotations, name="rotations")
+        if self.truth is not None and self.truth.centre_world.shape[0] != n:
+            raise RecordingError(
+                f"truth has {self.truth.centre_world.shape[0]} frames, recording {n}"
+            )
+
+    # -- convenience -----------------------------------------------------
+    @property
+    def n_frames(self) -> int:
+        """Number of frames ``n``."""
+        return int(self.times.shape[0])
+
+    @property
+    def rate_hz(self) -> float:
+        """Median sampling rate in Hz."""
+        return float(1.0 / np.median(np.diff(self.times)))
+
+    @property
+    def duration_s(self) -> float:
+        """``times[-1] - times[0]`` in seconds."""
+        return float(self.times[-1] - self.times[0])
+
+    def relative(self) -> tuple[np.ndarray, np.ndarray]:
+        """Pose of the lower sensor in the upper sensor's frame.
+
+        Returns
+        -------
+        q : (n, 3, 3) ndarray of float64
+            ``R_U^T R_L``: lower-sensor vectors to upper-sensor vectors.
+        d : (n, 3) ndarray of float64
+            ``R_U^T (t_L - t_U)``: lower-sensor origin in the upper frame, m.
+        """
+        ru, rl = self.rotations[:, 0], self.rotations[:, 1]
+        q = np.einsum("nji,njk->nik", ru, rl)
+        d = np.einsum("nji,nj->ni", ru, self.positions[:, 1] - self.positions[:, 0])
+        return q, d
+
+    def take(self, index: np.ndarray) -> Recording:
+        """A new recording with only the frames `index` (sorted, unique)."""
+        index = np.unique(np.asarray(index, dtype=np.int64))
+        return dataclasses.replace(
+            self,
+            times=self.times[index],
+            positions=self.positions[index],
+            rotations=self.rotations[index],
+            truth=None if self.truth is None else self.truth.take(index),
+        )
