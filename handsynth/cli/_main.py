@@ -1,17 +1,28 @@
 """Root ``handsynth`` command group.
 
-Sub-commands live in their own modules and are registered here.  Expected
-errors (:class:`handsynth.errors.HandsynthError`) become one line on stderr
-and exit status 2, never a traceback.
+Sub-commands live in their own modules and are registered here.  Every
+expected error -- a :class:`handsynth.errors.HandsynthError` from the library
+or a bad option or argument that click rejects -- becomes one line on stderr,
+``handsynth: error: <what>``, and exit status 2, never a traceback.  A
+sub-command module that cannot be imported is a bug of the installation and
+raises (it never silently drops its command).
 """
 
 from __future__ import annotations
 
+import importlib
 import sys
 
 import click
 
 from ..errors import HandsynthError
+
+#: The sub-command modules (``handsynth/cli/_<name>.py``), each adding itself to ``cli``.
+COMMAND_MODULES: tuple[str, ...] = ("demo", "build_db", "estimate", "eval", "measure", "joints")
+
+
+def _error_line(message: str) -> None:
+    click.echo(f"handsynth: error: {message}", err=True)
 
 
 class _Group(click.Group):
@@ -19,8 +30,29 @@ class _Group(click.Group):
         try:
             return super().invoke(ctx)
         except HandsynthError as exc:
-            click.echo(f"handsynth: error: {exc}", err=True)
+            _error_line(str(exc))
             ctx.exit(2)
+
+    def main(self, *args, **kwargs):
+        # click prints usage errors itself (a usage line, a hint and "Error: ...")
+        # when standalone; turn them into the one-line style of every other error.
+        kwargs["standalone_mode"] = False
+        try:
+            rv = super().main(*args, **kwargs)
+        except click.UsageError as exc:
+            where = exc.ctx.command_path if exc.ctx is not None else "handsynth"
+            _error_line(f"{where}: {exc.format_message()} (see '{where} --help')")
+            sys.exit(2)
+        except click.exceptions.Exit as exc:
+            sys.exit(exc.exit_code)
+        except click.Abort:
+            _error_line("aborted")
+            sys.exit(1)
+        except click.ClickException as exc:
+            _error_line(exc.format_message())
+            sys.exit(exc.exit_code)
+        # standalone_mode=False returns the exit code of ctx.exit(...) as an int
+        sys.exit(rv if isinstance(rv, int) else 0)
 
 
 @click.group(cls=_Group)
@@ -30,16 +62,9 @@ def cli() -> None:
 
 
 def _register() -> None:
-    # Each sub-command module adds itself to ``cli``; imported lazily here so
-    # that ``handsynth --help`` stays fast.
-    import importlib
-
-    for mod in ("demo", "build_db", "estimate", "eval", "measure", "joints"):
-        try:
-            importlib.import_module(f"{__package__}._{mod}")
-        except ModuleNotFoundError as exc:  # sub-command not written yet
-            if exc.name != f"{__package__}._{mod}":
-                raise
+    # Imported here, after ``cli`` exists, because each module adds itself to it.
+    for name in COMMAND_MODULES:
+        importlib.import_module(f"{__package__}._{name}")
 
 
 _register()

@@ -137,6 +137,7 @@ def test_bad_shapes_are_refused(tmp_path):
         build_databases(tmp_path, [], count=10)
 
 
+@pytest.mark.slow
 def test_ray_executor_gives_the_same_bytes(built, tmp_path):
     pytest.importorskip("ray", reason="Ray is optional: pip install 'handsynth[ray]'")
     _, data = built

@@ -1,0 +1,57 @@
+"""The root command: one error style for every bad option, no silently missing command."""
+
+import pytest
+from click.testing import CliRunner
+
+from handsynth.cli import _main
+from handsynth.cli._main import COMMAND_MODULES, cli
+
+
+def _run(*args):
+    return CliRunner().invoke(cli, list(args), prog_name="handsynth")
+
+
+def _one_error_line(res, *words):
+    assert res.exit_code == 2, res.output
+    lines = res.output.strip().splitlines()
+    assert len(lines) == 1, res.output
+    assert lines[0].startswith("handsynth: error: ")
+    for w in words:
+        assert w in lines[0]
+    assert "Traceback" not in res.output and "Usage:" not in res.output
+
+
+@pytest.mark.parametrize("args, words", [
+    (("nosuch",), ["No such command", "'nosuch'"]),
+    (("build-db", "--count", "abc"), ["handsynth build-db", "--count", "'abc'"]),
+    (("build-db", "--no-such-option"), ["--no-such-option"]),
+    (("estimate", "--fps", "fast"), ["handsynth estimate", "--fps"]),
+    (("joints", "estimate"), ["handsynth joints estimate", "RECORDING"]),
+    (("eval", "--hand", "robot"), ["--hand", "robot"]),
+])
+def test_bad_options_give_one_error_line(args, words):
+    _one_error_line(_run(*args), *words)
+
+
+def test_library_errors_use_the_same_line(tmp_path):
+    missing = tmp_path / "none.csv"
+    _one_error_line(_run("joints", "estimate", str(missing)), "none.csv")
+
+
+def test_every_command_module_registers_a_command():
+    assert len(cli.commands) >= len(COMMAND_MODULES)
+    names = set(cli.commands)
+    for mod in COMMAND_MODULES:
+        assert mod.replace("_", "-") in names
+
+
+def test_a_missing_command_module_is_an_import_error(monkeypatch):
+    monkeypatch.setattr(_main, "COMMAND_MODULES", (*COMMAND_MODULES, "renamed_away"))
+    with pytest.raises(ModuleNotFoundError, match="renamed_away"):
+        _main._register()
+
+
+def test_help_and_version_exit_zero():
+    assert _run("--help").exit_code == 0
+    res = _run("--version")
+    assert res.exit_code == 0 and "version" in res.output
