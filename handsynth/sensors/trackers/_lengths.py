@@ -29,17 +29,13 @@ from collections.abc import Iterable, Mapping
 import numpy as np
 
 from ...errors import InvalidInputError
+from ...models import SEGMENTS
 from ._result import JointCentreResult
 
 __all__ = ["SEGMENT_NAMES", "segment_length_mm", "segment_lengths_mm"]
 
-#: Segment names of L1..L14, in order.
-SEGMENT_NAMES: tuple[str, ...] = (
-    "thumb_proximal",
-    "thumb_distal",
-    *(f"{f}_{s}" for f in ("index", "middle", "ring", "little")
-      for s in ("proximal", "middle", "distal")),
-)
+#: Segment names of L1..L14, in order (``<finger>_<segment>`` of :data:`handsynth.models.SEGMENTS`).
+SEGMENT_NAMES: tuple[str, ...] = tuple(f"{f}_{seg}" for f, seg in SEGMENTS)
 
 
 def segment_length_mm(proximal: JointCentreResult, distal: JointCentreResult) -> float:
