@@ -178,14 +178,17 @@ def calibrate(rec: GloveRecording, *, options: CalibrationOptions | None = None,
     if len(motions) > 1:
         mixer = fit_mixer(cal.sensors, cal.motion, cal.phase(), motions=motions,
                           centre=centre, scale=scale, n_points=opts.n_points, ridge=opts.ridge)
-    for model in opts.models:
-        fits = {}
-        for m in motions:
-            sel = cal.motion == m
-            fits[m] = fit_motion_model(cal.sensors[sel], cal.angles[sel], model=model,
-                                       motion=m, t_threshold=opts.t_threshold,
-                                       centre=centre, scale=scale)
-        out[model] = RegressionEstimator(name=model, models=fits, mixer=mixer)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", GloveWarning)
+        for model in opts.models:
+            fits = {}
+            for m in motions:
+                sel = cal.motion == m
+                fits[m] = fit_motion_model(cal.sensors[sel], cal.angles[sel], model=model,
+                                           motion=m, t_threshold=opts.t_threshold,
+                                           centre=centre, scale=scale)
+            out[model] = RegressionEstimator(name=model, models=fits, mixer=mixer)
+    _reemit(caught, where)
     if opts.pooled:
         out["pooled_model4"] = RegressionEstimator(
             name="pooled_model4",
@@ -199,6 +202,25 @@ def calibrate(rec: GloveRecording, *, options: CalibrationOptions | None = None,
         out["synergy"] = _fit_synergy(cal, synergies or default_synergies(opts.synergy_k),
                                       centre, scale)
     return out
+
+
+def _reemit(caught, where: str) -> None:
+    """Re-issue the recorded warnings, one "too few samples" per motion.
+
+    Of the models' warnings about the same motion, the one of model 2 (all
+    five sensors, the seed's Table 1 layout) is kept, else the first.
+    """
+    per_motion: dict[str, str] = {}
+    for w in caught:
+        msg = str(w.message)
+        if not issubclass(w.category, GloveWarning) or "calibration samples" not in msg:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+            continue
+        motion = msg.split(" (", 1)[0]
+        if motion not in per_motion or "(model2)" in msg:
+            per_motion[motion] = msg
+    for msg in per_motion.values():
+        warnings.warn(f"{where}: {msg}", GloveWarning, stacklevel=3)
 
 
 def _fit_synergy(cal: GloveRecording, syn: Synergies, centre, scale) -> SynergyEstimator:

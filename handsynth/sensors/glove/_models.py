@@ -148,15 +148,10 @@ def _ols(z: np.ndarray, y: np.ndarray, terms, *, what: str) -> JointFit:
     cov = sigma2 * inv
     se = np.sqrt(np.clip(np.diag(cov)[1:], 0.0, None))
     with np.errstate(divide="ignore", invalid="ignore"):
-        t = np.where(se > 0, beta[1:] / se, np.inf * np.sign(beta[1:]))
+        t = np.where(se > 0, beta[1:] / se,
+                     np.where(beta[1:] == 0, 0.0, np.inf * np.sign(beta[1:])))
     sst = float(((y - y.mean()) ** 2).sum())
     r2 = 1.0 - float(resid @ resid) / sst if sst > 0 else 1.0
-    if n < MIN_SAMPLES_PER_COEF * k:
-        tv = ", ".join(f"{SENSOR_NAMES[s]}^{p} t={tt:.2f}" for (s, p), tt in zip(terms, t))
-        warnings.warn(
-            f"{what}: only {n} calibration samples for {k} coefficients (fewer than "
-            f"{MIN_SAMPLES_PER_COEF} per coefficient); t-values: {tv}",
-            GloveWarning, stacklevel=4)
     return JointFit(terms=tuple(terms), coef=beta[1:].copy(), intercept=float(beta[0]),
                     r2=r2, t_values=np.asarray(t, dtype=np.float64), n_samples=n)
 
@@ -269,7 +264,7 @@ def fit_motion_model(sensors: np.ndarray, angles: np.ndarray, *, model: str,
                 f"{s[0, dead[0]]:g} counts over {len(s)} samples (a dead sensor)")
     z = (s - centre) / scale
     fits = {}
-    label = f"motion {motion!r}" if motion else "calibration"
+    label = (f"motion {motion!r}" if motion else "calibration") + f" ({model})"
     for i, fj in enumerate(finger_joints()):
         own_cubic = [(i, 1), (i, 2), (i, 3)]
         fits[fj["j2"]] = _ols(z, a[:, fj["j2"]], own_cubic,  # eq. 2
@@ -279,4 +274,29 @@ def fit_motion_model(sensors: np.ndarray, angles: np.ndarray, *, model: str,
             what = f"{label}, {JOINT_NAMES[j]}"
             terms = _joint3_terms(model, i, z, a[:, j], t_threshold=t_threshold, what=what)
             fits[j] = _ols(z, a[:, j], terms, what=what)
+    _warn_few_samples(fits, label)
     return MotionModel(motion=motion, model=model, centre=centre, scale=scale, fits=fits)
+
+
+def _warn_few_samples(fits: dict, label: str) -> None:
+    """One warning per motion when a fit has < MIN_SAMPLES_PER_COEF samples per coefficient.
+
+    It lists the t-values (eq. 9) of the joint-3 regressions, the ones the
+    seed's sensor selection (eq. 11) rests on.
+    """
+    thin = {j: f for j, f in fits.items()
+            if f.n_samples < MIN_SAMPLES_PER_COEF * (len(f.terms) + 1)}
+    if not thin:
+        return
+    n = next(iter(thin.values())).n_samples
+    k = max(len(f.terms) + 1 for f in thin.values())
+    j3 = [fj["j3"] for fj in finger_joints()]
+    tv = "; ".join(
+        f"{JOINT_NAMES[j]}: " + (", ".join(f"{SENSOR_NAMES[s]}^{p} t={t:.2f}" for (s, p), t
+                                           in zip(fits[j].terms, fits[j].t_values))
+                                 or "no sensor kept")
+        for j in j3 if j in fits)
+    warnings.warn(
+        f"{label}: only {n} calibration samples for up to {k} coefficients (fewer than "
+        f"{MIN_SAMPLES_PER_COEF} per coefficient in {len(thin)} of {len(fits)} joint fits); "
+        f"t-values of the joint-3 regressions: {tv}", GloveWarning, stacklevel=3)
