@@ -163,6 +163,8 @@ def calibrate(rec: GloveRecording, *, options: CalibrationOptions | None = None,
     rec = _clean(rec, where)
     is_motion = ~np.isin(rec.motion.astype(str), ("", *RANGE_LABELS))
     cal = rec.select(is_motion)
+    angles = cal.angles
+    assert angles is not None  # _clean refused a recording without them
     motions = tuple(dict.fromkeys(cal.motion.tolist()))
     if not motions:
         raise EstimationError(f"{where}: no samples labelled with a motion (column 'motion')")
@@ -173,7 +175,7 @@ def calibrate(rec: GloveRecording, *, options: CalibrationOptions | None = None,
         raise EstimationError(f"{where}: {SENSOR_NAMES[flat[0]]} never changes during the "
                               "motions (a dead sensor)")
     out: dict[str, GloveEstimator] = {
-        "constant": ConstantEstimator(posture=cal.angles.mean(axis=0))}
+        "constant": ConstantEstimator(posture=angles.mean(axis=0))}
     mixer = None
     if len(motions) > 1:
         mixer = fit_mixer(cal.sensors, cal.motion, cal.phase(), motions=motions,
@@ -184,7 +186,7 @@ def calibrate(rec: GloveRecording, *, options: CalibrationOptions | None = None,
             fits = {}
             for m in motions:
                 sel = cal.motion == m
-                fits[m] = fit_motion_model(cal.sensors[sel], cal.angles[sel], model=model,
+                fits[m] = fit_motion_model(cal.sensors[sel], angles[sel], model=model,
                                            motion=m, t_threshold=opts.t_threshold,
                                            centre=centre, scale=scale)
             out[model] = RegressionEstimator(name=model, models=fits, mixer=mixer)
@@ -192,7 +194,7 @@ def calibrate(rec: GloveRecording, *, options: CalibrationOptions | None = None,
     if opts.pooled:
         out["pooled_model4"] = RegressionEstimator(
             name="pooled_model4",
-            models={"pooled": fit_motion_model(cal.sensors, cal.angles, model="model4",
+            models={"pooled": fit_motion_model(cal.sensors, angles, model="model4",
                                                motion="pooled", t_threshold=opts.t_threshold,
                                                centre=centre, scale=scale)})
     if opts.synergy_k:

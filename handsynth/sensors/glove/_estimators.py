@@ -36,7 +36,9 @@ __all__ = [
 class GloveEstimator(Protocol):
     """What every glove estimator provides."""
 
-    name: str
+    @property
+    def name(self) -> str:
+        """Short name, the key of the estimator in a calibration file."""
 
     def predict(self, sensors: np.ndarray, *, motion: str | None = None) -> np.ndarray:
         """Joint angles (N, 20), deg, canonical order, from readings (N, 5), counts.

@@ -66,6 +66,9 @@ class EvalOptions:
         Trials per motion in the later sessions.
     seed : int
         Base seed; users, donnings and sessions derive theirs from it.
+    seeds : int
+        Independent repetitions (seeds ``seed`` .. ``seed + seeds - 1``: new
+        users, gloves and sessions each time); the tables hold their means.
     calibration : CalibrationOptions
     """
 
@@ -73,6 +76,7 @@ class EvalOptions:
     trials: int = 5
     test_trials: int = 3
     seed: int = 0
+    seeds: int = 1
     calibration: CalibrationOptions = field(default_factory=CalibrationOptions)
 
     def __post_init__(self) -> None:
@@ -80,6 +84,9 @@ class EvalOptions:
         if isinstance(self.trials, bool) or not isinstance(self.trials, int) or self.trials < 3:
             raise InvalidInputError(f"EvalOptions.trials must be an integer >= 3, "
                                     f"got {self.trials!r}")
+        if isinstance(self.seeds, bool) or not isinstance(self.seeds, int) or self.seeds < 1:
+            raise InvalidInputError(f"EvalOptions.seeds must be a positive integer, "
+                                    f"got {self.seeds!r}")
         if isinstance(self.test_trials, bool) or not isinstance(self.test_trials, int) \
                 or self.test_trials < 1:
             raise InvalidInputError(f"EvalOptions.test_trials must be a positive integer, "
@@ -127,6 +134,8 @@ def _cell(pred, base, truth) -> dict:
 
 def _table(preds: dict, rec: GloveRecording) -> dict:
     """Per variant: per motion per finger cells, the seed's "Ave." row, a summary."""
+    truth = rec.truth
+    assert truth is not None  # simulated sessions carry their truth
     base = preds["constant"]
     motions = list(dict.fromkeys(rec.motion.tolist()))
     tables, summary = {}, {}
@@ -134,7 +143,7 @@ def _table(preds: dict, rec: GloveRecording) -> dict:
         rows = {}
         for m in motions:
             sel = rec.motion == m
-            rows[m] = {f: _cell(pred[sel, j], base[sel, j], rec.truth[sel, j])
+            rows[m] = {f: _cell(pred[sel, j], base[sel, j], truth[sel, j])
                        for f, j in zip(FINGERS, _MCP)}
         rows["Ave."] = {f: {k: round(float(np.mean([rows[m][f][k] for m in motions])), 3)
                             for k in ("mcp_error_deg", "baseline_mcp_error_deg", "r2",
@@ -142,7 +151,7 @@ def _table(preds: dict, rec: GloveRecording) -> dict:
         tables[name] = rows
 
         def mean_err(cols, p=pred):
-            return round(float(np.abs(p[:, cols] - rec.truth[:, cols]).mean()), 3)
+            return round(float(np.abs(p[:, cols] - truth[:, cols]).mean()), 3)
 
         summary[name] = {
             "mcp_error_deg": mean_err(_MCP), "baseline_mcp_error_deg": mean_err(_MCP, base),
@@ -174,6 +183,16 @@ def _mixing_accuracy(est: RegressionEstimator, rec: GloveRecording, sensors) -> 
     return out
 
 
+def _mean_tree(trees: list):
+    """Element-wise mean of equally shaped nested dicts; other leaves from the first."""
+    first = trees[0]
+    if isinstance(first, dict):
+        return {k: _mean_tree([t[k] for t in trees]) for k in first}
+    if isinstance(first, (int, float)) and not isinstance(first, bool):
+        return round(float(np.mean(trees)), 3)
+    return first
+
+
 def evaluate(options: EvalOptions | None = None) -> dict:
     """Run the four conditions and return the tables (JSON-serialisable).
 
@@ -186,10 +205,26 @@ def evaluate(options: EvalOptions | None = None) -> dict:
         (``"representative"``, ``"other"``) holding ``motions``, ``tables``
         (variant -> motion -> finger -> cell, plus the "Ave." row) and
         ``summary`` (variant -> mean errors over all samples, with the
-        constant answer's beside them).
+        constant answer's beside them).  With ``seeds > 1`` every number is
+        the mean over the seeds, and each summary entry adds
+        ``mcp_error_deg_per_seed``.
     """
     o = options or EvalOptions()
-    kind, seed = o.kind, o.seed
+    runs = [_evaluate_one(o, s) for s in range(o.seed, o.seed + o.seeds)]
+    out = _mean_tree(runs)
+    for cond, sets in out["conditions"].items():
+        for set_name, res in sets.items():
+            for variant, summ in res["summary"].items():
+                summ["mcp_error_deg_per_seed"] = [
+                    r["conditions"][cond][set_name]["summary"][variant]["mcp_error_deg"]
+                    for r in runs]
+    out["config"]["seeds"] = list(range(o.seed, o.seed + o.seeds))
+    out["users"] = [r["users"] for r in runs]
+    return out
+
+
+def _evaluate_one(o: EvalOptions, seed: int) -> dict:
+    kind = o.kind
     rep = motions_for(kind)
     user_a = make_user(seed, name="calibration user", hand_length=1.04)
     user_b = make_user(seed + 1000, name="second user", hand_length=0.94)
@@ -201,10 +236,12 @@ def evaluate(options: EvalOptions | None = None) -> dict:
     holds_a = _range_holds(user_a, don_a1, seed + 11)
     estimators = calibrate(cal, options=o.calibration)
     ref = range_readings(holds_a)
+    assert ref is not None  # _range_holds labels both holds
 
     conditions = {}
     # leave one trial out (the seed's setting)
-    preds, parts = {}, []
+    preds: dict[str, list[np.ndarray]] = {}
+    parts = []
     for k in range(o.trials):
         test = cal.select(cal.trial == k)
         est_k = calibrate(cal.select(cal.trial != k), options=o.calibration,
@@ -228,20 +265,22 @@ def evaluate(options: EvalOptions | None = None) -> dict:
         norm = None
         if normalise:
             src = range_readings(holds)
+            assert src is not None
             norm = RangeNormalizer(source_open=src[0], source_fist=src[1],
                                    target_open=ref[0], target_fist=ref[1])
         conditions[cond] = {}
         for set_name, rec in sessions.items():
             sensors = norm.apply(rec.sensors) if norm is not None else rec.sensors
             res = _evaluate_on(estimators, rec, sensors, set_name == "representative")
-            if set_name == "representative" and "model4" in estimators:
-                res["mixing_weight_of_true_motion"] = _mixing_accuracy(
-                    estimators["model4"], rec, sensors)
+            m4 = estimators.get("model4")
+            if set_name == "representative" and isinstance(m4, RegressionEstimator):
+                res["mixing_weight_of_true_motion"] = _mixing_accuracy(m4, rec, sensors)
             conditions[cond][set_name] = res
 
     fit_r2 = {}
     for name in o.calibration.models:
         est = estimators[name]
+        assert isinstance(est, RegressionEstimator)
         fit_r2[name] = {m: {f: round(est.models[m].fits[j].r2, 4) for f, j in zip(FINGERS, _MCP)}
                         for m in est.motions}
     return {

@@ -60,9 +60,10 @@ class GloveRecording:
 
     sensors: np.ndarray
     angles: np.ndarray | None = None
-    motion: np.ndarray | None = None
-    trial: np.ndarray | None = None
-    time_s: np.ndarray | None = None
+    # None means "unknown" and becomes an array in __post_init__
+    motion: np.ndarray = None  # type: ignore[assignment]
+    trial: np.ndarray = None  # type: ignore[assignment]
+    time_s: np.ndarray = None  # type: ignore[assignment]
     kind: str = ""
     truth: np.ndarray | None = None
     adc_max: float = 4095.0

@@ -29,6 +29,7 @@ Smart Mater. Struct. 25:013001, 2016), which is why both are modelled.
 from __future__ import annotations
 
 from dataclasses import dataclass, fields, replace
+from typing import Any
 
 import numpy as np
 
@@ -145,13 +146,14 @@ class SensorParams:
     """
 
     kind: str = "dg5"
-    gain: object = 4.0
-    offset: object = 1500.0
-    nonlinearity: object = 0.1
-    hysteresis_deg: object = 3.0
-    noise_counts: object = 2.0
-    crosstalk: object = 0.0
-    distal_weight_error: object = 0.0
+    # Any: a scalar or five values in, always a read-only (5,) array after __post_init__
+    gain: Any = 4.0
+    offset: Any = 1500.0
+    nonlinearity: Any = 0.1
+    hysteresis_deg: Any = 3.0
+    noise_counts: Any = 2.0
+    crosstalk: Any = 0.0
+    distal_weight_error: Any = 0.0
     adc_max: int = 4095
 
     def __post_init__(self) -> None:
