@@ -2,9 +2,10 @@
 
 A calibration recording holds trials of the representative motions with
 reference joint angles (seed 004 section 2.1: a many-sensor glove worn at
-the same time).  Samples labelled ``open`` and ``fist`` are static holds
-for the range calibration of later wearings (:class:`RangeNormalizer`) and
-are not used as a motion.
+the same time).  Samples labelled ``range_open`` and ``range_fist`` are
+static holds of the open hand and a fist for the range calibration of later
+wearings (:class:`RangeNormalizer`) and are not used as a motion (the labels
+differ from the motion names, so a recorded "fist" motion is no hold).
 """
 
 from __future__ import annotations
@@ -45,7 +46,7 @@ __all__ = [
 ]
 
 #: Motion labels of the static holds of a range calibration.
-RANGE_LABELS = ("open", "fist")
+RANGE_LABELS = ("range_open", "range_fist")
 _FORMAT = "handsynth-glove-calibration"
 _VERSION = 1
 

@@ -36,7 +36,7 @@ import numpy as np
 
 from ...errors import InvalidInputError
 from ...models import FINGERS, NAMED_POSES
-from ._calibrate import CalibrationOptions, calibrate, range_readings
+from ._calibrate import RANGE_LABELS, CalibrationOptions, calibrate, range_readings
 from ._estimators import RangeNormalizer, RegressionEstimator
 from ._models import MODELS, finger_joints
 from ._motions import OTHER_MOTIONS, motions_for
@@ -96,7 +96,7 @@ class EvalOptions:
 def _range_holds(user, params, seed) -> GloveRecording:
     rec = simulate_poses(user, params, np.stack([NAMED_POSES["open"], NAMED_POSES["fist"]]),
                          seed=seed)
-    return GloveRecording(sensors=rec.sensors, motion=np.repeat(["open", "fist"], 30),
+    return GloveRecording(sensors=rec.sensors, motion=np.repeat(RANGE_LABELS, 30),
                           trial=rec.trial, kind=rec.kind, adc_max=rec.adc_max)
 
 

@@ -182,6 +182,11 @@ class MotionModel:
         Standardisation of the readings.
     fits : dict of int to JointFit
         Fits of every joint except joints 1 (derived by eq. 1).
+    z_range : ndarray, shape (2, 5) or None
+        Lowest and highest standardised reading of the calibration; readings
+        beyond are clamped to it before the polynomials are evaluated (a
+        cubic fitted on one range runs away outside it; the seed does not
+        say what it did there).  None: no clamping.
     """
 
     motion: str
@@ -189,10 +194,13 @@ class MotionModel:
     centre: np.ndarray
     scale: np.ndarray
     fits: dict
+    z_range: np.ndarray | None = None
 
     def predict(self, sensors: np.ndarray) -> np.ndarray:
         """Joint angles, shape (N, 20), deg, from readings (N, 5), counts."""
         z = (np.asarray(sensors, dtype=np.float64) - self.centre) / self.scale
+        if self.z_range is not None:
+            z = np.clip(z, self.z_range[0], self.z_range[1])
         out = np.zeros((z.shape[0], len(JOINT_NAMES)))
         for j, fit in self.fits.items():
             out[:, j] = fit.predict(z)
@@ -203,6 +211,7 @@ class MotionModel:
     def to_dict(self) -> dict:
         return {"motion": self.motion, "model": self.model, "centre": self.centre.tolist(),
                 "scale": self.scale.tolist(),
+                "z_range": None if self.z_range is None else self.z_range.tolist(),
                 "fits": {JOINT_NAMES[j]: f.to_dict() for j, f in self.fits.items()}}
 
     @classmethod
@@ -210,6 +219,8 @@ class MotionModel:
         return cls(motion=str(d["motion"]), model=str(d["model"]),
                    centre=np.asarray(d["centre"], dtype=np.float64),
                    scale=np.asarray(d["scale"], dtype=np.float64),
+                   z_range=None if d.get("z_range") is None
+                   else np.asarray(d["z_range"], dtype=np.float64),
                    fits={JOINT_NAMES.index(k): JointFit.from_dict(v)
                          for k, v in d["fits"].items()})
 
@@ -217,7 +228,7 @@ class MotionModel:
 def fit_motion_model(sensors: np.ndarray, angles: np.ndarray, *, model: str,
                      motion: str = "", t_threshold: float = 2.0,
                      centre: np.ndarray | None = None,
-                     scale: np.ndarray | None = None) -> MotionModel:
+                     scale: np.ndarray | None = None, clamp: bool = True) -> MotionModel:
     """Fit `model` to the calibration samples of one motion.
 
     Parameters
@@ -233,6 +244,9 @@ def fit_motion_model(sensors: np.ndarray, angles: np.ndarray, *, model: str,
         |t| below which model 3 and 4 drop a sensor (2, eq. 11).
     centre, scale : ndarray, shape (5,), keyword-only
         Standardisation; default the mean and s.d. of `sensors`.
+    clamp : bool, keyword-only
+        Clamp readings to the calibration's range when predicting (see
+        :class:`MotionModel`).
 
     Returns
     -------
@@ -275,7 +289,9 @@ def fit_motion_model(sensors: np.ndarray, angles: np.ndarray, *, model: str,
             terms = _joint3_terms(model, i, z, a[:, j], t_threshold=t_threshold, what=what)
             fits[j] = _ols(z, a[:, j], terms, what=what)
     _warn_few_samples(fits, label)
-    return MotionModel(motion=motion, model=model, centre=centre, scale=scale, fits=fits)
+    z_range = np.stack([z.min(axis=0), z.max(axis=0)]) if clamp else None
+    return MotionModel(motion=motion, model=model, centre=centre, scale=scale, fits=fits,
+                       z_range=z_range)
 
 
 def _warn_few_samples(fits: dict, label: str) -> None:

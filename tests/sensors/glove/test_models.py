@@ -101,3 +101,13 @@ def test_dead_sensor_and_unknown_model_raise():
         fit_motion_model(s, a, model="model2", motion="standard")
     with pytest.raises(EstimationError, match="model5"):
         fit_motion_model(s, a, model="model5")
+
+
+def test_readings_beyond_the_calibration_are_clamped_not_extrapolated():
+    s, a = _data()
+    m = fit_motion_model(s, a, model="model4")
+    far = s.max(axis=0) + 5000.0
+    edge = s.max(axis=0)
+    np.testing.assert_allclose(m.predict(far[None]), m.predict(edge[None]))
+    free = fit_motion_model(s, a, model="model4", clamp=False)
+    assert np.abs(free.predict(far[None]) - m.predict(far[None])).max() > 100
