@@ -109,14 +109,23 @@ def simulate(out, kind, user_seed, donning, motions, trials, seed, range_holds, 
               help="Points along each motion for the mixing likelihood (seed eq. 4).")
 @click.option("--synergies", "synergy_k", type=int, default=2, show_default=True,
               help="Synergies of the synergy baseline (0 leaves it out).")
+@click.option("--synergy-csv", type=click.Path(dir_okay=False),
+              help="Learn the synergies from this 22-sensor CyberGlove-style export instead of "
+                   "the hand model's natural pose set.")
+@click.option("--synergy-units", type=click.Choice(("deg", "rad")), default="deg",
+              show_default=True, help="Angle unit of --synergy-csv.")
 @click.option("--adc-max", type=float, default=4095.0, show_default=True,
               help="Full scale of the readings, counts.")
-def calibrate(recording, out, kind, models, t_threshold, n_points, synergy_k, adc_max):
+def calibrate(recording, out, kind, models, t_threshold, n_points, synergy_k, synergy_csv,
+              synergy_units, adc_max):
     """Fit every estimator on RECORDING (CSV with motions and reference angles)."""
+    from ..errors import InvalidInputError
     from ..sensors.glove import (
         CalibrationOptions,
         RegressionEstimator,
+        fit_synergies,
         range_readings,
+        read_cyberglove_csv,
         read_glove_csv,
         save_calibration,
     )
@@ -125,8 +134,16 @@ def calibrate(recording, out, kind, models, t_threshold, n_points, synergy_k, ad
     rec = read_glove_csv(recording, kind=kind, adc_max=adc_max)
     opts = CalibrationOptions(models=tuple(models) or _MODELS, t_threshold=t_threshold,
                               n_points=n_points, synergy_k=synergy_k)
+    synergies = None
+    if synergy_csv:
+        if synergy_k < 1:
+            raise InvalidInputError("--synergy-csv needs --synergies >= 1")
+        synergies = fit_synergies(read_cyberglove_csv(synergy_csv, units=synergy_units),
+                                  k=synergy_k, source=str(synergy_csv))
+        click.echo(f"synergies from {synergy_csv}: {synergy_k} explain "
+                   f"{100 * synergies.explained.sum():.1f} % of the posture variance")
     with _warnings_to_stderr():
-        est = fit(rec, options=opts, where=str(recording))
+        est = fit(rec, options=opts, synergies=synergies, where=str(recording))
     ref = range_readings(rec)
     save_calibration(out, est, kind=kind, range_reference=ref,
                      meta={"recording": str(recording), "n_samples": rec.n_samples})

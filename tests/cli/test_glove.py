@@ -129,3 +129,33 @@ def test_eval_json_has_the_seed_table_layout(tmp_path):
     summ = loto["summary"]["model4/known"]
     assert len(summ["mcp_error_deg_per_seed"]) == 2
     assert summ["mcp_error_deg"] < summ["baseline_mcp_error_deg"] / 2
+
+
+def test_calibrate_learns_synergies_from_a_cyberglove_export(files, tmp_path):
+    from handsynth.models import natural_pose_set
+    from handsynth.sensors.glove import CYBERGLOVE_COLUMNS
+
+    poses = natural_pose_set(200, seed=9)
+    idx = {n: i for i, n in enumerate(JOINT_NAMES)}
+    cols = []
+    for c in CYBERGLOVE_COLUMNS:
+        if c == "thumb_rotation":
+            cols.append(poses[:, idx["thumb_cmc_flex"]])
+        elif c == "thumb_abduction":
+            cols.append(poses[:, idx["thumb_cmc_abd"]])
+        elif f"{c}_flex" in idx:
+            cols.append(poses[:, idx[f"{c}_flex"]])
+        else:                                  # relative abductions, palm, wrist
+            cols.append(np.zeros(len(poses)))
+    export = tmp_path / "cyber.csv"
+    np.savetxt(export, np.column_stack(cols), delimiter=",", fmt="%.4f")
+    out = tmp_path / "c.json"
+    res = _run("glove", "calibrate", files["cal_csv"], "-o", out, "--kind", "dg5",
+               "--synergy-csv", export, "--synergies", 3)
+    assert res.exit_code == 0, res.output
+    assert "synergies from" in res.output and "3 explain" in res.output
+    syn = json.loads(out.read_text())["estimators"]["synergy"]["synergies"]
+    assert syn["source"].endswith("cyber.csv") and len(syn["components"]) == 3
+    res = _run("glove", "calibrate", files["cal_csv"], "-o", out, "--kind", "dg5",
+               "--synergy-csv", export, "--synergy-units", "rad")
+    assert res.exit_code == 2 and "pass units='deg'" in res.output

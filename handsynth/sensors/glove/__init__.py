@@ -21,6 +21,7 @@ from ._calibrate import (
     save_calibration,
 )
 from ._checks import SensorCheck, check_sensors
+from ._cyberglove import CYBERGLOVE_COLUMNS, read_cyberglove_csv
 from ._estimators import (
     ConstantEstimator,
     GloveEstimator,
@@ -68,6 +69,7 @@ from ._synergy import Synergies, fit_synergies
 
 __all__ = [
     "CONDITIONS",
+    "CYBERGLOVE_COLUMNS",
     "DIP_PIP_RATIO",
     "GLOVE_KINDS",
     "MODELS",
@@ -110,6 +112,7 @@ __all__ = [
     "play_operator",
     "play_operator_reference",
     "range_readings",
+    "read_cyberglove_csv",
     "read_glove_csv",
     "save_calibration",
     "sensor_joints",
