@@ -28,6 +28,8 @@ from ...errors import EstimationError
 
 __all__ = ["MotionMixer", "fit_mixer"]
 
+_CHUNK = 2048
+
 
 @dataclass(frozen=True, eq=False)
 class MotionMixer:
@@ -50,9 +52,12 @@ class MotionMixer:
     def log_likelihood(self, sensors: np.ndarray) -> np.ndarray:
         """log L_p (eqs. 4-5), shape (N, P)."""
         z = (np.asarray(sensors, dtype=np.float64) - self.centre) / self.scale
-        d = z[:, None, None, :] - self.means[None]                 # (N, P, n, 5)
-        m = np.einsum("xpni,pnij,xpnj->xpn", d, self.inv_covs, d)  # Mahalanobis^2
-        return (-0.5 * m).max(axis=2)
+        out = np.empty((len(z), len(self.motions)))
+        for a in range(0, len(z), _CHUNK):      # bounded memory: (chunk, P, n, 5) at a time
+            d = z[a:a + _CHUNK, None, None, :] - self.means[None]
+            m = np.einsum("xpni,pnij,xpnj->xpn", d, self.inv_covs, d)  # Mahalanobis^2
+            out[a:a + _CHUNK] = (-0.5 * m).max(axis=2)
+        return out
 
     def weights(self, sensors: np.ndarray) -> np.ndarray:
         """r_p of eq. 6, shape (N, P), rows summing to 1 (NaN rows stay NaN)."""

@@ -50,3 +50,18 @@ def test_sparse_bins_raise():
     s, lab, ph = _two_motions(rng, n_trials=1, n=10)
     with pytest.raises(EstimationError, match="point .* of 20 has"):
         fit_mixer(s, lab, ph, motions=("a", "b"), centre=s.mean(0), scale=s.std(0))
+
+
+def test_long_inputs_are_processed_in_chunks_with_the_same_result():
+    import handsynth.sensors.glove._mixing as mod
+
+    rng = np.random.default_rng(0)
+    s, lab, ph = _two_motions(rng)
+    mix = fit_mixer(s, lab, ph, motions=("a", "b"), centre=s.mean(0), scale=s.std(0),
+                    n_points=10)
+    whole = mix.log_likelihood(s)
+    old, mod._CHUNK = mod._CHUNK, 7
+    try:
+        np.testing.assert_allclose(mix.log_likelihood(s), whole)
+    finally:
+        mod._CHUNK = old
