@@ -170,7 +170,7 @@ def calibrate(recording, out, kind, models, t_threshold, n_points, synergy_k, sy
               help="Joint angles to write (CSV, canonical joint names, degrees).")
 @click.option("--model", "name", default="model4", show_default=True,
               help="Estimator in the calibration file: model1..model4, pooled_model4, "
-                   "synergy or constant.")
+                   "synergy, model4+synergy or constant.")
 @click.option("--motion", default=None,
               help="The representative motion, when known; default mix over all (eqs. 4-6).")
 @click.option("--range", "range_csv", type=click.Path(dir_okay=False),

@@ -32,7 +32,7 @@ def test_calibrate_writes_a_loadable_file_and_prints_fit_r2(files):
     data = json.loads(files["cal"].read_text())
     assert data["format"] == "handsynth-glove-calibration" and data["kind"] == "dg5"
     assert set(data["estimators"]) == {"constant", "model1", "model2", "model3", "model4",
-                                       "pooled_model4", "synergy"}
+                                       "pooled_model4", "synergy", "model4+synergy"}
     assert data["range_reference"] is not None
     out = files["calibrate_output"]
     assert "R^2 of the joint-3 (MCP) fits of model4" in out and "lateral_contact" in out

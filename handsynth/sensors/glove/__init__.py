@@ -24,6 +24,7 @@ from ._checks import SensorCheck, check_sensors
 from ._cyberglove import CYBERGLOVE_COLUMNS, read_cyberglove_csv
 from ._estimators import (
     ConstantEstimator,
+    GatedEstimator,
     GloveEstimator,
     RangeNormalizer,
     RegressionEstimator,
@@ -81,6 +82,7 @@ __all__ = [
     "CalibrationOptions",
     "ConstantEstimator",
     "EvalOptions",
+    "GatedEstimator",
     "GloveEstimator",
     "GloveRecording",
     "GloveUser",

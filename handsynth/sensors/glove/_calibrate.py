@@ -24,6 +24,7 @@ from ...models import natural_pose_set
 from ._checks import check_sensors
 from ._estimators import (
     ConstantEstimator,
+    GatedEstimator,
     GloveEstimator,
     RegressionEstimator,
     SynergyEstimator,
@@ -145,8 +146,9 @@ def calibrate(rec: GloveRecording, *, options: CalibrationOptions | None = None,
     Returns
     -------
     dict of str to GloveEstimator
-        ``"constant"``, the chosen models (``"model1"`` ...), ``"pooled_model4"``
-        and ``"synergy"`` as the options ask.
+        ``"constant"``, the chosen models (``"model1"`` ...), ``"pooled_model4"``,
+        ``"synergy"`` and ``"model4+synergy"`` (:class:`GatedEstimator`) as the
+        options allow.
 
     Raises
     ------
@@ -204,6 +206,9 @@ def calibrate(rec: GloveRecording, *, options: CalibrationOptions | None = None,
                                   f"{', '.join(GLOVE_KINDS)} for the synergy baseline")
         out["synergy"] = _fit_synergy(cal, synergies or default_synergies(opts.synergy_k),
                                       centre, scale)
+        primary = out.get("model4")
+        if isinstance(primary, RegressionEstimator) and primary.mixer is not None:
+            out["model4+synergy"] = GatedEstimator(primary=primary, fallback=out["synergy"])
     return out
 
 

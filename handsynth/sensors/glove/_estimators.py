@@ -24,6 +24,7 @@ from ._synergy import Synergies
 
 __all__ = [
     "ConstantEstimator",
+    "GatedEstimator",
     "GloveEstimator",
     "RangeNormalizer",
     "RegressionEstimator",
@@ -205,6 +206,59 @@ class SynergyEstimator:
 
 
 @dataclass(frozen=True, eq=False)
+class GatedEstimator:
+    """Mixing over the representative motions, handing over to a fallback off them.
+
+    The mixing of seed 004 (eqs. 4-6) always answers with a blend of the
+    representative motions, even for a reading that none of them explains.
+    Here the smallest Mahalanobis distance d^2 = -2 max_p log L_p of a
+    reading to the motion points (eqs. 4-5) is compared with the chi-square
+    distribution of 5 degrees of freedom that it follows for a reading of a
+    calibrated motion: below its 95 % quantile (11.07) the answer is the
+    primary's, above its 99.9 % quantile (20.52) the fallback's, linear in
+    between.  The quantiles are fixed by the distribution, not tuned on data.
+
+    Attributes
+    ----------
+    primary : RegressionEstimator
+        With a mixer (more than one motion).
+    fallback : GloveEstimator
+        Typically the synergy baseline.
+    name : str
+    """
+
+    primary: RegressionEstimator
+    fallback: GloveEstimator
+    name: str = "model4+synergy"
+
+    #: chi-square(5) quantiles 0.95 and 0.999 (scipy.stats.chi2.ppf)
+    lo: float = 11.0705
+    hi: float = 20.5150
+
+    def fallback_weight(self, sensors) -> np.ndarray:
+        """Weight of the fallback per sample, shape (N,), in [0, 1]."""
+        s = _as_sensors(sensors)
+        if self.primary.mixer is None:
+            raise EstimationError(f"{self.name}: the primary estimator has no motion mixer")
+        d2 = -2.0 * self.primary.mixer.log_likelihood(s).max(axis=1)
+        return np.clip((d2 - self.lo) / (self.hi - self.lo), 0.0, 1.0)
+
+    def predict(self, sensors, *, motion=None) -> np.ndarray:
+        s = _as_sensors(sensors)
+
+        def gated(x):
+            f = self.fallback_weight(x)[:, None]
+            return (1.0 - f) * self.primary.predict(x, motion=motion) + \
+                f * self.fallback.predict(x)
+
+        return _finish(s, gated)
+
+    def to_dict(self) -> dict:
+        return {"type": "gated", "name": self.name, "primary": self.primary.to_dict(),
+                "fallback": self.fallback.to_dict(), "lo": self.lo, "hi": self.hi}
+
+
+@dataclass(frozen=True, eq=False)
 class RangeNormalizer:
     """Two-point map of a new wearing's readings onto the calibration's.
 
@@ -260,6 +314,13 @@ def estimator_from_dict(d: dict) -> GloveEstimator:
                 name=d["name"],
                 models={m: MotionModel.from_dict(v) for m, v in d["models"].items()},
                 mixer=None if d["mixer"] is None else MotionMixer.from_dict(d["mixer"]))
+        if t == "gated":
+            primary = estimator_from_dict(d["primary"])
+            if not isinstance(primary, RegressionEstimator):
+                raise InvalidInputError(f"estimator {d['name']!r}: its primary must be a "
+                                        "regression estimator")
+            return GatedEstimator(primary=primary, fallback=estimator_from_dict(d["fallback"]),
+                                  name=d["name"], lo=float(d["lo"]), hi=float(d["hi"]))
         if t == "synergy":
             return SynergyEstimator(
                 synergies=Synergies.from_dict(d["synergies"]), kind=d["kind"],
@@ -273,5 +334,5 @@ def estimator_from_dict(d: dict) -> GloveEstimator:
     except (TypeError, ValueError) as exc:
         raise InvalidInputError(f"estimator entry {d.get('name')!r} is malformed: {exc}") \
             from None
-    raise InvalidInputError(f"unknown estimator type {t!r}; expected constant, regression "
-                            "or synergy")
+    raise InvalidInputError(f"unknown estimator type {t!r}; expected constant, regression, "
+                            "synergy or gated")

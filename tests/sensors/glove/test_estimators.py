@@ -5,6 +5,7 @@ from handsynth.errors import EstimationError, InvalidInputError
 from handsynth.models import JOINT_LIMITS_DEG, JOINT_NAMES
 from handsynth.sensors.glove import (
     ConstantEstimator,
+    GatedEstimator,
     GloveEstimator,
     RangeNormalizer,
     RegressionEstimator,
@@ -17,11 +18,11 @@ from handsynth.sensors.glove import (
 
 def test_every_estimator_satisfies_the_protocol(estimators):
     assert {"constant", "model1", "model2", "model3", "model4", "pooled_model4",
-            "synergy"} <= set(estimators)
+            "synergy", "model4+synergy"} <= set(estimators)
     for name, est in estimators.items():
         assert isinstance(est, GloveEstimator), name
         assert est.name == name
-    for cls in (ConstantEstimator, RegressionEstimator, SynergyEstimator):
+    for cls in (ConstantEstimator, RegressionEstimator, SynergyEstimator, GatedEstimator):
         assert any(type(e) is cls for e in estimators.values())
     assert not isinstance(object(), GloveEstimator)
 
@@ -83,3 +84,15 @@ def test_range_normalizer_maps_holds_and_refuses_a_dead_sensor():
     src_f[3] = 1000.0
     with pytest.raises(EstimationError, match="sensor_ring reads the same"):
         RangeNormalizer(src_o, src_f, tgt_o, tgt_f)
+
+
+def test_gate_keeps_calibrated_readings_and_hands_far_ones_to_the_fallback(estimators, cal_rec):
+    gated = estimators["model4+synergy"]
+    w = gated.fallback_weight(cal_rec.sensors)
+    assert np.mean(w == 0) > 0.9            # chi-square(5) 95 % quantile: ~5 % beyond
+    far = cal_rec.sensors[:3] + np.array([0.0, 0.0, 0.0, 0.0, 300.0])
+    far[:, 1] = cal_rec.sensors[:, 1].max() + 200     # index far beyond, little bent
+    assert (gated.fallback_weight(far) == 1).all()
+    np.testing.assert_allclose(gated.predict(far), estimators["synergy"].predict(far))
+    near = cal_rec.sensors[w == 0][:5]
+    np.testing.assert_allclose(gated.predict(near), estimators["model4"].predict(near))
