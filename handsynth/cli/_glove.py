@@ -1,0 +1,277 @@
+"""``handsynth glove``: all joint angles from a five-sensor data glove (seed 004)."""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+import warnings
+from contextlib import contextmanager
+from pathlib import Path
+
+import click
+
+from ._main import cli
+
+_MODELS = ("model1", "model2", "model3", "model4")
+
+
+def _write_json(path: str, payload) -> None:
+    target = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", dir=target.parent or ".")
+    try:
+        with os.fdopen(fd, "w") as f:
+            json.dump(payload, f, indent=2)
+        os.replace(tmp, target)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+@contextmanager
+def _warnings_to_stderr():
+    """Print the library's warnings as ``handsynth: warning: ...`` lines."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        yield
+    for w in caught:
+        click.echo(f"handsynth: warning: {w.message}", err=True)
+
+
+@cli.group()
+def glove() -> None:
+    """All 20 joint angles from a five-sensor data glove (seed 004)."""
+
+
+@glove.command()
+@click.argument("out", type=click.Path(dir_okay=False))
+@click.option("--kind", type=click.Choice(("dg5", "5dt")), default="dg5", show_default=True,
+              help="Glove design: sensors over the PIP (dg5) or over MCP and PIP (5dt).")
+@click.option("--user", "user_seed", type=int, default=0, show_default=True,
+              help="Seed of the simulated wearer (hand, rest posture, grasp style).")
+@click.option("--donning", type=int, default=0, show_default=True,
+              help="Seed of this wearing of the glove (offsets, gains, slip).")
+@click.option("--motion", "motions", multiple=True,
+              help="Motion to record (repeat); default the glove's representative motions.")
+@click.option("--trials", type=int, default=5, show_default=True, help="Trials per motion.")
+@click.option("--seed", type=int, default=0, show_default=True,
+              help="Seed of trial variation and noise.")
+@click.option("--range-holds/--no-range-holds", default=True, show_default=True,
+              help="Add open-hand and fist holds (motions 'range_open', 'range_fist') for "
+                   "the range calibration.")
+@click.option("--no-angles", is_flag=True, help="Leave out the reference joint angles.")
+def simulate(out, kind, user_seed, donning, motions, trials, seed, range_holds, no_angles):
+    """Write a simulated glove recording OUT (CSV, canonical joint names)."""
+    import numpy as np
+
+    from ..errors import InvalidInputError
+    from ..models import NAMED_POSES
+    from ..sensors.glove import (
+        RANGE_LABELS,
+        GloveRecording,
+        don_glove,
+        make_user,
+        motions_for,
+        simulate_poses,
+        simulate_session,
+        write_glove_csv,
+    )
+
+    if trials < 1:
+        raise InvalidInputError(f"--trials must be >= 1, got {trials}")
+    user = make_user(user_seed)
+    params = don_glove(user, kind, seed=donning)
+    rec = simulate_session(user, params, motions or motions_for(kind), trials=trials, seed=seed)
+    if range_holds:
+        holds = simulate_poses(user, params, np.stack([NAMED_POSES["open"], NAMED_POSES["fist"]]),
+                               seed=seed + 1)
+        holds = GloveRecording(
+            sensors=holds.sensors, angles=holds.angles,
+            motion=np.repeat(RANGE_LABELS, holds.n_samples // 2),
+            trial=holds.trial, time_s=rec.time_s[-1] + 1.0 + np.arange(holds.n_samples) / 60.0,
+            kind=kind, adc_max=holds.adc_max)
+        rec = GloveRecording.concatenate([rec, holds])
+    write_glove_csv(out, rec, with_angles=not no_angles)
+    click.echo(f"wrote {rec.n_samples} samples ({kind}, {user.name}) to {out}")
+
+
+@glove.command()
+@click.argument("recording", type=click.Path(dir_okay=False))
+@click.option("-o", "--out", "out", type=click.Path(dir_okay=False), required=True,
+              help="Calibration file to write (JSON).")
+@click.option("--kind", type=click.Choice(("dg5", "5dt")), required=True,
+              help="Glove design (fixes which joints the sensors span).")
+@click.option("--model", "models", type=click.Choice(_MODELS), multiple=True,
+              help="Model(s) to fit (repeat); default all four.")
+@click.option("--t-threshold", type=float, default=2.0, show_default=True,
+              help="|t| below which models 3 and 4 drop a sensor (seed eq. 11).")
+@click.option("--points", "n_points", type=int, default=20, show_default=True,
+              help="Points along each motion for the mixing likelihood (seed eq. 4).")
+@click.option("--synergies", "synergy_k", type=int, default=2, show_default=True,
+              help="Synergies of the synergy baseline (0 leaves it out).")
+@click.option("--synergy-csv", type=click.Path(dir_okay=False),
+              help="Learn the synergies from this 22-sensor CyberGlove-style export instead of "
+                   "the hand model's natural pose set.")
+@click.option("--synergy-units", type=click.Choice(("deg", "rad")), default="deg",
+              show_default=True, help="Angle unit of --synergy-csv.")
+@click.option("--adc-max", type=float, default=4095.0, show_default=True,
+              help="Full scale of the readings, counts.")
+def calibrate(recording, out, kind, models, t_threshold, n_points, synergy_k, synergy_csv,
+              synergy_units, adc_max):
+    """Fit every estimator on RECORDING (CSV with motions and reference angles)."""
+    from ..errors import InvalidInputError
+    from ..sensors.glove import (
+        CalibrationOptions,
+        RegressionEstimator,
+        fit_synergies,
+        range_readings,
+        read_cyberglove_csv,
+        read_glove_csv,
+        save_calibration,
+    )
+    from ..sensors.glove import calibrate as fit
+
+    rec = read_glove_csv(recording, kind=kind, adc_max=adc_max)
+    opts = CalibrationOptions(models=tuple(models) or _MODELS, t_threshold=t_threshold,
+                              n_points=n_points, synergy_k=synergy_k)
+    synergies = None
+    if synergy_csv:
+        if synergy_k < 1:
+            raise InvalidInputError("--synergy-csv needs --synergies >= 1")
+        synergies = fit_synergies(read_cyberglove_csv(synergy_csv, units=synergy_units),
+                                  k=synergy_k, source=str(synergy_csv))
+        click.echo(f"synergies from {synergy_csv}: {synergy_k} explain "
+                   f"{100 * synergies.explained.sum():.1f} % of the posture variance")
+    with _warnings_to_stderr():
+        est = fit(rec, options=opts, synergies=synergies, where=str(recording))
+    ref = range_readings(rec)
+    save_calibration(out, est, kind=kind, range_reference=ref,
+                     meta={"recording": str(recording), "n_samples": rec.n_samples})
+    click.echo(f"{recording}: {rec.n_samples} samples; estimators: {', '.join(est)}")
+    click.echo("range holds (open, fist): " + ("stored" if ref is not None else
+                                               "none; apply cannot take --range"))
+    best = next((est[m] for m in ("model4", "model3", "model2", "model1") if m in est), None)
+    if isinstance(best, RegressionEstimator):
+        click.echo(f"R^2 of the joint-3 (MCP) fits of {best.name} (seed Table 6):")
+        from ..sensors.glove import finger_joints
+
+        j3 = [f["j3"] for f in finger_joints()]
+        click.echo(f"{'motion':<20}" + "".join(f"{f:>8}" for f in
+                                               ("thumb", "index", "middle", "ring", "little")))
+        for m, mm in best.models.items():
+            click.echo(f"{m:<20}" + "".join(f"{mm.fits[j].r2:8.3f}" for j in j3))
+    click.echo(f"wrote {out}")
+
+
+@glove.command()
+@click.argument("calibration", type=click.Path(dir_okay=False))
+@click.argument("readings", type=click.Path(dir_okay=False))
+@click.option("-o", "--out", "out", type=click.Path(dir_okay=False), required=True,
+              help="Joint angles to write (CSV, canonical joint names, degrees).")
+@click.option("--model", "name", default="model4", show_default=True,
+              help="Estimator in the calibration file: model1..model4, pooled_model4, "
+                   "synergy, model4+synergy or constant.")
+@click.option("--motion", default=None,
+              help="The representative motion, when known; default mix over all (eqs. 4-6).")
+@click.option("--range", "range_csv", type=click.Path(dir_okay=False),
+              help="CSV with open-hand and fist holds of this wearing (motions 'range_open', "
+                   "'range_fist'): map its readings onto the calibration's first.")
+@click.option("--adc-max", type=float, default=4095.0, show_default=True,
+              help="Full scale of the readings, counts.")
+def apply(calibration, readings, out, name, motion, range_csv, adc_max):
+    """Estimate joint angles from READINGS (CSV) with CALIBRATION (JSON)."""
+    from ..errors import InvalidInputError
+    from ..sensors.glove import (
+        RangeNormalizer,
+        check_sensors,
+        load_calibration,
+        range_readings,
+        read_glove_csv,
+        write_angles_csv,
+    )
+
+    cal = load_calibration(calibration)
+    est = cal["estimators"].get(name)
+    if est is None:
+        raise InvalidInputError(f"{calibration}: no estimator {name!r}; it holds "
+                                f"{', '.join(cal['estimators'])}")
+    rec = read_glove_csv(readings, kind=cal["kind"], adc_max=adc_max)
+    sensors = rec.sensors
+    with _warnings_to_stderr():
+        check_sensors(sensors, adc_max=adc_max, where=str(readings))
+        if range_csv:
+            if cal["range_reference"] is None:
+                raise InvalidInputError(f"{calibration}: the calibration had no range_open/"
+                                        "range_fist holds, so --range cannot be used")
+            src = range_readings(read_glove_csv(range_csv, adc_max=adc_max))
+            if src is None:
+                raise InvalidInputError(f"{range_csv}: needs rows with motion 'range_open' "
+                                        "and rows with motion 'range_fist'")
+            tgt = cal["range_reference"]
+            sensors = RangeNormalizer(src[0], src[1], tgt[0], tgt[1]).apply(sensors)
+        angles = est.predict(sensors, motion=motion)
+    write_angles_csv(out, angles, time_s=rec.time_s)
+    click.echo(f"{readings}: {rec.n_samples} samples -> {out} ({name}"
+               + (f", motion {motion}" if motion else ", mixed over motions") + ")")
+
+
+@glove.command("eval")
+@click.option("--kind", type=click.Choice(("dg5", "5dt", "both")), default="dg5",
+              show_default=True, help="Glove design(s) to evaluate.")
+@click.option("--trials", type=int, default=5, show_default=True,
+              help="Calibration trials per motion (>= 3).")
+@click.option("--test-trials", type=int, default=3, show_default=True,
+              help="Trials per motion in the later sessions.")
+@click.option("--seed", type=int, default=0, show_default=True, help="First seed.")
+@click.option("--seeds", type=int, default=1, show_default=True,
+              help="Independent repetitions (new users, glove, sessions); tables hold means.")
+@click.option("--json", "json_out", type=click.Path(dir_okay=False),
+              help="Write every table as JSON.")
+def eval_(kind, trials, test_trials, seed, seeds, json_out):
+    """The seed's tables (per finger, motion, model: MCP error, R^2) on simulated data."""
+    from ..sensors.glove import EvalOptions, evaluate
+
+    kinds = ("dg5", "5dt") if kind == "both" else (kind,)
+    results = {}
+    with _warnings_to_stderr():
+        for k in kinds:
+            results[k] = evaluate(EvalOptions(kind=k, trials=trials, test_trials=test_trials,
+                                              seed=seed, seeds=seeds))
+    for k, res in results.items():
+        _print_eval(k, res)
+    if json_out:
+        _write_json(json_out, {"kinds": list(kinds), "results": results})
+        click.echo(f"wrote {json_out}")
+
+
+def _print_eval(kind: str, res: dict) -> None:
+    click.echo(f"== {kind}: mean joint-3 (MCP) error, deg, against the simulated truth; "
+               "'const' is the constant answer (mean calibration posture) on the same samples")
+    loto = res["conditions"]["loto"]["representative"]
+    fingers = ("thumb", "index", "middle", "ring", "little")
+    click.echo("leave one trial out, motion known (seed Tables 2-5, 'Ave.' row):")
+    click.echo(f"{'variant':<16}" + "".join(f"{f:>8}" for f in fingers) + f"{'const':>8}")
+    for v, rows in loto["tables"].items():
+        ave = rows["Ave."]
+        click.echo(f"{v:<16}" + "".join(f"{ave[f]['mcp_error_deg']:8.2f}" for f in fingers)
+                   + f"{loto['summary'][v]['baseline_mcp_error_deg']:8.2f}")
+    click.echo("all samples, per condition: rewear = same user, glove put on again; user2 = "
+               "another user; both after an open/fist range calibration, except user2-raw; "
+               "rep = calibrated motions, other = motions not calibrated")
+    short = {"loto": "loto", "new_session": "rewear", "second_user": "user2",
+             "second_user_raw": "user2-raw", "representative": "rep", "other": "other"}
+    head = f"{'variant':<16}"
+    cols = []
+    for cond, sets in res["conditions"].items():
+        for set_name in sets:
+            cols.append((cond, set_name))
+            head += f"{short.get(cond, cond) + '/' + short.get(set_name, set_name):>18}"
+    click.echo(head)
+    variants = list(res["conditions"]["new_session"]["representative"]["summary"])
+    for v in variants:
+        line = f"{v:<16}"
+        for cond, set_name in cols:
+            s = res["conditions"][cond][set_name]["summary"].get(v)
+            line += f"{'-':>18}" if s is None else \
+                f"{s['mcp_error_deg']:>9.2f} ({s['baseline_mcp_error_deg']:5.1f})"
+        click.echo(line)

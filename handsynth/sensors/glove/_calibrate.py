@@ -1,0 +1,317 @@
+"""Calibration of every glove estimator from recordings of the motions; the file.
+
+A calibration recording holds trials of the representative motions with
+reference joint angles (seed 004 section 2.1: a many-sensor glove worn at
+the same time).  Samples labelled ``range_open`` and ``range_fist`` are
+static holds of the open hand and a fist for the range calibration of later
+wearings (:class:`RangeNormalizer`) and are not used as a motion (the labels
+differ from the motion names, so a recorded "fist" motion is no hold).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ...errors import EstimationError, InvalidInputError
+from ...models import natural_pose_set
+from ._checks import check_sensors
+from ._estimators import (
+    ConstantEstimator,
+    GatedEstimator,
+    GloveEstimator,
+    RegressionEstimator,
+    SynergyEstimator,
+    estimator_from_dict,
+)
+from ._mixing import fit_mixer
+from ._models import MODELS, GloveWarning, fit_motion_model
+from ._recording import GloveRecording
+from ._sensors import GLOVE_KINDS, SENSOR_NAMES
+from ._synergy import Synergies, fit_synergies
+
+__all__ = [
+    "RANGE_LABELS",
+    "CalibrationOptions",
+    "calibrate",
+    "default_synergies",
+    "load_calibration",
+    "range_readings",
+    "save_calibration",
+]
+
+#: Motion labels of the static holds of a range calibration.
+RANGE_LABELS = ("range_open", "range_fist")
+_FORMAT = "handsynth-glove-calibration"
+_VERSION = 1
+
+@dataclass(frozen=True)
+class CalibrationOptions:
+    """Options of :func:`calibrate`.
+
+    Parameters
+    ----------
+    models : tuple of str
+        Which of :data:`MODELS` to fit.
+    t_threshold : float
+        |t| below which models 3 and 4 drop a sensor (eq. 11: 2).
+    n_points : int
+        Points along each motion for the mixing likelihood (eq. 4).
+    ridge : float
+        Added to each point covariance, standardised units squared.
+    pooled : bool
+        Also fit model 4 on every motion at once ("pooled_model4").
+    synergy_k : int
+        Synergies kept by the synergy baseline; 0 leaves it out.
+    """
+
+    models: tuple[str, ...] = MODELS
+    t_threshold: float = 2.0
+    n_points: int = 20
+    ridge: float = 0.01
+    pooled: bool = True
+    synergy_k: int = 2
+
+    def __post_init__(self) -> None:
+        bad = [m for m in self.models if m not in MODELS]
+        if bad:
+            raise InvalidInputError(f"CalibrationOptions.models: unknown {bad[0]!r}; "
+                                    f"expected some of {', '.join(MODELS)}")
+        if not self.t_threshold >= 0:
+            raise InvalidInputError(
+                f"CalibrationOptions.t_threshold must be >= 0, got {self.t_threshold!r}")
+        if not self.ridge > 0:
+            raise InvalidInputError(f"CalibrationOptions.ridge must be > 0, got {self.ridge!r}")
+
+
+_SYNERGY_CACHE: dict[int, Synergies] = {}
+
+
+def default_synergies(k: int = 2) -> Synergies:
+    """Synergies of the hand model's natural pose set (4,096 poses, seed 0)."""
+    if k not in _SYNERGY_CACHE:
+        _SYNERGY_CACHE[k] = fit_synergies(natural_pose_set(4096, seed=0), k=k,
+                                          source="handsynth natural pose set (4096, seed 0)")
+    return _SYNERGY_CACHE[k]
+
+
+def _clean(rec: GloveRecording, where: str) -> GloveRecording:
+    """Drop NaN rows and saturated samples; refuse dead sensors."""
+    if rec.angles is None:
+        raise EstimationError(f"{where}: no reference joint angles; calibration needs them")
+    chk = check_sensors(rec.sensors, adc_max=rec.adc_max, where=where, warn=False)
+    if chk.dead:
+        k = chk.dead[0]
+        raise EstimationError(
+            f"{where}: {SENSOR_NAMES[k]} is dead (it reads "
+            f"{rec.sensors[~np.isnan(rec.sensors[:, k]), k][0]:g} counts in every sample); "
+            "fix the sensor before calibrating")
+    bad = np.isnan(rec.sensors).any(axis=1) | np.isnan(rec.angles).any(axis=1)
+    if bad.any():
+        rows = ", ".join(str(int(r)) for r in np.flatnonzero(bad)[:5])
+        warnings.warn(f"{where}: dropped {int(bad.sum())} of {rec.n_samples} rows with NaN "
+                      f"(first rows {rows})", GloveWarning, stacklevel=3)
+    sat = chk.saturated.any(axis=1) & ~bad
+    if sat.any():
+        per = ", ".join(f"{SENSOR_NAMES[k]} {int(chk.saturated[:, k].sum())}"
+                        for k in range(5) if chk.saturated[:, k].any())
+        warnings.warn(f"{where}: dropped {int(sat.sum())} of {rec.n_samples} samples with a "
+                      f"saturated reading ({per}); a saturated sensor says only 'at least "
+                      "this far'", GloveWarning, stacklevel=3)
+    return rec.select(~bad & ~sat)
+
+
+def calibrate(rec: GloveRecording, *, options: CalibrationOptions | None = None,
+              synergies: Synergies | None = None,
+              where: str = "calibration") -> dict[str, GloveEstimator]:
+    """Fit every estimator on a calibration recording.
+
+    Parameters
+    ----------
+    rec : GloveRecording
+        Trials of the representative motions with reference ``angles``;
+        ``kind`` must be set for the synergy baseline.
+    options : CalibrationOptions, keyword-only
+    synergies : Synergies, keyword-only
+        Prior of the synergy baseline; default :func:`default_synergies`.
+    where : str, keyword-only
+        Name of the data in messages.
+
+    Returns
+    -------
+    dict of str to GloveEstimator
+        ``"constant"``, the chosen models (``"model1"`` ...), ``"pooled_model4"``,
+        ``"synergy"`` and ``"model4+synergy"`` (:class:`GatedEstimator`) as the
+        options allow.
+
+    Raises
+    ------
+    EstimationError
+        No reference angles, no motion samples, a dead sensor, or a
+        regression that cannot be fitted (named in the message).
+
+    Warns
+    -----
+    GloveWarning
+        Rows dropped for NaN or saturation; too few samples for a regression
+        (with the t-values).
+    """
+    opts = options or CalibrationOptions()
+    rec = _clean(rec, where)
+    is_motion = ~np.isin(rec.motion.astype(str), ("", *RANGE_LABELS))
+    cal = rec.select(is_motion)
+    angles = cal.angles
+    assert angles is not None  # _clean refused a recording without them
+    motions = tuple(dict.fromkeys(cal.motion.tolist()))
+    if not motions:
+        raise EstimationError(f"{where}: no samples labelled with a motion (column 'motion')")
+    centre = cal.sensors.mean(axis=0)
+    scale = cal.sensors.std(axis=0)
+    flat = np.flatnonzero(scale == 0)
+    if flat.size:
+        raise EstimationError(f"{where}: {SENSOR_NAMES[flat[0]]} never changes during the "
+                              "motions (a dead sensor)")
+    out: dict[str, GloveEstimator] = {
+        "constant": ConstantEstimator(posture=angles.mean(axis=0))}
+    mixer = None
+    if len(motions) > 1:
+        mixer = fit_mixer(cal.sensors, cal.motion, cal.phase(), motions=motions,
+                          centre=centre, scale=scale, n_points=opts.n_points, ridge=opts.ridge)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", GloveWarning)
+        for model in opts.models:
+            fits = {}
+            for m in motions:
+                sel = cal.motion == m
+                fits[m] = fit_motion_model(cal.sensors[sel], angles[sel], model=model,
+                                           motion=m, t_threshold=opts.t_threshold,
+                                           centre=centre, scale=scale)
+            out[model] = RegressionEstimator(name=model, models=fits, mixer=mixer)
+    _reemit(caught, where)
+    if opts.pooled:
+        out["pooled_model4"] = RegressionEstimator(
+            name="pooled_model4",
+            models={"pooled": fit_motion_model(cal.sensors, angles, model="model4",
+                                               motion="pooled", t_threshold=opts.t_threshold,
+                                               centre=centre, scale=scale)})
+    if opts.synergy_k:
+        if rec.kind not in GLOVE_KINDS:
+            raise EstimationError(f"{where}: the glove kind is unknown; give one of "
+                                  f"{', '.join(GLOVE_KINDS)} for the synergy baseline")
+        out["synergy"] = _fit_synergy(cal, synergies or default_synergies(opts.synergy_k),
+                                      centre, scale)
+        primary = out.get("model4")
+        if isinstance(primary, RegressionEstimator) and primary.mixer is not None:
+            out["model4+synergy"] = GatedEstimator(primary=primary, fallback=out["synergy"])
+    return out
+
+
+def _reemit(caught, where: str) -> None:
+    """Re-issue the recorded warnings, one "too few samples" per motion.
+
+    Of the models' warnings about the same motion, the one of model 2 (all
+    five sensors, the seed's Table 1 layout) is kept, else the first.
+    """
+    per_motion: dict[str, str] = {}
+    for w in caught:
+        msg = str(w.message)
+        if not issubclass(w.category, GloveWarning) or "calibration samples" not in msg:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+            continue
+        motion = msg.split(" (", 1)[0]
+        if motion not in per_motion or "(model2)" in msg:
+            per_motion[motion] = msg
+    for msg in per_motion.values():
+        warnings.warn(f"{where}: {msg}", GloveWarning, stacklevel=3)
+
+
+def _fit_synergy(cal: GloveRecording, syn: Synergies, centre, scale) -> SynergyEstimator:
+    proto = SynergyEstimator(synergies=syn, kind=cal.kind, centre=centre, scale=scale,
+                             bend_coef=np.zeros((5, 4)), bend_variance=np.ones(5))
+    target = cal.angles @ proto.weight_matrix().T          # nominal bend, (N, 5)
+    z = (cal.sensors - centre) / scale
+    coef = np.zeros((5, 4))
+    var = np.zeros(5)
+    for k in range(5):
+        x = np.column_stack([np.ones(len(z)), z[:, k], z[:, k] ** 2, z[:, k] ** 3])
+        beta, *_ = np.linalg.lstsq(x, target[:, k], rcond=None)
+        coef[k] = beta
+        var[k] = max(float(np.mean((target[:, k] - x @ beta) ** 2)), 1e-3)
+    return SynergyEstimator(synergies=syn, kind=cal.kind, centre=centre, scale=scale,
+                            bend_coef=coef, bend_variance=var)
+
+
+def range_readings(rec: GloveRecording) -> tuple[np.ndarray, np.ndarray] | None:
+    """Median readings (open, fist), each shape (5,), or None without both holds."""
+    lab = rec.motion.astype(str)
+    if not all((lab == r).any() for r in RANGE_LABELS):
+        return None
+    ok = ~np.isnan(rec.sensors).any(axis=1)
+    return tuple(np.median(rec.sensors[(lab == r) & ok], axis=0) for r in RANGE_LABELS)
+
+
+def save_calibration(path, estimators: dict, *, kind: str = "",
+                     range_reference: tuple[np.ndarray, np.ndarray] | None = None,
+                     meta: dict | None = None) -> Path:
+    """Write estimators (and the range-hold readings) as JSON, atomically."""
+    payload = {
+        "format": _FORMAT, "version": _VERSION, "kind": kind,
+        "range_reference": None if range_reference is None
+        else {"open": np.asarray(range_reference[0]).tolist(),
+              "fist": np.asarray(range_reference[1]).tolist()},
+        "meta": meta or {},
+        "estimators": {k: v.to_dict() for k, v in estimators.items()},
+    }
+    target = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", dir=target.parent or Path("."))
+    try:
+        with os.fdopen(fd, "w") as f:
+            json.dump(payload, f)
+        os.replace(tmp, target)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return target
+
+
+def load_calibration(path) -> dict:
+    """Read a calibration file.
+
+    Returns
+    -------
+    dict with ``"kind"``, ``"range_reference"`` (None or (open, fist)
+    arrays), ``"meta"`` and ``"estimators"`` (dict of str to GloveEstimator).
+
+    Raises
+    ------
+    InvalidInputError
+        No such file, not JSON, another format or version, or a malformed
+        estimator; the message names the file.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InvalidInputError(f"cannot read calibration {str(path)!r}: no such file")
+    try:
+        d = json.loads(path.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise InvalidInputError(f"{path}: not a calibration file (JSON error: {exc})") from None
+    if not isinstance(d, dict) or d.get("format") != _FORMAT:
+        raise InvalidInputError(f"{path}: not a handsynth glove calibration file")
+    if d.get("version") != _VERSION:
+        raise InvalidInputError(f"{path}: calibration version {d.get('version')!r}, this "
+                                f"handsynth reads version {_VERSION}")
+    try:
+        est = {k: estimator_from_dict(v) for k, v in d["estimators"].items()}
+    except InvalidInputError as exc:
+        raise InvalidInputError(f"{path}: {exc}") from None
+    rr = d.get("range_reference")
+    return {"kind": d.get("kind", ""), "meta": d.get("meta", {}), "estimators": est,
+            "range_reference": None if rr is None
+            else (np.asarray(rr["open"], dtype=np.float64),
+                  np.asarray(rr["fist"], dtype=np.float64))}

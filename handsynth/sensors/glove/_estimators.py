@@ -1,0 +1,338 @@
+"""Estimators of the 20 joint angles from five glove readings, one interface.
+
+Every estimator satisfies :class:`GloveEstimator` (checked at run time by
+``isinstance`` and by a test): a ``name``, ``predict(sensors, *, motion=None)``
+returning angles (N, 20) in degrees, and ``to_dict()`` for the calibration
+file.  Rows of `sensors` with a NaN give rows of NaN; every other output is
+clipped to the joint limits (:data:`handsynth.models.JOINT_LIMITS_DEG`),
+since no hand can take an angle outside them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+from ...errors import EstimationError, InvalidInputError
+from ...models import JOINT_LIMITS_DEG, JOINT_NAMES
+from ._mixing import MotionMixer
+from ._models import MotionModel
+from ._sensors import sensor_joints
+from ._synergy import Synergies
+
+__all__ = [
+    "ConstantEstimator",
+    "GatedEstimator",
+    "GloveEstimator",
+    "RangeNormalizer",
+    "RegressionEstimator",
+    "SynergyEstimator",
+    "estimator_from_dict",
+]
+
+
+@runtime_checkable
+class GloveEstimator(Protocol):
+    """What every glove estimator provides."""
+
+    @property
+    def name(self) -> str:
+        """Short name, the key of the estimator in a calibration file."""
+
+    def predict(self, sensors: np.ndarray, *, motion: str | None = None) -> np.ndarray:
+        """Joint angles (N, 20), deg, canonical order, from readings (N, 5), counts.
+
+        `motion` names the representative motion when it is known; estimators
+        that do not use motions ignore it.
+        """
+
+    def to_dict(self) -> dict:
+        """JSON-serialisable form, read back by :func:`estimator_from_dict`."""
+
+
+def _as_sensors(sensors) -> np.ndarray:
+    s = np.asarray(sensors, dtype=np.float64)
+    if s.ndim == 1:
+        s = s[None]
+    if s.ndim != 2 or s.shape[1] != 5:
+        raise InvalidInputError(f"sensors must have shape (N, 5), got {np.shape(sensors)}")
+    if np.isinf(s).any():
+        row = int(np.argwhere(np.isinf(s))[0, 0])
+        raise InvalidInputError(f"sensors: row {row} has an infinite reading")
+    return s
+
+
+def _finish(s: np.ndarray, fn) -> np.ndarray:
+    """Apply fn to the finite rows; NaN rows stay NaN; clip to the joint limits."""
+    ok = ~np.isnan(s).any(axis=1)
+    out = np.full((len(s), len(JOINT_NAMES)), np.nan)
+    if ok.any():
+        out[ok] = np.clip(fn(s[ok]), JOINT_LIMITS_DEG[:, 0], JOINT_LIMITS_DEG[:, 1])
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class ConstantEstimator:
+    """The trivial baseline: always the mean posture of the calibration.
+
+    Attributes
+    ----------
+    posture : ndarray, shape (20,), deg
+    """
+
+    posture: np.ndarray
+    name: str = "constant"
+
+    def predict(self, sensors, *, motion=None) -> np.ndarray:
+        return _finish(_as_sensors(sensors), lambda s: np.tile(self.posture, (len(s), 1)))
+
+    def to_dict(self) -> dict:
+        return {"type": "constant", "name": self.name, "posture": self.posture.tolist()}
+
+
+@dataclass(frozen=True, eq=False)
+class RegressionEstimator:
+    """Per-motion regressions of seed 004, with likelihood mixing (eqs. 4-6).
+
+    Attributes
+    ----------
+    name : str
+    models : dict of str to MotionModel
+        One fit per representative motion (one entry "pooled" for a fit on
+        every motion at once).
+    mixer : MotionMixer or None
+        Needed to predict without a motion when there is more than one model.
+    """
+
+    name: str
+    models: dict
+    mixer: MotionMixer | None = None
+
+    @property
+    def motions(self) -> tuple[str, ...]:
+        return tuple(self.models)
+
+    def weights(self, sensors) -> np.ndarray:
+        """Motion weights r_p (eq. 6), shape (N, P), in the order of `motions`."""
+        s = _as_sensors(sensors)
+        if len(self.models) == 1:
+            return np.ones((len(s), 1))
+        if self.mixer is None:
+            raise EstimationError(f"{self.name}: no motion mixer; give the motion")
+        return self.mixer.weights(s)
+
+    def predict(self, sensors, *, motion=None) -> np.ndarray:
+        """Angles from the named motion's model, or mixed over all (eq. 6).
+
+        Raises
+        ------
+        InvalidInputError
+            `motion` is not one of the calibrated motions.
+        """
+        s = _as_sensors(sensors)
+        if motion is not None:
+            if motion not in self.models:
+                raise InvalidInputError(
+                    f"motion {motion!r} was not calibrated; calibrated motions: "
+                    f"{', '.join(self.models)}")
+            return _finish(s, self.models[motion].predict)
+
+        def mixed(x):
+            r = self.weights(x)
+            order = self.mixer.motions if self.mixer is not None else self.motions
+            return sum(r[:, [p]] * self.models[m].predict(x) for p, m in enumerate(order))
+
+        return _finish(s, mixed)
+
+    def to_dict(self) -> dict:
+        return {"type": "regression", "name": self.name,
+                "models": {m: v.to_dict() for m, v in self.models.items()},
+                "mixer": None if self.mixer is None else self.mixer.to_dict()}
+
+
+@dataclass(frozen=True, eq=False)
+class SynergyEstimator:
+    """Synergy-based reconstruction (Bianchi et al. 2013), the outside baseline.
+
+    Each reading is first turned into the bend angle of its sensor (a cubic
+    in the standardised reading, fitted on the calibration to the nominal
+    bend of the reference angles, see :func:`sensor_joints`); the angles are
+    then the minimum-variance estimate under the synergy prior
+    (:meth:`Synergies.reconstruct`).
+
+    Attributes
+    ----------
+    synergies : Synergies
+    kind : str
+        Glove design (fixes the sensors' joint weights).
+    centre, scale : ndarray, shape (5,)
+    bend_coef : ndarray, shape (5, 4)
+        Intercept and z, z^2, z^3 coefficients per sensor.
+    bend_variance : ndarray, shape (5,), deg^2
+    """
+
+    synergies: Synergies
+    kind: str
+    centre: np.ndarray
+    scale: np.ndarray
+    bend_coef: np.ndarray
+    bend_variance: np.ndarray
+    name: str = "synergy"
+
+    def weight_matrix(self) -> np.ndarray:
+        j = sensor_joints(self.kind)
+        a = np.zeros((5, len(JOINT_NAMES)))
+        for k in range(5):
+            a[k, j["distal"][k]] += j["w_distal"][k]
+            a[k, j["proximal"][k]] += j["w_proximal"][k]
+        return a
+
+    def bend(self, sensors) -> np.ndarray:
+        z = (_as_sensors(sensors) - self.centre) / self.scale
+        c = self.bend_coef
+        return c[:, 0] + c[:, 1] * z + c[:, 2] * z**2 + c[:, 3] * z**3
+
+    def predict(self, sensors, *, motion=None) -> np.ndarray:
+        return _finish(_as_sensors(sensors), lambda s: self.synergies.reconstruct(
+            self.bend(s), self.weight_matrix(), self.bend_variance))
+
+    def to_dict(self) -> dict:
+        return {"type": "synergy", "name": self.name, "kind": self.kind,
+                "synergies": self.synergies.to_dict(), "centre": self.centre.tolist(),
+                "scale": self.scale.tolist(), "bend_coef": self.bend_coef.tolist(),
+                "bend_variance": self.bend_variance.tolist()}
+
+
+@dataclass(frozen=True, eq=False)
+class GatedEstimator:
+    """Mixing over the representative motions, handing over to a fallback off them.
+
+    The mixing of seed 004 (eqs. 4-6) always answers with a blend of the
+    representative motions, even for a reading that none of them explains.
+    Here the smallest Mahalanobis distance d^2 = -2 max_p log L_p of a
+    reading to the motion points (eqs. 4-5) is compared with the chi-square
+    distribution of 5 degrees of freedom that it follows for a reading of a
+    calibrated motion: below its 95 % quantile (11.07) the answer is the
+    primary's, above its 99.9 % quantile (20.52) the fallback's, linear in
+    between.  The quantiles are fixed by the distribution, not tuned on data.
+
+    Attributes
+    ----------
+    primary : RegressionEstimator
+        With a mixer (more than one motion).
+    fallback : GloveEstimator
+        Typically the synergy baseline.
+    name : str
+    """
+
+    primary: RegressionEstimator
+    fallback: GloveEstimator
+    name: str = "model4+synergy"
+
+    #: chi-square(5) quantiles 0.95 and 0.999 (scipy.stats.chi2.ppf)
+    lo: float = 11.0705
+    hi: float = 20.5150
+
+    def fallback_weight(self, sensors) -> np.ndarray:
+        """Weight of the fallback per sample, shape (N,), in [0, 1]."""
+        s = _as_sensors(sensors)
+        if self.primary.mixer is None:
+            raise EstimationError(f"{self.name}: the primary estimator has no motion mixer")
+        d2 = -2.0 * self.primary.mixer.log_likelihood(s).max(axis=1)
+        return np.clip((d2 - self.lo) / (self.hi - self.lo), 0.0, 1.0)
+
+    def predict(self, sensors, *, motion=None) -> np.ndarray:
+        s = _as_sensors(sensors)
+
+        def gated(x):
+            f = self.fallback_weight(x)[:, None]
+            return (1.0 - f) * self.primary.predict(x, motion=motion) + \
+                f * self.fallback.predict(x)
+
+        return _finish(s, gated)
+
+    def to_dict(self) -> dict:
+        return {"type": "gated", "name": self.name, "primary": self.primary.to_dict(),
+                "fallback": self.fallback.to_dict(), "lo": self.lo, "hi": self.hi}
+
+
+@dataclass(frozen=True, eq=False)
+class RangeNormalizer:
+    """Two-point map of a new wearing's readings onto the calibration's.
+
+    A wearer holds the open hand and a fist for a few seconds after putting
+    the glove on (what VR glove software asks for); each sensor is mapped
+    linearly so that its open and fist readings land on those of the
+    calibration session.  This removes gain and offset changes, not changes
+    of nonlinearity, placement or grasp style.
+
+    Attributes
+    ----------
+    source_open, source_fist : ndarray, shape (5,), counts
+        Readings of the new wearing.
+    target_open, target_fist : ndarray, shape (5,), counts
+        Readings of the calibration session.
+    """
+
+    source_open: np.ndarray
+    source_fist: np.ndarray
+    target_open: np.ndarray
+    target_fist: np.ndarray
+
+    def __post_init__(self) -> None:
+        span = np.asarray(self.source_fist) - np.asarray(self.source_open)
+        flat = np.flatnonzero(np.abs(span) < 1.0)
+        if flat.size:
+            from ._sensors import SENSOR_NAMES
+            raise EstimationError(
+                f"range calibration: {SENSOR_NAMES[flat[0]]} reads the same for the open "
+                f"hand and the fist ({self.source_open[flat[0]]:g} counts); is it dead?")
+
+    def apply(self, sensors) -> np.ndarray:
+        s = _as_sensors(sensors)
+        u = (s - self.source_open) / (self.source_fist - self.source_open)
+        return self.target_open + u * (self.target_fist - self.target_open)
+
+
+def estimator_from_dict(d: dict) -> GloveEstimator:
+    """Rebuild an estimator written by its ``to_dict``.
+
+    Raises
+    ------
+    InvalidInputError
+        Unknown ``type`` or a missing field (named in the message).
+    """
+    try:
+        t = d["type"]
+        if t == "constant":
+            return ConstantEstimator(posture=np.asarray(d["posture"], dtype=np.float64),
+                                     name=d["name"])
+        if t == "regression":
+            return RegressionEstimator(
+                name=d["name"],
+                models={m: MotionModel.from_dict(v) for m, v in d["models"].items()},
+                mixer=None if d["mixer"] is None else MotionMixer.from_dict(d["mixer"]))
+        if t == "gated":
+            primary = estimator_from_dict(d["primary"])
+            if not isinstance(primary, RegressionEstimator):
+                raise InvalidInputError(f"estimator {d['name']!r}: its primary must be a "
+                                        "regression estimator")
+            return GatedEstimator(primary=primary, fallback=estimator_from_dict(d["fallback"]),
+                                  name=d["name"], lo=float(d["lo"]), hi=float(d["hi"]))
+        if t == "synergy":
+            return SynergyEstimator(
+                synergies=Synergies.from_dict(d["synergies"]), kind=d["kind"],
+                centre=np.asarray(d["centre"], dtype=np.float64),
+                scale=np.asarray(d["scale"], dtype=np.float64),
+                bend_coef=np.asarray(d["bend_coef"], dtype=np.float64),
+                bend_variance=np.asarray(d["bend_variance"], dtype=np.float64),
+                name=d["name"])
+    except KeyError as exc:
+        raise InvalidInputError(f"estimator entry lacks field {exc.args[0]!r}") from None
+    except (TypeError, ValueError) as exc:
+        raise InvalidInputError(f"estimator entry {d.get('name')!r} is malformed: {exc}") \
+            from None
+    raise InvalidInputError(f"unknown estimator type {t!r}; expected constant, regression, "
+                            "synergy or gated")

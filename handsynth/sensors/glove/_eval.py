@@ -1,0 +1,303 @@
+"""The seed's tables on simulated data, and the conditions they leave out.
+
+Seed 004 reports, per finger and per representative motion, the mean error
+of joint 3 (the MCP; thumb: CMC flexion) of each model (Tables 2-5) and the
+R^2 of model 4 (Table 6), with the motion known.  :func:`evaluate` builds the
+same tables for every estimator in four conditions:
+
+``loto``
+    Leave one trial out: the calibration user and donning, each trial of
+    every motion estimated by estimators calibrated on the other trials
+    (the seed's setting).
+``new_session``
+    The calibration user later, glove taken off and put on again (new
+    offsets, gains and slip), after a range calibration (open hand, fist;
+    :class:`RangeNormalizer`): "calibrate once, then wear".
+``second_user``
+    Another user (other hand length, rest posture, grasp style, DIP/PIP
+    ratio and sensor slip) wearing the same glove after a range
+    calibration, estimated with the first user's calibration.
+``second_user_raw``
+    The same without the range calibration.
+
+``new_session`` and ``second_user`` also hold motions outside the
+calibration set (:data:`OTHER_MOTIONS`): with those the motion is unknown,
+so only mixing (eqs. 4-6), the pooled model, the synergy baseline and the
+constant apply.  Every cell carries the constant answer's error on the same
+samples and the s.d. of the true angle there.  Errors are against the
+simulator's noise-free truth; calibration used the noisy reference glove.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ...errors import InvalidInputError
+from ...models import FINGERS, NAMED_POSES
+from ._calibrate import RANGE_LABELS, CalibrationOptions, calibrate, range_readings
+from ._estimators import RangeNormalizer, RegressionEstimator
+from ._models import MODELS, finger_joints
+from ._motions import OTHER_MOTIONS, motions_for
+from ._recording import GloveRecording
+from ._simulate import don_glove, make_user, simulate_poses, simulate_session
+
+__all__ = ["CONDITIONS", "EvalOptions", "evaluate"]
+
+CONDITIONS = ("loto", "new_session", "second_user", "second_user_raw")
+_J = finger_joints()
+_MCP = [f["j3"] for f in _J]
+_PIP = [f["j2"] for f in _J]
+_DIP = [f["j1"] for f in _J]
+_ABD = [f["abd"] for f in _J]
+
+
+@dataclass(frozen=True)
+class EvalOptions:
+    """Options of :func:`evaluate`.
+
+    Parameters
+    ----------
+    kind : {"dg5", "5dt"}
+    trials : int
+        Calibration trials per motion (>= 3 for leave-one-trial-out).
+    test_trials : int
+        Trials per motion in the later sessions.
+    seed : int
+        Base seed; users, donnings and sessions derive theirs from it.
+    seeds : int
+        Independent repetitions (seeds ``seed`` .. ``seed + seeds - 1``: new
+        users, gloves and sessions each time); the tables hold their means.
+    calibration : CalibrationOptions
+    """
+
+    kind: str = "dg5"
+    trials: int = 5
+    test_trials: int = 3
+    seed: int = 0
+    seeds: int = 1
+    calibration: CalibrationOptions = field(default_factory=CalibrationOptions)
+
+    def __post_init__(self) -> None:
+        motions_for(self.kind)  # validates the kind
+        if isinstance(self.trials, bool) or not isinstance(self.trials, int) or self.trials < 3:
+            raise InvalidInputError(f"EvalOptions.trials must be an integer >= 3, "
+                                    f"got {self.trials!r}")
+        if isinstance(self.seeds, bool) or not isinstance(self.seeds, int) or self.seeds < 1:
+            raise InvalidInputError(f"EvalOptions.seeds must be a positive integer, "
+                                    f"got {self.seeds!r}")
+        if isinstance(self.test_trials, bool) or not isinstance(self.test_trials, int) \
+                or self.test_trials < 1:
+            raise InvalidInputError(f"EvalOptions.test_trials must be a positive integer, "
+                                    f"got {self.test_trials!r}")
+
+
+def _range_holds(user, params, seed) -> GloveRecording:
+    rec = simulate_poses(user, params, np.stack([NAMED_POSES["open"], NAMED_POSES["fist"]]),
+                         seed=seed)
+    return GloveRecording(sensors=rec.sensors, motion=np.repeat(RANGE_LABELS, 30),
+                          trial=rec.trial, kind=rec.kind, adc_max=rec.adc_max)
+
+
+def _variants(estimators: dict, representative: bool) -> dict:
+    """Prediction functions name -> f(sensors, motion) for a motion set."""
+    out = {}
+    for name, est in estimators.items():
+        if isinstance(est, RegressionEstimator) and name in MODELS:
+            if representative:
+                out[f"{name}/known"] = (est, True)
+            out[f"{name}/mixed"] = (est, False)
+        else:
+            out[name] = (est, False)
+    return out
+
+
+def _predict(est, known: bool, rec: GloveRecording, sensors: np.ndarray) -> np.ndarray:
+    if not known:
+        return est.predict(sensors)
+    out = np.empty((rec.n_samples, 20))
+    for m in dict.fromkeys(rec.motion.tolist()):
+        sel = rec.motion == m
+        out[sel] = est.predict(sensors[sel], motion=m)
+    return out
+
+
+def _cell(pred, base, truth) -> dict:
+    err = np.abs(pred - truth)
+    sst = float(((truth - truth.mean()) ** 2).sum())
+    r2 = 1.0 - float(((pred - truth) ** 2).sum()) / sst if sst > 0 else float("nan")
+    return {"mcp_error_deg": round(float(err.mean()), 3), "r2": round(r2, 4),
+            "baseline_mcp_error_deg": round(float(np.abs(base - truth).mean()), 3),
+            "truth_sd_deg": round(float(truth.std()), 3)}
+
+
+def _table(preds: dict, rec: GloveRecording) -> dict:
+    """Per variant: per motion per finger cells, the seed's "Ave." row, a summary."""
+    truth = rec.truth
+    assert truth is not None  # simulated sessions carry their truth
+    base = preds["constant"]
+    motions = list(dict.fromkeys(rec.motion.tolist()))
+    tables, summary = {}, {}
+    for name, pred in preds.items():
+        rows = {}
+        for m in motions:
+            sel = rec.motion == m
+            rows[m] = {f: _cell(pred[sel, j], base[sel, j], truth[sel, j])
+                       for f, j in zip(FINGERS, _MCP)}
+        rows["Ave."] = {f: {k: round(float(np.mean([rows[m][f][k] for m in motions])), 3)
+                            for k in ("mcp_error_deg", "baseline_mcp_error_deg", "r2",
+                                      "truth_sd_deg")} for f in FINGERS}
+        tables[name] = rows
+
+        def mean_err(cols, p=pred):
+            return round(float(np.abs(p[:, cols] - truth[:, cols]).mean()), 3)
+
+        summary[name] = {
+            "mcp_error_deg": mean_err(_MCP), "baseline_mcp_error_deg": mean_err(_MCP, base),
+            "pip_error_deg": mean_err(_PIP), "dip_error_deg": mean_err(_DIP),
+            "abduction_error_deg": mean_err(_ABD),
+            "all_joints_error_deg": mean_err(list(range(20))),
+            "baseline_all_joints_error_deg": mean_err(list(range(20)), base),
+        }
+    return {"motions": motions, "tables": tables, "summary": summary}
+
+
+def _evaluate_on(estimators: dict, rec: GloveRecording, sensors: np.ndarray,
+                 representative: bool) -> dict:
+    preds = {name: _predict(est, known, rec, sensors)
+             for name, (est, known) in _variants(estimators, representative).items()}
+    return _table(preds, rec)
+
+
+def _mixing_accuracy(est: RegressionEstimator, rec: GloveRecording, sensors) -> dict:
+    """Mean weight r_p of the true motion, per motion (eq. 6)."""
+    if est.mixer is None:
+        return {}
+    r = est.weights(sensors)
+    out = {}
+    for p, m in enumerate(est.mixer.motions):
+        sel = rec.motion == m
+        if sel.any():
+            out[m] = round(float(np.nanmean(r[sel, p])), 3)
+    return out
+
+
+def _mean_tree(trees: list):
+    """Element-wise mean of equally shaped nested dicts; other leaves from the first."""
+    first = trees[0]
+    if isinstance(first, dict):
+        return {k: _mean_tree([t[k] for t in trees]) for k in first}
+    if isinstance(first, (int, float)) and not isinstance(first, bool):
+        return round(float(np.mean(trees)), 3)
+    return first
+
+
+def evaluate(options: EvalOptions | None = None) -> dict:
+    """Run the four conditions and return the tables (JSON-serialisable).
+
+    Returns
+    -------
+    dict
+        ``config``, ``users``, ``fit_r2`` (R^2 of the joint-3 regression of
+        each model on the full calibration, the seed's Table 6) and
+        ``conditions``: for each of :data:`CONDITIONS` a dict of motion sets
+        (``"representative"``, ``"other"``) holding ``motions``, ``tables``
+        (variant -> motion -> finger -> cell, plus the "Ave." row) and
+        ``summary`` (variant -> mean errors over all samples, with the
+        constant answer's beside them).  With ``seeds > 1`` every number is
+        the mean over the seeds, and each summary entry adds
+        ``mcp_error_deg_per_seed``.
+    """
+    o = options or EvalOptions()
+    runs = [_evaluate_one(o, s) for s in range(o.seed, o.seed + o.seeds)]
+    out = _mean_tree(runs)
+    for cond, sets in out["conditions"].items():
+        for set_name, res in sets.items():
+            for variant, summ in res["summary"].items():
+                summ["mcp_error_deg_per_seed"] = [
+                    r["conditions"][cond][set_name]["summary"][variant]["mcp_error_deg"]
+                    for r in runs]
+    out["config"]["seeds"] = list(range(o.seed, o.seed + o.seeds))
+    out["users"] = [r["users"] for r in runs]
+    return out
+
+
+def _evaluate_one(o: EvalOptions, seed: int) -> dict:
+    kind = o.kind
+    rep = motions_for(kind)
+    user_a = make_user(seed, name="calibration user", hand_length=1.04)
+    user_b = make_user(seed + 1000, name="second user", hand_length=0.94)
+    don_a1 = don_glove(user_a, kind, seed=seed + 1, glove_seed=seed)
+    don_a2 = don_glove(user_a, kind, seed=seed + 2, glove_seed=seed)
+    don_b = don_glove(user_b, kind, seed=seed + 3, glove_seed=seed)
+
+    cal = simulate_session(user_a, don_a1, rep, trials=o.trials, seed=seed + 10)
+    holds_a = _range_holds(user_a, don_a1, seed + 11)
+    estimators = calibrate(cal, options=o.calibration)
+    ref = range_readings(holds_a)
+    assert ref is not None  # _range_holds labels both holds
+
+    conditions = {}
+    # leave one trial out (the seed's setting)
+    preds: dict[str, list[np.ndarray]] = {}
+    parts = []
+    for k in range(o.trials):
+        test = cal.select(cal.trial == k)
+        est_k = calibrate(cal.select(cal.trial != k), options=o.calibration,
+                          where=f"calibration without trial {k}")
+        for name, (est, known) in _variants(est_k, True).items():
+            preds.setdefault(name, []).append(_predict(est, known, test, test.sensors))
+        parts.append(test)
+    loto = GloveRecording.concatenate(parts)
+    conditions["loto"] = {"representative": _table(
+        {n: np.vstack(p) for n, p in preds.items()}, loto)}
+
+    for cond, user, don, normalise in (("new_session", user_a, don_a2, True),
+                                       ("second_user", user_b, don_b, True),
+                                       ("second_user_raw", user_b, don_b, False)):
+        s_seed = seed + (20 if user is user_a else 30)
+        sessions = {"representative": simulate_session(user, don, rep, trials=o.test_trials,
+                                                       seed=s_seed),
+                    "other": simulate_session(user, don, list(OTHER_MOTIONS),
+                                              trials=o.test_trials, seed=s_seed + 1)}
+        holds = _range_holds(user, don, s_seed + 2)
+        norm = None
+        if normalise:
+            src = range_readings(holds)
+            assert src is not None
+            norm = RangeNormalizer(source_open=src[0], source_fist=src[1],
+                                   target_open=ref[0], target_fist=ref[1])
+        conditions[cond] = {}
+        for set_name, rec in sessions.items():
+            sensors = norm.apply(rec.sensors) if norm is not None else rec.sensors
+            res = _evaluate_on(estimators, rec, sensors, set_name == "representative")
+            m4 = estimators.get("model4")
+            if set_name == "representative" and isinstance(m4, RegressionEstimator):
+                res["mixing_weight_of_true_motion"] = _mixing_accuracy(m4, rec, sensors)
+            conditions[cond][set_name] = res
+
+    fit_r2 = {}
+    for name in o.calibration.models:
+        est = estimators[name]
+        assert isinstance(est, RegressionEstimator)
+        fit_r2[name] = {m: {f: round(est.models[m].fits[j].r2, 4) for f, j in zip(FINGERS, _MCP)}
+                        for m in est.motions}
+    return {
+        "config": {"kind": kind, "trials": o.trials, "test_trials": o.test_trials,
+                   "seed": seed, "rate_hz": 60.0, "models": list(o.calibration.models),
+                   "t_threshold": o.calibration.t_threshold,
+                   "n_points": o.calibration.n_points,
+                   "synergy_k": o.calibration.synergy_k,
+                   "representative_motions": list(rep),
+                   "other_motions": list(OTHER_MOTIONS),
+                   "joint3": dict(zip(FINGERS, ("thumb_cmc_flex", "index_mcp_flex",
+                                                "middle_mcp_flex", "ring_mcp_flex",
+                                                "little_mcp_flex"))),
+                   "errors": "mean absolute error against the simulated truth, deg"},
+        "users": {u.name: {"hand_length": round(u.hand_length, 3),
+                           "dip_ratio": [round(float(x), 3) for x in u.dip_ratio]}
+                  for u in (user_a, user_b)},
+        "fit_r2": fit_r2,
+        "conditions": conditions,
+    }

@@ -1,0 +1,289 @@
+"""A glove recording: sensor readings, optional reference angles, labels; CSV I/O.
+
+CSV layout (one header line, comma-separated, one row per sample)::
+
+    time_s,motion,trial,sensor_thumb,...,sensor_little[,thumb_cmc_flex,...,little_dip_flex]
+
+The joint columns use the canonical names of :data:`handsynth.models.JOINT_NAMES`
+and are optional (a recording to be estimated has none).  ``motion`` may be
+empty where unknown, ``trial`` is an integer.  Empty or ``nan`` sensor cells
+are read as NaN (a dropped sample), and the estimators flag them.
+"""
+
+from __future__ import annotations
+
+import csv
+import os
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ...errors import RecordingError
+from ...models import JOINT_NAMES
+from ._sensors import GLOVE_KINDS, SENSOR_NAMES
+
+__all__ = ["GloveRecording", "read_glove_csv", "write_angles_csv", "write_glove_csv"]
+
+
+@dataclass(frozen=True, eq=False)
+class GloveRecording:
+    """Readings of a five-sensor glove with optional reference joint angles.
+
+    Parameters
+    ----------
+    sensors : ndarray, shape (N, 5), float64, counts
+        Raw readings thumb to little finger (:data:`SENSOR_NAMES`); NaN marks
+        a missing sample.
+    angles : ndarray, shape (N, 20), float64, deg, or None
+        Reference joint angles (canonical order), e.g. from a 22-sensor glove
+        worn under it; None when unknown.
+    motion : ndarray, shape (N,), str
+        Motion name per sample, "" where unknown.
+    trial : ndarray, shape (N,), int64
+        Trial number per sample; a (motion, trial) pair is one trial.
+    time_s : ndarray, shape (N,), float64, s
+    kind : str
+        Glove design, one of :data:`GLOVE_KINDS`, or "" when unknown.
+    truth : ndarray, shape (N, 20), float64, deg, or None
+        Noise-free joint angles of a simulated recording (``angles`` then
+        carries the reference glove's error); None for real data.
+    adc_max : float
+        Full scale of the readings (a reading at 0 or `adc_max` is saturated).
+
+    Raises
+    ------
+    RecordingError
+        Shapes that do not match (the message names the field and shape).
+    """
+
+    sensors: np.ndarray
+    angles: np.ndarray | None = None
+    # None means "unknown" and becomes an array in __post_init__
+    motion: np.ndarray = None  # type: ignore[assignment]
+    trial: np.ndarray = None  # type: ignore[assignment]
+    time_s: np.ndarray = None  # type: ignore[assignment]
+    kind: str = ""
+    truth: np.ndarray | None = None
+    adc_max: float = 4095.0
+    meta: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        s = np.asarray(self.sensors, dtype=np.float64)
+        if s.ndim != 2 or s.shape[1] != 5:
+            raise RecordingError(f"sensors must have shape (N, 5), got {s.shape}")
+        n = s.shape[0]
+        object.__setattr__(self, "sensors", s)
+        for name in ("angles", "truth"):
+            a = getattr(self, name)
+            if a is not None:
+                a = np.asarray(a, dtype=np.float64)
+                if a.shape != (n, len(JOINT_NAMES)):
+                    raise RecordingError(f"{name} must have shape ({n}, 20), got {a.shape}")
+                object.__setattr__(self, name, a)
+        motion = np.full(n, "", dtype=object) if self.motion is None \
+            else np.asarray(self.motion, dtype=object)
+        trial = np.zeros(n, dtype=np.int64) if self.trial is None \
+            else np.asarray(self.trial, dtype=np.int64)
+        time_s = np.arange(n, dtype=np.float64) if self.time_s is None \
+            else np.asarray(self.time_s, dtype=np.float64)
+        for name, arr in (("motion", motion), ("trial", trial), ("time_s", time_s)):
+            if arr.shape != (n,):
+                raise RecordingError(f"{name} must have shape ({n},), got {arr.shape}")
+        object.__setattr__(self, "motion", motion)
+        object.__setattr__(self, "trial", trial)
+        object.__setattr__(self, "time_s", time_s)
+        if self.kind not in ("", *GLOVE_KINDS):
+            raise RecordingError(f"kind must be one of {', '.join(GLOVE_KINDS)} or '', "
+                                 f"got {self.kind!r}")
+
+    @property
+    def n_samples(self) -> int:
+        return self.sensors.shape[0]
+
+    def select(self, mask) -> GloveRecording:
+        """The samples where boolean `mask` (shape (N,)) is true."""
+        m = np.asarray(mask, dtype=bool)
+        return GloveRecording(
+            sensors=self.sensors[m],
+            angles=None if self.angles is None else self.angles[m],
+            motion=self.motion[m], trial=self.trial[m], time_s=self.time_s[m],
+            kind=self.kind, truth=None if self.truth is None else self.truth[m],
+            adc_max=self.adc_max, meta=dict(self.meta))
+
+    def trials(self) -> list[tuple[str, int]]:
+        """The (motion, trial) pairs in order of first appearance."""
+        seen = dict.fromkeys(zip(self.motion.tolist(), self.trial.tolist()))
+        return list(seen)
+
+    def phase(self) -> np.ndarray:
+        """Time within each trial scaled to [0, 1], shape (N,), float64."""
+        out = np.zeros(self.n_samples)
+        for m, t in self.trials():
+            idx = np.flatnonzero((self.motion == m) & (self.trial == t))
+            ts = self.time_s[idx]
+            span = ts.max() - ts.min()
+            out[idx] = (ts - ts.min()) / span if span > 0 else 0.0
+        return out
+
+    @staticmethod
+    def concatenate(recs) -> GloveRecording:
+        """Join recordings end to end (their kinds must agree)."""
+        recs = list(recs)
+        kinds = {r.kind for r in recs} - {""}
+        if len(kinds) > 1:
+            raise RecordingError(f"cannot join recordings of glove kinds {sorted(kinds)}")
+
+        def cat(name):
+            vals = [getattr(r, name) for r in recs]
+            return None if any(v is None for v in vals) else np.concatenate(vals)
+
+        return GloveRecording(
+            sensors=cat("sensors"), angles=cat("angles"), motion=cat("motion"),
+            trial=cat("trial"), time_s=cat("time_s"), kind=kinds.pop() if kinds else "",
+            truth=cat("truth"), adc_max=max(r.adc_max for r in recs))
+
+
+def _atomic_write(path, write) -> Path:
+    target = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", dir=target.parent or Path("."))
+    try:
+        with os.fdopen(fd, "w", newline="") as f:
+            write(f)
+        os.replace(tmp, target)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return target
+
+
+def write_glove_csv(path, rec: GloveRecording, *, with_angles: bool = True) -> Path:
+    """Write `rec` as CSV (layout in the module docstring), atomically.
+
+    The file appears complete or not at all.  Reference `angles` are written
+    when present and `with_angles` is true; the simulator's noise-free truth
+    is never written.
+    """
+    angles = rec.angles if with_angles else None
+    header = ["time_s", "motion", "trial", *SENSOR_NAMES]
+    if angles is not None:
+        header += list(JOINT_NAMES)
+
+    def write(f):
+        w = csv.writer(f)
+        w.writerow(header)
+        for i in range(rec.n_samples):
+            row = [f"{rec.time_s[i]:.6f}", rec.motion[i], int(rec.trial[i])]
+            row += [_fmt(v) for v in rec.sensors[i]]
+            if angles is not None:
+                row += [_fmt(v) for v in angles[i]]
+            w.writerow(row)
+
+    return _atomic_write(path, write)
+
+
+def write_angles_csv(path, angles: np.ndarray, *, time_s: np.ndarray | None = None) -> Path:
+    """Write estimated joint angles (N, 20) in degrees with canonical column names."""
+    angles = np.asarray(angles, dtype=np.float64)
+    n = angles.shape[0]
+    t = np.arange(n, dtype=np.float64) if time_s is None else np.asarray(time_s)
+
+    def write(f):
+        w = csv.writer(f)
+        w.writerow(["time_s", *JOINT_NAMES])
+        for i in range(n):
+            w.writerow([f"{t[i]:.6f}", *(_fmt(v) for v in angles[i])])
+
+    return _atomic_write(path, write)
+
+
+def _fmt(v: float) -> str:
+    return "nan" if not np.isfinite(v) else f"{v:.4f}"
+
+
+def read_glove_csv(path, *, kind: str = "", adc_max: float = 4095.0) -> GloveRecording:
+    """Read a glove CSV written by :func:`write_glove_csv` or by hand.
+
+    Parameters
+    ----------
+    path : str or Path
+    kind : str, keyword-only
+        Glove design to record in the result ("" if unknown).
+    adc_max : float, keyword-only
+        Full scale of the readings, counts.
+
+    Returns
+    -------
+    GloveRecording
+        With ``angles`` when all 20 joint columns are present.
+
+    Raises
+    ------
+    RecordingError
+        No such file, no header, a missing sensor column, some but not all
+        joint columns, a row of the wrong length, or a cell that is not a
+        number; the message names the file, line and column.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise RecordingError(f"cannot read glove CSV {str(path)!r}: no such file")
+    with path.open(newline="") as f:
+        rows = list(csv.reader(f))
+    if not rows:
+        raise RecordingError(f"{path}: empty file, expected a header line")
+    header = [h.strip() for h in rows[0]]
+    missing = [c for c in SENSOR_NAMES if c not in header]
+    if missing:
+        raise RecordingError(f"{path}: missing sensor column(s) {', '.join(missing)}; "
+                             f"header is {', '.join(header)}")
+    joints = [c for c in JOINT_NAMES if c in header]
+    if joints and len(joints) != len(JOINT_NAMES):
+        absent = [c for c in JOINT_NAMES if c not in header]
+        raise RecordingError(f"{path}: joint columns are incomplete, missing "
+                             f"{', '.join(absent)}")
+    col = {h: i for i, h in enumerate(header)}
+    body = [r for r in rows[1:] if any(c.strip() for c in r)]
+    if not body:
+        raise RecordingError(f"{path}: no data rows after the header")
+    n = len(body)
+    sensors = np.empty((n, 5))
+    angles = np.empty((n, len(JOINT_NAMES))) if joints else None
+    motion = np.full(n, "", dtype=object)
+    trial = np.zeros(n, dtype=np.int64)
+    time_s = np.arange(n, dtype=np.float64)
+    for i, r in enumerate(body):
+        line = i + 2
+        if len(r) != len(header):
+            raise RecordingError(f"{path}, line {line}: {len(r)} fields, header has "
+                                 f"{len(header)}")
+        for k, name in enumerate(SENSOR_NAMES):
+            sensors[i, k] = _num(r[col[name]], path, line, name, allow_empty=True)
+        if angles is not None:
+            for k, name in enumerate(JOINT_NAMES):
+                angles[i, k] = _num(r[col[name]], path, line, name, allow_empty=True)
+        if "time_s" in col:
+            time_s[i] = _num(r[col["time_s"]], path, line, "time_s")
+        if "motion" in col:
+            motion[i] = r[col["motion"]].strip()
+        if "trial" in col:
+            v = _num(r[col["trial"]], path, line, "trial")
+            if v != int(v):
+                raise RecordingError(f"{path}, line {line}: trial must be an integer, "
+                                     f"got {r[col['trial']]!r}")
+            trial[i] = int(v)
+    return GloveRecording(sensors=sensors, angles=angles, motion=motion, trial=trial,
+                          time_s=time_s, kind=kind, adc_max=adc_max)
+
+
+def _num(cell: str, path, line: int, name: str, *, allow_empty: bool = False) -> float:
+    s = cell.strip()
+    if s == "" and allow_empty:
+        return float("nan")
+    try:
+        v = float(s)
+    except ValueError:
+        raise RecordingError(f"{path}, line {line}: {name} is {cell!r}, not a number") from None
+    if np.isinf(v):
+        raise RecordingError(f"{path}, line {line}: {name} is {cell!r}")
+    return v

@@ -1,0 +1,125 @@
+"""Postural synergies (PCA of joint angles) and reconstruction from few sensors.
+
+Santello, Flanders & Soechting, "Postural hand synergies for tool use",
+J. Neurosci. 18:10105-10115 (1998): two principal components explained
+more than 80 % of the variance of grasp postures.  Reconstructing all
+joints from a few measured ones through such synergies is the approach of
+Bianchi, Salaris & Bicchi, "Synergy-based hand pose sensing", Int. J.
+Robotics Research 32(4):396-406 (2013); Jarque-Bou et al. (2021) study
+kinematic synergies of grasps recorded with CyberGloves.  Issue 19 names the
+three as anchors; every figure handsynth reports is measured here, none is
+taken from them.
+
+The reconstruction is the minimum-variance estimate of Bianchi et al.: the
+synergies give a Gaussian prior on the 20 angles, theta ~ N(mu, Sigma) with
+Sigma = V diag(lambda) V^T + sigma_res^2 I (k components, residual variance
+sigma_res^2 of the rest); a glove gives b = A theta + e, the bend of each
+sensor (A: the sensor's nominal joint weights); then
+
+    theta_hat = mu + Sigma A^T (A Sigma A^T + R)^-1 (b - A mu),
+
+with R the variance of the bend error.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...errors import EstimationError
+from ...models import JOINT_NAMES
+
+__all__ = ["Synergies", "fit_synergies"]
+
+
+@dataclass(frozen=True, eq=False)
+class Synergies:
+    """Principal components of joint-angle postures.
+
+    Attributes
+    ----------
+    mean : ndarray, shape (20,), deg
+    components : ndarray, shape (k, 20)
+        Unit row vectors, largest variance first.
+    variances : ndarray, shape (k,), deg^2
+    residual_variance : float, deg^2
+        Mean variance per joint left after k components.
+    explained : ndarray, shape (k,)
+        Share of the total variance of each component.
+    source : str
+    """
+
+    mean: np.ndarray
+    components: np.ndarray
+    variances: np.ndarray
+    residual_variance: float
+    explained: np.ndarray
+    source: str = ""
+
+    @property
+    def k(self) -> int:
+        return self.components.shape[0]
+
+    def covariance(self) -> np.ndarray:
+        """Prior covariance V diag(lambda) V^T + sigma_res^2 I, shape (20, 20)."""
+        v = self.components
+        return (v.T * self.variances) @ v + self.residual_variance * np.eye(v.shape[1])
+
+    def reconstruct(self, bend: np.ndarray, weights: np.ndarray,
+                    bend_variance: np.ndarray) -> np.ndarray:
+        """Minimum-variance angles (N, 20) from bends (N, M) = weights (M, 20) @ theta.
+
+        Parameters
+        ----------
+        bend : ndarray, shape (N, M), deg
+        weights : ndarray, shape (M, 20)
+        bend_variance : ndarray, shape (M,), deg^2
+        """
+        sig = self.covariance()
+        a = np.asarray(weights, dtype=np.float64)
+        gain = sig @ a.T @ np.linalg.inv(a @ sig @ a.T + np.diag(bend_variance))
+        return self.mean + (np.asarray(bend) - a @ self.mean) @ gain.T
+
+    def to_dict(self) -> dict:
+        return {"mean": self.mean.tolist(), "components": self.components.tolist(),
+                "variances": self.variances.tolist(),
+                "residual_variance": self.residual_variance,
+                "explained": self.explained.tolist(), "source": self.source}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> Synergies:
+        return cls(mean=np.asarray(d["mean"], dtype=np.float64),
+                   components=np.asarray(d["components"], dtype=np.float64),
+                   variances=np.asarray(d["variances"], dtype=np.float64),
+                   residual_variance=float(d["residual_variance"]),
+                   explained=np.asarray(d["explained"], dtype=np.float64),
+                   source=str(d.get("source", "")))
+
+
+def fit_synergies(postures: np.ndarray, *, k: int = 2, source: str = "") -> Synergies:
+    """PCA of `postures` (N, 20) deg keeping `k` components.
+
+    Raises
+    ------
+    EstimationError
+        Fewer than k + 2 finite postures, or k outside 1..20.
+    """
+    p = np.asarray(postures, dtype=np.float64)
+    if p.ndim != 2 or p.shape[1] != len(JOINT_NAMES):
+        raise EstimationError(f"postures must have shape (N, 20), got {p.shape}")
+    p = p[np.isfinite(p).all(axis=1)]
+    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 1 <= k <= 20:
+        raise EstimationError(f"k must be an integer in 1..20, got {k!r}")
+    if len(p) < k + 2:
+        raise EstimationError(f"{len(p)} finite postures cannot give {k} synergies")
+    mean = p.mean(axis=0)
+    var_all, vec = np.linalg.eigh(np.cov(p, rowvar=False))
+    order = np.argsort(var_all)[::-1]
+    var = np.clip(var_all[order], 0.0, None)
+    vt = vec[:, order].T
+    total = var.sum()
+    resid = float(var[k:].sum() / len(JOINT_NAMES))
+    return Synergies(mean=mean, components=vt[:k].copy(), variances=var[:k].copy(),
+                     residual_variance=max(resid, 1e-6), explained=var[:k] / total,
+                     source=source)

@@ -1,0 +1,108 @@
+import json
+import re
+import warnings
+
+import numpy as np
+import pytest
+
+from handsynth.errors import EstimationError, InvalidInputError
+from handsynth.sensors.glove import (
+    CalibrationOptions,
+    GloveRecording,
+    GloveWarning,
+    calibrate,
+    load_calibration,
+    save_calibration,
+)
+
+
+def _with(rec, sensors):
+    return GloveRecording(sensors=sensors, angles=rec.angles, motion=rec.motion,
+                          trial=rec.trial, time_s=rec.time_s, kind=rec.kind,
+                          adc_max=rec.adc_max)
+
+
+def test_dead_sensor_refuses_calibration(cal_rec):
+    s = cal_rec.sensors.copy()
+    s[:, 3] = 1777.0
+    with pytest.raises(EstimationError, match=r"sensor_ring is dead \(it reads 1777 counts"):
+        calibrate(_with(cal_rec, s), where="cal.csv")
+
+
+def test_nan_and_saturated_rows_are_dropped_with_warnings(cal_rec):
+    s = cal_rec.sensors.copy()
+    s[[10, 20, 30], 0] = np.nan
+    s[100:140, 2] = cal_rec.adc_max
+    with warnings.catch_warnings(record=True) as got:
+        warnings.simplefilter("always")
+        est = calibrate(_with(cal_rec, s), where="cal.csv",
+                        options=CalibrationOptions(synergy_k=0))
+    msgs = " | ".join(str(w.message) for w in got if issubclass(w.category, GloveWarning))
+    assert "cal.csv: dropped 3 of" in msgs and "first rows 10, 20, 30" in msgs
+    assert "dropped 40 of" in msgs and "sensor_middle 40" in msgs
+    assert "synergy" not in est
+
+
+def test_too_few_samples_warn_with_t_values(cal_rec):
+    keep = np.zeros(cal_rec.n_samples, dtype=bool)
+    for m in set(cal_rec.motion):
+        idx = np.flatnonzero((cal_rec.motion == m) & (cal_rec.trial == 0))
+        keep[idx[::6]] = True                       # ~35 samples per motion
+    with warnings.catch_warnings(record=True) as got:
+        warnings.simplefilter("always")
+        calibrate(cal_rec.select(keep), options=CalibrationOptions(n_points=4, synergy_k=0))
+    msgs = [str(w.message) for w in got if issubclass(w.category, GloveWarning)]
+    assert len(msgs) == 3                            # one per motion, not one per model
+    std = next(m for m in msgs if "'standard'" in m)
+    assert re.match(r"calibration: motion 'standard' \(model2\): only \d+ calibration "
+                    r"samples for up to 6 coefficients", std)
+    assert re.search(r"index_mcp_flex: sensor_thumb\^1 t=-?\d+\.\d\d, sensor_index\^1 t=",
+                     std)
+
+
+def test_no_reference_angles_or_motions_raise(cal_rec):
+    bare = GloveRecording(sensors=cal_rec.sensors, kind="dg5")
+    with pytest.raises(EstimationError, match="no reference joint angles"):
+        calibrate(bare)
+    unl = GloveRecording(sensors=cal_rec.sensors, angles=cal_rec.angles, kind="dg5")
+    with pytest.raises(EstimationError, match="no samples labelled with a motion"):
+        calibrate(unl)
+
+
+def test_options_are_checked():
+    with pytest.raises(InvalidInputError, match="model7"):
+        CalibrationOptions(models=("model7",))
+    with pytest.raises(TypeError):
+        CalibrationOptions(t_treshold=2.0)
+
+
+def test_file_round_trip_and_bad_files(tmp_path, estimators, cal_rec):
+    path = save_calibration(tmp_path / "cal.json", estimators, kind="dg5",
+                            range_reference=(np.zeros(5), np.ones(5)))
+    cal = load_calibration(path)
+    assert cal["kind"] == "dg5" and set(cal["estimators"]) == set(estimators)
+    s = cal_rec.sensors[::40]
+    np.testing.assert_allclose(cal["estimators"]["model4"].predict(s),
+                               estimators["model4"].predict(s))
+    np.testing.assert_allclose(cal["range_reference"][1], np.ones(5))
+    bad = tmp_path / "bad.json"
+    bad.write_text("{not json")
+    with pytest.raises(InvalidInputError, match="bad.json: not a calibration file"):
+        load_calibration(bad)
+    bad.write_text(json.dumps({"format": "something else"}))
+    with pytest.raises(InvalidInputError, match="not a handsynth glove calibration"):
+        load_calibration(bad)
+    with pytest.raises(InvalidInputError, match="no such file"):
+        load_calibration(tmp_path / "missing.json")
+
+
+def test_failed_write_leaves_no_file(tmp_path, monkeypatch, estimators):
+    import handsynth.sensors.glove._calibrate as mod
+
+    def boom(*a, **k):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(mod.json, "dump", boom)
+    with pytest.raises(OSError):
+        save_calibration(tmp_path / "cal.json", estimators)
+    assert list(tmp_path.iterdir()) == []

@@ -1,0 +1,48 @@
+import json
+
+import pytest
+
+from handsynth.errors import InvalidInputError
+from handsynth.models import FINGERS
+from handsynth.sensors.glove import CONDITIONS, EvalOptions, evaluate
+
+
+@pytest.fixture(scope="module")
+def result():
+    return evaluate(EvalOptions(kind="dg5", trials=3, test_trials=1, seed=4))
+
+
+def test_layout_matches_the_seed_tables(result):
+    json.dumps(result)                                  # serialisable
+    assert set(result["conditions"]) == set(CONDITIONS)
+    loto = result["conditions"]["loto"]["representative"]
+    assert loto["motions"] == ["standard", "lateral_contact", "tripod"]
+    for variant in ("model1/known", "model2/known", "model3/known", "model4/known",
+                    "model4/mixed", "pooled_model4", "synergy", "constant"):
+        rows = loto["tables"][variant]
+        assert set(rows) == {"standard", "lateral_contact", "tripod", "Ave."}
+        for cell in rows["standard"].values():
+            assert {"mcp_error_deg", "r2", "baseline_mcp_error_deg", "truth_sd_deg"} <= set(cell)
+        assert list(rows["Ave."]) == list(FINGERS)
+    assert set(result["fit_r2"]["model4"]["tripod"]) == set(FINGERS)
+    other = result["conditions"]["second_user"]["other"]["tables"]
+    assert "model4/known" not in other and "model4/mixed" in other
+
+
+def test_estimates_beat_the_constant_and_range_calibration_matters(result):
+    c = result["conditions"]
+    # the second user is the hard case: only "better than the constant" is pinned there
+    for cond, factor in (("loto", 0.4), ("new_session", 0.5), ("second_user", 0.8)):
+        s = c[cond]["representative"]["summary"]
+        assert s["model4/mixed"]["mcp_error_deg"] < factor * s["constant"]["mcp_error_deg"], cond
+        assert s["constant"]["baseline_mcp_error_deg"] == s["constant"]["mcp_error_deg"]
+    raw = c["second_user_raw"]["representative"]["summary"]["model4/mixed"]["mcp_error_deg"]
+    norm = c["second_user"]["representative"]["summary"]["model4/mixed"]["mcp_error_deg"]
+    assert raw > 1.5 * norm
+
+
+def test_options_are_checked():
+    with pytest.raises(InvalidInputError, match="trials must be an integer >= 3"):
+        EvalOptions(trials=2)
+    with pytest.raises(InvalidInputError, match="glove kind"):
+        EvalOptions(kind="cyber")

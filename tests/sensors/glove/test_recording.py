@@ -1,0 +1,56 @@
+import numpy as np
+import pytest
+
+from handsynth.errors import RecordingError
+from handsynth.models import JOINT_NAMES
+from handsynth.sensors.glove import (
+    SENSOR_NAMES,
+    GloveRecording,
+    read_glove_csv,
+    write_angles_csv,
+    write_glove_csv,
+)
+
+
+def test_csv_round_trip(tmp_path, cal_rec):
+    rec = cal_rec.select(np.arange(cal_rec.n_samples) < 300)
+    path = write_glove_csv(tmp_path / "r.csv", rec)
+    back = read_glove_csv(path, kind="dg5")
+    np.testing.assert_allclose(back.sensors, rec.sensors)
+    np.testing.assert_allclose(back.angles, rec.angles, atol=1e-4)
+    assert back.motion.tolist() == rec.motion.tolist()
+    assert back.trial.tolist() == rec.trial.tolist()
+    assert back.truth is None          # the simulator's truth is never written
+    header = path.read_text().splitlines()[0].split(",")
+    assert header[3:8] == list(SENSOR_NAMES) and header[8:] == list(JOINT_NAMES)
+
+
+def test_sensors_only_and_nan_cells(tmp_path):
+    p = tmp_path / "s.csv"
+    p.write_text("time_s," + ",".join(SENSOR_NAMES) + "\n0,1,2,3,4,5\n0.1,1,,3,nan,5\n")
+    rec = read_glove_csv(p)
+    assert rec.angles is None and rec.n_samples == 2
+    assert np.isnan(rec.sensors[1, [1, 3]]).all()
+
+
+@pytest.mark.parametrize("text, msg", [
+    ("a,b\n1,2\n", "missing sensor column"),
+    ("time_s," + ",".join(SENSOR_NAMES) + "\n0,1,2,x,4,5\n", r"line 2: sensor_middle is 'x'"),
+    ("time_s," + ",".join(SENSOR_NAMES) + "\n0,1,2,3\n", "line 2: 4 fields, header has 6"),
+    (",".join(SENSOR_NAMES) + ",thumb_cmc_flex\n1,2,3,4,5,6\n", "joint columns are incomplete"),
+    (",".join(SENSOR_NAMES) + "\n", "no data rows"),
+])
+def test_bad_csv_names_the_problem(tmp_path, text, msg):
+    p = tmp_path / "bad.csv"
+    p.write_text(text)
+    with pytest.raises(RecordingError, match=msg):
+        read_glove_csv(p)
+
+
+def test_angles_csv_and_shape_errors(tmp_path):
+    a = np.zeros((3, 20))
+    a[1] = np.nan
+    text = write_angles_csv(tmp_path / "a.csv", a).read_text().splitlines()
+    assert text[0].split(",")[1:] == list(JOINT_NAMES) and "nan" in text[2]
+    with pytest.raises(RecordingError, match=r"sensors must have shape \(N, 5\)"):
+        GloveRecording(sensors=np.zeros((3, 4)))

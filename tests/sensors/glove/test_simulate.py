@@ -1,0 +1,59 @@
+import numpy as np
+import pytest
+
+from handsynth.errors import InvalidInputError
+from handsynth.models import JOINT_LIMITS_DEG, JOINT_NAMES
+from handsynth.sensors.glove import (
+    don_glove,
+    make_user,
+    motions_for,
+    simulate_session,
+)
+
+
+def test_session_shapes_labels_and_limits(cal_rec):
+    assert cal_rec.sensors.shape == (cal_rec.n_samples, 5)
+    assert set(cal_rec.motion) == set(motions_for("dg5"))
+    assert set(cal_rec.trial) == {0, 1, 2, 3}
+    assert (cal_rec.truth >= JOINT_LIMITS_DEG[:, 0] - 1e-9).all()
+    assert (cal_rec.truth <= JOINT_LIMITS_DEG[:, 1] + 1e-9).all()
+    # the reference glove is not the truth
+    err = cal_rec.angles - cal_rec.truth
+    assert 1.2 < err.std() < 1.8
+
+
+def test_trials_vary_and_users_differ(user, dg5):
+    rec = simulate_session(user, dg5, ["standard"], trials=3, seed=5)
+    j = JOINT_NAMES.index("index_mcp_flex")
+    peaks = [rec.truth[rec.trial == k, j].max() for k in range(3)]
+    lengths = [(rec.trial == k).sum() for k in range(3)]
+    assert np.ptp(peaks) > 1.0 and len(set(lengths)) > 1
+    other = make_user(99)
+    rec2 = simulate_session(other, don_glove(other, "dg5", seed=1), ["standard"], trials=3,
+                            seed=5)
+    assert abs(rec2.truth[:, j].max() - max(peaks)) > 0.5 or \
+        not np.allclose(other.dip_ratio, user.dip_ratio)
+
+
+def test_dip_is_not_exactly_two_thirds_pip(cal_rec):
+    p, d = JOINT_NAMES.index("middle_pip_flex"), JOINT_NAMES.index("middle_dip_flex")
+    big = cal_rec.truth[:, p] > 30
+    ratio = cal_rec.truth[big, d] / cal_rec.truth[big, p]
+    assert abs(np.median(ratio) - 2 / 3) > 0.005
+
+
+def test_parallel_extension_barely_moves_a_dg5_sensor(user):
+    """Seed 004 section 3.1 / Fig. 5: why Parallel Extension is dropped for DG5."""
+    dg5, fdt = don_glove(user, "dg5", seed=1), don_glove(user, "5dt", seed=1)
+    r_dg5 = simulate_session(user, dg5, ["parallel_extension"], trials=1, seed=3)
+    r_5dt = simulate_session(user, fdt, ["parallel_extension"], trials=1, seed=3)
+    span_dg5 = np.ptp(r_dg5.sensors[:, 1:], axis=0) / dg5.gain[1:]
+    span_5dt = np.ptp(r_5dt.sensors[:, 1:], axis=0) / fdt.gain[1:]
+    assert span_5dt.mean() > 2.5 * span_dg5.mean()
+
+
+def test_bad_arguments():
+    with pytest.raises(InvalidInputError, match="unknown motion 'wave'"):
+        simulate_session(make_user(0), don_glove(make_user(0), "dg5", seed=0), ["wave"])
+    with pytest.raises(InvalidInputError, match="seed"):
+        make_user(-1)
