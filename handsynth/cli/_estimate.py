@@ -235,7 +235,8 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
             source, what = VideoSource(video_in), f"video {video_in}"
         lookup = None
         if not calibrate or chosen_db:
-            lookup = _open_lookup(db_dir, shape_name, measurements, not no_temporal, info_err,
+            lookup = _open_lookup(db_dir, shape_name, measurements,
+                                  False if no_temporal else None, info_err,
                                   personal=personal, build=build)
         mount = lookup.mount if lookup is not None else CameraMount.paper()
         side = lookup.side if lookup is not None else "right"

@@ -28,9 +28,10 @@ scoring itself is the paper's, unchanged:
    a true lower bound and skipping by it never changes the answer.  The
    codes of the probed cells are streamed once; the candidates with the
    smallest bounds are scored until one survives the pruning, then every
-   candidate whose bound does not exceed the best E so far is scored with
-   the exact search's compiled helpers (P1, P2 from the packed masks, HLAC
-   distance in int32 with early abandon).
+   candidate whose bound does not exceed the best E so far is scored by
+   the exact search's compiled scoring function
+   (:func:`handsynth.estimate._score.score`: P1, P2 from the packed masks,
+   HLAC distance in int32 with early abandon).
 4. **Widening and fallback.**  When no candidate survives both stages,
    the probe doubles (next-nearest cells) up to ``max_nprobe`` cells.  If
    still none survives, the answer is the smallest ``E`` over the
@@ -89,19 +90,15 @@ import math
 import os
 from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
-from ..db import HLAC_SIZE, count_outside
+from ..db import HLAC_SIZE
 from ..errors import DatabaseError, InvalidInputError
-from ._search import (
-    SearchOptions,
-    SearchResult,
-    SearchTables,
-    _hlac_distance,
-    _query,
-)
+from ._score import SURVIVOR, SURVIVOR_ABOVE_BEST, Constants, Query, Rows, score
+from ._search import SearchOptions, SearchResult, SearchTables, _query
 
 __all__ = ["ApproximateIndex", "ApproximateOptions", "ann_path", "tables_fingerprint"]
 
@@ -324,55 +321,102 @@ def _code_bound(q_y, code, step, band):
     return acc
 
 
-@njit(cache=True, nogil=True)
-def _score(i, best_e, q_hlac, q_sil, q_ridge, th1, hlac, sil_bits, ridge_bits, ridge_area, c1,
-           c2, c3, c4, prune):
-    """One candidate against the best E so far: (status, p1, p2, d).
+class _Probe(NamedTuple):
+    """Which candidates :func:`_ivf_kernel` scores, and how.
 
-    Status -1: pruned; 0: survives but cannot beat `best_e`; 1: survives
-    with ``E = d + C3 p1 + C4 p2 <= best_e``; 2: cannot beat `best_e`
-    (its P1 penalty alone exceeds it), stage 2 not decided.  The HLAC
-    distance comes last, with early exit.
+    Attributes
+    ----------
+    starts, stops : ndarray of int64, shape (P,)
+        Code positions ``[starts[r], stops[r])`` of the probed cells.
+    extra_j : int
+        One more code position (the seed outside the probed cells), or -1.
+    seed_j : int
+        Code position scored first (the seed), or -1.
+    fallback_ok : bool
+        With no survivor, score every candidate again without pruning
+        (else return -1 so that the caller widens the probe).
+    max_scored : int
+        Candidates scored exactly once one survives (0: no limit).
     """
-    p1 = count_outside(q_ridge, sil_bits[i])
-    if prune and p1 > th1:
-        return -1, p1, 0, 0
-    pen = c3 * p1
-    if pen > best_e:
-        return 2, p1, 0, 0
-    a = ridge_area[i]
-    p2 = count_outside(ridge_bits[i], q_sil)
-    if prune and p2 > c1 * a * a + c2 * a:
-        return -1, p1, p2, 0
-    pen += c4 * p2
-    if pen > best_e:
-        return 0, p1, p2, 0
-    d = _hlac_distance(q_hlac, hlac[i], best_e - pen)
-    if d + pen > best_e:
-        return 0, p1, p2, d
-    return 1, p1, p2, d
+
+    starts: np.ndarray
+    stops: np.ndarray
+    extra_j: int
+    seed_j: int
+    fallback_ok: bool
+    max_scored: int
+
+
+class _Codes(NamedTuple):
+    """The index's arrays that :func:`_ivf_kernel` reads (:class:`ApproximateIndex`).
+
+    Attributes
+    ----------
+    order : ndarray of int32, shape (N,)
+    codes : ndarray of int16, shape (N, dims)
+    step, band : ndarray of float64, shape (dims,)
+    inv_gain : float
+    """
+
+    order: np.ndarray
+    codes: np.ndarray
+    step: np.ndarray
+    band: np.ndarray
+    inv_gain: float
 
 
 @njit(cache=True, nogil=True)
-def _ivf_kernel(q_hlac, q_sil, q_ridge, q_area, q_y, hlac, sil_bits, ridge_bits, ridge_area,
-                order, codes, step, band, inv_gain, c, c1, c2, c3, c4, prune, starts, stops,
-                extra_j, seed_j, fallback_ok, max_scored):
-    """Best candidate among the code positions ``[starts[r], stops[r])`` and `extra_j`.
+def _ivf_kernel(query, q_area, q_y, table, index, constants, probe):
+    """Best candidate among the probed code positions and ``extra_j``.
 
-    Returns (entry, E, d, p1, p2, survivors, fallback); entry -1 when no
-    candidate survives the pruning and not `fallback_ok`.
+    Parameters
+    ----------
+    query : tuple
+        The fields of a :class:`~handsynth.estimate._score.Query`, in order.
+    q_area : float
+        ``A_input``, pixels.
+    q_y : ndarray of float64, shape (dims,)
+        ``A h`` of the input.
+    table : tuple
+        The fields of a :class:`~handsynth.estimate._score.Rows`, in order
+        (the database's columns, entry order).
+    index : tuple
+        The fields of a :class:`_Codes`, in order.
+    constants : tuple
+        ``(c, c1, c2, c3, c4, prune)`` of :class:`SearchOptions`.
+    probe : tuple
+        The fields of a :class:`_Probe`, in order.
 
+    Returns
+    -------
+    tuple
+        (entry, E, d, p1, p2, survivors, fallback); entry -1 when no
+        candidate survives the pruning and not ``fallback_ok``.
+
+    Notes
+    -----
     Pass 1 computes the code bound of every candidate (codes are stored in
-    cell order, so this streams).  Pass 2 scores the seed (`seed_j`, a code
-    position, or -1) and then the candidates with the smallest bounds until
-    one survives; pass 3 visits the rest in order and scores only those
-    whose bound does not exceed the best E so far, stopping after
-    `max_scored` scored candidates (when > 0) once one survivor is known.
-    ``survivors`` counts the survivors among the candidates scored (as the
-    exact search does).
-    Ties go to the lowest entry index.  With no survivor and `fallback_ok`, the passes run again
-    without pruning and the result is marked as a fallback.
+    cell order, so this streams).  Pass 2 scores the seed and then the
+    candidates with the smallest bounds until one survives; pass 3 visits
+    the rest in order and scores only those whose bound does not exceed the
+    best E so far, stopping after ``max_scored`` scored candidates (when > 0)
+    once one survivor is known.  ``survivors`` counts the survivors among
+    the candidates scored (as the exact search does).  Ties go to the lowest
+    entry index.  With no survivor and ``fallback_ok``, the passes run again
+    without pruning and the result is marked as a fallback.  The groups
+    arrive as plain tuples (cheap to dispatch from Python) and are named
+    here.
     """
+    q = Query(*query)
+    rows = Rows(*table)
+    ix = _Codes(*index)
+    p = _Probe(*probe)
+    c, c1, c2, c3, c4, prune = constants
+    # fields read once, into locals: a field read in a loop costs a reference count
+    # update per iteration
+    order, codes, step, band, inv_gain = ix.order, ix.codes, ix.step, ix.band, ix.inv_gain
+    starts, stops, extra_j, seed_j = p.starts, p.stops, p.extra_j, p.seed_j
+    fallback_ok, max_scored = p.fallback_ok, p.max_scored
     m = 0
     for r in range(starts.shape[0]):
         m += stops[r] - starts[r]
@@ -389,13 +433,13 @@ def _ivf_kernel(q_hlac, q_sil, q_ridge, q_area, q_y, hlac, sil_bits, ridge_bits,
     if extra_j >= 0:
         js[k] = extra_j
         low[k] = _code_bound(q_y, codes[extra_j], step, band) * inv_gain
-    th1 = c * q_area
     seen = np.zeros(m, np.bool_)
+    consts = Constants(c * q_area, c1, c2, c3, c4, prune)
     for attempt in range(2):
-        pruning = prune and attempt == 0
         if attempt == 1:
             if not (prune and fallback_ok):
                 break
+            consts = Constants(c * q_area, c1, c2, c3, c4, False)
             seen[:] = False
         best_e = np.inf
         best_i = -1
@@ -407,42 +451,38 @@ def _ivf_kernel(q_hlac, q_sil, q_ridge, q_area, q_y, hlac, sil_bits, ridge_bits,
         while best_i < 0 and tries < 16 and tries < m:
             kk = -1
             if tries == 0 and seed_j >= 0:
-                for q in range(m):
-                    if js[q] == seed_j:
-                        kk = q
+                for t in range(m):
+                    if js[t] == seed_j:
+                        kk = t
                         break
             if kk < 0:
-                for q in range(m):
-                    if not seen[q] and (kk < 0 or low[q] < low[kk]):
-                        kk = q
+                for t in range(m):
+                    if not seen[t] and (kk < 0 or low[t] < low[kk]):
+                        kk = t
             tries += 1
             if kk < 0 or seen[kk]:
                 continue
             seen[kk] = True
             scored += 1
             i = order[js[kk]]
-            st, p1, p2, d = _score(i, best_e, q_hlac, q_sil, q_ridge, th1, hlac, sil_bits,
-                                   ridge_bits, ridge_area, c1, c2, c3, c4, pruning)
-            if st == 0 or st == 1:
+            st, e, d, p1, p2 = score(i, 0.0, best_e, q, rows, consts)
+            if st >= SURVIVOR_ABOVE_BEST:
                 survivors += 1
-            if st == 1:
-                best_e, best_i, best_d, best_p1, best_p2 = d + c3 * p1 + c4 * p2, i, d, p1, p2
-        for q in range(m):
-            if seen[q] or low[q] > best_e:
+            if st == SURVIVOR:
+                best_e, best_i, best_d, best_p1, best_p2 = e, i, d, p1, p2
+        for t in range(m):
+            if seen[t] or low[t] > best_e:
                 continue
             if max_scored > 0 and scored >= max_scored and best_i >= 0:
                 break  # enough candidates scored: keep the best so far
             scored += 1
-            i = order[js[q]]
-            st, p1, p2, d = _score(i, best_e, q_hlac, q_sil, q_ridge, th1, hlac, sil_bits,
-                                   ridge_bits, ridge_area, c1, c2, c3, c4, pruning)
-            if st != 0 and st != 1:
+            i = order[js[t]]
+            st, e, d, p1, p2 = score(i, 0.0, best_e, q, rows, consts)
+            if st < SURVIVOR_ABOVE_BEST:
                 continue
             survivors += 1
-            if st == 1:
-                e = d + c3 * p1 + c4 * p2
-                if e < best_e or (e == best_e and i < best_i):
-                    best_e, best_i, best_d, best_p1, best_p2 = e, i, d, p1, p2
+            if st == SURVIVOR and (e < best_e or i < best_i):  # ties: the lowest entry index
+                best_e, best_i, best_d, best_p1, best_p2 = e, i, d, p1, p2
         if best_i >= 0:
             if attempt == 1:
                 survivors = 0
@@ -509,6 +549,8 @@ class ApproximateIndex:
         # |A x|^2 <= gain |x|^2 with gain the largest eigenvalue of A A^T (1 up to rounding)
         gain = float(np.linalg.eigvalsh(self._a64 @ self._a64.T).max()) * (1.0 + 1e-9)
         self._inv_gain = (1.0 - 1e-12) / max(gain, 1.0)
+        self._kernel_codes = tuple(_Codes(order=self.order, codes=self.codes, step=self.step,
+                                          band=self._band, inv_gain=self._inv_gain))
         for arr in (self.projection, self.centroids, self.order, self.offsets, self.position,
                     self.codes, self.step, self._a64, self._c_norms, self._band):
             arr.setflags(write=False)
@@ -813,10 +855,9 @@ class ApproximateIndex:
             inside = seed_j >= 0 and bool(((starts <= seed_j) & (seed_j < stops)).any())
             extra_j = seed_j if seed_j >= 0 and not inside else -1
             i, e, d, p1, p2, surv, fb = _ivf_kernel(
-                h, sb, rb, area, q_y, t.hlac, t.sil_bits, t.ridge_bits, t.ridge_area,
-                self.order, self.codes, self.step, self._band, self._inv_gain, opts.c, opts.c1,
-                opts.c2, opts.c3, opts.c4, opts.prune, starts, stops, extra_j, seed_j,
-                probe >= limit, self.options.max_scored or 0)
+                (h, sb, rb), area, q_y, (t.hlac, t.sil_bits, t.ridge_bits, t.ridge_area),
+                self._kernel_codes, (opts.c, opts.c1, opts.c2, opts.c3, opts.c4, opts.prune),
+                (starts, stops, extra_j, seed_j, probe >= limit, self.options.max_scored or 0))
             if i >= 0:
                 return SearchResult(index=int(i), error=float(e), hlac_distance=int(d),
                                     p1=int(p1), p2=int(p2), survivors=int(surv),

@@ -36,6 +36,39 @@ from ._selection import SelectionOptions, select_shape
 __all__ = ["PoseEstimate", "PoseEstimator", "PoseLookup"]
 
 
+def _refuse_for_calibration(*, options, temporal, approximate) -> None:
+    """Raise for a lookup option that a calibrated lookup cannot honour.
+
+    Parameters
+    ----------
+    options : SearchOptions or None
+        As given to :class:`PoseLookup` (``None``: not given).
+    temporal : bool or None
+        As given (``None``: not given; ``False`` is honoured trivially).
+    approximate : object
+        The approximate index or its request (``None`` or ``False``: none).
+
+    Raises
+    ------
+    InvalidInputError
+        Naming the option and the value received.
+    """
+    if approximate is not None and approximate is not False:
+        got = repr(approximate) if isinstance(approximate, bool) else \
+            f"<{type(approximate).__name__}>"
+        raise InvalidInputError(
+            f"a calibrated lookup needs the exact search, got approximate={got} (the "
+            "approximate index); leave approximate unset")
+    if options is not None:
+        raise InvalidInputError(
+            f"options={options!r} cannot be honoured by a calibrated lookup (its masked search "
+            "has no E constants); leave options unset")
+    if temporal:
+        raise InvalidInputError(
+            f"temporal={temporal!r} cannot be honoured by a calibrated lookup (its masked "
+            "search takes no seed); pass temporal=False or leave temporal unset")
+
+
 def _build_options(build) -> BuildOptions:
     if build is None:
         return BuildOptions()
@@ -108,35 +141,46 @@ class PoseLookup:
     database : handsynth.db.Database
         An opened database (see :meth:`open` to open one from a folder).
     options : SearchOptions, keyword-only, optional
-        Search constants (the paper's by default).
-    temporal : bool, keyword-only
+        Search constants (the paper's by default).  Not usable with
+        :meth:`calibrated`, whose search has no such constants.
+    temporal : bool or None, keyword-only
         Score the previous frame's answer first (same answers, often faster).
         The previous answer is the only state; it is a plain int, so sharing
         one instance between threads stays safe (each thread may seed from
-        another thread's last answer, which changes no result).
-    ties : {"mean", "first"}, keyword-only
+        another thread's last answer, which changes no result).  ``None``
+        (default): ``True``, and ``False`` for a calibrated lookup (its
+        search takes no seed; ``temporal=True`` cannot be calibrated).
+    ties : {"mean", "first"} or None, keyword-only
         What to report when several entries match equally well (the same
         smallest ``E``: mostly entries whose features are identical because
-        a finger is folded out of the camera's view).  ``"mean"``
-        (default): the mean of their angles and keypoints, the answer with
-        the smallest expected error when each is equally likely;
-        ``"first"``: the first entry's, as a plain reading of the paper.
-        ``entry`` is the first either way.  The approximate index tracks no
-        ties (its answers are always ``"first"``).
+        a finger is folded out of the camera's view).  ``"mean"``: the mean
+        of their angles and keypoints, the answer with the smallest expected
+        error when each is equally likely; ``"first"``: the first entry's,
+        as a plain reading of the paper.  ``entry`` is the first either
+        way.  ``None`` (default): ``"mean"``, and ``"first"`` with the
+        approximate index, which tracks no ties (``ties="mean"`` with it is
+        refused).
     approximate : ApproximateIndex, ApproximateOptions or bool, keyword-only, optional
         Search with the approximate (IVF) index instead of the exact search
         (for databases of 10^5-10^6 entries; see
         :mod:`handsynth.estimate._ann`).  ``True`` or options: open the
         index kept next to the database file, building it if needed.
 
+    Raises
+    ------
+    InvalidInputError
+        A value of the wrong type, or a combination that cannot be
+        honoured (``ties="mean"`` with `approximate`), naming the options
+        and the value received.
+
     Notes
     -----
     :meth:`calibrated` gives a lookup that matches frames by the pixels
     outside a user's ignore mask, learnt from one open-hand frame
     (:mod:`handsynth.estimate._calibration`, beyond the paper), and reports
-    the weighted mean of the entries near the best (no temporal seed, exact
-    search only); :meth:`from_open_frame` also chooses the database from
-    that frame.
+    the weighted mean of the entries near the best; it needs the exact
+    search and takes no `options` and no ``temporal=True``.
+    :meth:`from_open_frame` also chooses the database from that frame.
 
     Examples
     --------
@@ -147,19 +191,29 @@ class PoseLookup:
     """
 
     def __init__(self, database: Database, *, options: SearchOptions | None = None,
-                 temporal: bool = True, ties: str = "mean", approximate=None) -> None:
+                 temporal: bool | None = None, ties: str | None = None,
+                 approximate=None) -> None:
         if not isinstance(database, Database):
             raise InvalidInputError(
                 f"database must be a handsynth.db.Database, got {type(database).__name__}")
         if options is not None and not isinstance(options, SearchOptions):
             raise InvalidInputError(
                 f"options must be SearchOptions, got {type(options).__name__}")
+        if temporal is not None and not isinstance(temporal, (bool, np.bool_)):
+            raise InvalidInputError(f"temporal must be True, False or None, got {temporal!r}")
+        if ties not in (None, "mean", "first"):
+            raise InvalidInputError(f"ties must be 'mean', 'first' or None, got {ties!r}")
+        approximate_used = approximate is not None and approximate is not False
+        if approximate_used and ties == "mean":
+            raise InvalidInputError(
+                "ties='mean' cannot be honoured by the approximate index (it tracks no ties); "
+                "pass ties='first' or leave ties unset")
         self.database = database
-        if ties not in ("mean", "first"):
-            raise InvalidInputError(f"ties must be 'mean' or 'first', got {ties!r}")
         self.options = options or SearchOptions()
-        self.temporal = bool(temporal)
-        self.ties = ties
+        self.temporal = True if temporal is None else bool(temporal)
+        self.ties = ties or ("first" if approximate_used else "mean")
+        # what the caller chose, for the combinations that calibrated() cannot honour
+        self._requested = {"options": options, "temporal": temporal}
         meta = database.meta
         try:
             self.mount = CameraMount(**meta["mount"])
@@ -207,17 +261,18 @@ class PoseLookup:
         ------
         InvalidInputError
             The frame is not an image or shows no hand, the database has no
-            open-hand entry, or the lookup uses the approximate index.
+            open-hand entry, or this lookup was made with an option the
+            calibrated search cannot honour: the approximate index,
+            `options` or ``temporal=True`` (naming it and the value).
         """
-        if self.approximate is not None:
-            raise InvalidInputError("a calibrated lookup needs the exact search, "
-                                    "got a lookup with an approximate index")
+        _refuse_for_calibration(approximate=self.approximate, **self._requested)
         user = self.silhouette(open_frame)
         if not user.any():
             raise InvalidInputError("open_frame shows no hand")
         reference = reference_silhouette(self.database)
         out = copy.copy(self)
         out._last = -1
+        out.temporal = False  # the masked search takes no seed
         out.calibration = Calibration.from_silhouettes(user, reference, dilation_px=dilation_px,
                                                        temperature_px=temperature_px)
         out._band_areas = masked_band_areas(self.tables.sil_bits, out.calibration)
@@ -378,15 +433,22 @@ class PoseLookup:
         dilation_px, temperature_px : keyword-only
             As for :meth:`calibrated`.
         **kwargs
-            Passed to :class:`PoseLookup` (``options``, ``ties``).
+            Passed to :class:`PoseLookup`: ``ties`` (``temporal=False`` is
+            accepted and changes nothing).
 
         Raises
         ------
         InvalidInputError
-            The frame is not an image or shows no hand, or an option is invalid.
+            The frame is not an image or shows no hand, an option is
+            invalid, or `kwargs` hold an option the calibrated search cannot
+            honour (``options``, ``temporal=True``, ``approximate``), before
+            anything is built.
         DatabaseError
             The database could not be built or read.
         """
+        _refuse_for_calibration(options=kwargs.get("options"),
+                                temporal=kwargs.get("temporal"),
+                                approximate=kwargs.get("approximate"))
         build = _build_options(build)
         mount = mount or CameraMount.paper()
         chosen = select_shape_from_frame(open_frame, mount=mount, side=build.side,

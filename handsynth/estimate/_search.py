@@ -45,9 +45,11 @@ vectorized pass over column-major tables (140 bytes per row), dropping rows
 whose penalty bounds already fail a pruning stage, (3) scores the 8 rows
 with the smallest bounds, which brings the best ``E`` near its final
 value, (4) scores, in layout order (:class:`_ExactIndex`), every other row
-whose bound does not exceed the best ``E`` so far.  Scoring counts P1, P2,
-then the HLAC distance with early exit, stopping as soon as the bound with
-the exact penalties exceeds the best ``E``.  Nothing is copied per entry.
+whose bound does not exceed the best ``E`` so far.  Scoring is
+:func:`handsynth.estimate._score.score`, shared with the approximate index:
+it counts P1, P2, then the HLAC distance with early exit, stopping as soon
+as the bound with the exact penalties exceeds the best ``E``.  Nothing is
+copied per entry.
 ``survivors`` of the result counts the entries (with their repeats) that
 passed both stages among those scored (a lower bound of the total, which
 :func:`search_reference` reports).  When no row passes
@@ -59,16 +61,17 @@ from __future__ import annotations
 import math
 import threading
 from dataclasses import dataclass, field, fields
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
-from ..db import HLAC_SIZE, count_outside, popcount64
+from ..db import HLAC_SIZE, popcount64
 from ..errors import InvalidInputError
+from ._score import SURVIVOR, SURVIVOR_ABOVE_BEST, Constants, Query, Rows, score
 
 __all__ = ["SearchOptions", "SearchResult", "SearchTables", "search", "search_reference"]
 
-_BLOCK = 200  # HLAC dims between early-exit checks (divides HLAC_SIZE)
 _BASIS_DIMS = 16  # principal directions of the HLAC bound
 _BASIS_SAMPLE = 4096  # distinct rows used to find them
 _BOUND_MARGIN = 1e-2  # relative margin of the float32 HLAC bound
@@ -208,13 +211,15 @@ class SearchTables:
     def __len__(self) -> int:
         return self.hlac.shape[0]
 
-    def _buffers(self, n: int) -> tuple[np.ndarray, ...]:
-        """Scratch arrays of one search, reused by each thread (allocating them per call
-        costs page faults of the order of the search itself)."""
+    def _buffers(self, n: int) -> _Scratch:
+        """Scratch arrays of one search for `n` distinct rows, reused by each thread
+        (allocating them per call costs page faults of the order of the search itself)."""
         bufs = getattr(self._scratch, "bufs", None)
-        if bufs is None or bufs[0].size != n:
-            bufs = (np.empty(n), np.empty(n), np.empty(n, np.int64), np.empty(_TOP, np.int64),
-                    np.empty(n, np.int32), np.empty(n, np.int32), np.empty(n, np.float32))
+        if bufs is None or bufs.key.size != n:
+            bufs = _Scratch(
+                key=np.empty(n), lb=np.empty(n), ties=np.empty(n, np.int64),
+                top=np.empty(_TOP, np.int64), lb1=np.empty(n, np.int32),
+                lb2=np.empty(n, np.int32), hb=np.empty(n, np.float32))
             self._scratch.bufs = bufs
         return bufs
 
@@ -250,8 +255,10 @@ class _ExactIndex:
         ascending.
     hlac : ndarray of uint8, shape (U', 1600)
     sil_bits, ridge_bits : ndarray of uint64, shape (U', 64)
+    source_area : ndarray of float64, shape (U',)
+        Ridge areas of the rows of the three arrays above.
     source : ndarray of int64, shape (U,)
-        Row of the three arrays above holding the row at ``u``: a compact copy in
+        Row of the four arrays above holding the row at ``u``: a compact copy in
         layout order (``source = arange(U)``) when it takes at most
         :data:`_COMPACT_MAX_BYTES`, else the database's own rows.
     sil_coarse_t, ridge_coarse_t : ndarray of uint64, shape (4, U)
@@ -265,6 +272,9 @@ class _ExactIndex:
         ``basis @ (h_i - mean)``, column-major.
     resid : ndarray of float32, shape (U,)
         ``|h_i - mean - basis.T @ proj_i|``.
+    arrays : tuple
+        The fields of an :class:`_IndexArrays` (the arrays above the
+        compiled search reads), in order, for :func:`_search_kernel`.
     """
 
     rows: np.ndarray
@@ -275,6 +285,7 @@ class _ExactIndex:
     hlac: np.ndarray
     sil_bits: np.ndarray
     ridge_bits: np.ndarray
+    source_area: np.ndarray
     source: np.ndarray
     sil_coarse_t: np.ndarray
     ridge_coarse_t: np.ndarray
@@ -283,6 +294,11 @@ class _ExactIndex:
     basis: np.ndarray
     proj_t: np.ndarray
     resid: np.ndarray
+    arrays: tuple = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "arrays", tuple(_IndexArrays(
+            **{name: getattr(self, name) for name in _IndexArrays._fields})))
 
     @classmethod
     def build(cls, tables: SearchTables) -> _ExactIndex:
@@ -302,19 +318,21 @@ class _ExactIndex:
         sizes = np.bincount(group, minlength=rows.size)
         compact = rows.size * (HLAC_SIZE + 128 * 8) <= _COMPACT_MAX_BYTES
         source = np.arange(rows.size) if compact else rows  # else read the database's rows
+        ridge_area = np.ascontiguousarray(tables.ridge_area[rows])
         out = cls(rows=rows, group=group, sizes=sizes, members=np.argsort(group, kind="stable"),
                   starts=np.concatenate([[0], np.cumsum(sizes)]),
                   hlac=tables.hlac[rows] if compact else tables.hlac,
                   sil_bits=tables.sil_bits[rows] if compact else tables.sil_bits,
                   ridge_bits=tables.ridge_bits[rows] if compact else tables.ridge_bits,
-                  source=source,
+                  source_area=ridge_area if compact else tables.ridge_area, source=source,
                   sil_coarse_t=_coarse_presence_rows(tables.sil_bits, rows).T.copy(),
                   ridge_coarse_t=_coarse_presence_rows(tables.ridge_bits, rows).T.copy(),
-                  ridge_area=np.ascontiguousarray(tables.ridge_area[rows]), mean=mean,
+                  ridge_area=ridge_area, mean=mean,
                   basis=basis, proj_t=np.ascontiguousarray(proj.T, dtype=np.float32),
                   resid=resid.astype(np.float32))
         for f in fields(out):
-            getattr(out, f.name).setflags(write=False)
+            if f.name != "arrays":
+                getattr(out, f.name).setflags(write=False)
         return out
 
     def entries_of(self, rows: np.ndarray) -> np.ndarray:
@@ -418,25 +436,6 @@ def _project_rows(hlac, rows, mean, basis, chunk: int = 8192):
     return proj, resid
 
 
-@njit(cache=True, nogil=True)
-def _hlac_distance(q_hlac, row, bound):
-    """Squared distance of two (1600,) uint8 vectors, abandoned once it exceeds `bound`.
-
-    Returns the partial sum then (a value above `bound`).  Blocks of a fixed
-    200 dims (int32 sums) keep the inner loop vectorized.
-    """
-    d = 0
-    for start in range(0, HLAC_SIZE, _BLOCK):
-        acc = np.int32(0)
-        for k in range(_BLOCK):
-            diff = np.int32(q_hlac[start + k]) - np.int32(row[start + k])
-            acc += diff * diff
-        d += acc
-        if d > bound:
-            return d
-    return d
-
-
 @njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
 def _query_projection(q_hlac, mean, basis):
     """``(p, |r|)`` of the input's HLAC vector (see :class:`_ExactIndex`)."""
@@ -498,46 +497,133 @@ def _count_planes(bits):
     return planes
 
 
+class _QueryBounds(NamedTuple):
+    """The input's side of the lower bounds of :func:`_bounds`.
+
+    Attributes
+    ----------
+    planes : ndarray of uint64, shape (5, 4)
+        Bit planes of the input's ridge pixels per 4x4 block (:func:`_count_planes`).
+    sil_coarse : ndarray of uint64, shape (4,)
+        Blocks holding an input silhouette pixel.
+    proj : ndarray of float64, shape (k,)
+        ``p``, the input's HLAC vector on the basis.
+    resid : float
+        ``|r|``, the length of the rest.
+    """
+
+    planes: np.ndarray
+    sil_coarse: np.ndarray
+    proj: np.ndarray
+    resid: float
+
+
+class _IndexArrays(NamedTuple):
+    """The arrays of an :class:`_ExactIndex` that the compiled search reads (same names)."""
+
+    hlac: np.ndarray
+    sil_bits: np.ndarray
+    ridge_bits: np.ndarray
+    source_area: np.ndarray
+    source: np.ndarray
+    rows: np.ndarray
+    sizes: np.ndarray
+    sil_coarse_t: np.ndarray
+    ridge_coarse_t: np.ndarray
+    ridge_area: np.ndarray
+    mean: np.ndarray
+    basis: np.ndarray
+    proj_t: np.ndarray
+    resid: np.ndarray
+
+
+class _Scratch(NamedTuple):
+    """Scratch arrays of one search (:meth:`SearchTables._buffers`), U distinct rows.
+
+    Attributes
+    ----------
+    key, lb : ndarray of float64, shape (U,)
+        Penalty bound and lower bound of ``E`` per row (:func:`_bounds`).
+    ties : ndarray of int64, shape (U,)
+        Rows tied with the best.
+    top : ndarray of int64, shape (8,)
+        Rows with the smallest bounds.
+    lb1, lb2 : ndarray of int32, shape (U,)
+        Lower bounds of P1 and P2.
+    hb : ndarray of float32, shape (U,)
+        Lower bound of the squared HLAC distance before the margin.
+    """
+
+    key: np.ndarray
+    lb: np.ndarray
+    ties: np.ndarray
+    top: np.ndarray
+    lb1: np.ndarray
+    lb2: np.ndarray
+    hb: np.ndarray
+
+
 @njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
-def _bounds(q_planes, q_sil_coarse, q_proj, q_resid, sil_coarse_t, ridge_coarse_t, ridge_area,
-            proj_t, resid, th1, c1, c2, c3, c4, prune, cap, key, lb, top, lb1, lb2, hb):
+def _bounds(qb, ix, k, cap, s):
     """Pass over the distinct rows: bounds, and the rows with the smallest ones.
 
+    Parameters
+    ----------
+    qb : _QueryBounds
+    ix : _IndexArrays
+    k : Constants
+    cap : float
+        A known ``E``: rows whose bound exceeds it are left out.
+    s : _Scratch
+        Receives ``key``, ``lb`` and ``top``; ``lb1``, ``lb2``, ``hb`` are
+        working space.
+
+    Returns
+    -------
+    int
+        Rows in ``s.top``.
+
+    Notes
+    -----
     ``key[u] = C3 lb1 + C4 lb2`` (-1 when a penalty bound already fails a
     pruning stage); ``lb[u] = key[u] + HLAC bound``, a lower bound of E (inf
-    when the row fails pruning or the bound exceeds `cap`, a known E).
-    `top` receives the rows with the smallest ``lb``, ascending; returns how
-    many.  The tables are column-major
-    (word or dimension first) so that the loops over rows vectorize;
-    `lb1`, `lb2` (int32) and `hb` (float32) are scratch arrays.
+    when the row fails pruning or the bound exceeds `cap`).  ``top``
+    receives the rows with the smallest ``lb``, ascending.  The tables are
+    column-major (word or dimension first) so that the loops over rows
+    vectorize.
     """
+    sil_coarse_t, ridge_coarse_t, proj_t = ix.sil_coarse_t, ix.ridge_coarse_t, ix.proj_t
+    key, lb, top, lb1, lb2, hb = s.key, s.lb, s.top, s.lb1, s.lb2, s.hb
     n = sil_coarse_t.shape[1]
     lb1[:] = 0
     lb2[:] = 0
     hb[:] = 0.0
-    for k in range(q_planes.shape[0]):
+    for plane in range(qb.planes.shape[0]):
         for w in range(4):
-            qw = q_planes[k, w]
+            qw = qb.planes[plane, w]
             if qw == 0:
                 continue
             col = sil_coarse_t[w]
             for u in range(n):
-                lb1[u] += np.int32(popcount64(qw & ~col[u])) << k
+                lb1[u] += np.int32(popcount64(qw & ~col[u])) << plane
     for w in range(4):
-        qw = ~q_sil_coarse[w]
+        qw = ~qb.sil_coarse[w]
         col = ridge_coarse_t[w]
         for u in range(n):
             lb2[u] += np.int32(popcount64(col[u] & qw))
     for j in range(proj_t.shape[0]):
-        qj = np.float32(q_proj[j])
+        qj = np.float32(qb.proj[j])
         col32 = proj_t[j]
         for u in range(n):
             t = col32[u] - qj
             hb[u] += t * t
-    qr = np.float32(q_resid)
+    qr = np.float32(qb.resid)
+    resid = ix.resid
     for u in range(n):
         t = resid[u] - qr
         hb[u] += t * t
+    ridge_area = ix.ridge_area
+    th1, c1, c2, c3, c4, prune = k.th1, k.c1, k.c2, k.c3, k.c4, k.prune
     ntop = 0
     ntop_max = top.shape[0]
     for u in range(n):
@@ -567,58 +653,52 @@ def _bounds(q_planes, q_sil_coarse, q_proj, q_resid, sil_coarse_t, ridge_coarse_
 
 
 @njit(cache=True, nogil=True)
-def _score(i, q_hlac, q_sil, q_ridge, hlac, sil_bits, ridge_bits, a, hl_bound, th1, c1, c2, c3,
-           c4, prune, best_e):
-    """Row i of the tables (ridge area `a`, HLAC lower bound `hl_bound`) against the
-    best E so far.
+def _best(query, qb, ix, constants, seed, s):
+    """Best distinct row over the rows that pass pruning (all when ``prune`` is False).
 
-    Returns (status, E, d, p1, p2).  Status 0: fails pruning; 1: passes
-    both stages, E exact or, when it cannot beat `best_e`, inf; 2: passes
-    stage 1 but cannot beat `best_e`, abandoned before stage 2 was decided.
+    Parameters
+    ----------
+    query : tuple
+        The fields of a :class:`Query`, in order.
+    qb : _QueryBounds
+    ix : _IndexArrays
+    constants : tuple
+        The fields of a :class:`Constants`, in order.
+    seed : int
+        Position of a row to score first, or -1.
+    s : _Scratch
+
+    Returns
+    -------
+    tuple
+        (row, E, d, p1, p2, scored survivors, number of tied rows); row -1
+        when none passes.  ``s.ties[:n]`` receives the rows whose E equals
+        the best (the best row among them), in no particular order.
+
+    Notes
+    -----
+    The groups that :func:`score` reads in the loop are named here, in this
+    function: named tuples received as arguments cost a reference count
+    update per field per call in the loop (measured: a quarter slower).
     """
-    p1 = count_outside(q_ridge, sil_bits[i])  # in full: 12 ns, less than checking a limit
-    if prune and p1 > th1:
-        return 0, 0.0, 0, p1, 0
-    pen = c3 * p1
-    if pen + hl_bound > best_e:
-        return 2, np.inf, 0, p1, 0
-    p2 = count_outside(ridge_bits[i], q_sil)
-    if prune and p2 > c1 * a * a + c2 * a:
-        return 0, 0.0, 0, p1, p2
-    pen += c4 * p2
-    if pen + hl_bound > best_e:
-        return 1, np.inf, 0, p1, p2
-    d = _hlac_distance(q_hlac, hlac[i], best_e - pen)
-    return 1, d + pen, d, p1, p2
-
-
-@njit(cache=True, nogil=True)
-def _best(q_hlac, q_sil, q_ridge, q_planes, q_sil_coarse, q_proj, q_resid, hlac, sil_bits,
-          ridge_bits, source, rows, sizes, sil_coarse_t, ridge_coarse_t, ridge_area, proj_t,
-          resid, th1, c1, c2, c3, c4, prune, seed, key, lb, top, ties, lb1, lb2, hb):
-    """Best distinct row over the rows that pass pruning (all when `prune` is False).
-
-    Returns (row, E, d, p1, p2, scored survivors, number of tied rows); row
-    -1 when none passes.  ``ties[:n]`` receives the rows whose E equals the
-    best (the best row among them), in no particular order.
-    """
+    q = Query(*query)
+    k = Constants(*constants)
+    table = Rows(ix.hlac, ix.sil_bits, ix.ridge_bits, ix.source_area)
+    rows, sizes, source, lb, key, ties = ix.rows, ix.sizes, ix.source, s.lb, s.key, s.ties
     best_u, best_e, best_d, best_p1, best_p2 = -1, np.inf, 0, 0, 0
     survivors = 0
     nties = 0
     if seed >= 0:
-        st, e, d, p1, p2 = _score(source[seed], q_hlac, q_sil, q_ridge, hlac, sil_bits,
-                                  ridge_bits, ridge_area[seed], 0.0, th1, c1, c2, c3, c4, prune,
-                                  np.inf)
-        if st == 1:
+        st, e, d, p1, p2 = score(source[seed], 0.0, np.inf, q, table, k)
+        if st == SURVIVOR:
             best_u, best_e, best_d, best_p1, best_p2 = seed, e, d, p1, p2
             survivors += sizes[seed]
             ties[0] = seed
             nties = 1
-    ntop = _bounds(q_planes, q_sil_coarse, q_proj, q_resid, sil_coarse_t, ridge_coarse_t,
-                   ridge_area, proj_t, resid, th1, c1, c2, c3, c4, prune, best_e, key, lb, top,
-                   lb1, lb2, hb)
+    ntop = _bounds(qb, ix, k, best_e, s)
     if seed >= 0:
         lb[seed] = np.inf  # scored
+    top = s.top
     for t in range(ntop + rows.shape[0]):
         # the rows with the smallest bounds first, then every row that may still win
         u = top[t] if t < ntop else t - ntop
@@ -626,16 +706,17 @@ def _best(q_hlac, q_sil, q_ridge, q_planes, q_sil_coarse, q_proj, q_resid, hlac,
             continue
         hl_bound = lb[u] - key[u]
         lb[u] = np.inf  # scored
-        st, e, d, p1, p2 = _score(source[u], q_hlac, q_sil, q_ridge, hlac, sil_bits, ridge_bits,
-                                  ridge_area[u], hl_bound, th1, c1, c2, c3, c4, prune, best_e)
-        if st != 1:
+        st, e, d, p1, p2 = score(source[u], hl_bound, best_e, q, table, k)
+        if st < SURVIVOR_ABOVE_BEST:
             continue
         survivors += sizes[u]
+        if st != SURVIVOR:
+            continue
         if e < best_e:
             best_u, best_e, best_d, best_p1, best_p2 = u, e, d, p1, p2
             ties[0] = u
             nties = 1
-        elif e == best_e:  # E is exact here: early exits only drop rows above best_e
+        else:  # e == best_e, exact: early exits only drop rows above best_e
             ties[nties] = u
             nties += 1
             if rows[u] < rows[best_u]:  # ties: the lowest entry index
@@ -644,22 +725,48 @@ def _best(q_hlac, q_sil, q_ridge, q_planes, q_sil_coarse, q_proj, q_resid, hlac,
 
 
 @njit(cache=True, nogil=True)
-def _search_kernel(q_hlac, q_sil, q_ridge, q_area, hlac, sil_bits, ridge_bits, source, rows,
-                   sizes, sil_coarse_t, ridge_coarse_t, ridge_area, mean, basis, proj_t, resid, c,
-                   c1, c2, c3, c4, prune, seed, key, lb, top, ties, lb1, lb2, hb):
-    """Best entry; returns (index, E, d, p1, p2, survivors, fallback, tied rows)."""
-    q_planes = _count_planes(q_ridge)
-    q_sil_coarse = _pack_blocks(_block_counts(q_sil) > 0)
-    q_proj, q_resid = _query_projection(q_hlac, mean, basis)
-    args = (q_hlac, q_sil, q_ridge, q_planes, q_sil_coarse, q_proj, q_resid, hlac, sil_bits,
-            ridge_bits, source, rows, sizes, sil_coarse_t, ridge_coarse_t, ridge_area, proj_t,
-            resid)
-    scratch = (key, lb, top, ties, lb1, lb2, hb)
-    u, e, d, p1, p2, surv, nt = _best(*args, c * q_area, c1, c2, c3, c4, prune, seed, *scratch)
+def _search_kernel(query, q_area, index, constants, seed, scratch):
+    """Best entry of the exact search.
+
+    Parameters
+    ----------
+    query : tuple
+        The fields of a :class:`Query`, in order.
+    q_area : float
+        ``A_input``, pixels.
+    index : tuple
+        The fields of an :class:`_IndexArrays`, in order
+        (:attr:`_ExactIndex.arrays`).
+    constants : tuple
+        ``(c, c1, c2, c3, c4, prune)`` of :class:`SearchOptions`.
+    seed : int
+        Position of a row to score first, or -1.
+    scratch : tuple
+        The fields of a :class:`_Scratch`, in order.
+
+    Returns
+    -------
+    tuple
+        (entry, E, d, p1, p2, survivors, fallback, tied rows).
+
+    Notes
+    -----
+    The groups arrive as plain tuples (cheap to dispatch from Python) and
+    are named here.
+    """
+    q = Query(*query)
+    ix = _IndexArrays(*index)
+    s = _Scratch(*scratch)
+    c, c1, c2, c3, c4, prune = constants
+    q_sil_coarse = _pack_blocks(_block_counts(q.sil_bits) > 0)
+    q_proj, q_resid = _query_projection(q.hlac, ix.mean, ix.basis)
+    qb = _QueryBounds(_count_planes(q.ridge_bits), q_sil_coarse, q_proj, q_resid)
+    u, e, d, p1, p2, surv, nt = _best(query, qb, ix, (c * q_area, c1, c2, c3, c4, prune), seed,
+                                      s)
     if u >= 0:
-        return rows[u], e, d, p1, p2, surv, False, nt
-    u, e, d, p1, p2, surv, nt = _best(*args, 0.0, c1, c2, c3, c4, False, seed, *scratch)
-    return rows[u], e, d, p1, p2, 0, True, nt
+        return ix.rows[u], e, d, p1, p2, surv, False, nt
+    u, e, d, p1, p2, surv, nt = _best(query, qb, ix, (0.0, c1, c2, c3, c4, False), seed, s)
+    return ix.rows[u], e, d, p1, p2, 0, True, nt
 
 
 def _query(features) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
@@ -702,16 +809,13 @@ def search(features, tables: SearchTables, *, options: SearchOptions | None = No
         raise InvalidInputError(f"seed must be an entry index in [0, {n}), got {seed!r}")
     h, sb, rb, area = _query(features)
     ix = tables.prepare()
-    u = ix.rows.size
-    key, lb, ties, top, lb1, lb2, hb = tables._buffers(u)
+    scratch = tables._buffers(ix.rows.size)
     i, e, d, p1, p2, surv, fallback, nt = _search_kernel(
-        h, sb, rb, area, ix.hlac, ix.sil_bits, ix.ridge_bits, ix.source, ix.rows, ix.sizes,
-        ix.sil_coarse_t, ix.ridge_coarse_t, ix.ridge_area, ix.mean, ix.basis, ix.proj_t, ix.resid,
-        opts.c, opts.c1, opts.c2, opts.c3, opts.c4, opts.prune,
-        -1 if s < 0 else int(ix.group[s]), key, lb, top, ties, lb1, lb2, hb)
+        (h, sb, rb), area, ix.arrays, (opts.c, opts.c1, opts.c2, opts.c3, opts.c4, opts.prune),
+        -1 if s < 0 else int(ix.group[s]), tuple(scratch))
     return SearchResult(index=int(i), error=float(e), hlac_distance=int(d), p1=int(p1),
                         p2=int(p2), survivors=int(surv), low_confidence=bool(fallback),
-                        tied=ix.entries_of(ties[:nt]))
+                        tied=ix.entries_of(scratch.ties[:nt]))
 
 
 def search_reference(features, tables: SearchTables, *,

@@ -9,7 +9,13 @@ import pytest
 
 import handsynth
 from handsynth.errors import DatabaseError, InvalidInputError
-from handsynth.estimate import PoseEstimator, PoseLookup, SelectionOptions, select_shape
+from handsynth.estimate import (
+    PoseEstimator,
+    PoseLookup,
+    SearchOptions,
+    SelectionOptions,
+    select_shape,
+)
 from handsynth.models import JOINT_NAMES, HandShape, model_measurements
 from handsynth.render import CameraMount, SilhouetteRenderer
 
@@ -163,3 +169,70 @@ def test_personal_database_is_built_once_for_the_hands_own_shape(tmp_path):
                           ({"shape": own, "build": {"count": 5}}, "build must be BuildOptions")):
         with pytest.raises(InvalidInputError, match=words):
             PoseLookup.personal(tmp_path, **kwargs)
+
+
+def _open_frame() -> np.ndarray:
+    r = SilhouetteRenderer(width_px=RENDER_SIZE[0], height_px=RENDER_SIZE[1])
+    return r.mask(np.zeros(len(JOINT_NAMES)))
+
+
+def test_defaults_are_the_natural_choice_of_each_mode(db_folder):
+    from handsynth.estimate import ApproximateOptions
+
+    exact = PoseLookup.open(db_folder, shape=HandShape())
+    assert (exact.ties, exact.temporal) == ("mean", True)
+    approx = PoseLookup.open(db_folder, shape=HandShape(),
+                             approximate=ApproximateOptions(nlist=8, nprobe=8, dims=16))
+    assert (approx.ties, approx.temporal) == ("first", True)
+    calibrated = exact.calibrated(_open_frame())
+    assert (calibrated.ties, calibrated.temporal) == ("mean", False)
+    # temporal=False is what a calibrated lookup does anyway: accepted
+    quiet = PoseLookup.open(db_folder, shape=HandShape(), temporal=False, ties="first")
+    assert quiet.calibrated(_open_frame()).ties == "first"
+
+
+@pytest.mark.parametrize("approximate", [True, "options"])
+def test_ties_mean_with_the_approximate_index_is_refused(db_folder, approximate):
+    from handsynth.estimate import ApproximateOptions
+
+    if approximate == "options":
+        approximate = ApproximateOptions(nlist=8, nprobe=8, dims=16)
+    before = sorted(p.name for p in db_folder.iterdir())
+    with pytest.raises(InvalidInputError,
+                       match=r"ties='mean' cannot be honoured by the approximate index.*"
+                             r"pass ties='first'"):
+        PoseLookup.open(db_folder, shape=HandShape(), ties="mean", approximate=approximate)
+    assert sorted(p.name for p in db_folder.iterdir()) == before  # refused before building
+
+
+@pytest.mark.parametrize("kwargs, words", [
+    ({"options": SearchOptions(c=0.1)},
+     r"options=SearchOptions\(c=0.1, .*\) cannot be honoured by a calibrated lookup"),
+    ({"options": SearchOptions()}, r"options=SearchOptions\(.*\) cannot be honoured"),
+    ({"temporal": True}, r"temporal=True cannot be honoured by a calibrated lookup.*"
+                         r"pass temporal=False"),
+])
+def test_calibrating_a_lookup_with_search_options_or_a_seed_is_refused(db_folder, kwargs, words):
+    lookup = PoseLookup.open(db_folder, shape=HandShape(), **kwargs)
+    with pytest.raises(InvalidInputError, match=words):
+        lookup.calibrated(_open_frame())
+    assert lookup.calibration is None
+
+
+@pytest.mark.parametrize("kwargs, words", [
+    ({"options": SearchOptions(c4=10.0)}, r"options=SearchOptions\(.*c4=10.0.*\) cannot be"),
+    ({"temporal": True}, r"temporal=True cannot be honoured by a calibrated lookup"),
+    ({"approximate": True}, r"needs the exact search, got approximate=True"),
+])
+def test_from_open_frame_refuses_what_it_cannot_honour_before_building(tmp_path, kwargs, words):
+    with pytest.raises(InvalidInputError, match=words):
+        PoseLookup.from_open_frame(tmp_path / "dbs", _open_frame(), shapes=[HandShape()],
+                                   **kwargs)
+    assert not (tmp_path / "dbs").exists()  # nothing was built
+
+
+def test_mode_arguments_are_checked(small_rows):
+    with pytest.raises(InvalidInputError, match=r"temporal must be True, False or None, got 'y"):
+        PoseLookup.from_rows(small_rows, temporal="yes")
+    with pytest.raises(InvalidInputError, match=r"ties must be 'mean', 'first' or None"):
+        PoseLookup.from_rows(small_rows, ties="last")

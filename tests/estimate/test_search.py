@@ -195,7 +195,14 @@ def test_near_ties_give_the_reference_answer(small_rows, query_rows):
 
 @pytest.mark.parametrize("kind", ["rendered", "uniform", "extreme"])
 def test_hlac_lower_bound_never_exceeds_the_distance(small_rows, kind):
-    from handsynth.estimate._search import _bounds, _query_projection
+    from handsynth.estimate._score import Constants
+    from handsynth.estimate._search import (
+        _bounds,
+        _IndexArrays,
+        _query_projection,
+        _QueryBounds,
+        _Scratch,
+    )
 
     rng = np.random.default_rng(11)
     if kind == "rendered":
@@ -211,13 +218,16 @@ def test_hlac_lower_bound_never_exceeds_the_distance(small_rows, kind):
     queries = np.vstack([hl[:20], rng.integers(0, 256, (20, 1600), dtype=np.uint8),
                          np.full((1, 1600), 255, np.uint8), np.zeros((1, 1600), np.uint8)])
     u = ix.rows.size
-    key, lb, top = np.empty(u), np.empty(u), np.empty(8, np.int64)
-    zero4 = np.zeros(4, np.uint64)
+    s = _Scratch(key=np.empty(u), lb=np.empty(u), ties=np.empty(u, np.int64),
+                 top=np.empty(8, np.int64), lb1=np.empty(u, np.int32), lb2=np.empty(u, np.int32),
+                 hb=np.empty(u, np.float32))
+    no_penalty = Constants(th1=0.0, c1=0.0, c2=0.0, c3=0.0, c4=0.0, prune=False)
     for q in queries:
         qp, qr = _query_projection(q, ix.mean, ix.basis)
-        _bounds(np.zeros((5, 4), np.uint64), zero4, qp, qr, ix.sil_coarse_t, ix.ridge_coarse_t,
-                ix.ridge_area, ix.proj_t, ix.resid, 0.0, 0.0, 0.0, 0.0, 0.0, False, np.inf, key,
-                lb, top, np.empty(u, np.int32), np.empty(u, np.int32), np.empty(u, np.float32))
+        qb = _QueryBounds(planes=np.zeros((5, 4), np.uint64), sil_coarse=np.zeros(4, np.uint64),
+                          proj=qp, resid=qr)
+        _bounds(qb, _IndexArrays(*ix.arrays), no_penalty, np.inf, s)
+        key, lb = s.key, s.lb
         d = ((hl[ix.rows].astype(np.int64) - q.astype(np.int64)) ** 2).sum(axis=1)
         assert np.all(key == 0.0) and np.all(lb <= d)
         if kind == "rendered":  # and it is tight enough to prune: most rows above half
