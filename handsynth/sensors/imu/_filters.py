@@ -269,22 +269,31 @@ class MahonyEstimator(_AhrsBase):
 
 @dataclass(frozen=True)
 class AhrsEKFEstimator(_AhrsBase):
-    """The ``ahrs`` package's quaternion EKF (ENU frame, local field as reference)."""
+    """The ``ahrs`` package's quaternion EKF (default noises).
+
+    Run in its NED frame, which expects the accelerometer as the gravity
+    direction (minus the specific force) and the local dip angle; its output
+    is turned into our frame by 180 deg about x.  (Its ENU mode drifted by
+    tens of degrees on static noisy data in our checks.)
+    """
 
     name: str = "ahrs_ekf"
 
     def _filter(self, gyr, acc, mag, rate, q0):
         from ahrs.filters import EKF
 
-        n0 = max(1, int(self.static.static_s * rate))
         from ._quat import qrot
 
+        n0 = max(1, int(self.static.static_s * rate))
         m_world = qrot(q0, mag[:n0].mean(axis=0))
         dip = float(np.degrees(np.arctan2(-m_world[2], np.hypot(m_world[0], m_world[1]))))
-        q0_enu = qmul(np.array([_Q_NWU_FROM_ENU[0], 0, 0, -_Q_NWU_FROM_ENU[3]]), q0)
-        q = EKF(gyr=gyr, acc=acc, mag=mag, frequency=rate, frame="ENU", magnetic_ref=dip,
-                q0=q0_enu).Q
-        return qmul(_Q_NWU_FROM_ENU, q)
+        q0_ned = qmul(_Q_X180, q0)
+        q = EKF(gyr=gyr, acc=-acc, mag=mag, frequency=rate, frame="NED", magnetic_ref=dip,
+                q0=q0_ned).Q
+        return qmul(_Q_X180, q)
+
+
+_Q_X180 = np.array([0.0, 1.0, 0.0, 0.0])
 
 
 def _check_rate(rate_hz):
