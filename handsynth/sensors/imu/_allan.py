@@ -5,9 +5,10 @@ Allan variance (seed 003 eqs. 4.1-4.3, the overlapping estimator of IEEE Std
 
     sigma^2(tau) = 1 / (2 (N - 2m)) sum_k (wbar_{k+m}(tau) - wbar_k(tau))^2,
 
-computed from the integrated signal theta (N + 1 values, theta_0 = 0) so that
-wbar_k = (theta_{k+m} - theta_k) / tau; the sum has N + 1 - 2m terms and is
-divided by that count (eq. 4.3 counts N - 2m for N phase values).  Noise coefficients: eq. 4.4, sigma^2 = Q^2/tau + K^2 tau / 3,
+computed from the integrated signal theta (N + 1 values, theta_0 = 0) so
+that wbar_k = (theta_{k+m} - theta_k) / tau; the sum has N + 1 - 2m terms
+and is divided by that count (eq. 4.3 counts N - 2m for N phase values).
+Noise coefficients: eq. 4.4, sigma^2 = Q^2/tau + K^2 tau / 3,
 extended by the flat bias-instability term (2 ln 2 / pi) B^2, fitted with
 non-negative least squares in relative error.  Q is the angle (velocity)
 random walk, K the rate random walk.

@@ -54,7 +54,7 @@ def azimuth_correction(rec: ImuRecording, static: StaticStart = StaticStart()) -
         If the common rotation is too slow (< 0.5 rad/s) or about the vertical
         (then g x w_max vanishes and fixes no heading).
     """
-    if static.align_start_s is None:
+    if static.align_start_s is None or static.align_end_s is None:
         return np.zeros(len(rec.sensors))
     n0 = _n(rec, static.static_s)
     a, b = _n(rec, static.align_start_s), _n(rec, static.align_end_s)

@@ -224,6 +224,7 @@ class VQFEstimator:
 @dataclass(frozen=True)
 class _AhrsBase:
     static: StaticStart = field(default_factory=StaticStart)
+    name: str = "ahrs"
 
     def _filter(self, gyr, acc, mag, rate, q0):  # pragma: no cover - overridden
         raise NotImplementedError

@@ -155,9 +155,23 @@ def _rotvec_quat(rv_deg) -> np.ndarray:
     return np.r_[np.cos(ang / 2), np.sin(ang / 2) * ax]
 
 
+def _find(el: ET.Element, path: str) -> ET.Element:
+    found = el.find(path)
+    if found is None:
+        raise InvalidInputError(f"the hand MJCF has no element {path!r}")
+    return found
+
+
+def _attr(el: ET.Element, name: str) -> str:
+    value = el.get(name)
+    if value is None:
+        raise InvalidInputError(f"the hand MJCF element {el.tag!r} has no attribute {name!r}")
+    return value
+
+
 def _mesh_top(root: ET.Element, mesh: str) -> float:
-    el = root.find(f"./asset/mesh[@name='{mesh}']")
-    v = np.array(el.get("vertex").split(), dtype=float).reshape(-1, 3)
+    el = _find(root, f"./asset/mesh[@name='{mesh}']")
+    v = np.array(_attr(el, "vertex").split(), dtype=float).reshape(-1, 3)
     return float(v[:, 2].max())
 
 
@@ -187,11 +201,11 @@ def imu_hand_mjcf(shape: HandShape | None = None, *, side: str = "right",
     la = placement.forearm_length_mm * 1e-3
     h = placement.height_mm * 1e-3
 
-    wb = root.find("worldbody")
-    stub = wb.find("./body[@name='forearm']")
+    wb = _find(root, "worldbody")
+    stub = _find(wb, "./body[@name='forearm']")
     fa_top = _mesh_top(root, "forearm")
     wb.remove(stub)
-    frame = wb.find("frame")
+    frame = _find(wb, "frame")
     wb.remove(frame)
     kf = root.find("keyframe")
     if kf is not None:
@@ -221,10 +235,10 @@ def imu_hand_mjcf(shape: HandShape | None = None, *, side: str = "right",
     hinge(wrist, "wrist_flex", (-1, 0, 0))
     hinge(wrist, "wrist_dev", (0, 0, sgn))
     wrist.append(frame)
-    palm = frame.find("body")
+    palm = _find(frame, "body")
 
     # two-part hand (Type 3): ring and little on a CM hinge near the wrist
-    mcp = {f: np.array(palm.find(f"./body[@name='{f}_proximal']").get("pos").split(), float)
+    mcp = {f: np.array(_attr(_find(palm, f"./body[@name='{f}_proximal']"), "pos").split(), float)
            for f in FINGERS[1:]}
     cm_pos = np.array([0.5 * (mcp["ring"][0] + mcp["little"][0]), 0.2 * mcp["middle"][1], 0.0])
     ulnar = ET.Element("body", name="palm_ulnar", pos=_fmt(cm_pos))
@@ -232,13 +246,13 @@ def imu_hand_mjcf(shape: HandShape | None = None, *, side: str = "right",
     axis = np.array([-1.0, 0.35 * sgn, 0.0])
     hinge(ulnar, "ulnar_cm_flex", axis / np.linalg.norm(axis))
     for f in ("ring", "little"):
-        b = palm.find(f"./body[@name='{f}_proximal']")
+        b = _find(palm, f"./body[@name='{f}_proximal']")
         palm.remove(b)
         b.set("pos", _fmt(mcp[f] - cm_pos))
         ulnar.append(b)
     palm.append(ulnar)
 
-    bodies = {b.get("name"): b for b in root.iter("body")}
+    bodies = {_attr(b, "name"): b for b in root.iter("body")}
     palm_top = _mesh_top(root, "palm")
     sites: dict[str, np.ndarray] = {
         # plate on the distal forearm (Fig. 2.15): two across, one proximal
@@ -256,15 +270,15 @@ def imu_hand_mjcf(shape: HandShape | None = None, *, side: str = "right",
             b = bodies[seg]
             kids = b.findall("body")
             if kids:
-                length = float(kids[0].get("pos").split()[1])
+                length = float(_attr(kids[0], "pos").split()[1])
             else:
-                length = float(b.findall("site")[-1].get("pos").split()[1])
+                length = float(_attr(b.findall("site")[-1], "pos").split()[1])
             sites[seg] = np.array([0.0, placement.along * length, _mesh_top(root, seg) + h])
     sensors = ET.SubElement(root, "sensor")
     for name in SENSOR_NAMES:
         pos = sites[name] + 1e-3 * np.asarray(placement.offsets_mm.get(name, (0, 0, 0)), float)
         q = _rotvec_quat(placement.tilts_deg.get(name, (0, 0, 0)))
-        body = bodies.get(SENSOR_BODIES[name]) if SENSOR_BODIES[name] != "forearm" else fore
+        body = bodies[SENSOR_BODIES[name]] if SENSOR_BODIES[name] != "forearm" else fore
         ET.SubElement(body, "site", name=f"imu_{name}", pos=_fmt(pos), quat=_fmt(q),
                       size="0.004", group="4")
         for kind, tag in (("acc", "accelerometer"), ("gyr", "gyro"), ("mag", "magnetometer")):

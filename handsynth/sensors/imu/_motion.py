@@ -211,7 +211,8 @@ def concat_motions(motions, *, label: str = "") -> Motion:
     """Join motions end to end (same rate; each must start where the last ended)."""
     motions = list(motions)
     rate = motions[0].rate_hz
-    segs, off = [], 0
+    segs: list[tuple[str, int, int]] = []
+    off = 0
     for m in motions:
         if m.rate_hz != rate:
             raise InvalidInputError(f"cannot join motions at {rate} Hz and {m.rate_hz} Hz")
@@ -271,7 +272,7 @@ def free_motion(duration_s: float = 30.0, *, rate_hz: float = 100.0, seed: int =
     rest = _full_pose(arm={"elbow_flex": centre["elbow_flex"]})
     q, qd, qdd = _base(t.size, rest)
     start = static_s
-    segs = [("static", 0, int(static_s * rate_hz))]
+    segs: list[tuple[str, int, int]] = [("static", 0, int(static_s * rate_hz))]
     if align_rotation:
         _oscillate(t, q, qd, qdd, "elbow_flex", 25.0, 0.5, static_s, static_s + 2.0, ramp=0.5)
         segs.append(("align", int(static_s * rate_hz), int((static_s + 2) * rate_hz)))
@@ -291,7 +292,7 @@ def free_motion(duration_s: float = 30.0, *, rate_hz: float = 100.0, seed: int =
             _oscillate(t, q, qd, qdd, name, a, f, start + 0.5, t[-1] + 1.0 / rate_hz,
                        ramp=0.8, phase=rng.uniform(0, 2 * np.pi))
     if elbow == "moving":
-        for k, name in enumerate(("elbow_x", "elbow_y", "elbow_z")):
+        for name in ("elbow_x", "elbow_y", "elbow_z"):
             for _ in range(2):
                 f = rng.uniform(0.2, 0.8) * speed
                 _oscillate(t, q, qd, qdd, name, elbow_amp_m * rng.uniform(0.2, 0.5), f,
@@ -354,7 +355,7 @@ def grasp_motion(grasps=("power_sphere", "medium_wrap", "lateral_pinch", "tip_pi
     t = _grid(dur, rate_hz)
     rest = _full_pose(arm={"elbow_flex": 35.0})
     q, qd, qdd = _base(t.size, rest)
-    segs = [("static", 0, int(static_s * rate_hz))]
+    segs: list[tuple[str, int, int]] = [("static", 0, int(static_s * rate_hz))]
     if align_rotation:
         _oscillate(t, q, qd, qdd, "elbow_flex", 25.0, 0.5, static_s, static_s + 2.0, ramp=0.5)
         segs.append(("align", int(static_s * rate_hz), int(lead * rate_hz)))

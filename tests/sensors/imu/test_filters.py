@@ -68,6 +68,9 @@ def test_azimuth_alignment_shrinks_the_spread(free_rec):
 def test_raw_integration_beats_constant_on_moving_segments(free_rec):
     e_raw = angle_deg(RawIntegration().run(free_rec), free_rec.truth.quat)
     e_const = angle_deg(ConstantEstimator().run(free_rec), free_rec.truth.quat)
-    rmse = lambda e: np.sqrt(np.mean(e[:, 400:] ** 2, axis=1))
+
+    def rmse(e):
+        return np.sqrt(np.mean(e[:, 400:] ** 2, axis=1))
+
     assert np.all(rmse(e_raw) < rmse(e_const))
     assert np.median(rmse(e_raw)) < 5.0
