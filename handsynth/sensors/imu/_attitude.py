@@ -63,8 +63,10 @@ def azimuth_correction(rec: ImuRecording, static: StaticStart = StaticStart()) -
                                 "is outside the recording")
     g = rec.acc[:, :n0].mean(axis=1)
     gyr = rec.gyr[:, a:b] - gyro_bias(rec, static)[:, None]
-    k = np.argmax(np.linalg.norm(gyr, axis=-1), axis=1)
-    wmax = gyr[np.arange(len(rec.sensors)), k]
+    # one common instant for every sensor (the fastest on average), so that
+    # all take w_max with the same sign
+    k = int(np.argmax(np.linalg.norm(gyr, axis=-1).mean(axis=0)))
+    wmax = gyr[:, k]
     if np.any(np.linalg.norm(wmax, axis=-1) < 0.5):
         raise EstimationError("the common rotation is slower than 0.5 rad/s; "
                               "cannot align compass azimuths")

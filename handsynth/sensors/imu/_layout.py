@@ -58,4 +58,6 @@ FLEX_JOINT = MappingProxyType({
     "thumb_distal": "thumb_ip_flex",
     **{f"{f}_{s}": f"{f}_{j}_flex" for f in ("index", "middle", "ring", "little")
        for s, j in (("proximal", "mcp"), ("middle", "pip"), ("distal", "dip"))},
+    **{f"{f}_tip": ("thumb_ip_flex" if f == "thumb" else f"{f}_dip_flex")
+       for f in ("thumb", "index", "middle", "ring", "little")},
 })

@@ -86,11 +86,16 @@ SENSOR_NAMES: tuple[str, ...] = (
     "thumb_metacarpal", "thumb_proximal", "thumb_distal",
 )
 
+#: Temporary fingertip sensors of the calibration (seed 003 Table 3.5, "Tip"),
+#: on the distal phalanges, used only to find the distal link vectors.
+TIP_SENSORS: tuple[str, ...] = tuple(f"{f}_tip" for f in FINGERS)
+
 #: Body (rigid segment) each sensor is fixed to.
 SENSOR_BODIES: Mapping[str, str] = MappingProxyType({
     "forearm_1": "forearm", "forearm_2": "forearm", "forearm_3": "forearm",
     "hand_ulnar": "palm_ulnar", "hand_radial": "palm",
     **{b: b for f in FINGERS for b in SEGMENT_BODIES[f]},
+    **{f"{f}_tip": SEGMENT_BODIES[f][-1] for f in FINGERS},
 })
 
 _LIMITS = {
@@ -177,7 +182,8 @@ def _mesh_top(root: ET.Element, mesh: str) -> float:
 
 def imu_hand_mjcf(shape: HandShape | None = None, *, side: str = "right",
                   placement: ImuPlacement | None = None,
-                  field_ut=EARTH_FIELD_UT, elbow_pos_m=(0.0, 0.0, 0.8)) -> str:
+                  field_ut=EARTH_FIELD_UT, elbow_pos_m=(0.0, 0.0, 0.8),
+                  tip_sensors: bool = False) -> str:
     """MJCF of the hand on a kinematic arm with 20 IMU sites and sensors.
 
     Parameters
@@ -189,6 +195,9 @@ def imu_hand_mjcf(shape: HandShape | None = None, *, side: str = "right",
         Earth field in the world frame, microtesla.
     elbow_pos_m : (3,) float, keyword-only
         Elbow joint centre in the world at zero elbow translation, metres.
+    tip_sensors : bool, keyword-only
+        Add the five calibration-only fingertip sensors :data:`TIP_SENSORS`,
+        `height_mm` above each fingertip point (the thesis' "offset").
 
     Returns
     -------
@@ -274,8 +283,10 @@ def imu_hand_mjcf(shape: HandShape | None = None, *, side: str = "right",
             else:
                 length = float(_attr(b.findall("site")[-1], "pos").split()[1])
             sites[seg] = np.array([0.0, placement.along * length, _mesh_top(root, seg) + h])
+            if not kids:
+                sites[f"{f}_tip"] = np.array([0.0, length, h])
     sensors = ET.SubElement(root, "sensor")
-    for name in SENSOR_NAMES:
+    for name in SENSOR_NAMES + (TIP_SENSORS if tip_sensors else ()):
         pos = sites[name] + 1e-3 * np.asarray(placement.offsets_mm.get(name, (0, 0, 0)), float)
         q = _rotvec_quat(placement.tilts_deg.get(name, (0, 0, 0)))
         body = bodies[SENSOR_BODIES[name]] if SENSOR_BODIES[name] != "forearm" else fore
@@ -302,7 +313,7 @@ class ImuHand:
 
     def __init__(self, shape: HandShape | None = None, *, side: str = "right",
                  placement: ImuPlacement | None = None, field_ut=EARTH_FIELD_UT,
-                 elbow_pos_m=(0.0, 0.0, 0.8)) -> None:
+                 elbow_pos_m=(0.0, 0.0, 0.8), tip_sensors: bool = False) -> None:
         import mujoco
 
         self._mj = mujoco
@@ -311,16 +322,18 @@ class ImuHand:
         self.placement = placement or ImuPlacement()
         self.field_ut = np.asarray(field_ut, dtype=float)
         self.model = compile_mjcf(imu_hand_mjcf(self.shape, side=side, placement=self.placement,
-                                                field_ut=field_ut, elbow_pos_m=elbow_pos_m))
+                                                field_ut=field_ut, elbow_pos_m=elbow_pos_m,
+                                                tip_sensors=tip_sensors))
+        self.sensors = SENSOR_NAMES + (TIP_SENSORS if tip_sensors else ())
         self.data = mujoco.MjData(self.model)
         m = self.model
         self.qadr = np.array([m.joint(n).qposadr[0] for n in MODEL_JOINTS], dtype=np.intp)
         self.dadr = np.array([m.joint(n).dofadr[0] for n in MODEL_JOINTS], dtype=np.intp)
         self.hinge = np.array([m.joint(n).type[0] == mujoco.mjtJoint.mjJNT_HINGE
                                for n in MODEL_JOINTS])
-        self.site_ids = np.array([m.site(f"imu_{n}").id for n in SENSOR_NAMES], dtype=np.intp)
+        self.site_ids = np.array([m.site(f"imu_{n}").id for n in self.sensors], dtype=np.intp)
         self.sensor_adr = {
-            (n, k): m.sensor(f"{n}_{k}").adr[0] for n in SENSOR_NAMES for k in ("acc", "gyr", "mag")
+            (n, k): m.sensor(f"{n}_{k}").adr[0] for n in self.sensors for k in ("acc", "gyr", "mag")
         }
         self.body_ids = {n: m.body(n).id for n in
                          ("forearm", "hand_root", "palm", "palm_ulnar",

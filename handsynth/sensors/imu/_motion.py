@@ -161,11 +161,12 @@ _CAL_CENTRE = {"elbow_flex": 30.0, "thumb_cmc_abd": 30.0, "thumb_cmc_flex": 10.0
                   for j, c in (("mcp_flex", 40.0), ("pip_flex", 40.0), ("dip_flex", 35.0))}}
 
 
-def calibration_motion(*, rate_hz: float = 100.0, cycles: float = 4.0, static_s: float = 2.0,
+def calibration_motion(*, rate_hz: float = 100.0, cycles: float = 5.0, static_s: float = 2.0,
                        plan=CALIBRATION_PLAN, rest_pose=None) -> Motion:
     """Static start, then each joint of `plan` rotated alone, the others still.
 
-    Each rotation is ``amp * sin(2 pi f t)`` about a mid-range centre, so that
+    Each rotation starts with 0.5 s still at the rest pose, then is
+    ``amp * sin(2 pi f t)`` about a mid-range centre, so that
     the angular velocity passes zero at the turning points where the angular
     acceleration is largest (the samples eqs. 3.2-3.4 use, Fig. 3.6).
 
@@ -185,17 +186,18 @@ def calibration_motion(*, rate_hz: float = 100.0, cycles: float = 4.0, static_s:
     rest = _full_pose(arm={"elbow_flex": _CAL_CENTRE["elbow_flex"]}) if rest_pose is None \
         else np.asarray(rest_pose, float)
     pieces = [static_motion(static_s, rate_hz=rate_hz, pose=rest)]
+    hold = 0.5  # still at the rest pose at the start of every rotation
     for label, joints, amp, freq in plan:
-        dur = cycles / freq + 1.0
+        dur = hold + cycles / freq + 1.0
         t = _grid(dur, rate_hz)
         q, qd, qdd = _base(t.size, rest)
         for j in joints:
             c = _CAL_CENTRE.get(j, rest[_J[j]])
             # move to the centre and back with min-jerk, oscillate in between
             if c != rest[_J[j]]:
-                _minjerk_add(t, q, qd, qdd, _J[j], c - rest[_J[j]], 0.0, 0.5)
+                _minjerk_add(t, q, qd, qdd, _J[j], c - rest[_J[j]], hold, hold + 0.5)
                 _minjerk_add(t, q, qd, qdd, _J[j], rest[_J[j]] - c, dur - 0.5, dur)
-            _oscillate(t, q, qd, qdd, j, amp, freq, 0.5, dur - 0.5, ramp=0.25 / freq)
+            _oscillate(t, q, qd, qdd, j, amp, freq, hold + 0.5, dur - 0.5, ramp=1.0 / freq)
         pieces.append(Motion(rate_hz, q, qd, qdd, label, ((label, 0, t.size),)))
     return concat_motions(pieces, label="calibration")
 

@@ -57,8 +57,9 @@ class ImuTruth:
     angles : ndarray, shape (N, 29)
         Joint angles of :data:`MODEL_JOINTS` (deg; slides m).
     joint_vectors : dict
-        ``(sensor, joint) -> (3,)`` vector from the joint centre to the
-        sensor in the sensor frame at the nominal mounting, metres.
+        ``(sensor, point) -> (3,)`` vector from each point of :data:`POINTS`
+        to the sensor in the sensor frame at the zero pose, nominal
+        mounting, metres (meaningful for points on the sensor's own chain).
     segments : tuple
         The motion's named stretches.
     """

@@ -8,8 +8,8 @@ import numpy as np
 
 from ...errors import InvalidInputError
 from ...models import HandShape
-from ._layout import FLEX_JOINT, LINKS, POINTS
-from ._model import MODEL_JOINTS, SENSOR_NAMES, ImuHand, ImuPlacement
+from ._layout import FLEX_JOINT, POINTS
+from ._model import MODEL_JOINTS, ImuHand, ImuPlacement
 from ._motion import Motion
 from ._noise import MPU9250_DATASHEET, ImuNoise, apply_axis_noise
 from ._recording import ImuRecording, ImuTruth
@@ -69,21 +69,22 @@ def simulate_imu(motion: Motion, *, shape: HandShape | None = None, side: str = 
     m, d = hand.model, hand.data
     import mujoco
 
-    s_n, n = len(SENSOR_NAMES), motion.n
+    names = hand.sensors
+    s_n, n = len(names), motion.n
     site_ids = hand.site_ids
     site_pos0 = m.site_pos[site_ids].copy()
     site_quat0 = m.site_quat[site_ids].copy()
     sameframe0 = m.site_sameframe[site_ids].copy()
     if skin is not None:
         m.site_sameframe[site_ids] = 0  # let MuJoCo use the moved site frames
-    flex_col = np.array([MODEL_JOINTS.index(FLEX_JOINT[s]) for s in SENSOR_NAMES])
+    flex_col = np.array([MODEL_JOINTS.index(FLEX_JOINT[s]) for s in names])
     point_sites = [m.site(p).id if p not in ("elbow", "ulnar_cm") else -1 for p in POINTS]
     point_bodies = {"elbow": m.body("forearm").id, "ulnar_cm": m.body("palm_ulnar").id}
     body_of_site = m.site_bodyid[site_ids]
 
-    acc_adr = np.array([hand.sensor_adr[(s, "acc")] for s in SENSOR_NAMES])
-    gyr_adr = np.array([hand.sensor_adr[(s, "gyr")] for s in SENSOR_NAMES])
-    mag_adr = np.array([hand.sensor_adr[(s, "mag")] for s in SENSOR_NAMES])
+    acc_adr = np.array([hand.sensor_adr[(s, "acc")] for s in names])
+    gyr_adr = np.array([hand.sensor_adr[(s, "gyr")] for s in names])
+    mag_adr = np.array([hand.sensor_adr[(s, "mag")] for s in names])
     acc = np.empty((s_n, n, 3))
     gyr = np.empty((s_n, n, 3))
     mag = np.empty((s_n, n, 3))
@@ -120,10 +121,9 @@ def simulate_imu(motion: Motion, *, shape: HandShape | None = None, side: str = 
         vectors = {}
         pts0 = {p: (d.site_xpos[point_sites[k]] if point_sites[k] >= 0
                     else d.xpos[point_bodies[p]]).copy() for k, p in enumerate(POINTS)}
-        for sensor, prox, dist in LINKS:
-            k = SENSOR_NAMES.index(sensor)
+        for k, sensor in enumerate(names):
             r = d.site_xmat[site_ids[k]].reshape(3, 3)
-            for p in (prox, dist):
+            for p in POINTS:
                 vectors[(sensor, p)] = r.T @ (d.site_xpos[site_ids[k]] - pts0[p])
     finally:
         m.site_pos[site_ids] = site_pos0
@@ -133,10 +133,10 @@ def simulate_imu(motion: Motion, *, shape: HandShape | None = None, side: str = 
         rng = np.random.default_rng(seed)
         acc = apply_axis_noise(acc, noise.accel, motion.rate_hz, rng)
         gyr = apply_axis_noise(gyr, noise.gyro, motion.rate_hz, rng)
-        mag = _mag_noise(mag, quat, noise, motion.rate_hz, rng)
+        mag = _mag_noise(mag, quat, noise, motion.rate_hz, rng, names)
     truth = ImuTruth(quat=quat, sensor_pos=spos, keypoints=pts, elbow=pts[:, 0].copy(),
                      angles=motion.q.copy(), joint_vectors=vectors, segments=motion.segments)
-    return ImuRecording(motion.rate_hz, SENSOR_NAMES, acc, gyr, mag, truth)
+    return ImuRecording(motion.rate_hz, names, acc, gyr, mag, truth)
 
 
 def _rot_from_quat(q):
@@ -148,7 +148,7 @@ def _rot_from_quat(q):
     ], -2)
 
 
-def _mag_noise(mag, quat, noise: ImuNoise, rate_hz: float, rng) -> np.ndarray:
+def _mag_noise(mag, quat, noise: ImuNoise, rate_hz: float, rng, names) -> np.ndarray:
     mn = noise.mag
     s, n, _ = mag.shape
     t = np.arange(n) / rate_hz
@@ -160,7 +160,7 @@ def _mag_noise(mag, quat, noise: ImuNoise, rate_hz: float, rng) -> np.ndarray:
             continue
         r = _rot_from_quat(quat)  # sensor -> world (nominal mount; fine for the extra field)
         extra = np.einsum("snji,j->sni", r, np.asarray(dist.field_ut, float)) * w[None, :, None]
-        mask = np.array([not dist.sensors or name in dist.sensors for name in SENSOR_NAMES])
+        mask = np.array([not dist.sensors or name in dist.sensors for name in names])
         mag = mag + extra * mask[:, None, None]
     ang = np.radians(rng.normal(0.0, mn.azimuth_sd_deg, s))
     c, si = np.cos(ang), np.sin(ang)
