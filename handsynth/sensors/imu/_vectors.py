@@ -34,6 +34,7 @@ needs no orientation.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from itertools import pairwise
 from types import MappingProxyType
 
 import numpy as np
@@ -178,7 +179,6 @@ def rotation_vector(rec: ImuRecording, sensor: str, point: str, *, hold_s: float
     dw_len = np.concatenate([data[lab][1][pts[lab]] for lab in len_rot])
     y = np.linalg.norm(a_len, axis=-1)
     x = np.sqrt(np.maximum(np.sum(dw_len**2, -1)[None] - (u @ dw_len.T) ** 2, 0.0))  # (U, M)
-    slope_i = np.sum(x * y, axis=1) / np.sum(x * x, axis=1)
     length = float(np.sum(x * y) / np.sum(x * x))
     d = np.sqrt(np.mean((y - length * x) ** 2, axis=1)) + 1e-9          # deviation from the line
     w1 = 1.0 / d                                                        # eq. 3.9
@@ -198,14 +198,13 @@ def rotation_vector(rec: ImuRecording, sensor: str, point: str, *, hold_s: float
     length = float(np.sum(x_all * y) / np.sum(x_all * x_all))
     res = y - length * x_all
     r2 = 1.0 - float(np.sum(res**2) / max(np.sum((y - y.mean()) ** 2), 1e-12))
-    del slope_i
     return VectorEstimate(length * u_mean, int(len(u)), r2)            # eq. 3.5
 
 
 def _child(sensor: str, dist: str) -> str:
     """Sensor of the link that starts at `dist` after `sensor`'s link."""
     for chain in CHAINS.values():
-        for (s1, _, d1), nxt in zip(chain, chain[1:]):
+        for (s1, _, d1), nxt in pairwise(chain):
             if s1 == sensor and d1 == dist:
                 return nxt[0]
     # the distal phalanx: its fingertip sensor
@@ -233,8 +232,8 @@ def calibrate_vectors(rec: ImuRecording, *, hold_s: float = 0.5) -> dict:
             if (s, p) not in out:
                 out[(s, p)] = rotation_vector(rec, s, p, hold_s=hold_s)
     # the distal sensors' and tip sensors' own DIP/IP vectors
-    for f, chain in CHAINS.items():
-        s_dist, j_prox, tip = chain[-1]
+    for chain in CHAINS.values():
+        _, j_prox, tip = chain[-1]
         out.setdefault((tip, j_prox), rotation_vector(rec, tip, j_prox, hold_s=hold_s))
     return out
 
