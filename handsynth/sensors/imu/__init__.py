@@ -9,6 +9,7 @@ baselines); sensor-to-joint vectors; joint angles and fingertip positions.
 """
 
 from ._attitude import StaticStart, azimuth_correction, gyro_bias, initial_attitude
+from ._ekf import ChainEKF, ChainEKFOptions, sensor_tree
 from ._filters import (
     AhrsEKFEstimator,
     ConstantEstimator,
@@ -29,6 +30,7 @@ from ._model import (
     MODEL_JOINTS,
     SENSOR_BODIES,
     SENSOR_NAMES,
+    TIP_SENSORS,
     ImuHand,
     ImuPlacement,
     imu_hand_mjcf,
@@ -61,6 +63,17 @@ from ._recording import (
     write_imu_csv,
 )
 from ._simulate import SkinMotion, simulate_imu
+from ._vectors import (
+    ROTATIONS,
+    ChainModel,
+    VectorEstimate,
+    calibrate_vectors,
+    chain_model,
+    link_vectors,
+    rotation_vector,
+    seel_joint_positions,
+    truth_chain_model,
+)
 
 __all__ = [
     "ARM_JOINTS",
@@ -75,11 +88,16 @@ __all__ = [
     "MODEL_JOINTS",
     "MPU9250_DATASHEET",
     "POINTS",
+    "ROTATIONS",
     "SENSOR_BODIES",
     "SENSOR_NAMES",
+    "TIP_SENSORS",
     "UNITS",
     "AhrsEKFEstimator",
     "AxisNoise",
+    "ChainEKF",
+    "ChainEKFOptions",
+    "ChainModel",
     "ConstantEstimator",
     "Filter1",
     "Filter1Options",
@@ -98,9 +116,12 @@ __all__ = [
     "SkinMotion",
     "StaticStart",
     "VQFEstimator",
+    "VectorEstimate",
     "apply_axis_noise",
     "azimuth_correction",
+    "calibrate_vectors",
     "calibration_motion",
+    "chain_model",
     "check_recording",
     "concat_motions",
     "free_motion",
@@ -109,8 +130,13 @@ __all__ = [
     "imu_hand_mjcf",
     "initial_attitude",
     "integrate_gyro",
+    "link_vectors",
     "read_imu_csv",
+    "rotation_vector",
+    "seel_joint_positions",
+    "sensor_tree",
     "simulate_imu",
     "static_motion",
+    "truth_chain_model",
     "write_imu_csv",
 ]

@@ -158,7 +158,10 @@ def rotation_vector(rec: ImuRecording, sensor: str, point: str, *, hold_s: float
     k = rec.index(sensor)
     hold = max(3, int(hold_s * rec.rate_hz))
     dir_rot, len_rot = ROTATIONS[point]
-    data = {lab: _rotation_data(rec, k, *_segment(segments, lab), hold) for lab in dir_rot}
+    data = {}
+    for lab in dir_rot:
+        a, b = _segment(segments, lab)
+        data[lab] = _rotation_data(rec, k, a, b, hold)
     pts = {lab: _turning_points(data[lab][0], data[lab][1]) for lab in dir_rot}
     for lab, idx in pts.items():
         if idx.size < 2:
