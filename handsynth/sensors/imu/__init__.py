@@ -22,6 +22,15 @@ from ._filters import (
     VQFEstimator,
     integrate_gyro,
 )
+from ._kinematics import (
+    JOINT_LINKS,
+    classify_grasp,
+    fingertip_positions,
+    joint_angles,
+    link_frames,
+    truth_link_frames,
+    zero_offsets,
+)
 from ._layout import CHAINS, FLEX_JOINT, LINKS, POINTS
 from ._model import (
     ARM_JOINTS,
@@ -84,6 +93,7 @@ __all__ = [
     "FLEX_JOINT",
     "GRASP_POSES",
     "GRAVITY_MPS2",
+    "JOINT_LINKS",
     "LINKS",
     "MODEL_JOINTS",
     "MPU9250_DATASHEET",
@@ -123,13 +133,17 @@ __all__ = [
     "calibration_motion",
     "chain_model",
     "check_recording",
+    "classify_grasp",
     "concat_motions",
+    "fingertip_positions",
     "free_motion",
     "grasp_motion",
     "gyro_bias",
     "imu_hand_mjcf",
     "initial_attitude",
     "integrate_gyro",
+    "joint_angles",
+    "link_frames",
     "link_vectors",
     "read_imu_csv",
     "rotation_vector",
@@ -138,5 +152,7 @@ __all__ = [
     "simulate_imu",
     "static_motion",
     "truth_chain_model",
+    "truth_link_frames",
     "write_imu_csv",
+    "zero_offsets",
 ]
