@@ -117,6 +117,8 @@ def truth_link_frames(rec: ImuRecording, model: ChainModel, hand) -> dict:
     import mujoco
 
     out = {}
+    if rec.truth is None:
+        raise InvalidInputError("truth_link_frames needs a simulated recording")
     hand.set_state(np.zeros(len(rec.truth.angles[0])))
     d = hand.data
     for s in model.own:

@@ -27,8 +27,8 @@ Baseline: the least-squares joint position of Seel, Schauer & Raisch,
 "Joint axis and position estimation from inertial measurement data by
 exploiting kinematic constraints", IEEE CCA 2012: for two sensors on either
 side of a joint, find o1, o2 minimising sum_t (|a1 + G1 o1| - |a2 + G2 o2|)^2,
-G o = w x (w x o) + dw x o, o from sensor to joint, by Gauss-Newton; it
-needs no orientation.
+G o = w x (w x o) + dw x o, o from sensor to joint, by Levenberg-Marquardt
+from a starting guess; it needs no orientation.
 """
 
 from __future__ import annotations
@@ -344,7 +344,7 @@ def seel_joint_positions(rec: ImuRecording, s1: str, s2: str, *, iterations: int
     start, stop : int, keyword-only
         Samples used.
     init : (6,) float, keyword-only
-        Starting o1, o2 (metres); 1 cm off both sensors by default.
+        Starting o1, o2 (metres); 1 cm below both sensors by default.
 
     Returns
     -------
@@ -368,21 +368,44 @@ def seel_joint_positions(rec: ImuRecording, s1: str, s2: str, *, iterations: int
 
     k1m, k2m = gamma(g1, d1), gamma(g2, d2)
     x = np.r_[0.0, 0.0, -0.01, 0.0, 0.0, -0.01] if init is None else np.asarray(init, float)
-    for _ in range(iterations):
+
+    def residual(x):
         # the joint centre's specific force seen from either sensor: a + G o
         e1 = a1 + np.einsum("nij,j->ni", k1m, x[:3])
         e2 = a2 + np.einsum("nij,j->ni", k2m, x[3:])
         n1 = np.linalg.norm(e1, axis=-1) + 1e-12
         n2 = np.linalg.norm(e2, axis=-1) + 1e-12
-        r = n1 - n2
-        j1 = np.einsum("ni,nij->nj", e1 / n1[:, None], k1m)
-        j2 = -np.einsum("ni,nij->nj", e2 / n2[:, None], k2m)
-        jac = np.concatenate([j1, j2], axis=1)
-        # small ridge: the position along a hinge axis is not observable
-        step = np.linalg.solve(jac.T @ jac + 1e-6 * np.eye(6) * len(r), -jac.T @ r)
-        x = x + step
-        if np.linalg.norm(step) < 1e-7:
-            break
+        return n1 - n2, e1 / n1[:, None], e2 / n2[:, None]
+
+    lam = 1e-3
+    r, u1, u2 = residual(x)
+    cost = float(r @ r)
+    for _ in range(iterations):
+        jac = np.concatenate([np.einsum("ni,nij->nj", u1, k1m),
+                              -np.einsum("ni,nij->nj", u2, k2m)], axis=1)
+        jtj = jac.T @ jac
+        # Levenberg-Marquardt; the damping also keeps the position along a
+        # hinge axis (not observable) near the start
+        step = np.linalg.solve(jtj + lam * (np.diag(np.diag(jtj)) + 1e-9 * np.eye(6)), -jac.T @ r)
+        r2, v1, v2 = residual(x + step)
+        c2 = float(r2 @ r2)
+        if c2 < cost:
+            x, r, u1, u2, cost = x + step, r2, v1, v2, c2
+            lam = max(lam / 3, 1e-7)
+            if np.linalg.norm(step) < 1e-7:
+                break
+        else:
+            lam *= 10
+            if lam > 1e8:
+                break
+    # a hinge leaves the position along its axis free (both o shift along
+    # it); as Seel et al., move the solution along such weakly determined
+    # directions to the point closest to the sensors
+    jac = np.concatenate([np.einsum("ni,nij->nj", u1, k1m),
+                          -np.einsum("ni,nij->nj", u2, k2m)], axis=1)
+    ev, vec = np.linalg.eigh(jac.T @ jac)
+    null = vec[:, ev < 1e-3 * ev.max()]
+    x = x - null @ (null.T @ x)
     return x[:3], x[3:]
 
 
