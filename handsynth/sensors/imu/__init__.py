@@ -9,7 +9,9 @@ baselines); sensor-to-joint vectors; joint angles and fingertip positions.
 """
 
 from ._attitude import StaticStart, azimuth_correction, gyro_bias, initial_attitude
+from ._broad import BROAD_FILTERS, broad_errors, find_broad_trials, read_broad_trial, run_broad
 from ._ekf import ChainEKF, ChainEKFOptions, sensor_tree
+from ._eval import FILTERS, HELDOUT, TUNING, SimConfig, evaluate, make_filter
 from ._filters import (
     AhrsEKFEstimator,
     ConstantEstimator,
@@ -86,13 +88,16 @@ from ._vectors import (
 
 __all__ = [
     "ARM_JOINTS",
+    "BROAD_FILTERS",
     "CALIBRATION_PLAN",
     "CHAINS",
     "EARTH_FIELD_UT",
     "EVAL_NOISE",
+    "FILTERS",
     "FLEX_JOINT",
     "GRASP_POSES",
     "GRAVITY_MPS2",
+    "HELDOUT",
     "JOINT_LINKS",
     "LINKS",
     "MODEL_JOINTS",
@@ -102,6 +107,7 @@ __all__ = [
     "SENSOR_BODIES",
     "SENSOR_NAMES",
     "TIP_SENSORS",
+    "TUNING",
     "UNITS",
     "AhrsEKFEstimator",
     "AxisNoise",
@@ -123,18 +129,22 @@ __all__ = [
     "Motion",
     "OrientationEstimator",
     "RawIntegration",
+    "SimConfig",
     "SkinMotion",
     "StaticStart",
     "VQFEstimator",
     "VectorEstimate",
     "apply_axis_noise",
     "azimuth_correction",
+    "broad_errors",
     "calibrate_vectors",
     "calibration_motion",
     "chain_model",
     "check_recording",
     "classify_grasp",
     "concat_motions",
+    "evaluate",
+    "find_broad_trials",
     "fingertip_positions",
     "free_motion",
     "grasp_motion",
@@ -145,8 +155,11 @@ __all__ = [
     "joint_angles",
     "link_frames",
     "link_vectors",
+    "make_filter",
+    "read_broad_trial",
     "read_imu_csv",
     "rotation_vector",
+    "run_broad",
     "seel_joint_positions",
     "sensor_tree",
     "simulate_imu",
