@@ -56,7 +56,7 @@ def imu() -> None:
               help="Write the full report as JSON.")
 def eval_(config_name, filters, durations, elbows, no_grasps, json_out) -> None:
     """Reproduce the thesis' tables on simulated data, beside trivial baselines."""
-    from ..sensors.imu._eval import FILTERS, HELDOUT, TUNING, evaluate
+    from ..sensors.imu import FILTERS, HELDOUT, TUNING, evaluate
 
     config = HELDOUT if config_name == "heldout" else TUNING
     rep = evaluate(config, durations=durations or (15.0, 30.0), elbows=elbows or ("fixed", "moving"),
@@ -102,8 +102,7 @@ def track(recording, filter_name, acc_units, gyr_units, mag_units, rate_hz, stat
     import numpy as np
 
     from ..errors import InvalidInputError
-    from ..sensors.imu import StaticStart, check_recording, read_imu_csv
-    from ..sensors.imu._eval import make_filter
+    from ..sensors.imu import StaticStart, check_recording, make_filter, read_imu_csv
 
     rec = read_imu_csv(recording, acc_units=acc_units, gyr_units=gyr_units, mag_units=mag_units,
                        rate_hz=rate_hz)
@@ -143,7 +142,7 @@ def track(recording, filter_name, acc_units, gyr_units, mag_units, rate_hz, stat
               help="Write per-trial errors as JSON.")
 def broad(directory, filters, json_out) -> None:
     """Run the filters on the BROAD trials present in DIRECTORY (the dataset's metric)."""
-    from ..sensors.imu._broad import BROAD_FILTERS, run_broad
+    from ..sensors.imu import BROAD_FILTERS, run_broad
 
     res = run_broad(directory, filters=_filters(filters, BROAD_FILTERS))
     if json_out:
