@@ -54,14 +54,34 @@ def imu() -> None:
 @click.option("--no-grasps", is_flag=True, help="Skip the grasp classification.")
 @click.option("--json", "json_out", type=click.Path(dir_okay=False), required=True,
               help="Write the full report as JSON.")
-def eval_(config_name, filters, durations, elbows, no_grasps, json_out) -> None:
+@click.option("--plots", "plot_dir", type=click.Path(file_okay=False),
+              help="Write orientation_error.png and stick_figure.png (last trial) here.")
+def eval_(config_name, filters, durations, elbows, no_grasps, json_out, plot_dir) -> None:
     """Reproduce the thesis' tables on simulated data, beside trivial baselines."""
-    from ..sensors.imu import FILTERS, HELDOUT, TUNING, evaluate
+    from ..sensors.imu import (
+        FILTERS,
+        HELDOUT,
+        TUNING,
+        evaluate,
+        plot_orientation_error,
+        plot_stick_figure,
+    )
 
     config = HELDOUT if config_name == "heldout" else TUNING
+    series: dict = {}
     rep = evaluate(config, durations=durations or (15.0, 30.0), elbows=elbows or ("fixed", "moving"),
-                   filters=_filters(filters, FILTERS), grasps=not no_grasps)
+                   filters=_filters(filters, FILTERS), grasps=not no_grasps, series=series)
     _write_json(json_out, rep)
+    if plot_dir:
+        out = Path(plot_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        last = rep["trials"][-1]
+        what = f"{config.label}, {last['duration_s']:g} s, elbow {last['elbow']}"
+        plot_orientation_error(series["t"], series["error"], out / "orientation_error.png",
+                               title=f"orientation error ({what})")
+        keep = {k: v for k, v in series["chains"].items() if k in ("truth", "filter4", "raw", "vqf")}
+        plot_stick_figure(keep, out / "stick_figure.png",
+                          title=f"side view at t = {series['chain_time_s']:.2f} s ({what})")
     click.echo(f"config {config.label}: orientation RMSE per segment over the motion, deg")
     click.echo(f"{'filter':<10}{'mean':>7}{'worst':>7}{'distal':>8}{'joint':>7}{'tip mm':>8}"
                f"{'tip/wrist':>10}")

@@ -93,8 +93,10 @@ def test_eval_writes_json_with_baselines(tmp_path):
     out = tmp_path / "eval.json"
     res = CliRunner().invoke(cli, ["imu", "eval", "--config", "tuning", "--duration", "8",
                                    "--elbow", "fixed", "--filter", "constant,raw,filter4",
-                                   "--no-grasps", "--json", str(out)])
+                                   "--no-grasps", "--json", str(out), "--plots", str(tmp_path / "p")])
     assert res.exit_code == 0, res.output
+    for png in ("orientation_error.png", "stick_figure.png"):
+        assert (tmp_path / "p" / png).read_bytes()[:4] == b"\x89PNG"
     rep = json.loads(out.read_text())
     assert set(rep["summary"]) == {"constant", "raw", "filter4"}
     assert rep["trials"][0]["duration_s"] == 8.0

@@ -65,6 +65,7 @@ from ._noise import (
     MagNoise,
     apply_axis_noise,
 )
+from ._plot import plot_orientation_error, plot_stick_figure
 from ._recording import (
     UNITS,
     ImuRecording,
@@ -156,6 +157,8 @@ __all__ = [
     "link_frames",
     "link_vectors",
     "make_filter",
+    "plot_orientation_error",
+    "plot_stick_figure",
     "read_broad_trial",
     "read_imu_csv",
     "rotation_vector",

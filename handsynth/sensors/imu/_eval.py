@@ -185,7 +185,7 @@ def _vector_report(cal, model, config: SimConfig, placement, lsq_rec) -> dict:
     }
 
 
-def _trial(rec, filters, model, frames, zero) -> dict:
+def _trial(rec, filters, model, frames, zero, series: dict | None = None) -> dict:
     truth = _truth(rec)
     motion_start = next((b for s, _, b in truth.segments if s == "align"), 0)
     sl = slice(motion_start, None)
@@ -197,6 +197,9 @@ def _trial(rec, filters, model, frames, zero) -> dict:
         q = make_filter(name, model).run(rec)
         err = angle_deg(q[:, sl], truth.quat[:, sl])
         head, incl = heading_inclination_deg(q[:, sl], truth.quat[:, sl])
+        if series is not None:
+            series.setdefault("t", np.arange(rec.n)[sl] / rec.rate_hz)
+            series.setdefault("error", {})[name] = err.mean(axis=0)
         out["orientation_rmse_deg"][name] = dict(zip(rec.sensors, _rmse(err, axis=1).tolist()))
         out["heading_rmse_deg"][name] = float(_rmse(head))
         out["inclination_rmse_deg"][name] = float(_rmse(incl))
@@ -214,6 +217,16 @@ def _trial(rec, filters, model, frames, zero) -> dict:
             fw[f] = float(_rmse(np.linalg.norm((tips[f] - wrist_est)[sl] - true_w[sl], axis=-1)) * 1e3)
             del chain
         out["fingertip_rmse_mm"][name] = fe
+        if series is not None:
+            i = int(np.argmax(np.abs(true_angles[:, JOINT_NAMES.index("index_pip_flex")])))
+            series.setdefault("chains", {})[name] = {
+                f: np.vstack([np.zeros(3), tips[f"{f}_joints"][i]]) for f in CHAINS}
+            true_chain = {}
+            for f, links in CHAINS.items():
+                pts = [kp[i, POINTS.index(a)] for _, a, _ in links] + [kp[i, POINTS.index(f"{f}_tip")]]
+                true_chain[f] = np.array(pts) - kp[i, POINTS.index("elbow")]
+            series["chains"]["truth"] = true_chain
+            series["chain_time_s"] = i / rec.rate_hz
         out["fingertip_from_wrist_rmse_mm"][name] = fw
     return out
 
@@ -240,7 +253,8 @@ def _grasp_report(config, placement, filters, model, frames, zero) -> dict:
 
 
 def evaluate(config: SimConfig = HELDOUT, *, durations=(15.0, 30.0), elbows=("fixed", "moving"),
-             filters=FILTERS, grasps: bool = True, speed: float = 1.0) -> dict:
+             filters=FILTERS, grasps: bool = True, speed: float = 1.0,
+             series: dict | None = None) -> dict:
     """Run the evaluation and return a JSON-ready dict.
 
     Parameters
@@ -255,6 +269,9 @@ def evaluate(config: SimConfig = HELDOUT, *, durations=(15.0, 30.0), elbows=("fi
         Also classify the grasps of :func:`grasp_motion`.
     speed : float, keyword-only
         Frequency scale of the free motions.
+    series : dict, keyword-only
+        Filled with the last trial's error time series and a stick-figure
+        instant (for :mod:`._plot`).
     """
     for f in filters:
         if f not in FILTERS:
@@ -270,7 +287,8 @@ def evaluate(config: SimConfig = HELDOUT, *, durations=(15.0, 30.0), elbows=("fi
             rec = simulate_imu(free_motion(float(dur), seed=seed, elbow=elbow, speed=speed),
                                hand=hand, noise=config.noise, skin=config.skin, seed=seed + 50)
             lsq_rec = lsq_rec or rec
-            t = _trial(rec, filters, model, frames, zero)
+            last = k == len(durations) - 1 and m == len(elbows) - 1
+            t = _trial(rec, filters, model, frames, zero, series if last else None)
             t.update(duration_s=float(dur), elbow=elbow)
             trials.append(t)
     report = {"config": config.describe(), "filters": list(filters),
