@@ -12,8 +12,8 @@ on one thread), times each filter on the whole recording (best of
 reports how many times faster than real time it runs.  The target of issue
 18 is >= 10x for 20 sensors at 100 Hz.
 
-The last line is machine-readable:
-``filter4_x_realtime=<n> raw_x_realtime=<n> filter1_x_realtime=<n> vqf_x_realtime=<n> sensors=20 rate_hz=<n>``.
+The last line is machine-readable: ``filter4_x_realtime=<n> raw_x_realtime=<n>
+filter1_x_realtime=<n> vqf_x_realtime=<n> sensors=20 rate_hz=<n>``.
 """
 
 from __future__ import annotations
@@ -24,6 +24,7 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMB
     os.environ.setdefault(_var, "1")  # one core: before numpy is imported
 
 import argparse
+import contextlib
 import time
 
 from handsynth.sensors.imu import (
@@ -45,10 +46,8 @@ def main() -> None:
     ap.add_argument("--rate", type=float, default=100.0, help="sampling rate, Hz")
     ap.add_argument("--repeat", type=int, default=3, help="timed runs per filter (best kept)")
     args = ap.parse_args()
-    try:
+    with contextlib.suppress(AttributeError, OSError):
         os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
-    except (AttributeError, OSError):
-        pass
     cal = simulate_imu(calibration_motion(), hand=ImuHand(tip_sensors=True), seed=1)
     model = chain_model(cal)
     rec = simulate_imu(free_motion(args.duration, rate_hz=args.rate, seed=2), seed=3)
