@@ -264,7 +264,8 @@ class ChainEKF:
     static : StaticStart, keyword-only
     name : str, keyword-only
     fast : bool, keyword-only
-        Use the compiled observation (numba); False runs :func:`observe`.
+        Run the compiled loop (numba); False runs the plain reference loop
+        with :func:`observe` (the same arithmetic, tested equal).
     """
 
     model: ChainModel
@@ -301,10 +302,12 @@ class ChainEKF:
         p_cov[-3:, -3:] = np.eye(3) * o.elbow_acc_sd**2
         qn = (o.gyro_noise * dt) ** 2
         fast_w = np.degrees(np.linalg.norm(gyr, axis=-1)) >= (o.switch_dps or np.inf)
+        if self.fast:
+            from ._ekf_numba import run_fast
+
+            return run_fast(tree, q, gyr, dgyr, rec.acc, rec.mag, dt, mh, fnorm0, rz, fast_w, o)
         out = np.empty((s_n, n, 4))
         out[:, 0] = q
-        if self.fast:
-            from ._ekf_numba import observe_fast
         for i in range(1, n):
             w = 0.5 * (gyr[:, i] + gyr[:, i - 1])
             q = qnormalize(qmul(q, qexp(w * dt)))                           # eq. 5.10
@@ -314,12 +317,8 @@ class ChainEKF:
             p_cov[:, -3:] = 0.0
             p_cov[-3:, -3:] = np.eye(3) * o.elbow_acc_sd**2                 # eq. 4.38
             r = quat_to_mat(q)
-            args = (r, gyr[:, i], dgyr[:, i], rec.acc[:, i], rec.mag[:, i])
-            if self.fast:
-                z, hx, h, sd = observe_fast(tree, *args, mh, fnorm0, rz, fast_w[:, i], o)
-            else:
-                z, hx, h, sd = observe(tree, *args, mh=mh, fnorm0=fnorm0, rz=rz,
-                                       fast=fast_w[:, i], options=o)
+            z, hx, h, sd = observe(tree, r, gyr[:, i], dgyr[:, i], rec.acc[:, i], rec.mag[:, i],
+                                   mh=mh, fnorm0=fnorm0, rz=rz, fast=fast_w[:, i], options=o)
             vinv = 1.0 / sd**2                                              # eqs. 4.7-4.8
             info = np.linalg.inv(p_cov) + (h.T * vinv) @ h
             p_cov = np.linalg.inv(info)

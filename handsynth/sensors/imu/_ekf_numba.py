@@ -125,3 +125,81 @@ def observe_fast(tree, r, w, dw, a, mag, mh, fnorm0, rz, fast, options):
                    np.ascontiguousarray(dw), np.ascontiguousarray(a), np.ascontiguousarray(mag),
                    mh, fnorm0, rz, np.ascontiguousarray(fast), o.use_h2,
                    o.switch_dps is not None, o.acc_sd, o.demoted, o.mag_sd, o.mag_gate)
+
+
+@njit(cache=True)
+def _qmul(a, b):
+    return np.array([a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
+                     a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
+                     a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
+                     a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0]])
+
+
+@njit(cache=True)
+def _qexp(v):
+    ang = np.sqrt(np.sum(v * v))
+    if ang < 1e-12:
+        return np.array([1.0, 0.5 * v[0], 0.5 * v[1], 0.5 * v[2]])
+    s = np.sin(0.5 * ang) / ang
+    return np.array([np.cos(0.5 * ang), s * v[0], s * v[1], s * v[2]])
+
+
+@njit(cache=True)
+def _qmat(q):
+    w, x, y, z = q[0], q[1], q[2], q[3]
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+@njit(cache=True)
+def _loop(q0, gyr, dgyr, acc, mag, dt, parent, order, anc, via, own, vpar, ppar, children, roots,
+          mh, fnorm0, rz, fast, use_h2, switch, acc_sd, demoted, mag_sd, mag_gate, qn, elbow_var):
+    s_n, n = gyr.shape[0], gyr.shape[1]
+    nx = 3 * s_n + 3
+    out = np.empty((s_n, n, 4))
+    q = q0.copy()
+    out[:, 0] = q
+    p = np.eye(nx) * 1e-4
+    for k in range(3):
+        p[3 * s_n + k, 3 * s_n + k] = elbow_var
+    r = np.empty((s_n, 3, 3))
+    for i in range(1, n):
+        for j in range(s_n):                                   # eq. 5.10
+            w = 0.5 * (gyr[j, i] + gyr[j, i - 1]) * dt
+            qj = _qmul(q[j], _qexp(w))
+            q[j] = qj / np.sqrt(np.sum(qj * qj))
+            r[j] = _qmat(q[j])
+        for k in range(3 * s_n):
+            p[k, k] += qn
+        p[3 * s_n:, :] = 0.0
+        p[:, 3 * s_n:] = 0.0
+        for k in range(3):
+            p[3 * s_n + k, 3 * s_n + k] = elbow_var              # eq. 4.38
+        z, hx, h, sd = _kernel(parent, order, anc, via, own, vpar, ppar, children, roots, r,
+                               np.ascontiguousarray(gyr[:, i]), np.ascontiguousarray(dgyr[:, i]),
+                               np.ascontiguousarray(acc[:, i]), np.ascontiguousarray(mag[:, i]),
+                               mh, fnorm0, rz, fast[:, i], use_h2, switch, acc_sd, demoted,
+                               mag_sd, mag_gate)
+        vinv = 1.0 / (sd * sd)                                 # eqs. 4.7-4.8, information form
+        hv = h.T * vinv
+        info = np.linalg.inv(p) + hv @ h
+        p = np.linalg.inv(info)
+        p = 0.5 * (p + p.T)
+        dx = p @ (hv @ (z - hx))
+        for j in range(s_n):
+            qj = _qmul(_qexp(dx[3 * j:3 * j + 3]), q[j])
+            q[j] = qj / np.sqrt(np.sum(qj * qj))
+        out[:, i] = q
+    return out
+
+
+def run_fast(tree, q0, gyr, dgyr, acc, mag, dt, mh, fnorm0, rz, fast, options):
+    """The whole filter loop compiled; the same arithmetic as :meth:`ChainEKF._run` with ``fast=False``."""
+    o = options
+    return _loop(np.ascontiguousarray(q0), np.ascontiguousarray(gyr), np.ascontiguousarray(dgyr),
+                 np.ascontiguousarray(acc), np.ascontiguousarray(mag), dt, tree.parent, tree.order,
+                 tree.anc, tree.via, tree.own, tree.vpar, tree.ppar, tree.children, tree.roots,
+                 mh, fnorm0, rz, np.ascontiguousarray(fast), o.use_h2, o.switch_dps is not None,
+                 o.acc_sd, o.demoted, o.mag_sd, o.mag_gate, (o.gyro_noise * dt) ** 2,
+                 o.elbow_acc_sd**2)

@@ -76,3 +76,11 @@ def test_white_noise_only_beats_raw_integration(imu_hand):
         return np.sqrt(np.mean(angle_deg(q, rec.truth.quat)[:, 400:] ** 2))
 
     assert rmse(ChainEKF(truth_chain_model(rec)).run(rec)) < rmse(RawIntegration().run(rec))
+
+
+def test_compiled_loop_equals_reference_loop(moving_rec):
+    model = truth_chain_model(moving_rec)
+    short = moving_rec.slice(0, 450)
+    fast = ChainEKF(model).run(short)
+    ref = ChainEKF(model, fast=False).run(short)
+    assert angle_deg(fast, ref).max() < 1e-4  # arccos resolution near 0
