@@ -14,6 +14,33 @@ from ._main import cli
 _TRACK_FILTERS = ("raw", "filter1", "vqf", "madgwick", "mahony", "ahrs_ekf", "constant")
 
 
+def _unit_options(f):
+    f = click.option("--rate", "rate_hz", type=float, default=None,
+                     help="Sampling rate, Hz (default: from the time column).")(f)
+    f = click.option("--mag-units", type=click.Choice(("uT", "mT", "G", "nT")), default="uT",
+                     show_default=True)(f)
+    f = click.option("--gyr-units", type=click.Choice(("rad/s", "deg/s")), default="rad/s",
+                     show_default=True)(f)
+    f = click.option("--acc-units", type=click.Choice(("m/s2", "g", "mg")), default="m/s2",
+                     show_default=True)(f)
+    return f
+
+
+def _write_table(path, header, table) -> None:
+    import numpy as np
+
+    target = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", dir=target.parent or ".")
+    try:
+        with os.fdopen(fd, "w") as f:
+            f.write(",".join(header) + "\n")
+            np.savetxt(f, table, delimiter=",", fmt="%.8g")
+        os.replace(tmp, target)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
 def _write_json(path: str, payload) -> None:
     target = Path(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", dir=target.parent or ".")
@@ -98,32 +125,73 @@ def eval_(config_name, filters, durations, elbows, no_grasps, json_out, plot_dir
 
 @imu.command()
 @click.argument("recording", type=click.Path(dir_okay=False))
+@click.option("--segments", "segments_path", type=click.Path(dir_okay=False), required=True,
+              help='JSON {"static": [0, 2], "elbow_flex": [2, 9.5], ...}: the labelled '
+                   "calibration rotations, seconds.")
+@_unit_options
+@click.option("--out", "out_path", type=click.Path(dir_okay=False), required=True,
+              help="Calibration JSON (link model, link frames, zero pose).")
+def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz, out_path) -> None:
+    """Sensor-to-joint vectors, link vectors and link frames from a calibration RECORDING."""
+    import dataclasses
+
+    from ..errors import RecordingError
+    from ..sensors.imu import calibrate as run_calibration
+    from ..sensors.imu import check_recording, read_imu_csv, segments_from_seconds
+
+    rec = read_imu_csv(recording, acc_units=acc_units, gyr_units=gyr_units, mag_units=mag_units,
+                       rate_hz=rate_hz)
+    try:
+        spans = json.loads(Path(segments_path).read_text())
+    except (OSError, json.JSONDecodeError) as exc:
+        raise RecordingError(f"{segments_path}: cannot read the segments JSON ({exc})") from None
+    if not isinstance(spans, dict):
+        raise RecordingError(f"{segments_path}: expected an object of label: [start_s, end_s]")
+    rec = dataclasses.replace(rec, segments=segments_from_seconds(spans, rec.rate_hz, rec.n))
+    for w in check_recording(rec, source=str(recording)):
+        click.echo(f"handsynth: warning: {w}", err=True)
+    cal = run_calibration(rec)
+    cal.save(out_path)
+    lengths = ", ".join(f"{a}->{b} {1e3 * float((v @ v) ** 0.5):.0f} mm"
+                        for (s, a, b), v in cal.model.links.items() if s.startswith("index"))
+    click.echo(f"calibrated {len(cal.sensors)} sensors -> {out_path}; index links: {lengths}")
+
+
+@imu.command()
+@click.argument("recording", type=click.Path(dir_okay=False))
 @click.option("--filter", "filter_name", type=click.Choice(_TRACK_FILTERS), default="vqf",
-              show_default=True, help="Orientation filter.")
-@click.option("--acc-units", type=click.Choice(("m/s2", "g", "mg")), default="m/s2",
-              show_default=True)
-@click.option("--gyr-units", type=click.Choice(("rad/s", "deg/s")), default="rad/s",
-              show_default=True)
-@click.option("--mag-units", type=click.Choice(("uT", "mT", "G", "nT")), default="uT",
-              show_default=True)
-@click.option("--rate", "rate_hz", type=float, default=None,
-              help="Sampling rate, Hz (default: from the time column).")
+              show_default=True, help="Orientation filter (without --calibration).")
+@click.option("--calibration", "calibration_path", type=click.Path(dir_okay=False),
+              help="Calibration JSON from 'handsynth imu calibrate': run Filter 4 and "
+                   "write joint angles too.")
+@_unit_options
 @click.option("--static", "static_s", type=float, default=2.0, show_default=True,
               help="Length of the still start, s (gyro bias, initial attitude).")
 @click.option("--align", default=None, metavar="START,END",
               help="Common rotation for the compass azimuth alignment, s (e.g. 2,4).")
 @click.option("--out", "out_path", type=click.Path(dir_okay=False), required=True,
               help="CSV of quaternions (time_s, <sensor>_qw .. _qz).")
-def track(recording, filter_name, acc_units, gyr_units, mag_units, rate_hz, static_s, align,
-          out_path) -> None:
+@click.option("--angles-out", type=click.Path(dir_okay=False),
+              help="CSV of joint angles in degrees (needs --calibration).")
+def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_units, rate_hz,
+          static_s, align, out_path, angles_out) -> None:
     """Orientation of every sensor of a CSV RECORDING (columns <sensor>_acc_x .. _mag_z)."""
     import dataclasses
 
     import numpy as np
 
     from ..errors import InvalidInputError
-    from ..sensors.imu import StaticStart, check_recording, make_filter, read_imu_csv
+    from ..models import JOINT_NAMES
+    from ..sensors.imu import (
+        ImuCalibration,
+        StaticStart,
+        check_recording,
+        make_filter,
+        read_imu_csv,
+    )
 
+    if angles_out and not calibration_path:
+        raise InvalidInputError("--angles-out needs --calibration")
     rec = read_imu_csv(recording, acc_units=acc_units, gyr_units=gyr_units, mag_units=mag_units,
                        rate_hz=rate_hz)
     for w in check_recording(rec, static_s=static_s, source=str(recording)):
@@ -135,23 +203,21 @@ def track(recording, filter_name, acc_units, gyr_units, mag_units, rate_hz, stat
         except ValueError:
             raise InvalidInputError(f"--align must be START,END in seconds, got {align!r}") from None
     static = StaticStart(static_s=static_s, align_start_s=a, align_end_s=b)
-    est = dataclasses.replace(make_filter(filter_name), static=static)
-    q = est.run(rec)
-    cols = ["time_s"] + [f"{s}_q{c}" for s in rec.sensors for c in "wxyz"]
-    table = np.column_stack([np.arange(rec.n) / rec.rate_hz] + [q[k, :, c] for k in range(q.shape[0])
-                                                               for c in range(4)])
-    target = Path(out_path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", dir=target.parent or ".")
-    try:
-        with os.fdopen(fd, "w") as f:
-            f.write(",".join(cols) + "\n")
-            np.savetxt(f, table, delimiter=",", fmt="%.8g")
-        os.replace(tmp, target)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    click.echo(f"{len(rec.sensors)} sensors, {rec.n} samples ({rec.duration_s:.1f} s) at "
-               f"{rec.rate_hz:g} Hz -> {out_path} ({filter_name})")
+    t = np.arange(rec.n) / rec.rate_hz
+    if calibration_path:
+        cal = ImuCalibration.load(calibration_path)
+        res = cal.track(rec, static=static)
+        q, sensors, name = res["quat"], cal.sensors, "filter4"
+        if angles_out:
+            _write_table(angles_out, ["time_s", *JOINT_NAMES], np.column_stack([t, res["angles"]]))
+    else:
+        est = dataclasses.replace(make_filter(filter_name), static=static)
+        q, sensors, name = est.run(rec), rec.sensors, filter_name
+    cols = ["time_s"] + [f"{s}_q{c}" for s in sensors for c in "wxyz"]
+    _write_table(out_path, cols, np.column_stack([t] + [q[k, :, c] for k in range(q.shape[0])
+                                                         for c in range(4)]))
+    click.echo(f"{len(sensors)} sensors, {rec.n} samples ({rec.duration_s:.1f} s) at "
+               f"{rec.rate_hz:g} Hz -> {out_path} ({name})")
 
 
 @imu.command()

@@ -107,3 +107,41 @@ def test_eval_unknown_filter_is_one_line(tmp_path):
     res = CliRunner().invoke(cli, ["imu", "eval", "--filter", "kalman9", "--json",
                                    str(tmp_path / "x.json")])
     assert res.exit_code == 2 and "unknown filter 'kalman9'" in res.output
+
+
+@pytest.mark.slow
+def test_calibrate_then_track_joint_angles(tmp_path):
+    from handsynth.models import JOINT_NAMES
+    from handsynth.sensors.imu import ImuHand, calibration_motion
+
+    hand = ImuHand(tip_sensors=True)
+    cal = simulate_imu(calibration_motion(), hand=hand, seed=11)
+    cal_csv, seg_json, model = tmp_path / "cal.csv", tmp_path / "seg.json", tmp_path / "cal.json"
+    write_imu_csv(cal, cal_csv)
+    seg_json.write_text(json.dumps({lab: [a / cal.rate_hz, b / cal.rate_hz]
+                                    for lab, a, b in cal.truth.segments}))
+    res = CliRunner().invoke(cli, ["imu", "calibrate", str(cal_csv), "--segments", str(seg_json),
+                                   "--out", str(model)])
+    assert res.exit_code == 0, res.output
+    rec = simulate_imu(free_motion(10.0, seed=12), seed=13)
+    rec_csv, q_csv, ang_csv = tmp_path / "rec.csv", tmp_path / "q.csv", tmp_path / "a.csv"
+    write_imu_csv(rec, rec_csv)
+    res = CliRunner().invoke(cli, ["imu", "track", str(rec_csv), "--calibration", str(model),
+                                   "--align", "2,4", "--out", str(q_csv), "--angles-out", str(ang_csv)])
+    assert res.exit_code == 0, res.output
+    ang = np.loadtxt(ang_csv, delimiter=",", skiprows=1)[:, 1:]
+    err = ang[400:] - rec.truth.angles[400:, 9:]
+    j = [JOINT_NAMES.index(n) for n in ("index_pip_flex", "middle_mcp_flex", "little_dip_flex")]
+    assert np.sqrt(np.mean(err[:, j] ** 2)) < 5.0
+    # against a constant answer (the first frame held) the error is far larger
+    const = ang[400:400 + 1] - rec.truth.angles[400:, 9:]
+    assert np.sqrt(np.mean(err[:, j] ** 2)) < 0.3 * np.sqrt(np.mean(const[:, j] ** 2))
+
+
+def test_calibrate_segment_outside_is_named(tmp_path, sim):
+    src, seg = tmp_path / "rec.csv", tmp_path / "seg.json"
+    write_imu_csv(sim.subset(("forearm_1",)), src)
+    seg.write_text(json.dumps({"static": [0, 2], "elbow_flex": [5, 99]}))
+    res = CliRunner().invoke(cli, ["imu", "calibrate", str(src), "--segments", str(seg),
+                                   "--out", str(tmp_path / "c.json")])
+    assert res.exit_code == 2 and "segment 'elbow_flex' = [5.0, 99.0] s lies outside" in res.output

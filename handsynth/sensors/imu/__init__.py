@@ -10,6 +10,7 @@ baselines); sensor-to-joint vectors; joint angles and fingertip positions.
 
 from ._attitude import StaticStart, azimuth_correction, gyro_bias, initial_attitude
 from ._broad import BROAD_FILTERS, broad_errors, find_broad_trials, read_broad_trial, run_broad
+from ._calibration import ImuCalibration, calibrate, segments_from_seconds
 from ._ekf import ChainEKF, ChainEKFOptions, sensor_tree
 from ._eval import FILTERS, HELDOUT, TUNING, SimConfig, evaluate, make_filter
 from ._filters import (
@@ -118,6 +119,7 @@ __all__ = [
     "ConstantEstimator",
     "Filter1",
     "Filter1Options",
+    "ImuCalibration",
     "ImuHand",
     "ImuNoise",
     "ImuPlacement",
@@ -138,6 +140,7 @@ __all__ = [
     "apply_axis_noise",
     "azimuth_correction",
     "broad_errors",
+    "calibrate",
     "calibrate_vectors",
     "calibration_motion",
     "chain_model",
@@ -164,6 +167,7 @@ __all__ = [
     "rotation_vector",
     "run_broad",
     "seel_joint_positions",
+    "segments_from_seconds",
     "sensor_tree",
     "simulate_imu",
     "static_motion",

@@ -94,12 +94,10 @@ def link_frames(cal: ImuRecording, model: ChainModel, *, hold_s: float = 0.5) ->
     dict
         sensor -> (3, 3) rotation from sensor frame to link frame.
     """
-    if cal.truth is None:
-        raise InvalidInputError("link_frames needs the calibration recording's segments")
     out = {}
     hold = max(3, int(hold_s * cal.rate_hz))
     for s in model.own:
-        a, b = _segment(cal.truth.segments, _FRAME_ROTATION[s])
+        a, b = _segment(cal.labelled(), _FRAME_ROTATION[s])
         k = cal.index(s)
         w = cal.gyr[k, a:b] - cal.gyr[k, a:a + hold].mean(axis=0)
         # principal direction of the angular velocity (eq. 5.1, all samples)

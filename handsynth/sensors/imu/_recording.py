@@ -85,6 +85,10 @@ class ImuRecording:
     gyr : ndarray, shape (S, N, 3), rad/s
     mag : ndarray, shape (S, N, 3), uT
     truth : ImuTruth or None
+    segments : tuple of (str, int, int)
+        Labelled stretches (label, first sample, end sample), e.g. the
+        calibration rotations of a real recording; a simulation's are in
+        its truth.
     """
 
     rate_hz: float
@@ -93,6 +97,13 @@ class ImuRecording:
     gyr: np.ndarray
     mag: np.ndarray
     truth: ImuTruth | None = None
+    segments: tuple = ()
+
+    def labelled(self) -> tuple:
+        """The labelled stretches: `segments`, else the truth's, else ()."""
+        if self.segments:
+            return self.segments
+        return self.truth.segments if self.truth is not None else ()
 
     @property
     def n(self) -> int:

@@ -100,7 +100,7 @@ def _segment(rec_segments, label):
     for name, a, b in rec_segments:
         if name == label:
             return a, b
-    raise InvalidInputError(f"the calibration recording has no rotation {label!r}")
+    raise InvalidInputError(f"the calibration recording has no labelled stretch {label!r}")
 
 
 def _turning_points(gyr, dgyr, *, frac_w=0.25, frac_dw=0.5):
@@ -154,7 +154,7 @@ def rotation_vector(rec: ImuRecording, sensor: str, point: str, *, hold_s: float
     if point not in ROTATIONS:
         raise InvalidInputError(f"no calibration rotations for {point!r}; expected one of "
                                 f"{', '.join(ROTATIONS)}")
-    segments = rec.truth.segments if rec.truth is not None else ()
+    segments = rec.labelled()
     k = rec.index(sensor)
     hold = max(3, int(hold_s * rec.rate_hz))
     dir_rot, len_rot = ROTATIONS[point]
@@ -279,7 +279,7 @@ def link_vectors(rec: ImuRecording, vectors: dict, *, static: StaticStart | None
 
 
 def _calibration_static(rec: ImuRecording) -> StaticStart:
-    segs = rec.truth.segments if rec.truth is not None else ()
+    segs = rec.labelled()
     static_end = _segment(segs, "static")[1] / rec.rate_hz
     a, b = _segment(segs, "elbow_flex")
     return StaticStart(static_s=static_end, align_start_s=a / rec.rate_hz,
