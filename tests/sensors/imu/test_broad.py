@@ -19,6 +19,7 @@ def _fields(n=500):
 def test_read_mat_trial(tmp_path):
     savemat(tmp_path / "05_test.mat", _fields())
     rec, opt, movement = read_broad_trial(tmp_path / "05_test.mat")
+    assert opt.shape == (500, 4)
     assert rec.rate_hz == 200.0 and rec.sensors == ("05_test",) and movement.sum() == 400
     assert [p.name for p in find_broad_trials(tmp_path)] == ["05_test.mat"]
 
