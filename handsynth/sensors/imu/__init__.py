@@ -1,6 +1,178 @@
-"""Finger tracking with inertial measurement units (SPEC.md section 3).
+"""IMU finger tracking: a simulated 20-IMU system and its estimators (seed 003).
 
-Simulated MEMS IMUs on the forearm, the back of the hand and every phalanx,
-orientation filters, sensor-to-joint vectors and joint angles.  Not written
-yet: the package reserves the name.
+Simulation (:func:`simulate_imu`) of MPU-9250-like IMUs on the forearm (3),
+the back of the hand (2) and every phalanx (15) of the handsynth hand, noise
+as Allan-deviation figures; Allan variance; orientation estimators sharing
+one :class:`OrientationEstimator` protocol (gyro integration, the thesis'
+Filter 1 and EKF "Filter 4", and the VQF, Madgwick, Mahony and ahrs-EKF
+baselines); sensor-to-joint vectors; joint angles and fingertip positions.
 """
+
+from ._attitude import StaticStart, azimuth_correction, gyro_bias, initial_attitude
+from ._broad import BROAD_FILTERS, broad_errors, find_broad_trials, read_broad_trial, run_broad
+from ._calibration import ImuCalibration, calibrate, segments_from_seconds
+from ._ekf import ChainEKF, ChainEKFOptions, sensor_tree
+from ._eval import FILTERS, HELDOUT, TUNING, SimConfig, evaluate, make_filter
+from ._filters import (
+    AhrsEKFEstimator,
+    ConstantEstimator,
+    Filter1,
+    Filter1Options,
+    MadgwickEstimator,
+    MahonyEstimator,
+    OrientationEstimator,
+    RawIntegration,
+    VQFEstimator,
+    integrate_gyro,
+)
+from ._kinematics import (
+    JOINT_LINKS,
+    classify_grasp,
+    fingertip_positions,
+    joint_angles,
+    link_frames,
+    truth_link_frames,
+    zero_offsets,
+)
+from ._layout import CHAINS, FLEX_JOINT, LINKS, POINTS
+from ._model import (
+    ARM_JOINTS,
+    EARTH_FIELD_UT,
+    GRAVITY_MPS2,
+    MODEL_JOINTS,
+    SENSOR_BODIES,
+    SENSOR_NAMES,
+    TIP_SENSORS,
+    ImuHand,
+    ImuPlacement,
+    imu_hand_mjcf,
+)
+from ._motion import (
+    CALIBRATION_PLAN,
+    GRASP_POSES,
+    Motion,
+    calibration_motion,
+    concat_motions,
+    free_motion,
+    grasp_motion,
+    static_motion,
+)
+from ._noise import (
+    EVAL_NOISE,
+    MPU9250_DATASHEET,
+    AxisNoise,
+    ImuNoise,
+    MagDisturbance,
+    MagNoise,
+    apply_axis_noise,
+)
+from ._plot import plot_orientation_error, plot_stick_figure
+from ._recording import (
+    UNITS,
+    ImuRecording,
+    ImuTruth,
+    check_recording,
+    read_imu_csv,
+    write_imu_csv,
+)
+from ._simulate import SkinMotion, simulate_imu
+from ._vectors import (
+    ROTATIONS,
+    ChainModel,
+    VectorEstimate,
+    calibrate_vectors,
+    chain_model,
+    link_vectors,
+    rotation_vector,
+    seel_joint_positions,
+    truth_chain_model,
+)
+
+__all__ = [
+    "ARM_JOINTS",
+    "BROAD_FILTERS",
+    "CALIBRATION_PLAN",
+    "CHAINS",
+    "EARTH_FIELD_UT",
+    "EVAL_NOISE",
+    "FILTERS",
+    "FLEX_JOINT",
+    "GRASP_POSES",
+    "GRAVITY_MPS2",
+    "HELDOUT",
+    "JOINT_LINKS",
+    "LINKS",
+    "MODEL_JOINTS",
+    "MPU9250_DATASHEET",
+    "POINTS",
+    "ROTATIONS",
+    "SENSOR_BODIES",
+    "SENSOR_NAMES",
+    "TIP_SENSORS",
+    "TUNING",
+    "UNITS",
+    "AhrsEKFEstimator",
+    "AxisNoise",
+    "ChainEKF",
+    "ChainEKFOptions",
+    "ChainModel",
+    "ConstantEstimator",
+    "Filter1",
+    "Filter1Options",
+    "ImuCalibration",
+    "ImuHand",
+    "ImuNoise",
+    "ImuPlacement",
+    "ImuRecording",
+    "ImuTruth",
+    "MadgwickEstimator",
+    "MagDisturbance",
+    "MagNoise",
+    "MahonyEstimator",
+    "Motion",
+    "OrientationEstimator",
+    "RawIntegration",
+    "SimConfig",
+    "SkinMotion",
+    "StaticStart",
+    "VQFEstimator",
+    "VectorEstimate",
+    "apply_axis_noise",
+    "azimuth_correction",
+    "broad_errors",
+    "calibrate",
+    "calibrate_vectors",
+    "calibration_motion",
+    "chain_model",
+    "check_recording",
+    "classify_grasp",
+    "concat_motions",
+    "evaluate",
+    "find_broad_trials",
+    "fingertip_positions",
+    "free_motion",
+    "grasp_motion",
+    "gyro_bias",
+    "imu_hand_mjcf",
+    "initial_attitude",
+    "integrate_gyro",
+    "joint_angles",
+    "link_frames",
+    "link_vectors",
+    "make_filter",
+    "plot_orientation_error",
+    "plot_stick_figure",
+    "read_broad_trial",
+    "read_imu_csv",
+    "rotation_vector",
+    "run_broad",
+    "seel_joint_positions",
+    "segments_from_seconds",
+    "sensor_tree",
+    "simulate_imu",
+    "static_motion",
+    "truth_chain_model",
+    "truth_link_frames",
+    "write_imu_csv",
+    "zero_offsets",
+]

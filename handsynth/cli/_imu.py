@@ -1,0 +1,241 @@
+"""``handsynth imu``: IMU finger tracking (simulated evaluation, recordings, BROAD)."""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from pathlib import Path
+
+import click
+
+from ._main import cli
+
+_TRACK_FILTERS = ("raw", "filter1", "vqf", "madgwick", "mahony", "ahrs_ekf", "constant")
+
+
+def _unit_options(f):
+    f = click.option("--rate", "rate_hz", type=float, default=None,
+                     help="Sampling rate, Hz (default: from the time column).")(f)
+    f = click.option("--mag-units", type=click.Choice(("uT", "mT", "G", "nT")), default="uT",
+                     show_default=True)(f)
+    f = click.option("--gyr-units", type=click.Choice(("rad/s", "deg/s")), default="rad/s",
+                     show_default=True)(f)
+    f = click.option("--acc-units", type=click.Choice(("m/s2", "g", "mg")), default="m/s2",
+                     show_default=True)(f)
+    return f
+
+
+def _write_table(path, header, table) -> None:
+    import numpy as np
+
+    target = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", dir=target.parent or ".")
+    try:
+        with os.fdopen(fd, "w") as f:
+            f.write(",".join(header) + "\n")
+            np.savetxt(f, table, delimiter=",", fmt="%.8g")
+        os.replace(tmp, target)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _write_json(path: str, payload) -> None:
+    target = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", dir=target.parent or ".")
+    try:
+        with os.fdopen(fd, "w") as f:
+            json.dump(payload, f, indent=2)
+        os.replace(tmp, target)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _filters(values, allowed):
+    from ..errors import InvalidInputError
+
+    names = tuple(dict.fromkeys(v for item in values for v in item.split(",") if v))
+    for n in names:
+        if n not in allowed:
+            raise InvalidInputError(f"unknown filter {n!r}; expected one of {', '.join(allowed)}")
+    return names or allowed
+
+
+@cli.group()
+def imu() -> None:
+    """IMU finger tracking: 20 MEMS IMUs from the elbow to the fingertips (seed 003)."""
+
+
+@imu.command("eval")
+@click.option("--config", "config_name", type=click.Choice(("heldout", "tuning")),
+              default="heldout", show_default=True,
+              help="Simulator configuration (heldout: not used for tuning).")
+@click.option("--filter", "filters", multiple=True,
+              help="Filter(s) to run, comma-separated or repeated (default: all).")
+@click.option("--duration", "durations", type=float, multiple=True,
+              help="Trial length(s), s (default 15 and 30).")
+@click.option("--elbow", "elbows", type=click.Choice(("fixed", "moving")), multiple=True,
+              help="Elbow condition(s) (default both).")
+@click.option("--no-grasps", is_flag=True, help="Skip the grasp classification.")
+@click.option("--json", "json_out", type=click.Path(dir_okay=False), required=True,
+              help="Write the full report as JSON.")
+@click.option("--plots", "plot_dir", type=click.Path(file_okay=False),
+              help="Write orientation_error.png and stick_figure.png (last trial) here.")
+def eval_(config_name, filters, durations, elbows, no_grasps, json_out, plot_dir) -> None:
+    """Reproduce the thesis' tables on simulated data, beside trivial baselines."""
+    from ..sensors.imu import (
+        FILTERS,
+        HELDOUT,
+        TUNING,
+        evaluate,
+        plot_orientation_error,
+        plot_stick_figure,
+    )
+
+    config = HELDOUT if config_name == "heldout" else TUNING
+    series: dict = {}
+    rep = evaluate(config, durations=durations or (15.0, 30.0), elbows=elbows or ("fixed", "moving"),
+                   filters=_filters(filters, FILTERS), grasps=not no_grasps, series=series)
+    _write_json(json_out, rep)
+    if plot_dir:
+        out = Path(plot_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        last = rep["trials"][-1]
+        what = f"{config.label}, {last['duration_s']:g} s, elbow {last['elbow']}"
+        plot_orientation_error(series["t"], series["error"], out / "orientation_error.png",
+                               title=f"orientation error ({what})")
+        keep = {k: v for k, v in series["chains"].items() if k in ("truth", "filter4", "raw", "vqf")}
+        plot_stick_figure(keep, out / "stick_figure.png",
+                          title=f"side view at t = {series['chain_time_s']:.2f} s ({what})")
+    click.echo(f"config {config.label}: orientation RMSE per segment over the motion, deg")
+    click.echo(f"{'filter':<10}{'mean':>7}{'worst':>7}{'distal':>8}{'joint':>7}{'tip mm':>8}"
+               f"{'tip/wrist':>10}")
+    for name, s in rep["summary"].items():
+        click.echo(f"{name:<10}{s['orientation_mean_deg']:7.2f}{s['orientation_worst_segment_deg']:7.2f}"
+                   f"{s['orientation_distal_mean_deg']:8.2f}{s['joint_angle_mean_rmse_deg']:7.2f}"
+                   f"{s['fingertip_mean_rmse_mm']:8.1f}{s['fingertip_from_wrist_mean_rmse_mm']:10.1f}")
+    v = rep["vectors"]
+    click.echo("sensor-to-joint vectors, median error mm: "
+               + ", ".join(f"{k} {v[k]['median_mm']:.1f}" for k in
+                           ("rotation_method", "least_squares_seel", "baseline_standard_hand",
+                            "baseline_zero_vector")))
+
+
+@imu.command()
+@click.argument("recording", type=click.Path(dir_okay=False))
+@click.option("--segments", "segments_path", type=click.Path(dir_okay=False), required=True,
+              help='JSON {"static": [0, 2], "elbow_flex": [2, 9.5], ...}: the labelled '
+                   "calibration rotations, seconds.")
+@_unit_options
+@click.option("--out", "out_path", type=click.Path(dir_okay=False), required=True,
+              help="Calibration JSON (link model, link frames, zero pose).")
+def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz, out_path) -> None:
+    """Sensor-to-joint vectors, link vectors and link frames from a calibration RECORDING."""
+    import dataclasses
+
+    from ..errors import RecordingError
+    from ..sensors.imu import calibrate as run_calibration
+    from ..sensors.imu import check_recording, read_imu_csv, segments_from_seconds
+
+    rec = read_imu_csv(recording, acc_units=acc_units, gyr_units=gyr_units, mag_units=mag_units,
+                       rate_hz=rate_hz)
+    try:
+        spans = json.loads(Path(segments_path).read_text())
+    except (OSError, json.JSONDecodeError) as exc:
+        raise RecordingError(f"{segments_path}: cannot read the segments JSON ({exc})") from None
+    if not isinstance(spans, dict):
+        raise RecordingError(f"{segments_path}: expected an object of label: [start_s, end_s]")
+    rec = dataclasses.replace(rec, segments=segments_from_seconds(spans, rec.rate_hz, rec.n))
+    for w in check_recording(rec, source=str(recording)):
+        click.echo(f"handsynth: warning: {w}", err=True)
+    cal = run_calibration(rec)
+    cal.save(out_path)
+    lengths = ", ".join(f"{a}->{b} {1e3 * float((v @ v) ** 0.5):.0f} mm"
+                        for (s, a, b), v in cal.model.links.items() if s.startswith("index"))
+    click.echo(f"calibrated {len(cal.sensors)} sensors -> {out_path}; index links: {lengths}")
+
+
+@imu.command()
+@click.argument("recording", type=click.Path(dir_okay=False))
+@click.option("--filter", "filter_name", type=click.Choice(_TRACK_FILTERS), default="vqf",
+              show_default=True, help="Orientation filter (without --calibration).")
+@click.option("--calibration", "calibration_path", type=click.Path(dir_okay=False),
+              help="Calibration JSON from 'handsynth imu calibrate': run Filter 4 and "
+                   "write joint angles too.")
+@_unit_options
+@click.option("--static", "static_s", type=float, default=2.0, show_default=True,
+              help="Length of the still start, s (gyro bias, initial attitude).")
+@click.option("--align", default=None, metavar="START,END",
+              help="Common rotation for the compass azimuth alignment, s (e.g. 2,4).")
+@click.option("--out", "out_path", type=click.Path(dir_okay=False), required=True,
+              help="CSV of quaternions (time_s, <sensor>_qw .. _qz).")
+@click.option("--angles-out", type=click.Path(dir_okay=False),
+              help="CSV of joint angles in degrees (needs --calibration).")
+def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_units, rate_hz,
+          static_s, align, out_path, angles_out) -> None:
+    """Orientation of every sensor of a CSV RECORDING (columns <sensor>_acc_x .. _mag_z)."""
+    import dataclasses
+
+    import numpy as np
+
+    from ..errors import InvalidInputError
+    from ..models import JOINT_NAMES
+    from ..sensors.imu import (
+        ImuCalibration,
+        StaticStart,
+        check_recording,
+        make_filter,
+        read_imu_csv,
+    )
+
+    if angles_out and not calibration_path:
+        raise InvalidInputError("--angles-out needs --calibration")
+    rec = read_imu_csv(recording, acc_units=acc_units, gyr_units=gyr_units, mag_units=mag_units,
+                       rate_hz=rate_hz)
+    for w in check_recording(rec, static_s=static_s, source=str(recording)):
+        click.echo(f"handsynth: warning: {w}", err=True)
+    a = b = None
+    if align:
+        try:
+            a, b = (float(x) for x in align.split(","))
+        except ValueError:
+            raise InvalidInputError(f"--align must be START,END in seconds, got {align!r}") from None
+    static = StaticStart(static_s=static_s, align_start_s=a, align_end_s=b)
+    t = np.arange(rec.n) / rec.rate_hz
+    if calibration_path:
+        cal = ImuCalibration.load(calibration_path)
+        res = cal.track(rec, static=static)
+        q, sensors, name = res["quat"], cal.sensors, "filter4"
+        if angles_out:
+            _write_table(angles_out, ["time_s", *JOINT_NAMES], np.column_stack([t, res["angles"]]))
+    else:
+        est = dataclasses.replace(make_filter(filter_name), static=static)
+        q, sensors, name = est.run(rec), rec.sensors, filter_name
+    cols = ["time_s"] + [f"{s}_q{c}" for s in sensors for c in "wxyz"]
+    _write_table(out_path, cols, np.column_stack([t] + [q[k, :, c] for k in range(q.shape[0])
+                                                         for c in range(4)]))
+    click.echo(f"{len(sensors)} sensors, {rec.n} samples ({rec.duration_s:.1f} s) at "
+               f"{rec.rate_hz:g} Hz -> {out_path} ({name})")
+
+
+@imu.command()
+@click.argument("directory", type=click.Path(file_okay=False))
+@click.option("--filter", "filters", multiple=True,
+              help="Filter(s), comma-separated or repeated (default: all single-IMU filters).")
+@click.option("--json", "json_out", type=click.Path(dir_okay=False),
+              help="Write per-trial errors as JSON.")
+def broad(directory, filters, json_out) -> None:
+    """Run the filters on the BROAD trials present in DIRECTORY (the dataset's metric)."""
+    from ..sensors.imu import BROAD_FILTERS, run_broad
+
+    res = run_broad(directory, filters=_filters(filters, BROAD_FILTERS))
+    if json_out:
+        _write_json(json_out, res)
+    click.echo(f"{len(res['trials'])} BROAD trial(s); mean RMSE over the movement phases, deg "
+               f"({res['anchor']})")
+    click.echo(f"{'filter':<10}{'total':>8}{'heading':>9}{'inclination':>13}")
+    for name, m in res["mean"].items():
+        click.echo(f"{name:<10}{m['total_rmse_deg']:8.2f}{m['heading_rmse_deg']:9.2f}"
+                   f"{m['inclination_rmse_deg']:13.2f}")

@@ -1,0 +1,96 @@
+"""Initial attitude and compass azimuth alignment across sensors.
+
+Initial attitude: gravity and the tilt-compensated compass over the static
+start (seed 003 eqs. 2.9-2.11).  Azimuth alignment (section 4.2.5): every
+sensor sees the same angular velocity during a common rotation; the vector
+w_g = g x w_max (eq. 4.18), tilt-compensated, has a heading psi_wg (eq. 4.19)
+with far less spread between sensors than the compass.  The per-sensor
+difference psi_d = psi - psi_wg (eq. 4.20) is compared with its median over
+the sensors, giving the correction psi_cor = median - psi_d (eq. 4.21) that
+is added to each compass heading (eq. 4.22).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...errors import EstimationError, InvalidInputError
+from ._quat import quat_from_acc_mag
+from ._recording import ImuRecording
+
+__all__ = ["StaticStart", "azimuth_correction", "gyro_bias", "initial_attitude"]
+
+
+@dataclass(frozen=True)
+class StaticStart:
+    """Where the static start and the common rotation are (seconds)."""
+
+    static_s: float = 2.0
+    align_start_s: float | None = 2.0
+    align_end_s: float | None = 4.0
+
+    def __post_init__(self) -> None:
+        if not self.static_s > 0:
+            raise InvalidInputError(f"static_s must be > 0, got {self.static_s!r}")
+
+
+def _n(rec: ImuRecording, seconds: float) -> int:
+    return max(1, min(rec.n, round(seconds * rec.rate_hz)))
+
+
+def gyro_bias(rec: ImuRecording, static: StaticStart = StaticStart()) -> np.ndarray:
+    """Mean gyro over the static start, rad/s, shape (S, 3) (seed 003 section 4.2.4)."""
+    return rec.gyr[:, : _n(rec, static.static_s)].mean(axis=1)
+
+
+def azimuth_correction(rec: ImuRecording, static: StaticStart = StaticStart()) -> np.ndarray:
+    """Per-sensor compass heading correction psi_cor, radians, shape (S,) (eqs. 4.18-4.21).
+
+    Raises
+    ------
+    EstimationError
+        If the common rotation is too slow (< 0.5 rad/s) or about the vertical
+        (then g x w_max vanishes and fixes no heading).
+    """
+    if static.align_start_s is None or static.align_end_s is None:
+        return np.zeros(len(rec.sensors))
+    n0 = _n(rec, static.static_s)
+    a, b = _n(rec, static.align_start_s), _n(rec, static.align_end_s)
+    if b - a < 2:
+        raise InvalidInputError(f"the common rotation {static.align_start_s}-{static.align_end_s} s "
+                                "is outside the recording")
+    g = rec.acc[:, :n0].mean(axis=1)
+    gyr = rec.gyr[:, a:b] - gyro_bias(rec, static)[:, None]
+    # one common instant for every sensor (the fastest on average), so that
+    # all take w_max with the same sign
+    k = int(np.argmax(np.linalg.norm(gyr, axis=-1).mean(axis=0)))
+    wmax = gyr[:, k]
+    if np.any(np.linalg.norm(wmax, axis=-1) < 0.5):
+        raise EstimationError("the common rotation is slower than 0.5 rad/s; "
+                              "cannot align compass azimuths")
+    wg = np.cross(g, wmax)                                              # eq. 4.18
+    if np.any(np.linalg.norm(wg, axis=-1) < 0.2 * np.linalg.norm(g, axis=-1)
+              * np.linalg.norm(wmax, axis=-1)):
+        raise EstimationError("the common rotation is about the vertical; "
+                              "g x w_max fixes no heading")
+    mag = rec.mag[:, :n0].mean(axis=1)
+    q_m = quat_from_acc_mag(g, mag)
+    q_w = quat_from_acc_mag(g, wg)                                      # eq. 4.19
+    psi = 2 * np.arctan2(q_m[:, 3], q_m[:, 0])
+    psi_wg = 2 * np.arctan2(q_w[:, 3], q_w[:, 0])
+    d = np.angle(np.exp(1j * (psi - psi_wg)))                           # eq. 4.20
+    # median of the angles, unwrapped around the first sensor's
+    dmean = d[0] + np.median(np.angle(np.exp(1j * (d - d[0]))))
+    return np.angle(np.exp(1j * (dmean - d)))                           # eq. 4.21
+
+
+def initial_attitude(rec: ImuRecording, static: StaticStart = StaticStart(), *,
+                     align: bool = True) -> np.ndarray:
+    """Initial sensor-to-world quaternions, shape (S, 4) (eqs. 2.9-2.11, 4.22)."""
+    n0 = _n(rec, static.static_s)
+    g = rec.acc[:, :n0].mean(axis=1)
+    mag = rec.mag[:, :n0].mean(axis=1)
+    cor = azimuth_correction(rec, static) if align else 0.0
+    return quat_from_acc_mag(g, mag, heading_offset_rad=cor)

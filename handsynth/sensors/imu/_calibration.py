@@ -1,0 +1,141 @@
+"""The calibrated tracker: link model, link frames and zero pose in one file.
+
+:func:`calibrate` runs chapter 3 and section 5.2.1 of seed 003 on a
+calibration recording whose stretches are labelled (``static``, and one
+rotation per entry of :data:`CALIBRATION_PLAN`); :class:`ImuCalibration`
+saves to and loads from JSON, and :meth:`ImuCalibration.track` turns any
+recording of the same sensors into attitudes, joint angles and fingertips.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ...errors import RecordingError
+from ._ekf import ChainEKF
+from ._kinematics import fingertip_positions, joint_angles, link_frames, zero_offsets
+from ._recording import ImuRecording
+from ._vectors import ChainModel, chain_model
+
+__all__ = ["ImuCalibration", "calibrate", "segments_from_seconds"]
+
+_VERSION = 1
+
+
+def segments_from_seconds(spans: dict, rate_hz: float, n: int) -> tuple:
+    """``{label: [start_s, end_s]}`` -> ((label, first sample, end sample), ...), checked."""
+    out = []
+    for label, span in spans.items():
+        try:
+            a, b = (float(x) for x in span)
+        except (TypeError, ValueError):
+            raise RecordingError(f"segment {label!r} must be [start_s, end_s], got {span!r}") from None
+        i, j = round(a * rate_hz), round(b * rate_hz)
+        if not (0 <= i < j <= n):
+            raise RecordingError(f"segment {label!r} = [{a}, {b}] s lies outside the recording "
+                                 f"(0-{n / rate_hz:.2f} s)")
+        out.append((str(label), i, j))
+    return tuple(out)
+
+
+@dataclass(frozen=True)
+class ImuCalibration:
+    """Link model, link frames and zero-pose angles of one wearer and mounting.
+
+    Attributes
+    ----------
+    model : ChainModel
+    frames : dict
+        sensor -> (3, 3) link frame L_R_S.
+    zero : ndarray, shape (20,)
+    sensors : tuple of str
+        The sensors the tracker expects (the link model's).
+    """
+
+    model: ChainModel
+    frames: dict
+    zero: np.ndarray
+    sensors: tuple
+
+    def track(self, rec: ImuRecording, *, static=None) -> dict:
+        """Attitudes (Filter 4), joint angles and fingertips of a recording.
+
+        Returns
+        -------
+        dict
+            ``quat`` (S, N, 4), ``angles`` (N, 20) degrees, ``tips``
+            finger -> (N, 3) metres from the elbow.
+        """
+        missing = [s for s in self.sensors if s not in rec.sensors]
+        if missing:
+            raise RecordingError(f"the recording lacks sensor(s) {', '.join(missing)} "
+                                 "of the calibration")
+        sub = rec.subset(self.sensors)
+        est = ChainEKF(self.model) if static is None else ChainEKF(self.model, static=static)
+        q = est.run(sub)
+        angles, _ = joint_angles(q, sub.sensors, self.frames, zero=self.zero)
+        tips = {f: v for f, v in fingertip_positions(q, sub.sensors, self.model).items()
+                if not f.endswith("_joints")}
+        return {"quat": q, "angles": angles, "tips": tips}
+
+    def to_dict(self) -> dict:
+        return {"format": "handsynth-imu-calibration", "version": _VERSION,
+                "sensors": list(self.sensors),
+                "own_m": {s: v.tolist() for s, v in self.model.own.items()},
+                "links_m": [[s, a, b, v.tolist()] for (s, a, b), v in self.model.links.items()],
+                "frames": {s: v.tolist() for s, v in self.frames.items()},
+                "zero_deg": self.zero.tolist()}
+
+    def save(self, path) -> Path:
+        """Write JSON atomically (never a half-written file under `path`)."""
+        path = Path(path)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+        try:
+            with os.fdopen(fd, "w") as f:
+                json.dump(self.to_dict(), f, indent=1)
+            os.replace(tmp, path)
+        except BaseException:
+            Path(tmp).unlink(missing_ok=True)
+            raise
+        return path
+
+    @classmethod
+    def load(cls, path) -> ImuCalibration:
+        path = Path(path)
+        try:
+            d = json.loads(path.read_text())
+        except FileNotFoundError:
+            raise RecordingError(f"{path}: no such file") from None
+        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+            raise RecordingError(f"{path}: not a calibration JSON file ({exc})") from None
+        if not isinstance(d, dict) or d.get("format") != "handsynth-imu-calibration":
+            raise RecordingError(f"{path}: not a handsynth IMU calibration file")
+        missing = [k for k in ("sensors", "own_m", "links_m", "frames", "zero_deg") if k not in d]
+        if missing:
+            raise RecordingError(f"{path}: missing field(s) {', '.join(missing)}")
+        try:
+            model = ChainModel({s: np.array(v, float) for s, v in d["own_m"].items()},
+                               {(s, a, b): np.array(v, float) for s, a, b, v in d["links_m"]})
+            frames = {s: np.array(v, float).reshape(3, 3) for s, v in d["frames"].items()}
+            zero = np.array(d["zero_deg"], float).reshape(20)
+        except (TypeError, ValueError) as exc:
+            raise RecordingError(f"{path}: malformed calibration values ({exc})") from None
+        return cls(model, frames, zero, tuple(d["sensors"]))
+
+
+def calibrate(rec: ImuRecording) -> ImuCalibration:
+    """Calibrate from a recording with labelled stretches (see :func:`calibration_motion`).
+
+    Needs the five fingertip sensors of the calibration (:data:`TIP_SENSORS`)
+    for the distal link vectors (seed 003 Table 3.5).
+    """
+    model = chain_model(rec)
+    frames = link_frames(rec, model)
+    zero = zero_offsets(rec, frames)
+    return ImuCalibration(model, frames, zero, tuple(model.own))

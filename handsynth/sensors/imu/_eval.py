@@ -1,0 +1,322 @@
+"""Evaluation on simulated data: the thesis' tables against trivial baselines.
+
+Two simulator configurations:
+
+- ``tuning``: the standard hand, datasheet noise (:data:`MPU9250_DATASHEET`),
+  sensors exactly where :class:`ImuPlacement` puts them, no skin motion.
+  The filters' options were chosen on this one.
+- ``heldout``: another hand (longer, narrower), other noise figures
+  (:data:`EVAL_NOISE`, with a magnet near the hand from 14 to 19 s), every
+  sensor tilted (5 deg s.d. per axis) and shifted (2 mm s.d.) on its segment,
+  and skin motion (:class:`SkinMotion`).  Nothing was tuned on it.
+
+Each trial is a free motion of 15 or 30 s with the elbow fixed or moving
+(as the thesis' section 4.4); orientation RMSE is per segment over the
+motion (after the static start and the alignment rotation).  Beside every
+filter stand two trivial answers: ``constant`` (the initial attitude held)
+and ``raw`` (gyro integration).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ...errors import InvalidInputError
+from ...models import JOINT_NAMES, HandShape
+from ._ekf import ChainEKF
+from ._filters import (
+    AhrsEKFEstimator,
+    ConstantEstimator,
+    Filter1,
+    MadgwickEstimator,
+    MahonyEstimator,
+    RawIntegration,
+    VQFEstimator,
+)
+from ._kinematics import classify_grasp, fingertip_positions, joint_angles, link_frames, zero_offsets
+from ._layout import CHAINS, LINKS, POINTS
+from ._model import SENSOR_NAMES, ImuHand, ImuPlacement
+from ._motion import GRASP_POSES, calibration_motion, free_motion, grasp_motion, static_motion
+from ._noise import EVAL_NOISE, MPU9250_DATASHEET, ImuNoise
+from ._quat import angle_deg, heading_inclination_deg
+from ._recording import ImuRecording, ImuTruth
+from ._simulate import SkinMotion, simulate_imu
+from ._vectors import chain_model, seel_joint_positions, truth_chain_model
+
+__all__ = ["FILTERS", "HELDOUT", "TUNING", "SimConfig", "evaluate", "make_filter"]
+
+#: Names of the orientation estimators that :func:`evaluate` can run.
+FILTERS: tuple[str, ...] = ("constant", "raw", "filter1", "filter4", "vqf", "madgwick", "mahony",
+                            "ahrs_ekf")
+
+
+@dataclass(frozen=True)
+class SimConfig:
+    """One simulator configuration (frozen).
+
+    Parameters
+    ----------
+    label : str
+    shape : HandShape
+    noise : ImuNoise
+    tilt_sd_deg, offset_sd_mm : float
+        Random mounting errors of every sensor on its segment.
+    skin : SkinMotion or None
+    seed : int
+    """
+
+    label: str
+    shape: HandShape = field(default_factory=HandShape)
+    noise: ImuNoise = MPU9250_DATASHEET
+    tilt_sd_deg: float = 0.0
+    offset_sd_mm: float = 0.0
+    skin: SkinMotion | None = None
+    seed: int = 0
+
+    def placement(self) -> ImuPlacement:
+        rng = np.random.default_rng(self.seed + 1000)
+        tilts = {s: tuple(rng.normal(0, self.tilt_sd_deg, 3)) for s in SENSOR_NAMES} \
+            if self.tilt_sd_deg else {}
+        offs = {s: tuple(rng.normal(0, self.offset_sd_mm, 3) * np.array([1, 1, 0.3]))
+                for s in SENSOR_NAMES} if self.offset_sd_mm else {}
+        return ImuPlacement(tilts_deg=tilts, offsets_mm=offs)
+
+    def describe(self) -> dict:
+        return {"label": self.label, "hand_shape": self.shape.name, "noise": self.noise.label,
+                "tilt_sd_deg": self.tilt_sd_deg, "offset_sd_mm": self.offset_sd_mm,
+                "skin_motion": None if self.skin is None else dataclasses.asdict(self.skin),
+                "magnetic_disturbances": [dataclasses.asdict(d) for d in self.noise.disturbances],
+                "seed": self.seed}
+
+
+TUNING = SimConfig("tuning")
+HELDOUT = SimConfig("heldout", HandShape(length=1.08, width=0.93, palm=0.95), EVAL_NOISE,
+                    tilt_sd_deg=5.0, offset_sd_mm=2.0, skin=SkinMotion(2.0, 4.0), seed=1)
+
+
+def make_filter(name: str, model=None):
+    """An estimator by name (``filter4`` needs the link model)."""
+    table = {"constant": ConstantEstimator, "raw": RawIntegration, "filter1": Filter1,
+             "vqf": VQFEstimator, "madgwick": MadgwickEstimator, "mahony": MahonyEstimator,
+             "ahrs_ekf": AhrsEKFEstimator}
+    if name == "filter4":
+        if model is None:
+            raise InvalidInputError("filter4 needs a link model (calibration)")
+        return ChainEKF(model)
+    if name not in table:
+        raise InvalidInputError(f"unknown filter {name!r}; expected one of {', '.join(FILTERS)}")
+    return table[name]()
+
+
+def _rmse(x, axis=None):
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns (thumb CMC) stay NaN
+        m = np.sqrt(np.nanmean(np.square(x), axis=axis))
+    return float(m) if axis is None else m
+
+
+def _truth(rec: ImuRecording) -> ImuTruth:
+    if rec.truth is None:
+        raise InvalidInputError("evaluation needs simulated recordings with truth")
+    return rec.truth
+
+
+def _vector_errors(est: dict, truth: dict) -> dict:
+    err = {f"{s}<-{p}": float(np.linalg.norm(np.asarray(v) - truth[(s, p)]) * 1e3)
+           for (s, p), v in est.items()}
+    vals = np.array(list(err.values()))
+    return {"median_mm": float(np.median(vals)), "mean_mm": float(vals.mean()),
+            "max_mm": float(vals.max()), "n": int(vals.size), "per_vector_mm": err}
+
+
+def _calibrate(config: SimConfig, placement: ImuPlacement):
+    hand = ImuHand(config.shape, placement=placement, tip_sensors=True)
+    quiet = dataclasses.replace(config.noise, disturbances=())
+    cal = simulate_imu(calibration_motion(), hand=hand, noise=quiet, skin=config.skin,
+                       seed=config.seed + 7)
+    model = chain_model(cal)
+    frames = link_frames(cal, model)
+    zero = zero_offsets(cal, frames)
+    return cal, model, frames, zero
+
+
+def _vector_report(cal, model, config: SimConfig, placement, lsq_rec) -> dict:
+    from ._vectors import calibrate_vectors
+
+    truth = _truth(cal).joint_vectors
+    vec = calibrate_vectors(cal)
+    rot = {k: v.vector for k, v in vec.items() if not k[0].endswith("_tip")}
+    # baseline 1: the standard hand with sensors where they should be
+    std = simulate_imu(static_motion(0.1), hand=ImuHand(tip_sensors=True), noise=None)
+    std_vec = _truth(std).joint_vectors
+    nominal = {k: std_vec[k] for k in rot}
+    zero_vec = {k: np.zeros(3) for k in rot}
+    # baseline 2: least squares (Seel et al. 2012) on a free motion, per joint
+    lsq: dict = {}
+    for s1, _, j2 in LINKS:
+        child = next((lk[0] for lk in LINKS if lk[1] == j2), None)
+        if child is None:
+            continue
+        # started from the standard hand's vectors, as a user would
+        init = np.r_[-std_vec[(s1, j2)], -std_vec[(child, j2)]]
+        o1, o2 = seel_joint_positions(lsq_rec, s1, child, start=int(4 * lsq_rec.rate_hz),
+                                      init=init)
+        if (s1, j2) in truth:
+            lsq.setdefault((s1, j2), -o1)
+        lsq.setdefault((child, j2), -o2)
+    rot_common = {k: rot[k] for k in lsq if k in rot}
+    truth_links = truth_chain_model(cal).links
+    link_err = {f"{s}:{a}->{b}": float(np.linalg.norm(v - truth_links[(s, a, b)]) * 1e3)
+                for (s, a, b), v in model.links.items()}
+    lv = np.array(list(link_err.values()))
+    return {
+        "rotation_method": _vector_errors(rot, truth),
+        "rotation_method_on_lsq_pairs": _vector_errors(rot_common, truth),
+        "least_squares_seel": _vector_errors(lsq, truth),
+        "baseline_standard_hand": _vector_errors(nominal, truth),
+        "baseline_zero_vector": _vector_errors(zero_vec, truth),
+        "link_vectors_mm": {"median_mm": float(np.median(lv)), "max_mm": float(lv.max()),
+                            "per_link_mm": link_err},
+    }
+
+
+def _trial(rec, filters, model, frames, zero, series: dict | None = None) -> dict:
+    truth = _truth(rec)
+    motion_start = next((b for s, _, b in truth.segments if s == "align"), 0)
+    sl = slice(motion_start, None)
+    out: dict = {"orientation_rmse_deg": {}, "heading_rmse_deg": {}, "inclination_rmse_deg": {},
+                 "joint_rmse_deg": {}, "fingertip_rmse_mm": {}, "fingertip_from_wrist_rmse_mm": {}}
+    kp = truth.keypoints
+    true_angles = truth.angles[:, 9:]
+    for name in filters:
+        q = make_filter(name, model).run(rec)
+        err = angle_deg(q[:, sl], truth.quat[:, sl])
+        head, incl = heading_inclination_deg(q[:, sl], truth.quat[:, sl])
+        if series is not None:
+            series.setdefault("t", np.arange(rec.n)[sl] / rec.rate_hz)
+            series.setdefault("error", {})[name] = err.mean(axis=0)
+        out["orientation_rmse_deg"][name] = dict(zip(rec.sensors, _rmse(err, axis=1).tolist()))
+        out["heading_rmse_deg"][name] = float(_rmse(head))
+        out["inclination_rmse_deg"][name] = float(_rmse(incl))
+        ang, _ = joint_angles(q, rec.sensors, frames, zero=zero)
+        je = _rmse(ang[sl] - true_angles[sl], axis=0)
+        out["joint_rmse_deg"][name] = {n: float(v) for n, v in zip(JOINT_NAMES, je)
+                                       if np.isfinite(v)}
+        tips = fingertip_positions(q, rec.sensors, model)
+        fe, fw = {}, {}
+        for f, chain in CHAINS.items():
+            true = kp[:, POINTS.index(f"{f}_tip")] - kp[:, POINTS.index("elbow")]
+            fe[f] = float(_rmse(np.linalg.norm(tips[f][sl] - true[sl], axis=-1)) * 1e3)
+            wrist_est = tips[f"{f}_joints"][:, 0]
+            true_w = true - (kp[:, POINTS.index("wrist")] - kp[:, POINTS.index("elbow")])
+            fw[f] = float(_rmse(np.linalg.norm((tips[f] - wrist_est)[sl] - true_w[sl], axis=-1)) * 1e3)
+            del chain
+        out["fingertip_rmse_mm"][name] = fe
+        if series is not None:
+            i = int(np.argmax(np.abs(true_angles[:, JOINT_NAMES.index("index_pip_flex")])))
+            series.setdefault("chains", {})[name] = {
+                f: np.vstack([np.zeros(3), tips[f"{f}_joints"][i]]) for f in CHAINS}
+            true_chain = {}
+            for f, links in CHAINS.items():
+                pts = [kp[i, POINTS.index(a)] for _, a, _ in links] + [kp[i, POINTS.index(f"{f}_tip")]]
+                true_chain[f] = np.array(pts) - kp[i, POINTS.index("elbow")]
+            series["chains"]["truth"] = true_chain
+            series["chain_time_s"] = i / rec.rate_hz
+        out["fingertip_from_wrist_rmse_mm"][name] = fw
+    return out
+
+
+def _grasp_report(config, placement, filters, model, frames, zero) -> dict:
+    hand = ImuHand(config.shape, placement=placement)
+    rec = simulate_imu(grasp_motion(), hand=hand, noise=config.noise, skin=config.skin,
+                       seed=config.seed + 31)
+    classes = {g: p for g, p in GRASP_POSES.items() if g != "open"}
+    truth = _truth(rec)
+    holds = [(s.split(":", 1)[1], a, b) for s, a, b in truth.segments if s.startswith("grasp:")]
+    out: dict = {"classes": list(classes), "accuracy": {}}
+    for name in filters:
+        q = make_filter(name, model).run(rec)
+        ang, _ = joint_angles(q, rec.sensors, frames, zero=zero)
+        hits = [classify_grasp(ang[a:b].mean(axis=0, keepdims=True), classes)[0] == g
+                for g, a, b in holds]
+        out["accuracy"][name] = float(np.mean(hits))
+    truth_hits = [classify_grasp(truth.angles[a:b, 9:].mean(axis=0, keepdims=True),
+                                 classes)[0] == g for g, a, b in holds]
+    out["accuracy"]["true_angles"] = float(np.mean(truth_hits))
+    out["baseline_majority"] = 1.0 / len(classes)
+    return out
+
+
+def evaluate(config: SimConfig = HELDOUT, *, durations=(15.0, 30.0), elbows=("fixed", "moving"),
+             filters=FILTERS, grasps: bool = True, speed: float = 1.0,
+             series: dict | None = None) -> dict:
+    """Run the evaluation and return a JSON-ready dict.
+
+    Parameters
+    ----------
+    config : SimConfig
+    durations : sequence of float, keyword-only
+        Trial lengths, s (>= 6).
+    elbows : sequence of {"fixed", "moving"}, keyword-only
+    filters : sequence of str, keyword-only
+        Names from :data:`FILTERS`.
+    grasps : bool, keyword-only
+        Also classify the grasps of :func:`grasp_motion`.
+    speed : float, keyword-only
+        Frequency scale of the free motions.
+    series : dict, keyword-only
+        Filled with the last trial's error time series and a stick-figure
+        instant (for :mod:`._plot`).
+    """
+    for f in filters:
+        if f not in FILTERS:
+            raise InvalidInputError(f"unknown filter {f!r}; expected one of {', '.join(FILTERS)}")
+    placement = config.placement()
+    cal, model, frames, zero = _calibrate(config, placement)
+    hand = ImuHand(config.shape, placement=placement)
+    trials = []
+    lsq_rec = None
+    for k, dur in enumerate(durations):
+        for m, elbow in enumerate(elbows):
+            seed = config.seed * 100 + 10 * k + m
+            rec = simulate_imu(free_motion(float(dur), seed=seed, elbow=elbow, speed=speed),
+                               hand=hand, noise=config.noise, skin=config.skin, seed=seed + 50)
+            lsq_rec = lsq_rec or rec
+            last = k == len(durations) - 1 and m == len(elbows) - 1
+            t = _trial(rec, filters, model, frames, zero, series if last else None)
+            t.update(duration_s=float(dur), elbow=elbow)
+            trials.append(t)
+    report = {"config": config.describe(), "filters": list(filters),
+              "vectors": _vector_report(cal, model, config, placement, lsq_rec),
+              "trials": trials, "summary": _summary(trials, filters)}
+    if grasps:
+        report["grasps"] = _grasp_report(config, placement, filters, model, frames, zero)
+    return report
+
+
+_DISTAL = tuple(f"{f}_distal" for f in CHAINS)
+
+
+def _summary(trials, filters) -> dict:
+    out = {}
+    for name in filters:
+        per = np.array([[t["orientation_rmse_deg"][name][s] for s in SENSOR_NAMES] for t in trials])
+        distal = [SENSOR_NAMES.index(s) for s in _DISTAL]
+        joint = [np.mean(list(t["joint_rmse_deg"][name].values())) for t in trials]
+        tips = [np.mean(list(t["fingertip_rmse_mm"][name].values())) for t in trials]
+        tips_w = [np.mean(list(t["fingertip_from_wrist_rmse_mm"][name].values())) for t in trials]
+        out[name] = {
+            "orientation_mean_deg": float(per.mean()),
+            "orientation_worst_segment_deg": float(per.max()),
+            "orientation_distal_mean_deg": float(per[:, distal].mean()),
+            "segments_over_2deg": int((per.max(axis=0) > 2.0).sum()),
+            "joint_angle_mean_rmse_deg": float(np.mean(joint)),
+            "fingertip_mean_rmse_mm": float(np.mean(tips)),
+            "fingertip_from_wrist_mean_rmse_mm": float(np.mean(tips_w)),
+        }
+    return out

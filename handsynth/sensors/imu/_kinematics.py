@@ -1,0 +1,250 @@
+"""Link frames, joint angles, fingertip positions and grasp classes (seed 003 ch. 5).
+
+Link frame (eqs. 5.1-5.2): x along the flexion-extension axis of the link's
+proximal joint, taken from the sensor's own gyro during that joint's
+calibration rotation, signed so that extension is positive (the thesis'
+"伸展側方向正"; for a sensor on the back of the segment, x cross V points out
+of the back); z = x cross V / |x cross V| with V the link vector; y = z
+cross x.  L_R_S has those axes as rows.
+
+Joint angle (eqs. 5.4-5.5): the rotation from the proximal to the distal
+link frame, L(j+1)_R_Lj, decomposed as Euler angles in the order z, y, x
+(the distal link turned about z, then y, then x): phi about x is
+extension (minus flexion), psi about z is abduction.  In canonical names:
+``<f>_mcp_flex = -phi``, ``<f>_mcp_abd = psi`` (right hand; the sign is
+flipped for the left), ``pip/dip/ip/thumb mcp flex = -phi``.  The thumb CMC
+has oblique axes that the z-y-x decomposition does not separate into the
+model's ``thumb_cmc_flex``/``thumb_cmc_abd``; its Euler angles are returned
+separately and the canonical entries are NaN.  Angles are measured from the
+calibration's static pose (the anatomical zero).
+
+Fingertips (eq. 3.12): the sum of the link vectors, each turned by its
+sensor's attitude, from the elbow.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ...errors import EstimationError, InvalidInputError
+from ...models import JOINT_NAMES
+from ._layout import CHAINS, FLEX_JOINT
+from ._quat import quat_to_mat
+from ._recording import ImuRecording
+from ._vectors import ChainModel, _segment
+
+__all__ = [
+    "JOINT_LINKS",
+    "classify_grasp",
+    "fingertip_positions",
+    "joint_angles",
+    "link_frames",
+    "truth_link_frames",
+    "zero_offsets",
+]
+
+_F4 = ("index", "middle", "ring", "little")
+
+#: canonical joint (or joint pair) -> (proximal link sensor, distal link sensor)
+JOINT_LINKS = {
+    "thumb_cmc": ("hand_radial", "thumb_metacarpal"),
+    "thumb_mcp": ("thumb_metacarpal", "thumb_proximal"),
+    "thumb_ip": ("thumb_proximal", "thumb_distal"),
+    **{f"{f}_mcp": ("hand_ulnar" if f in ("ring", "little") else "hand_radial", f"{f}_proximal")
+       for f in _F4},
+    **{f"{f}_pip": (f"{f}_proximal", f"{f}_middle") for f in _F4},
+    **{f"{f}_dip": (f"{f}_middle", f"{f}_distal") for f in _F4},
+}
+
+# the calibration rotation whose axis is each frame's x: the proximal joint's
+# flexion (eq. 5.1), except the ring/little side of the hand, which takes the
+# wrist's like the index/middle side so that both hand parts share the
+# wrist flexion axis the thesis chose for the hand (section 5.2.1)
+_FRAME_ROTATION = {**FLEX_JOINT, "hand_ulnar": "wrist_flex"}
+
+# the link whose vector gives each sensor's frame its y direction
+_FRAME_LINK = {
+    "hand_radial": ("wrist", "middle_mcp"),
+    "hand_ulnar": ("ulnar_cm", "ring_mcp"),
+}
+
+
+def _frame_vector(model: ChainModel, sensor: str) -> np.ndarray:
+    if sensor in _FRAME_LINK:
+        a, b = _FRAME_LINK[sensor]
+        return model.links[(sensor, a, b)]
+    return model.link(sensor)[2]
+
+
+def _frame(x, v) -> np.ndarray:
+    z = np.cross(x, v)
+    nz = np.linalg.norm(z)
+    if nz < 1e-9:
+        raise EstimationError("the flexion axis is parallel to the link vector")
+    z /= nz
+    y = np.cross(z, x)
+    return np.stack([x, y, z])                                              # eq. 5.2
+
+
+def link_frames(cal: ImuRecording, model: ChainModel, *, hold_s: float = 0.5) -> dict:
+    """L_R_S of every link sensor from the calibration rotations (eqs. 5.1-5.2).
+
+    Returns
+    -------
+    dict
+        sensor -> (3, 3) rotation from sensor frame to link frame.
+    """
+    out = {}
+    hold = max(3, int(hold_s * cal.rate_hz))
+    for s in model.own:
+        a, b = _segment(cal.labelled(), _FRAME_ROTATION[s])
+        k = cal.index(s)
+        w = cal.gyr[k, a:b] - cal.gyr[k, a:a + hold].mean(axis=0)
+        # principal direction of the angular velocity (eq. 5.1, all samples)
+        _, _, vt = np.linalg.svd(w, full_matrices=False)
+        x = vt[0]
+        v = _frame_vector(model, s)
+        if np.dot(np.cross(x, v), [0.0, 0.0, 1.0]) < 0:  # extension positive
+            x = -x
+        out[s] = _frame(x, v)
+    return out
+
+
+def truth_link_frames(rec: ImuRecording, model: ChainModel, hand) -> dict:
+    """Link frames from the model's true flexion axes (for reference)."""
+    import mujoco
+
+    out = {}
+    if rec.truth is None:
+        raise InvalidInputError("truth_link_frames needs a simulated recording")
+    hand.set_state(np.zeros(len(rec.truth.angles[0])))
+    d = hand.data
+    for s in model.own:
+        j = hand.model.joint(_FRAME_ROTATION[s]).id
+        axis_world = d.xaxis[j].copy()
+        site = hand.model.site(f"imu_{s}").id
+        r = d.site_xmat[site].reshape(3, 3)
+        x = -(r.T @ axis_world)                 # model axes are flexion-positive
+        if np.dot(np.cross(x, _frame_vector(model, s)), [0.0, 0.0, 1.0]) < 0:
+            x = -x
+        out[s] = _frame(x, _frame_vector(model, s))
+    del mujoco
+    return out
+
+
+def _euler_zyx(r):
+    """phi (x), theta (y), psi (z) of R = Rz(psi) Ry(theta) Rx(phi), radians (eqs. 2.9-2.11)."""
+    theta = -np.arcsin(np.clip(r[..., 2, 0], -1.0, 1.0))
+    phi = np.arctan2(r[..., 2, 1], r[..., 2, 2])
+    psi = np.arctan2(r[..., 1, 0], r[..., 0, 0])
+    return phi, theta, psi
+
+
+def _relative(quats, sensors, frames, prox, dist):
+    rp = quat_to_mat(quats[sensors.index(prox)]) @ frames[prox].T           # G_R_Lj
+    rd = quat_to_mat(quats[sensors.index(dist)]) @ frames[dist].T
+    return np.einsum("nji,njk->nik", rp, rd)                                 # Lj_R_L(j+1), eq. 5.4
+
+
+def joint_angles(quats, sensors, frames: dict, *, side: str = "right",
+                 zero: np.ndarray | None = None) -> tuple[np.ndarray, dict]:
+    """Joint angles in canonical order from sensor attitudes (eqs. 5.4-5.5).
+
+    Parameters
+    ----------
+    quats : ndarray, shape (S, N, 4)
+    sensors : sequence of str, length S
+    frames : dict
+        From :func:`link_frames`.
+    side : {"right", "left"}, keyword-only
+    zero : ndarray, shape (20,), keyword-only
+        Angles of the anatomical zero pose as this function measures them
+        (subtracted); see :func:`zero_offsets`.
+
+    Returns
+    -------
+    angles : ndarray, shape (N, 20), degrees
+        Canonical :data:`JOINT_NAMES`; the thumb CMC entries are NaN.
+    extra : dict
+        ``"thumb_cmc_euler"``: (N, 3) phi, theta, psi in degrees.
+    """
+    sensors = tuple(sensors)
+    n = quats.shape[1]
+    out = np.full((n, len(JOINT_NAMES)), np.nan)
+    sign = 1.0 if side == "right" else -1.0
+    extra = {}
+    for joint, (prox, dist) in JOINT_LINKS.items():
+        phi, theta, psi = (np.degrees(a) for a in _euler_zyx(
+            _relative(quats, sensors, frames, prox, dist)))
+        if joint == "thumb_cmc":
+            extra["thumb_cmc_euler"] = np.stack([phi, theta, psi], axis=1)
+            continue
+        out[:, JOINT_NAMES.index(f"{joint}_flex")] = -phi
+        if joint.endswith("_mcp") and not joint.startswith("thumb"):
+            out[:, JOINT_NAMES.index(f"{joint}_abd")] = sign * psi
+    if zero is not None:
+        out -= zero
+    return out, extra
+
+
+def zero_offsets(cal: ImuRecording, frames: dict, *, side: str = "right",
+                 static=None) -> np.ndarray:
+    """Joint angles measured on the calibration's static start (the anatomical zero).
+
+    The static start's attitudes (eqs. 2.9-2.11 with the azimuth alignment)
+    give the angles this method reads for the zero pose; subtracting them
+    removes the constant offsets that link-vector and axis errors leave
+    (an addition to the thesis, which reports the raw Euler angles).
+
+    Returns
+    -------
+    ndarray, shape (20,), degrees (0 for the thumb CMC).
+    """
+    from ._attitude import initial_attitude
+    from ._vectors import _calibration_static
+
+    q0 = initial_attitude(cal, static or _calibration_static(cal))
+    a, _ = joint_angles(q0[:, None], cal.sensors, frames, side=side)
+    return np.nan_to_num(a[0])
+
+
+def fingertip_positions(quats, sensors, model: ChainModel) -> dict:
+    """Fingertip positions from the elbow by chaining link vectors (eq. 3.12).
+
+    Returns
+    -------
+    dict
+        finger -> (N, 3) metres, world frame, relative to the elbow centre;
+        also ``"<finger>_joints"`` -> (N, L, 3) the chain's joint positions.
+    """
+    sensors = tuple(sensors)
+    out = {}
+    for f, chain in CHAINS.items():
+        pos = np.zeros((quats.shape[1], 3))
+        joints = []
+        for s, a, b in chain:
+            if s not in sensors:
+                raise InvalidInputError(f"fingertip of {f} needs sensor {s!r}")
+            v = model.links[(s, a, b)]
+            pos = pos + np.einsum("nij,j->ni", quat_to_mat(quats[sensors.index(s)]), v)
+            joints.append(pos.copy())
+        out[f] = pos
+        out[f"{f}_joints"] = np.stack(joints, axis=1)
+    return out
+
+
+def classify_grasp(angles, grasps: dict) -> list[str]:
+    """Nearest grasp posture (Cutkosky classes) for each row of canonical angles.
+
+    Parameters
+    ----------
+    angles : ndarray, shape (N, 20), degrees (NaN entries ignored)
+    grasps : dict
+        name -> (20,) posture, e.g. :data:`GRASP_POSES`.
+    """
+    names = list(grasps)
+    ref = np.stack([grasps[g] for g in names])
+    a = np.asarray(angles, float)
+    ok = np.isfinite(a)
+    d = np.nansum(np.where(ok[:, None], (a[:, None] - ref[None]) ** 2, 0.0), axis=-1)
+    return [names[i] for i in np.argmin(d, axis=1)]

@@ -1,0 +1,240 @@
+"""MEMS noise of an MPU-9250-like IMU, parameterised as Allan-deviation figures.
+
+MuJoCo's sensors are ideal; everything below is added here, per sensor and
+axis, as the gyro model of seed 003 eq. 4.9 (Lam et al. 2003): output = true
++ bias + white noise, the bias a random walk (rate random walk, slope +1/2 of
+the Allan deviation) plus a first-order Gauss-Markov bias instability (the
+flat part) plus a constant turn-on bias.
+
+Default figures (:data:`MPU9250_DATASHEET`)
+-------------------------------------------
+InvenSense, *MPU-9250 Product Specification*, PS-MPU-9250A-01 rev. 1.1 (2016):
+
+- gyro rate noise spectral density 0.01 deg/s/sqrt(Hz) (Table "Gyroscope
+  specifications"); full scale +/-2000 deg/s (16 bit, 0.061 deg/s per LSB);
+  initial zero-rate output tolerance +/-5 deg/s (taken as 3 sigma after a
+  static bias removal of the start: 0.3 deg/s residual s.d. is used, see
+  ``turn_on_bias``); sensitivity tolerance +/-3 %, cross-axis +/-2 %;
+- accelerometer noise power spectral density 300 ug/sqrt(Hz); full scale
+  +/-16 g (0.49 mg per LSB); zero-g initial tolerance +/-80 mg, sensitivity
+  +/-3 %, cross-axis +/-2 %;
+- magnetometer (AK8963 die) full scale +/-4800 uT, 0.15 uT per LSB.
+
+The datasheet gives no rate random walk and no bias instability.  Rate random
+walk comes from the thesis' own Allan analysis of 20 MPU-9250s (seed 003
+Table 4.1: gyro RRW 1.4-6.2e-4 deg/s^1.5, mean 2.3e-4; accelerometer RRW
+1.1-8.7e-6 G/s^0.5, mean 4.6e-6).  Its Allan plots (Figs. 4.3-4.4) show only
+the -1/2 and +1/2 slopes, so the bias instability is set below their
+crossing (gyro 5e-4 deg/s, accelerometer 1e-5 G): an assumption, stated as
+such.  Magnetometer white noise 0.3 uT (two LSB) and the residual hard and
+soft iron after calibration are assumptions too; the between-sensor azimuth
+spread of 4.5 deg s.d. is the thesis' measured figure (Table 4.2).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ...errors import InvalidInputError
+from ._model import GRAVITY_MPS2
+
+__all__ = [
+    "EVAL_NOISE",
+    "MPU9250_DATASHEET",
+    "AxisNoise",
+    "ImuNoise",
+    "MagDisturbance",
+    "MagNoise",
+    "apply_axis_noise",
+]
+
+_DEG = np.pi / 180.0
+
+
+@dataclass(frozen=True)
+class AxisNoise:
+    """Noise of one 3-axis inertial sensor, SI units (rad/s or m/s^2).
+
+    Parameters
+    ----------
+    white : float
+        Noise density N (Allan slope -1/2 coefficient, the value of the
+        Allan deviation at tau = 1 s): rad/s/sqrt(Hz) or m/s^2/sqrt(Hz).
+    rate_random_walk : float
+        K (Allan slope +1/2 coefficient, seed 003 eq. 4.4): units/sqrt(s).
+    bias_instability : float
+        B (flat part of the Allan deviation, at 0.664 B): units.
+    bias_corr_s : float
+        Correlation time of the Gauss-Markov process that models B.
+    turn_on_bias : float
+        s.d. of the constant bias per axis (units).
+    scale_error, cross_axis : float
+        s.d. of the scale-factor error and of the cross-axis terms (fractions).
+    full_scale : float
+        Saturation, units.
+    lsb : float
+        Quantisation step, units (0 for none).
+    """
+
+    white: float
+    rate_random_walk: float
+    bias_instability: float
+    bias_corr_s: float = 100.0
+    turn_on_bias: float = 0.0
+    scale_error: float = 0.0
+    cross_axis: float = 0.0
+    full_scale: float = np.inf
+    lsb: float = 0.0
+
+    def __post_init__(self) -> None:
+        for k in ("white", "rate_random_walk", "bias_instability", "turn_on_bias",
+                  "scale_error", "cross_axis", "lsb"):
+            v = getattr(self, k)
+            if not (np.isfinite(v) and v >= 0):
+                raise InvalidInputError(f"{k} must be finite and >= 0, got {v!r}")
+        if not self.bias_corr_s > 0:
+            raise InvalidInputError(f"bias_corr_s must be > 0, got {self.bias_corr_s!r}")
+        if not self.full_scale > 0:
+            raise InvalidInputError(f"full_scale must be > 0, got {self.full_scale!r}")
+
+    def scaled(self, factor: float) -> AxisNoise:
+        """The same sensor with every random term times `factor`."""
+        return replace(self, white=self.white * factor,
+                       rate_random_walk=self.rate_random_walk * factor,
+                       bias_instability=self.bias_instability * factor,
+                       turn_on_bias=self.turn_on_bias * factor)
+
+
+@dataclass(frozen=True)
+class MagNoise:
+    """Magnetometer noise and calibration residuals, microtesla.
+
+    Parameters
+    ----------
+    white_ut : float
+        White noise s.d. per sample.
+    hard_iron_ut : float
+        s.d. of the constant offset per axis.
+    soft_iron : float
+        s.d. of the symmetric soft-iron matrix entries around identity.
+    azimuth_sd_deg : float
+        s.d. of a per-sensor rotation of the magnetometer axes about the
+        sensor z axis (the between-sensor azimuth spread, seed 003 Table 4.2).
+    full_scale_ut, lsb_ut : float
+    """
+
+    white_ut: float = 0.3
+    hard_iron_ut: float = 1.0
+    soft_iron: float = 0.02
+    azimuth_sd_deg: float = 4.5
+    full_scale_ut: float = 4800.0
+    lsb_ut: float = 0.15
+
+
+@dataclass(frozen=True)
+class MagDisturbance:
+    """A local magnetic field (a magnet, a steel tool) for a while.
+
+    Parameters
+    ----------
+    start_s, end_s : float
+        Active time, with 0.5 s smooth onset and offset.
+    field_ut : (3,) float
+        Extra world-frame field at full strength, microtesla.
+    sensors : tuple of str
+        Affected sensors (empty: all).
+    """
+
+    start_s: float
+    end_s: float
+    field_ut: tuple = (15.0, 10.0, -5.0)
+    sensors: tuple = ()
+
+
+@dataclass(frozen=True)
+class ImuNoise:
+    """Noise of every IMU of the system (each sensor draws its own terms)."""
+
+    gyro: AxisNoise
+    accel: AxisNoise
+    mag: MagNoise = field(default_factory=MagNoise)
+    disturbances: tuple = ()
+    label: str = ""
+
+
+_G = GRAVITY_MPS2
+#: Defaults from the MPU-9250 datasheet and the thesis' Table 4.1 (see module notes).
+MPU9250_DATASHEET = ImuNoise(
+    gyro=AxisNoise(white=0.01 * _DEG, rate_random_walk=2.3e-4 * _DEG,
+                   bias_instability=5e-4 * _DEG, turn_on_bias=0.3 * _DEG,
+                   scale_error=0.01, cross_axis=0.005, full_scale=2000 * _DEG,
+                   lsb=2000 * _DEG / 32768),
+    accel=AxisNoise(white=300e-6 * _G, rate_random_walk=4.6e-6 * _G,
+                    bias_instability=1e-5 * _G, turn_on_bias=0.01 * _G,
+                    scale_error=0.01, cross_axis=0.005, full_scale=16 * _G,
+                    lsb=16 * _G / 32768),
+    mag=MagNoise(),
+    label="mpu9250-datasheet",
+)
+
+#: The held-out configuration for evaluation: other (worse) noise figures,
+#: larger calibration residuals and a magnet near the hand from 14 to 19 s.
+#: Sensor misalignment and skin motion are set in the simulation call.
+EVAL_NOISE = ImuNoise(
+    gyro=AxisNoise(white=0.015 * _DEG, rate_random_walk=6e-4 * _DEG,
+                   bias_instability=2e-3 * _DEG, bias_corr_s=40.0, turn_on_bias=0.5 * _DEG,
+                   scale_error=0.02, cross_axis=0.01, full_scale=2000 * _DEG,
+                   lsb=2000 * _DEG / 32768),
+    accel=AxisNoise(white=400e-6 * _G, rate_random_walk=9e-6 * _G,
+                    bias_instability=3e-5 * _G, bias_corr_s=40.0, turn_on_bias=0.02 * _G,
+                    scale_error=0.02, cross_axis=0.01, full_scale=16 * _G,
+                    lsb=16 * _G / 32768),
+    mag=MagNoise(white_ut=0.5, hard_iron_ut=2.0, soft_iron=0.04, azimuth_sd_deg=6.0),
+    disturbances=(MagDisturbance(14.0, 19.0, (12.0, -8.0, 6.0)),),
+    label="eval-heldout",
+)
+
+
+def apply_axis_noise(x: np.ndarray, noise: AxisNoise, rate_hz: float,
+                     rng: np.random.Generator) -> np.ndarray:
+    """Add the terms of `noise` to ideal 3-axis signals.
+
+    Parameters
+    ----------
+    x : ndarray, shape (S, N, 3)
+        Ideal signals of S sensors, SI units.
+    noise : AxisNoise
+    rate_hz : float
+    rng : numpy.random.Generator
+
+    Returns
+    -------
+    ndarray, shape (S, N, 3)
+        Noisy, saturated and quantised signals.
+    """
+    s, _, _ = x.shape
+    dt = 1.0 / rate_hz
+    m = np.eye(3) + rng.normal(0.0, noise.cross_axis, (s, 3, 3)) * (1 - np.eye(3))
+    m += np.eye(3) * rng.normal(0.0, noise.scale_error, (s, 1, 3))
+    y = np.einsum("sij,snj->sni", m, x)
+    # white noise: density N -> per-sample s.d. N / sqrt(dt)
+    y += rng.normal(0.0, noise.white / np.sqrt(dt), y.shape)
+    # rate random walk: bias increments of s.d. K sqrt(dt)
+    y += np.cumsum(rng.normal(0.0, noise.rate_random_walk * np.sqrt(dt), y.shape), axis=1)
+    if noise.bias_instability > 0:
+        # Gauss-Markov: peak Allan deviation 0.618 sigma at tau ~ 1.89 T_c,
+        # matched to the flicker plateau 0.664 B (IEEE Std 952-1997, annex C)
+        sigma = 0.664 * noise.bias_instability / 0.618
+        phi = np.exp(-dt / noise.bias_corr_s)
+        e = rng.normal(0.0, sigma * np.sqrt(1 - phi**2), y.shape)
+        from scipy.signal import lfilter
+
+        e[:, 0] = rng.normal(0.0, sigma, (s, 3))
+        y += lfilter([1.0], [1.0, -phi], e, axis=1)
+    y += rng.normal(0.0, noise.turn_on_bias, (s, 1, 3))
+    y = np.clip(y, -noise.full_scale, noise.full_scale)
+    if noise.lsb > 0:
+        y = np.round(y / noise.lsb) * noise.lsb
+    return y

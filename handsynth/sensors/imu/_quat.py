@@ -1,0 +1,149 @@
+"""Unit quaternions (w, x, y, z), sensor-to-world, vectorised over leading axes.
+
+Conventions of seed 003 chapter 5: q = cos(b/2) + n sin(b/2) (eq. 5.7),
+the Hamilton product of eq. 5.9 and the rotation matrix of eq. 5.11.  The
+world frame is z up, x magnetic north (eq. 2.8's g = [0, 0, g]).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = [
+    "angle_deg",
+    "euler_zyx_to_quat",
+    "heading_inclination_deg",
+    "mat_to_quat",
+    "qconj",
+    "qexp",
+    "qmul",
+    "qnormalize",
+    "qrot",
+    "qrotinv",
+    "quat_from_acc_mag",
+    "quat_to_mat",
+]
+
+
+def qmul(a, b):
+    """Hamilton product a * b (seed 003 eq. 5.9)."""
+    w1, x1, y1, z1 = np.moveaxis(np.asarray(a), -1, 0)
+    w2, x2, y2, z2 = np.moveaxis(np.asarray(b), -1, 0)
+    return np.stack([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+                     w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2],
+                    axis=-1)
+
+
+def qconj(q):
+    q = np.asarray(q)
+    return q * np.array([1.0, -1.0, -1.0, -1.0])
+
+
+def qnormalize(q):
+    q = np.asarray(q, dtype=float)
+    return q / np.linalg.norm(q, axis=-1, keepdims=True)
+
+
+def quat_to_mat(q):
+    """Rotation matrix G_R_S of eq. 5.11, shape (..., 3, 3)."""
+    w, x, y, z = np.moveaxis(np.asarray(q), -1, 0)
+    return np.stack([
+        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
+    ], -2)
+
+
+def mat_to_quat(r):
+    """Quaternion (w >= 0) of rotation matrices, shape (..., 4)."""
+    r = np.asarray(r, dtype=float)
+    from scipy.spatial.transform import Rotation
+
+    flat = Rotation.from_matrix(r.reshape(-1, 3, 3)).as_quat()  # x, y, z, w
+    q = np.concatenate([flat[:, 3:], flat[:, :3]], axis=1)
+    q *= np.where(q[:, :1] < 0, -1.0, 1.0)
+    return q.reshape(*r.shape[:-2], 4)
+
+
+def qrot(q, v):
+    """Rotate sensor-frame vectors `v` into the world: G_R_S v."""
+    return np.einsum("...ij,...j->...i", quat_to_mat(q), v)
+
+
+def qrotinv(q, v):
+    """World vectors into the sensor frame: G_R_S^T v."""
+    return np.einsum("...ji,...j->...i", quat_to_mat(q), v)
+
+
+def qexp(rotvec):
+    """Quaternion of rotation vectors (rad), shape (..., 4)."""
+    rv = np.asarray(rotvec, dtype=float)
+    ang = np.linalg.norm(rv, axis=-1, keepdims=True)
+    half = 0.5 * ang
+    # sin(a/2)/a with its limit 1/2 at a -> 0
+    k = np.where(ang > 1e-9, np.sin(half) / np.where(ang > 1e-9, ang, 1.0), 0.5 - ang**2 / 48)
+    return np.concatenate([np.cos(half), k * rv], axis=-1)
+
+
+def euler_zyx_to_quat(phi, theta, psi):
+    """q of G_R_S = R_z(psi) R_y(theta) R_x(phi) (eqs. 2.7 and 5.8), radians."""
+    cp, sp = np.cos(np.asarray(phi) / 2), np.sin(np.asarray(phi) / 2)
+    ct, st = np.cos(np.asarray(theta) / 2), np.sin(np.asarray(theta) / 2)
+    cs, ss = np.cos(np.asarray(psi) / 2), np.sin(np.asarray(psi) / 2)
+    return np.stack([cp * ct * cs + sp * st * ss, sp * ct * cs - cp * st * ss,
+                     cp * st * cs + sp * ct * ss, cp * ct * ss - sp * st * cs], axis=-1)
+
+
+def quat_from_acc_mag(acc, mag, *, heading_offset_rad=0.0):
+    """Attitude from gravity and the tilt-compensated compass (eqs. 2.9-2.11, 5.8).
+
+    Parameters
+    ----------
+    acc : array_like, shape (..., 3)
+        Accelerometer (any units; only the direction is used).
+    mag : array_like, shape (..., 3)
+        Magnetometer (any units).
+    heading_offset_rad : float or array_like, keyword-only
+        Added to the compass azimuth psi (the correction psi_cor of eq. 4.22).
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+    """
+    acc = np.asarray(acc, dtype=float)
+    mag = np.asarray(mag, dtype=float)
+    ax, ay, az = np.moveaxis(acc, -1, 0)
+    phi = np.arctan2(ay, az)                                     # eq. 2.9
+    theta = -np.arctan2(ax, np.hypot(ay, az))
+    mx, my, mz = np.moveaxis(mag, -1, 0)
+    # eq. 2.10: H m = R_y(theta) R_x(phi) S m
+    cph, sph, cth, sth = np.cos(phi), np.sin(phi), np.cos(theta), np.sin(theta)
+    my1 = cph * my - sph * mz
+    mz1 = sph * my + cph * mz
+    hx = cth * mx + sth * mz1
+    hy = my1
+    psi = -np.arctan2(hy, hx) + heading_offset_rad             # eq. 2.11
+    return euler_zyx_to_quat(phi, theta, psi)
+
+
+def angle_deg(q1, q2):
+    """Angle of the rotation between two orientations, degrees, shape (...)."""
+    d = np.abs(np.sum(np.asarray(q1) * np.asarray(q2), axis=-1))
+    return np.degrees(2 * np.arccos(np.clip(d, 0.0, 1.0)))
+
+
+def heading_inclination_deg(q_est, q_true):
+    """Split the error of sensor-to-world estimates into heading and inclination.
+
+    The error e = q_true^-1... taken in the world frame, e = q_est q_true^*,
+    is decomposed as a rotation about the vertical (heading) times the rest
+    (inclination), as in the BROAD benchmark (Laidig et al., Data 6(7):72,
+    2021).  Returns two arrays of degrees.
+    """
+    e = qmul(q_est, qconj(q_true))
+    w, z = e[..., 0], e[..., 3]
+    heading = np.degrees(2 * np.arctan2(np.abs(z), np.abs(w)))
+    heading = np.where(heading > 180, 360 - heading, heading)
+    hq = np.stack([w, 0 * w, 0 * w, z], -1) / np.maximum(np.hypot(w, z), 1e-12)[..., None]
+    incl = qmul(qconj(hq), e)
+    return heading, angle_deg(incl, np.array([1.0, 0, 0, 0]))

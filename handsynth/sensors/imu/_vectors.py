@@ -1,0 +1,416 @@
+"""Sensor-to-joint-centre vectors and link vectors from rotations (seed 003 ch. 3).
+
+For a rotation about a fixed centre, the accelerometer minus gravity is the
+rotational acceleration (eq. 3.7)
+
+    a_r = dw x P + w x (w x P)          (eq. 3.1 without the Coriolis term)
+
+where P is the vector from the centre to the sensor (sensor frame).  At the
+turning points of an oscillation (w ~ 0) only the tangential term is left,
+perpendicular to P; two rotations about different axes give P's direction
+as the cross product of their accelerations (eq. 3.2), its sign from the
+construction of Fig. 3.2 (P . (a_r x dw) > 0), and its length as the slope
+of |a_r| against sqrt(|dw|^2 - (u . dw)^2) (eqs. 3.3-3.4, 3.8, least
+squares).  Every pair of turning points gives one direction; they are
+averaged with the weights of eq. 3.9 (inverse deviation from the fitted
+line, inverse RMSE of the predicted rotational acceleration over the whole
+rotation) as in eq. 3.10.  One-axis joints pair their rotation with a
+non-parallel rotation of the proximal two-axis joint for the direction and
+use their own rotation alone for the length (Fig. 3.3).
+
+Link vectors (eq. 3.6, 3.11): the link from J1 to J2 measured by sensor S1 is
+R_S1^T R_S2 (S2 P^J1 - S2 P^J2), S2 being the next link's sensor (the
+temporary fingertip sensor for the distal phalanges, minus its height above
+the tip, the thesis' "offset").
+
+Baseline: the least-squares joint position of Seel, Schauer & Raisch,
+"Joint axis and position estimation from inertial measurement data by
+exploiting kinematic constraints", IEEE CCA 2012: for two sensors on either
+side of a joint, find o1, o2 minimising sum_t (|a1 + G1 o1| - |a2 + G2 o2|)^2,
+G o = w x (w x o) + dw x o, o from sensor to joint, by Levenberg-Marquardt
+from a starting guess; it needs no orientation.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from itertools import pairwise
+from types import MappingProxyType
+
+import numpy as np
+from scipy.signal import savgol_filter
+
+from ...errors import EstimationError, InvalidInputError
+from ._attitude import StaticStart, initial_attitude
+from ._layout import CHAINS, LINKS
+from ._model import GRAVITY_MPS2
+from ._quat import quat_to_mat
+from ._recording import ImuRecording
+
+__all__ = [
+    "ROTATIONS",
+    "ChainModel",
+    "VectorEstimate",
+    "calibrate_vectors",
+    "chain_model",
+    "link_vectors",
+    "rotation_vector",
+    "seel_joint_positions",
+    "truth_chain_model",
+]
+
+_FINGERS4 = ("index", "middle", "ring", "little")
+
+#: point -> (rotations giving the direction, rotations giving the length),
+#: the calibration segments of :func:`calibration_motion` (seed 003 Table 3.5).
+ROTATIONS = MappingProxyType({
+    "elbow": (("elbow_flex", "humeral_rot"), ("elbow_flex", "humeral_rot")),
+    "wrist": (("wrist_flex", "wrist_dev"), ("wrist_flex", "wrist_dev")),
+    "ulnar_cm": (("ulnar_cm_flex", "wrist_dev"), ("ulnar_cm_flex",)),
+    "thumb_cmc": (("thumb_cmc_flex", "thumb_cmc_abd"), ("thumb_cmc_flex", "thumb_cmc_abd")),
+    "thumb_mcp": (("thumb_mcp_flex", "thumb_cmc_abd"), ("thumb_mcp_flex",)),
+    "thumb_ip": (("thumb_ip_flex", "thumb_cmc_abd"), ("thumb_ip_flex",)),
+    **{f"{f}_mcp": ((f"{f}_mcp_flex", f"{f}_mcp_abd"), (f"{f}_mcp_flex", f"{f}_mcp_abd"))
+       for f in _FINGERS4},
+    **{f"{f}_{j}": ((f"{f}_{j}_flex", f"{f}_mcp_abd"), (f"{f}_{j}_flex",))
+       for f in _FINGERS4 for j in ("pip", "dip")},
+})
+
+
+@dataclass(frozen=True)
+class VectorEstimate:
+    """One sensor-to-centre vector.
+
+    Attributes
+    ----------
+    vector : ndarray, shape (3,)
+        From the centre to the sensor, sensor frame, metres (eq. 3.5).
+    pairs : int
+        Turning-point pairs that gave a direction (N1 N2 of eq. 3.10).
+    r2 : float
+        Coefficient of determination of the length fit (eq. 3.8, Fig. 3.7).
+    """
+
+    vector: np.ndarray
+    pairs: int
+    r2: float
+
+
+def _segment(rec_segments, label):
+    for name, a, b in rec_segments:
+        if name == label:
+            return a, b
+    raise InvalidInputError(f"the calibration recording has no labelled stretch {label!r}")
+
+
+def _turning_points(gyr, dgyr, *, frac_w=0.25, frac_dw=0.5):
+    w = np.linalg.norm(gyr, axis=-1)
+    dw = np.linalg.norm(dgyr, axis=-1)
+    i = np.arange(1, w.size - 1)
+    w_ref, dw_ref = np.percentile(w, 95), np.percentile(dw, 95)
+    loc = (w[i] <= w[i - 1]) & (w[i] <= w[i + 1]) & (w[i] < frac_w * w_ref) \
+        & (dw[i] > frac_dw * dw_ref)
+    return i[loc]
+
+
+def _rotation_data(rec: ImuRecording, k: int, a: int, b: int, hold: int):
+    """gyro, angular acceleration and rotational acceleration of sensor k on a:b."""
+    dt = 1.0 / rec.rate_hz
+    gyr = rec.gyr[k, a:b] - rec.gyr[k, a:a + hold].mean(axis=0)
+    gyr_s = savgol_filter(gyr, 7, 2, axis=0)
+    dgyr = savgol_filter(gyr, 7, 2, deriv=1, delta=dt, axis=0)
+    acc = savgol_filter(rec.acc[k, a:b], 5, 2, axis=0)
+    # gravity in the sensor frame: from the still start, carried along by the gyro
+    g = rec.acc[k, a:a + hold].mean(axis=0)
+    g *= GRAVITY_MPS2 / np.linalg.norm(g)
+    gs = np.empty_like(acc)
+    from ._filters import integrate_gyro
+
+    q = integrate_gyro(np.array([[1.0, 0, 0, 0]]), gyr[None], rec.rate_hz)[0]
+    r = quat_to_mat(q)                                  # S(0) <- S(t)
+    gs[:] = np.einsum("nji,j->ni", r, g)
+    return gyr_s, dgyr, acc - gs                        # eq. 3.7
+
+
+def rotation_vector(rec: ImuRecording, sensor: str, point: str, *, hold_s: float = 0.5
+                    ) -> VectorEstimate:
+    """Vector from `point` (a joint centre) to `sensor` from calibration rotations.
+
+    Parameters
+    ----------
+    rec : ImuRecording
+        A recording of :func:`calibration_motion` (its truth's ``segments``
+        locate the rotations; recordings from elsewhere pass the same names).
+    sensor : str
+    point : str
+        A key of :data:`ROTATIONS`.
+    hold_s : float, keyword-only
+        Still time at the start of every rotation (gravity and gyro bias).
+
+    Returns
+    -------
+    VectorEstimate
+    """
+    if point not in ROTATIONS:
+        raise InvalidInputError(f"no calibration rotations for {point!r}; expected one of "
+                                f"{', '.join(ROTATIONS)}")
+    segments = rec.labelled()
+    k = rec.index(sensor)
+    hold = max(3, int(hold_s * rec.rate_hz))
+    dir_rot, len_rot = ROTATIONS[point]
+    data = {}
+    for lab in dir_rot:
+        a, b = _segment(segments, lab)
+        data[lab] = _rotation_data(rec, k, a, b, hold)
+    pts = {lab: _turning_points(data[lab][0], data[lab][1]) for lab in dir_rot}
+    for lab, idx in pts.items():
+        if idx.size < 2:
+            raise EstimationError(f"sensor {sensor!r}: rotation {lab!r} has {idx.size} usable "
+                                  "turning points (need >= 2; rotate faster or longer)")
+    a1 = data[dir_rot[0]][2][pts[dir_rot[0]]]
+    a2 = data[dir_rot[1]][2][pts[dir_rot[1]]]
+    dw1 = data[dir_rot[0]][1][pts[dir_rot[0]]]
+    u = np.cross(a1[:, None], a2[None]).reshape(-1, 3)                    # eq. 3.2
+    norm = np.linalg.norm(u, axis=-1)
+    keep = norm > 1e-3 * norm.max()
+    u = u[keep] / norm[keep, None]
+    # sign (Fig. 3.2): P . (a_r x dw) > 0 for the first rotation's samples
+    ref = np.cross(a1, dw1).mean(axis=0)
+    u *= np.sign(u @ ref)[:, None]
+    # length (eqs. 3.3-3.4, 3.8): |a_r| = |P| sqrt(|dw|^2 - (u . dw)^2), per u_i
+    a_len = np.concatenate([data[lab][2][pts[lab]] for lab in len_rot])
+    dw_len = np.concatenate([data[lab][1][pts[lab]] for lab in len_rot])
+    y = np.linalg.norm(a_len, axis=-1)
+    x = np.sqrt(np.maximum(np.sum(dw_len**2, -1)[None] - (u @ dw_len.T) ** 2, 0.0))  # (U, M)
+    length = float(np.sum(x * y) / np.sum(x * x))
+    d = np.sqrt(np.mean((y - length * x) ** 2, axis=1)) + 1e-9          # deviation from the line
+    w1 = 1.0 / d                                                        # eq. 3.9
+    # w2: RMSE of eq. 3.1 (first two terms) over each direction rotation
+    w2 = np.zeros(len(u))
+    for lab in dir_rot:
+        gyr_s, dgyr, a_r = data[lab]
+        p = length * u                                                  # (U, 3)
+        pred = np.cross(dgyr[None], p[:, None]) + np.cross(
+            gyr_s[None], np.cross(gyr_s[None], p[:, None]))
+        w2 += np.sum(np.mean((pred - a_r[None]) ** 2, axis=1), axis=1)
+    w2 = 1.0 / np.sqrt(w2)
+    w = w1 * w2
+    u_mean = np.sum(w[:, None] * u, axis=0) / np.sum(w)                 # eq. 3.10
+    u_mean /= np.linalg.norm(u_mean)
+    x_all = np.sqrt(np.maximum(np.sum(dw_len**2, -1) - (dw_len @ u_mean) ** 2, 0))
+    length = float(np.sum(x_all * y) / np.sum(x_all * x_all))
+    res = y - length * x_all
+    r2 = 1.0 - float(np.sum(res**2) / max(np.sum((y - y.mean()) ** 2), 1e-12))
+    return VectorEstimate(length * u_mean, int(len(u)), r2)            # eq. 3.5
+
+
+def _child(sensor: str, dist: str) -> str:
+    """Sensor of the link that starts at `dist` after `sensor`'s link."""
+    for chain in CHAINS.values():
+        for (s1, _, d1), nxt in pairwise(chain):
+            if s1 == sensor and d1 == dist:
+                return nxt[0]
+    # the distal phalanx: its fingertip sensor
+    return dist  # e.g. "index_tip" is also the tip sensor's name
+
+
+def calibrate_vectors(rec: ImuRecording, *, hold_s: float = 0.5) -> dict:
+    """Every vector the link model and the EKF need, from a calibration recording.
+
+    Returns
+    -------
+    dict
+        ``(sensor, point) -> VectorEstimate`` for each link's own sensor to
+        its proximal point and the next link's sensor to both ends.
+    """
+    out = {}
+    for s1, j1, j2 in LINKS:
+        s2 = _child(s1, j2)
+        wanted = [(s1, j1), (s2, j1)]
+        if not j2.endswith("_tip"):
+            wanted.append((s2, j2))
+        else:
+            wanted.append((s1, j1))
+        for s, p in wanted:
+            if (s, p) not in out:
+                out[(s, p)] = rotation_vector(rec, s, p, hold_s=hold_s)
+    # the distal sensors' and tip sensors' own DIP/IP vectors
+    for chain in CHAINS.values():
+        _, j_prox, tip = chain[-1]
+        out.setdefault((tip, j_prox), rotation_vector(rec, tip, j_prox, hold_s=hold_s))
+    return out
+
+
+def link_vectors(rec: ImuRecording, vectors: dict, *, static: StaticStart | None = None,
+                 tip_offset_m: float = 0.004) -> dict:
+    """Link vectors in their own sensor's frame, eq. 3.6 / 3.11.
+
+    Parameters
+    ----------
+    rec : ImuRecording
+        The calibration recording (its static start gives the relative
+        rotations R_S1^T R_S2, eqs. 2.7, 2.9, 2.11 with the azimuth alignment
+        of section 4.2.5 on its first rotation).
+    vectors : dict
+        ``(sensor, point) -> (3,)`` or VectorEstimate.
+    tip_offset_m : float, keyword-only
+        Height of the fingertip sensors above the fingertip point.
+
+    Returns
+    -------
+    dict
+        ``(sensor, proximal point, distal point) -> (3,)`` metres.
+    """
+    vec = {k: (v.vector if isinstance(v, VectorEstimate) else np.asarray(v, float))
+           for k, v in vectors.items()}
+    if static is None:
+        static = _calibration_static(rec)
+    r = quat_to_mat(initial_attitude(rec, static))
+    out = {}
+    for s1, j1, j2 in LINKS:
+        s2 = _child(s1, j2)
+        r12 = r[rec.index(s1)].T @ r[rec.index(s2)]
+        if j2.endswith("_tip"):
+            tip = vec[(s2, j1)] - np.array([0.0, 0.0, tip_offset_m])
+            out[(s1, j1, j2)] = r12 @ tip
+        else:
+            out[(s1, j1, j2)] = r12 @ (vec[(s2, j1)] - vec[(s2, j2)])     # eq. 3.6
+    return out
+
+
+def _calibration_static(rec: ImuRecording) -> StaticStart:
+    segs = rec.labelled()
+    static_end = _segment(segs, "static")[1] / rec.rate_hz
+    a, b = _segment(segs, "elbow_flex")
+    return StaticStart(static_s=static_end, align_start_s=a / rec.rate_hz,
+                       align_end_s=b / rec.rate_hz)
+
+
+@dataclass(frozen=True)
+class ChainModel:
+    """Link model of the system: vectors every chain estimator needs.
+
+    Attributes
+    ----------
+    own : dict
+        sensor -> (3,) vector from its link's proximal point to the sensor
+        (S P^J of eq. 4.27), sensor frame, metres.
+    links : dict
+        (sensor, proximal, distal) -> (3,) link vector (eq. 3.11), sensor frame.
+    """
+
+    own: dict
+    links: dict
+
+    def link(self, sensor: str) -> tuple[str, str, np.ndarray]:
+        for (s, a, b), v in self.links.items():
+            if s == sensor:
+                return a, b, v
+        raise InvalidInputError(f"no link measured by sensor {sensor!r}")
+
+
+def chain_model(rec: ImuRecording, vectors: dict | None = None, **kw) -> ChainModel:
+    """The link model from a calibration recording (eqs. 3.2-3.11)."""
+    vectors = vectors if vectors is not None else calibrate_vectors(rec)
+    own = {}
+    for s1, j1, _ in LINKS:
+        v = vectors[(s1, j1)]
+        own[s1] = v.vector if isinstance(v, VectorEstimate) else np.asarray(v, float)
+    return ChainModel(own, link_vectors(rec, vectors, **kw))
+
+
+def truth_chain_model(rec: ImuRecording) -> ChainModel:
+    """The exact link model of a simulated recording (for tests and as a reference)."""
+    if rec.truth is None:
+        raise InvalidInputError("truth_chain_model needs a simulated recording")
+    jv = rec.truth.joint_vectors
+    own = {s1: jv[(s1, j1)] for s1, j1, _ in LINKS}
+    links = {(s1, j1, j2): jv[(s1, j1)] - jv[(s1, j2)] for s1, j1, j2 in LINKS}
+    return ChainModel(own, links)
+
+
+def seel_joint_positions(rec: ImuRecording, s1: str, s2: str, *, iterations: int = 30,
+                         start: int = 0, stop: int | None = None,
+                         init=None) -> tuple[np.ndarray, np.ndarray]:
+    """Least-squares joint position between two sensors (Seel et al. 2012).
+
+    Parameters
+    ----------
+    rec : ImuRecording
+    s1, s2 : str
+        Sensors on the proximal and distal segments of the joint.
+    iterations : int, keyword-only
+        Gauss-Newton steps.
+    start, stop : int, keyword-only
+        Samples used.
+    init : (6,) float, keyword-only
+        Starting o1, o2 (metres); 1 cm below both sensors by default.
+
+    Returns
+    -------
+    o1, o2 : ndarray, shape (3,)
+        The joint centre in each sensor's frame (sensor -> joint, i.e. -P).
+    """
+    dt = 1.0 / rec.rate_hz
+    stop = rec.n if stop is None else stop
+    k1, k2 = rec.index(s1), rec.index(s2)
+    g1 = savgol_filter(rec.gyr[k1, start:stop], 7, 2, axis=0)
+    g2 = savgol_filter(rec.gyr[k2, start:stop], 7, 2, axis=0)
+    d1 = savgol_filter(rec.gyr[k1, start:stop], 7, 2, deriv=1, delta=dt, axis=0)
+    d2 = savgol_filter(rec.gyr[k2, start:stop], 7, 2, deriv=1, delta=dt, axis=0)
+    a1 = savgol_filter(rec.acc[k1, start:stop], 5, 2, axis=0)
+    a2 = savgol_filter(rec.acc[k2, start:stop], 5, 2, axis=0)
+
+    def gamma(g, d):
+        # K with K o = w x (w x o) + dw x o
+        wx = _skew(g)
+        return wx @ wx + _skew(d)
+
+    k1m, k2m = gamma(g1, d1), gamma(g2, d2)
+    x = np.r_[0.0, 0.0, -0.01, 0.0, 0.0, -0.01] if init is None else np.asarray(init, float)
+
+    def residual(x):
+        # the joint centre's specific force seen from either sensor: a + G o
+        e1 = a1 + np.einsum("nij,j->ni", k1m, x[:3])
+        e2 = a2 + np.einsum("nij,j->ni", k2m, x[3:])
+        n1 = np.linalg.norm(e1, axis=-1) + 1e-12
+        n2 = np.linalg.norm(e2, axis=-1) + 1e-12
+        return n1 - n2, e1 / n1[:, None], e2 / n2[:, None]
+
+    lam = 1e-3
+    r, u1, u2 = residual(x)
+    cost = float(r @ r)
+    for _ in range(iterations):
+        jac = np.concatenate([np.einsum("ni,nij->nj", u1, k1m),
+                              -np.einsum("ni,nij->nj", u2, k2m)], axis=1)
+        jtj = jac.T @ jac
+        # Levenberg-Marquardt; the damping also keeps the position along a
+        # hinge axis (not observable) near the start
+        step = np.linalg.solve(jtj + lam * (np.diag(np.diag(jtj)) + 1e-9 * np.eye(6)), -jac.T @ r)
+        r2, v1, v2 = residual(x + step)
+        c2 = float(r2 @ r2)
+        if c2 < cost:
+            x, r, u1, u2, cost = x + step, r2, v1, v2, c2
+            lam = max(lam / 3, 1e-7)
+            if np.linalg.norm(step) < 1e-7:
+                break
+        else:
+            lam *= 10
+            if lam > 1e8:
+                break
+    # a hinge leaves the position along its axis free (both o shift along
+    # it); as Seel et al., move the solution along such weakly determined
+    # directions to the point closest to the sensors
+    jac = np.concatenate([np.einsum("ni,nij->nj", u1, k1m),
+                          -np.einsum("ni,nij->nj", u2, k2m)], axis=1)
+    ev, vec = np.linalg.eigh(jac.T @ jac)
+    null = vec[:, ev < 1e-3 * ev.max()]
+    x = x - null @ (null.T @ x)
+    return x[:3], x[3:]
+
+
+def _skew(v):
+    z = np.zeros(v.shape[:-1])
+    x, y, w = v[..., 0], v[..., 1], v[..., 2]
+    return np.stack([np.stack([z, -w, y], -1), np.stack([w, z, -x], -1),
+                     np.stack([-y, x, z], -1)], -2)

@@ -1,0 +1,147 @@
+import json
+
+import h5py
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from scipy.io import savemat
+
+from handsynth.cli._main import cli
+from handsynth.sensors.imu import free_motion, simulate_imu, write_imu_csv
+from handsynth.sensors.imu._filters import _Q_NWU_FROM_ENU
+from handsynth.sensors.imu._quat import qconj, qmul
+
+
+@pytest.fixture(scope="module")
+def sim():
+    return simulate_imu(free_motion(8.0, seed=2), seed=3)
+
+
+def test_track_csv_writes_quaternions(tmp_path, sim):
+    rec = sim.subset(("forearm_1", "index_distal"))
+    src, out = tmp_path / "rec.csv", tmp_path / "q.csv"
+    write_imu_csv(rec, src)
+    res = CliRunner().invoke(cli, ["imu", "track", str(src), "--filter", "raw", "--align", "2,4",
+                                   "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    header = out.read_text().splitlines()[0].split(",")
+    assert header[:5] == ["time_s", "forearm_1_qw", "forearm_1_qx", "forearm_1_qy", "forearm_1_qz"]
+    q = np.loadtxt(out, delimiter=",", skiprows=1)[:, 1:].reshape(-1, 2, 4).transpose(1, 0, 2)
+    from handsynth.sensors.imu._quat import angle_deg
+
+    err = angle_deg(q, sim.truth.quat[[0, 16]])
+    assert np.sqrt(np.mean(err**2)) < 5.0
+
+
+def test_track_wrong_units_is_one_line(tmp_path, sim):
+    src = tmp_path / "rec.csv"
+    write_imu_csv(sim.subset(("forearm_1",)), src)
+    res = CliRunner().invoke(cli, ["imu", "track", str(src), "--acc-units", "g",
+                                   "--out", str(tmp_path / "q.csv")])
+    assert res.exit_code == 2
+    assert res.output.startswith("handsynth: error:") and "m/s^2" in res.output
+    assert "Traceback" not in res.output
+    assert not (tmp_path / "q.csv").exists()
+
+
+def _write_broad(path, rec, sensor, kind):
+    k = rec.index(sensor)
+    q_enu = qmul(qconj(_Q_NWU_FROM_ENU), rec.truth.quat[k])
+    q_enu[300:310] = np.nan  # marker dropout, as in the dataset
+    movement = np.zeros(rec.n, bool)
+    movement[400:] = True
+    fields = dict(imu_acc=rec.acc[k], imu_gyr=rec.gyr[k], imu_mag=rec.mag[k], opt_quat=q_enu,
+                  movement=movement, sampling_rate=np.array([[rec.rate_hz]]))
+    if kind == "mat":
+        savemat(path, fields)
+    else:
+        with h5py.File(path, "w") as f:
+            for k, v in fields.items():
+                f[k] = v
+
+
+def test_broad_on_a_synthetic_trial(tmp_path, sim):
+    d = tmp_path / "broad"
+    (d / "data_mat").mkdir(parents=True)
+    (d / "data_hdf5").mkdir()
+    _write_broad(d / "data_mat" / "01_synthetic_a.mat", sim, "index_middle", "mat")
+    rec2 = simulate_imu(free_motion(8.0, seed=5), seed=6)
+    _write_broad(d / "data_hdf5" / "02_synthetic_b.hdf5", rec2, "thumb_distal", "hdf5")
+    out = tmp_path / "broad.json"
+    res = CliRunner().invoke(cli, ["imu", "broad", str(d), "--filter", "constant,raw,vqf",
+                                   "--json", str(out)])
+    assert res.exit_code == 0, res.output
+    data = json.loads(out.read_text())
+    assert set(data["trials"]) == {"01_synthetic_a", "02_synthetic_b"}
+    m = data["mean"]
+    assert m["raw"]["total_rmse_deg"] < m["constant"]["total_rmse_deg"]
+    assert m["vqf"]["total_rmse_deg"] < 15.0
+    assert "2.9" in res.output
+
+
+def test_broad_missing_field_is_named(tmp_path, sim):
+    d = tmp_path / "b"
+    d.mkdir()
+    savemat(d / "01_bad.mat", dict(imu_acc=sim.acc[0]))
+    res = CliRunner().invoke(cli, ["imu", "broad", str(d)])
+    assert res.exit_code == 2
+    assert "missing BROAD field(s) imu_gyr" in res.output and "01_bad.mat" in res.output
+
+
+@pytest.mark.slow
+def test_eval_writes_json_with_baselines(tmp_path):
+    out = tmp_path / "eval.json"
+    res = CliRunner().invoke(cli, ["imu", "eval", "--config", "tuning", "--duration", "8",
+                                   "--elbow", "fixed", "--filter", "constant,raw,filter4",
+                                   "--no-grasps", "--json", str(out), "--plots", str(tmp_path / "p")])
+    assert res.exit_code == 0, res.output
+    for png in ("orientation_error.png", "stick_figure.png"):
+        assert (tmp_path / "p" / png).read_bytes()[:4] == b"\x89PNG"
+    rep = json.loads(out.read_text())
+    assert set(rep["summary"]) == {"constant", "raw", "filter4"}
+    assert rep["trials"][0]["duration_s"] == 8.0
+    assert "rotation_method" in res.output
+
+
+def test_eval_unknown_filter_is_one_line(tmp_path):
+    res = CliRunner().invoke(cli, ["imu", "eval", "--filter", "kalman9", "--json",
+                                   str(tmp_path / "x.json")])
+    assert res.exit_code == 2 and "unknown filter 'kalman9'" in res.output
+
+
+@pytest.mark.slow
+def test_calibrate_then_track_joint_angles(tmp_path):
+    from handsynth.models import JOINT_NAMES
+    from handsynth.sensors.imu import ImuHand, calibration_motion
+
+    hand = ImuHand(tip_sensors=True)
+    cal = simulate_imu(calibration_motion(), hand=hand, seed=11)
+    cal_csv, seg_json, model = tmp_path / "cal.csv", tmp_path / "seg.json", tmp_path / "cal.json"
+    write_imu_csv(cal, cal_csv)
+    seg_json.write_text(json.dumps({lab: [a / cal.rate_hz, b / cal.rate_hz]
+                                    for lab, a, b in cal.truth.segments}))
+    res = CliRunner().invoke(cli, ["imu", "calibrate", str(cal_csv), "--segments", str(seg_json),
+                                   "--out", str(model)])
+    assert res.exit_code == 0, res.output
+    rec = simulate_imu(free_motion(10.0, seed=12), seed=13)
+    rec_csv, q_csv, ang_csv = tmp_path / "rec.csv", tmp_path / "q.csv", tmp_path / "a.csv"
+    write_imu_csv(rec, rec_csv)
+    res = CliRunner().invoke(cli, ["imu", "track", str(rec_csv), "--calibration", str(model),
+                                   "--align", "2,4", "--out", str(q_csv), "--angles-out", str(ang_csv)])
+    assert res.exit_code == 0, res.output
+    ang = np.loadtxt(ang_csv, delimiter=",", skiprows=1)[:, 1:]
+    err = ang[400:] - rec.truth.angles[400:, 9:]
+    j = [JOINT_NAMES.index(n) for n in ("index_pip_flex", "middle_mcp_flex", "little_dip_flex")]
+    assert np.sqrt(np.mean(err[:, j] ** 2)) < 5.0
+    # against a constant answer (the first frame held) the error is far larger
+    const = ang[400:400 + 1] - rec.truth.angles[400:, 9:]
+    assert np.sqrt(np.mean(err[:, j] ** 2)) < 0.3 * np.sqrt(np.mean(const[:, j] ** 2))
+
+
+def test_calibrate_segment_outside_is_named(tmp_path, sim):
+    src, seg = tmp_path / "rec.csv", tmp_path / "seg.json"
+    write_imu_csv(sim.subset(("forearm_1",)), src)
+    seg.write_text(json.dumps({"static": [0, 2], "elbow_flex": [5, 99]}))
+    res = CliRunner().invoke(cli, ["imu", "calibrate", str(src), "--segments", str(seg),
+                                   "--out", str(tmp_path / "c.json")])
+    assert res.exit_code == 2 and "segment 'elbow_flex' = [5.0, 99.0] s lies outside" in res.output

@@ -1,0 +1,57 @@
+import numpy as np
+import pytest
+from scipy.io import savemat
+
+from handsynth.errors import RecordingError
+from handsynth.sensors.imu import broad_errors, find_broad_trials, read_broad_trial
+from handsynth.sensors.imu._quat import qexp, qmul
+
+
+def _fields(n=500):
+    rng = np.random.default_rng(0)
+    q = np.tile([1.0, 0, 0, 0], (n, 1))
+    return dict(imu_acc=np.tile([0, 0, 9.81], (n, 1)) + rng.normal(0, 0.01, (n, 3)),
+                imu_gyr=rng.normal(0, 0.001, (n, 3)), imu_mag=np.tile([0, 20.0, -40.0], (n, 1)),
+                opt_quat=q, movement=np.r_[np.zeros(100), np.ones(n - 100)].astype(np.uint8)[:, None],
+                sampling_rate=np.array([[200.0]]))
+
+
+def test_read_mat_trial(tmp_path):
+    savemat(tmp_path / "05_test.mat", _fields())
+    rec, opt, movement = read_broad_trial(tmp_path / "05_test.mat")
+    assert opt.shape == (500, 4)
+    assert rec.rate_hz == 200.0 and rec.sensors == ("05_test",) and movement.sum() == 400
+    assert [p.name for p in find_broad_trials(tmp_path)] == ["05_test.mat"]
+
+
+def test_metric_splits_heading_and_inclination():
+    n = 50
+    opt = np.tile([1.0, 0, 0, 0], (n, 1))
+    move = np.ones(n, bool)
+    e = broad_errors(qmul(qexp([0, 0, np.radians(4)]), opt), opt, move)
+    assert e["total_rmse_deg"] == pytest.approx(4) and e["heading_rmse_deg"] == pytest.approx(4)
+    assert e["inclination_rmse_deg"] == pytest.approx(0, abs=1e-6)
+    opt_nan = opt.copy()
+    opt_nan[:10] = np.nan  # lost markers are left out
+    assert np.isfinite(broad_errors(opt, opt_nan, move)["total_rmse_deg"])
+
+
+def test_bad_trials_are_named(tmp_path):
+    f = _fields()
+    f["imu_gyr"][7, 1] = np.nan
+    savemat(tmp_path / "01_nan.mat", f)
+    with pytest.raises(RecordingError, match="01_nan.mat: field imu_gyr is not finite at sample 7"):
+        read_broad_trial(tmp_path / "01_nan.mat")
+    f = _fields()
+    f["movement"][:] = 0
+    savemat(tmp_path / "02_still.mat", f)
+    with pytest.raises(RecordingError, match="movement marks no sample"):
+        read_broad_trial(tmp_path / "02_still.mat")
+    (tmp_path / "03_junk.mat").write_text("junk")
+    with pytest.raises(RecordingError, match="03_junk.mat: not a readable .mat file"):
+        read_broad_trial(tmp_path / "03_junk.mat")
+    with pytest.raises(RecordingError, match="not a directory"):
+        find_broad_trials(tmp_path / "missing")
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(RecordingError, match="no BROAD trial files"):
+        find_broad_trials(tmp_path / "empty")

@@ -1,0 +1,59 @@
+import numpy as np
+import pytest
+
+from handsynth.errors import InvalidInputError
+from handsynth.models import HandShape
+from handsynth.sensors.imu import ImuHand, calibration_motion, free_motion, simulate_imu
+from handsynth.sensors.imu._vectors import (
+    calibrate_vectors,
+    link_vectors,
+    rotation_vector,
+    seel_joint_positions,
+    truth_chain_model,
+)
+
+
+@pytest.fixture(scope="module")
+def cal_rec():
+    """A hand that is not the standard one, with fingertip sensors, datasheet noise."""
+    hand = ImuHand(HandShape(length=1.1, width=0.95), tip_sensors=True)
+    return simulate_imu(calibration_motion(), hand=hand, seed=4)
+
+
+@pytest.fixture(scope="module")
+def vectors(cal_rec):
+    return calibrate_vectors(cal_rec)
+
+
+def test_finger_vectors_within_a_few_mm(cal_rec, vectors):
+    jv = cal_rec.truth.joint_vectors
+    finger = [k for k in vectors if k[0].split("_")[0] in ("index", "middle", "ring", "little")
+              and "ulnar" not in k[1]]
+    err = np.array([np.linalg.norm(vectors[k].vector - jv[k]) * 1e3 for k in finger])
+    assert np.median(err) < 6.0
+    # far better than not knowing the vector (a zero vector is |P| off)
+    zero = np.array([np.linalg.norm(jv[k]) * 1e3 for k in finger])
+    assert np.median(err) < 0.25 * np.median(zero)
+
+
+def test_link_vectors_of_the_fingers(cal_rec, vectors):
+    links = link_vectors(cal_rec, vectors)
+    truth = truth_chain_model(cal_rec).links
+    keys = [k for k in links if k[0].endswith(("proximal", "middle")) and k[0] != "thumb_proximal"]
+    err = np.array([np.linalg.norm(links[k] - truth[k]) * 1e3 for k in keys])
+    assert np.median(err) < 6.0
+
+
+def test_unknown_point_is_named(cal_rec):
+    with pytest.raises(InvalidInputError, match="no calibration rotations for 'knee'"):
+        rotation_vector(cal_rec, "index_middle", "index_knee".replace("index_", ""))
+
+
+def test_seel_least_squares_finds_the_pip_joint(imu_hand):
+    rec = simulate_imu(free_motion(20.0, seed=9, speed=1.5), hand=imu_hand, seed=9)
+    o1, o2 = seel_joint_positions(rec, "index_proximal", "index_middle", start=400)
+    jv = rec.truth.joint_vectors
+    # o = sensor -> joint = -P; the hinge leaves the position along its axis (x) free
+    e1 = (o1 + jv[("index_proximal", "index_pip")])[1:]
+    e2 = (o2 + jv[("index_middle", "index_pip")])[1:]
+    assert np.linalg.norm(e1) < 0.01 and np.linalg.norm(e2) < 0.01
