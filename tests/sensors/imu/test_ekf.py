@@ -27,6 +27,7 @@ def test_protocol(moving_rec):
     assert isinstance(ChainEKF(truth_chain_model(moving_rec)), OrientationEstimator)
 
 
+@pytest.mark.slow  # the first call compiles the EKF (10-40 s on a fresh checkout)
 @pytest.mark.parametrize("opts", [ChainEKFOptions(), ChainEKFOptions(use_h2=False, switch_dps=None)])
 def test_compiled_observation_equals_reference(moving_rec, opts):
     rng = np.random.default_rng(0)
