@@ -28,6 +28,13 @@ from ._calibration import (
     reference_silhouette,
     select_shape_from_frame,
 )
+from ._learned import (
+    LearnedEstimator,
+    LearnedOptions,
+    fit_mlp,
+    learned_estimator,
+    train_learned,
+)
 from ._lookup import PoseEstimate, PoseEstimator, PoseLookup
 from ._masked import (
     MaskedMatch,
@@ -43,6 +50,8 @@ __all__ = [
     "ApproximateOptions",
     "Calibration",
     "FrameSelection",
+    "LearnedEstimator",
+    "LearnedOptions",
     "MaskedMatch",
     "PoseEstimate",
     "PoseEstimator",
@@ -52,6 +61,8 @@ __all__ = [
     "SearchTables",
     "Selection",
     "SelectionOptions",
+    "fit_mlp",
+    "learned_estimator",
     "masked_band_areas",
     "masked_search",
     "masked_search_reference",
@@ -61,4 +72,5 @@ __all__ = [
     "select_shape",
     "select_shape_from_frame",
     "shape_ratios",
+    "train_learned",
 ]

@@ -99,18 +99,40 @@ pose set (``docs/eval/model_hands_20448.json``):
 
 from ._hands import random_hand_shapes
 from ._options import CONDITIONS, EvalOptions
+from ._protocol import (
+    JOINT_GROUPS,
+    MOVING_DEG,
+    ProtocolOptions,
+    TestHand,
+    condition_stats,
+    mesh_test_hands,
+    model_test_hands,
+    run_protocol,
+)
 from ._report import EvalReport
 from ._run import evaluate
 from ._stats import JointStats, joint_stats, ratio_distance, silhouette_ambiguity
+from ._testposes import natural_test_poses, paper_protocol_poses, relaxed_rest_posture
 
 __all__ = [
     "CONDITIONS",
+    "JOINT_GROUPS",
+    "MOVING_DEG",
     "EvalOptions",
     "EvalReport",
     "JointStats",
+    "ProtocolOptions",
+    "TestHand",
+    "condition_stats",
     "evaluate",
     "joint_stats",
+    "mesh_test_hands",
+    "model_test_hands",
+    "natural_test_poses",
+    "paper_protocol_poses",
     "random_hand_shapes",
     "ratio_distance",
+    "relaxed_rest_posture",
+    "run_protocol",
     "silhouette_ambiguity",
 ]

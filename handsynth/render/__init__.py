@@ -7,6 +7,7 @@ GL context and the mask interface of :class:`SilhouetteRenderer`),
 """
 
 from ._camera import CameraMount
+from ._coverage import DEFAULT_CELLS, coverage
 from ._gl import backend, ensure_backend
 from ._io import write_png
 from ._masks import MaskMaker
@@ -28,17 +29,23 @@ from ._renderer import (
 )
 from ._scene import scene_include_mjcf, scene_mjcf, scene_parts, standard_assets
 from ._sheet import contact_sheet, label_image
+from ._varied import HandVariation, MountVariation, VariedRasterizer
 
 __all__ = [
+    "DEFAULT_CELLS",
     "CameraMount",
     "GLContextOwner",
+    "HandVariation",
     "MaskMaker",
+    "MountVariation",
     "SilhouetteRasterizer",
     "SilhouetteRenderer",
+    "VariedRasterizer",
     "backend",
     "binarize",
     "check_frame",
     "contact_sheet",
+    "coverage",
     "crop_resize",
     "ensure_backend",
     "label_image",
