@@ -29,6 +29,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import zipfile
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -341,7 +342,7 @@ def _read(path: Path, opts: LearningSetOptions, mount: CameraMount, side: str) -
         with np.load(path) as z:
             arrays = {k: z[k] for k in ("grids", "rest_grids", "hand", "angles", "rest_angles",
                                         "complete")}
-    except (OSError, ValueError, KeyError, EOFError) as exc:
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
         raise DatabaseCorruptError(f"learning set {path} is unreadable: {exc}") from None
     n = opts.hands * opts.poses_per_hand
     if int(arrays["complete"][0]) != n or arrays["grids"].shape != (n, opts.cells[0] * opts.cells[1]):

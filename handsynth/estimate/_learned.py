@@ -39,8 +39,10 @@ from __future__ import annotations
 
 import copy
 import hashlib
+import itertools
 import json
 import os
+import zipfile
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -63,10 +65,18 @@ class LearnedOptions:
 
     Parameters
     ----------
-    kind : {"mlp", "knn"}
+    kind : {"mlp", "knn", "fingers"}
+        ``"fingers"``: a kNN per digit on the cells that digit changes
+        (module docstring).
     use_rest : bool
         Give the regressor the difference from the rest frame (a calibrated
         estimator); without it the frame alone.
+    target : {"delta", "angles"}
+        With `use_rest`: ``"delta"`` learns the change from the hand's rest
+        posture (zero where the frame equals the rest frame) and adds the
+        rest posture read from the rest frame by a second regressor of the
+        same kind (frame -> angles, learnt from every frame); ``"angles"``
+        learns the angles directly.
     components : int
         Principal components of the input kept.
     hidden : tuple of int
@@ -84,6 +94,7 @@ class LearnedOptions:
 
     kind: str = "mlp"
     use_rest: bool = True
+    target: str = "delta"
     components: int = 192
     hidden: tuple[int, ...] = (384, 384)
     epochs: int = 40
@@ -94,8 +105,12 @@ class LearnedOptions:
     seed: int = 0
 
     def __post_init__(self) -> None:
-        if self.kind not in ("mlp", "knn"):
-            raise InvalidInputError(f"LearnedOptions.kind must be 'mlp' or 'knn', got {self.kind!r}")
+        if self.target not in ("delta", "angles"):
+            raise InvalidInputError(f"LearnedOptions.target must be 'delta' or 'angles', "
+                                    f"got {self.target!r}")
+        if self.kind not in ("mlp", "knn", "fingers"):
+            raise InvalidInputError(f"LearnedOptions.kind must be 'mlp', 'knn' or 'fingers', "
+                                    f"got {self.kind!r}")
         for name in ("components", "epochs", "batch", "k"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
@@ -130,11 +145,16 @@ def _pca(z: np.ndarray, k: int, rng: np.random.Generator, sample: int = 20000
     idx = rng.choice(len(z), size=min(sample, len(z)), replace=False)
     s = z[idx].astype(np.float64)
     mean = s.mean(axis=0)
-    cov = np.cov(s - mean, rowvar=False)
-    w, v = np.linalg.eigh(cov)
-    order = np.argsort(w)[::-1][:k]
-    return (mean.astype(np.float32), np.ascontiguousarray(v[:, order], np.float32),
-            np.sqrt(np.maximum(w[order], 1e-12)).astype(np.float32))
+    s -= mean
+    if len(s) > s.shape[1]:
+        w, v = np.linalg.eigh(s.T @ s / max(len(s) - 1, 1))
+        order = np.argsort(w)[::-1][:k]
+        v, w = v[:, order], w[order]
+    else:  # fewer rows than dimensions: the thin SVD of the rows is cheaper
+        _, sv, vt = np.linalg.svd(s, full_matrices=False)
+        v, w = vt[:k].T, sv[:k] ** 2 / max(len(s) - 1, 1)
+    return (mean.astype(np.float32), np.ascontiguousarray(v, np.float32),
+            np.sqrt(np.maximum(w, 1e-12)).astype(np.float32))
 
 
 # ---------------------------------------------------------------------------
@@ -175,7 +195,7 @@ def fit_mlp(x: np.ndarray, y: np.ndarray, *, hidden=(384, 384), epochs: int = 40
     rng = np.random.default_rng(seed)
     sizes = [x.shape[1], *hidden, y.shape[1]]
     weights = [(rng.normal(0, np.sqrt(2.0 / a), (a, b))).astype(np.float32)
-               for a, b in zip(sizes[:-1], sizes[1:])]
+               for a, b in itertools.pairwise(sizes)]
     biases = [np.zeros(b, np.float32) for b in sizes[1:]]
     params = weights + biases
     m1 = [np.zeros_like(p) for p in params]
@@ -250,13 +270,16 @@ class LearnedEstimator:
         self._rest: np.ndarray | None = None
         self.smoothing = 0.0
         self._previous: np.ndarray | None = None
-        self._index = None
-        if options.kind == "knn":
+        self._index = {}
+        if options.kind in ("knn", "fingers"):
             import faiss
 
-            index = faiss.IndexFlatL2(arrays["codes"].shape[1])
-            index.add(np.ascontiguousarray(arrays["codes"]))
-            self._index = index
+            for prefix in ("", "abs_", *(f"d{d}_" for d in range(5))):
+                if prefix + "codes" in arrays:
+                    index = faiss.IndexFlatL2(arrays[prefix + "codes"].shape[1])
+                    index.add(np.ascontiguousarray(arrays[prefix + "codes"]))
+                    self._index[prefix] = index
+        self._rest_angles: np.ndarray | None = None
         self._lo = JOINT_LIMITS_DEG[:, 0]
         self._hi = JOINT_LIMITS_DEG[:, 1]
 
@@ -281,7 +304,42 @@ class LearnedEstimator:
         out = copy.copy(self)
         out._rest = g.ravel()
         out._previous = None
+        if "abs_mean" in self._a:
+            z = _inputs(out._rest[None], None) - self._a["abs_mean"]
+            out._rest_angles = self._predict("abs_", z @ self._a["abs_components"])[0]
         return out
+
+    def _predict_digits(self, z: np.ndarray) -> tuple[np.ndarray, float]:
+        """Each digit's angles from its own cells (kind ``"fingers"``), and the mean distance."""
+        a = self._a
+        angles = np.empty(20)
+        dist = 0.0
+        for d, joints in enumerate(_DIGIT_JOINTS):
+            p = f"d{d}_"
+            c = (z[:, a[p + "cols"]] * a[p + "w"] - a[p + "mean"]) @ a[p + "components"]
+            got, e = self._knn(p, c)
+            angles[list(joints)] = got
+            dist += e / 5
+        return angles, dist
+
+    def _knn(self, prefix: str, c: np.ndarray) -> tuple[np.ndarray, float]:
+        d, idx = self._index[prefix].search(np.ascontiguousarray(c, np.float32), self.options.k)
+        d = np.sqrt(np.maximum(d[0], 0.0))
+        w = 1.0 / (d + d[0] + 1e-6)
+        return (w @ self._a[prefix + "angles"][idx[0]] / w.sum()).astype(np.float64), float(d[0])
+
+    def _predict(self, prefix: str, c: np.ndarray) -> tuple[np.ndarray, float]:
+        """Regressor `prefix` on codes `c` (1, k): angles (20,) and the nearest distance."""
+        a = self._a
+        if self.options.kind == "mlp":
+            h = c / a[prefix + "scale"]
+            n_layers = int(a[prefix + "layers"])
+            for i in range(n_layers):
+                h = h @ a[f"{prefix}w{i}"] + a[f"{prefix}b{i}"]
+                if i < n_layers - 1:
+                    np.maximum(h, 0.0, out=h)
+            return (h[0] * a[prefix + "y_sd"] + a[prefix + "y_mean"]).astype(np.float64), 0.0
+        return self._knn(prefix, c)
 
     def grid(self, frame: np.ndarray) -> np.ndarray:
         """The frame's coverage grid as the learning set holds it ((rows, cols) uint8)."""
@@ -322,29 +380,22 @@ class LearnedEstimator:
         if self.options.use_rest and self._rest is None:
             raise InvalidInputError("this estimator reads the user's rest frame: call "
                                     "calibrated(rest_frame) first")
-        z = _inputs(g, self._rest[None] if self.options.use_rest else None) - self._a["mean"]
-        c = z @ self._a["components"]
-        if self.options.kind == "mlp":
-            h = c / self._a["scale"]
-            n_layers = int(self._a["layers"])
-            for i in range(n_layers):
-                h = h @ self._a[f"w{i}"] + self._a[f"b{i}"]
-                if i < n_layers - 1:
-                    np.maximum(h, 0.0, out=h)
-            angles = (h[0] * self._a["y_sd"] + self._a["y_mean"]).astype(np.float64)
-            error = 0.0
+        z = _inputs(g, self._rest[None] if self.options.use_rest else None)
+        if self.options.kind == "fingers":
+            angles, error = self._predict_digits(z)
+            conf = 1.0 / (1.0 + error)
         else:
-            d, idx = self._index.search(np.ascontiguousarray(c, np.float32), self.options.k)
-            d = np.sqrt(np.maximum(d[0], 0.0))
-            w = 1.0 / (d + d[0] + 1e-6)
-            angles = (w @ self._a["angles"][idx[0]] / w.sum()).astype(np.float64)
-            error = float(d[0])
+            z -= self._a["mean"]
+            c = z @ self._a["components"]
+            angles, error = self._predict("", c)
+            total = float(np.sum(z * z))
+            conf = float(np.sum(c * c) / total) if total > 0 else 0.0
+        if self._rest_angles is not None:
+            angles = angles + self._rest_angles
         angles = np.clip(angles, self._lo, self._hi)
         if self.smoothing > 0 and self._previous is not None:
             angles = self.smoothing * self._previous + (1 - self.smoothing) * angles
         self._previous = angles if self.smoothing > 0 else None
-        total = float(np.sum(z * z))
-        conf = float(np.sum(c * c) / total) if total > 0 else 0.0
         return PoseEstimate(angles=angles, keypoints=np.full((21, 3), np.nan, np.float32),
                             confidence=min(max(conf, 0.0), 1.0), entry=-1, error=error,
                             low_confidence=False, no_hand=False)
@@ -376,7 +427,7 @@ class LearnedEstimator:
             with np.load(path) as z:
                 meta = json.loads(str(z["meta"]))
                 arrays = {k: z[k] for k in z.files if k != "meta"}
-        except (OSError, ValueError, KeyError, EOFError) as exc:
+        except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
             raise DatabaseCorruptError(f"learnt estimator {path} is unreadable: {exc}") from None
         if meta.get("format") != _FORMAT:
             raise DatabaseCorruptError(f"learnt estimator {path} has format {meta.get('format')}, "
@@ -406,13 +457,66 @@ def train_learned(data: LearningSet, options: LearnedOptions | None = None, *,
     if not isinstance(data, LearningSet):
         raise InvalidInputError(f"data must be a LearningSet, got {type(data).__name__}")
     rng = np.random.default_rng(opts.seed)
-    rest = data.rest_grids[data.hand] if opts.use_rest else None
-    z = _inputs(data.grids, rest)
-    k = min(opts.components, z.shape[1])
-    mean, comps, scale = _pca(z, k, rng)
-    codes = ((z - mean) @ comps).astype(np.float32)
-    del z
     y = data.angles.astype(np.float32)
+    if opts.kind == "fingers":
+        rest = data.rest_grids[data.hand] if opts.use_rest else None
+        arrays = _fit_digits(_inputs(data.grids, rest), y, opts, rng, data.grids.shape[1])
+    elif opts.use_rest:
+        rest = data.rest_grids[data.hand]
+        arrays = _fit(_inputs(data.grids, rest), y - data.rest_angles[data.hand]
+                      if opts.target == "delta" else y, opts, rng, "", progress)
+        if opts.target == "delta":
+            grids = np.vstack([data.grids, data.rest_grids])
+            y_abs = np.vstack([y, data.rest_angles.astype(np.float32)])
+            arrays.update(_fit(_inputs(grids, None), y_abs, opts, rng, "abs_", progress))
+    else:
+        arrays = _fit(_inputs(data.grids, None), y, opts, rng, "", progress)
+    return LearnedEstimator(arrays, options=opts, mount=data.mount, side=data.side,
+                            cells=data.options.cells)
+
+
+_DIGIT_JOINTS = ((0, 1, 2, 3), *(tuple(range(4 + 4 * k, 8 + 4 * k)) for k in range(4)))
+#: A cell belongs to a digit's region when its coverage correlates with one of
+#: the digit's angles by more than this over the learning set (or by four
+#: standard errors of a zero correlation, ``4 / sqrt(N)``, if larger).
+_REGION_CORR = 0.1
+
+
+def _fit_digits(z: np.ndarray, y: np.ndarray, opts: LearnedOptions, rng: np.random.Generator,
+                n_cells: int) -> dict:
+    """Per digit: the cells whose coverage follows its angles, their components and a kNN."""
+    x = z[:, :n_cells]
+    xs = (x - x.mean(axis=0)) / np.maximum(x.std(axis=0), 1e-6)
+    ys = (y - y.mean(axis=0)) / np.maximum(y.std(axis=0), 1e-6)
+    corr = np.abs(xs.T @ ys) / len(z)  # (cells, 20)
+    del xs
+    arrays: dict = {}
+    blocks = z.shape[1] // n_cells
+    for d, joints in enumerate(_DIGIT_JOINTS):
+        w = corr[:, list(joints)].max(axis=1)
+        cells = np.nonzero(w > max(_REGION_CORR, 4.0 / np.sqrt(len(z))))[0]
+        cols = np.concatenate([cells + b * n_cells for b in range(blocks)])
+        weight = np.tile(w[cells], blocks).astype(np.float32)
+        zd = z[:, cols] * weight
+        mean, comps, _ = _pca(zd, min(opts.components, 64, len(cols)), rng)
+        p = f"d{d}_"
+        arrays.update({p + "cols": cols, p + "w": weight, p + "mean": mean, p + "components": comps,
+                       p + "codes": ((zd - mean) @ comps).astype(np.float32),
+                       p + "angles": np.ascontiguousarray(y[:, list(joints)], np.float32)})
+    return arrays
+
+
+def _fit(z: np.ndarray, y: np.ndarray, opts: LearnedOptions, rng: np.random.Generator,
+         prefix: str, progress) -> dict:
+    """Principal components of inputs `z` and a regressor of `y` on them, as named arrays."""
+    k = min(opts.components, z.shape[1])
+    mean, comps, sd = _pca(z, k, rng)
+    # one scale for every component (the first one's s.d.): whitening each
+    # component gave the perceptron the noise of the small ones at full weight
+    # (model hands, paper frames: flexion skill 0.17 whitened, 0.38 not)
+    scale = np.full_like(sd, sd[0])
+    codes = ((z - mean) @ comps).astype(np.float32)
+    y = np.asarray(y, np.float32)
     arrays: dict = {"mean": mean, "components": comps, "scale": scale}
     if opts.kind == "knn":
         arrays["codes"] = codes
@@ -427,8 +531,7 @@ def train_learned(data: LearningSet, options: LearnedOptions | None = None, *,
         arrays.update({"y_mean": y_mean, "y_sd": y_sd, "layers": np.array(len(weights))})
         for i, (w, b) in enumerate(zip(weights, biases)):
             arrays[f"w{i}"], arrays[f"b{i}"] = w, b
-    return LearnedEstimator(arrays, options=opts, mount=data.mount, side=data.side,
-                            cells=data.options.cells)
+    return {prefix + k: v for k, v in arrays.items()}
 
 
 def learned_estimator(folder, options: LearnedOptions | None = None, *,

@@ -289,12 +289,11 @@ def run_protocol(methods: dict, hands: list[TestHand], options: ProtocolOptions 
                     stats["seconds_per_frame"] = round(dt, 6)
                     rec[ps][name] = stats
                     if progress is not None:
-                        s = stats["skill"]
-                        progress(f"{hand.name} {ps} {name}: flexion MAE "
-                                 f"{stats['method']['groups_mae_deg']['finger_flexion']} "
-                                 f"(constant {stats['constant']['groups_mae_deg']['finger_flexion']}, "
-                                 f"skill {s['finger_flexion']}), all {stats['method']['groups_mae_deg']['all']} "
-                                 f"(skill {s['all']})")
+                        mae, const = (stats[k]["groups_mae_deg"] for k in ("method", "constant"))
+                        progress(f"{hand.name} {ps} {name}: flexion MAE {mae['finger_flexion']} "
+                                 f"(constant {const['finger_flexion']}, skill "
+                                 f"{stats['skill']['finger_flexion']}), all {mae['all']} "
+                                 f"(skill {stats['skill']['all']})")
         finally:
             close = getattr(maker, "close", None)
             if close is not None:
