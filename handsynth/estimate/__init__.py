@@ -12,6 +12,13 @@
   :func:`search_reference` (numpy, the specification); the approximate
   index for large databases: :class:`ApproximateIndex`,
   :class:`ApproximateOptions`.
+* Estimators for hands no database was made from (beyond the paper,
+  issue 15): :class:`LearnedEstimator` reads the camera's whole fixed
+  frame (:func:`handsynth.render.coverage`) with a per-digit nearest-neighbour
+  search or a perceptron learnt from randomised model hands
+  (:func:`learned_estimator`, :class:`LearnedOptions`, :func:`train_learned`,
+  :func:`fit_mlp`), calibrated by a frame of the user's relaxed hand;
+  :class:`EnsembleEstimator` averages several.
 * Calibration from one open-hand frame (beyond the paper):
   :func:`select_shape_from_frame`, :class:`Calibration` and the masked search
   (:func:`masked_search` / :func:`masked_search_reference`,
@@ -28,6 +35,7 @@ from ._calibration import (
     reference_silhouette,
     select_shape_from_frame,
 )
+from ._ensemble import EnsembleEstimator
 from ._learned import (
     LearnedEstimator,
     LearnedOptions,
@@ -49,6 +57,7 @@ __all__ = [
     "ApproximateIndex",
     "ApproximateOptions",
     "Calibration",
+    "EnsembleEstimator",
     "FrameSelection",
     "LearnedEstimator",
     "LearnedOptions",

@@ -109,3 +109,23 @@ def test_bad_options_are_refused_by_name():
         LearnedOptions(target="pose")
     with pytest.raises(InvalidInputError, match="components"):
         LearnedOptions(components=0)
+
+
+def test_an_ensemble_reports_the_weighted_mean_and_calibrates_its_members(data):
+    from handsynth.estimate import EnsembleEstimator
+
+    a = train_learned(data, LearnedOptions(kind="fingers", k=2))
+    b = train_learned(data, LearnedOptions(kind="knn", target="angles", components=16, k=1))
+    ens = EnsembleEstimator([a, b], weights=[3, 1])
+    assert isinstance(ens, PoseEstimator)
+    rest = SilhouetteRasterizer().mask(np.full(20, 4.0))
+    frame = SilhouetteRasterizer().mask(np.full(20, 12.0))
+    cal = ens.calibrated(rest)
+    expect = (0.75 * a.calibrated(rest).estimate(frame).angles
+              + 0.25 * b.calibrated(rest).estimate(frame).angles)
+    np.testing.assert_allclose(cal.estimate(frame).angles, expect)
+    assert cal.estimate(np.zeros((480, 720), bool)).no_hand
+    with pytest.raises(InvalidInputError, match="weights"):
+        EnsembleEstimator([a, b], weights=[1, -1])
+    with pytest.raises(InvalidInputError, match="at least one"):
+        EnsembleEstimator([])
