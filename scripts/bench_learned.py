@@ -12,10 +12,12 @@ MuJoCo as masks and painted as skin on a dark background (BGR uint8), reused
 cyclically.  The estimator is calibrated to each hand's rest frame once, not
 timed.  The process is pinned to one CPU, BLAS and OpenCV to one thread.
 
-Printed: median and p99 latency of :meth:`LearnedEstimator.estimate`, and the
-median cost of its parts on the same frames: binarizing (Otsu) the BGR frame,
-the coverage grid (wrist cut, cell averages), the principal-component code
-and the regressor.  The last line is machine-readable:
+Printed: median and p99 latency of ``estimate`` (``--kind ensemble``, the
+default: the mean of the per-digit kNN and the perceptron, as
+scripts/eval_protocol.py builds them), and the median cost of its parts on
+the same frames: binarizing (Otsu) the BGR frame, the coverage grid (wrist
+cut, cell averages), and each member's estimate from the mask (its own
+coverage grid, principal-component codes and regressor).  The last line is machine-readable:
 ``learned_fps_median=<number> latency_p99_ms=<number>``.
 """
 
@@ -28,6 +30,7 @@ for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 os.environ.setdefault("MUJOCO_GL", "egl")
 
 import argparse
+import sys
 import time
 from pathlib import Path
 
@@ -47,9 +50,10 @@ def _median_ms(fn, items, repeat: int) -> float:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cache", type=Path, required=True, help="folder of the learnt estimator")
-    ap.add_argument("--kind", default="mlp", choices=["mlp", "knn"])
+    ap.add_argument("--kind", default="ensemble", choices=["ensemble", "fingers", "mlp"],
+                    help="the estimator of scripts/eval_protocol.py of that name")
     ap.add_argument("--frames", type=int, default=2000, help="timed frames")
-    ap.add_argument("--hands", type=int, default=400, help="learning set: hands")
+    ap.add_argument("--hands", type=int, default=1000, help="learning set: hands")
     ap.add_argument("--poses-per-hand", type=int, default=100, help="learning set: frames per hand")
     args = ap.parse_args()
 
@@ -60,15 +64,20 @@ def main() -> None:
         os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
 
     from handsynth.db import LearningSetOptions
-    from handsynth.estimate import LearnedOptions, learned_estimator
+    from handsynth.estimate import EnsembleEstimator, learned_estimator
     from handsynth.eval import natural_test_poses, relaxed_rest_posture
     from handsynth.render import CameraMount, binarize, coverage
     from handsynth.testhands import TEST_HANDS, MeshHandRenderer, shipped_hand_path
 
     mount = CameraMount.paper()
-    est = learned_estimator(args.cache, LearnedOptions(kind=args.kind),
-                            data=LearningSetOptions(hands=args.hands, poses_per_hand=args.poses_per_hand),
-                            mount=mount, progress=print)
+    sys.path.insert(0, str(Path(__file__).parent))
+    from eval_protocol import LEARNED
+
+    data = LearningSetOptions(hands=args.hands, poses_per_hand=args.poses_per_hand)
+    members = {k: learned_estimator(args.cache, LEARNED[k], data=data, mount=mount, progress=print)
+               for k in (("fingers", "mlp") if args.kind == "ensemble" else (args.kind,))}
+    est = EnsembleEstimator(list(members.values())) if args.kind == "ensemble" \
+        else members[args.kind]
     rng = np.random.default_rng(0)
     skin, dark = np.array([120, 150, 210], np.uint8), np.array([25, 20, 15], np.uint8)
 
@@ -102,17 +111,14 @@ def main() -> None:
 
     cal, frames = per_hand[0]
     masks = [binarize(f) for f in frames]
-    grids = [cal.grid(f).reshape(1, -1) for f in frames]
-    codes = [np.atleast_2d(cal.code(f)) for f in frames]
     n = min(args.frames, 500)
     parts = {
         "binarize (Otsu) of the BGR frame": _median_ms(binarize, frames, n),
         "coverage grid (wrist cut, cell means)": _median_ms(lambda m: coverage(m, mount), masks, n),
-        "principal-component code": _median_ms(
-            lambda g: (np.hstack([g, g - cal._rest[None]]) / 255.0 - cal._a["mean"]) @ cal._a["components"],
-            grids, n),
-        f"regressor ({args.kind})": _median_ms(lambda c: cal._predict("", c), codes, n),
     }
+    members_cal = cal.members if args.kind == "ensemble" else [cal]
+    for name, m in zip(members, members_cal):
+        parts[f"{name}: estimate from the mask"] = _median_ms(m.estimate, masks, n)
     print(f"{args.kind}: median {med * 1e3:.3f} ms ({1 / med:.0f} fps), p99 {p99 * 1e3:.3f} ms, "
           f"one core, {args.frames} frames")
     for k, v in parts.items():

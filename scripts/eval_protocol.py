@@ -11,13 +11,15 @@ Methods:
   standard    the paper's lookup in the standard hand's 20,448-entry database
   selected    the database chosen by formulas (1)-(4) (hands with measurements only)
   calibrated  PoseLookup.from_open_frame on the hand's rest frame
-  mlp         LearnedEstimator, perceptron, calibrated to the rest frame
-  mlp_norest  the same without the rest frame
-  knn         LearnedEstimator, k nearest learning frames, calibrated
+  fingers         LearnedEstimator, per-digit kNN on each digit's cells, calibrated to the rest frame
+  mlp             LearnedEstimator, perceptron, calibrated
+  knn             LearnedEstimator, kNN on the whole frame, calibrated
+  fingers_norest  fingers without the rest frame
+  ensemble        the mean of fingers and mlp
 
 Example:
   python scripts/eval_protocol.py --cache ~/handsynth_cache --model-hands 4 \
-      --frames 200 --methods standard,calibrated,mlp,knn --json protocol.json
+      --frames 200 --json protocol.json
 
 The last line printed is machine-readable: one JSON object of the headline
 figures (flexion MAE, constant, skill per hand kind, method and pose set).
@@ -37,12 +39,21 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 import numpy as np
 
 from handsynth.db import BuildOptions, LearningSetOptions, build_databases
-from handsynth.estimate import LearnedOptions, PoseLookup, learned_estimator
+from handsynth.estimate import EnsembleEstimator, LearnedOptions, PoseLookup, learned_estimator
 from handsynth.eval import ProtocolOptions, mesh_test_hands, model_test_hands, run_protocol
 from handsynth.models import HandShape
 from handsynth.render import CameraMount
 
-_ALL = ("standard", "selected", "calibrated", "mlp", "mlp_norest", "knn")
+_ALL = ("standard", "selected", "calibrated", "fingers", "mlp", "knn", "fingers_norest", "ensemble")
+
+#: The learnt methods' options (chosen on model hands: docs in the README section
+#: "Camera estimator for unseen hands").
+LEARNED = {
+    "fingers": LearnedOptions(kind="fingers", k=64),
+    "mlp": LearnedOptions(kind="mlp", target="angles", epochs=15),
+    "knn": LearnedOptions(kind="knn", target="angles", k=8),
+    "fingers_norest": LearnedOptions(kind="fingers", k=64, use_rest=False),
+}
 
 
 def _methods(names, cache: Path, data: LearningSetOptions, mount: CameraMount, say):
@@ -66,18 +77,23 @@ def _methods(names, cache: Path, data: LearningSetOptions, mount: CameraMount, s
     if "calibrated" in names:
         out["calibrated"] = lambda rest, hand: PoseLookup.from_open_frame(dbs, rest, mount=mount,
                                                                           workers=1)
-    learned = {"mlp": LearnedOptions(kind="mlp"), "mlp_norest": LearnedOptions(kind="mlp", use_rest=False),
-               "knn": LearnedOptions(kind="knn")}
-    for name, opts in learned.items():
-        if name not in names:
+    built = {}
+    for name, opts in LEARNED.items():
+        if name not in names and not (name in ("fingers", "mlp") and "ensemble" in names):
             continue
         t0 = time.perf_counter()
-        est = learned_estimator(cache, opts, data=data, mount=mount, progress=say)
+        built[name] = learned_estimator(cache, opts, data=data, mount=mount, progress=say)
         say(f"{name}: ready in {time.perf_counter() - t0:.1f} s")
-        if opts.use_rest:
+    for name, est in built.items():
+        if name not in names:
+            continue
+        if est.options.use_rest:
             out[name] = lambda rest, hand, est=est: est.calibrated(rest)
         else:
             out[name] = lambda rest, hand, est=est: est
+    if "ensemble" in names:
+        ens = EnsembleEstimator([built["fingers"], built["mlp"]])
+        out["ensemble"] = lambda rest, hand: ens.calibrated(rest)
     return out
 
 
@@ -105,14 +121,17 @@ def headline(result: dict) -> dict:
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--cache", required=True, type=Path, help="folder for databases and learnt estimators")
-    p.add_argument("--methods", default="standard,calibrated,mlp,knn")
+    p.add_argument("--methods", default="standard,selected,calibrated,fingers,mlp,ensemble")
     p.add_argument("--model-hands", type=int, default=4)
-    p.add_argument("--model-seed", type=int, default=0)
+    p.add_argument("--model-seed", type=int, default=1, help="seed of the model hands (0: the "
+                   "development hands the options were chosen on)")
+    p.add_argument("--model-spread", type=float, default=1.5,
+                   help="HandVariation spread of the model hands (learning: 1.0)")
     p.add_argument("--mesh", default="godot_xr_tools,mrtk", help="glTF hands ('' for none)")
     p.add_argument("--frames", type=int, default=200)
     p.add_argument("--pose-sets", default="paper,natural")
     p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--hands", type=int, default=400, help="learning set: hands")
+    p.add_argument("--hands", type=int, default=1000, help="learning set: hands")
     p.add_argument("--poses-per-hand", type=int, default=100, help="learning set: frames per hand")
     p.add_argument("--json", type=Path)
     a = p.parse_args(argv)
@@ -127,7 +146,7 @@ def main(argv=None) -> int:
 
     data = LearningSetOptions(hands=a.hands, poses_per_hand=a.poses_per_hand)
     methods = _methods(names, a.cache, data, mount, say)
-    hands = model_test_hands(a.model_hands, seed=a.model_seed, mount=mount)
+    hands = model_test_hands(a.model_hands, seed=a.model_seed, mount=mount, spread=a.model_spread)
     if a.mesh:
         hands += mesh_test_hands([m for m in a.mesh.split(",") if m], mount=mount)
     opts = ProtocolOptions(frames=a.frames, pose_sets=tuple(a.pose_sets.split(",")), seed=a.seed)

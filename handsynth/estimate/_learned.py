@@ -19,16 +19,27 @@ open hand.  This estimator changes three things:
    hand's own shape and what is motion.  The rest frame need not be the open
    hand: any relaxed posture.
 
-Two regressors share that input (:class:`LearnedOptions` ``kind``), both
-reduced by principal components first:
+Three regressors share that input (:class:`LearnedOptions` ``kind``):
 
-``"mlp"``
-    A two-hidden-layer perceptron (ReLU), trained with Adam on the squared
-    error of standardised angles (numpy only; :func:`fit_mlp`).
+``"fingers"`` (default)
+    The pose space factorises: each digit is read from its own cells.  A
+    cell belongs to a digit when its coverage correlates with one of the
+    digit's angles over the learning set (|r| > 0.1), weighted by that
+    correlation; per digit, the principal components of those cells (of the
+    frame and of its difference from the rest frame) and the weighted mean of
+    the digit's angles in the ``k`` nearest learning frames (weights
+    ``1 / (d + d_1)``, ``d_1`` the nearest distance; exact search, faiss
+    ``IndexFlatL2``).  Other fingers moving no longer disturb a digit's match.
 ``"knn"``
-    The weighted mean of the ``k`` nearest learning frames' angles (weights
-    ``1 / (d + d_1)``, ``d_1`` the nearest distance), by exact search
-    (faiss ``IndexFlatL2``).
+    The same nearest-neighbour mean on the principal components of the whole
+    frame.
+``"mlp"``
+    A two-hidden-layer perceptron (ReLU) on the principal components (one
+    common scale), trained with Adam on the squared error of standardised
+    angles (numpy only; :func:`fit_mlp`).
+
+Chosen on model hands of random geometry (README, "Camera estimator for
+unseen hands"): ``"fingers"`` with ``k = 64`` on a 100,000-frame learning set.
 
 Everything learnt is kept in a folder the caller names
 (:func:`learned_estimator`), as one ``.npz`` written to a temporary name and
@@ -72,11 +83,12 @@ class LearnedOptions:
         Give the regressor the difference from the rest frame (a calibrated
         estimator); without it the frame alone.
     target : {"delta", "angles"}
-        With `use_rest`: ``"delta"`` learns the change from the hand's rest
-        posture (zero where the frame equals the rest frame) and adds the
-        rest posture read from the rest frame by a second regressor of the
-        same kind (frame -> angles, learnt from every frame); ``"angles"``
-        learns the angles directly.
+        With `use_rest`: ``"angles"`` (default) learns the angles directly;
+        ``"delta"`` learns the change from the hand's rest posture (zero
+        where the frame equals the rest frame) and adds the rest posture read
+        from the rest frame by a second regressor of the same kind.  On model
+        hands ``"delta"`` was worse (the rest posture read from one frame
+        adds its own error), so it is kept only to be measured.
     components : int
         Principal components of the input kept.
     hidden : tuple of int
@@ -92,16 +104,16 @@ class LearnedOptions:
     seed : int
     """
 
-    kind: str = "mlp"
+    kind: str = "fingers"
     use_rest: bool = True
-    target: str = "delta"
+    target: str = "angles"
     components: int = 192
     hidden: tuple[int, ...] = (384, 384)
-    epochs: int = 40
+    epochs: int = 15
     batch: int = 256
     learning_rate: float = 1e-3
     weight_decay: float = 1e-5
-    k: int = 8
+    k: int = 64
     seed: int = 0
 
     def __post_init__(self) -> None:
