@@ -53,7 +53,7 @@ def main() -> None:
     ap.add_argument("--kind", default="ensemble", choices=["ensemble", "fingers", "mlp"],
                     help="the estimator of scripts/eval_protocol.py of that name")
     ap.add_argument("--frames", type=int, default=2000, help="timed frames")
-    ap.add_argument("--hands", type=int, default=1000, help="learning set: hands")
+    ap.add_argument("--hands", type=int, default=2000, help="learning set: hands")
     ap.add_argument("--poses-per-hand", type=int, default=100, help="learning set: frames per hand")
     args = ap.parse_args()
 

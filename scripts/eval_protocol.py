@@ -49,10 +49,10 @@ _ALL = ("standard", "selected", "calibrated", "fingers", "mlp", "knn", "fingers_
 #: The learnt methods' options (chosen on model hands: docs in the README section
 #: "Camera estimator for unseen hands").
 LEARNED = {
-    "fingers": LearnedOptions(kind="fingers", k=64),
-    "mlp": LearnedOptions(kind="mlp", target="angles", epochs=15),
+    "fingers": LearnedOptions(kind="fingers", k=128),
+    "mlp": LearnedOptions(kind="mlp", target="angles"),
     "knn": LearnedOptions(kind="knn", target="angles", k=8),
-    "fingers_norest": LearnedOptions(kind="fingers", k=64, use_rest=False),
+    "fingers_norest": LearnedOptions(kind="fingers", k=128, use_rest=False),
 }
 
 
@@ -131,7 +131,7 @@ def main(argv=None) -> int:
     p.add_argument("--frames", type=int, default=200)
     p.add_argument("--pose-sets", default="paper,natural")
     p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--hands", type=int, default=1000, help="learning set: hands")
+    p.add_argument("--hands", type=int, default=2000, help="learning set: hands")
     p.add_argument("--poses-per-hand", type=int, default=100, help="learning set: frames per hand")
     p.add_argument("--json", type=Path)
     a = p.parse_args(argv)

@@ -37,8 +37,14 @@ import numpy as np
 
 from ..errors import DatabaseCorruptError, DatabaseError, InvalidInputError
 from ..models import GRID_LEVELS, JOINT_LIMITS_DEG, HandShape, natural_pose_set
-from ..render import CameraMount, HandVariation, MountVariation, VariedRasterizer, coverage
-from ..render._coverage import DEFAULT_CELLS
+from ..render import (
+    DEFAULT_CELLS,
+    CameraMount,
+    HandVariation,
+    MountVariation,
+    VariedRasterizer,
+    coverage,
+)
 
 __all__ = ["LearningSet", "LearningSetOptions", "learning_poses", "learning_set",
            "random_rest_posture", "render_learning_set"]
@@ -73,7 +79,7 @@ class LearningSetOptions:
     seed : int
     """
 
-    hands: int = 1000
+    hands: int = 2000
     poses_per_hand: int = 100
     mix: tuple[float, float, float] = (0.4, 0.4, 0.2)
     hand_spread: float = 1.0
@@ -189,7 +195,7 @@ def learning_poses(rest: np.ndarray, n: int, rng: np.random.Generator, *,
     for i, kind in enumerate(kinds):
         a = out[i]
         if kind == 0:
-            motion = rng.integers(9)
+            motion = int(rng.integers(9))
             if motion < 4:  # one finger flexes (MCP, PIP jointly over their ranges)
                 j = 4 + 4 * motion
                 a[j] = rng.uniform(_LO[j], _HI[j])

@@ -39,7 +39,7 @@ Three regressors share that input (:class:`LearnedOptions` ``kind``):
     angles (numpy only; :func:`fit_mlp`).
 
 Chosen on model hands of random geometry (README, "Camera estimator for
-unseen hands"): ``"fingers"`` with ``k = 64`` on a 100,000-frame learning set.
+unseen hands"): ``"fingers"`` with ``k = 128`` on a 200,000-frame learning set.
 
 Everything learnt is kept in a folder the caller names
 (:func:`learned_estimator`), as one ``.npz`` written to a temporary name and
@@ -119,7 +119,7 @@ class LearnedOptions:
     batch: int = 256
     learning_rate: float = 1e-3
     weight_decay: float = 1e-5
-    k: int = 64
+    k: int = 128
     lists: int = 256
     probes: int = 16
     seed: int = 0
@@ -237,7 +237,8 @@ def fit_mlp(x: np.ndarray, y: np.ndarray, *, hidden=(384, 384), epochs: int = 40
             diff = acts[-1] - y[idx]
             total += float(np.mean(diff * diff)) * len(idx)
             g = (2.0 / diff.size) * diff
-            gw, gb = [None] * len(weights), [None] * len(weights)
+            gw: list = [None] * len(weights)
+            gb: list = [None] * len(weights)
             for i in range(len(weights) - 1, -1, -1):
                 gw[i] = acts[i].T @ g + weight_decay * weights[i]
                 gb[i] = g.sum(axis=0)
@@ -286,7 +287,7 @@ class LearnedEstimator:
         self.options = options
         self.mount = mount
         self.side = side
-        self.cells = tuple(int(c) for c in cells)
+        self.cells: tuple[int, int] = (int(cells[0]), int(cells[1]))
         self._a = arrays
         for v in arrays.values():
             if isinstance(v, np.ndarray):
@@ -294,7 +295,8 @@ class LearnedEstimator:
         self._rest: np.ndarray | None = None
         self.smoothing = 0.0
         self._previous: np.ndarray | None = None
-        self._index = {}
+        self._index: dict = {}
+        self._quantizers: list = []
         if options.kind in ("knn", "fingers"):
             import faiss
 
@@ -305,14 +307,14 @@ class LearnedEstimator:
                 dim = codes.shape[1]
                 if options.lists and len(codes) >= 39 * options.lists:
                     quantizer = faiss.IndexFlatL2(dim)
-                    index = faiss.IndexIVFFlat(quantizer, dim, options.lists)
-                    index.train(codes)
-                    index.nprobe = min(options.probes or 1, options.lists)
-                    self._quantizers = [*getattr(self, "_quantizers", []), quantizer]
+                    ivf = faiss.IndexIVFFlat(quantizer, dim, options.lists)
+                    ivf.train(codes)
+                    ivf.nprobe = min(options.probes or 1, options.lists)
+                    self._quantizers.append(quantizer)  # the inverted file does not own it
+                    self._index[prefix] = ivf
                 else:  # exact (also when too few codes to train the cells)
-                    index = faiss.IndexFlatL2(dim)
-                index.add(codes)
-                self._index[prefix] = index
+                    self._index[prefix] = faiss.IndexFlatL2(dim)
+                self._index[prefix].add(codes)
         self._rest_angles: np.ndarray | None = None
         self._lo = JOINT_LIMITS_DEG[:, 0]
         self._hi = JOINT_LIMITS_DEG[:, 1]
@@ -388,7 +390,8 @@ class LearnedEstimator:
         if self.options.use_rest and self._rest is None:
             raise InvalidInputError("this estimator reads the user's rest frame: call "
                                     "calibrated(rest_frame) first")
-        z = _inputs(g, self._rest[None] if self.options.use_rest else None)
+        z = _inputs(g, self._rest[None] if self._rest is not None and self.options.use_rest
+                    else None)
         return ((z - self._a["mean"]) @ self._a["components"])[0]
 
     def estimate(self, frame: np.ndarray) -> PoseEstimate:
@@ -415,7 +418,8 @@ class LearnedEstimator:
         if self.options.use_rest and self._rest is None:
             raise InvalidInputError("this estimator reads the user's rest frame: call "
                                     "calibrated(rest_frame) first")
-        z = _inputs(g, self._rest[None] if self.options.use_rest else None)
+        z = _inputs(g, self._rest[None] if self._rest is not None and self.options.use_rest
+                    else None)
         if self.options.kind == "fingers":
             angles, error = self._predict_digits(z)
             conf = 1.0 / (1.0 + error)
