@@ -1,5 +1,12 @@
 """The paper's accuracy experiment on synthetic ground truth (SPEC.md section 1, "Paper's experiment").
 
+Beside it, :func:`run_protocol` is the evaluation that cannot flatter
+(:mod:`handsynth.eval._protocol`): test poses from relaxed rest postures by a
+generator no estimator is built from (:func:`relaxed_rest_posture`,
+:func:`paper_protocol_poses`, :func:`natural_test_poses`), model hands beyond the
+four ratios and the glTF hands, and the open-hand constant beside every figure.
+The experiment below draws its test poses from the databases' own generator.
+
 The paper measured 3 subjects with a CyberGlove as truth and compared the
 *standard database* (built from the standard hand) with the *selected
 database* (the grid shape chosen by formulas (1)-(4) from the subject's

@@ -4,6 +4,10 @@ Besides the renderers, the pieces another renderer needs to draw into the
 same scene are public: :class:`GLContextOwner` and :class:`MaskMaker` (the
 GL context and the mask interface of :class:`SilhouetteRenderer`),
 :func:`offscreen_renderer`, :func:`scene_parts` and :func:`label_image`.
+
+Beyond the paper: :func:`coverage` (the fixed-frame grid of the learned
+estimator) and :class:`VariedRasterizer` with :class:`HandVariation` and
+:class:`MountVariation` (model hands beyond the four ratios, a moved device).
 """
 
 from ._camera import CameraMount
