@@ -36,6 +36,14 @@ from ._build import (
     database_path,
 )
 from ._entries import DEFAULT_RENDER_SIZE, database_meta, render_entries
+from ._learning import (
+    LearningSet,
+    LearningSetOptions,
+    learning_poses,
+    learning_set,
+    random_rest_posture,
+    render_learning_set,
+)
 from ._store import (
     FORMAT_VERSION,
     KEYPOINT_SCALE_M,
@@ -69,6 +77,8 @@ __all__ = [
     "BuildSummary",
     "Database",
     "Features",
+    "LearningSet",
+    "LearningSetOptions",
     "build_database",
     "build_databases",
     "build_default_database",
@@ -82,11 +92,15 @@ __all__ = [
     "extract_features_batch",
     "hilditch_thinning",
     "hlac",
+    "learning_poses",
+    "learning_set",
     "open_database",
     "pack_mask",
     "popcount64",
     "popcount_bits",
+    "random_rest_posture",
     "render_entries",
+    "render_learning_set",
     "unpack_mask",
     "verify",
     "write_database",

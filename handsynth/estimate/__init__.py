@@ -12,6 +12,13 @@
   :func:`search_reference` (numpy, the specification); the approximate
   index for large databases: :class:`ApproximateIndex`,
   :class:`ApproximateOptions`.
+* Estimators for hands no database was made from (beyond the paper,
+  issue 15): :class:`LearnedEstimator` reads the camera's whole fixed
+  frame (:func:`handsynth.render.coverage`) with a per-digit nearest-neighbour
+  search or a perceptron learnt from randomised model hands
+  (:func:`learned_estimator`, :class:`LearnedOptions`, :func:`train_learned`,
+  :func:`fit_mlp`), calibrated by a frame of the user's relaxed hand;
+  :class:`EnsembleEstimator` averages several.
 * Calibration from one open-hand frame (beyond the paper):
   :func:`select_shape_from_frame`, :class:`Calibration` and the masked search
   (:func:`masked_search` / :func:`masked_search_reference`,
@@ -28,6 +35,14 @@ from ._calibration import (
     reference_silhouette,
     select_shape_from_frame,
 )
+from ._ensemble import EnsembleEstimator
+from ._learned import (
+    LearnedEstimator,
+    LearnedOptions,
+    fit_mlp,
+    learned_estimator,
+    train_learned,
+)
 from ._lookup import PoseEstimate, PoseEstimator, PoseLookup
 from ._masked import (
     MaskedMatch,
@@ -42,7 +57,10 @@ __all__ = [
     "ApproximateIndex",
     "ApproximateOptions",
     "Calibration",
+    "EnsembleEstimator",
     "FrameSelection",
+    "LearnedEstimator",
+    "LearnedOptions",
     "MaskedMatch",
     "PoseEstimate",
     "PoseEstimator",
@@ -52,6 +70,8 @@ __all__ = [
     "SearchTables",
     "Selection",
     "SelectionOptions",
+    "fit_mlp",
+    "learned_estimator",
     "masked_band_areas",
     "masked_search",
     "masked_search_reference",
@@ -61,4 +81,5 @@ __all__ = [
     "select_shape",
     "select_shape_from_frame",
     "shape_ratios",
+    "train_learned",
 ]

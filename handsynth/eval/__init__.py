@@ -1,5 +1,12 @@
 """The paper's accuracy experiment on synthetic ground truth (SPEC.md section 1, "Paper's experiment").
 
+Beside it, :func:`run_protocol` is the evaluation that cannot flatter
+(:mod:`handsynth.eval._protocol`): test poses from relaxed rest postures by a
+generator no estimator is built from (:func:`relaxed_rest_posture`,
+:func:`paper_protocol_poses`, :func:`natural_test_poses`), model hands beyond the
+four ratios and the glTF hands, and the open-hand constant beside every figure.
+The experiment below draws its test poses from the databases' own generator.
+
 The paper measured 3 subjects with a CyberGlove as truth and compared the
 *standard database* (built from the standard hand) with the *selected
 database* (the grid shape chosen by formulas (1)-(4) from the subject's
@@ -99,18 +106,40 @@ pose set (``docs/eval/model_hands_20448.json``):
 
 from ._hands import random_hand_shapes
 from ._options import CONDITIONS, EvalOptions
+from ._protocol import (
+    JOINT_GROUPS,
+    MOVING_DEG,
+    ProtocolOptions,
+    TestHand,
+    condition_stats,
+    mesh_test_hands,
+    model_test_hands,
+    run_protocol,
+)
 from ._report import EvalReport
 from ._run import evaluate
 from ._stats import JointStats, joint_stats, ratio_distance, silhouette_ambiguity
+from ._testposes import natural_test_poses, paper_protocol_poses, relaxed_rest_posture
 
 __all__ = [
     "CONDITIONS",
+    "JOINT_GROUPS",
+    "MOVING_DEG",
     "EvalOptions",
     "EvalReport",
     "JointStats",
+    "ProtocolOptions",
+    "TestHand",
+    "condition_stats",
     "evaluate",
     "joint_stats",
+    "mesh_test_hands",
+    "model_test_hands",
+    "natural_test_poses",
+    "paper_protocol_poses",
     "random_hand_shapes",
     "ratio_distance",
+    "relaxed_rest_posture",
+    "run_protocol",
     "silhouette_ambiguity",
 ]

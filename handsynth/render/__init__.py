@@ -4,9 +4,14 @@ Besides the renderers, the pieces another renderer needs to draw into the
 same scene are public: :class:`GLContextOwner` and :class:`MaskMaker` (the
 GL context and the mask interface of :class:`SilhouetteRenderer`),
 :func:`offscreen_renderer`, :func:`scene_parts` and :func:`label_image`.
+
+Beyond the paper: :func:`coverage` (the fixed-frame grid of the learned
+estimator) and :class:`VariedRasterizer` with :class:`HandVariation` and
+:class:`MountVariation` (model hands beyond the four ratios, a moved device).
 """
 
 from ._camera import CameraMount
+from ._coverage import DEFAULT_CELLS, coverage
 from ._gl import backend, ensure_backend
 from ._io import write_png
 from ._masks import MaskMaker
@@ -28,17 +33,23 @@ from ._renderer import (
 )
 from ._scene import scene_include_mjcf, scene_mjcf, scene_parts, standard_assets
 from ._sheet import contact_sheet, label_image
+from ._varied import HandVariation, MountVariation, VariedRasterizer
 
 __all__ = [
+    "DEFAULT_CELLS",
     "CameraMount",
     "GLContextOwner",
+    "HandVariation",
     "MaskMaker",
+    "MountVariation",
     "SilhouetteRasterizer",
     "SilhouetteRenderer",
+    "VariedRasterizer",
     "backend",
     "binarize",
     "check_frame",
     "contact_sheet",
+    "coverage",
     "crop_resize",
     "ensure_backend",
     "label_image",

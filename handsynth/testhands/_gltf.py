@@ -390,6 +390,59 @@ def _canonical_bone(name: str) -> str | None:
     return f"{m.group(1)}_{m.group(2)}" if m else None
 
 
+def _shifted_rig(g: _Gltf, joints_nodes: list, names: list[str]
+                 ) -> tuple[list[str], list] | None:
+    """Canonical names for a rig whose nodes sit one joint proximal of their names.
+
+    Some exports (the MRTK hand: FBX armatures converted to glTF) put each
+    bone's node at the joint *proximal* of the one OpenXR names: the node
+    ``index_intermediate`` is at the index MCP, ``index_tip`` at the DIP and a
+    childless ``index_tip_end`` at the fingertip, while the ``<digit>_metacarpal``
+    nodes all sit at the wrist and the skin has no ``wrist`` bone.  Such a rig
+    is recognised by those two facts (no wrist bone; every digit's ``tip`` node
+    has a ``tip_end`` child) and renamed one step distal: ``<digit>_tip_end``
+    becomes ``<digit>_tip``, ``tip`` becomes ``distal`` and so on; the
+    ``<digit>_metacarpal`` nodes at the wrist become bones handsynth does not
+    pose, and the common parent of the digit chains is the wrist.  Nodes that
+    are not skin joints (the wrist, the tips) are appended to the joint list
+    and carry no skin weights.
+
+    Returns
+    -------
+    (names, joints_nodes) or None
+        None when the rig does not follow this convention.
+    """
+    if "wrist" in names:
+        return None
+    nodes = g.doc.get("nodes", [])
+    by_name = {str(nd.get("name", "")).lower(): i for i, nd in enumerate(nodes)
+               if isinstance(nd, dict)}
+    parent = {c: i for i, nd in enumerate(nodes) if isinstance(nd, dict)
+              for c in nd.get("children", [])}
+    tip_ends = {}
+    for digit in FINGERS:
+        tip, end = by_name.get(f"{digit}_tip"), by_name.get(f"{digit}_tip_end")
+        if tip is None or end is None or parent.get(end) != tip:
+            return None
+        tip_ends[digit] = end
+    bases = {parent.get(by_name.get(f"{d}_metacarpal", -1)) for d in FINGERS}
+    if len(bases) != 1 or None in bases:
+        return None
+    distal_of = {"thumb": dict(zip(("metacarpal", "proximal", "distal", "tip"),
+                                   ("other", "metacarpal", "proximal", "distal"))),
+                 **{d: dict(zip(_FINGER_BONES, ("other", "metacarpal", "proximal",
+                                                "intermediate", "distal")))
+                    for d in FINGERS[1:]}}
+    out = []
+    for nm in names:
+        digit, _, bone = nm.partition("_")
+        new = distal_of.get(digit, {}).get(bone, "other")
+        out.append(f"other:{nm}" if new == "other" or nm.startswith("other:")
+                   else f"{digit}_{new}")
+    extra = [("wrist", bases.pop()), *((f"{d}_tip", tip_ends[d]) for d in FINGERS)]
+    return out + [n for n, _ in extra], list(joints_nodes) + [i for _, i in extra]
+
+
 def _unit(v: np.ndarray) -> np.ndarray:
     n = np.linalg.norm(v)
     if not n > 1e-12:
@@ -511,6 +564,9 @@ def load_mesh_rig(path: str | os.PathLike | None = None) -> MeshRig:
     for _k, n in enumerate(joints_nodes):
         nm = str(g.field("nodes", n).get("name", ""))
         names.append(_canonical_bone(nm) or f"other:{nm}")
+    shifted = _shifted_rig(g, joints_nodes, names)
+    if shifted is not None:
+        names, joints_nodes = shifted
     need = ["wrist", *(f"thumb_{b}" for b in _THUMB_BONES),
             *(f"{f_}_{b}" for f_ in FINGERS[1:] for b in _FINGER_BONES[1:])]
     missing = [n for n in need if n not in names]

@@ -223,11 +223,40 @@ def test_every_shipped_hand_has_its_licence(name):
     assert path.is_file() and any(p.name.lower().startswith("license") for p in path.parent.iterdir())
 
 
-def test_binary_gltf_is_read_and_a_rig_without_a_wrist_bone_is_refused_by_name():
-    # The MRTK hand (GLB) names its 24 bones like OpenXR but has no wrist bone;
-    # reading its JSON and binary chunks gets as far as the bone check.
-    with pytest.raises(InvalidInputError, match="no bones named like wrist .*found thumb_metacarpal"):
-        load_mesh_rig(shipped_hand_path("mrtk"))
+def test_binary_gltf_with_nodes_one_joint_proximal_of_their_names_loads():
+    # The MRTK hand (GLB) puts each node one joint proximal of its OpenXR name
+    # (node index_intermediate at the index MCP, index_tip_end at the fingertip)
+    # and has no wrist bone: the rig is renamed one step distal.
+    from handsynth.testhands._gltf import _Gltf
+
+    g = _Gltf(shipped_hand_path("mrtk"))
+    rig = load_mesh_rig(shipped_hand_path("mrtk"))
+    world = g.node_world()
+    node = {str(n.get("name")): i for i, n in enumerate(g.doc["nodes"])}
+    for canonical, name in (("index_proximal", "index_intermediate"), ("index_tip", "index_tip_end"),
+                            ("thumb_metacarpal", "thumb_proximal"), ("wrist", "Armature")):
+        p = rig.to_hand[:3, :3] @ world[node[name]][:3, 3] + rig.to_hand[:3, 3]
+        np.testing.assert_allclose(rig.joints[canonical], p, atol=1e-9)
+    np.testing.assert_allclose(rig.joints["wrist"], 0.0, atol=1e-12)
+    # the tips and the wrist carry no skin weights; every posed bone carries some
+    for name in ("wrist", "index_tip"):
+        assert not np.any((rig.bone_index == rig.bone(name)) & (rig.bone_weight > 0))
+    for name in ("index_proximal", "index_intermediate", "index_distal", "thumb_metacarpal"):
+        assert np.any((rig.bone_index == rig.bone(name)) & (rig.bone_weight > 0))
+    length = np.linalg.norm(rig.joints["middle_tip"] - rig.joints["wrist"]) * 1e3
+    assert 180 < length < 210, length  # About.md: 196 mm
+    assert json.loads(json.dumps(rig.tip_mm))  # every digit has a tip length
+
+
+def test_a_rig_without_a_wrist_bone_is_refused_by_name(tmp_path):
+    doc = json.loads(shipped_hand_path("godot_xr_tools").read_text())
+    for n in doc["nodes"]:
+        if n.get("name") == "Wrist_R":
+            n["name"] = "Carpus"
+    bad = tmp_path / "no_wrist.gltf"
+    bad.write_text(json.dumps(doc))
+    with pytest.raises(InvalidInputError, match="no bones named like wrist .*found"):
+        load_mesh_rig(bad)
 
 
 def test_unknown_test_hand_is_refused():

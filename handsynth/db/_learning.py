@@ -1,0 +1,357 @@
+"""A learning set of fixed-frame coverage grids from randomised model hands.
+
+The paper's databases hold one hand shape and one finger moving from the
+exact open hand.  A user's hand is never that hand and never rests at
+exactly zero, so a lookup in them has no entry for what the camera sees
+(issue 15).  This set is made for learning instead: every few frames a new
+hand is drawn (:class:`~handsynth.render.HandVariation` on a random grid-range
+shape: per-segment lengths and breadths, palm length, MCP places), worn with
+the device a little moved (:class:`~handsynth.render.MountVariation`), with
+its own rest posture; its poses are
+
+* ``from_rest``: the hand at rest with one digit's flexion, one finger's
+  abduction or the thumb moving (the paper's motions, from this hand's rest);
+* ``fingers``: every finger at its own random closure, some left at rest;
+* ``natural``: :func:`~handsynth.models.natural_pose_set` poses.
+
+Every sample keeps its hand's rest frame, so an estimator can learn to use a
+frame of the user's own rest posture (a calibration frame).  Masks come from
+:class:`~handsynth.render.VariedRasterizer` at the device's frame size and
+are stored as :func:`~handsynth.render.coverage` grids (uint8, 255 = covered).
+
+The set is a pure function of its options; :func:`learning_set` keeps it in a
+folder the caller names (never the package), as one ``.npz`` file written to a
+temporary name and renamed when complete, named by a digest of the options.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import zipfile
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import DatabaseCorruptError, DatabaseError, InvalidInputError
+from ..models import GRID_LEVELS, JOINT_LIMITS_DEG, HandShape, natural_pose_set
+from ..render import (
+    DEFAULT_CELLS,
+    CameraMount,
+    HandVariation,
+    MountVariation,
+    VariedRasterizer,
+    coverage,
+)
+
+__all__ = ["LearningSet", "LearningSetOptions", "learning_poses", "learning_set",
+           "random_rest_posture", "render_learning_set"]
+
+_FORMAT = 1
+_LO, _HI = JOINT_LIMITS_DEG[:, 0], JOINT_LIMITS_DEG[:, 1]
+# abduction of index, middle, ring, little in a fully fanned rest (deg toward the thumb)
+_FAN_DEG = np.array([8.0, 1.0, -6.0, -12.0])
+
+
+@dataclass(frozen=True)
+class LearningSetOptions:
+    """What a learning set holds.
+
+    Parameters
+    ----------
+    hands : int
+        Number of random hands.
+    poses_per_hand : int
+        Frames of each hand (besides its rest frame).
+    mix : tuple of 3 float
+        Shares of ``from_rest``, ``fingers`` and ``natural`` poses.
+    hand_spread : float
+        ``spread`` of :meth:`HandVariation.random`.
+    mount_variation : MountVariation
+        How the device moves between wearers.
+    edge_px : int
+        Masks are grown or shrunk by up to this many pixels (uniform), so that
+        the learner does not rely on the model's exact outline.
+    cells : (int, int)
+        Coverage grid.
+    seed : int
+    """
+
+    hands: int = 2000
+    poses_per_hand: int = 100
+    mix: tuple[float, float, float] = (0.4, 0.4, 0.2)
+    hand_spread: float = 1.0
+    mount_variation: MountVariation = field(default_factory=MountVariation)
+    edge_px: int = 4
+    cells: tuple[int, int] = DEFAULT_CELLS
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        for name in ("hands", "poses_per_hand"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
+                raise InvalidInputError(f"LearningSetOptions.{name} must be a positive integer, "
+                                        f"got {v!r}")
+        mix = tuple(float(m) for m in self.mix)
+        if len(mix) != 3 or min(mix) < 0 or not np.isclose(sum(mix), 1.0):
+            raise InvalidInputError(f"LearningSetOptions.mix must be 3 shares summing to 1, "
+                                    f"got {self.mix!r}")
+        object.__setattr__(self, "mix", mix)
+        if not 0 <= self.edge_px <= 20:
+            raise InvalidInputError(f"LearningSetOptions.edge_px must be in [0, 20], "
+                                    f"got {self.edge_px!r}")
+        if not isinstance(self.mount_variation, MountVariation):
+            raise InvalidInputError("LearningSetOptions.mount_variation must be a MountVariation")
+        object.__setattr__(self, "cells", tuple(int(c) for c in self.cells))
+
+    def digest(self) -> str:
+        """A short digest of the options (names the cached file)."""
+        d = asdict(self)
+        d["format"] = _FORMAT
+        return hashlib.sha256(json.dumps(d, sort_keys=True).encode()).hexdigest()[:16]
+
+
+@dataclass(frozen=True, eq=False)
+class LearningSet:
+    """Coverage grids of randomised hands with their joint angles.
+
+    Attributes
+    ----------
+    grids : ndarray, shape (N, rows * cols), uint8
+        Coverage of each frame, 255 = fully covered.
+    rest_grids : ndarray, shape (hands, rows * cols), uint8
+        Coverage of each hand's rest frame.
+    hand : ndarray, shape (N,), int32
+        The hand (row of `rest_grids`) of each frame.
+    angles : ndarray, shape (N, 20), float32
+        Joint angles, degrees, canonical order.
+    rest_angles : ndarray, shape (hands, 20), float32
+    options : LearningSetOptions
+    mount : CameraMount
+        The nominal device (before each hand's variation).
+    side : str
+    """
+
+    grids: np.ndarray
+    rest_grids: np.ndarray
+    hand: np.ndarray
+    angles: np.ndarray
+    rest_angles: np.ndarray
+    options: LearningSetOptions
+    mount: CameraMount
+    side: str
+
+    def __len__(self) -> int:
+        return len(self.grids)
+
+
+def random_rest_posture(rng: np.random.Generator) -> np.ndarray:
+    """A random relaxed posture for learning (degrees, (20,)).
+
+    Finger MCP flexion uniform in [-5, 20], PIP in [0, 30], DIP in [0, 20];
+    the fingers fanned by a common random share (-0.3 to 1) of a full fan
+    (index +8, middle +1, ring -6, little -12 deg) plus 3 deg each; the thumb
+    anywhere in a band around its rest (CMC flexion -15 to 25, palmar
+    abduction 0 to 40, MCP -5 to 25, IP -10 to 30 deg).
+    """
+    a = np.zeros(20)
+    a[0] = rng.uniform(-15, 25)
+    a[1] = rng.uniform(0, 40)
+    a[2] = rng.uniform(-5, 25)
+    a[3] = rng.uniform(-10, 30)
+    fan = rng.uniform(-0.3, 1.0)
+    for k in range(4):
+        j = 4 + 4 * k
+        a[j] = rng.uniform(-5, 20)
+        a[j + 1] = fan * _FAN_DEG[k] + rng.normal(0, 3)
+        a[j + 2] = rng.uniform(0, 30)
+        a[j + 3] = rng.uniform(0, 20)
+    return np.clip(a, _LO, _HI)
+
+
+def _dip(pip: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    return pip * rng.uniform(0.3, 1.0, np.shape(pip)) + rng.normal(0, 5, np.shape(pip))
+
+
+def learning_poses(rest: np.ndarray, n: int, rng: np.random.Generator, *,
+                   mix: tuple[float, float, float] = (0.4, 0.4, 0.2)) -> np.ndarray:
+    """Poses of one hand for learning (module docstring), degrees, (n, 20).
+
+    Parameters
+    ----------
+    rest : ndarray, shape (20,)
+        The hand's rest posture.
+    n : int
+    rng : numpy.random.Generator
+    mix : tuple of 3 float, keyword-only
+        Shares of ``from_rest``, ``fingers`` and ``natural`` poses.
+    """
+    kinds = rng.choice(3, size=n, p=np.asarray(mix) / sum(mix))
+    out = np.tile(rest, (n, 1))
+    nat = natural_pose_set(max(int((kinds == 2).sum()), 1), seed=int(rng.integers(2**31)))
+    k_nat = 0
+    for i, kind in enumerate(kinds):
+        a = out[i]
+        if kind == 0:
+            motion = int(rng.integers(9))
+            if motion < 4:  # one finger flexes (MCP, PIP jointly over their ranges)
+                j = 4 + 4 * motion
+                a[j] = rng.uniform(_LO[j], _HI[j])
+                a[j + 2] = rng.uniform(_LO[j + 2], _HI[j + 2])
+                a[j + 3] = _dip(a[j + 2], rng)
+            elif motion < 8:  # one finger's abduction
+                j = 4 + 4 * (motion - 4)
+                a[j + 1] = rng.uniform(_LO[j + 1], _HI[j + 1])
+                a[j] = rng.uniform(0, 45)
+            else:  # the thumb
+                a[:4] = rng.uniform(_LO[:4], _HI[:4])
+        elif kind == 1:
+            for k in range(4):
+                if rng.random() < 0.3:
+                    continue
+                j = 4 + 4 * k
+                c = rng.random()
+                a[j] = 100 * c - 10 + rng.normal(0, 15)
+                a[j + 2] = 105 * np.clip(c + rng.normal(0, 0.3), 0, 1) - 5
+                a[j + 3] = _dip(a[j + 2], rng)
+                a[j + 1] = a[j + 1] * (1 - c) + rng.normal(0, 5) * (1 - c)
+            if rng.random() < 0.6:
+                a[:4] = rng.uniform(_LO[:4], _HI[:4])
+        else:
+            out[i] = nat[k_nat]
+            k_nat += 1
+    return np.clip(out, _LO, _HI)
+
+
+def _random_shape(rng: np.random.Generator) -> HandShape:
+    kw = {}
+    for name, (lo, mid, hi) in GRID_LEVELS.items():
+        kw[name] = rng.uniform(lo - (mid - lo), hi + (hi - mid))
+    return HandShape(**kw)
+
+
+def _edge(mask: np.ndarray, px: int) -> np.ndarray:
+    import cv2
+
+    if px == 0:
+        return mask
+    k = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * abs(px) + 1, 2 * abs(px) + 1))
+    op = cv2.dilate if px > 0 else cv2.erode
+    return op(mask.view(np.uint8), k).view(bool)
+
+
+def render_learning_set(options: LearningSetOptions | None = None, *,
+                        mount: CameraMount | None = None, side: str = "right",
+                        progress=None) -> LearningSet:
+    """Render a learning set (module docstring).
+
+    Parameters
+    ----------
+    options : LearningSetOptions, optional
+    mount : CameraMount, keyword-only, optional
+        The nominal device (the paper's by default): every hand wears it
+        moved by ``options.mount_variation``; the wrist cut of the coverage
+        grids is the nominal device's.
+    side : {"right", "left"}, keyword-only
+    progress : callable, keyword-only, optional
+        Called with (hands done, hands) after each hand.
+
+    Returns
+    -------
+    LearningSet
+    """
+    opts = options or LearningSetOptions()
+    mount = mount or CameraMount.paper()
+    rng = np.random.default_rng(opts.seed)
+    n, per = opts.hands, opts.poses_per_hand
+    d = opts.cells[0] * opts.cells[1]
+    grids = np.empty((n * per, d), np.uint8)
+    rest_grids = np.empty((n, d), np.uint8)
+    angles = np.empty((n * per, 20), np.float32)
+    rest_angles = np.empty((n, 20), np.float32)
+    hand = np.repeat(np.arange(n, dtype=np.int32), per)
+    shapes: dict = {}
+    for h in range(n):
+        shape = _random_shape(rng)
+        key = round(shape.length, 1), round(shape.width, 1)
+        if key not in shapes:  # a few built hands; the variation does the rest
+            shapes[key] = VariedRasterizer(HandShape(length=key[0], width=key[1]), mount,
+                                           side=side)
+        r = shapes[key]
+        r.vary(HandVariation.random(rng, spread=opts.hand_spread))
+        r.set_mount(opts.mount_variation.sample(mount, rng))
+        edge = int(rng.integers(-opts.edge_px, opts.edge_px + 1))
+        rest = random_rest_posture(rng)
+        poses = learning_poses(rest, per, rng, mix=opts.mix)
+
+        def grid(pose, r=r, edge=edge):
+            m = _edge(r.mask(pose), edge)
+            return np.rint(coverage(m, mount, side=side, cells=opts.cells) * 255).astype(np.uint8)
+
+        rest_grids[h] = grid(rest).ravel()
+        rest_angles[h] = rest
+        for i, pose in enumerate(poses):
+            grids[h * per + i] = grid(pose).ravel()
+        angles[h * per:(h + 1) * per] = poses
+        if progress is not None:
+            progress(h + 1, n)
+    return LearningSet(grids, rest_grids, hand, angles, rest_angles, opts, mount, side)
+
+
+def learning_set(folder, options: LearningSetOptions | None = None, *,
+                 mount: CameraMount | None = None, side: str = "right",
+                 progress=None) -> LearningSet:
+    """The learning set of `options`, read from `folder` or rendered and kept there.
+
+    Parameters
+    ----------
+    folder : str or os.PathLike
+        A folder the caller chose (created if missing).  The file is
+        ``learning_<digest>.npz``; a file that does not read back complete is
+        rendered again.
+    options, mount, side, progress
+        As :func:`render_learning_set`.
+
+    Raises
+    ------
+    DatabaseError
+        The folder cannot be created or written.
+    """
+    opts = options or LearningSetOptions()
+    mount = mount or CameraMount.paper()
+    folder = Path(folder)
+    key = hashlib.sha256(json.dumps([opts.digest(), mount.as_dict(), side],
+                                    sort_keys=True).encode()).hexdigest()[:16]
+    path = folder / f"learning_{key}.npz"
+    if path.is_file():
+        try:
+            return _read(path, opts, mount, side)
+        except DatabaseCorruptError:
+            pass
+    out = render_learning_set(opts, mount=mount, side=side, progress=progress)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_suffix(f".{os.getpid()}.tmp.npz")
+        np.savez(tmp, grids=out.grids, rest_grids=out.rest_grids, hand=out.hand,
+                 angles=out.angles, rest_angles=out.rest_angles,
+                 complete=np.array([len(out.grids)]))
+        os.replace(tmp, path)
+    except OSError as exc:
+        raise DatabaseError(f"cannot write the learning set to {folder}: {exc}") from None
+    return out
+
+
+def _read(path: Path, opts: LearningSetOptions, mount: CameraMount, side: str) -> LearningSet:
+    try:
+        with np.load(path) as z:
+            arrays = {k: z[k] for k in ("grids", "rest_grids", "hand", "angles", "rest_angles",
+                                        "complete")}
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
+        raise DatabaseCorruptError(f"learning set {path} is unreadable: {exc}") from None
+    n = opts.hands * opts.poses_per_hand
+    if int(arrays["complete"][0]) != n or arrays["grids"].shape != (n, opts.cells[0] * opts.cells[1]):
+        raise DatabaseCorruptError(f"learning set {path} is incomplete")
+    return LearningSet(arrays["grids"], arrays["rest_grids"], arrays["hand"], arrays["angles"],
+                       arrays["rest_angles"], opts, mount, side)

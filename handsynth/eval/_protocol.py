@@ -1,0 +1,302 @@
+"""An evaluation of camera estimators that cannot flatter them (issue 15).
+
+The paper's experiment (:func:`~handsynth.eval.evaluate`) draws its test
+poses from the same generator as the databases: one joint moving from the
+exact open hand.  A lookup in such a database then looks accurate while a
+hand whose other fingers rest a few degrees elsewhere is read as the open
+hand.  This protocol changes what was not modelled:
+
+* **Test poses** come from :mod:`handsynth.eval._testposes`, a generator no
+  estimator is built from: a relaxed rest posture per hand, then the paper's
+  motions from it (``paper``) or natural grasps (``natural``).
+* **Test hands**: model hands whose geometry goes beyond the four ratios
+  (:func:`model_test_hands`: a random shape over and beyond the grid and a
+  :class:`~handsynth.render.HandVariation` of every segment and the palm),
+  and the realistic glTF hands of :mod:`handsynth.testhands`
+  (:func:`mesh_test_hands`) -- those stand for users' hands: constants are
+  chosen on model hands only.
+* **Calibration**: an estimator that calibrates gets one frame of the test
+  hand at its own rest posture, not at the database's zero.
+* **Baseline**: every figure stands beside the constant estimator that
+  always answers the open hand (all angles 0) on the same frames, and the
+  skill ``1 - MAE / MAE_constant`` (0: no better than the constant; 1:
+  perfect).  Per joint: MAE, mean +- s.d. of the signed error, the MAE on
+  frames where the joint truly moves (more than 20 deg from the hand's rest
+  posture) and the correlation of estimate and truth.
+
+Joint groups: ``finger_flexion`` is the 12 MCP, PIP and DIP flexions of index
+to little; ``abduction`` the 4 finger MCP abductions; ``thumb`` its 4 angles;
+``all`` the 20.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import InvalidInputError
+from ..models import JOINT_NAMES, HandShape
+from ..render import CameraMount, HandVariation, VariedRasterizer
+from ._testposes import natural_test_poses, paper_protocol_poses, relaxed_rest_posture
+
+__all__ = [
+    "JOINT_GROUPS",
+    "MOVING_DEG",
+    "ProtocolOptions",
+    "TestHand",
+    "condition_stats",
+    "mesh_test_hands",
+    "model_test_hands",
+    "run_protocol",
+]
+
+#: A joint "truly moves" in a frame when it is this far from the hand's rest posture.
+MOVING_DEG = 20.0
+
+JOINT_GROUPS: dict[str, tuple[int, ...]] = {
+    "finger_flexion": tuple(4 + 4 * k + o for k in range(4) for o in (0, 2, 3)),
+    "abduction": tuple(5 + 4 * k for k in range(4)),
+    "thumb": (0, 1, 2, 3),
+    "all": tuple(range(20)),
+}
+
+
+@dataclass(frozen=True)
+class ProtocolOptions:
+    """Options of :func:`run_protocol`.
+
+    Parameters
+    ----------
+    frames : int
+        Frames per hand and pose set.
+    pose_sets : tuple of str
+        ``"paper"`` and/or ``"natural"``.
+    seed : int
+        Seed of the test poses and rest postures (independent of any
+        estimator's seeds: it is mixed with a constant of this module).
+    """
+
+    frames: int = 200
+    pose_sets: tuple[str, ...] = ("paper", "natural")
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        if isinstance(self.frames, bool) or not isinstance(self.frames, (int, np.integer)) \
+                or self.frames < 2:
+            raise InvalidInputError(f"ProtocolOptions.frames must be an integer >= 2, "
+                                    f"got {self.frames!r}")
+        bad = [p for p in self.pose_sets if p not in ("paper", "natural")]
+        if bad or not self.pose_sets:
+            raise InvalidInputError(f"ProtocolOptions.pose_sets must name 'paper' and/or "
+                                    f"'natural', got {self.pose_sets!r}")
+
+
+@dataclass
+class TestHand:
+    """A hand of the protocol: its name and a maker of its masks at the device's frame size.
+
+    Attributes
+    ----------
+    name : str
+    kind : {"model", "mesh"}
+    make : callable
+        ``make()`` returns a :class:`~handsynth.render.MaskMaker` (with
+        ``mask(angles)``) of this hand through the device.
+    info : dict
+        What the hand is (JSON-ready).
+    measurements : HandMeasurements or None
+        What a photo of the hand would give (for the paper's selection).
+    """
+
+    __test__ = False  # not a pytest class
+
+    name: str
+    kind: str
+    make: Callable
+    info: dict = field(default_factory=dict)
+    measurements: object = None
+
+
+def model_test_hands(n: int, *, seed: int = 0, mount: CameraMount | None = None,
+                     spread: float = 1.0) -> list[TestHand]:
+    """`n` model hands with random geometry beyond the four ratios.
+
+    Each hand is a random :class:`HandShape` (each ratio uniform over the
+    grid's range and one grid step beyond it on either side) varied by
+    :meth:`HandVariation.random` at `spread`, seen through `mount` (the
+    paper's device by default) at 720x480.  Seeds are mixed with a constant
+    of this module, so they never repeat a learning set's hands.
+    """
+    from ..models import GRID_LEVELS
+
+    mount = mount or CameraMount.paper()
+    rng = np.random.default_rng(np.random.SeedSequence([seed, 0x7E57]))
+    out = []
+    for i in range(n):
+        ratios = {k: float(rng.uniform(lo - (mid - lo), hi + (hi - mid)))
+                  for k, (lo, mid, hi) in GRID_LEVELS.items()}
+        shape = HandShape(**ratios)
+        var = HandVariation.random(rng, spread=spread)
+
+        def make(shape=shape, var=var):
+            r = VariedRasterizer(shape, mount)
+            r.vary(var)
+            return r
+
+        out.append(TestHand(f"model{i}", "model", make,
+                            info={"shape": shape.as_dict(), "variation": {
+                                k: (list(v) if isinstance(v, tuple) else v)
+                                for k, v in var.__dict__.items()}}))
+    return out
+
+
+def mesh_test_hands(names=None, *, mount: CameraMount | None = None) -> list[TestHand]:
+    """The glTF hands shipped in :mod:`handsynth.testhands` (all by default)."""
+    from ..testhands import TEST_HANDS, MeshHandRenderer, shipped_hand_path
+
+    mount = mount or CameraMount.paper()
+    out = []
+    for name in (names or sorted(TEST_HANDS)):
+        path = shipped_hand_path(name)
+
+        def make(path=path):
+            return MeshHandRenderer(mount, path=path)
+
+        out.append(TestHand(name, "mesh", make, info={"file": path.name}))
+    return out
+
+
+def _seed(seed: int, hand: str, pose_set: str) -> np.random.SeedSequence:
+    return np.random.SeedSequence([seed, 0x51A7E, *hand.encode(), *pose_set.encode()])
+
+
+def _stats(est: np.ndarray, truth: np.ndarray, rest: np.ndarray) -> dict:
+    """Per-joint and per-group figures of one method on one set of frames."""
+    err = est - truth
+    ok = ~np.isnan(err).any(axis=1)
+    err, e_t, e_r = err[ok], truth[ok], rest[ok]
+    e_est = est[ok]
+    moving = np.abs(e_t - e_r) > MOVING_DEG
+    joints = {}
+    for j, name in enumerate(JOINT_NAMES):
+        m = moving[:, j]
+        sd_t, sd_e = np.std(e_t[:, j]), np.std(e_est[:, j])
+        corr = float(np.corrcoef(e_t[:, j], e_est[:, j])[0, 1]) if sd_t > 1e-9 and sd_e > 1e-9 \
+            else float("nan")
+        joints[name] = {
+            "mae_deg": _r(np.mean(np.abs(err[:, j]))),
+            "mean_deg": _r(np.mean(err[:, j])),
+            "sd_deg": _r(np.std(err[:, j], ddof=1)) if len(err) > 1 else None,
+            "moving_frames": int(m.sum()),
+            "moving_mae_deg": _r(np.mean(np.abs(err[m, j]))) if m.any() else None,
+            "moving_mean_deg": _r(np.mean(err[m, j])) if m.any() else None,
+            "corr": _r(corr),
+        }
+    groups = {g: _r(np.mean(np.abs(err[:, list(ix)]))) for g, ix in JOINT_GROUPS.items()}
+    return {"frames": int(ok.sum()), "no_hand": int((~ok).sum()), "groups_mae_deg": groups,
+            "joints": joints}
+
+
+def _r(v) -> float | None:
+    v = float(v)
+    return None if not math.isfinite(v) else round(v, 4)
+
+
+def condition_stats(estimates: np.ndarray, truth: np.ndarray, rest: np.ndarray) -> dict:
+    """Figures of one method beside the constant open-hand estimator on the same frames.
+
+    Parameters
+    ----------
+    estimates, truth : ndarray, shape (N, 20)
+        Degrees; rows of `estimates` with NaN (no hand found) are left out of
+        the method's figures and counted.
+    rest : ndarray, shape (20,) or (N, 20)
+        The hand's rest posture (a joint moves when it is more than
+        :data:`MOVING_DEG` from it).
+
+    Returns
+    -------
+    dict
+        ``method`` and ``constant`` (the figures of :func:`_stats`) and
+        ``skill`` per joint group: ``1 - MAE / MAE_constant``.
+    """
+    truth = np.asarray(truth, float)
+    rest = np.broadcast_to(np.asarray(rest, float), truth.shape)
+    method = _stats(np.asarray(estimates, float), truth, rest)
+    constant = _stats(np.zeros_like(truth), truth, rest)
+    skill = {}
+    for g in JOINT_GROUPS:
+        a, b = method["groups_mae_deg"][g], constant["groups_mae_deg"][g]
+        skill[g] = _r(1.0 - a / b) if a is not None and b else None
+    return {"method": method, "constant": constant, "skill": skill}
+
+
+def run_protocol(methods: dict, hands: list[TestHand], options: ProtocolOptions | None = None,
+                 *, progress=None) -> dict:
+    """Render every test hand's frames and score every method on them.
+
+    Parameters
+    ----------
+    methods : dict of str to callable
+        ``make(rest_frame, hand)`` returns an object with ``estimate(frame)``
+        (a :class:`~handsynth.estimate.PoseEstimator`) for one test hand, or
+        None where the method does not apply to the hand;
+        `rest_frame` is the hand at its rest posture (720x480 bool mask),
+        `hand` the :class:`TestHand` (for methods that need its measurements).
+    hands : list of TestHand
+    options : ProtocolOptions, optional
+    progress : callable, keyword-only, optional
+        Called with a line of text after each hand, pose set and method.
+
+    Returns
+    -------
+    dict
+        ``{"options", "hands": {name: {"info", "rest_deg", "<pose set>":
+        {method: condition_stats + "seconds_per_frame"}}}}``.
+    """
+    opts = options or ProtocolOptions()
+    if not methods:
+        raise InvalidInputError("run_protocol needs at least one method")
+    out: dict = {"options": {"frames": opts.frames, "pose_sets": list(opts.pose_sets),
+                             "seed": opts.seed, "moving_deg": MOVING_DEG}, "hands": {}}
+    for hand in hands:
+        rng = np.random.default_rng(_seed(opts.seed, hand.name, "rest"))
+        rest = relaxed_rest_posture(rng)
+        maker = hand.make()
+        try:
+            rest_frame = maker.mask(rest)
+            if hand.measurements is None and callable(getattr(maker, "measurements", None)):
+                hand.measurements = maker.measurements()
+            made = {name: est for name, make in methods.items()
+                    if (est := make(rest_frame, hand)) is not None}
+            rec: dict = {"info": hand.info, "kind": hand.kind,
+                         "rest_deg": [round(float(v), 3) for v in rest]}
+            for ps in opts.pose_sets:
+                prng = np.random.default_rng(_seed(opts.seed, hand.name, ps))
+                gen = paper_protocol_poses if ps == "paper" else natural_test_poses
+                poses, _ = gen(rest, opts.frames, prng)
+                frames = maker.masks(poses)
+                rec[ps] = {}
+                for name, est in made.items():
+                    t0 = time.perf_counter()
+                    got = np.stack([est.estimate(f).angles for f in frames])
+                    dt = (time.perf_counter() - t0) / len(frames)
+                    stats = condition_stats(got, poses, rest)
+                    stats["seconds_per_frame"] = round(dt, 6)
+                    rec[ps][name] = stats
+                    if progress is not None:
+                        mae, const = (stats[k]["groups_mae_deg"] for k in ("method", "constant"))
+                        progress(f"{hand.name} {ps} {name}: flexion MAE {mae['finger_flexion']} "
+                                 f"(constant {const['finger_flexion']}, skill "
+                                 f"{stats['skill']['finger_flexion']}), all {mae['all']} "
+                                 f"(skill {stats['skill']['all']})")
+        finally:
+            close = getattr(maker, "close", None)
+            if close is not None:
+                close()
+        out["hands"][hand.name] = rec
+    return out

@@ -1,0 +1,242 @@
+"""Model hands beyond the four ratios: per-segment geometry and a moved camera, rasterized.
+
+The paper's hand shapes change four ratios of one standard hand
+(:class:`~handsynth.models.HandShape`).  Real hands, and hands rigged by
+others, differ in more ways: each phalanx has its own length and breadth, the
+palm its own length (how far the MCP joints lie from the wrist), each MCP its
+own place, and the device sits a little differently on every wrist.
+:class:`HandVariation` describes those differences as scale factors and
+offsets applied to a built model hand, and :class:`VariedRasterizer` draws the
+masks of the varied hand with the same exact rasterization as
+:class:`~handsynth.render.SilhouetteRasterizer` (the convex parts are scaled in
+their own body frames, so they stay convex).
+
+No MJCF is generated for a variation: the compiled model's body positions and
+the rasterizer's vertex arrays are changed in place, so a new hand costs
+microseconds and a learning set can draw a different hand every few frames.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+from ..errors import InvalidShapeError
+from ..models import FINGERS, HandShape
+from ._camera import CameraMount
+from ._raster import SilhouetteRasterizer
+
+__all__ = ["HandVariation", "MountVariation", "VariedRasterizer"]
+
+_DIGIT_BODIES = {
+    "thumb": ("thumb_metacarpal", "thumb_proximal", "thumb_distal"),
+    **{f: (f"{f}_proximal", f"{f}_middle", f"{f}_distal") for f in FINGERS[1:]},
+}
+
+
+def _quat_mat(q: np.ndarray) -> np.ndarray:
+    w, x, y, z = q
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+    ])
+
+
+@dataclass(frozen=True)
+class HandVariation:
+    """How one hand differs from a built model hand, beyond its four ratios.
+
+    Every factor multiplies the built hand's value (1 = unchanged); offsets
+    are added in the hand frame.
+
+    Parameters
+    ----------
+    segment_length : tuple of 15 float
+        Length of each segment, digits in :data:`~handsynth.models.FINGERS`
+        order, base to tip (thumb: metacarpal, proximal, distal; fingers:
+        proximal, middle, distal).
+    digit_width : tuple of 5 float
+        Breadth and depth of every segment of each digit.
+    palm_length : float
+        Distance of the MCP joints and the thumb CMC from the wrist (hand
+        frame y), and the palm's extent along the hand.
+    palm_width : float
+        The palm's breadth and the MCPs' and thumb CMC's x.
+    palm_depth : float
+        The palm's thickness.
+    mcp_offset_mm : tuple of 8 float
+        (x, y) offsets of the index, middle, ring and little MCP joints, mm.
+    thumb_offset_mm : tuple of 3 float
+        Offset of the thumb CMC joint, mm.
+
+    Raises
+    ------
+    InvalidShapeError
+        A factor that is not in [0.3, 3] or an offset beyond 30 mm, naming it.
+    """
+
+    segment_length: tuple[float, ...] = (1.0,) * 15
+    digit_width: tuple[float, ...] = (1.0,) * 5
+    palm_length: float = 1.0
+    palm_width: float = 1.0
+    palm_depth: float = 1.0
+    mcp_offset_mm: tuple[float, ...] = (0.0,) * 8
+    thumb_offset_mm: tuple[float, ...] = (0.0,) * 3
+
+    def __post_init__(self) -> None:
+        sizes = {"segment_length": 15, "digit_width": 5, "mcp_offset_mm": 8, "thumb_offset_mm": 3}
+        for f in fields(self):
+            v = np.asarray(getattr(self, f.name), dtype=np.float64)
+            n = sizes.get(f.name)
+            if (n is None and v.ndim != 0) or (n is not None and v.shape != (n,)):
+                raise InvalidShapeError(f"HandVariation.{f.name} must have {n or 1} values, "
+                                        f"got shape {v.shape}")
+            if f.name.endswith("_mm"):
+                ok = np.all(np.isfinite(v)) and np.all(np.abs(v) <= 30.0)
+            else:
+                ok = np.all(np.isfinite(v)) and np.all((v >= 0.3) & (v <= 3.0))
+            if not ok:
+                raise InvalidShapeError(f"HandVariation.{f.name} out of range: {v.tolist()}")
+            object.__setattr__(self, f.name, float(v) if n is None else tuple(map(float, v)))
+
+    @classmethod
+    def random(cls, rng: np.random.Generator, *, spread: float = 1.0) -> HandVariation:
+        """A random hand: independent log-normal factors and normal offsets.
+
+        The s.d.s (at ``spread=1``) are wide on purpose, wider than adult
+        variation in segment lengths (coefficients of variation about 6-8 %,
+        Buchholz et al. 1992, Table 1): a silhouette estimator must also meet
+        hands whose joint centres were placed differently (a rig's joint
+        nodes, a surface marker), so each segment length varies with s.d.
+        15 %, on top of a common scale of s.d. 7 %; digit breadths 10 %; the
+        palm's length 12 % (the distance of the MCPs from the wrist joint
+        centre depends on where the wrist centre is taken), breadth 6 %,
+        depth 10 %; MCP positions 3 mm, thumb CMC 5 mm.
+
+        Parameters
+        ----------
+        rng : numpy.random.Generator
+        spread : float, keyword-only
+            Multiplies every s.d. (0: the built hand unchanged).
+        """
+        s = float(spread)
+        common = rng.normal(0.0, 0.07 * s)
+        return cls(
+            segment_length=tuple(np.exp(common + rng.normal(0.0, 0.15 * s, 15))),
+            digit_width=tuple(np.exp(rng.normal(0.0, 0.10 * s, 5))),
+            palm_length=float(np.exp(common + rng.normal(0.0, 0.12 * s))),
+            palm_width=float(np.exp(rng.normal(0.0, 0.06 * s))),
+            palm_depth=float(np.exp(rng.normal(0.0, 0.10 * s))),
+            mcp_offset_mm=tuple(rng.normal(0.0, 3.0 * s, 8)),
+            thumb_offset_mm=tuple(rng.normal(0.0, 5.0 * s, 3)),
+        )
+
+
+@dataclass(frozen=True)
+class MountVariation:
+    """Where the device sits on one wearer: s.d.s of normal offsets from a mount.
+
+    Parameters
+    ----------
+    height_mm, thumb_offset_mm, along_mm, tilt_deg, roll_deg : float
+        S.d. of the offset of each :class:`CameraMount` field.
+    """
+
+    height_mm: float = 10.0
+    thumb_offset_mm: float = 6.0
+    along_mm: float = 8.0
+    tilt_deg: float = 4.0
+    roll_deg: float = 4.0
+
+    def sample(self, mount: CameraMount, rng: np.random.Generator) -> CameraMount:
+        """`mount` with every field offset by a normal draw of its s.d."""
+        return mount.replace(**{f.name: getattr(mount, f.name) + rng.normal(0.0, getattr(self, f.name))
+                                for f in fields(self)})
+
+
+class VariedRasterizer(SilhouetteRasterizer):
+    """:class:`SilhouetteRasterizer` of a hand whose geometry and camera can be changed.
+
+    Parameters
+    ----------
+    shape : HandShape, optional
+        The built hand (the standard hand by default); :meth:`vary` changes it
+        further.
+    mount : CameraMount, optional
+        The paper's device by default; :meth:`set_mount` moves it.
+    side, width_px, height_px, forearm : keyword-only
+        As :class:`SilhouetteRasterizer`.
+    """
+
+    def __init__(self, shape: HandShape | None = None, mount: CameraMount | None = None, *,
+                 side: str = "right", width_px: int | None = None, height_px: int | None = None,
+                 forearm: bool = True) -> None:
+        super().__init__(shape, mount, side=side, width_px=width_px, height_px=height_px,
+                         forearm=forearm)
+        m = self.hand.model
+        self._base_mount = self.mount
+        self._body_pos0 = m.body_pos.copy()
+        self._site_pos0 = m.site_pos.copy()
+        self._verts0 = self._verts.copy()
+        # each geom's vertices in its body's frame: p_body = geom_pos + R_geom @ v
+        self._geom_rot = []
+        for g in range(len(self._starts) - 1):
+            owner = int(self._owner[self._starts[g]])
+            self._geom_rot.append((owner, int(m.geom_bodyid[owner]), _quat_mat(m.geom_quat[owner]),
+                                   m.geom_pos[owner].copy()))
+        self._bid = {m.body(b).name: b for b in range(m.nbody)}
+        self.variation = HandVariation()
+
+    def set_mount(self, mount: CameraMount) -> None:
+        """Draw the following masks through `mount` (same frame size)."""
+        if not isinstance(mount, CameraMount):
+            raise InvalidShapeError(f"mount must be a CameraMount, got {type(mount).__name__}")
+        pose = mount.pose_in_hand(side=self.side)
+        self._cam_rot = np.ascontiguousarray(pose[:3, :3])
+        self._cam_pos = np.ascontiguousarray(pose[:3, 3])
+        k = mount.intrinsics(self.width_px, self.height_px)
+        self._k = (float(k[0, 0]), float(k[1, 1]), float(k[0, 2]), float(k[1, 2]))
+        self.mount = mount
+
+    def vary(self, variation: HandVariation) -> None:
+        """Give the hand `variation` (relative to the built hand, not cumulative)."""
+        if not isinstance(variation, HandVariation):
+            raise InvalidShapeError(f"variation must be a HandVariation, got {type(variation).__name__}")
+        m, v = self.hand.model, variation
+        sign = -1.0 if self.side == "left" else 1.0
+        m.body_pos[:] = self._body_pos0
+        m.site_pos[:] = self._site_pos0
+        scale = {}  # body id -> per-axis scale of its own frame
+        for d, bodies in enumerate(_DIGIT_BODIES.values()):
+            w = v.digit_width[d]
+            for k, name in enumerate(bodies):
+                scale[self._bid[name]] = np.array([w, v.segment_length[3 * d + k], w])
+        palm = self._bid["palm"]
+        scale[palm] = np.array([v.palm_width, v.palm_length, v.palm_depth])
+        # joint positions: a child sits at its parent's scaled offset
+        for b in range(1, m.nbody):
+            parent = m.body_parentid[b]
+            if parent in scale and parent != palm:
+                m.body_pos[b] = self._body_pos0[b] * scale[parent]
+        for k, f in enumerate(FINGERS[1:]):
+            b = self._bid[f"{f}_proximal"]
+            dx, dy = v.mcp_offset_mm[2 * k: 2 * k + 2]
+            m.body_pos[b] = self._body_pos0[b] * scale[palm] + np.array([sign * dx, dy, 0.0]) * 1e-3
+        b = self._bid["thumb_metacarpal"]
+        t = np.array(v.thumb_offset_mm) * np.array([sign, 1.0, 1.0]) * 1e-3
+        m.body_pos[b] = self._body_pos0[b] * scale[palm] + t
+        for s in range(m.nsite):
+            sb = m.site_bodyid[s]
+            if sb in scale:
+                m.site_pos[s] = self._site_pos0[s] * scale[sb]
+        verts = self._verts0.copy()
+        for g, (_, body, rot, pos) in enumerate(self._geom_rot):
+            if body not in scale:
+                continue
+            a, e = self._starts[g], self._starts[g + 1]
+            p = (pos + self._verts0[a:e] @ rot.T) * scale[body]
+            verts[a:e] = (p - pos) @ rot
+        self._verts = np.ascontiguousarray(verts)
+        self.variation = v

@@ -1,0 +1,143 @@
+import numpy as np
+import pytest
+
+from handsynth.db import LearningSetOptions, render_learning_set
+from handsynth.errors import InvalidInputError
+from handsynth.estimate import (
+    LearnedEstimator,
+    LearnedOptions,
+    PoseEstimator,
+    fit_mlp,
+    learned_estimator,
+    train_learned,
+)
+from handsynth.render import SilhouetteRasterizer
+
+DATA = LearningSetOptions(hands=6, poses_per_hand=10, seed=2)
+
+
+@pytest.fixture(scope="module")
+def data():
+    return render_learning_set(DATA)
+
+
+def _frames(data, rows):
+    """Masks whose coverage equals the learning set's stored grids (cells of 16x16 pixels)."""
+    return [np.repeat(np.repeat(data.grids[i].reshape(30, 45), 16, 0), 16, 1) >= 128 for i in rows]
+
+
+def test_fit_mlp_learns_a_smooth_function():
+    rng = np.random.default_rng(0)
+    x = rng.normal(size=(2000, 3)).astype(np.float32)
+    y = np.stack([x[:, 0] - 2 * x[:, 1], np.abs(x[:, 2])], axis=1).astype(np.float32)
+    w, b = fit_mlp(x, y, hidden=(32,), epochs=30, batch=64, learning_rate=3e-3)
+    h = np.maximum(x @ w[0] + b[0], 0) @ w[1] + b[1]
+    assert np.mean((h - y) ** 2) < 0.02 * np.var(y)
+
+
+@pytest.mark.parametrize(("kind", "target"), [("knn", "delta"), ("knn", "angles"), ("mlp", "delta"),
+                                              ("mlp", "angles"), ("fingers", "angles")])
+def test_learned_estimators_implement_the_interface_and_need_the_rest_frame(data, kind, target):
+    est = train_learned(data, LearnedOptions(kind=kind, target=target, components=16,
+                                             hidden=(16,), epochs=2, k=1))
+    assert isinstance(est, PoseEstimator)
+    frame = SilhouetteRasterizer().mask(np.zeros(20))
+    with pytest.raises(InvalidInputError, match="calibrated"):
+        est.estimate(frame)
+    cal = est.calibrated(frame)
+    e = cal.estimate(frame)
+    assert e.angles.shape == (20,) and np.isfinite(e.angles).all() and not e.no_hand
+    assert cal.estimate(np.zeros((480, 720), bool)).no_hand
+    with pytest.raises(InvalidInputError, match="rest_frame shows no hand"):
+        est.calibrated(np.zeros((480, 720), bool))
+
+
+def test_nearest_neighbour_of_a_learning_frame_is_that_frame(data):
+    est = train_learned(data, LearnedOptions(kind="knn", target="angles", components=400, k=1))
+    hand = 2
+    rows = np.nonzero(data.hand == hand)[0][:4]
+    rest = np.repeat(np.repeat(data.rest_grids[hand].reshape(30, 45), 16, 0), 16, 1) >= 128
+    cal = est.calibrated(rest)
+    cal._rest = data.rest_grids[hand]  # the stored grid itself (the mask above rounds it)
+    for i, f in zip(rows, _frames(data, rows)):
+        g = cal.grid(f).ravel()
+        if np.array_equal(g, data.grids[i]):
+            np.testing.assert_allclose(cal.estimate(f).angles, data.angles[i], atol=1e-3)
+
+
+def test_each_digit_is_read_from_the_cells_it_changes():
+    data = render_learning_set(LearningSetOptions(hands=20, poses_per_hand=20, seed=3))
+    est = train_learned(data, LearnedOptions(kind="fingers", k=1))
+    cells = 30 * 45
+    for d in range(5):
+        cols = est._a[f"d{d}_cols"]
+        assert 0 < len(cols) < 2 * cells
+        # the same cells of the frame and of its difference from the rest frame
+        np.testing.assert_array_equal(cols[cols >= cells] - cells, cols[cols < cells])
+    # the thumb side is at the top of the image: the index's cells weigh higher than the little's
+    rows = {}
+    for d in (1, 4):
+        cols, w = est._a[f"d{d}_cols"], est._a[f"d{d}_w"]
+        top = cols[np.argsort(w)[::-1][:20]] % cells
+        rows[d] = np.mean(top // 45)
+    assert rows[1] < rows[4]
+
+
+def test_without_the_rest_frame_an_estimator_reads_frames_directly(data):
+    est = train_learned(data, LearnedOptions(kind="mlp", use_rest=False, components=16,
+                                             hidden=(8,), epochs=1))
+    assert np.isfinite(est.estimate(SilhouetteRasterizer().mask(np.zeros(20))).angles).all()
+
+
+def test_learnt_estimators_are_kept_in_the_caller_s_folder(tmp_path):
+    opts = LearnedOptions(kind="mlp", components=8, hidden=(8,), epochs=1)
+    small = LearningSetOptions(hands=2, poses_per_hand=5, seed=1)
+    a = learned_estimator(tmp_path, opts, data=small)
+    files = sorted(p.name.split("_")[0] for p in tmp_path.glob("*.npz"))
+    assert files == ["learned", "learning"]
+    b = learned_estimator(tmp_path, opts, data=small)
+    assert isinstance(b, LearnedEstimator)
+    frame = SilhouetteRasterizer().mask(np.full(20, 5.0))
+    np.testing.assert_array_equal(a.calibrated(frame).estimate(frame).angles,
+                                  b.calibrated(frame).estimate(frame).angles)
+
+
+def test_bad_options_are_refused_by_name():
+    with pytest.raises(InvalidInputError, match="kind must be 'mlp', 'knn' or 'fingers'"):
+        LearnedOptions(kind="forest")
+    with pytest.raises(InvalidInputError, match="target"):
+        LearnedOptions(target="pose")
+    with pytest.raises(InvalidInputError, match="components"):
+        LearnedOptions(components=0)
+
+
+def test_an_ensemble_reports_the_weighted_mean_and_calibrates_its_members(data):
+    from handsynth.estimate import EnsembleEstimator
+
+    a = train_learned(data, LearnedOptions(kind="fingers", k=2))
+    b = train_learned(data, LearnedOptions(kind="knn", target="angles", components=16, k=1))
+    ens = EnsembleEstimator([a, b], weights=[3, 1])
+    assert isinstance(ens, PoseEstimator)
+    rest = SilhouetteRasterizer().mask(np.full(20, 4.0))
+    frame = SilhouetteRasterizer().mask(np.full(20, 12.0))
+    cal = ens.calibrated(rest)
+    expect = (0.75 * a.calibrated(rest).estimate(frame).angles
+              + 0.25 * b.calibrated(rest).estimate(frame).angles)
+    np.testing.assert_allclose(cal.estimate(frame).angles, expect)
+    assert cal.estimate(np.zeros((480, 720), bool)).no_hand
+    with pytest.raises(InvalidInputError, match="weights"):
+        EnsembleEstimator([a, b], weights=[1, -1])
+    with pytest.raises(InvalidInputError, match="at least one"):
+        EnsembleEstimator([])
+
+
+def test_the_inverted_file_with_one_cell_answers_as_the_exact_search(data):
+    exact = train_learned(data, LearnedOptions(kind="fingers", k=5, lists=0))
+    ivf = train_learned(data, LearnedOptions(kind="fingers", k=5, lists=1, probes=1))
+    assert type(ivf._index["d1_"]).__name__ == "IndexIVFFlat"
+    assert type(exact._index["d1_"]).__name__ == "IndexFlatL2"
+    rest = SilhouetteRasterizer().mask(np.full(20, 4.0))
+    a, b = exact.calibrated(rest), ivf.calibrated(rest)
+    for pose in (np.full(20, 12.0), np.full(20, 18.0)):
+        frame = SilhouetteRasterizer().mask(pose)
+        np.testing.assert_allclose(a.estimate(frame).angles, b.estimate(frame).angles, atol=1e-4)

@@ -1,0 +1,99 @@
+import json
+
+import numpy as np
+import pytest
+
+from handsynth.errors import InvalidInputError
+from handsynth.eval import (
+    JOINT_GROUPS,
+    MOVING_DEG,
+    ProtocolOptions,
+    condition_stats,
+    model_test_hands,
+    natural_test_poses,
+    paper_protocol_poses,
+    relaxed_rest_posture,
+    run_protocol,
+)
+from handsynth.models import JOINT_LIMITS_DEG, JOINT_NAMES
+
+LO, HI = JOINT_LIMITS_DEG[:, 0], JOINT_LIMITS_DEG[:, 1]
+DIGIT = np.r_[0, 0, 0, 0, np.repeat(np.arange(1, 5), 4)]
+
+
+def test_rest_postures_are_relaxed_not_zero_and_within_the_limits():
+    rng = np.random.default_rng(0)
+    rests = np.stack([relaxed_rest_posture(rng) for _ in range(200)])
+    assert np.all(rests >= LO) and np.all(rests <= HI)
+    flex = rests[:, list(JOINT_GROUPS["finger_flexion"])]
+    assert flex.mean() > 3 and (np.abs(flex) > 0.5).mean() > 0.8
+    assert rests.std(axis=0).min() > 1.0  # every joint varies between hands
+
+
+def test_paper_protocol_moves_one_digit_from_the_rest_posture():
+    rng = np.random.default_rng(1)
+    rest = relaxed_rest_posture(rng)
+    poses, motion = paper_protocol_poses(rest, 300, rng)
+    assert np.all(poses >= LO) and np.all(poses <= HI)
+    for p, m in zip(poses, motion):
+        moved = set(DIGIT[np.abs(p - rest) > 1e-9])
+        assert moved <= {0 if m == 8 else 1 + m % 4}
+    assert set(motion) == set(range(9))
+
+
+def test_natural_poses_move_several_fingers():
+    rng = np.random.default_rng(2)
+    rest = relaxed_rest_posture(rng)
+    poses, kind = natural_test_poses(rest, 400, rng)
+    assert np.all(poses >= LO) and np.all(poses <= HI)
+    fingers_moving = np.array([len(set(DIGIT[np.abs(p - rest) > 10]) - {0}) for p in poses])
+    assert (fingers_moving >= 2).mean() > 0.5 and len(set(kind)) == 8
+
+
+def test_constant_open_hand_has_zero_skill_and_the_truth_skill_one():
+    rng = np.random.default_rng(3)
+    rest = relaxed_rest_posture(rng)
+    truth, _ = paper_protocol_poses(rest, 100, rng)
+    const = condition_stats(np.zeros_like(truth), truth, rest)
+    assert all(v == 0.0 for v in const["skill"].values())
+    exact = condition_stats(truth, truth, rest)
+    assert all(v == 1.0 for v in exact["skill"].values())
+    j = JOINT_NAMES.index("index_pip_flex")
+    moving = np.abs(truth[:, j] - rest[j]) > MOVING_DEG
+    got = const["method"]["joints"]["index_pip_flex"]
+    assert got["moving_frames"] == moving.sum() > 0
+    np.testing.assert_allclose(got["moving_mae_deg"], np.abs(truth[moving, j]).mean(), atol=1e-3)
+    # frames without a hand are counted and left out
+    est = truth.copy()
+    est[:5] = np.nan
+    s = condition_stats(est, truth, rest)
+    assert s["method"]["no_hand"] == 5 and s["method"]["frames"] == 95
+
+
+def test_run_protocol_scores_methods_beside_the_constant():
+    class Rest:  # answers the hand's rest posture read from nowhere: a method that knows it
+        def __init__(self, rest):
+            self.rest = rest
+
+        def estimate(self, frame):
+            class E:
+                angles = self.rest
+            return E()
+
+    hands = model_test_hands(1, seed=4)
+    out = run_protocol({"zero": lambda rest, hand: Rest(np.zeros(20)),
+                        "skip": lambda rest, hand: None},
+                       hands, ProtocolOptions(frames=6, pose_sets=("paper",)))
+    rec = out["hands"]["model0"]
+    assert list(rec["paper"]) == ["zero"]
+    assert rec["paper"]["zero"]["skill"]["all"] == 0.0
+    json.dumps(out)
+
+
+def test_bad_options_are_refused():
+    with pytest.raises(InvalidInputError, match="frames"):
+        ProtocolOptions(frames=1)
+    with pytest.raises(InvalidInputError, match="pose_sets"):
+        ProtocolOptions(pose_sets=("fist",))
+    with pytest.raises(InvalidInputError, match="method"):
+        run_protocol({}, [])

@@ -1,0 +1,82 @@
+import numpy as np
+import pytest
+
+from handsynth.errors import InvalidShapeError
+from handsynth.models import HandShape, named_pose
+from handsynth.render import (
+    CameraMount,
+    HandVariation,
+    MountVariation,
+    SilhouetteRasterizer,
+    VariedRasterizer,
+)
+
+W, H = 240, 160
+
+
+@pytest.fixture(scope="module")
+def varied():
+    return VariedRasterizer(HandShape(length=1.02), width_px=W, height_px=H)
+
+
+def test_no_variation_draws_the_built_hand(varied):
+    varied.vary(HandVariation())
+    varied.set_mount(CameraMount.paper())
+    plain = SilhouetteRasterizer(HandShape(length=1.02), width_px=W, height_px=H)
+    for pose in ("open", "fist", "pinch", "spread"):
+        assert np.array_equal(varied.mask(named_pose(pose)), plain.mask(named_pose(pose)))
+
+
+def test_a_variation_is_relative_to_the_built_hand_not_cumulative(varied):
+    rng = np.random.default_rng(3)
+    varied.vary(HandVariation.random(rng))
+    first = varied.mask(named_pose("point"))
+    varied.vary(HandVariation.random(rng))
+    varied.vary(varied.variation)  # applying the same twice changes nothing
+    again = varied.mask(named_pose("point"))
+    varied.vary(HandVariation.random(np.random.default_rng(3)))
+    assert np.array_equal(varied.mask(named_pose("point")), first)
+    assert not np.array_equal(again, first)
+    varied.vary(HandVariation())
+
+
+def test_segment_length_moves_the_joints_and_tips_by_its_factor(varied):
+    varied.vary(HandVariation())
+    varied.hand.set_pose(np.zeros(20))
+    kp0 = varied.hand.keypoints()
+    lengths = [1.0] * 15
+    lengths[3], lengths[5] = 1.3, 0.8  # index proximal and distal
+    varied.vary(HandVariation(segment_length=tuple(lengths), palm_length=1.2))
+    varied.hand.set_pose(np.zeros(20))
+    kp = varied.hand.keypoints()
+    # keypoints: 5 index MCP, 6 PIP, 7 DIP, 8 tip; the MCP moves with the palm length
+    np.testing.assert_allclose(kp[5, 1], 1.2 * kp0[5, 1], rtol=1e-9)
+    np.testing.assert_allclose(np.linalg.norm(kp[6] - kp[5]), 1.3 * np.linalg.norm(kp0[6] - kp0[5]),
+                               rtol=1e-9)
+    np.testing.assert_allclose(np.linalg.norm(kp[8] - kp[7]), 0.8 * np.linalg.norm(kp0[8] - kp0[7]),
+                               rtol=1e-9)
+    # and the drawn finger is longer: the open hand covers more pixels
+    assert varied.mask(np.zeros(20)).sum() > SilhouetteRasterizer(
+        HandShape(length=1.02), width_px=W, height_px=H).mask(np.zeros(20)).sum()
+    varied.vary(HandVariation())
+
+
+def test_a_moved_mount_draws_what_a_rasterizer_built_with_it_draws(varied):
+    varied.vary(HandVariation())
+    mount = MountVariation().sample(CameraMount.paper(), np.random.default_rng(0))
+    assert mount != CameraMount.paper()
+    varied.set_mount(mount)
+    other = SilhouetteRasterizer(HandShape(length=1.02), mount, width_px=W, height_px=H)
+    assert np.array_equal(varied.mask(named_pose("grasp")), other.mask(named_pose("grasp")))
+    varied.set_mount(CameraMount.paper())
+
+
+def test_bad_variations_are_refused_by_name():
+    with pytest.raises(InvalidShapeError, match="segment_length must have 15"):
+        HandVariation(segment_length=(1.0,) * 14)
+    with pytest.raises(InvalidShapeError, match="palm_length out of range"):
+        HandVariation(palm_length=0.1)
+    with pytest.raises(InvalidShapeError, match="mcp_offset_mm out of range"):
+        HandVariation(mcp_offset_mm=(0.0,) * 7 + (np.nan,))
+    with pytest.raises(InvalidShapeError, match="HandVariation"):
+        VariedRasterizer(width_px=W, height_px=H).vary("long")
