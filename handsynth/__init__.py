@@ -13,6 +13,8 @@ sensor-based methods.  Each layer imports only the layers below it (the
 import contracts in ``pyproject.toml``).
 """
 
+# First: chooses MuJoCo's OpenGL backend before anything imports mujoco.
+from . import _gl  # noqa: F401
 from ._version import __version__
 from .estimate import PoseLookup
 from .models import JOINT_NAMES, HandModel, HandShape

@@ -17,6 +17,7 @@ __all__ = [
     "InvalidInputError",
     "InvalidPoseError",
     "InvalidShapeError",
+    "OutputError",
     "RecordingError",
     "RenderError",
 ]
@@ -56,6 +57,14 @@ class DatabaseMismatchError(DatabaseError):
 
 class DatabaseCorruptError(DatabaseError):
     """A database file is incomplete, truncated or fails its checksum."""
+
+
+class OutputError(HandsynthError):
+    """An output file or folder could not be written (missing or read-only folder, full
+    disk, a name that is an input or a folder, a folder locked by another run).
+
+    Nothing half-written is left under the output's name.
+    """
 
 
 class RecordingError(InvalidInputError):

@@ -50,3 +50,39 @@ def query_rows():
     angles = np.vstack([natural_pose_set(12, seed=5), paper_pose_set(12, seed=9)])
     return render_entries(angles, HandShape(length=1.03, width=1.06, palm=0.98, thumb=1.04),
                           CameraMount(), render_size=RENDER_SIZE)
+
+
+def _mount_tmpfs(path, *options: str):
+    import subprocess
+
+    if os.geteuid() != 0:
+        pytest.skip("needs root to mount a small tmpfs (full-disk and read-only cases)")
+    path.mkdir(parents=True, exist_ok=True)
+    res = subprocess.run(["mount", "-t", "tmpfs", "-o", ",".join(("size=256k",) + options),
+                          "tmpfs", str(path)], capture_output=True, text=True)
+    if res.returncode != 0:
+        pytest.skip(f"cannot mount a tmpfs here: {res.stderr.strip()}")
+
+
+def _unmount(path):
+    import subprocess
+
+    subprocess.run(["umount", "-l", str(path)], capture_output=True)
+
+
+@pytest.fixture
+def full_disk(tmp_path):
+    """A 256 KiB tmpfs: a disk that fills up (skipped unless running as root)."""
+    path = tmp_path / "small_disk"
+    _mount_tmpfs(path)
+    yield path
+    _unmount(path)
+
+
+@pytest.fixture
+def read_only_folder(tmp_path):
+    """An empty folder on a read-only file system (skipped unless running as root)."""
+    path = tmp_path / "read_only"
+    _mount_tmpfs(path, "ro")
+    yield path
+    _unmount(path)

@@ -41,6 +41,16 @@ def _check_limits(frames, seconds, max_dead, fps) -> None:
         raise InvalidInputError(f"--fps must be a positive number, got {fps}")
 
 
+def _check_db_folder(db_dir) -> None:
+    """--db must be a folder (the library's message would say it does not exist)."""
+    from ..errors import DatabaseError
+
+    path = Path(db_dir)
+    if path.exists() and not path.is_dir():
+        raise DatabaseError(f"--db {str(path)!r} is a file; give the folder that holds the "
+                            "<shape>.h5 databases (e.g. --db dbs)")
+
+
 def _open_lookup(db_dir, shape_name, measurements, temporal, err, personal=False, build=None):
     import time
 
@@ -71,6 +81,13 @@ def _open_lookup(db_dir, shape_name, measurements, temporal, err, personal=False
         t = time.perf_counter()
         path = build_default_database(db_dir)
         click.echo(f"default database {path} ready in {time.perf_counter() - t:.1f} s", err=err)
+    else:
+        from ..db import find_database
+        from ..estimate import select_shape
+
+        _check_db_folder(db_dir)
+        grid = select_shape(meas).shape if meas is not None else (shape or HandShape()).nearest_grid()
+        find_database(db_dir, grid)  # what is wrong there, in words, before the lookup opens
     return PoseLookup.open(db_dir, shape=shape, measurements=meas, temporal=temporal)
 
 
@@ -214,6 +231,13 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
     info_err = to_stdout  # keep standard output for the rows
     if to_stdout and fmt is None:
         raise InvalidInputError("--out - (standard output) needs --format csv or jsonl")
+    if fmt is not None and out is None:
+        raise InvalidInputError(f"--format {fmt} applies to the rows of --out, and no --out "
+                                "was given")
+    if keypoints and out is None:
+        raise InvalidInputError("--keypoints adds columns to the rows of --out, and no --out "
+                                "was given")
+    inputs = [p for p in (video_in, measurements, calibrate_image) if p is not None]
     size = _parse_size(synthetic_size, "--synthetic-size") if synthetic else None
     user_shape = HandShape.from_name(synthetic_shape) if synthetic else None
     if synthetic and frames is None and seconds is None:
@@ -247,11 +271,16 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
             what = f"synthetic hand {user_shape.name} ({synthetic_motion} poses)"
         if calibrate:
             lookup = _calibrate(lookup, source, open_image, db_dir, mount, side, build, info_err)
+        if lookup is not None:
+            inputs.append(lookup.database.path)
+        if out is not None and video_out is not None and not to_stdout \
+                and Path(out).resolve() == Path(video_out).resolve():
+            raise InvalidInputError(f"--out and --video-out are the same file {out!r}")
         if out is not None:
-            sink = open_row_writer(out, format=fmt,
+            sink = open_row_writer(out, format=fmt, inputs=inputs,
                                    columns=live_columns(keypoints=keypoints, truth=synthetic))
         if video_out is not None:
-            video = SideBySideWriter(video_out, lookup, fps=source.fps or fps)
+            video = SideBySideWriter(video_out, lookup, fps=source.fps or fps, inputs=inputs)
         options = LiveOptions(max_frames=frames, max_seconds=seconds, max_dead_reads=max_dead,
                               keypoints=keypoints)
         click.echo(f"estimating {what} against {lookup.database.path.name} "
@@ -259,13 +288,17 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
         show = None if quiet or not sys.stderr.isatty() else _progress(sys.stderr)
         summary = run_live(lookup, source, sink=sink, video_out=video, options=options,
                            progress=show)
-    finally:
+    except BaseException:
         if video is not None:
-            video.close()
-        if sink is not None:
-            sink.close()
+            video.discard()
+        raise
+    finally:
         if source is not None:
             source.close()
+        if sink is not None:
+            sink.close()
+    if video is not None:
+        video.close()  # checks the file and only then gives it its name
     if show is not None:
         sys.stderr.write("\n")
     click.echo(summary.format(), err=info_err)
@@ -276,3 +309,7 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
                    err=info_err)
     if summary.stop_reason == "dead":
         raise EstimationError(f"{what}: {summary.message}; stopped after {summary.frames} frames")
+    if summary.frames == 0 and summary.stop_reason == "ended":
+        raise EstimationError(
+            f"{what}: no frame could be used ({summary.reads} reads: {summary.dropped} empty, "
+            f"{summary.invalid} refused); no rows were written")

@@ -81,7 +81,11 @@ def eval_(db_folder, out_dir, prefix, json_path, json_frames, n_hands, frames, p
     database built for the shape measured on a photo of the hand.  Prints
     mean +- s.d. (MAE) of the signed error per joint and the targets.
     """
+    from .._io import check_output
     from ..eval import EvalOptions, evaluate
+
+    if json_path:
+        check_output(json_path, what="JSON report")  # before the work, not after it
 
     options = EvalOptions(
         db_folder=db_folder, n_hands=n_hands, frames_per_hand=frames,

@@ -10,17 +10,16 @@ import click
 from ._main import cli
 
 _METHODS = ("patent", "variance3d", "obrien", "score")
+#: Bounds of ``joints eval``: a trial holds still for its first 0.5 s; 3600 s at 240 Hz
+#: is 864,000 frames per trial and estimator.
+_MIN_DURATION_S, _MAX_DURATION_S = 2.0, 3600.0
+_MAX_SEEDS = 100
 
 
-def _write_json(path: str, payload) -> None:
-    import os
-    import tempfile
+def _write_json(path: str, payload, inputs=()) -> None:
+    from .._io import write_text
 
-    target = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", dir=target.parent or ".")
-    with os.fdopen(fd, "w") as f:
-        json.dump(payload, f, indent=2)
-    os.replace(tmp, target)
+    write_text(path, json.dumps(payload, indent=2) + "\n", what="JSON file", inputs=inputs)
 
 
 def _lateral(value: str):
@@ -73,6 +72,7 @@ def joints() -> None:
 def estimate(recording, methods, frames, lateral_axis, bins, units, angles, rate_hz,
              drop_invalid, json_out, plot_out) -> None:
     """Estimate the joint centre of RECORDING (.h5 or Polhemus text export)."""
+    from .._io import check_output
     from ..sensors.trackers import (
         AxisAngleFilter,
         make_estimator,
@@ -80,6 +80,9 @@ def estimate(recording, methods, frames, lateral_axis, bins, units, angles, rate
         read_recording,
     )
 
+    for path in (json_out, plot_out):  # before the work: a bad name fails now
+        if path:
+            check_output(path, inputs=[recording])
     kwargs = {}
     if Path(recording).suffix.lower() not in (".h5", ".hdf5"):
         kwargs = dict(units=units, angles=angles, rate_hz=rate_hz,
@@ -113,11 +116,11 @@ def estimate(recording, methods, frames, lateral_axis, bins, units, angles, rate
         rows.append(row)
     if json_out:
         _write_json(json_out, {"recording": str(recording), "joint": rec.joint,
-                               "n_frames": rec.n_frames, "results": rows})
+                               "n_frames": rec.n_frames, "results": rows}, inputs=[recording])
     if plot_out:
         filtered = next((r.axis_filter for r in results if r.axis_filter is not None), None)
         plot_axis_histogram(filtered if filtered is not None else filt.apply(rec), plot_out,
-                            title=f"{rec.joint}: axis-angle filter")
+                            title=f"{rec.joint}: axis-angle filter", inputs=[recording])
 
 
 @joints.command("eval")
@@ -131,11 +134,18 @@ def estimate(recording, methods, frames, lateral_axis, bins, units, angles, rate
               help="Number of simulated trials per row (averaged).")
 def eval_(json_out, duration_s, rate_hz, seeds) -> None:
     """Reproduce the patent's table (mock vs finger, all vs filtered) on simulated data."""
+    from .._io import check_output
     from ..errors import InvalidInputError
     from ..sensors.trackers import evaluate
 
-    if seeds < 1:
-        raise InvalidInputError(f"--seeds must be >= 1, got {seeds}")
+    if not 1 <= seeds <= _MAX_SEEDS:
+        raise InvalidInputError(f"--seeds must be between 1 and {_MAX_SEEDS}, got {seeds}")
+    if not _MIN_DURATION_S <= duration_s <= _MAX_DURATION_S:
+        raise InvalidInputError(
+            f"--duration must be between {_MIN_DURATION_S:g} and {_MAX_DURATION_S:g} s (a trial "
+            f"starts with a still {_MIN_DURATION_S / 4:g} s), got {duration_s:g}")
+    if json_out:
+        check_output(json_out)
     rows = evaluate(duration_s=duration_s, rate_hz=float(rate_hz), seeds=tuple(range(seeds)))
     click.echo("errors in mm against the simulated centre; |PU-PL| as in the patent "
                "(mock ~2 mm; finger DIP 7.09 -> 4.21 mm)")

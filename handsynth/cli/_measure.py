@@ -63,6 +63,7 @@ def measure(photo, mm_per_px, reference_width_mm, out, details, annotate, normal
     """
     import json
 
+    from .._io import check_output, write_text
     from ..measure import (
         NO_CALIBRATION,
         NO_SHAPE_CORRECTION,
@@ -83,6 +84,11 @@ def measure(photo, mm_per_px, reference_width_mm, out, details, annotate, normal
         raise InvalidInputError(
             "give the photo's scale: exactly one of --mm-per-px X (mm per pixel at the hand) "
             "or --reference-width-mm W (the longer side of a reference object beside the hand)")
+    outputs = [p for p in (out, details, annotate) if p is not None]
+    for path in outputs:  # before the work: a bad name fails now, not after it
+        check_output(path, what="output file", inputs=[photo])
+    if len({p.resolve() for p in outputs}) < len(outputs):
+        raise InvalidInputError("--out, --details and --annotate must be different files")
     image = read_image(photo, what="photo")
     options = MeasureOptions(normalize=normalize)
     if raw:
@@ -94,11 +100,12 @@ def measure(photo, mm_per_px, reference_width_mm, out, details, annotate, normal
     for w in result.warnings:
         click.echo(f"handsynth: warning: {w}", err=True)
     if out is not None:
-        write_measurement_file(out, result.measurements)
+        write_measurement_file(out, result.measurements, inputs=[photo])
         click.echo(f"wrote {out}")
     if details is not None:
-        details.write_text(json.dumps(result.as_dict(), indent=1) + "\n", encoding="utf-8")
+        write_text(details, json.dumps(result.as_dict(), indent=1) + "\n", what="details file",
+                   inputs=[photo])
         click.echo(f"wrote {details}")
     if annotate is not None:
-        write_png(annotate, annotate_measurement(image, result)[..., ::-1])
+        write_png(annotate, annotate_measurement(image, result)[..., ::-1], inputs=[photo])
         click.echo(f"wrote {annotate}")

@@ -27,6 +27,7 @@ from ._bits import (
 )
 from ._build import (
     DEFAULT_DATABASE,
+    MAX_COUNT,
     BuildOptions,
     BuildProgress,
     BuildSummary,
@@ -34,6 +35,7 @@ from ._build import (
     build_databases,
     build_default_database,
     database_path,
+    find_database,
 )
 from ._entries import DEFAULT_RENDER_SIZE, database_meta, render_entries
 from ._learning import (
@@ -72,6 +74,7 @@ __all__ = [
     "HLAC_SIZE",
     "IMAGE_SIZE",
     "KEYPOINT_SCALE_M",
+    "MAX_COUNT",
     "BuildOptions",
     "BuildProgress",
     "BuildSummary",
@@ -90,6 +93,7 @@ __all__ = [
     "database_path",
     "extract_features",
     "extract_features_batch",
+    "find_database",
     "hilditch_thinning",
     "hlac",
     "learning_poses",

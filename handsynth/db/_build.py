@@ -34,7 +34,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import DatabaseError, InvalidInputError
+from .._io import os_error_reason
+from ..errors import DatabaseError, InvalidInputError, OutputError
 from ..models import PAPER_SIZE, HandShape
 from ..models import pose_set as make_pose_set
 from ..render import CameraMount
@@ -44,6 +45,7 @@ from ._store import verify, write_database
 
 __all__ = [
     "DEFAULT_DATABASE",
+    "MAX_COUNT",
     "BuildOptions",
     "BuildProgress",
     "BuildSummary",
@@ -51,11 +53,17 @@ __all__ = [
     "build_databases",
     "build_default_database",
     "database_path",
+    "find_database",
 ]
 
 _STORED = ("angles", "hlac", "sil_bits", "ridge_bits", "ridge_area", "keypoints")
 _MAX_CHUNK = 4096  # poses per task: progress granularity and parent memory
 _MIN_CHUNK = 128
+#: Most poses per shape: a database is read into memory whole, 2,832 bytes per
+#: entry (57.9 MB for the paper's 20,448), so 5,000,000 entries need 14 GB.
+MAX_COUNT = 5_000_000
+#: Lock file of a build in its output folder (one build per folder at a time).
+LOCK_NAME = ".handsynth-build.lock"
 
 
 @dataclass(frozen=True)
@@ -101,6 +109,11 @@ class BuildOptions:
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < lo:
                 raise InvalidInputError(f"{name} must be an integer >= {lo}, got {v!r}")
             object.__setattr__(self, name, int(v))
+        if self.count > MAX_COUNT:
+            raise InvalidInputError(
+                f"count must be at most {MAX_COUNT:,} poses per shape (a database is held in "
+                f"memory, 2.8 kB per entry: {self.count:,} would need "
+                f"{self.count * 2832 / 1e9:,.0f} GB), got {self.count}")
         size = self.render_size
         try:
             w, h = (int(s) for s in size)
@@ -214,6 +227,43 @@ def database_path(out_dir, shape: HandShape) -> Path:
     return Path(out_dir) / f"{shape.name}.h5"
 
 
+def find_database(folder, shape: HandShape) -> Path:
+    """The existing database file of `shape` in `folder`, or an error that says what is there.
+
+    Parameters
+    ----------
+    folder : str or os.PathLike
+    shape : HandShape
+
+    Returns
+    -------
+    pathlib.Path
+        ``<folder>/<shape.name>.h5``, a file (not yet checked: see :func:`open_database`).
+
+    Raises
+    ------
+    DatabaseError
+        `folder` is missing or a file; the name is a folder or a link to
+        nothing; or there is no such file (the message lists the database
+        files that are there).
+    """
+    folder = Path(folder)
+    if not folder.is_dir():
+        why = "is a file, not a folder" if folder.exists() else "does not exist"
+        raise DatabaseError(f"database folder {str(folder)!r} {why}")
+    path = database_path(folder, shape)
+    if path.is_dir():
+        raise DatabaseError(f"database {path} is a folder, not a file")
+    if path.is_symlink() and not path.exists():
+        raise DatabaseError(f"database {path} is a link to {os.readlink(path)!r}, which does "
+                            "not exist")
+    if not path.is_file():
+        have = sorted(p.stem for p in folder.glob("*.h5") if p.is_file())
+        raise DatabaseError(f"no database for shape {shape.name} in {folder} (database files "
+                            f"there: {', '.join(have) or 'none'})")
+    return path
+
+
 # --------------------------------------------------------------------------- workers
 
 # One open renderer per worker process, reused while tasks are of one shape.
@@ -260,6 +310,41 @@ def _alive(pid: int) -> bool:
     except PermissionError:
         return True
     return True
+
+
+class _FolderLock:
+    """An exclusive lock on a build's output folder (``fcntl.flock`` on :data:`LOCK_NAME`).
+
+    A second build of the same folder -- same or other parameters -- is
+    refused while the first runs; the lock goes with the process that holds
+    it, even when that process is killed.
+    """
+
+    def __init__(self, folder: Path, what: str) -> None:
+        import fcntl
+
+        self.path = folder / LOCK_NAME
+        try:
+            fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+        except OSError as exc:
+            raise DatabaseError(f"cannot lock the output folder {str(folder)!r}: "
+                                f"{os_error_reason(exc)}") from None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            other = os.pread(fd, 4096, 0).decode("utf-8", "replace").strip()
+            os.close(fd)
+            raise OutputError(
+                f"output folder {str(folder)!r} is in use by another build ({other or 'running'}); "
+                "wait for it to finish, or build into another folder") from None
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"pid {os.getpid()}: {what}\n".encode(), 0)
+        self._fd: int | None = fd
+
+    def release(self) -> None:
+        if self._fd is not None:
+            os.close(self._fd)  # closing releases the lock
+            self._fd = None
 
 
 def _check_existing(path: Path, meta: dict) -> tuple[bool, str | None]:
@@ -328,8 +413,10 @@ def build_databases(out_dir, shapes: Sequence[HandShape | str], mount: CameraMou
         Side, pose set, count, seed and render size.  Instead, the same
         fields may be given as keywords (``count=3000, seed=1``).
     workers : int, keyword-only, optional
-        Worker processes; all cores (``os.cpu_count()``) by default.  One
-        worker renders in this process.
+        Worker processes; all cores (``os.cpu_count()``) by default, and at
+        most that many with ``executor="process"``.  One worker renders in
+        this process.  Workers exit when this process dies and ignore Ctrl-C
+        (this process stops them).
     executor : {"process", "ray"}, keyword-only
         A local process pool, or Ray (optional dependency; a local instance
         with `workers` CPUs, or the cluster of ``RAY_ADDRESS``).
@@ -351,8 +438,12 @@ def build_databases(out_dir, shapes: Sequence[HandShape | str], mount: CameraMou
     ------
     InvalidInputError
         Bad shapes, options, workers or executor (the message names it).
+    OutputError
+        Another build holds the folder's lock (:data:`LOCK_NAME`): one build
+        per folder at a time.
     DatabaseError
-        A database could not be written.
+        The folder cannot be created or locked, or a database could not be
+        written (full disk, read-only folder); finished files stay.
     """
     if options is None:
         options = BuildOptions(**option_fields)
@@ -366,6 +457,11 @@ def build_databases(out_dir, shapes: Sequence[HandShape | str], mount: CameraMou
     if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1:
         raise InvalidInputError(f"workers must be a positive integer, got {workers!r}")
     workers = int(workers)
+    cores = os.cpu_count() or 1
+    if executor == "process" and workers > cores:
+        raise InvalidInputError(
+            f"workers must be at most the {cores} CPU cores of this machine (each worker "
+            f"process renders on one core and holds its own model), got {workers}")
     if executor not in EXECUTORS:
         raise InvalidInputError(
             f"executor must be one of {', '.join(EXECUTORS)}, got {executor!r}")
@@ -373,12 +469,25 @@ def build_databases(out_dir, shapes: Sequence[HandShape | str], mount: CameraMou
     if not isinstance(mount, CameraMount):
         raise InvalidInputError(f"mount must be a CameraMount, got {type(mount).__name__}")
     shape_list = _as_shapes(shapes)
+    _chunk_size(options.count, len(shape_list), workers, chunk_size)  # checked before any file
     out = Path(out_dir)
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise DatabaseError(f"cannot create output folder {out}: {exc}") from None
+        raise DatabaseError(f"cannot create output folder {out}: {os_error_reason(exc)}") from None
 
+    what = (f"{len(shape_list)} shape(s), {options.pose_set} poses x {options.count}, "
+            f"seed {options.seed}, {options.side} hand")
+    lock = _FolderLock(out, what)
+    try:
+        return _build_locked(out, shape_list, mount, options, workers, executor, chunk_size,
+                             force, progress)
+    finally:
+        lock.release()
+
+
+def _build_locked(out: Path, shape_list, mount, options, workers, executor, chunk_size, force,
+                  progress) -> BuildSummary:
     t0 = time.perf_counter()
     paths, todo, skipped, rebuilt = [], [], [], {}
     for shape in shape_list:

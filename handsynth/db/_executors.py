@@ -5,6 +5,12 @@ Each executor runs a picklable function over a list of tasks and yields
 Mesa's llvmpipe to one rendering thread (``LP_NUM_THREADS=1``) before their
 first render, so ``workers`` processes use ``workers`` cores.
 
+Worker processes die with their parent: each watches its parent process
+and exits within half a second once the parent is gone (killed with
+SIGKILL, say), and they ignore Ctrl-C from their start, which the terminal sends to the
+whole process group: the parent alone stops the run (and terminates its workers),
+so an interrupt gives one message, not one traceback per worker.
+
 Ray is imported here and nowhere else; it is an optional dependency (``pip
 install handsynth[ray]``).  Without an address Ray starts a local instance
 with ``num_cpus=workers``; with ``RAY_ADDRESS`` set (or ``ray.init`` already
@@ -13,8 +19,12 @@ called by the user) the tasks go to that cluster.
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing
 import os
+import signal
+import threading
+import time
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
@@ -29,10 +39,59 @@ EXECUTORS: tuple[str, ...] = ("process", "ray")
 _WORKER_ENV = {"LP_NUM_THREADS": "1"}
 
 
-def _init_worker(env: dict[str, str]) -> None:
+#: Seconds between a worker's checks that its parent is alive.
+_PARENT_POLL_S = 0.5
+
+
+def _watch_parent(parent: int) -> None:
+    while True:
+        time.sleep(_PARENT_POLL_S)
+        if os.getppid() != parent:  # re-parented: the parent is gone
+            os._exit(1)
+
+
+def _init_worker(env: dict[str, str], parent: int) -> None:
     # Runs in the fresh (spawned) worker before any task, hence before the
     # first GL context is created.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # inherited already; also for other starts
     os.environ.update(env)
+    threading.Thread(target=_watch_parent, args=(parent,), daemon=True,
+                     name="handsynth-parent-watch").start()
+
+
+@contextlib.contextmanager
+def _children_ignore_sigint() -> Iterator[None]:
+    """Start child processes that ignore Ctrl-C from their first instruction.
+
+    An ignored SIGINT passes through fork and exec, and a Python interpreter
+    that starts with SIGINT ignored leaves it so: a Ctrl-C while a worker is
+    still importing cannot print a traceback there.  (A blocked signal mask
+    would not do: the spawn start method clears it.)  The disposition is the
+    whole process's, so a Ctrl-C in the milliseconds of this block is not
+    seen here either; the block covers only the submissions that start
+    workers.  Only the main thread may change signal handlers; elsewhere
+    nothing is changed.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _terminate(pool: ProcessPoolExecutor) -> None:
+    """Stop the pool's workers now (an interrupted or failed run)."""
+    stop = getattr(pool, "terminate_workers", None)  # Python >= 3.14
+    if stop is not None:
+        stop()
+        return
+    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+        with contextlib.suppress(Exception):
+            proc.terminate()
+    pool.shutdown(wait=False, cancel_futures=True)
 
 
 def _run_inline(fn: Callable, tasks: Sequence) -> Iterator[tuple[int, object]]:
@@ -44,21 +103,31 @@ def _run_process(fn: Callable, tasks: Sequence, workers: int) -> Iterator[tuple[
     # "spawn": a worker must not inherit the parent's GL state or threads.
     ctx = multiprocessing.get_context("spawn")
     pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx,
-                               initializer=_init_worker, initargs=(dict(_WORKER_ENV),))
+                               initializer=_init_worker,
+                               initargs=(dict(_WORKER_ENV), os.getpid()))
     # Keep at most 2 tasks per worker queued so that results stream back in
     # roughly the task order (bounded memory in the parent).
     pending: dict = {}
     next_task = 0
+    finished = False
     try:
         while next_task < len(tasks) or pending:
             while next_task < len(tasks) and len(pending) < 2 * workers:
-                pending[pool.submit(fn, tasks[next_task])] = next_task
+                # the first `workers` submissions start the worker processes
+                starting = _children_ignore_sigint() if next_task < workers \
+                    else contextlib.nullcontext()
+                with starting:
+                    pending[pool.submit(fn, tasks[next_task])] = next_task
                 next_task += 1
             done, _ = wait(pending, return_when=FIRST_COMPLETED)
             for fut in done:
                 yield pending.pop(fut), fut.result()
+        finished = True
     finally:
-        pool.shutdown(wait=not pending, cancel_futures=True)
+        if finished:
+            pool.shutdown(wait=True)
+        else:
+            _terminate(pool)
 
 
 def _import_ray():

@@ -28,13 +28,13 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 import zipfile
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from .._io import atomic_open, os_error_reason
 from ..errors import DatabaseCorruptError, DatabaseError, InvalidInputError
 from ..models import GRID_LEVELS, JOINT_LIMITS_DEG, HandShape, natural_pose_set
 from ..render import (
@@ -333,13 +333,13 @@ def learning_set(folder, options: LearningSetOptions | None = None, *,
     out = render_learning_set(opts, mount=mount, side=side, progress=progress)
     try:
         folder.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_suffix(f".{os.getpid()}.tmp.npz")
-        np.savez(tmp, grids=out.grids, rest_grids=out.rest_grids, hand=out.hand,
+    except OSError as exc:
+        raise DatabaseError(f"cannot create the learning-set folder {folder}: "
+                            f"{os_error_reason(exc)}") from None
+    with atomic_open(path, "wb", what="learning set", error=DatabaseError) as f:
+        np.savez(f, grids=out.grids, rest_grids=out.rest_grids, hand=out.hand,
                  angles=out.angles, rest_angles=out.rest_angles,
                  complete=np.array([len(out.grids)]))
-        os.replace(tmp, path)
-    except OSError as exc:
-        raise DatabaseError(f"cannot write the learning set to {folder}: {exc}") from None
     return out
 
 

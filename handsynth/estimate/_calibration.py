@@ -45,14 +45,21 @@ from functools import lru_cache
 import numpy as np
 
 from ..db import pack_mask, unpack_mask
-from ..errors import InvalidInputError
+from ..errors import EstimationError, InvalidInputError
 from ..models import HandShape
 from ..render import CameraMount, preprocess
 
-__all__ = ["Calibration", "FrameSelection", "reference_silhouette", "select_shape_from_frame"]
+__all__ = ["MIN_OPEN_IOU", "Calibration", "FrameSelection", "reference_silhouette",
+           "select_shape_from_frame"]
 
 _MAX_DILATION_PX = 8
 _MAX_TEMPERATURE_PX = 8.0
+#: Least overlap (IoU) of a calibration frame's silhouette with the database's open hand.
+#: Measured against the standard hand's open entry: model hands with all ratios 0.8 or
+#: 1.2 (or mixed) open give 0.73-0.84 at 720x480, the off-grid hands of the evaluation
+#: (``handsynth eval``, small renders) down to 0.55, the standard hand with four fingers
+#: flexed 60 deg at the MCP 0.53, frames of uniform random noise 0.30.
+MIN_OPEN_IOU = 0.45
 #: Entries farther than this many temperatures above the best are left out of the mean.
 WINDOW_TEMPERATURES = 10.0
 
@@ -90,7 +97,8 @@ class Calibration:
 
     @classmethod
     def from_silhouettes(cls, user, reference, *, dilation_px: int = 1,
-                         temperature_px: float = 1.0) -> Calibration:
+                         temperature_px: float = 1.0,
+                         min_open_iou: float | None = None) -> Calibration:
         """The calibration of a user's open-hand silhouette against the database's.
 
         Parameters
@@ -106,11 +114,19 @@ class Calibration:
             seeds 2-5, which the recorded evaluations do not use (README,
             "Calibrated lookup").
 
+        min_open_iou : float, keyword-only, optional
+            Least overlap (IoU) of the two silhouettes: below it the user's
+            frame is not taken for an open hand (:data:`MIN_OPEN_IOU` by
+            default; 0 accepts anything).
+
         Raises
         ------
         InvalidInputError
             Silhouettes of different or non-square shapes, an empty one, or
-            a `dilation_px` or `temperature_px` out of range.
+            a `dilation_px`, `temperature_px` or `min_open_iou` out of range.
+        EstimationError
+            The silhouettes overlap less than `min_open_iou`: the frame does
+            not show an open hand (random noise overlaps about 0.3).
         """
         u = np.asarray(user)
         o = np.asarray(reference)
@@ -131,6 +147,17 @@ class Calibration:
                 or not 0.0 <= temperature_px <= _MAX_TEMPERATURE_PX:
             raise InvalidInputError(f"temperature_px must be a number in [0, "
                                     f"{_MAX_TEMPERATURE_PX:g}], got {temperature_px!r}")
+        floor = MIN_OPEN_IOU if min_open_iou is None else min_open_iou
+        if isinstance(floor, bool) or not isinstance(floor, (int, float, np.integer, np.floating)) \
+                or not 0.0 <= floor <= 1.0:
+            raise InvalidInputError(f"min_open_iou must be a number in [0, 1], got {floor!r}")
+        iou = float((u & o).sum() / (u | o).sum())
+        if iou < floor:
+            raise EstimationError(
+                f"the open-hand frame does not look like an open hand: its silhouette overlaps "
+                f"the database's open hand by IoU {iou:.2f}, at least {floor:g} is needed; "
+                "hold the hand open and flat in front of the device (a hand-free or noisy "
+                "frame gives about 0.3)")
         ignore = u ^ o
         if dilation_px > 0:  # scipy's default structure in 2-D is the 4-neighbour cross
             from scipy.ndimage import binary_dilation
@@ -139,7 +166,6 @@ class Calibration:
         ignore.setflags(write=False)
         keep = pack_mask(~ignore)
         keep.setflags(write=False)
-        iou = float((u & o).sum() / (u | o).sum())
         return cls(ignore=ignore, keep_bits=keep, open_iou=iou, dilation_px=int(dilation_px),
                    temperature_px=float(temperature_px))
 

@@ -52,13 +52,13 @@ import copy
 import hashlib
 import itertools
 import json
-import os
 import zipfile
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
 
+from .._io import atomic_open, os_error_reason
 from ..db import LearningSet, LearningSetOptions, learning_set
 from ..errors import DatabaseCorruptError, DatabaseError, InvalidInputError
 from ..models import JOINT_LIMITS_DEG
@@ -445,13 +445,13 @@ class LearnedEstimator:
         path = Path(path)
         meta = {"format": _FORMAT, "options": asdict(self.options), "mount": self.mount.as_dict(),
                 "side": self.side, "cells": list(self.cells)}
-        tmp = path.with_suffix(f".{os.getpid()}.tmp.npz")
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
-            np.savez(tmp, meta=np.array(json.dumps(meta)), **self._a)
-            os.replace(tmp, path)
         except OSError as exc:
-            raise DatabaseError(f"cannot write the learnt estimator to {path}: {exc}") from None
+            raise DatabaseError(f"cannot write the learnt estimator to {path}: "
+                                f"{os_error_reason(exc)}") from None
+        with atomic_open(path, "wb", what="learnt estimator", error=DatabaseError) as f:
+            np.savez(f, meta=np.array(json.dumps(meta)), **self._a)
 
     @classmethod
     def load(cls, path) -> LearnedEstimator:

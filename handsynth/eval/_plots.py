@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .._io import atomic_open
 from ..models import JOINT_NAMES
 
 if TYPE_CHECKING:
@@ -32,8 +33,9 @@ def _figure(figsize):
 
 
 def _save(fig, path: Path) -> Path:
-    fig.savefig(path, format="png")
-    return path
+    with atomic_open(path, "wb", what="plot") as f:
+        fig.savefig(f, format="png")
+    return Path(path)
 
 
 def _plot_histograms(report: EvalReport, path: Path) -> Path:

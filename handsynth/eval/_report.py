@@ -3,14 +3,13 @@
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import InvalidInputError
+from .._io import os_error_reason, write_text
+from ..errors import InvalidInputError, OutputError
 from ..models import JOINT_NAMES, HandShape
 from ._options import (
     _CONDITION_TEXT,
@@ -238,17 +237,7 @@ class EvalReport:
 
     def write_json(self, path, *, frames: bool = False) -> Path:
         """Write :meth:`to_json` to `path` atomically (temporary file, then rename)."""
-        target = Path(path)
-        target.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", dir=target.parent)
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(self.to_json(frames=frames))
-            f.write("\n")
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp's 0600 would hide the results from others
-        os.replace(tmp, target)
-        return target
+        return write_text(path, self.to_json(frames=frames) + "\n", what="JSON report")
 
     def write_plots(self, folder, *, prefix: str = "eval_") -> list[Path]:
         """Write the figures as PNG files (matplotlib, Agg canvas).
@@ -271,9 +260,19 @@ class EvalReport:
         Returns
         -------
         list of pathlib.Path
+
+        Raises
+        ------
+        OutputError
+            The folder cannot be created or a file cannot be written (each
+            file appears complete or not at all).
         """
         folder = Path(folder)
-        folder.mkdir(parents=True, exist_ok=True)
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise OutputError(f"cannot create the plot folder {str(folder)!r}: "
+                              f"{os_error_reason(exc)}") from None
         return [_plot_histograms(self, folder / f"{prefix}error_hist.png"),
                 _plot_distance(self, folder / f"{prefix}error_vs_distance.png"),
                 _plot_joint_mae(self, folder / f"{prefix}joint_mae.png")]

@@ -6,7 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InvalidInputError
+from .._io import PendingOutput
+from ..errors import InvalidInputError, OutputError
 from ..models import JOINT_LIMITS_DEG
 from ._checks import _check_float, _quiet_opencv
 
@@ -47,15 +48,27 @@ class SideBySideWriter:
         A four-character code overriding the suffix's codec.
     labels : bool, keyword-only
         Draw frame index, entry and confidence on the frames.
+    inputs : iterable of path-like, keyword-only
+        Files the run reads; `path` must be none of them.
+
+    Notes
+    -----
+    The video is written under a temporary name and appears under `path`
+    only when :meth:`close` has checked that it holds every frame written
+    (OpenCV's encoders do not report a full disk; reading the file back
+    does).
 
     Raises
     ------
     InvalidInputError
         Unknown suffix or codec, or OpenCV cannot open a writer for the file.
+    OutputError
+        `path` is a folder, in a missing folder, or one of `inputs`; or, on
+        :meth:`close`, the video could not be written completely.
     """
 
     def __init__(self, path, lookup, *, fps: float = 30.0, codec: str | None = None,
-                 labels: bool = True) -> None:
+                 labels: bool = True, inputs=()) -> None:
         self.path = Path(path)
         suffix = self.path.suffix.lower()
         if codec is None:
@@ -79,18 +92,24 @@ class SideBySideWriter:
         self._writer = None
         self._renderer = None
         self._size = None
+        self._pending: PendingOutput | None = PendingOutput(self.path, what="video",
+                                                            inputs=inputs, keep_suffix=True)
 
     def _open(self, w: int, h: int) -> None:
         import cv2
 
         from ..render import SilhouetteRenderer
 
+        pending = self._pending
+        if pending is None:
+            raise InvalidInputError(f"video {str(self.path)!r} is already closed")
         with _quiet_opencv():
-            writer = cv2.VideoWriter(str(self.path), cv2.VideoWriter_fourcc(*self.codec),
+            writer = cv2.VideoWriter(str(pending.tmp), cv2.VideoWriter_fourcc(*self.codec),
                                      self.fps, (2 * w, h))
             opened = writer.isOpened()
         if not opened:
             writer.release()
+            pending.discard()
             raise InvalidInputError(f"OpenCV cannot write video {str(self.path)!r} with codec "
                                     f"{self.codec!r}")
         self._writer, self._size = writer, (w, h)
@@ -137,16 +156,54 @@ class SideBySideWriter:
         self.frames += 1
 
     def close(self) -> None:
-        """Finish the file and release the renderer."""
+        """Finish the file, check that it holds every frame, and release the renderer.
+
+        Raises
+        ------
+        OutputError
+            The file does not hold the frames written (a full disk); it is
+            removed.
+        """
+        import cv2
+
+        writer, self._writer = self._writer, None
+        r, self._renderer = self._renderer, None
+        if r is not None:
+            r.close()
+        pending, self._pending = self._pending, None
+        if writer is None:
+            if pending is not None:
+                pending.discard()
+            return
+        writer.release()
+        with _quiet_opencv():
+            cap = cv2.VideoCapture(str(pending.tmp))
+            readable = int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) if cap.isOpened() else 0
+            cap.release()
+        if readable != self.frames:
+            pending.discard()
+            raise OutputError(
+                f"cannot write the video {str(self.path)!r}: {readable} of {self.frames} frames "
+                "could be read back (is the disk full?); nothing was kept")
+        pending.commit()
+
+    def discard(self) -> None:
+        """Stop writing and remove the unfinished file (an interrupted or failed run)."""
         writer, self._writer = self._writer, None
         if writer is not None:
             writer.release()
         r, self._renderer = self._renderer, None
         if r is not None:
             r.close()
+        pending, self._pending = self._pending, None
+        if pending is not None:
+            pending.discard()
 
     def __enter__(self):
         return self
 
-    def __exit__(self, *exc) -> None:
-        self.close()
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if exc_type is None:
+            self.close()
+        else:
+            self.discard()

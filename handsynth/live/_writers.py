@@ -1,7 +1,14 @@
-"""Row writers of the live loop: one complete, flushed line per frame (CSV or JSON Lines)."""
+"""Row writers of the live loop: one complete, flushed line per frame (CSV or JSON Lines).
+
+A row file holds only complete lines, whatever happens: rows are written to
+the file in whole lines with one system call per flush, and when a write
+fails (a full disk) the file is cut back to the last complete line before
+the error is raised.  A killed run leaves the lines flushed so far.
+"""
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import json
@@ -12,7 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InvalidInputError, RecordingError
+from .._io import check_output, os_error_reason
+from ..errors import InvalidInputError, OutputError
 from ..models import JOINT_NAMES, KEYPOINT_SITES
 from ._checks import _check_int
 
@@ -64,23 +72,27 @@ def _make_row(index: int, timestamp_s: float, est, *, keypoints: bool,
 class _RowWriter:
     format = ""
 
-    def __init__(self, target, *, columns=None, flush_every: int = 1) -> None:
+    def __init__(self, target, *, columns=None, flush_every: int = 1, inputs=()) -> None:
         self.flush_every = _check_int(flush_every, "flush_every", minimum=1)
         self.columns = tuple(columns) if columns is not None else live_columns()
+        self._fd: int | None = None
+        self._stream = None
+        self._pending: list[str] = []
+        self._complete = 0  # bytes of complete lines in the file
+        self._failed = False
         if isinstance(target, (str, os.PathLike)) and str(target) != "-":
-            self.path = Path(target)
+            self.path = check_output(target, what="row file", inputs=inputs)
             try:
-                self._stream = open(self.path, "w", encoding="utf-8", newline="")  # noqa: SIM115
+                self._fd = os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o666)
             except OSError as exc:
-                raise InvalidInputError(f"cannot write rows to {str(self.path)!r}: "
-                                        f"{exc.strerror or exc}") from None
-            self._owned = True
+                raise OutputError(f"cannot write rows to {str(self.path)!r}: "
+                                  f"{os_error_reason(exc)}") from None
         else:
             self.path = None
             self._stream = sys.stdout if str(target) == "-" else target
-            self._owned = False
         self.rows = 0
         self._header()
+        self._flush()
 
     def _header(self) -> None:
         pass
@@ -95,32 +107,57 @@ class _RowWriter:
         ------
         InvalidInputError
             `row` has a key that is not one of :attr:`columns`.
+        OutputError
+            The file cannot take the rows (a full disk); it keeps the
+            complete lines written before.
         """
         extra = set(row).difference(self.columns)
         if extra:
             raise InvalidInputError(f"row has columns {sorted(extra)} that this writer "
                                     f"was not opened with")
-        self._emit(self._line(row))
+        self._pending.append(self._line(row))
         self.rows += 1
         if self.rows % self.flush_every == 0:
-            self._stream.flush()
+            self._flush()
 
-    def _emit(self, line: str) -> None:
+    def _flush(self) -> None:
+        if self._failed or (not self._pending and self._fd is not None):
+            return
+        data, self._pending = "".join(self._pending), []
+        if self._fd is None:
+            if self._stream is None:
+                return
+            try:
+                self._stream.write(data)
+                self._stream.flush()
+            except OSError as exc:
+                self._failed = True
+                raise OutputError(f"cannot write rows to the output: "
+                                  f"{os_error_reason(exc)}") from None
+            return
+        view = memoryview(data.encode("utf-8"))
         try:
-            self._stream.write(line)
+            while view:
+                view = view[os.write(self._fd, view):]
         except OSError as exc:
-            raise RecordingError(f"cannot write rows to {self.path or 'the output'}: "
-                                 f"{exc.strerror or exc}") from None
+            self._failed = True
+            with contextlib.suppress(OSError):  # cut back to the last complete line
+                os.ftruncate(self._fd, self._complete)
+            raise OutputError(
+                f"cannot write rows to {str(self.path)!r}: {os_error_reason(exc)}; it holds "
+                "the complete rows written before") from None
+        self._complete += len(data.encode("utf-8"))
 
     def close(self) -> None:
         """Flush, and close the file if this writer opened it."""
-        stream = getattr(self, "_stream", None)
-        if stream is None:
-            return
-        stream.flush()
-        if self._owned:
-            stream.close()
-        self._stream = None
+        try:
+            self._flush()
+        finally:
+            if self._fd is not None:
+                os.close(self._fd)
+                self._fd = None
+            self._stream = None
+            self._failed = True  # nothing more is written
 
     def __enter__(self):
         return self
@@ -149,8 +186,7 @@ class CsvRowWriter(_RowWriter):
     format = "csv"
 
     def _header(self) -> None:
-        self._emit(",".join(self.columns) + "\n")
-        self._stream.flush()
+        self._pending.append(",".join(self.columns) + "\n")
 
     def _line(self, row: dict) -> str:
         buf = io.StringIO()
@@ -181,7 +217,7 @@ _SUFFIXES = {".csv": "csv", ".jsonl": "jsonl", ".ndjson": "jsonl"}
 
 
 def open_row_writer(target, *, format: str | None = None, columns=None,
-                    flush_every: int = 1):
+                    flush_every: int = 1, inputs=()):
     """A CSV or JSON-lines row writer for `target`.
 
     Parameters
@@ -194,6 +230,9 @@ def open_row_writer(target, *, format: str | None = None, columns=None,
     columns : sequence of str, keyword-only, optional
         :func:`live_columns` by default.
     flush_every : int, keyword-only
+    inputs : iterable of path-like, keyword-only
+        Files the run reads (video, database, measurements); `target` must
+        be none of them.
 
     Returns
     -------
@@ -202,8 +241,10 @@ def open_row_writer(target, *, format: str | None = None, columns=None,
     Raises
     ------
     InvalidInputError
-        Unknown format, a suffix that does not tell the format, or a file
-        that cannot be created.
+        Unknown format, or a suffix that does not tell the format.
+    OutputError
+        A file that cannot be created: its folder is missing, it is a
+        folder, or it is one of `inputs`.
     """
     if format is None:
         suffix = Path(str(target)).suffix.lower() if isinstance(target, (str, os.PathLike)) else ""
@@ -214,4 +255,4 @@ def open_row_writer(target, *, format: str | None = None, columns=None,
         format = _SUFFIXES[suffix]
     if format not in _WRITERS:
         raise InvalidInputError(f"format must be 'csv' or 'jsonl', got {format!r}")
-    return _WRITERS[format](target, columns=columns, flush_every=flush_every)
+    return _WRITERS[format](target, columns=columns, flush_every=flush_every, inputs=inputs)

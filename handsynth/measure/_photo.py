@@ -127,6 +127,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._io import write_text
 from ..errors import InvalidInputError
 from ..estimate import Selection, SelectionOptions, select_shape, shape_ratios
 from ..models import HandMeasurements, HandShape, model_measurements
@@ -1128,7 +1129,7 @@ def measure_photo(image, *, mm_per_px: float | None = None,
         warnings=tuple(warnings))
 
 
-def write_measurement_file(path, measurements: HandMeasurements) -> Path:
+def write_measurement_file(path, measurements: HandMeasurements, *, inputs=()) -> Path:
     """Write `measurements` to ``.json`` or ``.csv`` (read back by ``HandMeasurements.from_file``).
 
     The file appears complete or not at all (written to a temporary name,
@@ -1139,13 +1140,22 @@ def write_measurement_file(path, measurements: HandMeasurements) -> Path:
     path : str or os.PathLike
         Ends in ``.json`` or ``.csv``.
     measurements : HandMeasurements
+    inputs : iterable of path-like, keyword-only
+        Files the caller read (the photo); `path` must be none of them.
 
     Returns
     -------
     Path
+
+    Raises
+    ------
+    InvalidInputError
+        Another suffix.
+    OutputError
+        The file cannot be written (missing folder, full disk...) or is one
+        of `inputs`.
     """
     import json
-    import os
 
     path = Path(path)
     suffix = path.suffix.lower()
@@ -1160,14 +1170,7 @@ def write_measurement_file(path, measurements: HandMeasurements) -> Path:
         text = "\n".join(rows) + "\n"
     else:
         raise InvalidInputError(f"measurement file must end in .json or .csv, got {str(path)!r}")
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    try:
-        tmp.write_text(text, encoding="utf-8")
-        os.replace(tmp, path)
-    except OSError as exc:
-        tmp.unlink(missing_ok=True)
-        raise InvalidInputError(f"cannot write {str(path)!r}: {exc}") from None
-    return path
+    return write_text(path, text, what="measurement file", inputs=inputs)
 
 
 def annotate_measurement(image, result: PhotoMeasurement) -> np.ndarray:

@@ -158,14 +158,22 @@ class HandMeasurements:
         Raises
         ------
         InvalidShapeError
-            Unreadable file, unknown suffix, or bad values (naming file and field).
+            Unreadable or non-UTF-8 file, unknown suffix, a name given twice,
+            or bad values (naming file, line and field).  A UTF-8 byte-order
+            mark is allowed.
         """
         path = Path(path)
         suffix = path.suffix.lower()
         try:
-            text = path.read_text(encoding="utf-8")
+            # utf-8-sig: a byte-order mark (Excel's "CSV UTF-8") is not part of the text
+            text = path.read_text(encoding="utf-8-sig")
         except OSError as exc:
-            raise InvalidShapeError(f"cannot read measurement file {path}: {exc}") from None
+            raise InvalidShapeError(f"cannot read measurement file {path}: "
+                                    f"{exc.strerror or exc}") from None
+        except UnicodeDecodeError as exc:
+            raise InvalidShapeError(
+                f"measurement file {path} is not UTF-8 text (byte {exc.object[exc.start]:#04x} at "
+                f"offset {exc.start}); save it as UTF-8") from None
         if suffix == ".json":
             try:
                 return cls.from_dict(json.loads(text))
@@ -173,6 +181,7 @@ class HandMeasurements:
                 raise InvalidShapeError(f"measurement file {path} is not JSON: {exc}") from None
         if suffix == ".csv":
             values: dict[str, float] = {}
+            seen: dict[str, int] = {}
             for k, row in enumerate(csv.reader(text.splitlines()), 1):
                 if not row or not row[0].strip() or row[0].lstrip().startswith("#"):
                     continue
@@ -181,6 +190,11 @@ class HandMeasurements:
                 name, value = row[0].strip(), row[1].strip()
                 if k == 1 and name.lower() == "name":
                     continue
+                if name in values:
+                    raise InvalidShapeError(
+                        f"{path} line {k}: {name} is given again (line {seen[name]} gave it "
+                        "first); give each measurement once")
+                seen[name] = k
                 try:
                     values[name] = float(value)
                 except ValueError:

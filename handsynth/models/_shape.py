@@ -63,6 +63,8 @@ class HandShape:
         lo, hi = _RATIO_RANGE
         for f in fields(self):
             value = getattr(self, f.name)
+            if isinstance(value, bool) or getattr(getattr(value, "dtype", None), "kind", "") == "b":
+                raise InvalidShapeError(f"HandShape.{f.name} must be a number, got {value!r}")
             try:
                 v = float(value)
             except (TypeError, ValueError):
@@ -127,7 +129,7 @@ class HandShape:
         parts = name.split("_")
         keys = {"L": "length", "W": "width", "P": "palm", "T": "thumb"}
         try:
-            if len(parts) != 4 or [p[0] for p in parts] != list(keys):
+            if len(parts) != 4 or [p[:1] for p in parts] != list(keys):
                 raise ValueError
             return cls(**{keys[p[0]]: float(p[1:]) for p in parts})
         except ValueError:

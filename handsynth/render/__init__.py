@@ -10,9 +10,9 @@ estimator) and :class:`VariedRasterizer` with :class:`HandVariation` and
 :class:`MountVariation` (model hands beyond the four ratios, a moved device).
 """
 
+from .._gl import backend, ensure_backend
 from ._camera import CameraMount
 from ._coverage import DEFAULT_CELLS, coverage
-from ._gl import backend, ensure_backend
 from ._io import write_png
 from ._masks import MaskMaker
 from ._preprocess import (

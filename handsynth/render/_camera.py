@@ -10,7 +10,11 @@ import numpy as np
 from ..errors import InvalidCameraError
 from ..models import DORSUM_Z_MM
 
-__all__ = ["CameraMount"]
+__all__ = ["MAX_WRIST_CUT_MM", "CameraMount"]
+
+
+#: Largest wrist cut, mm from the wrist joint centre along the hand.
+MAX_WRIST_CUT_MM = 40.0
 
 
 @dataclass(frozen=True)
@@ -59,6 +63,9 @@ class CameraMount:
         y < ``wrist_cut_mm`` at dorsum height (the forearm), identically for
         database renders and live frames, so a real forearm and the model's
         forearm stub do not enter the features.  ``None`` disables the cut.
+        At most :data:`MAX_WRIST_CUT_MM` (the thumb's CMC joint lies about
+        24 mm from the wrist, the MCP joints 69-83 mm: a cut much beyond
+        them leaves no hand), at least -100 mm.
 
     Raises
     ------
@@ -88,6 +95,10 @@ class CameraMount:
             raise InvalidCameraError(f"CameraMount.height_mm must be > 0, got {self.height_mm!r}")
         if not 1.0 <= self.fov_deg <= 170.0:
             raise InvalidCameraError(f"CameraMount.fov_deg must be in [1, 170], got {self.fov_deg!r}")
+        if self.wrist_cut_mm is not None and not -100.0 <= self.wrist_cut_mm <= MAX_WRIST_CUT_MM:
+            raise InvalidCameraError(
+                f"CameraMount.wrist_cut_mm must be in [-100, {MAX_WRIST_CUT_MM:g}] mm (beyond it "
+                f"the cut removes the palm and every frame shows no hand), got {self.wrist_cut_mm!r}")
         if not -80.0 <= self.tilt_deg <= 80.0:
             raise InvalidCameraError(f"CameraMount.tilt_deg must be in [-80, 80], got {self.tilt_deg!r}")
         for n in ("width_px", "height_px"):

@@ -7,13 +7,23 @@ from pathlib import Path
 
 import numpy as np
 
+from .._io import write_bytes
 from ..errors import InvalidInputError
 
 __all__ = ["write_png"]
 
 
-def write_png(path: str | os.PathLike, rgb: np.ndarray) -> Path:
-    """Write an RGB (H, W, 3) or grey (H, W) uint8 image as PNG, atomically."""
+def write_png(path: str | os.PathLike, rgb: np.ndarray, *, inputs=()) -> Path:
+    """Write an RGB (H, W, 3) or grey (H, W) uint8 image as PNG, atomically.
+
+    Raises
+    ------
+    InvalidInputError
+        Not a uint8 or bool image.
+    OutputError
+        `path` cannot be written (missing folder, full disk...) or is one of
+        `inputs`; nothing is left under its name.
+    """
     import cv2
 
     path = Path(path)
@@ -25,7 +35,4 @@ def write_png(path: str | os.PathLike, rgb: np.ndarray) -> Path:
     ok, buf = cv2.imencode(".png", img[..., ::-1] if img.ndim == 3 else img)
     if not ok:
         raise InvalidInputError(f"could not encode {path} as PNG")
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    tmp.write_bytes(buf.tobytes())
-    os.replace(tmp, path)
-    return path
+    return write_bytes(path, buf.tobytes(), what="picture", inputs=inputs)

@@ -137,7 +137,8 @@ def check_frame(frame) -> np.ndarray:
     InvalidInputError
         If `frame` is not a numpy array, has a shape other than (H, W) or
         (H, W, 3), a side under :data:`MIN_FRAME_SIDE` pixels, NaN/inf
-        values, or a dtype other than bool or uint8; the message names it.
+        values, a dtype other than bool or uint8, or a bool (H, W, 3) array
+        (a mask has one channel); the message names it.
     """
     if not isinstance(frame, np.ndarray):
         raise InvalidInputError(f"frame must be a numpy array, got {type(frame).__name__}")
@@ -154,6 +155,10 @@ def check_frame(frame) -> np.ndarray:
     if frame.dtype not in (np.bool_, np.uint8):
         raise InvalidInputError(
             f"frame must be a bool mask or a uint8 image, got dtype {frame.dtype}")
+    if frame.dtype == np.bool_ and frame.ndim == 3:
+        raise InvalidInputError(
+            f"a bool frame is a mask and must have shape (H, W), got {frame.shape}; give a "
+            "colour frame as uint8 (H, W, 3)")
     return frame
 
 

@@ -7,10 +7,10 @@ import os
 
 import numpy as np
 
+from .._gl import ensure_backend
 from ..errors import InvalidCameraError, RenderError
 from ..models import HandModel, HandShape
 from ._camera import CameraMount
-from ._gl import ensure_backend
 from ._masks import MaskMaker
 from ._scene import scene_mjcf
 

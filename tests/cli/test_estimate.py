@@ -311,3 +311,124 @@ def test_calibrate_image_chooses_and_builds_the_database(tmp_path):
     assert f"database {expect.name}.h5, open-hand IoU" in res.stdout
     assert len(open_database(database_path(dbs, expect))) == 30
     assert "frames 4 " in res.stdout
+
+
+# --------------------------------------------------------------------------- faults (issue 16)
+
+
+def _write_video(path, frames):
+    import cv2
+
+    h, w = frames[0].shape[:2]
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 15.0, (w, h))
+    for f in frames:
+        writer.write(f)
+    writer.release()
+    return path
+
+
+@pytest.fixture
+def hand_video(tmp_path, masks):
+    frames = [np.repeat(m.view(np.uint8)[:, :, None] * np.uint8(255), 3, axis=2) for m in masks]
+    return _write_video(tmp_path / "hand.avi", frames)
+
+
+def test_rows_on_a_full_disk_are_one_error_and_complete_lines(full_disk, db):
+    # item 7: a traceback and half a row
+    out = full_disk / "rows.csv"
+    (full_disk / "filler").write_bytes(b"\0" * (256 * 1024 - 24 * 1024))  # leave ~24 KiB
+    res = _run("--synthetic", "--db", str(db), "--out", str(out), "--keypoints", "--frames",
+               "400", *SMALL)
+    assert res.exit_code == 2, res.output
+    assert "Traceback" not in res.output
+    assert "cannot write rows to" in res.output and "no space left" in res.output
+    text = out.read_text()
+    assert text and text.endswith("\n")
+    header, rows = _read_csv(out)
+    assert 0 < len(rows) < 400 and all(len(r) == len(header) and None not in r.values()
+                                       for r in rows)
+
+
+def test_side_by_side_video_on_a_full_disk_is_an_error_not_a_truncated_file(full_disk, db):
+    # item 7: exit 0 and a truncated video reported as complete
+    out = full_disk / "side.avi"
+    res = _run("--synthetic", "--db", str(db), "--video-out", str(out), "--frames", "120", *SMALL)
+    assert res.exit_code == 2, res.output
+    assert "cannot write the video" in res.output and "Traceback" not in res.output
+    assert list(full_disk.iterdir()) == []
+
+
+@pytest.mark.parametrize("option", ["--out", "--video-out"])
+def test_an_output_never_replaces_the_input_video(tmp_path, db, hand_video, option):
+    # item 11: --out or --video-out equal to --video overwrote it with exit 0
+    before = hand_video.read_bytes()
+    link = tmp_path / "link.avi"
+    link.symlink_to(hand_video)
+    for target in (hand_video, link):
+        args = [option, str(target)] + (["--format", "csv"] if option == "--out" else [])
+        res = _run("--video", str(hand_video), "--db", str(db), *args, "-q")
+        assert res.exit_code == 2 and "never replaces an input" in res.output, res.output
+    assert hand_video.read_bytes() == before
+
+
+def test_rows_never_replace_the_database(tmp_path, db):
+    path = database_path(db, HandShape())
+    before = path.read_bytes()
+    res = _run("--synthetic", "--db", str(db), "--out", str(path), "--format", "csv", *SMALL)
+    assert res.exit_code == 2 and "never replaces an input" in res.output, res.output
+    assert path.read_bytes() == before
+
+
+def test_a_video_whose_every_frame_is_refused_is_an_error(tmp_path, db):
+    # item 12: exit 0 with 0 rows
+    tiny = _write_video(tmp_path / "tiny.avi", [np.full((6, 6, 3), 200, np.uint8)] * 5)
+    out = tmp_path / "rows.csv"
+    res = _run("--video", str(tiny), "--db", str(db), "--out", str(out), "-q")
+    assert res.exit_code == 2, res.output
+    assert "no frame could be used" in res.output and "5 refused" in res.output
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--format", "jsonl"], ["--format jsonl applies to the rows of --out"]),      # item 19
+    (["--out", "{tmp}/nowhere/rows.csv"], ["folder", "nowhere", "does not exist"]),  # item 9
+    (["--out", "{tmp}/sub.csv"], ["is a folder"]),
+    (["--db", "{db_file}"], ["is a file; give the folder"]),                          # item 15
+])
+def test_misleading_or_silent_options_give_clear_errors(tmp_path, db, args, words):
+    db_file = database_path(db, HandShape())
+    (tmp_path / "sub.csv").mkdir()
+    args = [a.format(tmp=tmp_path, db_file=db_file) for a in args]
+    if "--db" not in args:
+        args += ["--db", str(db)]
+    res = _run("--synthetic", *args, *SMALL)
+    assert res.exit_code == 2, res.output
+    assert res.output.count("\n") == 1 and all(w in res.output for w in words), res.output
+
+
+@pytest.mark.parametrize("kind", ["folder", "dangling link"])
+def test_a_folder_or_dangling_link_named_like_a_database_is_named(tmp_path, kind):
+    # item 15: "no database for shape X (have: X)"
+    name = tmp_path / f"{HandShape().name}.h5"
+    if kind == "folder":
+        name.mkdir()
+    else:
+        name.symlink_to(tmp_path / "gone.h5")
+    res = _run("--synthetic", "--db", str(tmp_path), *SMALL)
+    assert res.exit_code == 2
+    assert ("is a folder, not a file" if kind == "folder" else "which does not exist") \
+        in res.output, res.output
+
+
+@pytest.mark.parametrize("where", ["--db", "cache"])
+def test_a_read_only_database_folder_names_the_real_reason(read_only_folder, where):
+    # item 4: --personal and the default cache in a read-only folder hid the real error
+    args = ["--synthetic", "--frames", "2", *SMALL]
+    env = None
+    if where == "--db":
+        args += ["--shape", "standard", "--personal", "--db", str(read_only_folder),
+                 "--build-count", "50"]
+    else:
+        env = {"HANDSYNTH_CACHE_DIR": str(read_only_folder)}
+    res = _run(*args, env=env)
+    assert res.exit_code == 2, res.output
+    assert "read-only" in res.output and "Traceback" not in res.output

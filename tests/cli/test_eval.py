@@ -20,6 +20,7 @@ def _run(*args):
 
 def test_eval_prints_table_and_writes_json_and_plots(tmp_path):
     out, js = tmp_path / "plots", tmp_path / "res" / "eval.json"
+    js.parent.mkdir()  # the folder of an output file must exist (the plot folder is created)
     res = _run("--db", str(tmp_path / "dbs"), "--out", str(out), "--json", str(js),
                "--conditions", "standard,selected", "-q", *SMALL)
     assert res.exit_code == 0, res.output
@@ -70,3 +71,11 @@ def test_mesh_hand_is_pluggable(tmp_path):
     assert set(d["targets"]["all"]) == {"index_pip_sd_deg", "selected_beats_standard"}
     assert d["conditions"]["selected"]["all"]["frames"] == 8
     assert (tmp_path / "plots" / "eval_mesh_error_hist.png").is_file()
+
+
+def test_a_json_report_in_a_missing_folder_is_refused_before_the_work(tmp_path):
+    # issue 16 item 9: the check came after minutes of work, as a traceback
+    res = _run("--db", str(tmp_path / "dbs"), "--json", str(tmp_path / "no" / "e.json"), "-q",
+               *SMALL)
+    assert res.exit_code == 2 and "folder" in res.output and "does not exist" in res.output
+    assert not (tmp_path / "dbs").exists()

@@ -85,3 +85,36 @@ def test_bad_input_is_one_line_exit_2(photos, args, words):
     lines = res.output.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("handsynth: error:"), res.output
     assert words in lines[0]
+
+
+# --------------------------------------------------------------------------- faults (issue 16)
+
+
+@pytest.mark.parametrize("option, name", [("--details", "d.json"), ("--annotate", "a.png"),
+                                          ("--out", "m.csv")])
+def test_an_output_in_a_missing_folder_is_one_line(tmp_path, photos, option, name):
+    # item 9: FileNotFoundError tracebacks
+    res = CliRunner().invoke(cli, ["measure", str(photos / "hand.png"), "--mm-per-px", "0.5",
+                                   option, str(tmp_path / "nowhere" / name)])
+    assert res.exit_code == 2, res.output
+    assert "nowhere' does not exist" in res.output and "Traceback" not in res.output
+
+
+@pytest.mark.parametrize("option", ["--details", "--annotate"])
+def test_an_output_on_a_full_disk_leaves_nothing(full_disk, photos, option):
+    # item 9: 0-byte or temporary files left behind
+    (full_disk / "filler").write_bytes(b"\0" * (256 * 1024 - 4096))
+    name = "d.json" if option == "--details" else "a.png"
+    res = CliRunner().invoke(cli, ["measure", str(photos / "hand.png"), "--mm-per-px", "0.5",
+                                   option, str(full_disk / name)])
+    assert res.exit_code == 2 and "no space left" in res.output, res.output
+    assert sorted(p.name for p in full_disk.iterdir()) == ["filler"]
+
+
+def test_the_annotated_picture_never_replaces_the_photo(tmp_path, photos):
+    photo = tmp_path / "hand.png"
+    photo.write_bytes((photos / "hand.png").read_bytes())
+    res = CliRunner().invoke(cli, ["measure", str(photo), "--mm-per-px", "0.5", "--annotate",
+                                   str(photo)])
+    assert res.exit_code == 2 and "never replaces an input" in res.output, res.output
+    assert photo.read_bytes() == (photos / "hand.png").read_bytes()

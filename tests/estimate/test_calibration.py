@@ -83,7 +83,7 @@ def test_masked_search_equals_the_reference_on_random_tables():
         if k < 4:  # random masks: large ignored areas, many ties
             cal = Calibration.from_silhouettes(rng.random((64, 64)) < 0.1,
                                                rng.random((64, 64)) < 0.1, dilation_px=k % 3,
-                                               temperature_px=temperature)
+                                               temperature_px=temperature, min_open_iou=0.0)
             sil = rng.random((64, 64)) < 0.3
         else:  # entry 7 itself, a small ignored block
             cal = Calibration.from_silhouettes(_box(0, 9, 0, 9), _box(0, 9, 0, 8),
@@ -105,7 +105,8 @@ def test_band_areas_bound_the_masked_difference_from_below():
     rng = np.random.default_rng(5)
     masks = rng.random((200, 64, 64)) < rng.random((200, 1, 1))
     masks[:50, :, 20:] = False  # some entries with the same areas in a band, others not
-    cal = Calibration.from_silhouettes(rng.random((64, 64)) < 0.05, rng.random((64, 64)) < 0.05)
+    cal = Calibration.from_silhouettes(rng.random((64, 64)) < 0.05, rng.random((64, 64)) < 0.05,
+                                       min_open_iou=0.0)
     table = pack_mask(masks)
     bands = masked_band_areas(table, cal)
     assert bands.shape == (200, 8) and bands.dtype == np.int32
@@ -291,3 +292,20 @@ def test_shape_from_frame_refuses_bad_input():
     for bad in ([], ["L1"], [HandShape(), 3]):
         with pytest.raises(InvalidInputError, match="shapes"):
             select_shape_from_frame(_open_frame(HandShape()), shapes=bad)
+
+
+def test_a_frame_without_an_open_hand_is_refused():
+    # issue 16 item 8: calibration on random noise was accepted ("3744 of 4096 pixels ignored")
+    from handsynth.errors import EstimationError
+    from handsynth.render import preprocess
+
+    reference = _open_frame(HandShape())
+    ref = preprocess(reference, CameraMount())
+    noise = np.random.default_rng(3).integers(0, 256, reference.shape + (3,), dtype=np.uint8)
+    with pytest.raises(EstimationError, match=r"does not look like an open hand: .* IoU 0\.[0-4]"):
+        Calibration.from_silhouettes(preprocess(noise, CameraMount()), ref)
+    wide = preprocess(_open_frame(HandShape(length=1.2, width=0.8, palm=1.2, thumb=0.8)),
+                      CameraMount())
+    assert Calibration.from_silhouettes(wide, ref).open_iou > 0.6  # a real, other hand passes
+    with pytest.raises(InvalidInputError, match=r"min_open_iou"):
+        Calibration.from_silhouettes(wide, ref, min_open_iou=1.5)

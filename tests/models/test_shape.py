@@ -89,3 +89,16 @@ def test_width_ratio_changes_finger_thickness_only():
     ka, kb = _kp(HandShape()), _kp(HandShape(width=1.1))
     for k in ka:
         np.testing.assert_allclose(ka[k], kb[k], atol=1e-9)
+
+
+@pytest.mark.parametrize("value", [True, False, np.bool_(True)])
+def test_a_bool_is_not_a_ratio(value):
+    # issue 16 item 19: HandShape(length=True) was accepted as 1.0
+    with pytest.raises(InvalidShapeError, match=r"HandShape.length must be a number, got"):
+        HandShape(length=value)
+
+
+@pytest.mark.parametrize("name", ["L1.0__W1.0_P1.0", "_W1_P1_T1", "L1_W1_P1_", ""])
+def test_a_malformed_name_is_an_invalid_shape(name):
+    with pytest.raises(InvalidShapeError, match=r"is not of the form"):
+        HandShape.from_name(name)

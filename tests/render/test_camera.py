@@ -54,3 +54,12 @@ def test_left_mount_is_mirrored():
 def test_bad_mount_names_the_field(field, value):
     with pytest.raises(InvalidCameraError, match=f"CameraMount.{field}"):
         CameraMount(**{field: value})
+
+
+@pytest.mark.parametrize("cut", [1e6, 41.0, -101.0])
+def test_a_wrist_cut_that_removes_the_hand_is_refused(cut):
+    # issue 16 item 19: wrist_cut_mm=1e6 was accepted, then every frame was "no hand"
+    with pytest.raises(InvalidCameraError, match=r"wrist_cut_mm must be in \[-100, 40\] mm"):
+        CameraMount(wrist_cut_mm=cut)
+    assert CameraMount(wrist_cut_mm=40.0).wrist_cut_mm == 40.0
+    assert CameraMount(wrist_cut_mm=None).wrist_cut_mm is None

@@ -259,3 +259,16 @@ def test_fast_preprocess_equals_the_reference_past_the_first_run_buffer():
     for frame in (mask, grey):
         np.testing.assert_array_equal(preprocess(frame, NO_CUT, size=64),
                                       preprocess_reference(frame, NO_CUT, size=64))
+
+
+def test_a_three_channel_bool_frame_is_refused():
+    # issue 16 item 10: a bool (H, W, 3) frame passed check_frame and crashed later
+    from handsynth.render import check_frame
+
+    frame = np.zeros((48, 64, 3), bool)
+    frame[10:30, 10:40] = True
+    for fn in (check_frame, lambda f: preprocess(f, CameraMount())):
+        with pytest.raises(InvalidInputError, match=r"a bool frame is a mask and must have shape "
+                                                    r"\(H, W\), got \(48, 64, 3\)"):
+            fn(frame)
+    assert preprocess(frame[..., 0], CameraMount()).any()  # its one channel is fine

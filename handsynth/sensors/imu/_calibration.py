@@ -10,13 +10,12 @@ recording of the same sensors into attitudes, joint angles and fingertips.
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from ..._io import atomic_open
 from ...errors import RecordingError
 from ._ekf import ChainEKF
 from ._kinematics import fingertip_positions, joint_angles, link_frames, zero_offsets
@@ -95,14 +94,8 @@ class ImuCalibration:
     def save(self, path) -> Path:
         """Write JSON atomically (never a half-written file under `path`)."""
         path = Path(path)
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-        try:
-            with os.fdopen(fd, "w") as f:
-                json.dump(self.to_dict(), f, indent=1)
-            os.replace(tmp, path)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
+        with atomic_open(path, "w", what="calibration file") as f:
+            json.dump(self.to_dict(), f, indent=1)
         return path
 
     @classmethod

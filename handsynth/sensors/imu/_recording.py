@@ -12,13 +12,12 @@ sample, or returns the warnings it found.
 from __future__ import annotations
 
 import csv
-import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from ..._io import atomic_open
 from ...errors import RecordingError
 from ._model import GRAVITY_MPS2
 
@@ -237,16 +236,10 @@ def write_imu_csv(rec: ImuRecording, path) -> None:
         for arr in (rec.acc, rec.gyr, rec.mag):
             data.extend(arr[k].T)
     table = np.column_stack(data)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", newline="") as f:
-            f.write(f"# handsynth imu recording; acc m/s2, gyr rad/s, mag uT; rate_hz={rec.rate_hz:g}\n")
-            f.write(",".join(cols) + "\n")
-            np.savetxt(f, table, delimiter=",", fmt="%.9g")
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_open(path, "w", what="IMU recording", newline="") as f:
+        f.write(f"# handsynth imu recording; acc m/s2, gyr rad/s, mag uT; rate_hz={rec.rate_hz:g}\n")
+        f.write(",".join(cols) + "\n")
+        np.savetxt(f, table, delimiter=",", fmt="%.9g")
 
 
 def read_imu_csv(path, *, acc_units: str = "m/s2", gyr_units: str = "rad/s",

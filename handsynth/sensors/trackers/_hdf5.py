@@ -12,19 +12,21 @@ Layout (format ``"handsynth.recording"``, version 1)::
         reference_centre  (2, 3)
         attrs: joint_kind
 
-Files are written to a temporary file in the target directory and moved into
-place with :func:`os.replace`, so a reader never sees a half-written file.
+Files are made in memory and written by :func:`handsynth._io.write_bytes` (a
+temporary file in the target folder, fsynced, moved into place with
+:func:`os.replace`), so a reader never sees a half-written file.
 """
 
 from __future__ import annotations
 
+import io
 import json
 import os
-import tempfile
 from pathlib import Path
 
 import h5py
 
+from ..._io import write_bytes
 from ...errors import InvalidInputError, RecordingError
 from ._recording import GroundTruth, Recording
 
@@ -34,7 +36,7 @@ _FORMAT = "handsynth.recording"
 _VERSION = 1
 
 
-def save_recording(path: str | os.PathLike, recording: Recording) -> Path:
+def save_recording(path: str | os.PathLike, recording: Recording, *, inputs=()) -> Path:
     """Write `recording` to HDF5 atomically.
 
     Parameters
@@ -57,29 +59,25 @@ def save_recording(path: str | os.PathLike, recording: Recording) -> Path:
         meta = json.dumps(dict(recording.metadata))
     except TypeError as exc:
         raise InvalidInputError(f"recording metadata is not JSON-serialisable: {exc}") from None
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or ".")
-    os.close(fd)
-    try:
-        with h5py.File(tmp, "w") as f:
-            f.attrs["format"] = _FORMAT
-            f.attrs["version"] = _VERSION
-            f.attrs["joint"] = recording.joint
-            f.attrs["labels"] = list(recording.labels)
-            f.attrs["metadata"] = meta
-            f["times"] = recording.times
-            f["positions"] = recording.positions
-            f["rotations"] = recording.rotations
-            if recording.truth is not None:
-                g = f.create_group("truth")
-                g.attrs["joint_kind"] = recording.truth.joint_kind
-                g["centre_world"] = recording.truth.centre_world
-                g["centre_sensor"] = recording.truth.centre_sensor
-                g["reference_centre"] = recording.truth.reference_centre
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
+    # made in memory, then written whole by the atomic writer: a full disk fails in a
+    # plain write, never inside the HDF5 library
+    buffer = io.BytesIO()
+    with h5py.File(buffer, "w") as f:
+        f.attrs["format"] = _FORMAT
+        f.attrs["version"] = _VERSION
+        f.attrs["joint"] = recording.joint
+        f.attrs["labels"] = list(recording.labels)
+        f.attrs["metadata"] = meta
+        f["times"] = recording.times
+        f["positions"] = recording.positions
+        f["rotations"] = recording.rotations
+        if recording.truth is not None:
+            g = f.create_group("truth")
+            g.attrs["joint_kind"] = recording.truth.joint_kind
+            g["centre_world"] = recording.truth.centre_world
+            g["centre_sensor"] = recording.truth.centre_sensor
+            g["reference_centre"] = recording.truth.reference_centre
+    return write_bytes(path, buffer.getbuffer(), what="recording", inputs=inputs)
 
 
 def load_recording(path: str | os.PathLike) -> Recording:

@@ -15,7 +15,10 @@ import numpy as np
 
 from ...errors import InvalidInputError
 
-__all__ = ["FlexionMotion", "MotionSamples"]
+__all__ = ["MAX_SAMPLES", "FlexionMotion", "MotionSamples"]
+
+#: Most samples of one simulated trial (about 1 GB of float64 poses): 11.6 h at 240 Hz.
+MAX_SAMPLES = 10_000_000
 
 
 @dataclass(frozen=True)
@@ -91,8 +94,13 @@ class FlexionMotion:
                 raise InvalidInputError(f"{name} must be > 0, got {getattr(self, name)!r}")
         if not 0 <= self.hold_s < self.duration_s:
             raise InvalidInputError(
-                f"hold_s must be in [0, duration_s), got {self.hold_s!r}"
+                f"duration_s ({self.duration_s!r} s) must be longer than hold_s "
+                f"({self.hold_s!r} s, the still start), and hold_s at least 0"
             )
+        if self.duration_s * self.rate_hz > MAX_SAMPLES:
+            raise InvalidInputError(
+                f"duration_s x rate_hz must be at most {MAX_SAMPLES:,} samples, got "
+                f"{self.duration_s!r} s x {self.rate_hz!r} Hz")
         if not 0 <= self.variability < 1:
             raise InvalidInputError(f"variability must be in [0, 1), got {self.variability!r}")
 

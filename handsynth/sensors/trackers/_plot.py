@@ -11,12 +11,14 @@ from pathlib import Path
 
 import numpy as np
 
+from ..._io import atomic_open
 from ._axis_filter import AxisFilterResult
 
 __all__ = ["plot_axis_histogram"]
 
 
-def plot_axis_histogram(result: AxisFilterResult, path: str | os.PathLike, *, title: str = "") -> Path:
+def plot_axis_histogram(result: AxisFilterResult, path: str | os.PathLike, *, title: str = "",
+                        inputs=()) -> Path:
     """Save the lateral-component histogram with the chosen bin highlighted.
 
     Parameters
@@ -27,6 +29,8 @@ def plot_axis_histogram(result: AxisFilterResult, path: str | os.PathLike, *, ti
         PNG file to write.
     title : str
         Figure title.
+    inputs : iterable of path-like, keyword-only
+        Files the caller read; `path` must be none of them.
 
     Returns
     -------
@@ -52,6 +56,6 @@ def plot_axis_histogram(result: AxisFilterResult, path: str | os.PathLike, *, ti
     if title:
         fig.suptitle(title)
     fig.tight_layout()
-    path = Path(path)
-    fig.savefig(path, format="png")
-    return path
+    with atomic_open(path, "wb", what="plot", inputs=inputs) as f:
+        fig.savefig(f, format="png")
+    return Path(path)

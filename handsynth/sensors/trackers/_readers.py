@@ -73,6 +73,30 @@ def _parse_lines(path: Path, n_cols: int) -> tuple[np.ndarray, np.ndarray]:
     return np.asarray(rows, dtype=np.float64), np.asarray(lines)
 
 
+#: Slack on the Euler-angle ranges, degrees (a tracker may print 180.00 or 90.004).
+_EULER_SLACK_DEG = 0.01
+
+
+def _check_euler_range(a: np.ndarray, lines: np.ndarray, finite: np.ndarray, order: str,
+                       path: Path, names: tuple[str, ...], suffix: str) -> None:
+    """Refuse Euler angles outside their ranges: first and last in [-180, 180] deg, the
+    middle one in [-90, 90] deg (Tait-Bryan orders such as Polhemus' azimuth, elevation,
+    roll) or [0, 180] deg (proper Euler orders such as ZXZ).  Out-of-range values mean
+    another column layout or unit, not an orientation."""
+    tait_bryan = len(set(order.upper())) == 3
+    lo_mid, hi_mid = (-90.0, 90.0) if tait_bryan else (0.0, 180.0)
+    bounds = ((-180.0, 180.0), (lo_mid, hi_mid), (-180.0, 180.0))
+    for j, (lo, hi) in enumerate(bounds):
+        col = a[finite, j]
+        bad = np.flatnonzero((col < lo - _EULER_SLACK_DEG) | (col > hi + _EULER_SLACK_DEG))
+        if bad.size:
+            k = int(bad[0])
+            raise RecordingError(
+                f"{path.name} line {int(lines[finite][k])}: Euler angle {names[j] + suffix} is "
+                f"{col[k]:g} deg, outside [{lo:g}, {hi:g}] for order {order!r}; are the columns, "
+                "the angle format and the units right?")
+
+
 def read_polhemus(
     path: str | os.PathLike,
     *,
@@ -165,6 +189,7 @@ def read_polhemus(
         finite = np.isfinite(a).all(axis=1)
         rot = np.full((rows.shape[0], 3, 3), np.nan)
         if angles == "euler":
+            _check_euler_range(a, lines, finite, euler_order, path, ang, suffix)
             rot[finite] = Rotation.from_euler(euler_order, a[finite], degrees=True).as_matrix()
         else:
             q = a[finite]

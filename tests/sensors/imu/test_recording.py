@@ -81,3 +81,17 @@ def test_csv_gap_and_bad_cells(tmp_path, free_rec):
         read_imu_csv(p, gyr_units="rpm")
     with pytest.raises(RecordingError, match="no such file"):
         read_imu_csv(tmp_path / "missing.csv")
+
+
+def test_a_recording_is_written_whole_or_not_at_all(tmp_path, free_rec, full_disk):
+    # issue 16: every output goes through the atomic writer (a missing folder or a full
+    # disk is one clear error; nothing half-written is left)
+    from handsynth.errors import OutputError
+
+    small = free_rec.subset(("forearm_1",)).slice(0, 50)
+    with pytest.raises(OutputError, match=r"folder .*nowhere' does not exist"):
+        write_imu_csv(small, tmp_path / "nowhere" / "r.csv")
+    (full_disk / "filler").write_bytes(b"\0" * (256 * 1024 - 2048))
+    with pytest.raises(OutputError, match=r"no space left"):
+        write_imu_csv(free_rec, full_disk / "r.csv")
+    assert sorted(p.name for p in full_disk.iterdir()) == ["filler"]

@@ -1,0 +1,104 @@
+"""The one atomic writer of every output (handsynth/_io.py): whole or nothing, never over an input."""
+
+import os
+from pathlib import Path
+
+import pytest
+
+from handsynth._io import (
+    PendingOutput,
+    atomic_open,
+    atomic_path,
+    check_output,
+    same_file,
+    write_bytes,
+    write_text,
+)
+from handsynth.errors import DatabaseError, OutputError
+
+
+def test_a_write_appears_whole_and_leaves_no_temporary_file(tmp_path):
+    target = tmp_path / "a.json"
+    write_text(target, "old\n")
+    write_text(target, "new\n")
+    assert target.read_text() == "new\n" and sorted(os.listdir(tmp_path)) == ["a.json"]
+    assert target.stat().st_mode & 0o044  # an ordinary, readable file (not mkstemp's 0600)
+
+
+def test_an_error_while_writing_keeps_the_old_file(tmp_path):
+    target = tmp_path / "a.txt"
+    write_text(target, "old\n")
+    with pytest.raises(KeyboardInterrupt), atomic_open(target) as f:
+        f.write("half")
+        raise KeyboardInterrupt
+    assert target.read_text() == "old\n" and sorted(os.listdir(tmp_path)) == ["a.txt"]
+
+
+def test_a_failed_cleanup_never_hides_the_real_error(tmp_path, monkeypatch):
+    # issue 16 item 4: in a read-only folder the cleanup's unlink raised instead
+    target = tmp_path / "x.bin"
+    real_unlink = Path.unlink
+
+    def unlink(self, *args, **kwargs):
+        if ".tmp-" in self.name:
+            raise PermissionError(13, "Permission denied", str(self))
+        return real_unlink(self, *args, **kwargs)
+
+    monkeypatch.setattr(Path, "unlink", unlink)
+    with pytest.raises(OutputError, match=r"no space left") as err, atomic_path(target) as tmp:
+        tmp.write_bytes(b"12")
+        raise OSError(28, "No space left on device")
+    assert any("could not be removed: permission denied" in n for n in err.value.__notes__)
+
+
+def test_a_read_only_folder_is_named(read_only_folder):
+    with pytest.raises(DatabaseError, match=r"the file system is read-only") as err:
+        write_bytes(read_only_folder / "x.h5", b"data", what="database", error=DatabaseError)
+    assert "x.h5" in str(err.value)
+
+
+def test_a_full_disk_is_named_and_leaves_nothing(full_disk):
+    with pytest.raises(OutputError, match=r"no space left on the device"):
+        write_bytes(full_disk / "big.bin", b"\1" * (512 * 1024))
+    assert list(full_disk.iterdir()) == []
+
+
+@pytest.mark.parametrize("make", ["same path", "symlink", "hard link", "relative path"])
+def test_an_output_never_replaces_an_input(tmp_path, monkeypatch, make):
+    # issue 16 item 11
+    source = tmp_path / "in.csv"
+    source.write_text("input\n")
+    out = {"same path": source, "symlink": tmp_path / "s.csv", "hard link": tmp_path / "h.csv",
+           "relative path": Path("in.csv")}[make]
+    if make == "symlink":
+        out.symlink_to(source)
+    elif make == "hard link":
+        os.link(source, out)
+    monkeypatch.chdir(tmp_path)
+    assert same_file(out, source)
+    with pytest.raises(OutputError, match=r"never replaces an input"):
+        write_text(out, "output\n", inputs=[source])
+    assert source.read_text() == "input\n"
+
+
+@pytest.mark.parametrize("name, words", [
+    ("missing/x.json", "folder '{tmp}/missing' does not exist"),
+    ("file.txt/x.json", "'{tmp}/file.txt' is not a folder"),
+    ("sub", "it is a folder"),
+])
+def test_an_output_that_cannot_be_a_file_is_named(tmp_path, name, words):
+    # issue 16 item 9: FileNotFoundError tracebacks
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "file.txt").write_text("")
+    with pytest.raises(OutputError, match=words.format(tmp=tmp_path).replace("(", r"\(")):
+        check_output(tmp_path / name)
+
+
+def test_a_pending_output_keeps_its_suffix_and_commits_or_discards(tmp_path):
+    pending = PendingOutput(tmp_path / "v.mp4", keep_suffix=True)
+    assert pending.tmp.name.endswith(".mp4") and ".tmp-" in pending.tmp.name
+    pending.tmp.write_bytes(b"x")
+    pending.discard()
+    assert list(tmp_path.iterdir()) == []
+    with pytest.raises(OutputError, match=r"was not written"):
+        pending.commit()
