@@ -82,12 +82,7 @@ def _open_lookup(db_dir, shape_name, measurements, temporal, err, personal=False
         path = build_default_database(db_dir)
         click.echo(f"default database {path} ready in {time.perf_counter() - t:.1f} s", err=err)
     else:
-        from ..db import find_database
-        from ..estimate import select_shape
-
-        _check_db_folder(db_dir)
-        grid = select_shape(meas).shape if meas is not None else (shape or HandShape()).nearest_grid()
-        find_database(db_dir, grid)  # what is wrong there, in words, before the lookup opens
+        _check_db_folder(db_dir)  # names the option; the library names the file
     return PoseLookup.open(db_dir, shape=shape, measurements=meas, temporal=temporal)
 
 

@@ -87,7 +87,6 @@ import copy
 import hashlib
 import json
 import math
-import os
 from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 from typing import NamedTuple
@@ -95,6 +94,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from .._io import atomic_open
 from ..db import HLAC_SIZE
 from ..errors import DatabaseError, InvalidInputError
 from ._score import SURVIVOR, SURVIVOR_ABOVE_BEST, Constants, Query, Rows, score
@@ -686,16 +686,8 @@ class ApproximateIndex:
         arrays = {"projection": self.projection, "centroids": self.centroids, "order": self.order,
                   "offsets": self.offsets, "codes": self.codes, "step": self.step,
                   "meta": np.frombuffer(json.dumps(meta, sort_keys=True).encode(), np.uint8)}
-        tmp = path.with_name(f"{path.name}.tmp-{os.getpid()}")
-        try:
-            with open(tmp, "wb") as f:
-                np.savez(f, **arrays)
-                f.flush()
-                os.fsync(f.fileno())
-            os.replace(tmp, path)
-        except OSError as exc:
-            tmp.unlink(missing_ok=True)
-            raise DatabaseError(f"cannot write the approximate index {path}: {exc}") from None
+        with atomic_open(path, "wb", what="approximate index", error=DatabaseError) as f:
+            np.savez(f, **arrays)
         return path
 
     @classmethod

@@ -21,8 +21,8 @@ from ..db import (
     BuildOptions,
     Database,
     build_databases,
-    database_path,
     extract_features,
+    find_database,
     open_database,
 )
 from ..errors import DatabaseError, InvalidInputError
@@ -327,15 +327,7 @@ class PoseLookup:
             if shape is not None and not isinstance(shape, HandShape):
                 raise InvalidInputError(f"shape must be a HandShape, got {type(shape).__name__}")
             grid = (shape or HandShape()).nearest_grid()
-        folder = Path(folder)
-        if not folder.is_dir():
-            raise DatabaseError(f"database folder {str(folder)!r} does not exist")
-        path = database_path(folder, grid)
-        if not path.is_file():
-            have = sorted(p.stem for p in folder.glob("*.h5"))
-            raise DatabaseError(f"no database for shape {grid.name} in {folder} (have: "
-                                f"{', '.join(have) or 'none'})")
-        return cls(open_database(path), **kwargs)
+        return cls(open_database(find_database(folder, grid)), **kwargs)
 
     @classmethod
     def personal(cls, folder, *, shape: HandShape | None = None,
