@@ -12,12 +12,14 @@ number of frames, is ``M = [[I, -Qm], [-Qm^T, I]]`` with ``Qm`` the mean of
 the ``Q(i)``.  With ``Qm = U diag(s) V^T`` its eigenvalues are ``1 - s_k`` and
 ``1 + s_k``; the eigenvector of ``1 - s_k`` is ``(u_k, v_k) / sqrt(2)``: the
 centre moving rigidly along ``u_k`` (upper frame) = ``v_k`` (lower frame).
-``1 - s_k`` is about half the variance of the rotation angle about ``u_k``,
-so ``spread_k = sqrt(2 (1 - s_k))`` is the spread (RMS, radians) of the
-relative rotation about that direction, whatever the joint:
+``1 - s_k`` is about half the mean squared angle through which the motion
+turns the direction ``u_k``, so ``spread_k = sqrt(2 (1 - s_k))`` is that
+angle (RMS, radians) -- the *turn* of ``u_k``, whatever the joint.  The
+joint axis is the direction that turns least; flexion about it turns the
+two directions across it by about the RMS flexion angle:
 
-* a hinge has one spread near zero, along its axis: only the axis is
-  determined, a point can slide along it;
+* a hinge has one turn near zero, its axis: only the axis is determined,
+  a point can slide along it;
 * a joint that barely moved has all three near zero: nothing is determined.
 
 The expected error of the centre along ``u_k`` is the least-squares standard
@@ -70,8 +72,8 @@ class Determinability:
     Attributes
     ----------
     spread_deg : (3,) ndarray of float64
-        RMS spread of the relative rotation about the three principal
-        directions, ascending, degrees.
+        RMS angle through which the relative motion turns each of the three
+        principal directions, ascending, degrees (element 0: the joint axis).
     directions_upper, directions_lower : (3, 3) ndarray of float64
         Row ``k``: the unit direction of ``spread_deg[k]`` in the upper and
         lower sensor frame.  Row 0 is the best joint axis.
@@ -92,7 +94,7 @@ class Determinability:
 
     @property
     def axis_upper(self) -> np.ndarray:
-        """Direction of least rotation spread (the joint axis), upper frame."""
+        """Direction that turns least (the joint axis), upper frame."""
         return self.directions_upper[0]
 
     @property
@@ -103,7 +105,7 @@ class Determinability:
     def to_dict(self) -> dict:
         """JSON-serialisable summary."""
         return {
-            "rotation_spread_deg": np.round(self.spread_deg, 3).tolist(),
+            "turn_deg": np.round(self.spread_deg, 3).tolist(),
             "axis_upper": np.round(self.axis_upper, 5).tolist(),
             "axis_lower": np.round(self.axis_lower, 5).tolist(),
             "residual_mm": round(float(self.residual_mm), 4),

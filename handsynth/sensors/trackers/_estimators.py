@@ -216,8 +216,9 @@ class _Estimator:
             raise EstimationError(
                 f"the motion {where} does not determine the joint centre: expected "
                 f"error {across:.3g} mm > refuse_error_mm={self.refuse_error_mm:g} "
-                f"(rotation spread {det.spread_deg[1]:.2f} and {det.spread_deg[2]:.2f} "
-                f"deg, range of motion {rom:.1f} deg, residual {det.residual_mm:.2f} mm); "
+                f"(the directions across the joint axis turn by only {det.spread_deg[1]:.2f} "
+                f"and {det.spread_deg[2]:.2f} deg RMS, range of motion {rom:.1f} deg, "
+                f"residual {det.residual_mm:.2f} mm); "
                 f"flex the joint further or record longer"
             )
         single_axis = not float(det.expected_error_mm[0]) <= self.axis_error_mm
@@ -244,15 +245,16 @@ class _Estimator:
             x = x + (e @ (m - x)) * e
             cu, cl = x[:3], x[3:]
             notes.append(
-                f"single-axis motion: only the joint axis is determined (rotation spread "
-                f"about it {det.spread_deg[0]:.2f} deg, expected error along it "
+                f"single-axis motion: only the joint axis is determined (the axis itself "
+                f"turns by {det.spread_deg[0]:.2f} deg RMS, expected error along it "
                 f"{min(det.expected_error_mm[0], 1e6):.3g} mm); the centre given is the "
                 f"point of the axis nearest the two sensors"
             )
         if det.expected_error_mm[1] > self.warn_error_mm:
             notes.append(
                 f"the centre is poorly determined: expected error {det.expected_error_mm[1]:.1f} "
-                f"mm across the joint axis (rotation spread {det.spread_deg[1]:.2f} deg); "
+                f"mm across the joint axis (directions across it turn by "
+                f"{det.spread_deg[1]:.2f} deg RMS); "
                 f"flex the joint further"
             )
         far = max(float(np.linalg.norm(cu)), float(np.linalg.norm(cl))) * 1e3

@@ -634,8 +634,7 @@ def read_polhemus(
     if problems:
         msg = f"{path.name}: " + "; ".join(problems)
         if on_invalid == "raise":
-            raise RecordingError(msg + " (read with on_invalid='drop' or --drop-invalid to skip "
-                                 "them)")
+            raise RecordingError(msg + " (on_invalid='drop' drops them)")
         warnings.warn(msg + "; dropped", stacklevel=2)
     if notes["duplicates"]:
         warnings.warn(f"{path.name}: dropped {notes['duplicates']} duplicated rows", stacklevel=2)
