@@ -171,30 +171,55 @@ def estimate(recording, methods, frames, lateral_axis, lateral_frame, bins, unit
 
 
 @joints.command("eval")
+@click.option("--config", "configs", type=click.Choice(("project", "independent", "both")),
+              default="both", show_default=True,
+              help="Simulator configuration: the project's own, a second one that differs in "
+                   "joint, placement, kinematics and error model, or both.")
 @click.option("--json", "json_out", type=click.Path(dir_okay=False),
               help="Write the table as JSON.")
 @click.option("--duration", "duration_s", type=float, default=30.0, show_default=True,
               help="Simulated trial length, s.")
-@click.option("--rate", "rate_hz", type=click.Choice(("240", "120")), default="240",
-              show_default=True, help="Sampling rate, Hz.")
 @click.option("--seeds", type=int, default=3, show_default=True,
               help="Number of simulated trials per row (averaged).")
-def eval_(json_out, duration_s, rate_hz, seeds) -> None:
-    """Reproduce the patent's table (mock vs finger, all vs filtered) on simulated data."""
+@click.option("--rom-sweep", is_flag=True,
+              help="Instead: every method at 10-70 deg range of motion, ok / warned / refused.")
+def eval_(configs, json_out, duration_s, seeds, rom_sweep) -> None:
+    """The patent's table (mock vs finger, all vs filtered) on two simulator configurations."""
     from ..errors import InvalidInputError
     from ..sensors.trackers import evaluate
+    from ..sensors.trackers import rom_sweep as sweep
 
     if seeds < 1:
         raise InvalidInputError(f"--seeds must be >= 1, got {seeds}")
-    rows = evaluate(duration_s=duration_s, rate_hz=float(rate_hz), seeds=tuple(range(seeds)))
-    click.echo("errors in mm against the simulated centre; |PU-PL| as in the patent "
-               "(mock ~2 mm; finger DIP 7.09 -> 4.21 mm)")
-    click.echo(f"{'scenario':<9}{'noise':<20}{'method':<11}{'frames':<9}{'used':>6}"
-               f"{'err_U':>8}{'err_L':>8}{'|PU-PL|':>9}{'ms':>7}")
+    if not duration_s > 0:
+        raise InvalidInputError(f"--duration must be > 0, got {duration_s}")
+    names = ("project", "independent") if configs == "both" else (configs,)
+    if rom_sweep:
+        rows = sweep(configs=names, duration_s=min(duration_s, 20.0), seeds=tuple(range(seeds)))
+        click.echo("largest of the P_U/P_L errors in mm; W = answered with a warning, "
+                   "R = refused; baseline = midpoint of the two sensors")
+        click.echo(f"{'config':<12}{'scenario':<9}{'rom':>4} {'method':<11}{'frames':<9}"
+                   f"{'status':<8}{'error':>8}{'baseline':>9}")
+        for r in rows:
+            click.echo(f"{r['config']:<12}{r['scenario']:<9}{r['rom_deg']:>4} {r['method']:<11}"
+                       f"{r['frames']:<9}{r['status']:<8}{r['error_mm']:8.2f}"
+                       f"{r['baseline_mm']:9.2f}")
+        if json_out:
+            _write_json(json_out, {"duration_s": min(duration_s, 20.0), "seeds": seeds,
+                                   "rows": rows})
+        return
+    rows = [r for c in names for r in evaluate(config=c, duration_s=duration_s,
+                                               seeds=tuple(range(seeds)))]
+    click.echo("errors in mm against the simulated centre (mean over answered trials); "
+               "|PU-PL| as in the patent (mock ~2 mm; finger DIP 7.09 -> 4.21 mm); "
+               "midpoint = the trivial baseline")
+    click.echo(f"{'config':<12}{'scenario':<9}{'noise':<20}{'method':<11}{'frames':<9}"
+               f"{'used':>6}{'err_U':>8}{'err_L':>8}{'|PU-PL|':>9}{'ans/warn/ref':>14}{'ms':>7}")
     for r in rows:
-        click.echo(f"{r['scenario']:<9}{r['noise']:<20}{r['method']:<11}{r['frames']:<9}"
-                   f"{r['n_frames_used']:>6}{r['error_upper_mm']:8.2f}{r['error_lower_mm']:8.2f}"
-                   f"{r['distance_mm']:9.2f}{r['time_ms']:7.1f}")
+        counts = f"{r['answered']}/{r['warned']}/{r['refused']}"
+        click.echo(f"{r['config']:<12}{r['scenario']:<9}{r['noise']:<20}{r['method']:<11}"
+                   f"{r['frames']:<9}{r['n_frames_used']:>6}{r['error_upper_mm']:8.2f}"
+                   f"{r['error_lower_mm']:8.2f}{r['distance_mm']:9.2f}{counts:>14}"
+                   f"{r['time_ms']:7.1f}")
     if json_out:
-        _write_json(json_out, {"duration_s": duration_s, "rate_hz": float(rate_hz),
-                               "seeds": seeds, "rows": rows})
+        _write_json(json_out, {"duration_s": duration_s, "seeds": seeds, "rows": rows})

@@ -21,7 +21,7 @@ from ._estimators import (
     PlaneVarianceEstimator,
     VarianceEstimator,
 )
-from ._eval import ESTIMATORS, evaluate, make_estimator
+from ._eval import CONFIGS, ESTIMATORS, evaluate, make_estimator, midpoint_baseline, rom_sweep
 from ._geometry import SUPPORTED_JOINTS, JointGeometry, joint_geometry
 from ._hdf5 import load_recording, save_recording
 from ._joint_models import ArcJoint, FingerJoint, HingeJoint
@@ -45,6 +45,7 @@ from ._score import ScoreEstimator
 from ._simulate import SensorMount, simulate_recording
 
 __all__ = [
+    "CONFIGS",
     "DISTORTED_FIELD",
     "ESTIMATORS",
     "LIBERTY",
@@ -79,6 +80,7 @@ __all__ = [
     "linear_centre",
     "load_recording",
     "make_estimator",
+    "midpoint_baseline",
     "motion_quality",
     "plane_coordinates",
     "plane_normal",
@@ -86,6 +88,7 @@ __all__ = [
     "plot_axis_histogram",
     "read_polhemus",
     "read_recording",
+    "rom_sweep",
     "save_recording",
     "segment_length_mm",
     "segment_lengths_mm",
