@@ -273,7 +273,7 @@ class _Estimator:
                 f"(> refuse_error_mm={self.refuse_error_mm:g} apart): this method's "
                 f"objective does not determine the centre in this motion; use 'obrien'"
             )
-        if gap > max(3.0, float(det.expected_error_mm[1])):
+        if gap > max(self.warn_error_mm, float(det.expected_error_mm[1])):
             notes.append(
                 f"{self.name} differs from the linear least-squares centre by {gap:.1f} mm"
             )

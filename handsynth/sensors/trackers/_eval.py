@@ -40,6 +40,7 @@ import numpy as np
 
 from ...errors import EstimationError, InvalidInputError
 from ._axis_filter import AxisAngleFilter
+from ._determinability import assess_determinability
 from ._estimators import OBrienEstimator, PlaneVarianceEstimator, VarianceEstimator
 from ._joint_models import ArcJoint, FingerJoint, HingeJoint
 from ._motion import FlexionMotion
@@ -271,7 +272,8 @@ def rom_sweep(
         One row per configuration x scenario x ROM x seed x method x frames
         with ``status`` (``"ok"``, ``"warned"``, ``"refused"``),
         ``error_mm`` (larger of the P_U and P_L errors; NaN when refused)
-        and ``baseline_mm`` (the midpoint baseline's larger error).
+        ``baseline_mm`` (the midpoint baseline's larger error) and
+        ``expected_error_mm`` (across the axis, all frames).
     """
     filt = AxisAngleFilter(lateral_axis="recording")
     rows = []
@@ -286,6 +288,8 @@ def rom_sweep(
                     cu, cl = midpoint_baseline(rec)
                     base = float(np.max(np.linalg.norm(
                         np.stack([cu, cl]) - rec.truth.reference_centre, axis=1)) * 1e3)
+                    q, d = rec.relative()
+                    expected = float(assess_determinability(q, d).expected_error_mm[1])
                     for m in methods:
                         for mode in frames:
                             st, eu, el, *_ = _score(rec, make_estimator(m, frames=mode,
@@ -293,5 +297,6 @@ def rom_sweep(
                             rows.append({"config": config, "scenario": scen, "rom_deg": rom,
                                          "seed": seed, "method": m, "frames": mode,
                                          "status": st, "error_mm": round(max(eu, el), 3),
-                                         "baseline_mm": round(base, 3)})
+                                         "baseline_mm": round(base, 3),
+                                         "expected_error_mm": round(expected, 3)})
     return rows
