@@ -532,21 +532,24 @@ def read_polhemus(
         station = rows[:, lay.station]
         present = sorted(int(s) for s in np.unique(station[np.isfinite(station)]))
         if sensors is None:
-            sensors = (1, 2) if len(present) > 2 and {1, 2} <= set(present) else tuple(present[:2])
             if len(present) < 2:
                 raise RecordingError(
                     f"{path.name}: only station {present} in the file; two sensors are needed")
-        missing_st = [s for s in sensors if s not in present]
+            first, second = (1, 2) if len(present) > 2 and {1, 2} <= set(present) else present[:2]
+            pair: tuple[int, int] = (first, second)
+        else:
+            pair = (int(sensors[0]), int(sensors[1]))
+        missing_st = [s for s in pair if s not in present]
         if missing_st:
             raise RecordingError(f"{path.name}: no line of sensor (station) {missing_st[0]} "
                                  f"(stations present: {present})")
-        extra = sorted(set(present) - set(sensors))
+        extra = sorted(set(present) - set(pair))
         if extra:
             warnings.warn(f"{path.name}: ignoring stations {extra}", stacklevel=2)
         frame_col = rows[:, lay.frame] if lay.frame is not None else None
-        up, lo, key, half, dups = _pair_stations(station, frame_col, (sensors[0], sensors[1]))
+        up, lo, key, half, dups = _pair_stations(station, frame_col, pair)
         if up.size == 0:
-            raise RecordingError(f"{path.name}: no complete frame of stations {sensors}")
+            raise RecordingError(f"{path.name}: no complete frame of stations {pair}")
         sel = [up, lo]
         pos_file = np.stack([rows[s][:, lay.pos[0]] for s in sel], axis=1)
         ang = [rows[s][:, lay.ang[0]] for s in sel]
@@ -578,8 +581,7 @@ def read_polhemus(
         notes["half_frames"] = 0
         if lay.time is not None and times.size and np.nanmin(times) > 1e8:
             notes["time_origin_unix_s"] = float(np.nanmin(times))
-        if sensors is None:
-            sensors = (1, 2)
+        pair = (1, 2) if sensors is None else (int(sensors[0]), int(sensors[1]))
     if lay.time is not None and times.size:
         times = times - np.nanmin(times)
         # rows re-written with a time that does not advance
@@ -657,7 +659,7 @@ def read_polhemus(
             "units_note": unit_note,
             "angles": lay.angles,
             "euler_order": euler_order,
-            "sensors": [int(s) for s in sensors],
+            "sensors": list(pair),
             "decimal_comma": bool(t.decimal_comma),
             "dropped_frames": int((~keep).sum()) + int(notes["half_frames"]),
             **notes,

@@ -105,12 +105,16 @@ def simulate_recording(
     Recording
         With :attr:`Recording.truth` set.
     """
+    jm: HingeJoint | FingerJoint | ArcJoint
     if isinstance(model, str):
-        models = {"hinge": HingeJoint, "finger": FingerJoint, "arc": ArcJoint}
+        models: dict[str, type[HingeJoint | FingerJoint | ArcJoint]] = {
+            "hinge": HingeJoint, "finger": FingerJoint, "arc": ArcJoint}
         if model not in models:
             raise InvalidInputError(
                 f"model: expected 'hinge', 'finger' or 'arc', got {model!r}")
-        model = models[model]()
+        jm = models[model]()
+    else:
+        jm = model
     rng = np.random.default_rng(seed)
     geo = joint_geometry(joint, source=geometry_source, hand=hand)
     m = motion.sample(rng)
@@ -121,7 +125,7 @@ def simulate_recording(
     ) @ geo.upper_rotation
     o_up = np.broadcast_to(geo.upper_origin, r_up.shape[:1] + (3,))
     # lower segment from the joint model, composed on the upper pose
-    r_rel, offset = model.pose(m.flexion, m.wobble)
+    r_rel, offset = jm.pose(m.flexion, m.wobble)
     c0 = np.array([0.0, geo.upper_length, 0.0])
     centre_up = c0 + offset  # joint centre in the upper segment frame, (n, 3)
     r_lo = r_up @ r_rel
@@ -146,7 +150,7 @@ def simulate_recording(
         centre_world=o_lo,
         centre_sensor=centre_sensor,
         reference_centre=reference,
-        joint_kind=model.kind,
+        joint_kind=jm.kind,
     )
     positions, rotations = noise.apply(positions, rotations, m.times, rng=rng)
     # re-orthonormalise after the noise product to machine precision
@@ -155,7 +159,7 @@ def simulate_recording(
     )
     metadata = {
         "source": "simulation",
-        "joint_model": model.describe(),
+        "joint_model": jm.describe(),
         "motion": {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(motion).items()},
         "upper_mount": asdict(upper_mount),
         "lower_mount": asdict(lower_mount),
