@@ -144,17 +144,32 @@ def midpoint_baseline(recording) -> tuple[np.ndarray, np.ndarray]:
     return 0.5 * d.mean(axis=0), -0.5 * np.einsum("nji,nj->i", q, d) / q.shape[0]
 
 
-def _score(rec, est) -> tuple[str, float, float, float, int, float]:
-    """(status, err_U, err_L, |PU-PL|, frames used, ms); status ok/warned/refused."""
+def _axis_error_mm(r, rec) -> float:
+    """Mean distance (U, L) of the true centre from the line through the
+    estimate along the data's joint axis: the error of what a single-axis
+    motion determines."""
+    det = r.determinability
+    out = []
+    for est, axis, true in ((r.centre_upper, det.axis_upper, rec.truth.reference_centre[0]),
+                            (r.centre_lower, det.axis_lower, rec.truth.reference_centre[1])):
+        v = true - est
+        out.append(np.linalg.norm(v - axis * (v @ axis)) * 1e3)
+    return float(np.mean(out))
+
+
+def _score(rec, est) -> tuple[str, float, float, float, int, float, float]:
+    """(status, err_U, err_L, |PU-PL|, frames used, ms, error across the axis);
+    status ok/warned/refused."""
     t0 = time.perf_counter()
     try:
         r = est.estimate(rec)
     except EstimationError:
-        return "refused", np.nan, np.nan, np.nan, 0, (time.perf_counter() - t0) * 1e3
+        return "refused", np.nan, np.nan, np.nan, 0, (time.perf_counter() - t0) * 1e3, np.nan
     dt = (time.perf_counter() - t0) * 1e3
     err = r.error_mm(rec)
     status = "warned" if r.warnings else "ok"
-    return status, float(err[0]), float(err[1]), r.distance_mm, int(r.frames.size), dt
+    return (status, float(err[0]), float(err[1]), r.distance_mm, int(r.frames.size), dt,
+            _axis_error_mm(r, rec))
 
 
 def evaluate(
@@ -190,7 +205,9 @@ def evaluate(
         ``"midpoint"`` baseline row per scenario x noise, with keys
         ``config, scenario, noise, method, frames, n_frames_used,
         error_upper_mm, error_lower_mm, error_mm`` (mean of the two),
-        ``distance_mm`` (|P_U - P_L|), ``answered``, ``warned``,
+        ``distance_mm`` (|P_U - P_L|), ``axis_error_mm`` (distance of the true
+        centre from the estimated joint axis, mean of U and L: what a
+        single-axis motion determines), ``answered``, ``warned``,
         ``refused`` (counts over seeds) and ``time_ms``.  Errors are NaN
         when every trial was refused.
     """
@@ -213,8 +230,13 @@ def evaluate(
                 rec = _config_recording(cfg, scen, noise_name, duration_s=duration_s, seed=seed)
                 cu, cl = midpoint_baseline(rec)
                 base = np.linalg.norm(np.stack([cu, cl]) - rec.truth.reference_centre, axis=1) * 1e3
+                q, d = rec.relative()
+                axis = assess_determinability(q, d)
+                base_axis = np.mean([np.linalg.norm(np.cross(c - t, a)) for c, t, a in (
+                    (cu, rec.truth.reference_centre[0], axis.axis_upper),
+                    (cl, rec.truth.reference_centre[1], axis.axis_lower))]) * 1e3
                 acc.setdefault(("midpoint", "all"), []).append(
-                    ("ok", base[0], base[1], np.nan, rec.n_frames, 0.0))
+                    ("ok", base[0], base[1], np.nan, rec.n_frames, 0.0, base_axis))
                 for est in ests:
                     for mode in ("all", "filtered"):
                         e = replace(est, frames=mode, axis_filter=filt)
@@ -222,7 +244,7 @@ def evaluate(
             for (name, mode), vals in acc.items():
                 status = [v[0] for v in vals]
                 ans = np.array([v[1:] for v in vals if v[0] != "refused"], dtype=np.float64)
-                m = ans.mean(axis=0) if ans.size else np.full(5, np.nan)
+                m = ans.mean(axis=0) if ans.size else np.full(6, np.nan)
                 rows.append(
                     {
                         "config": config,
@@ -235,6 +257,7 @@ def evaluate(
                         "error_lower_mm": round(float(m[1]), 3),
                         "error_mm": round(float(0.5 * (m[0] + m[1])), 3),
                         "distance_mm": round(float(m[2]), 3),
+                        "axis_error_mm": round(float(m[5]), 3),
                         "answered": len(vals) - status.count("refused"),
                         "warned": status.count("warned"),
                         "refused": status.count("refused"),
