@@ -45,6 +45,11 @@ def joints() -> None:
     """Finger joint centres from two 6-DOF trackers (patent JP2010-88628)."""
 
 
+def _echo_warnings(caught) -> None:
+    for w in caught:
+        click.echo(f"handsynth: warning: {w.message}", err=True)
+
+
 @joints.command()
 @click.argument("recording", type=click.Path(dir_okay=False))
 @click.option("--method", "methods", type=click.Choice(_METHODS + ("all",)),
@@ -54,28 +59,41 @@ def joints() -> None:
               show_default=True, help="All frames, axis-angle-filtered frames, or both.")
 @click.option("--lateral-axis", default="auto", show_default=True,
               help="Finger width direction for the filter and the patent's plane: "
-                   "auto, recording, x, y, z or 'ax,ay,az' (transmitter frame).")
+                   "auto, recording, x, y, z or 'ax,ay,az'.")
+@click.option("--lateral-frame", type=click.Choice(("transmitter", "upper")),
+              default="transmitter", show_default=True,
+              help="Frame of a --lateral-axis vector: the transmitter's at the standard state, "
+                   "or the upper sensor's own (fixed to the finger).")
 @click.option("--bins", type=int, default=100, show_default=True,
               help="Bins of the axis-angle filter.")
-@click.option("--units", type=click.Choice(("cm", "in", "mm", "m")), default="cm",
-              show_default=True, help="Position unit of a text export.")
-@click.option("--angles", type=click.Choice(("euler", "quaternion")), default="euler",
-              show_default=True, help="Orientation columns of a text export.")
+@click.option("--units", type=click.Choice(("auto", "cm", "in", "mm", "m")), default="auto",
+              show_default=True, help="Position unit of a text export (auto: judged by the "
+                                      "sensor spacing).")
+@click.option("--angles", type=click.Choice(("auto", "euler", "quaternion")), default="auto",
+              show_default=True, help="Orientation columns of a text export (auto: detected).")
+@click.option("--sensors", default=None,
+              help="Station numbers of the upper and lower sensor, e.g. '1,2' (default: the "
+                   "two in the file).")
 @click.option("--rate", "rate_hz", type=float, default=240.0, show_default=True,
               help="Sampling rate of a text export without times, Hz.")
-@click.option("--drop-invalid", is_flag=True,
-              help="Drop frames with NaN or missing rows instead of failing.")
+@click.option("--strict", is_flag=True,
+              help="Refuse a file with lost lines, NaN frames or glitches instead of dropping "
+                   "those frames.")
 @click.option("--json", "json_out", type=click.Path(dir_okay=False),
-              help="Write the results as JSON.")
+              help="Write the report and results as JSON.")
 @click.option("--plot", "plot_out", type=click.Path(dir_okay=False),
               help="Write the axis-angle histogram (PNG).")
-def estimate(recording, methods, frames, lateral_axis, bins, units, angles, rate_hz,
-             drop_invalid, json_out, plot_out) -> None:
-    """Estimate the joint centre of RECORDING (.h5 or Polhemus text export)."""
+def estimate(recording, methods, frames, lateral_axis, lateral_frame, bins, units, angles,
+             sensors, rate_hz, strict, json_out, plot_out) -> None:
+    """Estimate the joint centre of RECORDING (.h5, PiMgr CSV or Liberty ASCII)."""
+    import warnings
+
     from .._io import check_output
+    from ..errors import EstimationError, InvalidInputError
     from ..sensors.trackers import (
         AxisAngleFilter,
         make_estimator,
+        motion_quality,
         plot_axis_histogram,
         read_recording,
     )
@@ -85,58 +103,95 @@ def estimate(recording, methods, frames, lateral_axis, bins, units, angles, rate
             check_output(path, inputs=[recording])
     kwargs = {}
     if Path(recording).suffix.lower() not in (".h5", ".hdf5"):
-        kwargs = dict(units=units, angles=angles, rate_hz=rate_hz,
-                      on_invalid="drop" if drop_invalid else "raise")
-    rec = read_recording(recording, **kwargs)
-    filt = AxisAngleFilter(bins=bins, lateral_axis=_lateral(lateral_axis))
+        kwargs = dict(units=units, angles=None if angles == "auto" else angles,
+                      rate_hz=rate_hz, on_invalid="raise" if strict else "drop")
+        if sensors is not None:
+            try:
+                st = tuple(int(v) for v in sensors.split(","))
+            except ValueError:
+                st = ()
+            if len(st) != 2:
+                raise InvalidInputError(f"--sensors: expected two station numbers 'a,b', got "
+                                        f"{sensors!r}")
+            kwargs["sensors"] = st
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        rec = read_recording(recording, **kwargs)
+    _echo_warnings(caught)
+    filt = AxisAngleFilter(bins=bins, lateral_axis=_lateral(lateral_axis),
+                           lateral_frame=lateral_frame)
     names = _METHODS if "all" in methods else tuple(dict.fromkeys(methods))
     modes = ("all", "filtered") if frames == "both" else (frames,)
-    results = [make_estimator(m, frames=mode, axis_filter=filt).estimate(rec)
-               for m in names for mode in modes]
+
+    quality = motion_quality(rec)
+    click.echo(f"{rec.joint}: sensors {rec.labels[0]} / {rec.labels[1]}")
+    for line in quality.lines():
+        click.echo(line)
+    results, refused = [], []
+    for m in names:
+        for mode in modes:
+            try:
+                results.append(make_estimator(m, frames=mode, axis_filter=filt).estimate(rec))
+            except EstimationError as exc:
+                refused.append({"method": m, "frames_mode": mode, "refused": str(exc)})
 
     head = (f"{'method':<11}{'frames':<9}{'used':>6}  {'P_U (mm, upper sensor)':<26}"
-            f"{'P_L (mm, lower sensor)':<26}{'|PU-PL|':>8}{'resid':>7}")
+            f"{'P_L (mm, lower sensor)':<26}{'|PU-PL|':>8}{'resid':>7}{'exp.err':>8}")
     if rec.truth is not None:
         head += f"{'err_U':>7}{'err_L':>7}"
-    click.echo(f"{rec.joint}: {rec.n_frames} frames, {rec.duration_s:.1f} s, "
-               f"sensors {rec.labels[0]} / {rec.labels[1]}")
     click.echo(head)
     rows = []
     for r in results:
         pu = " ".join(f"{v:7.2f}" for v in r.centre_upper * 1e3)
         pl = " ".join(f"{v:7.2f}" for v in r.centre_lower * 1e3)
+        exp = r.determinability.expected_error_mm[1] if r.determinability is not None else float("nan")
         line = (f"{r.method:<11}{r.frames_mode:<9}{r.frames.size:>6}  {pu:<26}{pl:<26}"
-                f"{r.distance_mm:8.2f}{r.residual_mm:7.2f}")
+                f"{r.distance_mm:8.2f}{r.residual_mm:7.2f}{exp:8.2f}")
         row = r.to_dict()
         if rec.truth is not None:
             err = r.error_mm(rec)
             line += f"{err[0]:7.2f}{err[1]:7.2f}"
             row["error_mm"] = [round(float(e), 4) for e in err]
+        if r.determined == "axis":
+            line += "  axis only"
         click.echo(line)
         rows.append(row)
+    for r in results:
+        for w in r.warnings:
+            click.echo(f"  {r.method}/{r.frames_mode}: warning: {w}")
+    for x in refused:
+        click.echo(f"  {x['method']}/{x['frames_mode']}: refused: {x['refused']}")
     if json_out:
         _write_json(json_out, {"recording": str(recording), "joint": rec.joint,
-                               "n_frames": rec.n_frames, "results": rows}, inputs=[recording])
-    if plot_out:
+                               "n_frames": rec.n_frames, "quality": quality.to_dict(),
+                               "results": rows, "refused": refused}, inputs=[recording])
+    if plot_out and results:
         filtered = next((r.axis_filter for r in results if r.axis_filter is not None), None)
         plot_axis_histogram(filtered if filtered is not None else filt.apply(rec), plot_out,
                             title=f"{rec.joint}: axis-angle filter", inputs=[recording])
+    if not results:
+        raise EstimationError(f"no method gave a centre: {refused[0]['refused']}")
 
 
 @joints.command("eval")
+@click.option("--config", "configs", type=click.Choice(("project", "independent", "both")),
+              default="both", show_default=True,
+              help="Simulator configuration: the project's own, a second one that differs in "
+                   "joint, placement, kinematics and error model, or both.")
 @click.option("--json", "json_out", type=click.Path(dir_okay=False),
               help="Write the table as JSON.")
 @click.option("--duration", "duration_s", type=float, default=30.0, show_default=True,
               help="Simulated trial length, s.")
-@click.option("--rate", "rate_hz", type=click.Choice(("240", "120")), default="240",
-              show_default=True, help="Sampling rate, Hz.")
 @click.option("--seeds", type=int, default=3, show_default=True,
               help="Number of simulated trials per row (averaged).")
-def eval_(json_out, duration_s, rate_hz, seeds) -> None:
-    """Reproduce the patent's table (mock vs finger, all vs filtered) on simulated data."""
+@click.option("--rom-sweep", is_flag=True,
+              help="Instead: every method at 10-70 deg range of motion, ok / warned / refused.")
+def eval_(configs, json_out, duration_s, seeds, rom_sweep) -> None:
+    """The patent's table (mock vs finger, all vs filtered) on two simulator configurations."""
     from .._io import check_output
     from ..errors import InvalidInputError
     from ..sensors.trackers import evaluate
+    from ..sensors.trackers import rom_sweep as sweep
 
     if not 1 <= seeds <= _MAX_SEEDS:
         raise InvalidInputError(f"--seeds must be between 1 and {_MAX_SEEDS}, got {seeds}")
@@ -146,15 +201,35 @@ def eval_(json_out, duration_s, rate_hz, seeds) -> None:
             f"starts with a still {_MIN_DURATION_S / 4:g} s), got {duration_s:g}")
     if json_out:
         check_output(json_out)
-    rows = evaluate(duration_s=duration_s, rate_hz=float(rate_hz), seeds=tuple(range(seeds)))
-    click.echo("errors in mm against the simulated centre; |PU-PL| as in the patent "
-               "(mock ~2 mm; finger DIP 7.09 -> 4.21 mm)")
-    click.echo(f"{'scenario':<9}{'noise':<20}{'method':<11}{'frames':<9}{'used':>6}"
-               f"{'err_U':>8}{'err_L':>8}{'|PU-PL|':>9}{'ms':>7}")
+    names = ("project", "independent") if configs == "both" else (configs,)
+    if rom_sweep:
+        rows = sweep(configs=names, duration_s=min(duration_s, 20.0), seeds=tuple(range(seeds)))
+        click.echo("largest of the P_U/P_L errors in mm; W = answered with a warning, "
+                   "R = refused; baseline = midpoint of the two sensors")
+        click.echo(f"{'config':<12}{'scenario':<9}{'rom':>4} {'method':<11}{'frames':<9}"
+                   f"{'status':<8}{'error':>8}{'baseline':>9}")
+        for r in rows:
+            click.echo(f"{r['config']:<12}{r['scenario']:<9}{r['rom_deg']:>4} {r['method']:<11}"
+                       f"{r['frames']:<9}{r['status']:<8}{r['error_mm']:8.2f}"
+                       f"{r['baseline_mm']:9.2f}")
+        if json_out:
+            _write_json(json_out, {"duration_s": min(duration_s, 20.0), "seeds": seeds,
+                                   "rows": rows})
+        return
+    rows = [r for c in names for r in evaluate(config=c, duration_s=duration_s,
+                                               seeds=tuple(range(seeds)))]
+    click.echo("errors in mm against the simulated centre (mean over answered trials); axis = "
+               "distance of the true centre from the estimated axis; |PU-PL| as in the patent "
+               "(mock ~2 mm; finger DIP 7.09 -> 4.21 mm); midpoint = the trivial baseline")
+    click.echo(f"{'config':<12}{'scenario':<9}{'noise':<20}{'method':<11}{'frames':<9}"
+               f"{'used':>6}{'err_U':>8}{'err_L':>8}{'axis':>7}{'|PU-PL|':>9}{'ans/warn/ref':>14}"
+               f"{'ms':>7}")
     for r in rows:
-        click.echo(f"{r['scenario']:<9}{r['noise']:<20}{r['method']:<11}{r['frames']:<9}"
-                   f"{r['n_frames_used']:>6}{r['error_upper_mm']:8.2f}{r['error_lower_mm']:8.2f}"
-                   f"{r['distance_mm']:9.2f}{r['time_ms']:7.1f}")
+        counts = f"{r['answered']}/{r['warned']}/{r['refused']}"
+        click.echo(f"{r['config']:<12}{r['scenario']:<9}{r['noise']:<20}{r['method']:<11}"
+                   f"{r['frames']:<9}{r['n_frames_used']:>6}{r['error_upper_mm']:8.2f}"
+                   f"{r['error_lower_mm']:8.2f}{r['axis_error_mm']:7.2f}{r['distance_mm']:9.2f}"
+                   f"{counts:>14}"
+                   f"{r['time_ms']:7.1f}")
     if json_out:
-        _write_json(json_out, {"duration_s": duration_s, "rate_hz": float(rate_hz),
-                               "seeds": seeds, "rows": rows})
+        _write_json(json_out, {"duration_s": duration_s, "seeds": seeds, "rows": rows})

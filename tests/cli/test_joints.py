@@ -1,55 +1,146 @@
+"""``handsynth joints``: the real command on files written here in every export format."""
+
 import json
 
+import numpy as np
 import pytest
 from click.testing import CliRunner
+from scipy.spatial.transform import Rotation
 
 from handsynth.cli._main import cli
-from handsynth.sensors.trackers import FlexionMotion, save_recording, simulate_recording
+from handsynth.sensors.trackers import FlexionMotion, SensorNoise, save_recording, simulate_recording
 
 
 @pytest.fixture(scope="module")
-def rec_path(tmp_path_factory):
-    rec = simulate_recording(motion=FlexionMotion(duration_s=10.0), seed=7, geometry_source="table")
-    return save_recording(tmp_path_factory.mktemp("rec") / "dip.h5", rec)
+def sim():
+    return simulate_recording(motion=FlexionMotion(duration_s=10.0), seed=7, geometry_source="table")
 
 
-def test_estimate_writes_table_json_and_plot(tmp_path, rec_path):
+@pytest.fixture(scope="module")
+def rec_path(tmp_path_factory, sim):
+    return save_recording(tmp_path_factory.mktemp("rec") / "dip.h5", sim)
+
+
+def _run(*args):
+    return CliRunner().invoke(cli, ["joints", *map(str, args)], prog_name="handsynth")
+
+
+def test_estimate_writes_report_table_json_and_plot(tmp_path, rec_path):
     out, png = tmp_path / "out.json", tmp_path / "h.png"
-    res = CliRunner().invoke(cli, ["joints", "estimate", str(rec_path), "--method", "patent",
-                                   "--method", "score", "--lateral-axis", "recording",
-                                   "--json", str(out), "--plot", str(png)])
+    res = _run("estimate", rec_path, "--method", "patent", "--method", "score",
+               "--lateral-axis", "recording", "--json", out, "--plot", png)
     assert res.exit_code == 0, res.output
     assert "err_U" in res.output and "index_middle / index_distal" in res.output
+    assert "determinability:" in res.output and "range of motion" in res.output
     data = json.loads(out.read_text())
     got = {(r["method"], r["frames_mode"]) for r in data["results"]}
     assert got == {("patent", "all"), ("patent", "filtered"), ("score", "all"), ("score", "filtered")}
     patent = next(r for r in data["results"] if r["method"] == "patent" and r["frames_mode"] == "all")
     assert max(patent["error_mm"]) < 2.0 and patent["n_frames_used"] == 2400
+    assert data["quality"]["determinability"]["expected_error_mm"][1] < 2.0
     assert png.read_bytes()[:4] == b"\x89PNG"
 
 
-def test_estimate_bad_file_is_one_line_exit_2(tmp_path):
-    bad = tmp_path / "bad.txt"
-    bad.write_text("garbage\n")
-    res = CliRunner().invoke(cli, ["joints", "estimate", str(bad)])
+# --- the three export formats, written line by line here --------------------------------
+
+
+def _liberty(sim, *, counter, lose=()):
+    lines = []
+    for i in range(sim.n_frames):
+        for s in (0, 1):
+            if (i, s) in lose:
+                continue
+            p = sim.positions[i, s] * 100.0  # cm
+            e = Rotation.from_matrix(sim.rotations[i, s]).as_euler("ZYX", degrees=True)
+            head = f"  {s + 1}" + (f" {5000 + i:7d}" if counter else "")
+            lines.append(head + "".join(f" {v:9.4f}" for v in p) + "".join(f" {v:9.4f}" for v in e))
+    return lines
+
+
+def _pimgr(sim):
+    lines = ["Time,w1,x1,y1,z1,w2,x2,y2,z2,loc1_x,loc1_y,loc1_z,loc2_x,loc2_y,loc2_z"]
+    for i in range(sim.n_frames):
+        q = [Rotation.from_matrix(sim.rotations[i, s]).as_quat()[[3, 0, 1, 2]] for s in (0, 1)]
+        p = sim.positions[i] * 100.0
+        row = ",".join(f"{v:.6f}" for v in (*q[0], *q[1], *p[0], *p[1]))
+        t = 1_731_000_000.0 + sim.times[i]
+        lines.append(f"{t:.4f},{row}")
+        if i % 2 == 0:  # PiMgr writes about 1.5 rows per sample
+            lines.append(f"{t + 0.002:.4f},{row}")
+    return lines
+
+
+@pytest.mark.parametrize("kind", ["liberty-counter", "liberty-lost-line", "pimgr-unix-duplicates"])
+def test_real_formats_read_without_options(tmp_path, sim, kind):
+    if kind == "liberty-counter":
+        lines, want = _liberty(sim, counter=True), "station frame x y z"
+    elif kind == "liberty-lost-line":
+        lines, want = _liberty(sim, counter=False, lose={(100, 0), (300, 1)}), "half frames 2"
+    else:
+        lines, want = _pimgr(sim), "duplicates 1200"
+    path = tmp_path / f"{kind}.{'csv' if 'pimgr' in kind else 'txt'}"
+    path.write_text("\n".join(lines) + "\n")
+    out = tmp_path / "c.json"
+    res = _run("estimate", path, "--method", "obrien", "--frames", "all", "--json", out)
+    assert res.exit_code == 0, res.output
+    assert want in res.output and "units cm" in res.output
+    r = json.loads(out.read_text())["results"][0]
+    err = np.linalg.norm(np.array([r["centre_upper_mm"], r["centre_lower_mm"]])
+                         - sim.truth.reference_centre * 1e3, axis=1)
+    # the finger-like joint's centre slides 1.5 mm: no single point is nearer
+    assert err.max() < 2.0, err
+    expected_frames = sim.n_frames - (2 if kind == "liberty-lost-line" else 0)
+    assert r["n_frames_used"] == expected_frames
+
+
+MALFORMED = {
+    "empty.txt": b"",
+    "binary.txt": bytes(range(256)) * 8,
+    "arrays.npz": b"PK\x03\x04\x14\x00\x00\x00" + b"\x00" * 200,
+    "commas.txt": b",,,,,,,\n" * 5,
+    "nan.txt": b"1 nan nan nan nan nan nan\n2 nan nan nan nan nan nan\n" * 30,
+    "mixed.txt": b"1 1 2 3 4 5 6\n2 1 2 3\n1 1 2 3 4 5 6 7 8 9\n" * 20,
+    "header-only.csv": b"Time,w1,x1,y1,z1,w2,x2,y2,z2,loc1_x,loc1_y,loc1_z,loc2_x,loc2_y,loc2_z\n",
+}
+
+
+@pytest.mark.parametrize("name", sorted(MALFORMED))
+def test_malformed_file_is_one_error_line(tmp_path, name):
+    path = tmp_path / name
+    path.write_bytes(MALFORMED[name])
+    res = _run("estimate", path)
+    assert res.exit_code == 2, res.output
+    lines = res.output.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("handsynth: error: "), res.output
+    assert name in lines[0] and "Traceback" not in res.output
+
+
+def test_undeterminable_motion_is_refused_by_every_method(tmp_path):
+    # 10 deg of flexion under slowly varying (0.5 s) tracker error: few independent frames
+    noise = SensorNoise(position_sd_mm=0.76, orientation_sd_deg=0.15, correlation_time_s=0.5)
+    rec = simulate_recording(motion=FlexionMotion(duration_s=6.0, flexion_range_deg=(0, 10),
+                                                  wobble_deg=0.0), seed=2, geometry_source="table",
+                             noise=noise)
+    res = _run("estimate", save_recording(tmp_path / "small.h5", rec))
     assert res.exit_code == 2
-    assert "handsynth: error:" in res.output and "no data line" in res.output
-    assert "Traceback" not in res.output
+    assert "refused: " in res.output and "expected error" in res.output
+    assert res.output.strip().splitlines()[-1].startswith("handsynth: error: no method gave a centre")
 
 
-def test_eval_json(tmp_path):
+def test_eval_json_both_configurations(tmp_path):
     out = tmp_path / "eval.json"
-    res = CliRunner().invoke(cli, ["joints", "eval", "--duration", "8", "--seeds", "1",
-                                   "--json", str(out)])
+    res = _run("eval", "--duration", "6", "--seeds", "1", "--json", out)
     assert res.exit_code == 0, res.output
     rows = json.loads(out.read_text())["rows"]
-    # 2 scenarios x 2 noise levels x 4 methods x 2 frame modes
-    assert len(rows) == 32
-    keys = {(r["scenario"], r["noise"], r["method"], r["frames"]) for r in rows}
-    assert ("finger", "liberty-accuracy", "patent", "filtered") in keys
-    mock = [r for r in rows if r["scenario"] == "mock" and r["noise"] == "liberty-accuracy"
-            and r["method"] == "patent"]
-    assert all(r["error_mm"] < 1.0 and r["distance_mm"] < 2.5 for r in mock)
+    # project: 2 scenarios x 2 noises x (4 methods x 2 frame modes + baseline);
+    # independent: 2 scenarios x 1 error model x the same
+    assert len(rows) == 2 * 2 * 9 + 2 * 1 * 9
+    assert {r["config"] for r in rows} == {"project", "independent"}
+    base = {(r["config"], r["scenario"], r["noise"]): r["error_mm"] for r in rows
+            if r["method"] == "midpoint"}
+    obrien = [r for r in rows if r["method"] == "obrien" and r["frames"] == "all"]
+    # the linear method beats the constant answer on every row of both configurations
+    assert all(r["error_mm"] < base[(r["config"], r["scenario"], r["noise"])] / 2 for r in obrien)
 
 
 # --------------------------------------------------------------------------- faults (issue 16)

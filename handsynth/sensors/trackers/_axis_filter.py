@@ -119,10 +119,16 @@ class AxisAngleFilter:
         Range binned; ``(0, 1)`` covers every flipped unit axis, giving the
         patent's 0.01-wide bins such as 0.97-0.98 (para. 0110).
     lateral_axis : "auto", "recording" or (3,) sequence of float
-        Width direction of the finger: a vector in the transmitter frame at
-        the standard state, ``"recording"`` for
-        ``recording.metadata["lateral_axis"]`` (same convention), or
-        ``"auto"`` for the mean flexion axis (see module docstring).
+        Width direction of the finger: a vector (in the frame named by
+        `lateral_frame`), ``"recording"`` for
+        ``recording.metadata["lateral_axis"]`` (transmitter frame at the
+        standard state), or ``"auto"`` for the mean flexion axis (see
+        module docstring), which is fixed to the finger.
+    lateral_frame : {"transmitter", "upper"}
+        Frame of a vector `lateral_axis`: the transmitter's at the standard
+        state (the patent's calibration, para. 0084), or the upper sensor's
+        own frame -- a direction fixed to the finger, as the patent's
+        segment ``y`` axis is, that needs no standard state.
     reference_s : float
         Duration of the standard state at the start of the recording, s.
     min_angle_deg : float
@@ -133,6 +139,7 @@ class AxisAngleFilter:
     bins: int = 100
     value_range: tuple[float, float] = (0.0, 1.0)
     lateral_axis: str | tuple[float, float, float] = "auto"
+    lateral_frame: str = "transmitter"
     reference_s: float = 0.25
     min_angle_deg: float = 0.0
 
@@ -156,6 +163,10 @@ class AxisAngleFilter:
                 raise InvalidInputError(
                     f"lateral_axis must be a non-zero 3-vector, got {self.lateral_axis!r}"
                 )
+        if self.lateral_frame not in ("transmitter", "upper"):
+            raise InvalidInputError(
+                f"lateral_frame must be 'transmitter' or 'upper', got {self.lateral_frame!r}"
+            )
         if not (self.reference_s >= 0 and self.min_angle_deg >= 0):
             raise InvalidInputError(
                 f"reference_s and min_angle_deg must be >= 0, got "
@@ -180,6 +191,8 @@ class AxisAngleFilter:
                 )
         else:
             a = np.asarray(self.lateral_axis, dtype=np.float64)
+            if self.lateral_frame == "upper":  # already fixed to the finger
+                return a / np.linalg.norm(a)
         k = _reference_frames(recording, self.reference_s)
         r0 = Rotation.from_matrix(recording.rotations[:k, 0]).mean().as_matrix()
         a = r0.T @ a  # transmitter -> upper sensor frame (eq. 11)

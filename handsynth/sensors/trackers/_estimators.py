@@ -32,6 +32,12 @@ from ._axis_filter import (
     _reference_frames,
     principal_axis,
 )
+from ._determinability import (
+    Determinability,
+    _sensor_midpoint,
+    assess_determinability,
+    linear_centre,
+)
 from ._plane import foot_of_perpendicular, plane_coordinates, plane_point
 from ._recording import Recording
 from ._result import JointCentreResult, centre_distance_mm
@@ -71,6 +77,8 @@ class _Frames:
     q0: np.ndarray  # (3, 3) relative rotation in the standard state
     rom_deg: float
     filter_result: AxisFilterResult | None
+    det: Determinability
+    single_axis: bool
 
 
 def _check_frozen(recording: Recording) -> None:
@@ -106,16 +114,38 @@ class _Estimator:
     axis_filter : AxisAngleFilter
         Filter options (patent: 100 bins of the lateral axis component).
     min_rom_deg : float
-        Smallest range of motion (deg) accepted in the frames used; below it
-        the centre is not determined and :class:`EstimationError` is raised.
+        Smallest range of motion (deg) accepted in the frames used, a floor
+        below the data-driven checks.
     min_frames : int
         Smallest number of frames accepted after filtering.
+    refuse_error_mm : float
+        Refuse (:class:`EstimationError`) when the expected error of the
+        centre across the joint axis exceeds this (see
+        :mod:`~handsynth.sensors.trackers._determinability`).
+    warn_error_mm : float
+        Above this expected error the result carries a warning with it.
+    axis_error_mm : float
+        When the expected error *along* the best axis exceeds this, the
+        motion counts as single-axis: only the axis is determined, and the
+        centre reported is the point of the axis nearest the two sensors.
+    max_distance_mm : float
+        A centre farther than this from either sensor is not a finger joint
+        centre; it is refused, never returned.
+    max_residual_mm : float
+        Refuse when no point is fixed in both sensors to within this RMS per
+        coordinate (the sensors are not on the two sides of one joint, or
+        the data are corrupt).
     """
 
     frames: str = "all"
     axis_filter: AxisAngleFilter = field(default_factory=AxisAngleFilter)
-    min_rom_deg: float = 10.0
+    min_rom_deg: float = 5.0
     min_frames: int = 30
+    refuse_error_mm: float = 10.0
+    warn_error_mm: float = 2.0
+    axis_error_mm: float = 2.0
+    max_distance_mm: float = 60.0
+    max_residual_mm: float = 5.0
 
     name = "base"
 
@@ -132,6 +162,16 @@ class _Estimator:
             raise InvalidInputError(f"min_rom_deg must be >= 0, got {self.min_rom_deg!r}")
         if not (isinstance(self.min_frames, (int, np.integer)) and self.min_frames >= 3):
             raise InvalidInputError(f"min_frames must be an integer >= 3, got {self.min_frames!r}")
+        for n in ("refuse_error_mm", "warn_error_mm", "axis_error_mm", "max_distance_mm",
+                  "max_residual_mm"):
+            v = getattr(self, n)
+            if not (isinstance(v, (int, float)) and np.isfinite(v) and v > 0):
+                raise InvalidInputError(f"{n} must be > 0, got {v!r}")
+        if self.warn_error_mm > self.refuse_error_mm:
+            raise InvalidInputError(
+                f"warn_error_mm ({self.warn_error_mm!r}) must not exceed refuse_error_mm "
+                f"({self.refuse_error_mm!r})"
+            )
 
     def _select(self, recording: Recording) -> _Frames:
         if not isinstance(recording, Recording):
@@ -156,13 +196,32 @@ class _Estimator:
         sub = recording.take(index) if filt is not None else recording
         q, d = sub.relative()
         rom = _range_of_motion(q)
+        where = "in the filtered frames" if filt is not None else "in the recording"
         if rom < self.min_rom_deg:
-            where = "in the filtered frames" if filt is not None else "in the recording"
             raise EstimationError(
                 f"range of motion {rom:.1f} deg {where} is below min_rom_deg="
                 f"{self.min_rom_deg:g}: the joint barely moved, so a centre cannot "
                 f"be fixed; flex the joint further"
             )
+        det = assess_determinability(q, d)
+        if det.residual_mm > self.max_residual_mm:
+            raise EstimationError(
+                f"no point is fixed in both sensors {where}: the best one moves by "
+                f"{det.residual_mm:.1f} mm RMS per coordinate (> max_residual_mm="
+                f"{self.max_residual_mm:g}); are both sensors on the two sides of one "
+                f"joint, and the file read with the right columns and units?"
+            )
+        across = float(det.expected_error_mm[1])
+        if not across <= self.refuse_error_mm:
+            raise EstimationError(
+                f"the motion {where} does not determine the joint centre: expected "
+                f"error {across:.3g} mm > refuse_error_mm={self.refuse_error_mm:g} "
+                f"(the directions across the joint axis turn by only {det.spread_deg[1]:.2f} "
+                f"and {det.spread_deg[2]:.2f} deg RMS, range of motion {rom:.1f} deg, "
+                f"residual {det.residual_mm:.2f} mm); "
+                f"flex the joint further or record longer"
+            )
+        single_axis = not float(det.expected_error_mm[0]) <= self.axis_error_mm
         q_all, _ = recording.relative()
         k = _reference_frames(recording, self.axis_filter.reference_s)
         q0 = Rotation.from_matrix(q_all[:k]).mean().as_matrix()
@@ -171,9 +230,57 @@ class _Estimator:
         else:
             rv = matrix_to_rotvec(q_all @ q0.T)
             lateral = self.axis_filter._lateral_axis(recording, rv)
-        return _Frames(sub, index, q, d, lateral, q0, rom, filt)
+        return _Frames(sub, index, q, d, lateral, q0, rom, filt, det, single_axis)
 
-    def _result(self, f: _Frames, cu, cl, residual_mm: float) -> JointCentreResult:
+    def _finish(self, f: _Frames, cu: np.ndarray, cl: np.ndarray) -> tuple[
+            np.ndarray, np.ndarray, list[str]]:
+        """Single-axis convention, bounds and warnings shared by every method."""
+        det = f.det
+        notes = []
+        if f.single_axis:
+            # slide rigidly along the axis to the point nearest both sensors
+            e = np.concatenate([det.axis_upper, det.axis_lower]) / np.sqrt(2)
+            x = np.concatenate([cu, cl])
+            m = _sensor_midpoint(f.q, f.d)
+            x = x + (e @ (m - x)) * e
+            cu, cl = x[:3], x[3:]
+            notes.append(
+                f"single-axis motion: only the joint axis is determined (the axis itself "
+                f"turns by {det.spread_deg[0]:.2f} deg RMS, expected error along it "
+                f"{min(det.expected_error_mm[0], 1e6):.3g} mm); the centre given is the "
+                f"point of the axis nearest the two sensors"
+            )
+        if det.expected_error_mm[1] > self.warn_error_mm:
+            notes.append(
+                f"the centre is poorly determined: expected error {det.expected_error_mm[1]:.1f} "
+                f"mm across the joint axis (directions across it turn by "
+                f"{det.spread_deg[1]:.2f} deg RMS); "
+                f"flex the joint further"
+            )
+        far = max(float(np.linalg.norm(cu)), float(np.linalg.norm(cl))) * 1e3
+        if not far <= self.max_distance_mm:
+            raise EstimationError(
+                f"{self.name}: the centre found is {far:.3g} mm from a sensor (> "
+                f"max_distance_mm={self.max_distance_mm:g}); that is not a finger joint "
+                f"centre: the motion or this method does not determine it"
+            )
+        lu, ll = linear_centre(f.q, f.d, free_directions=int(f.single_axis))
+        gap = float(np.linalg.norm(np.concatenate([cu - lu, cl - ll])) / np.sqrt(2)) * 1e3
+        if gap > self.refuse_error_mm:
+            raise EstimationError(
+                f"{self.name}: its centre is {gap:.1f} mm from the linear least-squares "
+                f"centre, whose expected error is {det.expected_error_mm[1]:.2g} mm "
+                f"(> refuse_error_mm={self.refuse_error_mm:g} apart): this method's "
+                f"objective does not determine the centre in this motion; use 'obrien'"
+            )
+        if gap > max(self.warn_error_mm, float(det.expected_error_mm[1])):
+            notes.append(
+                f"{self.name} differs from the linear least-squares centre by {gap:.1f} mm"
+            )
+        return cu, cl, notes
+
+    def _result(self, f: _Frames, cu, cl, residual_mm: float,
+                notes: list[str]) -> JointCentreResult:
         cu = np.asarray(cu, dtype=np.float64)
         cl = np.asarray(cl, dtype=np.float64)
         if not (np.isfinite(cu).all() and np.isfinite(cl).all()):
@@ -192,6 +299,9 @@ class _Estimator:
             labels=f.recording.labels,
             joint=f.recording.joint,
             axis_filter=f.filter_result,
+            determinability=f.det,
+            determined="axis" if f.single_axis else "point",
+            warnings=tuple(notes),
         )
 
     def _solve(self, f: _Frames) -> tuple[np.ndarray, np.ndarray, float]:
@@ -207,15 +317,21 @@ class _Estimator:
         Returns
         -------
         JointCentreResult
+            With ``determined="axis"`` for a single-axis motion and its
+            ``warnings`` (expected error, single axis, disagreement with the
+            linear solution) to be shown with the centre.
 
         Raises
         ------
         EstimationError
-            A frozen sensor, too few frames, or too small a range of motion.
+            A frozen sensor, too few frames, a motion that does not
+            determine the centre, no point fixed in both sensors, or a
+            centre farther than ``max_distance_mm`` from a sensor.
         """
         f = self._select(recording)
         cu, cl, residual = self._solve(f)
-        res = self._result(f, cu, cl, residual)
+        cu, cl, notes = self._finish(f, np.asarray(cu, float), np.asarray(cl, float))
+        res = self._result(f, cu, cl, residual, notes)
         object.__setattr__(res, "n_frames_total", recording.n_frames)
         return res
 
@@ -231,7 +347,7 @@ def _variance_mm2(p_mm: np.ndarray, points_mm: np.ndarray) -> float:
 
 
 def _initial_point(points_mm: np.ndarray, rcond: float = 0.1) -> np.ndarray:
-    """Point ``V`` for eq. 9: an algebraic sphere fit to the points.
+    """A point ``V`` for eq. 9: an algebraic sphere fit to the points.
 
     Solves ``2 m_i . q = |m_i|^2 - mean |m|^2`` (``m_i`` the centred points)
     with a truncated SVD, so that for a hinge (points on a circle) it returns
@@ -244,18 +360,79 @@ def _initial_point(points_mm: np.ndarray, rcond: float = 0.1) -> np.ndarray:
     return c + q
 
 
-def _side_data(f: _Frames, side: str) -> tuple[np.ndarray, np.ndarray]:
-    """Other sensor's origins (mm) and the width direction, in this sensor's frame."""
+def _side_data(f: _Frames, side: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Other sensor's origins (mm), the width direction and the linear
+    centre (mm), in this sensor's frame."""
+    lu, ll = linear_centre(f.q, f.d, free_directions=int(f.single_axis))
     if side == "upper":
-        return f.d * 1e3, f.lateral_upper
+        return f.d * 1e3, f.lateral_upper, lu * 1e3
     # lower frame: the upper origin is -Q^T d; the width direction is carried
     # over with the standard-state relative rotation (segments aligned there)
     pts = -np.einsum("nji,nj->ni", f.q, f.d) * 1e3
-    return pts, f.q0.T @ f.lateral_upper
+    return pts, f.q0.T @ f.lateral_upper, ll * 1e3
+
+
+def _starts(points: np.ndarray, linear: np.ndarray) -> list[np.ndarray]:
+    """Candidate points ``V`` (mm): the linear centre first, then the sphere
+    fit and the midpoint of the two sensors."""
+    cands = [linear, _initial_point(points), 0.5 * points.mean(axis=0)]
+    return [c for c in cands if np.isfinite(c).all()]
+
+
+def _bounded(objective, bound_mm: float):
+    """`objective` of a point (mm), with a steep penalty beyond `bound_mm`
+    from the sensor (the frame's origin)."""
+
+    def f(p_mm: np.ndarray) -> float:
+        r = float(np.linalg.norm(p_mm))
+        val = objective(p_mm)
+        if r > bound_mm:
+            val += 1e3 * (r - bound_mm) ** 2 + 1e3
+        return val
+
+    return f
 
 
 @dataclass(frozen=True, kw_only=True)
-class PlaneVarianceEstimator(_Estimator):
+class _VarianceSearch(_Estimator):
+    """Nelder-Mead search of eq. 2 from several starts, inside a bound."""
+
+    xatol_mm: float = 1e-3
+    fatol_mm2: float = 1e-9
+    maxiter: int = 2000
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        for n in ("xatol_mm", "fatol_mm2"):
+            v = getattr(self, n)
+            if not (np.isfinite(v) and v > 0):
+                raise InvalidInputError(f"{n} must be > 0, got {v!r}")
+        if not (isinstance(self.maxiter, (int, np.integer)) and self.maxiter > 0):
+            raise InvalidInputError(f"maxiter must be a positive integer, got {self.maxiter!r}")
+
+    def _search(self, points: np.ndarray, axis: np.ndarray,
+                linear: np.ndarray) -> tuple[np.ndarray, float]:
+        raise NotImplementedError
+
+    def _pick(self, found: list[tuple[np.ndarray, float]]) -> tuple[np.ndarray, float]:
+        """Best of the restarts; a minimum at the bound is no answer."""
+        p, v = min(found, key=lambda pv: pv[1])
+        if np.linalg.norm(p) > self.max_distance_mm - 1.0:
+            raise EstimationError(
+                f"{self.name}: the variance of |v_LP| (eq. 2) keeps falling toward the "
+                f"search bound ({self.max_distance_mm:g} mm from the sensor): this "
+                f"motion does not fix its minimum; use 'obrien' or flex the joint further"
+            )
+        return p, v
+
+    def _solve(self, f: _Frames):
+        pu, vu = self._search(*_side_data(f, "upper"))
+        pl, vl = self._search(*_side_data(f, "lower"))
+        return pu * 1e-3, pl * 1e-3, float(np.sqrt(0.5 * (vu + vl)))
+
+
+@dataclass(frozen=True, kw_only=True)
+class PlaneVarianceEstimator(_VarianceSearch):
     """The patent's estimator (JP2010-88628, para. 0039-0074).
 
     For ``P_U``: minimise ``s^2`` (eq. 2) of ``|v_LP(i)|`` (eq. 1) over the
@@ -264,14 +441,23 @@ class PlaneVarianceEstimator(_Estimator):
     from a point ``V`` (eqs. 6-9).  ``P_L`` is the same with the roles of the
     receivers swapped (para. 0074).
 
-    The patent leaves ``P1, P2, P3`` and ``V`` to the user.  Here the plane
-    is the finger's sagittal plane: normal to the finger's width direction
-    (the ``y`` axis of the patent's segment frames; ``axis_filter.lateral_axis``
-    says how it is obtained) and through the midpoint of the two receivers,
-    which the patent centres on the phalanges (para. 0103).  For a hinge the
-    minimisers of eq. 2 form the whole joint axis, and this plane picks the
-    point of the axis on the finger's midline.  ``V`` is an algebraic sphere
-    fit of the other receiver's positions.
+    The patent leaves ``P1, P2, P3`` and ``V`` to the user ("任意の位置に配置
+    した点V", para. 0061).  Here the plane is the finger's sagittal plane:
+    normal to the finger's width direction (the ``y`` axis of the patent's
+    segment frames; ``axis_filter.lateral_axis`` says how it is obtained)
+    and through the midpoint of the two receivers, which the patent centres
+    on the phalanges (para. 0103).  For a hinge the minimisers of eq. 2 form
+    the whole joint axis, and this plane picks the point of the axis on the
+    finger's midline.
+
+    Robustness: eq. 2 is not bounded below along every direction (far from
+    the sensors, ``|v_LP|`` varies only with the component of the other
+    sensor's motion along the line of sight), so the search is run from
+    three points ``V`` -- the linear least-squares centre
+    (:func:`~handsynth.sensors.trackers._determinability.linear_centre`),
+    an algebraic sphere fit and the midpoint of the two sensors -- inside a
+    ball of radius ``max_distance_mm`` around the sensor, and the lowest
+    minimum is kept.  A minimum at the ball's surface is refused.
 
     Parameters
     ----------
@@ -280,27 +466,21 @@ class PlaneVarianceEstimator(_Estimator):
     xatol_mm, fatol_mm2 : float
         Nelder-Mead tolerances on the point (mm) and on ``s^2`` (mm^2).
     maxiter : int
-        Nelder-Mead iteration limit.
+        Nelder-Mead iteration limit per start.
 
     Other parameters are those of every estimator (``frames``,
-    ``axis_filter``, ``min_rom_deg``, ``min_frames``).
+    ``axis_filter``, ``min_rom_deg``, ``min_frames``, the determinability
+    thresholds and ``max_distance_mm``).
     """
 
     plane_size_mm: float = 10.0
-    xatol_mm: float = 1e-3
-    fatol_mm2: float = 1e-9
-    maxiter: int = 2000
 
     name = "patent"
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        for n in ("plane_size_mm", "xatol_mm", "fatol_mm2"):
-            v = getattr(self, n)
-            if not (np.isfinite(v) and v > 0):
-                raise InvalidInputError(f"{n} must be > 0, got {v!r}")
-        if not (isinstance(self.maxiter, (int, np.integer)) and self.maxiter > 0):
-            raise InvalidInputError(f"maxiter must be a positive integer, got {self.maxiter!r}")
+        if not (np.isfinite(self.plane_size_mm) and self.plane_size_mm > 0):
+            raise InvalidInputError(f"plane_size_mm must be > 0, got {self.plane_size_mm!r}")
 
     def _plane(self, points: np.ndarray, axis: np.ndarray):
         """``P1, P2, P3`` (mm): plane through the receivers' midpoint, normal `axis`."""
@@ -313,44 +493,39 @@ class PlaneVarianceEstimator(_Estimator):
         h = self.plane_size_mm
         return mid, mid + h * e1, mid + h * e2
 
-    def _fit_side(self, points: np.ndarray, axis: np.ndarray) -> tuple[np.ndarray, float]:
+    def _search(self, points, axis, linear):
         p1, p2, p3 = self._plane(points, axis)
-        start = foot_of_perpendicular(p1, p2, p3, _initial_point(points))  # eqs. 6-9
-        s0, t0 = plane_coordinates(p1, p2, p3, start)
+        objective = _bounded(lambda p: _variance_mm2(p, points), self.max_distance_mm)
         step = 1.0 / self.plane_size_mm  # 1 mm simplex
-        simplex = np.array([[s0, t0], [s0 + step, t0], [s0, t0 + step]])
-
-        def objective(w: np.ndarray) -> float:
-            return _variance_mm2(plane_point(p1, p2, p3, w[0], w[1]), points)  # eqs. 1-2
-
-        res = minimize(
-            objective,
-            np.array([s0, t0]),
-            method="Nelder-Mead",
-            options={
-                "initial_simplex": simplex,
-                "xatol": self.xatol_mm / self.plane_size_mm,
-                "fatol": self.fatol_mm2,
-                "maxiter": self.maxiter,
-            },
-        )
-        return plane_point(p1, p2, p3, res.x[0], res.x[1]), float(res.fun)
-
-    def _solve(self, f: _Frames):
-        pu, vu = self._fit_side(*_side_data(f, "upper"))
-        pl, vl = self._fit_side(*_side_data(f, "lower"))
-        return pu * 1e-3, pl * 1e-3, float(np.sqrt(0.5 * (vu + vl)))
+        found = []
+        for v in _starts(points, linear):
+            start = foot_of_perpendicular(p1, p2, p3, v)  # eqs. 6-9
+            s0, t0 = plane_coordinates(p1, p2, p3, start)
+            res = minimize(
+                lambda w: objective(plane_point(p1, p2, p3, w[0], w[1])),  # eqs. 1-2, 4
+                np.array([s0, t0]),
+                method="Nelder-Mead",
+                options={
+                    "initial_simplex": np.array([[s0, t0], [s0 + step, t0], [s0, t0 + step]]),
+                    "xatol": self.xatol_mm / self.plane_size_mm,
+                    "fatol": self.fatol_mm2,
+                    "maxiter": self.maxiter,
+                },
+            )
+            found.append((plane_point(p1, p2, p3, res.x[0], res.x[1]), float(res.fun)))
+        return self._pick(found)
 
 
 @dataclass(frozen=True, kw_only=True)
-class VarianceEstimator(_Estimator):
+class VarianceEstimator(_VarianceSearch):
     """Unconstrained 3-D minimisation of eq. 2 (the patent's starting point).
 
-    Same objective and starting point as :class:`PlaneVarianceEstimator`
-    (eqs. 1-2, start from eq. 9) but searched over all of 3-D space with
-    Nelder-Mead.  The patent found it inaccurate (para. 0044): for a
-    hinge-like joint every point of the axis minimises eq. 2, so the search
-    drifts along the axis.
+    Same objective, starts and bound as :class:`PlaneVarianceEstimator`
+    (eqs. 1-2) but searched over all of 3-D space with Nelder-Mead.  The
+    patent found it inaccurate (para. 0044): for a hinge-like joint every
+    point of the axis minimises eq. 2, so the search drifts along the axis
+    (a single-axis motion is then put back on the point nearest the sensors
+    like every method's).
 
     Parameters
     ----------
@@ -358,47 +533,31 @@ class VarianceEstimator(_Estimator):
         As for :class:`PlaneVarianceEstimator`.
     """
 
-    xatol_mm: float = 1e-3
-    fatol_mm2: float = 1e-9
     maxiter: int = 3000
 
     name = "variance3d"
 
-    def _fit_side(self, points: np.ndarray, axis: np.ndarray) -> tuple[np.ndarray, float]:
-        plane = PlaneVarianceEstimator()._plane(points, axis)
-        start = foot_of_perpendicular(*plane, _initial_point(points))
-        simplex = start + np.vstack([np.zeros(3), np.eye(3)])  # 1 mm steps
-        res = minimize(
-            _variance_mm2,
-            start,
-            args=(points,),
-            method="Nelder-Mead",
-            options={
-                "initial_simplex": simplex,
-                "xatol": self.xatol_mm,
-                "fatol": self.fatol_mm2,
-                "maxiter": self.maxiter,
-            },
-        )
-        return res.x, float(res.fun)
-
-    def _solve(self, f: _Frames):
-        pu, vu = self._fit_side(*_side_data(f, "upper"))
-        pl, vl = self._fit_side(*_side_data(f, "lower"))
-        return pu * 1e-3, pl * 1e-3, float(np.sqrt(0.5 * (vu + vl)))
+    def _search(self, points, axis, linear):
+        objective = _bounded(lambda p: _variance_mm2(p, points), self.max_distance_mm)
+        found = []
+        for v in _starts(points, linear):
+            res = minimize(
+                objective,
+                v,
+                method="Nelder-Mead",
+                options={
+                    "initial_simplex": v + np.vstack([np.zeros(3), np.eye(3)]),  # 1 mm
+                    "xatol": self.xatol_mm,
+                    "fatol": self.fatol_mm2,
+                    "maxiter": self.maxiter,
+                },
+            )
+            found.append((res.x, float(res.fun)))
+        return self._pick(found)
 
 
 # --------------------------------------------------------------------------
 # O'Brien et al. (2000): linear least squares in the parent frame
-
-
-def _solve_truncated(ata: np.ndarray, atb: np.ndarray, rcond: float) -> np.ndarray:
-    """Minimum-norm solution of normal equations, singular values of ``A``
-    below ``rcond * max`` discarded."""
-    w, v = np.linalg.eigh(ata)
-    sv = np.sqrt(np.clip(w, 0.0, None))
-    keep = sv > rcond * sv.max()
-    return v[:, keep] @ ((v[:, keep].T @ atb) / w[keep])
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -410,33 +569,17 @@ class OBrienEstimator(_Estimator):
     pp. 53-60 (the patent's non-patent literature 1).  The centre is a point
     fixed in both segments: in the parent (upper) frame ``c_U = Q(i) c_L +
     d(i)`` for every frame, i.e. ``[I, -Q(i)] [c_U; c_L] = d(i)``, solved for
-    the six unknowns in the least-squares sense through the SVD of the
-    stacked system.  For a hinge one singular value vanishes (the centre can
-    slide along the axis); singular values below ``hinge_rcond`` times the
-    largest are dropped, which gives the point of the axis nearest both
-    receivers (minimum norm of ``[c_U; c_L]``).
-
-    Parameters
-    ----------
-    hinge_rcond : float
-        Relative singular-value threshold for the hinge case.
+    the six unknowns in the least-squares sense in the eigenbasis of the
+    normal matrix
+    (:func:`~handsynth.sensors.trackers._determinability.linear_centre`).
+    Every direction the data determine is solved for; along the joint axis
+    of a single-axis motion (expected error above ``axis_error_mm``) the
+    point nearest the two sensors is taken.
     """
-
-    hinge_rcond: float = 0.05
 
     name = "obrien"
 
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        if not (np.isfinite(self.hinge_rcond) and 0 <= self.hinge_rcond < 1):
-            raise InvalidInputError(f"hinge_rcond must be in [0, 1), got {self.hinge_rcond!r}")
-
     def _solve(self, f: _Frames):
-        n = f.q.shape[0]
-        qs = f.q.sum(axis=0)
-        ata = np.block([[n * np.eye(3), -qs], [-qs.T, n * np.eye(3)]])
-        atb = np.concatenate([f.d.sum(axis=0), -np.einsum("nji,nj->i", f.q, f.d)])
-        x = _solve_truncated(ata, atb, self.hinge_rcond)
-        cu, cl = x[:3], x[3:]
+        cu, cl = linear_centre(f.q, f.d, free_directions=int(f.single_axis))
         resid = cu - np.einsum("nij,j->ni", f.q, cl) - f.d
         return cu, cl, float(np.sqrt((resid**2).sum(axis=1).mean()) * 1e3)

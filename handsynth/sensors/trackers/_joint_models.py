@@ -37,7 +37,7 @@ import numpy as np
 from ...errors import InvalidInputError
 from ..common import axis_angle_matrix
 
-__all__ = ["FingerJoint", "HingeJoint"]
+__all__ = ["ArcJoint", "FingerJoint", "HingeJoint"]
 
 _X = np.array([1.0, 0.0, 0.0])
 _Y = np.array([0.0, 1.0, 0.0])
@@ -118,6 +118,64 @@ class FingerJoint:
         a = np.deg2rad(self.slide_direction_deg)
         direction = -np.cos(a) * _Y - np.sin(a) * _Z
         offset = (self.slide_mm * 1e-3) * u2[..., None] * direction
+        return rot, offset
+
+    def describe(self) -> dict:
+        """JSON-serialisable parameters."""
+        return {"kind": self.kind, **asdict(self)}
+
+
+@dataclass(frozen=True, kw_only=True)
+class ArcJoint:
+    """Joint whose centre rolls on an arc and whose axis tilts linearly.
+
+    A second, independent finger-like model (a different shape from
+    :class:`FingerJoint`, so that estimators are not tested only on the
+    kinematics they were tuned on).  The lower bone's centre moves on a
+    circular arc of radius `arc_radius_mm` in the sagittal plane: it travels
+    the arc length ``slide_mm * theta / 90 deg`` (linear, not quadratic, in
+    the flexion angle), starting tangentially toward palmar-proximal; the
+    flexion axis turns about the dorsal axis (``z``, not the bone) by
+    ``axis_tilt_deg * theta / 90 deg``.  Like :class:`FingerJoint` this is a
+    modelling choice, not a measurement; defaults are the ones of the
+    independent check reported in the README (1.5 mm slide, 4 deg tilt).
+
+    Parameters
+    ----------
+    slide_mm : float
+        Arc length travelled by the centre at 90 deg flexion, millimetres.
+    arc_radius_mm : float
+        Radius of the arc, millimetres (> 0).
+    axis_tilt_deg : float
+        Rotation of the flexion axis about ``z`` at 90 deg flexion, degrees.
+    """
+
+    slide_mm: float = 1.5
+    arc_radius_mm: float = 4.0
+    axis_tilt_deg: float = 4.0
+
+    kind = "arc"
+
+    def __post_init__(self) -> None:
+        for name, v in asdict(self).items():
+            if not np.isfinite(v):
+                raise InvalidInputError(f"{name} must be finite, got {v!r}")
+        if self.slide_mm < 0:
+            raise InvalidInputError(f"slide_mm must be >= 0, got {self.slide_mm!r}")
+        if self.arc_radius_mm <= 0:
+            raise InvalidInputError(f"arc_radius_mm must be > 0, got {self.arc_radius_mm!r}")
+
+    def pose(self, theta: np.ndarray, psi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Lower segment in the upper segment frame; see :meth:`HingeJoint.pose`."""
+        theta = np.asarray(theta, dtype=np.float64)
+        u = theta / (np.pi / 2)
+        tilt = np.deg2rad(self.axis_tilt_deg) * u
+        axis = -axis_angle_matrix(np.broadcast_to(_Z, theta.shape + (3,)), tilt) @ _X
+        rot = _relative_rotation(axis, theta, psi)
+        r = self.arc_radius_mm * 1e-3
+        phi = (self.slide_mm * 1e-3) * u / r  # angle travelled on the arc
+        # arc tangent at the start: palmar (-z); it curves toward proximal (-y)
+        offset = r * (-np.sin(phi)[..., None] * _Z - (1 - np.cos(phi))[..., None] * _Y)
         return rot, offset
 
     def describe(self) -> dict:

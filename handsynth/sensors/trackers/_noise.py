@@ -27,7 +27,7 @@ import numpy as np
 from ...errors import InvalidInputError
 from ..common import rotvec_to_matrix
 
-__all__ = ["LIBERTY", "LIBERTY_RESOLUTION", "NO_NOISE", "SensorNoise"]
+__all__ = ["DISTORTED_FIELD", "LIBERTY", "LIBERTY_RESOLUTION", "NO_NOISE", "FieldDistortion", "SensorNoise"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -106,3 +106,95 @@ LIBERTY = SensorNoise(position_sd_mm=0.76, orientation_sd_deg=0.15)
 LIBERTY_RESOLUTION = SensorNoise(position_sd_mm=0.0038, orientation_sd_deg=0.0012)
 #: Exact poses.
 NO_NOISE = SensorNoise()
+
+
+@dataclass(frozen=True, kw_only=True)
+class FieldDistortion:
+    """Smooth field distortion, slow drift and small white jitter.
+
+    A second error model, independent of :class:`SensorNoise`: the Liberty
+    data sheet's static accuracy (0.76 mm, 0.15 deg RMS, see module
+    docstring) is applied as a *spatially smooth* distortion of the field,
+    the same for both sensors at the same place (a sum of `n_waves` plane
+    waves of wavelength `wavelength_mm` with random directions, phases and
+    amplitudes), plus a linear drift of each sensor's reading over the trial
+    and white jitter.  Wavelength, drift and jitter are modelling choices,
+    not data-sheet figures: the jitter is about ten times the data sheet's
+    resolution, the drift a fraction of a millimetre per trial.
+
+    Parameters
+    ----------
+    position_rms_mm, orientation_rms_deg : float
+        RMS of each component of the distortion over space.
+    wavelength_mm : float
+        Spatial wavelength of the distortion (> 0).
+    drift_mm, drift_deg : float
+        Drift of each sensor reached at the end of the trial (random
+        direction per sensor).
+    white_mm, white_deg : float
+        Per-frame white jitter, RMS per component.
+    n_waves : int
+        Number of plane waves in the distortion field.
+    """
+
+    position_rms_mm: float = 0.76
+    orientation_rms_deg: float = 0.15
+    wavelength_mm: float = 150.0
+    drift_mm: float = 0.3
+    drift_deg: float = 0.1
+    white_mm: float = 0.04
+    white_deg: float = 0.01
+    n_waves: int = 6
+
+    def __post_init__(self) -> None:
+        for name in ("position_rms_mm", "orientation_rms_deg", "drift_mm", "drift_deg",
+                     "white_mm", "white_deg"):
+            v = getattr(self, name)
+            if not (np.isfinite(v) and v >= 0):
+                raise InvalidInputError(f"{name} must be finite and >= 0, got {v!r}")
+        if not (np.isfinite(self.wavelength_mm) and self.wavelength_mm > 0):
+            raise InvalidInputError(f"wavelength_mm must be > 0, got {self.wavelength_mm!r}")
+        if not (isinstance(self.n_waves, (int, np.integer)) and self.n_waves >= 1):
+            raise InvalidInputError(f"n_waves must be an integer >= 1, got {self.n_waves!r}")
+
+    def _field(self, rng: np.random.Generator, rms: float):
+        """A random smooth vector field ``f(p)`` of per-component RMS `rms`."""
+        k = rng.standard_normal((self.n_waves, 3))
+        k *= 2 * np.pi / (self.wavelength_mm * 1e-3) / np.linalg.norm(k, axis=1, keepdims=True)
+        phase = rng.uniform(0, 2 * np.pi, self.n_waves)
+        amp = rng.standard_normal((self.n_waves, 3)) * rms / np.sqrt(self.n_waves / 2)
+
+        def f(p: np.ndarray) -> np.ndarray:
+            return np.sin(p @ k.T + phase) @ amp
+
+        return f
+
+    def apply(
+        self,
+        positions: np.ndarray,
+        rotations: np.ndarray,
+        times: np.ndarray,
+        *,
+        rng: np.random.Generator,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Return distorted copies of sensor poses; see :meth:`SensorNoise.apply`."""
+        n, k = positions.shape[:2]
+        fp = self._field(rng, self.position_rms_mm * 1e-3)
+        fr = self._field(rng, np.deg2rad(self.orientation_rms_deg))
+        span = max(float(times[-1] - times[0]), 1e-9)
+        ramp = ((times - times[0]) / span)[:, None, None]
+
+        def drift(total: float) -> np.ndarray:
+            d = rng.standard_normal((k, 3))
+            return ramp * (total * d / np.linalg.norm(d, axis=1, keepdims=True))
+
+        dp = fp(positions) + drift(self.drift_mm * 1e-3)
+        dp += rng.standard_normal((n, k, 3)) * (self.white_mm * 1e-3)
+        dr = fr(positions) + drift(np.deg2rad(self.drift_deg))
+        dr += rng.standard_normal((n, k, 3)) * np.deg2rad(self.white_deg)
+        # the field's orientation error is a rotation in the transmitter frame
+        return positions + dp, rotvec_to_matrix(dr) @ rotations
+
+
+#: The independent error model of the second evaluation configuration.
+DISTORTED_FIELD = FieldDistortion()

@@ -1,13 +1,40 @@
-"""Readers of real recordings: Polhemus PiMgr / Liberty text exports.
+"""Readers of real recordings: Polhemus PiMgr and Liberty text exports.
 
-PiMgr (Polhemus' Liberty manager, the patent's recording software, para.
-0097) and the Liberty's ASCII output write one line per sensor per frame:
-whitespace- or comma-separated numbers, typically ``station x y z azimuth
-elevation roll`` with positions in inches or centimetres and Euler angles in
-degrees, or a quaternion ``w x y z`` when so configured.  Column layout,
-units and angle convention differ between set-ups, so every one is an
-argument here.  Polhemus' azimuth, elevation, roll are rotations about the
-transmitter's z, then the new y, then the new x: intrinsic ``"ZYX"``.
+Two families of files reach users (PiMgr, Polhemus' Liberty manager, is the
+patent's recording software, para. 0097):
+
+* **PiMgr CSV** with a header, one line per sample holding both sensors::
+
+      Time,w1,x1,y1,z1,w2,x2,y2,z2,loc1_x,loc1_y,loc1_z,loc2_x,loc2_y,loc2_z
+
+  ``w, x, y, z`` are the sensor's quaternion (scalar first), ``loc`` its
+  position.  Times are Unix seconds or seconds from the start; PiMgr writes
+  rows faster than the tracker samples, so a sample can appear on two rows
+  (identical pose values): such duplicates are dropped and counted.
+* **Liberty ASCII** (the tracker's own output, also what PiMgr saves as
+  text): one line per station and frame, ``station [frame] x y z`` then
+  Euler angles ``azimuth elevation roll`` (degrees) or a quaternion
+  ``w x y z``.  The frame-counter column is optional; it is recognised by
+  the number of columns together with an integer counter that never
+  decreases, and the layout found is recorded, never guessed silently
+  (eight columns that are neither a unit quaternion nor a counter are an
+  error).  A frame is a line of the first station followed by one of the
+  second (or, with a counter, both lines of one counter value): a station
+  line without its partner -- a lost line -- drops that half frame, it is
+  never merged into a neighbour.
+
+Polhemus' azimuth, elevation, roll are rotations about the transmitter's
+``z``, then the new ``y``, then the new ``x``: intrinsic ``"ZYX"``.
+
+Decimal commas (``12,5`` with ``;`` or whitespace between fields) are read
+and recorded.  Position units are checked against a finger joint: two
+sensors on adjacent phalanges are 10-90 mm apart (receivers 9.6 mm wide,
+para. 0094; phalanges up to about 50 mm, Buchholz et al. 1992); with
+``units="auto"`` the unit that puts the median spacing nearest 28 mm is
+used, and an explicit unit that puts it outside that range is warned about
+when another unit would not.  Glitches -- a sensor position more than
+`glitch_mm` from the median of its five-frame neighbourhood, which smooth
+finger motion never is -- are dropped, counted and named.
 """
 
 from __future__ import annotations
@@ -15,9 +42,11 @@ from __future__ import annotations
 import os
 import re
 import warnings
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from scipy.ndimage import median_filter
 from scipy.spatial.transform import Rotation
 
 from ...errors import InvalidInputError, RecordingError
@@ -25,52 +54,378 @@ from ._recording import Recording
 
 __all__ = ["DEFAULT_COLUMNS", "read_polhemus", "read_recording"]
 
-#: Default column layout: station number, position, Euler angles.
+#: Column layout of Liberty ASCII without frame counter (Euler angles).
 DEFAULT_COLUMNS = ("sensor", "x", "y", "z", "a1", "a2", "a3")
-_UNITS_M = {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "in": 0.0254}
-_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|nan|NaN|NAN")
+_UNITS_M = {"cm": 1e-2, "in": 0.0254, "mm": 1e-3, "m": 1.0}
+_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|[-+]?(?:nan|NaN|NAN|inf|Inf)")
+_COMMA_NUMBER = re.compile(r"[-+]?\d+,\d+(?:[eE][-+]?\d+)?")
+_SPACING_MM = (10.0, 90.0)  # plausible distance of two sensors across a finger joint
+_TYPICAL_SPACING_MM = 28.0
+_BINARY_MAGIC = {
+    b"PK\x03\x04": "a zip archive (an .npz file?)",
+    b"\x93NUMPY": "a NumPy .npy file",
+    b"\x89HDF": "an HDF5 file (give it the .h5 suffix)",
+}
 
 
-def _parse_lines(path: Path, n_cols: int) -> tuple[np.ndarray, np.ndarray]:
-    """Numeric rows of a text file and their 1-based line numbers."""
-    rows, lines = [], []
+@dataclass
+class _Table:
+    """Parsed numeric rows of a text export."""
+
+    rows: np.ndarray  # (m, k) float64
+    lines: np.ndarray  # (m,) 1-based line numbers
+    header: tuple[str, ...] | None
+    decimal_comma: bool
+    skipped: list[int]  # unparseable line numbers
+
+
+def _read_text(path: Path) -> str:
     try:
-        text = path.read_text(encoding="utf-8", errors="replace")
+        raw = path.read_bytes()
     except OSError as exc:
         raise RecordingError(f"cannot read {str(path)!r}: {exc.strerror or exc}") from None
-    bad = []
+    if not raw.strip():
+        raise RecordingError(f"{str(path)!r} is empty")
+    for magic, what in _BINARY_MAGIC.items():
+        if raw.startswith(magic):
+            raise RecordingError(f"{str(path)!r} is {what}, not a Polhemus text export")
+    if b"\x00" in raw[:65536]:
+        raise RecordingError(f"{str(path)!r} is a binary file, not a Polhemus text export")
+    try:
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        try:
+            return raw.decode("latin-1")
+        except UnicodeDecodeError:  # pragma: no cover - latin-1 decodes any byte
+            raise RecordingError(f"{str(path)!r} is not a text file") from None
+
+
+def _split(line: str, sep: str, decimal_comma: bool) -> list[str]:
+    if sep == "ws":
+        fields = line.split()
+    else:
+        fields = [f.strip() for f in line.split(sep)]
+    if decimal_comma:
+        fields = [f.replace(",", ".") for f in fields]
+    return fields
+
+
+def _tokenise(path: Path) -> _Table:
+    """Numeric rows of a text export, the header names and the separator."""
+    text = _read_text(path)
+    content = []
     for no, line in enumerate(text.splitlines(), start=1):
         s = line.strip()
-        if not s or s[0] in "#%;":  # comments
+        if s and s[0] not in "#%":
+            content.append((no, s))
+    if not content:
+        raise RecordingError(f"{str(path)!r} has no data lines (only blanks or comments)")
+    sample = [s for _, s in content[:200]]
+    # separator and decimal mark
+    if sum(";" in s for s in sample) > len(sample) // 2:
+        sep, dec = ";", any(_COMMA_NUMBER.search(s) for s in sample)
+    elif any("," in s for s in sample):
+        ws_tokens = [t for s in sample for t in s.split()]
+        dec = (
+            len(ws_tokens) > 0
+            and any(_COMMA_NUMBER.fullmatch(t) for t in ws_tokens)
+            and all(_NUMBER.fullmatch(t) or _COMMA_NUMBER.fullmatch(t) for t in ws_tokens
+                    if not t[0].isalpha())
+            and all(len(s.split()) >= 4 for s in sample if not s[0].isalpha())
+        )
+        sep = "ws" if dec else ","
+    else:
+        sep, dec = "ws", False
+    header = None
+    rows, lines, skipped = [], [], []
+    for no, s in content:
+        fields = _split(s, sep, dec)
+        if not any(fields):
+            skipped.append(no)
             continue
-        fields = [f for f in re.split(r"[,\s]+", s) if f]
-        if not _NUMBER.fullmatch(fields[0]) and fields[0][0].isalpha():
-            continue  # a header line such as "Sensor X Y Z Az El Ro"
-        if not all(_NUMBER.fullmatch(f) for f in fields):
-            bad.append(no)
-            continue
-        if len(fields) < n_cols:
-            bad.append(no)
-            continue
-        rows.append([float(f) for f in fields[:n_cols]])
-        lines.append(no)
+        if all(_NUMBER.fullmatch(f) for f in fields if f) and all(fields):
+            rows.append([float(f) for f in fields])
+            lines.append(no)
+        elif not rows and header is None and any(f[:1].isalpha() for f in fields if f):
+            header = tuple(f.strip().strip('"').lower() for f in fields)
+        else:
+            skipped.append(no)
     if not rows:
         raise RecordingError(
-            f"{str(path)!r}: no data line with {n_cols} numeric columns found"
-            + (f" (first unparseable line: {bad[0]})" if bad else "")
+            f"{str(path)!r}: no data line of numbers found"
+            + (f" (first unparseable line: {skipped[0]})" if skipped else "")
         )
-    if bad:
-        frac = len(bad) / (len(bad) + len(rows))
-        if frac > 0.05:
+    counts = np.array([len(r) for r in rows])
+    values, freq = np.unique(counts, return_counts=True)
+    k = int(values[np.argmax(freq)])
+    odd = counts != k
+    if odd.any():
+        skipped.extend(int(n) for n in np.asarray(lines)[odd])
+        rows = [r for r, o in zip(rows, odd) if not o]
+        lines = [n for n, o in zip(lines, odd) if not o]
+    skipped.sort()
+    total = len(rows) + len(skipped)
+    if skipped and len(skipped) > 0.05 * total:
+        raise RecordingError(
+            f"{str(path)!r}: {len(skipped)} of {total} lines cannot be read as the "
+            f"{k} numeric fields most lines have (mixed field counts or text; first: "
+            f"line {skipped[0]})"
+        )
+    return _Table(np.asarray(rows, dtype=np.float64), np.asarray(lines), header, dec, skipped)
+
+
+# --------------------------------------------------------------------------
+# layouts
+
+
+@dataclass
+class _Layout:
+    """Where the fields of one line are."""
+
+    kind: str  # "station" (one sensor per line) or "wide" (both sensors per line)
+    description: str
+    time: int | None = None
+    frame: int | None = None
+    station: int | None = None
+    pos: tuple[list[int], ...] = ()  # per sensor (wide) or one entry (station)
+    ang: tuple[list[int], ...] = ()
+    angles: str = "euler"
+
+
+def _is_counter(col: np.ndarray, station: np.ndarray) -> bool:
+    if not np.all(np.isfinite(col)) or not np.all(col == np.round(col)) or np.any(col < 0):
+        return False
+    for st in np.unique(station):
+        c = col[station == st]
+        if c.size > 1 and (np.any(np.diff(c) < 0) or not np.any(np.diff(c) > 0)):
+            return False
+    return True
+
+
+def _unit_quaternions(q: np.ndarray) -> bool:
+    norm = np.linalg.norm(q, axis=1)
+    ok = np.isfinite(norm)
+    return bool(ok.any() and np.mean(np.abs(norm[ok] - 1) < 2e-2) > 0.99)
+
+
+def _detect_station_layout(t: _Table, path: Path) -> _Layout:
+    rows = t.rows
+    k = rows.shape[1]
+    station = rows[:, 0]
+    if not (np.all(station == np.round(station)) and np.all((station >= 0) & (station <= 32))):
+        raise RecordingError(
+            f"{path.name}: the first column is not a station number (values "
+            f"{np.unique(station)[:4].tolist()}...) and there is no header naming the "
+            f"columns; expected Liberty ASCII 'station [frame] x y z az el ro' or a PiMgr "
+            f"CSV with a header"
+        )
+    if k == 7:
+        return _Layout("station", "Liberty ASCII: station x y z azimuth elevation roll",
+                       station=0, pos=([1, 2, 3],), ang=([4, 5, 6],))
+    if k == 8:
+        quat = _unit_quaternions(rows[:, 4:8])
+        counter = _is_counter(rows[:, 1], station)
+        if quat and not counter:
+            return _Layout("station", "Liberty ASCII: station x y z qw qx qy qz", station=0,
+                           pos=([1, 2, 3],), ang=([4, 5, 6, 7],), angles="quaternion")
+        if counter and not quat:
+            return _Layout("station", "Liberty ASCII: station frame x y z azimuth elevation roll",
+                           station=0, frame=1, pos=([2, 3, 4],), ang=([5, 6, 7],))
+        raise RecordingError(
+            f"{path.name}: 8 columns that are "
+            + ("both a frame counter + Euler angles and a unit quaternion"
+               if quat else "neither a frame counter (column 2) nor a unit quaternion "
+               "(columns 5-8)")
+            + "; give the layout with columns=(...)"
+        )
+    if k == 9:
+        if _unit_quaternions(rows[:, 5:9]) and _is_counter(rows[:, 1], station):
+            return _Layout("station", "Liberty ASCII: station frame x y z qw qx qy qz",
+                           station=0, frame=1, pos=([2, 3, 4],), ang=([5, 6, 7, 8],),
+                           angles="quaternion")
+        raise RecordingError(
+            f"{path.name}: 9 columns but not 'station frame x y z qw qx qy qz' (no "
+            f"increasing integer counter in column 2 or no unit quaternion in columns 6-9)"
+        )
+    raise RecordingError(
+        f"{path.name}: {k} numeric columns and no header: not a Liberty ASCII layout "
+        f"(7 to 9 columns: station [frame] x y z and 3 Euler angles or a quaternion)"
+    )
+
+
+def _header_layout(header: tuple[str, ...], k: int, path: Path) -> _Layout:
+    if len(header) != k:
+        raise RecordingError(
+            f"{path.name}: the header names {len(header)} columns but the data lines have {k}"
+        )
+    idx = {h: i for i, h in enumerate(header)}
+
+    def find(*names: str) -> int | None:
+        return next((idx[n] for n in names if n in idx), None)
+
+    pos, ang = [], []
+    for s in ("1", "2"):
+        p = [find(f"loc{s}_{c}", f"pos{s}_{c}", f"{c}{s}_pos") for c in "xyz"]
+        q = [find(f"{c}{s}", f"q{c}{s}") for c in "wxyz"]
+        e = [find(f"{c}{s}") for c in ("az", "el", "ro")]
+        if any(i is None for i in p):
             raise RecordingError(
-                f"{str(path)!r}: {len(bad)} of {len(bad) + len(rows)} data lines cannot "
-                f"be parsed with {n_cols} numeric columns (first: line {bad[0]})"
+                f"{path.name}: header {','.join(header)!r} has no position columns "
+                f"loc{s}_x, loc{s}_y, loc{s}_z for sensor {s}"
             )
-        warnings.warn(
-            f"{path.name}: skipped {len(bad)} unparseable lines (first: line {bad[0]})",
-            stacklevel=3,
+        if all(i is not None for i in q):
+            ang.append([int(i) for i in q if i is not None])
+        elif all(i is not None for i in e):
+            ang.append([int(i) for i in e if i is not None])
+        else:
+            raise RecordingError(
+                f"{path.name}: header has no orientation of sensor {s} (w{s},x{s},y{s},z{s} "
+                f"or az{s},el{s},ro{s})"
+            )
+        pos.append([int(i) for i in p if i is not None])
+    angles = "quaternion" if len(ang[0]) == 4 else "euler"
+    return _Layout("wide", f"PiMgr CSV with header ({angles})", time=find("time", "t"),
+                   frame=find("frame", "count"), pos=tuple(pos), ang=tuple(ang), angles=angles)
+
+
+def _explicit_layout(columns: tuple[str, ...], angles: str, k: int, path: Path) -> _Layout:
+    """The old ``columns=`` interface: names of the leading columns."""
+    if len(set(columns)) != len(columns):
+        raise InvalidInputError(f"columns: duplicate names in {columns!r}")
+    if k < len(columns):
+        raise RecordingError(
+            f"{path.name}: lines have {k} fields, columns= names {len(columns)}"
         )
-    return np.asarray(rows, dtype=np.float64), np.asarray(lines)
+    ang = ("a1", "a2", "a3") if angles == "euler" else ("qw", "qx", "qy", "qz")
+    col = {c: i for i, c in enumerate(columns)}
+    long_format = "sensor" in columns
+    per = ("x", "y", "z", *ang)
+    need = per if long_format else tuple(f"{c}{s}" for s in (1, 2) for c in per)
+    missing = [c for c in need if c not in col]
+    if missing:
+        raise InvalidInputError(f"columns: {missing} missing for angles={angles!r} in {columns!r}")
+    if long_format:
+        return _Layout("station", f"columns={list(columns)}", time=col.get("time"),
+                       frame=col.get("frame"), station=col["sensor"],
+                       pos=([col[c] for c in "xyz"],), ang=([col[c] for c in ang],),
+                       angles=angles)
+    return _Layout("wide", f"columns={list(columns)}", time=col.get("time"),
+                   frame=col.get("frame"),
+                   pos=tuple([col[f"{c}{s}"] for c in "xyz"] for s in (1, 2)),
+                   ang=tuple([col[f"{c}{s}"] for c in ang] for s in (1, 2)), angles=angles)
+
+
+# --------------------------------------------------------------------------
+# assembling frames
+
+
+def _rotations(a: np.ndarray, angles: str, euler_order: str) -> tuple[np.ndarray, int]:
+    """Matrices of Euler angles (deg) or quaternions (w first); NaN rows stay NaN.
+
+    Returns the matrices and the number of quaternion sign flips between
+    consecutive rows (harmless: ``q`` and ``-q`` are one rotation).
+    """
+    rot = np.full(a.shape[:1] + (3, 3), np.nan)
+    finite = np.isfinite(a).all(axis=1)
+    flips = 0
+    if angles == "euler":
+        rot[finite] = Rotation.from_euler(euler_order, a[finite], degrees=True).as_matrix()
+        return rot, 0
+    q = a[finite]
+    norm = np.linalg.norm(q, axis=1)
+    good = np.abs(norm - 1) < 2e-2
+    if q.shape[0] > 1:
+        flips = int(np.sum(np.einsum("ij,ij->i", q[1:], q[:-1]) < 0))
+    idx = np.flatnonzero(finite)
+    ok = idx[good]
+    rot[ok] = Rotation.from_quat(q[good][:, [1, 2, 3, 0]]).as_matrix()
+    return rot, flips
+
+
+def _pair_stations(station: np.ndarray, frame: np.ndarray | None,
+                   sensors: tuple[int, int]) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, int]:
+    """Rows of the upper and lower sensor that form complete frames.
+
+    Returns row indices (upper, lower), the frame key of each (counter or
+    ordinal of the upper line), the number of half frames dropped and of
+    duplicated lines dropped.
+    """
+    a, b = sensors
+    if frame is not None:
+        keys: dict[float, list[int | None]] = {}
+        dups = 0
+        for i, (st, fr) in enumerate(zip(station, frame)):
+            if st not in (a, b):
+                continue
+            slot = keys.setdefault(float(fr), [None, None])
+            j = 0 if st == a else 1
+            if slot[j] is None:
+                slot[j] = i
+            else:
+                dups += 1
+        full = sorted((k, v) for k, v in keys.items() if v[0] is not None and v[1] is not None)
+        half = len(keys) - len(full)
+        up = np.array([v[0] for _, v in full], dtype=np.int64)
+        lo = np.array([v[1] for _, v in full], dtype=np.int64)
+        return up, lo, np.array([k for k, _ in full], dtype=np.float64), half, dups
+    sel = np.flatnonzero(np.isin(station, sensors))
+    st = station[sel]
+    up_l, lo_l, key = [], [], []
+    half = 0
+    i = 0
+    ordinal = 0  # frames started so far, complete or not: the frame's time slot
+    while i < sel.size:
+        if st[i] == a and i + 1 < sel.size and st[i + 1] == b:
+            up_l.append(sel[i])
+            lo_l.append(sel[i + 1])
+            key.append(float(ordinal))
+            i += 2
+        else:
+            half += 1
+            i += 1
+        ordinal += 1
+    return (np.array(up_l, dtype=np.int64), np.array(lo_l, dtype=np.int64),
+            np.array(key, dtype=np.float64), half, 0)
+
+
+def _choose_units(positions_file: np.ndarray, units: str, path: Path) -> tuple[str, str]:
+    """Unit of the file's positions and a note on how it was chosen."""
+    spacing = np.linalg.norm(positions_file[:, 1] - positions_file[:, 0], axis=1)
+    spacing = spacing[np.isfinite(spacing)]
+    if spacing.size == 0:
+        return (units if units != "auto" else "cm"), "no finite positions"
+    med = float(np.median(spacing))
+    in_mm = {u: med * f * 1e3 for u, f in _UNITS_M.items()}
+    plausible = [u for u, v in in_mm.items() if _SPACING_MM[0] <= v <= _SPACING_MM[1]]
+    if units == "auto":
+        best = min(in_mm, key=lambda u: abs(np.log(max(in_mm[u], 1e-12) / _TYPICAL_SPACING_MM)))
+        note = f"auto: sensor spacing {in_mm[best]:.1f} mm"
+        if best not in plausible:
+            warnings.warn(
+                f"{path.name}: no unit gives a plausible spacing of two sensors across a "
+                f"finger joint ({_SPACING_MM[0]:g}-{_SPACING_MM[1]:g} mm); using {best!r} "
+                f"({in_mm[best]:.3g} mm); pass units= if that is wrong", stacklevel=4)
+        elif len(plausible) > 1:
+            note += f"; {', '.join(u for u in plausible if u != best)} also plausible"
+        return best, note
+    if units not in plausible:
+        others = [u for u in plausible if u != units]
+        if others:
+            warnings.warn(
+                f"{path.name}: in {units!r} the two sensors are {in_mm[units]:.3g} mm apart, "
+                f"implausible across a finger joint; the data look like "
+                f"{' or '.join(repr(u) for u in others)} ({in_mm[others[0]]:.3g} mm)",
+                stacklevel=4)
+    return units, f"given: sensor spacing {in_mm[units]:.1f} mm"
+
+
+def _glitches(positions: np.ndarray, glitch_mm: float) -> np.ndarray:
+    """Frames where a sensor is farther than `glitch_mm` from its 5-frame median."""
+    if positions.shape[0] < 5:
+        return np.zeros(positions.shape[0], dtype=bool)
+    med = median_filter(positions, size=(5, 1, 1), mode="nearest")
+    dev = np.linalg.norm(positions - med, axis=2).max(axis=1) * 1e3
+    return dev > glitch_mm
 
 
 #: Slack on the Euler-angle ranges, degrees (a tracker may print 180.00 or 90.004).
@@ -101,46 +456,54 @@ def read_polhemus(
     path: str | os.PathLike,
     *,
     columns: tuple[str, ...] | None = None,
-    units: str = "cm",
-    angles: str = "euler",
+    units: str = "auto",
+    angles: str | None = None,
     euler_order: str = "ZYX",
-    sensors: tuple[int, int] = (1, 2),
+    sensors: tuple[int, int] | None = None,
     rate_hz: float = 240.0,
     labels: tuple[str, str] = ("upper", "lower"),
     joint: str = "joint",
-    on_invalid: str = "raise",
+    on_invalid: str = "drop",
+    glitch_mm: float = 10.0,
 ) -> Recording:
-    """Read a PiMgr / Liberty text export of two sensors.
+    """Read a PiMgr CSV or Liberty ASCII export of two sensors.
+
+    The layout is detected (see the module docstring) unless `columns` is
+    given; what was found is in ``recording.metadata`` (``format``,
+    ``layout``, ``units``, ``units_note``, counts of ``duplicates``,
+    ``half_frames``, ``glitch_frames``, ``invalid_frames``,
+    ``skipped_lines``, ``quaternion_sign_flips``, ``decimal_comma``).
 
     Parameters
     ----------
     path : path-like
     columns : tuple of str, optional
-        Name of each leading column; extra columns are ignored.  Default
-        :data:`DEFAULT_COLUMNS`, or ``("sensor", "x", "y", "z", "qw", "qx",
-        "qy", "qz")`` with ``angles="quaternion"``.  Required:
-        ``"x", "y", "z"`` and either ``"a1", "a2", "a3"`` (Euler angles in
-        degrees, applied in `euler_order`) or ``"qw", "qx", "qy", "qz"``.
-        ``"sensor"`` (station number) marks a one-sensor-per-line file;
-        ``"frame"`` (frame counter) and ``"time"`` (seconds) are optional.
-        Without ``"sensor"``, each line holds both sensors and the names
-        carry a suffix: ``"x1", ..., "a31", "x2", ...``.
-    units : {"cm", "in", "mm", "m"}
-        Unit of the positions (PiMgr default: inches or cm, as configured).
-    angles : {"euler", "quaternion"}
+        Explicit names of the leading columns (old interface): ``"x", "y",
+        "z"`` and ``"a1", "a2", "a3"`` (Euler, degrees) or ``"qw", "qx",
+        "qy", "qz"``, plus ``"sensor"`` for one sensor per line, or the same
+        names suffixed ``1``/``2`` for both sensors per line; ``"frame"``
+        and ``"time"`` optional.
+    units : {"auto", "cm", "in", "mm", "m"}
+        Unit of the positions; ``"auto"`` judges it by the sensor spacing.
+    angles : {"euler", "quaternion"}, optional
+        Orientation columns: required meaning with `columns`; otherwise
+        detected, and a file whose layout has the other kind is refused.
     euler_order : str
         SciPy Euler sequence; ``"ZYX"`` (intrinsic) is Polhemus' azimuth,
         elevation, roll.
-    sensors : (int, int)
-        Station numbers of the upper and lower sensor.
+    sensors : (int, int), optional
+        Station numbers of the upper and lower sensor; default: the two
+        stations in the file (lowest first), or 1 and 2 when there are more.
     rate_hz : float
-        Sampling rate used to build times when there is no ``"time"`` column
-        (frame counter times ``1 / rate_hz`` when there is a ``"frame"``).
+        Sampling rate used for times when the file has none (frame counter
+        times ``1 / rate_hz`` when there is a counter).
     labels, joint : see :class:`Recording`.
-    on_invalid : {"raise", "drop"}
-        What to do with frames that have NaN values or miss one of the two
-        sensors: raise :class:`RecordingError` naming them, or drop them with
-        a warning naming how many and which.
+    on_invalid : {"drop", "raise"}
+        Frames with NaN values, half frames (lost lines) and glitches:
+        drop them with a warning that counts them, or raise
+        :class:`RecordingError` naming them.
+    glitch_mm : float
+        Glitch threshold (see module docstring), millimetres.
 
     Returns
     -------
@@ -149,113 +512,172 @@ def read_polhemus(
     Raises
     ------
     RecordingError
-        Unreadable or unparseable file, missing sensors, NaN or missing rows
-        (with ``on_invalid="raise"``), matrices that are not rotations.
+        Unreadable, empty, binary or unparseable file, unknown layout,
+        missing sensors, invalid frames with ``on_invalid="raise"``,
+        matrices that are not rotations.
     InvalidInputError
         Bad arguments.
     """
     path = Path(path)
-    if units not in _UNITS_M:
-        raise InvalidInputError(f"units: expected one of {sorted(_UNITS_M)}, got {units!r}")
-    if angles not in ("euler", "quaternion"):
+    if units != "auto" and units not in _UNITS_M:
+        raise InvalidInputError(
+            f"units: expected 'auto' or one of {sorted(_UNITS_M)}, got {units!r}")
+    if angles is not None and angles not in ("euler", "quaternion"):
         raise InvalidInputError(f"angles: expected 'euler' or 'quaternion', got {angles!r}")
     if on_invalid not in ("raise", "drop"):
-        raise InvalidInputError(f"on_invalid: expected 'raise' or 'drop', got {on_invalid!r}")
+        raise InvalidInputError(f"on_invalid: expected 'drop' or 'raise', got {on_invalid!r}")
     if not (np.isfinite(rate_hz) and rate_hz > 0):
         raise InvalidInputError(f"rate_hz must be > 0, got {rate_hz!r}")
-    if columns is None:
-        columns = DEFAULT_COLUMNS if angles == "euler" else (
-            "sensor", "x", "y", "z", "qw", "qx", "qy", "qz")
-    columns = tuple(columns)
-    if len(set(columns)) != len(columns):
-        raise InvalidInputError(f"columns: duplicate names in {columns!r}")
-    ang = ("a1", "a2", "a3") if angles == "euler" else ("qw", "qx", "qy", "qz")
-    long_format = "sensor" in columns
-    per_sensor = ("x", "y", "z", *ang)
-    need = per_sensor if long_format else tuple(
-        f"{c}{k}" for k in (1, 2) for c in per_sensor
-    )
-    missing = [c for c in need if c not in columns]
-    if missing:
-        raise InvalidInputError(
-            f"columns: {missing} missing for angles={angles!r} in {columns!r}"
-        )
-    data, line_no = _parse_lines(path, len(columns))
-    col = {c: i for i, c in enumerate(columns)}
+    if not (np.isfinite(glitch_mm) and glitch_mm > 0):
+        raise InvalidInputError(f"glitch_mm must be > 0, got {glitch_mm!r}")
+    if sensors is not None and (len(sensors) != 2 or sensors[0] == sensors[1]):
+        raise InvalidInputError(f"sensors: expected two different station numbers, got {sensors!r}")
 
-    def pose(rows: np.ndarray, lines: np.ndarray, suffix: str = "") -> tuple[np.ndarray, np.ndarray]:
-        pos = rows[:, [col[c + suffix] for c in ("x", "y", "z")]] * _UNITS_M[units]
-        a = rows[:, [col[c + suffix] for c in ang]]
-        finite = np.isfinite(a).all(axis=1)
-        rot = np.full((rows.shape[0], 3, 3), np.nan)
-        if angles == "euler":
-            _check_euler_range(a, lines, finite, euler_order, path, ang, suffix)
-            rot[finite] = Rotation.from_euler(euler_order, a[finite], degrees=True).as_matrix()
-        else:
-            q = a[finite]
-            norm = np.linalg.norm(q, axis=1)
-            if np.any(np.abs(norm - 1) > 1e-2):
-                i = int(np.flatnonzero(np.abs(norm - 1) > 1e-2)[0])
-                raise RecordingError(
-                    f"{path.name}: quaternion with norm {norm[i]:.4f} != 1 at line "
-                    f"{lines[finite][i]}; is the angle format really 'quaternion'?"
-                )
-            rot[finite] = Rotation.from_quat(q[:, [1, 2, 3, 0]]).as_matrix()
-        return pos, rot
-
-    if long_format:
-        station = data[:, col["sensor"]]
-        unknown = sorted(set(station[np.isfinite(station)].astype(int)) - set(sensors))
-        if unknown:
-            warnings.warn(f"{path.name}: ignoring stations {unknown}", stacklevel=2)
-        if "frame" in col:
-            frame_id = data[:, col["frame"]]
-        else:  # consecutive lines of the first sensor start a new frame
-            frame_id = np.cumsum(station == sensors[0]).astype(np.float64)
-        frames = np.unique(frame_id[np.isin(station, sensors)])
-        n = frames.size
-        positions = np.full((n, 2, 3), np.nan)
-        rotations = np.full((n, 2, 3, 3), np.nan)
-        times = frames / rate_hz if "frame" in col else np.arange(n) / rate_hz
-        for s, st in enumerate(sensors):
-            rows = station == st
-            if not rows.any():
-                raise RecordingError(f"{path.name}: no line of sensor (station) {st}")
-            k = np.searchsorted(frames, frame_id[rows])
-            p, r = pose(data[rows], line_no[rows])
-            positions[k, s], rotations[k, s] = p, r
-            if "time" in col and s == 0:
-                times = np.full(n, np.nan)
-                times[k] = data[rows, col["time"]]
+    t = _tokenise(path)
+    k = t.rows.shape[1]
+    if columns is not None:
+        lay = _explicit_layout(tuple(columns), angles or "euler", k, path)
+    elif t.header is not None and any(h.startswith(("loc", "pos")) for h in t.header):
+        lay = _header_layout(t.header, k, path)
     else:
-        n = data.shape[0]
-        positions = np.empty((n, 2, 3))
-        rotations = np.empty((n, 2, 3, 3))
-        for s, k in enumerate(("1", "2")):
-            positions[:, s], rotations[:, s] = pose(data, line_no, k)
-        if "time" in col:
-            times = data[:, col["time"]]
-        elif "frame" in col:
-            times = data[:, col["frame"]] / rate_hz
-        else:
-            times = np.arange(n) / rate_hz
+        lay = _detect_station_layout(t, path)
+    if angles is not None and lay.angles != angles:
+        raise RecordingError(
+            f"{path.name}: the layout found is {lay.description!r}, whose orientation is "
+            f"{lay.angles!r}, not angles={angles!r}")
+    rows = t.rows
+    notes: dict = {"skipped_lines": len(t.skipped)}
+    if t.skipped:
+        warnings.warn(f"{path.name}: skipped {len(t.skipped)} unreadable lines (first: line "
+                      f"{t.skipped[0]})", stacklevel=2)
 
-    bad = ~(
-        np.isfinite(positions).all(axis=(1, 2))
-        & np.isfinite(rotations).all(axis=(1, 2, 3))
-        & np.isfinite(times)
-    )
-    if bad.any():
-        where = np.flatnonzero(bad)
-        msg = (
-            f"{path.name}: {where.size} of {n} frames have NaN values or miss a "
-            f"sensor's line (frames {where[:8].tolist()}{' ...' if where.size > 8 else ''})"
-        )
+    if lay.kind == "station":
+        assert lay.station is not None
+        station = rows[:, lay.station]
+        present = sorted(int(s) for s in np.unique(station[np.isfinite(station)]))
+        if sensors is None:
+            if len(present) < 2:
+                raise RecordingError(
+                    f"{path.name}: only station {present} in the file; two sensors are needed")
+            first, second = (1, 2) if len(present) > 2 and {1, 2} <= set(present) else present[:2]
+            pair: tuple[int, int] = (first, second)
+        else:
+            pair = (int(sensors[0]), int(sensors[1]))
+        missing_st = [s for s in pair if s not in present]
+        if missing_st:
+            raise RecordingError(f"{path.name}: no line of sensor (station) {missing_st[0]} "
+                                 f"(stations present: {present})")
+        extra = sorted(set(present) - set(pair))
+        if extra:
+            warnings.warn(f"{path.name}: ignoring stations {extra}", stacklevel=2)
+        frame_col = rows[:, lay.frame] if lay.frame is not None else None
+        up, lo, key, half, dups = _pair_stations(station, frame_col, pair)
+        if up.size == 0:
+            raise RecordingError(f"{path.name}: no complete frame of stations {pair}")
+        sel = [up, lo]
+        pos_file = np.stack([rows[s][:, lay.pos[0]] for s in sel], axis=1)
+        ang = [rows[s][:, lay.ang[0]] for s in sel]
+        ang_lines = [t.lines[s] for s in sel]
+        if lay.angles == "euler":  # before any frame is dropped: the line numbers are the file's
+            for a, lines in zip(ang, ang_lines):
+                _check_euler_range(a, lines, np.isfinite(a).all(axis=1), euler_order, path,
+                                   ("a1", "a2", "a3"), "")
+        if lay.time is not None:
+            times = rows[up, lay.time]
+        else:  # frame counter or frame ordinal
+            times = (key - key[0]) / rate_hz
+        line_no = t.lines[up]
+        notes["half_frames"] = half
+        notes["duplicates"] = dups
+    else:
+        pos_file = np.stack([rows[:, p] for p in lay.pos], axis=1)
+        ang = [rows[:, a] for a in lay.ang]
+        line_no = t.lines
+        ang_lines = [t.lines, t.lines]
+        if lay.angles == "euler":  # before any frame is dropped: the line numbers are the file's
+            for a, lines in zip(ang, ang_lines):
+                _check_euler_range(a, lines, np.isfinite(a).all(axis=1), euler_order, path,
+                                   ("a1", "a2", "a3"), "")
+        # duplicated rows: the same sample written again
+        pose = np.concatenate([pos_file.reshape(len(rows), -1), *ang], axis=1)
+        same = np.zeros(len(rows), dtype=bool)
+        same[1:] = np.all(pose[1:] == pose[:-1], axis=1)
+        if lay.time is not None:
+            times = rows[:, lay.time]
+        elif lay.frame is not None:
+            times = rows[:, lay.frame] / rate_hz
+        else:
+            times = np.arange(len(rows)) / rate_hz
+        keep = ~same
+        notes["duplicates"] = int(same.sum())
+        pos_file, ang, times, line_no = (pos_file[keep], [a[keep] for a in ang], times[keep],
+                                         line_no[keep])
+        notes["half_frames"] = 0
+        if lay.time is not None and times.size and np.nanmin(times) > 1e8:
+            notes["time_origin_unix_s"] = float(np.nanmin(times))
+        pair = (1, 2) if sensors is None else (int(sensors[0]), int(sensors[1]))
+    if lay.time is not None and times.size:
+        times = times - np.nanmin(times)
+        # rows re-written with a time that does not advance
+        ok = np.ones(times.size, dtype=bool)
+        last = -np.inf
+        for i, tt in enumerate(times):
+            if np.isfinite(tt) and tt <= last:
+                ok[i] = False
+            elif np.isfinite(tt):
+                last = tt
+        if not ok.all():
+            notes["non_increasing_times"] = int((~ok).sum())
+            pos_file, ang, times, line_no = pos_file[ok], [a[ok] for a in ang], times[ok], line_no[ok]
+
+    unit, unit_note = _choose_units(pos_file, units, path)
+    positions = pos_file * _UNITS_M[unit]
+    rots, flips = zip(*(_rotations(a, lay.angles, euler_order) for a in ang))
+    rotations = np.stack(rots, axis=1)
+    n = positions.shape[0]
+    invalid = ~(np.isfinite(positions).all(axis=(1, 2)) & np.isfinite(rotations).all(axis=(1, 2, 3))
+                & np.isfinite(times))
+    if lay.angles == "quaternion":
+        for s, a in enumerate(ang):
+            norm = np.linalg.norm(a, axis=1)
+            badq = np.isfinite(norm) & (np.abs(norm - 1) >= 2e-2)
+            if badq.sum() > 0.05 * n:
+                i = int(np.flatnonzero(badq)[0])
+                raise RecordingError(
+                    f"{path.name}: {int(badq.sum())} quaternions of sensor {s + 1} have a norm "
+                    f"far from 1 (first: {norm[i]:.4f} at line {line_no[i]}); are these columns "
+                    f"really a quaternion?")
+    glitch = np.zeros(n, dtype=bool)
+    fin = ~invalid
+    if fin.sum() >= 5:
+        glitch[np.flatnonzero(fin)] = _glitches(positions[fin], glitch_mm)
+    notes["invalid_frames"] = int(invalid.sum())
+    notes["glitch_frames"] = int(glitch.sum())
+    notes["quaternion_sign_flips"] = int(sum(flips))
+    problems = []
+    if notes["half_frames"]:
+        problems.append(f"{notes['half_frames']} half frames (a station line without its "
+                        f"partner: lost lines)")
+    if invalid.any():
+        w = np.flatnonzero(invalid)
+        problems.append(f"{w.size} frames with NaN values or unusable angles (lines "
+                        f"{line_no[w[:5]].tolist()}{' ...' if w.size > 5 else ''})")
+    if glitch.any():
+        w = np.flatnonzero(glitch)
+        problems.append(f"{w.size} glitch frames (a position > {glitch_mm:g} mm off its "
+                        f"neighbours; lines {line_no[w[:5]].tolist()}"
+                        f"{' ...' if w.size > 5 else ''})")
+    if problems:
+        msg = f"{path.name}: " + "; ".join(problems)
         if on_invalid == "raise":
-            raise RecordingError(msg + "; pass on_invalid='drop' to skip them")
+            raise RecordingError(msg + " (on_invalid='drop' drops them)")
         warnings.warn(msg + "; dropped", stacklevel=2)
-        keep = ~bad
-        times, positions, rotations = times[keep], positions[keep], rotations[keep]
+    if notes["duplicates"]:
+        warnings.warn(f"{path.name}: dropped {notes['duplicates']} duplicated rows", stacklevel=2)
+    keep = ~(invalid | glitch)
+    if keep.sum() < 10:
+        raise RecordingError(f"{path.name}: only {int(keep.sum())} usable frames of {n}")
+    times, positions, rotations = times[keep], positions[keep], rotations[keep]
     return Recording(
         times=times,
         positions=positions,
@@ -264,13 +686,17 @@ def read_polhemus(
         joint=joint,
         metadata={
             "source": str(path),
-            "format": "polhemus-text",
-            "units": units,
-            "angles": angles,
+            "format": "pimgr-csv" if lay.kind == "wide" and columns is None else "liberty-ascii"
+            if columns is None else "polhemus-text",
+            "layout": lay.description,
+            "units": unit,
+            "units_note": unit_note,
+            "angles": lay.angles,
             "euler_order": euler_order,
-            "columns": list(columns),
-            "sensors": list(sensors),
-            "dropped_frames": int(bad.sum()),
+            "sensors": list(pair),
+            "decimal_comma": bool(t.decimal_comma),
+            "dropped_frames": int((~keep).sum()) + int(notes["half_frames"]),
+            **notes,
         },
     )
 

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._axis_filter import AxisFilterResult
+from ._determinability import Determinability
 from ._recording import Recording
 
 __all__ = ["JointCentreResult", "centre_distance_mm"]
@@ -68,6 +69,14 @@ class JointCentreResult:
     joint : str
     axis_filter : AxisFilterResult or None
         The filter's histogram when ``frames_mode == "filtered"``.
+    determinability : Determinability or None
+        Rotation spread, joint axis and expected error of the frames used.
+    determined : {"point", "axis"}
+        ``"axis"`` for a single-axis motion: only the joint axis is
+        determined and the centre is the point of it nearest the sensors.
+    warnings : tuple of str
+        What the user must know with this centre (expected error, single
+        axis, disagreement with the linear solution); empty when none.
     """
 
     method: str
@@ -82,6 +91,9 @@ class JointCentreResult:
     labels: tuple[str, str]
     joint: str
     axis_filter: AxisFilterResult | None = None
+    determinability: Determinability | None = None
+    determined: str = "point"
+    warnings: tuple[str, ...] = ()
 
     def error_mm(self, recording: Recording) -> np.ndarray:
         """Distance of ``P_U`` and ``P_L`` from the true centre, millimetres.
@@ -121,7 +133,11 @@ class JointCentreResult:
             "n_frames_used": int(self.frames.size),
             "n_frames_total": int(self.n_frames_total),
             "range_of_motion_deg": round(float(self.range_of_motion_deg), 3),
+            "determined": self.determined,
+            "warnings": list(self.warnings),
         }
+        if self.determinability is not None:
+            d["determinability"] = self.determinability.to_dict()
         if self.axis_filter is not None:
             lo, hi = self.axis_filter.chosen_range
             d["axis_filter"] = {"bin": [round(lo, 6), round(hi, 6)],

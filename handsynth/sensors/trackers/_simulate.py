@@ -17,9 +17,9 @@ from scipy.spatial.transform import Rotation
 from ...errors import InvalidInputError
 from ..common import axis_angle_matrix
 from ._geometry import joint_geometry
-from ._joint_models import FingerJoint, HingeJoint
+from ._joint_models import ArcJoint, FingerJoint, HingeJoint
 from ._motion import FlexionMotion
-from ._noise import LIBERTY, SensorNoise
+from ._noise import LIBERTY, FieldDistortion, SensorNoise
 from ._recording import GroundTruth, Recording
 
 __all__ = ["SensorMount", "simulate_recording"]
@@ -68,11 +68,11 @@ class SensorMount:
 def simulate_recording(
     joint: str = "index_dip",
     *,
-    model: HingeJoint | FingerJoint | str = "finger",
+    model: HingeJoint | FingerJoint | ArcJoint | str = "finger",
     motion: FlexionMotion = FlexionMotion(),  # noqa: B008 - frozen dataclass, never mutated
     upper_mount: SensorMount = SensorMount(pitch_deg=15.0),
     lower_mount: SensorMount = SensorMount(pitch_deg=-15.0),
-    noise: SensorNoise = LIBERTY,
+    noise: SensorNoise | FieldDistortion = LIBERTY,
     seed: int | None = 0,
     geometry_source: str = "auto",
     hand=None,
@@ -84,14 +84,14 @@ def simulate_recording(
     joint : str
         ``"index_dip"``, ``"middle_pip"``, ... (see
         :data:`~handsynth.sensors._geometry.SUPPORTED_JOINTS`).
-    model : HingeJoint, FingerJoint, "hinge" or "finger"
+    model : HingeJoint, FingerJoint, ArcJoint, "hinge", "finger" or "arc"
         Joint kinematics; the strings give the default-parameter models.
     motion : FlexionMotion
         Trial protocol (duration, rate, range, wobble).
     upper_mount, lower_mount : SensorMount
         Receiver placement on the upper and lower segment.  The default
         +/-15 deg pitch tilts the receivers away from each other (para. 0101).
-    noise : SensorNoise
+    noise : SensorNoise or FieldDistortion
         Measurement error; default :data:`~handsynth.sensors.LIBERTY`.
     seed : int or None
         Seed of the random generator (motion variability and noise).
@@ -105,11 +105,16 @@ def simulate_recording(
     Recording
         With :attr:`Recording.truth` set.
     """
+    jm: HingeJoint | FingerJoint | ArcJoint
     if isinstance(model, str):
-        models = {"hinge": HingeJoint, "finger": FingerJoint}
+        models: dict[str, type[HingeJoint | FingerJoint | ArcJoint]] = {
+            "hinge": HingeJoint, "finger": FingerJoint, "arc": ArcJoint}
         if model not in models:
-            raise InvalidInputError(f"model: expected 'hinge' or 'finger', got {model!r}")
-        model = models[model]()
+            raise InvalidInputError(
+                f"model: expected 'hinge', 'finger' or 'arc', got {model!r}")
+        jm = models[model]()
+    else:
+        jm = model
     rng = np.random.default_rng(seed)
     geo = joint_geometry(joint, source=geometry_source, hand=hand)
     m = motion.sample(rng)
@@ -120,7 +125,7 @@ def simulate_recording(
     ) @ geo.upper_rotation
     o_up = np.broadcast_to(geo.upper_origin, r_up.shape[:1] + (3,))
     # lower segment from the joint model, composed on the upper pose
-    r_rel, offset = model.pose(m.flexion, m.wobble)
+    r_rel, offset = jm.pose(m.flexion, m.wobble)
     c0 = np.array([0.0, geo.upper_length, 0.0])
     centre_up = c0 + offset  # joint centre in the upper segment frame, (n, 3)
     r_lo = r_up @ r_rel
@@ -145,7 +150,7 @@ def simulate_recording(
         centre_world=o_lo,
         centre_sensor=centre_sensor,
         reference_centre=reference,
-        joint_kind=model.kind,
+        joint_kind=jm.kind,
     )
     positions, rotations = noise.apply(positions, rotations, m.times, rng=rng)
     # re-orthonormalise after the noise product to machine precision
@@ -154,11 +159,11 @@ def simulate_recording(
     )
     metadata = {
         "source": "simulation",
-        "joint_model": model.describe(),
+        "joint_model": jm.describe(),
         "motion": {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(motion).items()},
         "upper_mount": asdict(upper_mount),
         "lower_mount": asdict(lower_mount),
-        "noise": asdict(noise),
+        "noise": {"model": type(noise).__name__, **asdict(noise)},
         "seed": seed,
         "geometry_source": geo.source,
         # finger width direction (segment +x) in the transmitter frame at the

@@ -62,10 +62,10 @@ def test_polhemus_text_matches_recording(tmp_path, finger_rec, units, quaternion
 
 def test_missing_and_nan_rows_are_named(tmp_path, finger_rec):
     path = _export(finger_rec, tmp_path / "rec.txt", drop={(5, 1)}, nan={(9, 0)})
-    with pytest.raises(RecordingError, match=r"2 of \d+ frames .*\[5, 9\]"):
-        read_polhemus(path)
+    with pytest.raises(RecordingError, match=r"1 half frames.*1 frames with NaN.*lines \[\d+\]"):
+        read_polhemus(path, on_invalid="raise")
     with pytest.warns(UserWarning, match="dropped"):
-        rec = read_polhemus(path, on_invalid="drop")
+        rec = read_polhemus(path)
     assert rec.n_frames == finger_rec.n_frames - 2
 
 
@@ -76,10 +76,58 @@ def test_unparseable_and_wrong_format_files(tmp_path, finger_rec):
         read_polhemus(junk)
     garbled = tmp_path / "garbled.txt"
     garbled.write_text("\n".join(["1 1 2 3 4 5 6"] * 50 + ["1 1 2 3 x y z"] * 10))
-    with pytest.raises(RecordingError, match="cannot be parsed"):
+    with pytest.raises(RecordingError, match="10 of 60 lines cannot be read"):
         read_polhemus(garbled)
     # Euler angles read as quaternions: the norm check says so
     path = _export(finger_rec, tmp_path / "rec.txt")
     path.write_text("\n".join(line + " 0.5" for line in path.read_text().splitlines()))
-    with pytest.raises(RecordingError, match="quaternion with norm"):
+    with pytest.raises(RecordingError, match="8 columns that are neither"):
         read_polhemus(path, angles="quaternion")
+
+
+def _patch(path, fn):
+    import h5py
+
+    with h5py.File(path, "r+") as f:
+        fn(f)
+    return path
+
+
+def test_hdf5_damage_is_refused(tmp_path, finger_rec):
+    import h5py
+
+    ok = save_recording(tmp_path / "ok.h5", finger_rec)
+    with h5py.File(ok, "r") as f:
+        assert str(f.attrs["checksum"]).startswith("sha256:")
+
+    def flip_exponent_bit(f):
+        a = f["positions"][()]
+        raw = a.view(np.uint64)
+        raw[5, 1, 2] ^= np.uint64(1) << np.uint64(60)  # an exponent bit
+        f["positions"][...] = raw.view(np.float64)
+
+    cases = {
+        "bit": (flip_exponent_bit, "checksum"),
+        "meta": (lambda f: f.attrs.__setitem__("metadata", "{not json"), "not JSON"),
+        "bytes": (lambda f: f.attrs.__setitem__("joint", np.void(b"\x01\x02")), "not text"),
+        "labels": (lambda f: f.attrs.__setitem__("labels", '["only one"]'), "labels"),
+        "missing": (lambda f: f.__delitem__("rotations"), "damaged or incomplete"),
+        "incomplete": (lambda f: f.attrs.__delitem__("complete"), "incomplete"),
+        "version": (lambda f: f.attrs.__setitem__("version", "2"), "version"),
+    }
+    for name, (fn, msg) in cases.items():
+        path = save_recording(tmp_path / f"{name}.h5", finger_rec)
+        with pytest.raises(RecordingError, match=msg):
+            load_recording(_patch(path, fn))
+
+
+def test_hdf5_version_1_is_read_with_a_warning(tmp_path, finger_rec):
+    def v1(f):
+        f.attrs["version"] = 1
+        f.attrs["labels"] = [b"index_middle", b"index_distal"]
+        del f.attrs["checksum"]
+
+    path = _patch(save_recording(tmp_path / "v1.h5", finger_rec), v1)
+    with pytest.warns(UserWarning, match="no checksum"):
+        rec = load_recording(path)
+    assert rec.labels == ("index_middle", "index_distal")
