@@ -3,11 +3,8 @@
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 import warnings
 from contextlib import contextmanager
-from pathlib import Path
 
 import click
 
@@ -17,15 +14,9 @@ _MODELS = ("model1", "model2", "model3", "model4")
 
 
 def _write_json(path: str, payload) -> None:
-    target = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", dir=target.parent or ".")
-    try:
-        with os.fdopen(fd, "w") as f:
-            json.dump(payload, f, indent=2)
-        os.replace(tmp, target)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    from .._io import write_text
+
+    write_text(path, json.dumps(payload, indent=2) + "\n", what="JSON file")
 
 
 @contextmanager

@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from pathlib import Path
 
 import click
@@ -29,28 +27,17 @@ def _unit_options(f):
 def _write_table(path, header, table) -> None:
     import numpy as np
 
-    target = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", dir=target.parent or ".")
-    try:
-        with os.fdopen(fd, "w") as f:
-            f.write(",".join(header) + "\n")
-            np.savetxt(f, table, delimiter=",", fmt="%.8g")
-        os.replace(tmp, target)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    from .._io import atomic_open
+
+    with atomic_open(path, "w", what="CSV file") as f:
+        f.write(",".join(header) + "\n")
+        np.savetxt(f, table, delimiter=",", fmt="%.8g")
 
 
 def _write_json(path: str, payload) -> None:
-    target = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", dir=target.parent or ".")
-    try:
-        with os.fdopen(fd, "w") as f:
-            json.dump(payload, f, indent=2)
-        os.replace(tmp, target)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    from .._io import write_text
+
+    write_text(path, json.dumps(payload, indent=2) + "\n", what="JSON file")
 
 
 def _filters(values, allowed):

@@ -11,14 +11,13 @@ differ from the motion names, so a recorded "fist" motion is no hold).
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from ..._io import write_text
 from ...errors import EstimationError, InvalidInputError
 from ...models import natural_pose_set
 from ._checks import check_sensors
@@ -268,16 +267,7 @@ def save_calibration(path, estimators: dict, *, kind: str = "",
         "meta": meta or {},
         "estimators": {k: v.to_dict() for k, v in estimators.items()},
     }
-    target = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", dir=target.parent or Path("."))
-    try:
-        with os.fdopen(fd, "w") as f:
-            json.dump(payload, f)
-        os.replace(tmp, target)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return target
+    return write_text(path, json.dumps(payload), what="glove calibration")
 
 
 def load_calibration(path) -> dict:

@@ -13,13 +13,12 @@ are read as NaN (a dropped sample), and the estimators flag them.
 from __future__ import annotations
 
 import csv
-import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from ..._io import atomic_open
 from ...errors import RecordingError
 from ...models import JOINT_NAMES
 from ._sensors import GLOVE_KINDS, SENSOR_NAMES
@@ -146,16 +145,9 @@ class GloveRecording:
 
 
 def _atomic_write(path, write) -> Path:
-    target = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", dir=target.parent or Path("."))
-    try:
-        with os.fdopen(fd, "w", newline="") as f:
-            write(f)
-        os.replace(tmp, target)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return target
+    with atomic_open(path, "w", what="glove CSV", newline="") as f:
+        write(f)
+    return Path(path)
 
 
 def write_glove_csv(path, rec: GloveRecording, *, with_angles: bool = True) -> Path:

@@ -5,7 +5,7 @@ import warnings
 import numpy as np
 import pytest
 
-from handsynth.errors import EstimationError, InvalidInputError
+from handsynth.errors import EstimationError, InvalidInputError, OutputError
 from handsynth.sensors.glove import (
     CalibrationOptions,
     GloveRecording,
@@ -97,12 +97,12 @@ def test_file_round_trip_and_bad_files(tmp_path, estimators, cal_rec):
 
 
 def test_failed_write_leaves_no_file(tmp_path, monkeypatch, estimators):
-    import handsynth.sensors.glove._calibrate as mod
+    import handsynth._io as io_mod
 
     def boom(*a, **k):
-        raise OSError("disk full")
+        raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(mod.json, "dump", boom)
-    with pytest.raises(OSError):
+    monkeypatch.setattr(io_mod.os, "fsync", boom)  # the write fails in the atomic writer
+    with pytest.raises(OutputError, match="cannot write the glove calibration .*no space left"):
         save_calibration(tmp_path / "cal.json", estimators)
     assert list(tmp_path.iterdir()) == []
