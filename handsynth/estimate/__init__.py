@@ -41,6 +41,7 @@ from ._learned import (
     LearnedOptions,
     fit_mlp,
     learned_estimator,
+    local_linear,
     train_learned,
 )
 from ._lookup import PoseEstimate, PoseEstimator, PoseLookup
@@ -72,6 +73,7 @@ __all__ = [
     "SelectionOptions",
     "fit_mlp",
     "learned_estimator",
+    "local_linear",
     "masked_band_areas",
     "masked_search",
     "masked_search_reference",

@@ -65,7 +65,8 @@ from ..models import JOINT_LIMITS_DEG
 from ..render import CameraMount, coverage
 from ._lookup import PoseEstimate
 
-__all__ = ["LearnedEstimator", "LearnedOptions", "fit_mlp", "learned_estimator", "train_learned"]
+__all__ = ["LearnedEstimator", "LearnedOptions", "fit_mlp", "learned_estimator", "local_linear",
+           "train_learned"]
 
 _FORMAT = 1
 
@@ -101,6 +102,16 @@ class LearnedOptions:
         L2 penalty on the perceptron's weights.
     k : int
         Neighbours of ``"knn"`` and ``"fingers"``.
+    local : {"linear", "mean"}
+        How the neighbours' angles become the answer: ``"linear"``
+        (default) a weighted ridge regression on their codes read at the
+        query (:func:`local_linear`), ``"mean"`` their weighted mean.  The
+        linear fit needs more neighbours than code dimensions; with fewer it
+        falls back to the mean.  On model hands of random geometry it lowered
+        the natural-pose flexion MAE from 11.3 to 10.5 deg and the paper-frame
+        MAE from 5.6 to 5.5 deg (README, "Camera estimator for unseen hands").
+    ridge : float
+        Shrinkage of the local fit's slopes (:func:`local_linear`).
     lists, probes : int
         The nearest-neighbour search is faiss's inverted-file index
         (``IndexIVFFlat``: `lists` k-means cells, the `probes` nearest of
@@ -120,6 +131,8 @@ class LearnedOptions:
     learning_rate: float = 1e-3
     weight_decay: float = 1e-5
     k: int = 128
+    local: str = "linear"
+    ridge: float = 3.0
     lists: int = 256
     probes: int = 16
     seed: int = 0
@@ -128,6 +141,11 @@ class LearnedOptions:
         if self.target not in ("delta", "angles"):
             raise InvalidInputError(f"LearnedOptions.target must be 'delta' or 'angles', "
                                     f"got {self.target!r}")
+        if self.local not in ("linear", "mean"):
+            raise InvalidInputError(f"LearnedOptions.local must be 'linear' or 'mean', "
+                                    f"got {self.local!r}")
+        if not (isinstance(self.ridge, (int, float)) and self.ridge >= 0):
+            raise InvalidInputError(f"LearnedOptions.ridge must be a number >= 0, got {self.ridge!r}")
         if self.kind not in ("mlp", "knn", "fingers"):
             raise InvalidInputError(f"LearnedOptions.kind must be 'mlp', 'knn' or 'fingers', "
                                     f"got {self.kind!r}")
@@ -257,6 +275,44 @@ def fit_mlp(x: np.ndarray, y: np.ndarray, *, hidden=(384, 384), epochs: int = 40
     return weights, biases
 
 
+def local_linear(x: np.ndarray, y: np.ndarray, w: np.ndarray, *, ridge: float) -> np.ndarray:
+    """Weighted ridge regression of `y` on `x` among neighbours, read at ``x = 0``.
+
+    The weighted mean of the neighbours' angles is pulled toward where the
+    learning set is dense (the hand at rest): a finger flexed far is read as
+    flexed less.  Fitting ``y ~ b0 + x @ b`` among the neighbours and
+    reading ``b0`` (the fit at the query, placed at ``x = 0``) removes that
+    pull to first order (locally weighted regression, Cleveland & Devlin
+    1988, J. Am. Stat. Assoc. 83:596).  The slopes are shrunk by
+    ``ridge * trace(Xᵀ W X) / D``, so the fit degrades to the weighted mean
+    as `ridge` grows.
+
+    Parameters
+    ----------
+    x : ndarray, shape (k, D)
+        Neighbours' codes less the query's.
+    y : ndarray, shape (k, J)
+        Their angles, degrees.
+    w : ndarray, shape (k,)
+        Their weights (> 0).
+    ridge : float, keyword-only
+        Shrinkage of the slopes (0: none).
+
+    Returns
+    -------
+    ndarray, shape (J,), float64
+    """
+    x = np.asarray(x, np.float64)
+    w = np.asarray(w, np.float64) / np.sum(w)
+    design = np.hstack([np.ones((len(x), 1)), x])
+    wd = design * w[:, None]
+    gram = design.T @ wd
+    penalty = ridge * np.trace(gram[1:, 1:]) / max(x.shape[1], 1)
+    gram[np.arange(1, len(gram)), np.arange(1, len(gram))] += max(penalty, 1e-12)
+    beta = np.linalg.solve(gram, wd.T @ np.asarray(y, np.float64))
+    return beta[0]
+
+
 # ---------------------------------------------------------------------------
 # the estimator
 # ---------------------------------------------------------------------------
@@ -363,7 +419,11 @@ class LearnedEstimator:
         found = idx[0] >= 0  # the inverted file may hold fewer than k in the cells searched
         d, idx = np.sqrt(np.maximum(d[0][found], 0.0)), idx[0][found]
         w = 1.0 / (d + d[0] + 1e-6)
-        return (w @ self._a[prefix + "angles"][idx] / w.sum()).astype(np.float64), float(d[0])
+        y = self._a[prefix + "angles"][idx]
+        if self.options.local == "linear" and len(idx) > c.shape[1] + 1:
+            x = self._a[prefix + "codes"][idx] - c.astype(np.float32)
+            return local_linear(x, y, w, ridge=self.options.ridge), float(d[0])
+        return (w @ y / w.sum()).astype(np.float64), float(d[0])
 
     def _predict(self, prefix: str, c: np.ndarray) -> tuple[np.ndarray, float]:
         """Regressor `prefix` on codes `c` (1, k): angles (20,) and the nearest distance."""

@@ -9,6 +9,7 @@ from handsynth.estimate import (
     PoseEstimator,
     fit_mlp,
     learned_estimator,
+    local_linear,
     train_learned,
 )
 from handsynth.render import SilhouetteRasterizer
@@ -102,6 +103,39 @@ def test_learnt_estimators_are_kept_in_the_caller_s_folder(tmp_path):
                                   b.calibrated(frame).estimate(frame).angles)
 
 
+def test_the_local_linear_fit_reads_a_linear_neighbourhood_exactly_and_shrinks_to_the_mean():
+    rng = np.random.default_rng(3)
+    x = rng.normal(size=(40, 5))
+    slope = rng.normal(size=(5, 2))
+    y = 30.0 + x @ slope * 10
+    w = rng.uniform(0.5, 2.0, 40)
+    # the neighbours lie on a plane: the fit at the query (x = 0) is its offset
+    np.testing.assert_allclose(local_linear(x, y, w, ridge=0.0), [30.0, 30.0], atol=1e-9)
+    # the weighted mean is pulled off by the neighbours' asymmetric spread
+    x_shifted = x + 1.0
+    mean = w @ (30.0 + x_shifted @ slope * 10) / w.sum()
+    fit = local_linear(x_shifted, 30.0 + x_shifted @ slope * 10, w, ridge=0.0)
+    np.testing.assert_allclose(fit, [30.0, 30.0], atol=1e-9)
+    assert np.abs(mean - 30.0).max() > 1.0
+    # a very large ridge leaves only the intercept: the weighted mean
+    np.testing.assert_allclose(local_linear(x_shifted, 30.0 + x_shifted @ slope * 10, w,
+                                            ridge=1e9), mean, atol=1e-4)
+
+
+def test_the_linear_fit_falls_back_to_the_mean_with_fewer_neighbours_than_dimensions(data):
+    rest = SilhouetteRasterizer().mask(np.full(20, 4.0))
+    frame = SilhouetteRasterizer().mask(np.full(20, 20.0))
+    lin = train_learned(data, LearnedOptions(kind="fingers", k=3, local="linear", lists=0))
+    mean = train_learned(data, LearnedOptions(kind="fingers", k=3, local="mean", lists=0))
+    np.testing.assert_array_equal(lin.calibrated(rest).estimate(frame).angles,
+                                  mean.calibrated(rest).estimate(frame).angles)
+    many = train_learned(data, LearnedOptions(kind="fingers", k=60, components=4, lists=0))
+    many_mean = train_learned(data, LearnedOptions(kind="fingers", k=60, components=4, lists=0,
+                                                   local="mean"))
+    assert not np.allclose(many.calibrated(rest).estimate(frame).angles,
+                           many_mean.calibrated(rest).estimate(frame).angles)
+
+
 def test_bad_options_are_refused_by_name():
     with pytest.raises(InvalidInputError, match="kind must be 'mlp', 'knn' or 'fingers'"):
         LearnedOptions(kind="forest")
@@ -109,6 +143,10 @@ def test_bad_options_are_refused_by_name():
         LearnedOptions(target="pose")
     with pytest.raises(InvalidInputError, match="components"):
         LearnedOptions(components=0)
+    with pytest.raises(InvalidInputError, match="local must be 'linear' or 'mean'"):
+        LearnedOptions(local="cubic")
+    with pytest.raises(InvalidInputError, match="ridge"):
+        LearnedOptions(ridge=-1.0)
 
 
 def test_an_ensemble_reports_the_weighted_mean_and_calibrates_its_members(data):
