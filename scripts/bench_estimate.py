@@ -4,6 +4,8 @@ Usage::
 
     python scripts/bench_estimate.py [--db FOLDER] [--entries 20448] [--frames 2000]
                                      [--calibrated]
+    python scripts/bench_estimate.py --learned FOLDER [--kind ensemble|fingers|mlp]
+                                     [--frames 2000] [--hands 2000] [--poses-per-hand 100]
 
 The database of the standard hand is read from ``FOLDER/<HandShape().name>.h5``
 or, without ``--db``, rendered into a temporary folder (about 30 s for
@@ -16,6 +18,18 @@ matches poorly, so the search often has to fall back to scoring every
 entry (the worst case).  The process is pinned to one CPU and OpenCV to
 one thread.  The last line is machine-readable (paper-set frames):
 ``estimate_fps_median=<number> latency_p99_ms=<number>``.
+
+``--learned FOLDER`` times the estimator learnt from randomised model hands
+instead (README, "Camera estimator for unseen hands"; read from ``FOLDER`` or
+learnt there first: minutes), ``--kind ensemble`` (default: the mean of the
+per-digit estimator and the perceptron), ``fingers`` or ``mlp``, on frames of
+the glTF hands of :mod:`handsynth.testhands` (Godot XR Tools and MRTK, not
+the model it learnt from) in natural poses, painted as skin on a dark
+background (BGR uint8).  It is calibrated to each hand's rest frame once,
+not timed.  It also prints the median cost of its parts: binarizing (Otsu),
+the coverage grid (wrist cut, cell averages) and each member's estimate from
+the mask.  Its last line: ``learned_fps_median=<number>
+latency_p99_ms=<number>``.
 
 ``--calibrated`` times :meth:`PoseLookup.calibrated` instead (calibrated
 with the off-grid hand's open-hand frame: entries are bounded, then scored
@@ -48,6 +62,86 @@ def _build(folder: Path, n: int) -> None:
                                       seed=0, render_size=(720, 480)))
 
 
+def _median_ms(fn, items, repeat: int) -> float:
+    times = []
+    for i in range(repeat):
+        x = items[i % len(items)]
+        t0 = time.perf_counter()
+        fn(x)
+        times.append(time.perf_counter() - t0)
+    return float(np.median(times) * 1e3)
+
+
+def _bench_learned(args) -> None:
+    """``--learned``: the learnt estimator on frames of the glTF hands."""
+    import cv2
+
+    cv2.setNumThreads(1)
+    if hasattr(os, "sched_setaffinity"):
+        os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
+
+    from handsynth.db import LearningSetOptions
+    from handsynth.estimate import EnsembleEstimator, learned_estimator
+    from handsynth.eval import natural_test_poses, relaxed_rest_posture
+    from handsynth.render import CameraMount, binarize, coverage
+    from handsynth.testhands import TEST_HANDS, MeshHandRenderer, shipped_hand_path
+
+    mount = CameraMount.paper()
+    from handsynth.eval import LEARNED_METHODS as LEARNED
+
+    data = LearningSetOptions(hands=args.hands, poses_per_hand=args.poses_per_hand)
+    members = {k: learned_estimator(args.learned, LEARNED[k], data=data, mount=mount, progress=print)
+               for k in (("fingers", "mlp") if args.kind == "ensemble" else (args.kind,))}
+    est = EnsembleEstimator(list(members.values())) if args.kind == "ensemble" \
+        else members[args.kind]
+    rng = np.random.default_rng(0)
+    skin, dark = np.array([120, 150, 210], np.uint8), np.array([25, 20, 15], np.uint8)
+
+    def bgr(mask):
+        f = np.empty(mask.shape + (3,), np.uint8)
+        f[...] = dark
+        f[mask] = skin
+        return f
+
+    per_hand = []
+    for name in sorted(TEST_HANDS):
+        with MeshHandRenderer(mount, path=shipped_hand_path(name)) as r:
+            rest = relaxed_rest_posture(rng)
+            poses, _ = natural_test_poses(rest, 50, rng)
+            per_hand.append((est.calibrated(bgr(r.mask(rest))), [bgr(m) for m in r.masks(poses)]))
+    print(f"frames: {sum(len(f) for _, f in per_hand)} BGR 720x480 of {len(per_hand)} mesh hands "
+          f"({', '.join(sorted(TEST_HANDS))}), natural poses")
+
+    for cal, frames in per_hand:  # warm up
+        for f in frames[:20]:
+            cal.estimate(f)
+    lat = []
+    for i in range(args.frames):
+        cal, frames = per_hand[i % len(per_hand)]
+        f = frames[(i // len(per_hand)) % len(frames)]
+        t0 = time.perf_counter()
+        cal.estimate(f)
+        lat.append(time.perf_counter() - t0)
+    lat = np.array(lat)
+    med, p99 = float(np.median(lat)), float(np.percentile(lat, 99))
+
+    cal, frames = per_hand[0]
+    masks = [binarize(f) for f in frames]
+    n = min(args.frames, 500)
+    parts = {
+        "binarize (Otsu) of the BGR frame": _median_ms(binarize, frames, n),
+        "coverage grid (wrist cut, cell means)": _median_ms(lambda m: coverage(m, mount), masks, n),
+    }
+    members_cal = cal.members if args.kind == "ensemble" else [cal]
+    for name, m in zip(members, members_cal):
+        parts[f"{name}: estimate from the mask"] = _median_ms(m.estimate, masks, n)
+    print(f"{args.kind}: median {med * 1e3:.3f} ms ({1 / med:.0f} fps), p99 {p99 * 1e3:.3f} ms, "
+          f"one core, {args.frames} frames")
+    for k, v in parts.items():
+        print(f"  {k:45s} {v:.3f} ms")
+    print(f"learned_fps_median={1.0 / med:.1f} latency_p99_ms={p99 * 1e3:.3f}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--db", type=Path, help="folder of <shape>.h5 databases")
@@ -55,7 +149,17 @@ def main() -> None:
     ap.add_argument("--frames", type=int, default=2000, help="timed frames")
     ap.add_argument("--calibrated", action="store_true",
                     help="time a lookup calibrated with the hand's open-hand frame")
+    ap.add_argument("--learned", type=Path, metavar="FOLDER",
+                    help="time the learnt estimator (read from FOLDER or learnt there first)")
+    ap.add_argument("--kind", default="ensemble", choices=["ensemble", "fingers", "mlp"],
+                    help="--learned: which learnt estimator")
+    ap.add_argument("--hands", type=int, default=2000, help="--learned: learning set hands")
+    ap.add_argument("--poses-per-hand", type=int, default=100,
+                    help="--learned: learning set frames per hand")
     args = ap.parse_args()
+    if args.learned is not None:
+        _bench_learned(args)
+        return
 
     import cv2
 

@@ -115,6 +115,68 @@ def _calibrate(lookup, source, open_image, db_dir, mount, side, build, err):
     return lookup
 
 
+def _check_learned_options(db_dir, shape_name, measurements, personal, build_count,
+                           calibrate, video_out, no_temporal, keypoints) -> None:
+    """--learned replaces the database lookup: its options do not apply."""
+    given = [flag for flag, on in (("--db", db_dir is not None),
+                                   ("--shape", shape_name is not None),
+                                   ("--measurements", measurements is not None),
+                                   ("--personal", personal), ("--build-count", build_count is not None),
+                                   ("--calibrate", calibrate), ("--video-out", video_out is not None),
+                                   ("--no-temporal", no_temporal), ("--keypoints", keypoints)) if on]
+    if given:
+        raise InvalidInputError(f"{', '.join(given)} appl{'ies' if len(given) == 1 else 'y'} to "
+                                "the database lookup, not to --learned (the learnt estimator "
+                                "reads angles only and is calibrated to the hand at rest; "
+                                "--calibrate-image gives that frame)")
+
+
+def _open_learned(cache, kind, hands, err):
+    """The learnt estimator (read from `cache`, or learnt there first)."""
+    import time
+
+    from ..db import LearningSetOptions
+    from ..estimate import EnsembleEstimator, LearnedOptions, learned_estimator
+    from ..live import default_database_dir
+
+    if hands is not None and hands < 1:
+        raise InvalidInputError(f"--learned-hands must be a positive integer, got {hands}")
+    folder = Path(cache) if cache is not None else default_database_dir().parent / "learned"
+    if folder.exists() and not folder.is_dir():
+        raise InvalidInputError(f"--learned-cache {str(folder)!r} is a file; give a folder")
+    data = LearningSetOptions() if hands is None else LearningSetOptions(hands=hands)
+    t = time.perf_counter()
+
+    def say(line: str) -> None:
+        if not line.startswith("epoch"):
+            click.echo(line, err=err)
+
+    est = learned_estimator(folder, LearnedOptions(kind="fingers"), data=data, progress=say)
+    if kind == "ensemble":
+        est = EnsembleEstimator([est, learned_estimator(folder, LearnedOptions(kind="mlp"),
+                                                        data=data, progress=say)])
+    click.echo(f"learnt estimator ({kind}) ready in {time.perf_counter() - t:.1f} s "
+               f"({folder})", err=err)
+    return est
+
+
+def _calibrate_learned(est, source, rest_image, mount, side, err):
+    """The learnt estimator calibrated to the hand at rest."""
+    from ..live import first_hand_frame
+
+    if rest_image is not None:
+        rest, where = rest_image, "the calibration image"
+    elif hasattr(source, "open_frame"):
+        rest, where = source.open_frame(), "the synthetic hand at rest (open)"
+    else:
+        click.echo("calibrating: let the hand rest, relaxed", err=err)
+        rest = first_hand_frame(source, mount=mount, side=side, max_reads=CALIBRATION_READS)
+        where = "the first frame showing a hand"
+    est = est.calibrated(rest)
+    click.echo(f"calibrated to {where}", err=err)
+    return est
+
+
 def _build_options(count: int):
     from ..db import BuildOptions
 
@@ -162,6 +224,21 @@ def _progress(stream):
 @click.option("--calibrate-image", default=None, metavar="FILE",
               help="Calibrate with this image of the open, flat hand through the device "
                    "instead of the first frame (implies --calibrate).")
+@click.option("--learned", is_flag=True,
+              help="Use the estimator learnt from randomised model hands (beyond the paper; "
+                   "README 'Camera estimator for unseen hands') instead of a database lookup, "
+                   "calibrated to the user's hand at rest: --calibrate-image, else the first "
+                   "frame showing a hand (--synthetic: the hand rendered open). Learnt once "
+                   "into --learned-cache (minutes), then read.")
+@click.option("--learned-kind", type=click.Choice(["fingers", "ensemble"]), default="fingers",
+              show_default=True,
+              help="With --learned: the per-digit estimator, or its mean with the perceptron "
+                   "(learning the perceptron takes a few more minutes).")
+@click.option("--learned-cache", default=None, metavar="FOLDER",
+              help="Folder of the learnt estimator and its learning set [default: "
+                   "~/.cache/handsynth/learned].")
+@click.option("--learned-hands", type=int, default=None, metavar="N",
+              help="Random hands of the learning set [default: 2,000 x 100 frames].")
 @click.option("--frames", type=int, default=None, metavar="N",
               help=f"Stop after N frames [--synthetic default: {SYNTHETIC_FRAMES}].")
 @click.option("--seconds", type=float, default=None, metavar="S", help="Stop after S seconds.")
@@ -187,7 +264,8 @@ def _progress(stream):
               help="Stop when N consecutive reads give no usable frame.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress line.")
 def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, personal,
-             build_count, calibrate, calibrate_image, frames, seconds, out, fmt, keypoints,
+             build_count, calibrate, calibrate_image, learned, learned_kind, learned_cache,
+             learned_hands, frames, seconds, out, fmt, keypoints,
              video_out, synthetic_shape, synthetic_motion, synthetic_size, fps, no_temporal,
              max_dead, quiet) -> None:
     """Look up the hand pose of every frame of a camera, a video file or a synthetic hand.
@@ -232,6 +310,12 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
     if keypoints and out is None:
         raise InvalidInputError("--keypoints adds columns to the rows of --out, and no --out "
                                 "was given")
+    if learned:
+        _check_learned_options(db_dir, shape_name, measurements, personal, build_count,
+                               calibrate, video_out, no_temporal, keypoints)
+    elif learned_cache is not None or learned_hands is not None or learned_kind != "fingers":
+        raise InvalidInputError("--learned-kind, --learned-cache and --learned-hands apply "
+                                "with --learned only")
     inputs = [p for p in (video_in, measurements, calibrate_image) if p is not None]
     size = _parse_size(synthetic_size, "--synthetic-size") if synthetic else None
     user_shape = HandShape.from_name(synthetic_shape) if synthetic else None
@@ -253,20 +337,24 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
         elif video_in is not None:
             source, what = VideoSource(video_in), f"video {video_in}"
         lookup = None
-        if not calibrate or chosen_db:
+        if learned:
+            lookup = _open_learned(learned_cache, learned_kind, learned_hands, info_err)
+        elif not calibrate or chosen_db:
             lookup = _open_lookup(db_dir, shape_name, measurements,
                                   False if no_temporal else None, info_err,
                                   personal=personal, build=build)
-        mount = lookup.mount if lookup is not None else CameraMount.paper()
-        side = lookup.side if lookup is not None else "right"
+        mount = getattr(lookup, "mount", None) or CameraMount.paper()
+        side = getattr(lookup, "side", None) or "right"
         if synthetic:
             source = SyntheticSource(user_shape, mount, side=side,
                                      motion=SyntheticMotion(poses=synthetic_motion), fps=fps,
                                      width_px=size[0], height_px=size[1])
             what = f"synthetic hand {user_shape.name} ({synthetic_motion} poses)"
-        if calibrate:
+        if learned:
+            lookup = _calibrate_learned(lookup, source, open_image, mount, side, info_err)
+        elif calibrate:
             lookup = _calibrate(lookup, source, open_image, db_dir, mount, side, build, info_err)
-        if lookup is not None:
+        if lookup is not None and not learned:
             inputs.append(lookup.database.path)
         if out is not None and video_out is not None and not to_stdout \
                 and Path(out).resolve() == Path(video_out).resolve():
@@ -278,8 +366,12 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
             video = SideBySideWriter(video_out, lookup, fps=source.fps or fps, inputs=inputs)
         options = LiveOptions(max_frames=frames, max_seconds=seconds, max_dead_reads=max_dead,
                               keypoints=keypoints)
-        click.echo(f"estimating {what} against {lookup.database.path.name} "
-                   f"({len(lookup)} entries)", err=info_err)
+        if learned:
+            click.echo(f"estimating {what} with the learnt estimator ({learned_kind})",
+                       err=info_err)
+        else:
+            click.echo(f"estimating {what} against {lookup.database.path.name} "
+                       f"({len(lookup)} entries)", err=info_err)
         show = None if quiet or not sys.stderr.isatty() else _progress(sys.stderr)
         summary = run_live(lookup, source, sink=sink, video_out=video, options=options,
                            progress=show)

@@ -1,4 +1,4 @@
-"""``handsynth eval``: the paper's accuracy experiment, standard vs selected database."""
+"""``handsynth eval``: the paper's accuracy experiment, or the protocol that cannot flatter."""
 
 from __future__ import annotations
 
@@ -26,9 +26,30 @@ def _parse_list(text: str, option: str) -> tuple[str, ...]:
     return items
 
 
+#: Options of the paper's experiment that the protocol does not take.
+_EXPERIMENT_ONLY = ("out_dir", "prefix", "json_frames", "hand", "count", "db_pose_set",
+                    "ratio_margin", "mount", "frame_size", "render_size", "workers", "ties",
+                    "photo_mm_per_px")
+#: What ``--protocol`` compares unless ``--conditions`` says otherwise.
+PROTOCOL_DEFAULT = "standard,calibrated,fingers,fingers_mean,mlp,ensemble"
+
+
 @cli.command("eval")
 @click.option("--db", "db_folder", type=click.Path(file_okay=False), required=True,
-              help="Database folder; the databases needed are built there when missing.")
+              help="Database folder; the databases needed are built there when missing "
+                   "(--protocol: also the learnt estimators).")
+@click.option("--protocol", is_flag=True,
+              help="The evaluation that cannot flatter (README, 'Camera estimator for unseen "
+                   "hands'): relaxed rest postures from an independent generator, --hands model "
+                   "hands beyond the four ratios and the glTF hands, the constant open-hand "
+                   f"answer beside every figure. --conditions default: {PROTOCOL_DEFAULT}.")
+@click.option("--mesh", default="godot_xr_tools,mrtk", show_default=True,
+              help="--protocol: glTF hands to test, comma-separated ('' for none).")
+@click.option("--learned-hands", type=int, default=None, metavar="N",
+              help="--protocol: random hands of the learnt estimators' learning set "
+                   "[default: 2,000 x 100 frames].")
+@click.option("--hand-spread", type=float, default=1.5, show_default=True,
+              help="--protocol: variation of the model hands' geometry (the learning set's is 1).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), default=None,
               help="Folder for the plots (eval_*.png); none written if not given.")
 @click.option("--prefix", default=None,
@@ -45,9 +66,9 @@ def _parse_list(text: str, option: str) -> tuple[str, ...]:
               help="Pose sets of the test frames, comma-separated.")
 @click.option("--hand", type=click.Choice(["model", "mesh"]), default="model", show_default=True,
               help="Test hands: MuJoCo model hands, or the realistic glTF mesh hand.")
-@click.option("--conditions",
-              default="standard,selected,selected_none,personal,calibrated,own_shape",
-              show_default=True, help="Databases to compare, comma-separated.")
+@click.option("--conditions", default=None,
+              help="Databases (or, with --protocol, methods) to compare, comma-separated "
+                   "[default: standard,selected,selected_none,personal,calibrated,own_shape].")
 @click.option("--count", type=int, default=20448, show_default=True,
               help="Entries per database.")
 @click.option("--db-pose-set", type=click.Choice(["paper", "natural"]), default="paper",
@@ -70,9 +91,10 @@ def _parse_list(text: str, option: str) -> tuple[str, ...]:
 @click.option("--photo-mm-per-px", type=float, default=0.25, show_default=True,
               help="Scale of the photos that measure model hands for the personal condition.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress lines.")
-def eval_(db_folder, out_dir, prefix, json_path, json_frames, n_hands, frames, pose_sets, hand,
-          conditions, count, db_pose_set, seed, ratio_margin, mount, frame_size, render_size, workers,
-          ties, photo_mm_per_px, quiet) -> None:
+@click.pass_context
+def eval_(ctx, db_folder, protocol, mesh, learned_hands, hand_spread, out_dir, prefix, json_path, json_frames,
+          n_hands, frames, pose_sets, hand, conditions, count, db_pose_set, seed, ratio_margin,
+          mount, frame_size, render_size, workers, ties, photo_mm_per_px, quiet) -> None:
     """Accuracy on synthetic ground truth: standard vs selected database.
 
     Test hands of random off-grid shape are rendered in known poses at the
@@ -80,12 +102,33 @@ def eval_(db_folder, out_dir, prefix, json_path, json_frames, n_hands, frames, p
     database chosen by formulas (1)-(4) from their measurements and in a
     database built for the shape measured on a photo of the hand.  Prints
     mean +- s.d. (MAE) of the signed error per joint and the targets.
+
+    With --protocol: the camera estimators (lookups and learnt estimators)
+    under relaxed rest postures and hands beyond the four ratios; prints
+    the finger flexion MAE beside the constant open-hand answer and the
+    skill per hand kind, pose set and method; --json writes every figure
+    (per hand, per joint).
     """
     from .._io import check_output
     from ..eval import EvalOptions, evaluate
 
     if json_path:
         check_output(json_path, what="JSON report")  # before the work, not after it
+    say = None if quiet else (lambda line: click.echo(line, err=True))
+    if protocol:
+        given = [f"--{n.replace('_', '-')}" for n in _EXPERIMENT_ONLY
+                 if ctx.get_parameter_source(n) == click.core.ParameterSource.COMMANDLINE]
+        if given:
+            raise InvalidInputError(f"{', '.join(given)} appl{'ies' if len(given) == 1 else 'y'} "
+                                    "to the paper's experiment, not to --protocol")
+        _protocol(db_folder, mesh, learned_hands, hand_spread, json_path, n_hands, frames,
+                  _parse_list(pose_sets, "--pose-sets"),
+                  _parse_list(conditions or PROTOCOL_DEFAULT, "--conditions"), seed, say)
+        return
+    for n in ("mesh", "learned_hands", "hand_spread"):
+        if ctx.get_parameter_source(n) == click.core.ParameterSource.COMMANDLINE:
+            raise InvalidInputError(f"--{n.replace('_', '-')} applies with --protocol only")
+    conditions = conditions or "standard,selected,selected_none,personal,calibrated,own_shape"
 
     options = EvalOptions(
         db_folder=db_folder, n_hands=n_hands, frames_per_hand=frames,
@@ -95,7 +138,6 @@ def eval_(db_folder, out_dir, prefix, json_path, json_frames, n_hands, frames, p
         render_size=_parse_size(render_size, "--render-size") if render_size else None,
         mount=mount, frame_size=_parse_size(frame_size, "--frame-size"), workers=workers,
         ties=ties, photo_mm_per_px=photo_mm_per_px)
-    say = None if quiet else (lambda line: click.echo(line, err=True))
     report = evaluate(options, progress=say)
     click.echo(report.format())
     if json_path:
@@ -105,4 +147,47 @@ def eval_(db_folder, out_dir, prefix, json_path, json_frames, n_hands, frames, p
             prefix = "eval_mesh_" if hand == "mesh" else "eval_"
         for path in report.write_plots(out_dir, prefix=prefix):
             click.echo(f"plot: {path}")
+    sys.stdout.flush()
+
+
+def _protocol(folder, mesh, learned_hands, hand_spread, json_path, n_hands, frames, pose_sets, methods, seed,
+              say) -> None:
+    import json
+    import time
+
+    from .._io import write_text
+    from ..db import LearningSetOptions
+    from ..eval import (
+        ProtocolOptions,
+        format_headline,
+        mesh_test_hands,
+        model_test_hands,
+        protocol_headline,
+        protocol_methods,
+        run_protocol,
+    )
+    from ..render import CameraMount
+
+    if n_hands < 0:
+        raise InvalidInputError(f"--hands must be a non-negative integer, got {n_hands}")
+    if learned_hands is not None and learned_hands < 1:
+        raise InvalidInputError(f"--learned-hands must be a positive integer, got {learned_hands}")
+    if not hand_spread > 0:
+        raise InvalidInputError(f"--hand-spread must be a positive number, got {hand_spread}")
+    options = ProtocolOptions(frames=frames, pose_sets=pose_sets, seed=seed)
+    mount = CameraMount.paper()
+    meshes = [m.strip() for m in mesh.split(",") if m.strip()]
+    hands = model_test_hands(n_hands, seed=seed + 1, mount=mount, spread=hand_spread)
+    hands += mesh_test_hands(meshes, mount=mount) if meshes else []
+    if not hands:
+        raise InvalidInputError("no test hands: give --hands N > 0 or --mesh NAMES")
+    data = LearningSetOptions() if learned_hands is None else LearningSetOptions(hands=learned_hands)
+    factories = protocol_methods(methods, folder, data=data, mount=mount, progress=say)
+    t0 = time.perf_counter()
+    result = run_protocol(factories, hands, options, progress=say)
+    result["seconds"] = round(time.perf_counter() - t0, 1)
+    result["headline"] = protocol_headline(result)
+    click.echo(format_headline(result["headline"]))
+    if json_path:
+        click.echo(f"json: {write_text(json_path, json.dumps(result, indent=1), what='JSON report')}")
     sys.stdout.flush()

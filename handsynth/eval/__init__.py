@@ -105,6 +105,13 @@ pose set (``docs/eval/model_hands_20448.json``):
 """
 
 from ._hands import random_hand_shapes
+from ._methods import (
+    LEARNED_METHODS,
+    PROTOCOL_METHODS,
+    format_headline,
+    protocol_headline,
+    protocol_methods,
+)
 from ._options import CONDITIONS, EvalOptions
 from ._protocol import (
     JOINT_GROUPS,
@@ -124,7 +131,9 @@ from ._testposes import natural_test_poses, paper_protocol_poses, relaxed_rest_p
 __all__ = [
     "CONDITIONS",
     "JOINT_GROUPS",
+    "LEARNED_METHODS",
     "MOVING_DEG",
+    "PROTOCOL_METHODS",
     "EvalOptions",
     "EvalReport",
     "JointStats",
@@ -132,11 +141,14 @@ __all__ = [
     "TestHand",
     "condition_stats",
     "evaluate",
+    "format_headline",
     "joint_stats",
     "mesh_test_hands",
     "model_test_hands",
     "natural_test_poses",
     "paper_protocol_poses",
+    "protocol_headline",
+    "protocol_methods",
     "random_hand_shapes",
     "ratio_distance",
     "relaxed_rest_posture",

@@ -432,3 +432,41 @@ def test_a_read_only_database_folder_names_the_real_reason(read_only_folder, whe
     res = _run(*args, env=env)
     assert res.exit_code == 2, res.output
     assert "read-only" in res.output and "Traceback" not in res.output
+
+
+def test_learned_estimator_on_a_synthetic_hand_learns_once_then_reads_its_cache(tmp_path):
+    cache = tmp_path / "learned"
+    out = tmp_path / "rows.csv"
+    args = ["--synthetic", "--learned", "--learned-cache", str(cache), "--learned-hands", "6",
+            "--frames", "12", "--synthetic-motion", "natural", *SMALL]
+    res = _run(*args, "--out", str(out))
+    assert res.exit_code == 0, res.output
+    assert "learning set: 6 hands x 100 frames" in res.output
+    assert "with the learnt estimator (fingers)" in res.output
+    assert "calibrated to the synthetic hand at rest (open)" in res.output
+    header, rows = _read_csv(out)
+    assert tuple(header) == live_columns(truth=True)
+    est = np.array([[float(r[n]) for n in JOINT_NAMES] for r in rows])
+    assert est.shape == (12, 20) and np.isfinite(est).all()
+    assert ((est >= JOINT_LIMITS_DEG[:, 0] - 1e-3) & (est <= JOINT_LIMITS_DEG[:, 1] + 1e-3)).all()
+    assert re.search(r"mean absolute error vs truth [\d.]+ deg over 12 frames", res.output)
+    assert sorted(p.name.split("_")[0] for p in cache.iterdir()) == ["learned", "learning"]
+    again = _run(*args)
+    assert again.exit_code == 0, again.output
+    assert "learning set:" not in again.output  # read from the cache
+
+
+@pytest.mark.parametrize(("extra", "message"), [
+    (["--learned", "--db", "dbs"], "--db applies to the database lookup, not to --learned"),
+    (["--learned", "--calibrate", "--no-temporal"],
+     "--calibrate, --no-temporal apply to the database lookup"),
+    (["--learned-hands", "5"], "apply with --learned only"),
+    (["--learned", "--learned-hands", "0"], "--learned-hands must be a positive integer, got 0"),
+])
+def test_learned_options_that_do_not_apply_are_refused_by_name(tmp_path, extra, message):
+    res = CliRunner().invoke(cli, ["estimate", "--synthetic", "--learned-cache" if "--learned" in
+                                   extra else "--frames", str(tmp_path / "c") if "--learned" in
+                                   extra else "1", *extra, *SMALL])
+    assert res.exit_code == 2, res.output
+    assert message in res.output
+    assert "Traceback" not in res.output

@@ -79,3 +79,36 @@ def test_a_json_report_in_a_missing_folder_is_refused_before_the_work(tmp_path):
                *SMALL)
     assert res.exit_code == 2 and "folder" in res.output and "does not exist" in res.output
     assert not (tmp_path / "dbs").exists()
+
+
+def test_protocol_puts_the_constant_beside_every_method_and_writes_json(tmp_path):
+    js = tmp_path / "protocol.json"
+    res = _run("--protocol", "--db", str(tmp_path / "cache"), "--hands", "1", "--mesh", "mrtk",
+               "--frames", "6", "--pose-sets", "natural", "--learned-hands", "8",
+               "--conditions", "fingers,fingers_mean,ensemble", "--json", str(js), "-q")
+    assert res.exit_code == 0, res.output
+    d = json.loads(js.read_text())
+    assert set(d["hands"]) == {"model0", "mrtk"}
+    head = d["headline"]
+    assert set(head) == {f"{kind}/natural/{m}" for kind in ("model", "mesh")
+                         for m in ("fingers", "fingers_mean", "ensemble")}
+    for key, v in head.items():
+        assert v["constant"] > 0 and v["skill"] == pytest.approx(
+            1 - v["flexion_mae"] / v["constant"], abs=2e-3)
+        assert f"{key:32s} flexion MAE {v['flexion_mae']:6.2f}" in res.stdout
+    mrtk = d["hands"]["mrtk"]["natural"]["fingers"]
+    assert list(mrtk["method"]["joints"]) == list(JOINT_NAMES)
+    assert mrtk["constant"]["groups_mae_deg"]["finger_flexion"] == pytest.approx(
+        head["mesh/natural/fingers"]["constant"], abs=0.006)
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--protocol", "--count", "100"], "--count applies to the paper's experiment, not to --protocol"),
+    (["--mesh", "mrtk"], "--mesh applies with --protocol only"),
+    (["--protocol", "--conditions", "fingers,tree"], "methods must be distinct names from"),
+    (["--protocol", "--hands", "0", "--mesh", ""], "no test hands"),
+])
+def test_protocol_options_are_checked_by_name(tmp_path, args, message):
+    res = CliRunner().invoke(cli, ["eval", "--db", str(tmp_path / "c"), *args])
+    assert res.exit_code == 2, res.output
+    assert message in res.output and "Traceback" not in res.output

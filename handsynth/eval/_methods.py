@@ -1,0 +1,159 @@
+"""The camera estimators the protocol compares, by name, and its headline figures.
+
+:func:`run_protocol` takes estimators as factories ``(rest_frame, hand) ->
+estimator``; :func:`protocol_methods` makes them for the names users give
+(``handsynth eval --protocol --conditions ...``), building the databases and
+learning the estimators they need into one folder, and
+:func:`protocol_headline` reduces a protocol's result to the figures the
+README reports (finger flexion MAE beside the constant, skill, index PIP
+where it moves).
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..db import BuildOptions, LearningSetOptions, build_databases
+from ..errors import InvalidInputError
+from ..estimate import EnsembleEstimator, LearnedOptions, PoseLookup, learned_estimator, select_shape
+from ..models import HandShape
+from ..render import CameraMount
+
+__all__ = ["LEARNED_METHODS", "PROTOCOL_METHODS", "format_headline", "protocol_headline",
+           "protocol_methods"]
+
+#: The learnt estimators by name (options chosen on model hands: README, "Camera
+#: estimator for unseen hands").
+LEARNED_METHODS: dict[str, LearnedOptions] = {
+    "fingers": LearnedOptions(kind="fingers"),
+    "fingers_mean": LearnedOptions(kind="fingers", local="mean"),
+    "mlp": LearnedOptions(kind="mlp"),
+    "knn": LearnedOptions(kind="knn", k=8),
+    "fingers_norest": LearnedOptions(kind="fingers", use_rest=False),
+}
+
+#: Every name :func:`protocol_methods` knows: the paper's lookups, the
+#: calibrated lookup, the learnt estimators and ``ensemble`` (the mean of
+#: ``fingers`` and ``mlp``).
+PROTOCOL_METHODS: tuple[str, ...] = ("standard", "selected", "calibrated", *LEARNED_METHODS,
+                                     "ensemble")
+
+
+def protocol_methods(names, folder, *, data: LearningSetOptions | None = None,
+                     mount: CameraMount | None = None, progress=None) -> dict:
+    """Estimator factories for :func:`~handsynth.eval.run_protocol`.
+
+    Parameters
+    ----------
+    names : sequence of str
+        From :data:`PROTOCOL_METHODS`: ``standard`` (the paper's lookup in
+        the standard hand's 20,448-entry database), ``selected`` (the
+        database chosen by formulas (1)-(4) from the hand's measurements;
+        hands without measurements are skipped), ``calibrated``
+        (:meth:`PoseLookup.from_open_frame` on the hand's rest frame), the
+        learnt estimators of :data:`LEARNED_METHODS` (calibrated to the rest
+        frame when they read one) and ``ensemble``.
+    folder : str or os.PathLike
+        Where databases (``folder/dbs``) and learnt estimators are built
+        when missing and read when present.
+    data : LearningSetOptions, keyword-only, optional
+        The learning set of the learnt estimators.
+    mount : CameraMount, keyword-only, optional
+        The device (the paper's by default).
+    progress : callable, keyword-only, optional
+        Called with a line of text at each stage.
+
+    Returns
+    -------
+    dict
+        Name to a factory ``(rest_frame, hand) -> estimator or None``.
+
+    Raises
+    ------
+    InvalidInputError
+        An unknown or repeated name, or none.
+    """
+    names = list(names)
+    bad = [n for n in names if n not in PROTOCOL_METHODS]
+    if bad or not names or len(set(names)) != len(names):
+        raise InvalidInputError(f"methods must be distinct names from "
+                                f"{', '.join(PROTOCOL_METHODS)}, got {', '.join(names) or 'none'}")
+    mount = mount or CameraMount.paper()
+    say = progress or (lambda _line: None)
+    folder = Path(folder)
+    dbs = folder / "dbs"
+    out: dict = {}
+    if {"standard", "selected"} & set(names):
+        build_databases(dbs, [HandShape()], mount, options=BuildOptions(), workers=1)
+        standard = PoseLookup.open(dbs, shape=HandShape())
+    if "standard" in names:
+        out["standard"] = lambda rest, hand: standard
+    if "selected" in names:
+        def selected(rest, hand):
+            if hand.measurements is None:
+                return None
+            shape = select_shape(hand.measurements).shape
+            build_databases(dbs, [shape], mount, options=BuildOptions(), workers=1)
+            return PoseLookup.open(dbs, shape=shape)
+        out["selected"] = selected
+    if "calibrated" in names:
+        out["calibrated"] = lambda rest, hand: PoseLookup.from_open_frame(dbs, rest, mount=mount,
+                                                                          workers=1)
+    needed = set(names) | ({"fingers", "mlp"} if "ensemble" in names else set())
+    built = {}
+    for name, opts in LEARNED_METHODS.items():
+        if name in needed:
+            t0 = time.perf_counter()
+            built[name] = learned_estimator(folder, opts, data=data, mount=mount, progress=say)
+            say(f"{name}: ready in {time.perf_counter() - t0:.1f} s")
+    for name, est in built.items():
+        if name in names:
+            out[name] = ((lambda rest, hand, est=est: est.calibrated(rest))
+                         if est.options.use_rest else (lambda rest, hand, est=est: est))
+    if "ensemble" in names:
+        ens = EnsembleEstimator([built["fingers"], built["mlp"]])
+        out["ensemble"] = lambda rest, hand: ens.calibrated(rest)
+    return {n: out[n] for n in names}
+
+
+def protocol_headline(result: dict) -> dict:
+    """Headline figures of a :func:`~handsynth.eval.run_protocol` result.
+
+    Returns
+    -------
+    dict
+        ``"<hand kind>/<pose set>/<method>"`` to the finger flexion MAE, the
+        constant's, the skill and the index PIP MAE on frames where it truly
+        moves (means over the hands of that kind; degrees).
+    """
+    rows: dict = {}
+    for hand in result["hands"].values():
+        for ps in result["options"]["pose_sets"]:
+            for m, s in hand.get(ps, {}).items():
+                rows.setdefault(f"{hand['kind']}/{ps}/{m}", []).append((
+                    s["method"]["groups_mae_deg"]["finger_flexion"],
+                    s["constant"]["groups_mae_deg"]["finger_flexion"],
+                    s["method"]["joints"]["index_pip_flex"]["moving_mae_deg"]))
+    out = {}
+    for key, vals in rows.items():
+        a = np.array([[np.nan if x is None else x for x in v] for v in vals], float)
+        pip = a[:, 2][np.isfinite(a[:, 2])]
+        out[key] = {"flexion_mae": round(float(np.mean(a[:, 0])), 2),
+                    "constant": round(float(np.mean(a[:, 1])), 2),
+                    "skill": round(float(1 - np.mean(a[:, 0]) / np.mean(a[:, 1])), 3),
+                    "index_pip_moving_mae": round(float(pip.mean()), 2) if len(pip) else None}
+    return out
+
+
+def format_headline(headline: dict) -> str:
+    """The headline of :func:`protocol_headline` as lines of text, one per condition."""
+    lines = []
+    for key, v in headline.items():
+        pip = v["index_pip_moving_mae"]
+        lines.append(f"{key:32s} flexion MAE {v['flexion_mae']:6.2f} (constant "
+                     f"{v['constant']:6.2f}, skill {v['skill']:+.3f}); index PIP where it moves: "
+                     f"MAE {'-' if pip is None else f'{pip:.1f}'}")
+    return "\n".join(lines)
