@@ -230,10 +230,11 @@ def _progress(stream):
                    "calibrated to the user's hand at rest: --calibrate-image, else the first "
                    "frame showing a hand (--synthetic: the hand rendered open). Learnt once "
                    "into --learned-cache (minutes), then read.")
-@click.option("--learned-kind", type=click.Choice(["fingers", "ensemble"]), default="fingers",
+@click.option("--learned-kind", type=click.Choice(["fingers", "ensemble"]), default="ensemble",
               show_default=True,
-              help="With --learned: the per-digit estimator, or its mean with the perceptron "
-                   "(learning the perceptron takes a few more minutes).")
+              help="With --learned: the mean of the per-digit estimator and the perceptron "
+                   "(the more accurate on natural poses), or the per-digit estimator alone "
+                   "(learnt a few minutes faster).")
 @click.option("--learned-cache", default=None, metavar="FOLDER",
               help="Folder of the learnt estimator and its learning set [default: "
                    "~/.cache/handsynth/learned].")
@@ -313,7 +314,9 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
     if learned:
         _check_learned_options(db_dir, shape_name, measurements, personal, build_count,
                                calibrate, video_out, no_temporal, keypoints)
-    elif learned_cache is not None or learned_hands is not None or learned_kind != "fingers":
+    elif learned_cache is not None or learned_hands is not None or \
+            click.get_current_context().get_parameter_source("learned_kind") \
+            == click.core.ParameterSource.COMMANDLINE:
         raise InvalidInputError("--learned-kind, --learned-cache and --learned-hands apply "
                                 "with --learned only")
     inputs = [p for p in (video_in, measurements, calibrate_image) if p is not None]

@@ -26,10 +26,12 @@ Three regressors share that input (:class:`LearnedOptions` ``kind``):
     cell belongs to a digit when its coverage correlates with one of the
     digit's angles over the learning set (|r| > 0.1), weighted by that
     correlation; per digit, the principal components of those cells (of the
-    frame and of its difference from the rest frame) and the weighted mean of
-    the digit's angles in the ``k`` nearest learning frames (weights
-    ``1 / (d + d_1)``, ``d_1`` the nearest distance; exact search, faiss
-    ``IndexFlatL2``).  Other fingers moving no longer disturb a digit's match.
+    frame and of its difference from the rest frame) and, among the ``k``
+    nearest learning frames (weights ``1 / (d + d_1)``, ``d_1`` the nearest
+    distance; faiss inverted file), a weighted ridge regression of the
+    digit's angles on their codes read at the frame's code
+    (:func:`local_linear`; ``local="mean"``: their weighted mean).  Other
+    fingers moving no longer disturb a digit's match.
 ``"knn"``
     The same nearest-neighbour mean on the principal components of the whole
     frame.
@@ -39,7 +41,9 @@ Three regressors share that input (:class:`LearnedOptions` ``kind``):
     angles (numpy only; :func:`fit_mlp`).
 
 Chosen on model hands of random geometry (README, "Camera estimator for
-unseen hands"): ``"fingers"`` with ``k = 128`` on a 200,000-frame learning set.
+unseen hands"): ``"fingers"`` with ``k = 128`` and the local linear fit on a
+200,000-frame learning set, alone or averaged with ``"mlp"``
+(:class:`~handsynth.estimate.EnsembleEstimator`).
 
 Everything learnt is kept in a folder the caller names
 (:func:`learned_estimator`), as one ``.npz`` written to a temporary name and

@@ -438,7 +438,7 @@ def test_learned_estimator_on_a_synthetic_hand_learns_once_then_reads_its_cache(
     cache = tmp_path / "learned"
     out = tmp_path / "rows.csv"
     args = ["--synthetic", "--learned", "--learned-cache", str(cache), "--learned-hands", "6",
-            "--frames", "12", "--synthetic-motion", "natural", *SMALL]
+            "--frames", "12", "--synthetic-motion", "natural", "--learned-kind", "fingers", *SMALL]
     res = _run(*args, "--out", str(out))
     assert res.exit_code == 0, res.output
     assert "learning set: 6 hands x 100 frames" in res.output
@@ -461,6 +461,7 @@ def test_learned_estimator_on_a_synthetic_hand_learns_once_then_reads_its_cache(
     (["--learned", "--calibrate", "--no-temporal"],
      "--calibrate, --no-temporal apply to the database lookup"),
     (["--learned-hands", "5"], "apply with --learned only"),
+    (["--learned-kind", "ensemble"], "apply with --learned only"),
     (["--learned", "--learned-hands", "0"], "--learned-hands must be a positive integer, got 0"),
 ])
 def test_learned_options_that_do_not_apply_are_refused_by_name(tmp_path, extra, message):
