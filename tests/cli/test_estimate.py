@@ -451,9 +451,13 @@ def test_learned_estimator_on_a_synthetic_hand_learns_once_then_reads_its_cache(
     assert ((est >= JOINT_LIMITS_DEG[:, 0] - 1e-3) & (est <= JOINT_LIMITS_DEG[:, 1] + 1e-3)).all()
     assert re.search(r"mean absolute error vs truth [\d.]+ deg over 12 frames", res.output)
     assert sorted(p.name.split("_")[0] for p in cache.iterdir()) == ["learned", "learning"]
-    again = _run(*args)
+    again = _run(*args, "--smoothing", "0.5", "--out", str(tmp_path / "smooth.csv"))
     assert again.exit_code == 0, again.output
     assert "learning set:" not in again.output  # read from the cache
+    _, smooth_rows = _read_csv(tmp_path / "smooth.csv")
+    smooth = np.array([[float(r[n]) for n in JOINT_NAMES] for r in smooth_rows])
+    np.testing.assert_allclose(smooth[0], est[0])  # nothing to smooth with yet
+    np.testing.assert_allclose(smooth[1], 0.5 * smooth[0] + 0.5 * est[1], atol=1e-3)
 
 
 @pytest.mark.parametrize(("extra", "message"), [
@@ -462,6 +466,8 @@ def test_learned_estimator_on_a_synthetic_hand_learns_once_then_reads_its_cache(
      "--calibrate, --no-temporal apply to the database lookup"),
     (["--learned-hands", "5"], "apply with --learned only"),
     (["--learned-kind", "ensemble"], "apply with --learned only"),
+    (["--smoothing", "0.3"], "apply with --learned only"),
+    (["--learned", "--smoothing", "1"], "--smoothing must be in [0, 1), got 1.0"),
     (["--learned", "--learned-hands", "0"], "--learned-hands must be a positive integer, got 0"),
 ])
 def test_learned_options_that_do_not_apply_are_refused_by_name(tmp_path, extra, message):
