@@ -16,7 +16,10 @@ from ._main import cli
               help="Width of one picture in pixels.")
 @click.option("--frames", type=click.IntRange(0, 10_000), default=200, show_default=True,
               help="Synthetic frames of an off-grid hand to look up in the default database.")
-def demo(out_dir: Path, tile_width: int, frames: int) -> None:
+@click.option("--learned-hands", type=click.IntRange(0, 100_000), default=300, show_default=True,
+              help="Random hands of the learned estimator's small demo learning set "
+                   "(0: skip that part).")
+def demo(out_dir: Path, tile_width: int, frames: int, learned_hands: int) -> None:
     """Render pictures, build the embedded default database and look up synthetic frames.
 
     Pictures: the open hand, a fist and a pinch for the smallest and largest
@@ -44,6 +47,32 @@ def demo(out_dir: Path, tile_width: int, frames: int) -> None:
                f"MUJOCO_GL={backend()}; {time.perf_counter() - t:.1f} s")
     if frames:
         _lookup_demo(out_dir / "db", frames)
+    if learned_hands:
+        _learned_demo(out_dir / "learned", learned_hands, max(frames, 20))
+
+
+def _learned_demo(folder: Path, hands: int, frames: int) -> None:
+    import time
+
+    from ..db import LearningSetOptions
+    from ..eval import (
+        ProtocolOptions,
+        format_headline,
+        mesh_test_hands,
+        protocol_headline,
+        protocol_methods,
+        run_protocol,
+    )
+
+    t = time.perf_counter()
+    methods = protocol_methods(["fingers"], folder, data=LearningSetOptions(hands=hands))
+    click.echo(f"learned estimator ({hands} hands x 100 frames) ready in "
+               f"{time.perf_counter() - t:.1f} s in {folder}")
+    result = run_protocol(methods, mesh_test_hands(["mrtk"]), ProtocolOptions(frames=frames))
+    click.echo(f"learned estimator on {frames} frames of the MRTK glTF hand per pose set, "
+               "beside the constant open-hand answer (the full evaluation: handsynth eval "
+               "--protocol):")
+    click.echo(format_headline(protocol_headline(result)))
 
 
 def _lookup_demo(db_dir: Path, frames: int) -> None:

@@ -1,3 +1,5 @@
+import re
+
 import cv2
 from click.testing import CliRunner
 
@@ -7,7 +9,7 @@ from handsynth.db import open_database
 
 def test_demo_writes_pictures_and_looks_up_frames(tmp_path):
     res = CliRunner().invoke(cli, ["demo", "--out", str(tmp_path), "--tile-width", "96",
-                                   "--frames", "20"])
+                                   "--frames", "20", "--learned-hands", "10"])
     assert res.exit_code == 0, res.output
     for name in ("hands_paper_mount.png", "hands_whole_hand_mount.png"):
         img = cv2.imread(str(tmp_path / name))
@@ -17,6 +19,13 @@ def test_demo_writes_pictures_and_looks_up_frames(tmp_path):
     assert "looked up 20 frames" in res.output and "mean absolute error" in res.output
     line = next(x for x in res.output.splitlines() if x.startswith("calibrated to its open hand"))
     assert "pixels ignored" in line and "mean absolute error" in line
+    assert "learned estimator (10 hands x 100 frames) ready" in res.output
+    for pose_set in ("paper", "natural"):
+        row = next(x for x in res.output.splitlines() if x.startswith(f"mesh/{pose_set}/fingers"))
+        mae, const = (float(v) for v in re.findall(r"MAE +([\d.]+) \(constant +([\d.]+)", row)[0])
+        assert const > 0 and mae > 0
+    assert sorted(p.name.split("_")[0] for p in (tmp_path / "learned").iterdir()) == [
+        "learned", "learning"]
 
 
 def test_demo_bad_option_is_one_line(tmp_path):
