@@ -41,6 +41,7 @@ import json
 import numpy as np
 
 from handsynth import JOINT_NAMES, CameraMount, HandShape, PoseLookup
+from handsynth._io import write_text
 from handsynth.eval._hands import _pose_seed
 from handsynth.models import JOINT_LIMITS_DEG, pose_set
 from handsynth.render import SilhouetteRenderer
@@ -145,8 +146,7 @@ def main() -> None:
            **study(args, mount, mesh, open_frame, data)}
     mesh.close()
     if args.json:
-        with open(args.json, "w", encoding="utf-8") as fh:
-            json.dump(out, fh, indent=2)
+        write_text(args.json, json.dumps(out, indent=2), what="JSON report")
         print(f"json: {args.json}")
 
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from handsynth._io import write_text
 from handsynth.render import standard_assets
 
 OUT = Path(__file__).resolve().parents[1] / "assets" / "hand_mjcf"
@@ -16,5 +17,5 @@ OUT = Path(__file__).resolve().parents[1] / "assets" / "hand_mjcf"
 if __name__ == "__main__":
     OUT.mkdir(parents=True, exist_ok=True)
     for name, text in standard_assets().items():
-        (OUT / name).write_text(text)
+        write_text(OUT / name, text, what="MJCF asset")
         print(f"wrote {OUT / name}")
