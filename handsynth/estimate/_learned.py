@@ -443,7 +443,22 @@ class LearnedEstimator:
         return self._knn(prefix, c)
 
     def grid(self, frame: np.ndarray) -> np.ndarray:
-        """The frame's coverage grid as the learning set holds it ((rows, cols) uint8)."""
+        """The frame's coverage grid as the learning set holds it ((rows, cols) uint8).
+
+        Raises
+        ------
+        InvalidInputError
+            A frame whose width-to-height ratio is not the device's (the grid's
+            cells would fall on other parts of the view), or not an image.
+        """
+        shape = np.shape(frame)
+        if len(shape) in (2, 3) and shape[0] > 0 and shape[1] > 0:
+            want = self.mount.width_px / self.mount.height_px
+            if abs(shape[1] / shape[0] - want) > 0.01 * want:
+                raise InvalidInputError(
+                    f"frame is {shape[1]}x{shape[0]} pixels; this estimator learnt the "
+                    f"device's {self.mount.width_px}x{self.mount.height_px} view: give frames "
+                    "of that width-to-height ratio (scaled, not cropped)")
         c = coverage(frame, self.mount, side=self.side, cells=self.cells)
         return np.rint(c * 255).astype(np.uint8)
 

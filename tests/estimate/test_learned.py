@@ -136,6 +136,16 @@ def test_the_linear_fit_falls_back_to_the_mean_with_fewer_neighbours_than_dimens
                            many_mean.calibrated(rest).estimate(frame).angles)
 
 
+def test_a_frame_of_another_aspect_ratio_is_refused_with_its_size(data):
+    est = train_learned(data, LearnedOptions(kind="fingers", k=2, use_rest=False))
+    full = SilhouetteRasterizer().mask(np.full(20, 10.0))
+    half = full[::2, ::2]  # the same view at half the resolution gives the same grid
+    diff = np.abs(est.grid(half).astype(int) - est.grid(full).astype(int))
+    assert diff.mean() < 2 and est.grid(full).mean() > 20
+    with pytest.raises(InvalidInputError, match=r"frame is 640x480 pixels.*720x480"):
+        est.estimate(np.zeros((480, 640), bool))
+
+
 def test_bad_options_are_refused_by_name():
     with pytest.raises(InvalidInputError, match="kind must be 'mlp', 'knn' or 'fingers'"):
         LearnedOptions(kind="forest")
