@@ -72,7 +72,7 @@ from ._lookup import PoseEstimate
 __all__ = ["LearnedEstimator", "LearnedOptions", "fit_mlp", "learned_estimator", "local_linear",
            "train_learned"]
 
-_FORMAT = 1
+_FORMAT = 2  # 2: novelty_limit
 
 
 @dataclass(frozen=True)
@@ -405,18 +405,51 @@ class LearnedEstimator:
             out._rest_angles = self._predict("abs_", z @ self._a["abs_components"])[0]
         return out
 
-    def _predict_digits(self, z: np.ndarray) -> tuple[np.ndarray, float]:
-        """Each digit's angles from its own cells (kind ``"fingers"``), and the mean distance."""
+    def _digit_code(self, d: int, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Digit `d`'s codes (N, k) of inputs `z` and the squared norm (N,) they leave out."""
         a = self._a
+        p = f"d{d}_"
+        x = z[:, a[p + "cols"]] * a[p + "w"] - a[p + "mean"]
+        c = x @ a[p + "components"]
+        return c, np.maximum(np.einsum("ij,ij->i", x, x) - np.einsum("ij,ij->i", c, c), 0.0)
+
+    def _predict_digits(self, z: np.ndarray) -> tuple[np.ndarray, float]:
+        """Each digit's angles from its own cells (kind ``"fingers"``), and the novelty.
+
+        The novelty is the mean over the digits of the distance to the
+        nearest learning frame, counting the part of the frame's input its
+        principal components leave out (which no learning frame shows).
+        """
         angles = np.empty(20)
-        dist = 0.0
+        novelty = 0.0
         for d, joints in enumerate(_DIGIT_JOINTS):
-            p = f"d{d}_"
-            c = (z[:, a[p + "cols"]] * a[p + "w"] - a[p + "mean"]) @ a[p + "components"]
-            got, e = self._knn(p, c)
+            c, left_out = self._digit_code(d, z)
+            got, e = self._knn(f"d{d}_", c)
             angles[list(joints)] = got
-            dist += e / 5
-        return angles, dist
+            novelty += float(np.sqrt(e * e + left_out[0])) / 5
+        return angles, novelty
+
+    def _novelty_limit(self, z: np.ndarray, hand: np.ndarray, *, quantile: float = 0.99) -> float:
+        """The `quantile` of the novelty of learning frames `z` (hands `hand`) among other hands.
+
+        A user's hand is not in the learning set: each frame is searched for
+        as a new hand's would be, its own hand's frames left out (the
+        nearest neighbour of another hand among 256), so the limit says how
+        novel frames of hands never learnt usually are.
+        """
+        a = self._a
+        total = np.zeros(len(z))
+        rows = np.arange(len(z))
+        for d in range(5):
+            p = f"d{d}_"
+            c, left_out = self._digit_code(d, z)
+            dist, idx = self._index[p].search(np.ascontiguousarray(c, np.float32),
+                                              min(256, len(a[p + "codes"])))
+            other = (idx >= 0) & (a["hand"][np.maximum(idx, 0)] != hand[:, None])
+            first = np.argmax(other, axis=1)
+            near = np.where(other[rows, first], dist[rows, first], dist[:, -1])
+            total += np.sqrt(np.maximum(near, 0.0) + left_out) / 5
+        return float(np.quantile(total, quantile))
 
     def _knn(self, prefix: str, c: np.ndarray) -> tuple[np.ndarray, float]:
         d, idx = self._index[prefix].search(np.ascontiguousarray(c, np.float32), self.options.k)
@@ -485,9 +518,14 @@ class LearnedEstimator:
         -------
         PoseEstimate
             ``keypoints`` are NaN (this estimator reports angles only);
-            ``entry`` is -1; ``confidence`` is the share of the frame's
-            variance its code explains (a heuristic: low for frames unlike
-            any learnt); ``no_hand`` when the frame shows no hand.
+            ``entry`` is -1; ``confidence`` is a heuristic, low for frames
+            unlike any learnt (``"fingers"``: ``1 / (1 + error)``, ``error``
+            the mean over the digits of the nearest learning frame's
+            distance; otherwise the share of the frame's variance its code
+            explains); ``low_confidence`` (``"fingers"``) when ``error``
+            exceeds what 99 % of frames of hands the estimator did not learn
+            from show (:func:`train_learned`), e.g. a cluttered background;
+            ``no_hand`` when the frame shows no hand.
         """
         g = self.grid(frame).reshape(1, -1)
         if not g.any():
@@ -499,9 +537,12 @@ class LearnedEstimator:
                                     "calibrated(rest_frame) first")
         z = _inputs(g, self._rest[None] if self._rest is not None and self.options.use_rest
                     else None)
+        low = False
         if self.options.kind == "fingers":
             angles, error = self._predict_digits(z)
             conf = 1.0 / (1.0 + error)
+            if "novelty_limit" in self._a:
+                low = bool(error > float(self._a["novelty_limit"]))
         else:
             z -= self._a["mean"]
             c = z @ self._a["components"]
@@ -516,7 +557,7 @@ class LearnedEstimator:
         self._previous = angles if self.smoothing > 0 else None
         return PoseEstimate(angles=angles, keypoints=np.full((21, 3), np.nan, np.float32),
                             confidence=min(max(conf, 0.0), 1.0), entry=-1, error=error,
-                            low_confidence=False, no_hand=False)
+                            low_confidence=low, no_hand=False)
 
     # -- storage -------------------------------------------------------------------
     def save(self, path) -> None:
@@ -579,6 +620,13 @@ def train_learned(data: LearningSet, options: LearnedOptions | None = None, *,
     if opts.kind == "fingers":
         rest = data.rest_grids[data.hand] if opts.use_rest else None
         arrays = _fit_digits(_inputs(data.grids, rest), y, opts, rng, data.grids.shape[1])
+        arrays["hand"] = np.asarray(data.hand, np.int32)
+        est = LearnedEstimator(arrays, options=opts, mount=data.mount, side=data.side,
+                               cells=data.options.cells)
+        pick = np.sort(rng.choice(len(y), size=min(1000, len(y)), replace=False))
+        z = _inputs(data.grids[pick], None if rest is None else rest[pick])
+        arrays["novelty_limit"] = np.array(est._novelty_limit(z, data.hand[pick]), np.float32)
+        del arrays["hand"]
     elif opts.use_rest:
         rest = data.rest_grids[data.hand]
         arrays = _fit(_inputs(data.grids, rest), y - data.rest_angles[data.hand]

@@ -102,7 +102,9 @@ class PoseEstimate:
         The search's ``E`` of that entry; for a calibrated lookup its pixel
         difference outside the ignore mask (inf when `no_hand`).
     low_confidence : bool
-        No entry passed both pruning stages (SPEC.md section 1).
+        No entry passed both pruning stages (SPEC.md section 1); for a
+        :class:`~handsynth.estimate.LearnedEstimator`, the frame is farther
+        from every learning frame than 99 % of new hands' frames are.
     no_hand : bool
         The frame shows no hand (empty silhouette after preprocessing).
     """

@@ -146,6 +146,18 @@ def test_a_frame_of_another_aspect_ratio_is_refused_with_its_size(data):
         est.estimate(np.zeros((480, 640), bool))
 
 
+def test_frames_unlike_any_hand_are_flagged_low_confidence(data):
+    est = train_learned(data, LearnedOptions(kind="fingers", k=8, lists=0))
+    limit = float(est._a["novelty_limit"])
+    assert limit > 0
+    rest = _frames(data, [0])[0]
+    cal = est.calibrated(rest)
+    hand = cal.estimate(_frames(data, [1])[0])
+    assert hand.error <= limit and not hand.low_confidence
+    odd = cal.estimate(np.ones_like(rest))  # a bright background filling the view
+    assert odd.error > limit and odd.low_confidence
+
+
 def test_bad_options_are_refused_by_name():
     with pytest.raises(InvalidInputError, match="kind must be 'mlp', 'knn' or 'fingers'"):
         LearnedOptions(kind="forest")
