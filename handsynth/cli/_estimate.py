@@ -131,7 +131,7 @@ def _check_learned_options(db_dir, shape_name, measurements, personal, build_cou
                                 "--calibrate-image gives that frame)")
 
 
-def _open_learned(cache, kind, hands, smoothing, err):
+def _open_learned(cache, kind, hands, smoothing, side, err):
     """The learnt estimator (read from `cache`, or learnt there first)."""
     import time
 
@@ -153,15 +153,16 @@ def _open_learned(cache, kind, hands, smoothing, err):
         if not line.startswith("epoch"):
             click.echo(line, err=err)
 
-    members = [learned_estimator(folder, LearnedOptions(kind="fingers"), data=data, progress=say)]
+    members = [learned_estimator(folder, LearnedOptions(kind="fingers"), data=data, side=side,
+                                 progress=say)]
     if kind == "ensemble":
         members.append(learned_estimator(folder, LearnedOptions(kind="mlp"), data=data,
-                                         progress=say))
+                                         side=side, progress=say))
     for m in members:
         m.smoothing = smoothing or 0.0
     est = EnsembleEstimator(members) if kind == "ensemble" else members[0]
-    click.echo(f"learnt estimator ({kind}) ready in {time.perf_counter() - t:.1f} s "
-               f"({folder})", err=err)
+    click.echo(f"learnt estimator ({kind}, {side} hand) ready in "
+               f"{time.perf_counter() - t:.1f} s ({folder})", err=err)
     return est
 
 
@@ -245,6 +246,9 @@ def _progress(stream):
                    "~/.cache/handsynth/learned].")
 @click.option("--learned-hands", type=int, default=None, metavar="N",
               help="Random hands of the learning set [default: 2,000 x 100 frames].")
+@click.option("--side", type=click.Choice(["right", "left"]), default=None,
+              help="With --learned: the hand wearing the device [default: right] (the "
+                   "lookups take it from the database).")
 @click.option("--smoothing", type=float, default=None, metavar="A",
               help="With --learned: report A * previous + (1 - A) * new angles (0 <= A < 1) "
                    "[default: 0, none]. At 30 fps, 0.3 cut the frame-to-frame jitter by a "
@@ -275,7 +279,7 @@ def _progress(stream):
 @click.option("--quiet", "-q", is_flag=True, help="No progress line.")
 def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, personal,
              build_count, calibrate, calibrate_image, learned, learned_kind, learned_cache,
-             learned_hands, smoothing, frames, seconds, out, fmt, keypoints,
+             learned_hands, side, smoothing, frames, seconds, out, fmt, keypoints,
              video_out, synthetic_shape, synthetic_motion, synthetic_size, fps, no_temporal,
              max_dead, quiet) -> None:
     """Look up the hand pose of every frame of a camera, a video file or a synthetic hand.
@@ -324,9 +328,10 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
         _check_learned_options(db_dir, shape_name, measurements, personal, build_count,
                                calibrate, video_out, no_temporal, keypoints)
     elif learned_cache is not None or learned_hands is not None or smoothing is not None or \
+            side is not None or \
             click.get_current_context().get_parameter_source("learned_kind") \
             == click.core.ParameterSource.COMMANDLINE:
-        raise InvalidInputError("--learned-kind, --learned-cache, --learned-hands and "
+        raise InvalidInputError("--learned-kind, --learned-cache, --learned-hands, --side and "
                                 "--smoothing apply with --learned only")
     inputs = [p for p in (video_in, measurements, calibrate_image) if p is not None]
     size = _parse_size(synthetic_size, "--synthetic-size") if synthetic else None
@@ -351,13 +356,13 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
         lookup = None
         if learned:
             lookup = _open_learned(learned_cache, learned_kind, learned_hands, smoothing,
-                                   info_err)
+                                   side or "right", info_err)
         elif not calibrate or chosen_db:
             lookup = _open_lookup(db_dir, shape_name, measurements,
                                   False if no_temporal else None, info_err,
                                   personal=personal, build=build)
         mount = getattr(lookup, "mount", None) or CameraMount.paper()
-        side = getattr(lookup, "side", None) or "right"
+        side = getattr(lookup, "side", None) or side or "right"
         if synthetic:
             source = SyntheticSource(user_shape, mount, side=side,
                                      motion=SyntheticMotion(poses=synthetic_motion), fps=fps,

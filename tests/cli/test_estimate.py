@@ -460,6 +460,14 @@ def test_learned_estimator_on_a_synthetic_hand_learns_once_then_reads_its_cache(
     np.testing.assert_allclose(smooth[1], 0.5 * smooth[0] + 0.5 * est[1], atol=1e-3)
 
 
+def test_learned_estimator_for_the_left_hand(tmp_path):
+    res = _run("--synthetic", "--learned", "--side", "left", "--learned-cache", str(tmp_path),
+               "--learned-hands", "6", "--learned-kind", "fingers", "--frames", "4", *SMALL)
+    assert res.exit_code == 0, res.output
+    assert "learnt estimator (fingers, left hand)" in res.output
+    assert re.search(r"mean absolute error vs truth [\d.]+ deg over 4 frames", res.output)
+
+
 @pytest.mark.parametrize(("extra", "message"), [
     (["--learned", "--db", "dbs"], "--db applies to the database lookup, not to --learned"),
     (["--learned", "--calibrate", "--no-temporal"],
@@ -467,6 +475,7 @@ def test_learned_estimator_on_a_synthetic_hand_learns_once_then_reads_its_cache(
     (["--learned-hands", "5"], "apply with --learned only"),
     (["--learned-kind", "ensemble"], "apply with --learned only"),
     (["--smoothing", "0.3"], "apply with --learned only"),
+    (["--side", "left"], "apply with --learned only"),
     (["--learned", "--smoothing", "1"], "--smoothing must be in [0, 1), got 1.0"),
     (["--learned", "--learned-hands", "0"], "--learned-hands must be a positive integer, got 0"),
 ])
