@@ -44,6 +44,7 @@ from ._models import (
 )
 from ._motions import (
     MOTIONS,
+    NAMED_MOTIONS,
     OTHER_MOTIONS,
     REPRESENTATIVE_MOTIONS,
     grasp_posture,
@@ -75,6 +76,7 @@ __all__ = [
     "GLOVE_KINDS",
     "MODELS",
     "MOTIONS",
+    "NAMED_MOTIONS",
     "OTHER_MOTIONS",
     "RANGE_LABELS",
     "REPRESENTATIVE_MOTIONS",

@@ -10,9 +10,13 @@ The postures below are this project's reading of those grasp names (the
 seed gives pictures, not angles): a power grasp round a ~4 cm cylinder, a
 key pinch with the thumb pad on the side of the curled index, a three-jaw
 chuck of thumb, index and middle, and a flat-hand plate grasp.  Motions not
-in the calibration set come from the hand model's own named poses
-(:data:`handsynth.models.NAMED_POSES`) and from 50/50 blends of two
-representative grasps.
+in the calibration set (:data:`OTHER_MOTIONS`) are postures written here
+from their everyday descriptions, independently of every pose generator an
+estimator learns from (the synergy prior is learnt from
+:func:`handsynth.models.natural_pose_set`, which jitters the hand model's
+named poses, so those are not used as unseen motions), and 50/50 blends of
+two representative grasps.  The named poses stay available for simulation
+(:data:`NAMED_MOTIONS`).
 """
 
 from __future__ import annotations
@@ -24,6 +28,7 @@ from ...models import JOINT_LIMITS_DEG, NAMED_POSES
 
 __all__ = [
     "MOTIONS",
+    "NAMED_MOTIONS",
     "OTHER_MOTIONS",
     "REPRESENTATIVE_MOTIONS",
     "grasp_posture",
@@ -58,19 +63,28 @@ def _blend(a: str, b: str) -> np.ndarray:
     return arr
 
 
-#: Motions outside every calibration set: the hand model's named poses and
-#: blends of two representative grasps (deg, canonical order).
+#: Motions outside every calibration set and every learnt prior: hook grip,
+#: V sign, OK sign, large-cylinder wrap, thumb-to-little opposition (written
+#: from their descriptions, not fitted to anything) and blends of two
+#: representative grasps (deg, canonical order).
 OTHER_MOTIONS: dict[str, np.ndarray] = {
-    "fist": NAMED_POSES["fist"],
-    "point": NAMED_POSES["point"],
-    "pinch": NAMED_POSES["pinch"],
-    "grasp": NAMED_POSES["grasp"],
+    "hook": _pose((5, 20, 5, 5), (5, 2, 85), (5, 0, 85), (5, -2, 85), (5, -4, 85)),
+    "v_sign": _pose((35, 30, 35, 30), (0, 12, 0), (0, -8, 0), (75, -3, 95), (80, -6, 95)),
+    "ok_sign": _pose((30, 45, 20, 25), (40, 0, 60), (10, -2, 10), (10, -5, 10), (10, -10, 10)),
+    "large_cylinder": _pose((20, 55, 10, 10), (30, 3, 40), (30, 0, 40), (30, -3, 40),
+                            (35, -6, 40)),
+    "opposition": _pose((45, 50, 30, 20), (10, 0, 10), (15, 0, 15), (30, -3, 30), (50, 0, 50)),
     "standard+tripod": _blend("standard", "tripod"),
     "lateral_contact+tripod": _blend("lateral_contact", "tripod"),
 }
 
+#: The hand model's named poses as motions (simulation only: they are in the
+#: synergy prior's source).
+NAMED_MOTIONS: dict[str, np.ndarray] = {
+    name: NAMED_POSES[name] for name in ("fist", "point", "pinch", "grasp")}
+
 #: Every motion the simulator knows.
-MOTIONS: dict[str, np.ndarray] = {**REPRESENTATIVE_MOTIONS, **OTHER_MOTIONS}
+MOTIONS: dict[str, np.ndarray] = {**REPRESENTATIVE_MOTIONS, **OTHER_MOTIONS, **NAMED_MOTIONS}
 
 
 def motions_for(kind: str) -> tuple[str, ...]:
