@@ -160,8 +160,11 @@ def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz
               help="CSV of quaternions (time_s, <sensor>_qw .. _qz).")
 @click.option("--angles-out", type=click.Path(dir_okay=False),
               help="CSV of joint angles in degrees (needs --calibration).")
+@click.option("--tips-out", type=click.Path(dir_okay=False),
+              help="CSV of fingertip positions from the elbow centre, mm, in the world frame "
+                   "of the initial attitude (eq. 3.12; needs --calibration).")
 def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_units, rate_hz,
-          static_s, align, out_path, angles_out) -> None:
+          static_s, align, out_path, angles_out, tips_out) -> None:
     """Orientation of every sensor of a CSV RECORDING (columns <sensor>_acc_x .. _mag_z)."""
     import dataclasses
 
@@ -173,12 +176,14 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
         ImuCalibration,
         StaticStart,
         check_recording,
+        fingertip_positions,
         make_filter,
         read_imu_csv,
     )
 
-    if angles_out and not calibration_path:
-        raise InvalidInputError("--angles-out needs --calibration")
+    for flag, given in (("--angles-out", angles_out), ("--tips-out", tips_out)):
+        if given and not calibration_path:
+            raise InvalidInputError(f"{flag} needs --calibration")
     rec = read_imu_csv(recording, acc_units=acc_units, gyr_units=gyr_units, mag_units=mag_units,
                        rate_hz=rate_hz)
     for w in check_recording(rec, static_s=static_s, source=str(recording)):
@@ -197,6 +202,11 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
         q, sensors, name = res["quat"], cal.sensors, "filter4"
         if angles_out:
             _write_table(angles_out, ["time_s", *JOINT_NAMES], np.column_stack([t, res["angles"]]))
+        if tips_out:
+            tips = fingertip_positions(q, sensors, cal.model)
+            fingers = [f for f in tips if not f.endswith("_joints")]
+            _write_table(tips_out, ["time_s", *(f"{f}_tip_{c}_mm" for f in fingers for c in "xyz")],
+                         np.column_stack([t, *(1e3 * tips[f] for f in fingers)]))
     else:
         est = dataclasses.replace(make_filter(filter_name), static=static)
         q, sensors, name = est.run(rec), rec.sensors, filter_name

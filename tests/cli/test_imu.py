@@ -103,6 +103,14 @@ def test_eval_writes_json_with_baselines(tmp_path):
     assert "rotation_method" in res.output
 
 
+def test_tips_out_needs_the_calibration(tmp_path, sim):
+    src = tmp_path / "rec.csv"
+    write_imu_csv(sim, src)
+    res = CliRunner().invoke(cli, ["imu", "track", str(src), "--out", str(tmp_path / "q.csv"),
+                                   "--tips-out", str(tmp_path / "t.csv")])
+    assert res.exit_code == 2 and "--tips-out needs --calibration" in res.output
+
+
 def test_eval_unknown_filter_is_one_line(tmp_path):
     res = CliRunner().invoke(cli, ["imu", "eval", "--filter", "kalman9", "--json",
                                    str(tmp_path / "x.json")])
@@ -127,8 +135,23 @@ def test_calibrate_then_track_joint_angles(tmp_path):
     rec_csv, q_csv, ang_csv = tmp_path / "rec.csv", tmp_path / "q.csv", tmp_path / "a.csv"
     write_imu_csv(rec, rec_csv)
     res = CliRunner().invoke(cli, ["imu", "track", str(rec_csv), "--calibration", str(model),
-                                   "--align", "2,4", "--out", str(q_csv), "--angles-out", str(ang_csv)])
+                                   "--align", "2,4", "--out", str(q_csv), "--angles-out", str(ang_csv),
+                                   "--tips-out", str(tmp_path / "tips.csv")])
     assert res.exit_code == 0, res.output
+    with open(tmp_path / "tips.csv", encoding="utf-8") as fh:
+        header = fh.readline().strip().split(",")
+    assert header[:4] == ["time_s", "thumb_tip_x_mm", "thumb_tip_y_mm", "thumb_tip_z_mm"]
+    tips = np.loadtxt(tmp_path / "tips.csv", delimiter=",", skiprows=1)
+    assert tips.shape == (rec.n, 16)
+    from handsynth.sensors.imu import POINTS
+
+    kp = rec.truth.keypoints
+    true = (kp[:, POINTS.index("index_tip")] - kp[:, POINTS.index("elbow")]) * 1e3
+    got = tips[:, 4:7]  # the index fingertip
+    err = np.linalg.norm(got[400:] - true[400:], axis=1)
+    still = np.linalg.norm(got[400:401] - true[400:], axis=1)  # the first position held
+    assert np.sqrt(np.mean(err**2)) < 60.0 and np.sqrt(np.mean(err**2)) < 0.5 * np.sqrt(
+        np.mean(still**2))
     ang = np.loadtxt(ang_csv, delimiter=",", skiprows=1)[:, 1:]
     err = ang[400:] - rec.truth.angles[400:, 9:]
     j = [JOINT_NAMES.index(n) for n in ("index_pip_flex", "middle_mcp_flex", "little_dip_flex")]
