@@ -429,8 +429,11 @@ class LearnedEstimator:
             novelty += float(np.sqrt(e * e + left_out[0])) / 5
         return angles, novelty
 
-    def _novelty_limit(self, z: np.ndarray, hand: np.ndarray, *, quantile: float = 0.99) -> float:
-        """The `quantile` of the novelty of learning frames `z` (hands `hand`) among other hands.
+    def _novelty_limit(self, z: np.ndarray, rows: np.ndarray, hand: np.ndarray, *,
+                       quantile: float = 0.99) -> float:
+        """The `quantile` of the novelty of learning frames `rows` (inputs `z`) among other hands.
+
+        `hand` is the hand of every learning frame.
 
         A user's hand is not in the learning set: each frame is searched for
         as a new hand's would be, its own hand's frames left out (the
@@ -439,15 +442,15 @@ class LearnedEstimator:
         """
         a = self._a
         total = np.zeros(len(z))
-        rows = np.arange(len(z))
+        at = np.arange(len(z))
         for d in range(5):
             p = f"d{d}_"
             c, left_out = self._digit_code(d, z)
             dist, idx = self._index[p].search(np.ascontiguousarray(c, np.float32),
                                               min(256, len(a[p + "codes"])))
-            other = (idx >= 0) & (a["hand"][np.maximum(idx, 0)] != hand[:, None])
+            other = (idx >= 0) & (hand[np.maximum(idx, 0)] != hand[rows][:, None])
             first = np.argmax(other, axis=1)
-            near = np.where(other[rows, first], dist[rows, first], dist[:, -1])
+            near = np.where(other[at, first], dist[at, first], dist[:, -1])
             total += np.sqrt(np.maximum(near, 0.0) + left_out) / 5
         return float(np.quantile(total, quantile))
 
@@ -620,14 +623,15 @@ def train_learned(data: LearningSet, options: LearnedOptions | None = None, *,
     if opts.kind == "fingers":
         rest = data.rest_grids[data.hand] if opts.use_rest else None
         arrays = _fit_digits(_inputs(data.grids, rest), y, opts, rng, data.grids.shape[1])
-        arrays["hand"] = np.asarray(data.hand, np.int32)
         est = LearnedEstimator(arrays, options=opts, mount=data.mount, side=data.side,
                                cells=data.options.cells)
         pick = np.sort(rng.choice(len(y), size=min(1000, len(y)), replace=False))
         z = _inputs(data.grids[pick], None if rest is None else rest[pick])
-        arrays["novelty_limit"] = np.array(est._novelty_limit(z, data.hand[pick]), np.float32)
-        del arrays["hand"]
-    elif opts.use_rest:
+        limit = np.array(est._novelty_limit(z, pick, data.hand), np.float32)
+        limit.setflags(write=False)
+        est._a["novelty_limit"] = limit
+        return est
+    if opts.use_rest:
         rest = data.rest_grids[data.hand]
         arrays = _fit(_inputs(data.grids, rest), y - data.rest_angles[data.hand]
                       if opts.target == "delta" else y, opts, rng, "", progress)
