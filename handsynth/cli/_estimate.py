@@ -121,7 +121,8 @@ def _check_learned_options(db_dir, shape_name, measurements, personal, build_cou
     given = [flag for flag, on in (("--db", db_dir is not None),
                                    ("--shape", shape_name is not None),
                                    ("--measurements", measurements is not None),
-                                   ("--personal", personal), ("--build-count", build_count is not None),
+                                   ("--personal", personal),
+                                   ("--build-count", build_count is not None),
                                    ("--calibrate", calibrate), ("--video-out", video_out is not None),
                                    ("--no-temporal", no_temporal), ("--keypoints", keypoints)) if on]
     if given:

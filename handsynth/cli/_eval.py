@@ -92,9 +92,10 @@ PROTOCOL_DEFAULT = "standard,calibrated,fingers,fingers_mean,mlp,ensemble"
               help="Scale of the photos that measure model hands for the personal condition.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress lines.")
 @click.pass_context
-def eval_(ctx, db_folder, protocol, mesh, learned_hands, hand_spread, out_dir, prefix, json_path, json_frames,
-          n_hands, frames, pose_sets, hand, conditions, count, db_pose_set, seed, ratio_margin,
-          mount, frame_size, render_size, workers, ties, photo_mm_per_px, quiet) -> None:
+def eval_(ctx, db_folder, protocol, mesh, learned_hands, hand_spread, out_dir, prefix,
+          json_path, json_frames, n_hands, frames, pose_sets, hand, conditions, count,
+          db_pose_set, seed, ratio_margin, mount, frame_size, render_size, workers, ties,
+          photo_mm_per_px, quiet) -> None:
     """Accuracy on synthetic ground truth: standard vs selected database.
 
     Test hands of random off-grid shape are rendered in known poses at the
@@ -150,8 +151,8 @@ def eval_(ctx, db_folder, protocol, mesh, learned_hands, hand_spread, out_dir, p
     sys.stdout.flush()
 
 
-def _protocol(folder, mesh, learned_hands, hand_spread, json_path, n_hands, frames, pose_sets, methods, seed,
-              say) -> None:
+def _protocol(folder, mesh, learned_hands, hand_spread, json_path, n_hands, frames, pose_sets,
+              methods, seed, say) -> None:
     import json
     import time
 
@@ -181,7 +182,8 @@ def _protocol(folder, mesh, learned_hands, hand_spread, json_path, n_hands, fram
     hands += mesh_test_hands(meshes, mount=mount) if meshes else []
     if not hands:
         raise InvalidInputError("no test hands: give --hands N > 0 or --mesh NAMES")
-    data = LearningSetOptions() if learned_hands is None else LearningSetOptions(hands=learned_hands)
+    data = (LearningSetOptions() if learned_hands is None
+            else LearningSetOptions(hands=learned_hands))
     factories = protocol_methods(methods, folder, data=data, mount=mount, progress=say)
     t0 = time.perf_counter()
     result = run_protocol(factories, hands, options, progress=say)
@@ -189,5 +191,6 @@ def _protocol(folder, mesh, learned_hands, hand_spread, json_path, n_hands, fram
     result["headline"] = protocol_headline(result)
     click.echo(format_headline(result["headline"]))
     if json_path:
-        click.echo(f"json: {write_text(json_path, json.dumps(result, indent=1), what='JSON report')}")
+        path = write_text(json_path, json.dumps(result, indent=1), what="JSON report")
+        click.echo(f"json: {path}")
     sys.stdout.flush()
