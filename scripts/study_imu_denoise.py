@@ -32,7 +32,7 @@ def main() -> None:
     gain = float("nan")
     for name, config in (("tuning", TUNING), ("held-out", HELDOUT)):
         placement = config.placement()
-        _, model, frames, zero = _calibrate(config, placement)
+        _, calib = _calibrate(config, placement)
         hand = ImuHand(config.shape, placement=placement)
         still = simulate_imu(static_motion(120.0), hand=hand,
                              noise=dataclasses.replace(config.noise, disturbances=()), seed=3)
@@ -51,7 +51,7 @@ def main() -> None:
                                        rate_random_walk=c.rate_random_walk, q_signal=qs,
                                        rate_hz=rec.rate_hz)
                     rec = dataclasses.replace(rec, gyr=np.stack([d.apply(g) for g in rec.gyr]))
-                t = _trial(rec, ("filter4",), model, frames, zero)
+                t = _trial(rec, ("filter4",), calib)
                 o = np.array(list(t["orientation_rmse_deg"]["filter4"].values()))
                 res.append((o.mean(), o.max(), np.mean(list(t["joint_rmse_deg"]["filter4"].values()))))
             r = np.mean(res, axis=0)

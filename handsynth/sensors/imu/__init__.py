@@ -27,10 +27,12 @@ from ._filters import (
 )
 from ._kinematics import (
     JOINT_LINKS,
+    ThumbCmcModel,
     classify_grasp,
     fingertip_positions,
     joint_angles,
     link_frames,
+    thumb_cmc_model,
     truth_link_frames,
     zero_offsets,
 )
@@ -135,6 +137,7 @@ __all__ = [
     "SimConfig",
     "SkinMotion",
     "StaticStart",
+    "ThumbCmcModel",
     "VQFEstimator",
     "VectorEstimate",
     "apply_axis_noise",
@@ -171,6 +174,7 @@ __all__ = [
     "sensor_tree",
     "simulate_imu",
     "static_motion",
+    "thumb_cmc_model",
     "truth_chain_model",
     "truth_link_frames",
     "write_imu_csv",

@@ -18,13 +18,20 @@ import numpy as np
 from ..._io import atomic_open
 from ...errors import RecordingError
 from ._ekf import ChainEKF
-from ._kinematics import fingertip_positions, joint_angles, link_frames, zero_offsets
+from ._kinematics import (
+    ThumbCmcModel,
+    fingertip_positions,
+    joint_angles,
+    link_frames,
+    thumb_cmc_model,
+    zero_offsets,
+)
 from ._recording import ImuRecording
 from ._vectors import ChainModel, chain_model
 
 __all__ = ["ImuCalibration", "calibrate", "segments_from_seconds"]
 
-_VERSION = 1
+_VERSION = 2  # 2: the thumb CMC axes (version 1 files load without them)
 
 
 def segments_from_seconds(spans: dict, rate_hz: float, n: int) -> tuple:
@@ -55,12 +62,15 @@ class ImuCalibration:
     zero : ndarray, shape (20,)
     sensors : tuple of str
         The sensors the tracker expects (the link model's).
+    cmc : ThumbCmcModel or None
+        The thumb CMC's axes; None (files of version 1): CMC angles are NaN.
     """
 
     model: ChainModel
     frames: dict
     zero: np.ndarray
     sensors: tuple
+    cmc: ThumbCmcModel | None = None
 
     def track(self, rec: ImuRecording, *, static=None) -> dict:
         """Attitudes (Filter 4), joint angles and fingertips of a recording.
@@ -78,7 +88,7 @@ class ImuCalibration:
         sub = rec.subset(self.sensors)
         est = ChainEKF(self.model) if static is None else ChainEKF(self.model, static=static)
         q = est.run(sub)
-        angles, _ = joint_angles(q, sub.sensors, self.frames, zero=self.zero)
+        angles, _ = joint_angles(q, sub.sensors, self.frames, zero=self.zero, cmc=self.cmc)
         tips = {f: v for f, v in fingertip_positions(q, sub.sensors, self.model).items()
                 if not f.endswith("_joints")}
         return {"quat": q, "angles": angles, "tips": tips}
@@ -89,7 +99,9 @@ class ImuCalibration:
                 "own_m": {s: v.tolist() for s, v in self.model.own.items()},
                 "links_m": [[s, a, b, v.tolist()] for (s, a, b), v in self.model.links.items()],
                 "frames": {s: v.tolist() for s, v in self.frames.items()},
-                "zero_deg": self.zero.tolist()}
+                "zero_deg": self.zero.tolist(),
+                **({} if self.cmc is None else {"thumb_cmc": {
+                    "axes": self.cmc.axes.tolist(), "rest": self.cmc.rest.tolist()}})}
 
     def save(self, path) -> Path:
         """Write JSON atomically (never a half-written file under `path`)."""
@@ -117,9 +129,13 @@ class ImuCalibration:
                                {(s, a, b): np.array(v, float) for s, a, b, v in d["links_m"]})
             frames = {s: np.array(v, float).reshape(3, 3) for s, v in d["frames"].items()}
             zero = np.array(d["zero_deg"], float).reshape(20)
-        except (TypeError, ValueError) as exc:
+            cmc = None
+            if "thumb_cmc" in d:
+                cmc = ThumbCmcModel(np.array(d["thumb_cmc"]["axes"], float).reshape(2, 3),
+                                    np.array(d["thumb_cmc"]["rest"], float).reshape(3, 3))
+        except (TypeError, ValueError, KeyError) as exc:
             raise RecordingError(f"{path}: malformed calibration values ({exc})") from None
-        return cls(model, frames, zero, tuple(d["sensors"]))
+        return cls(model, frames, zero, tuple(d["sensors"]), cmc)
 
 
 def calibrate(rec: ImuRecording) -> ImuCalibration:
@@ -131,4 +147,4 @@ def calibrate(rec: ImuRecording) -> ImuCalibration:
     model = chain_model(rec)
     frames = link_frames(rec, model)
     zero = zero_offsets(rec, frames)
-    return ImuCalibration(model, frames, zero, tuple(model.own))
+    return ImuCalibration(model, frames, zero, tuple(model.own), thumb_cmc_model(rec, frames))

@@ -26,6 +26,7 @@ import numpy as np
 
 from ...errors import InvalidInputError
 from ...models import JOINT_NAMES, HandShape
+from ._calibration import ImuCalibration, calibrate
 from ._ekf import ChainEKF
 from ._filters import (
     AhrsEKFEstimator,
@@ -36,7 +37,7 @@ from ._filters import (
     RawIntegration,
     VQFEstimator,
 )
-from ._kinematics import classify_grasp, fingertip_positions, joint_angles, link_frames, zero_offsets
+from ._kinematics import classify_grasp, fingertip_positions, joint_angles
 from ._layout import CHAINS, LINKS, POINTS
 from ._model import SENSOR_NAMES, ImuHand, ImuPlacement
 from ._motion import GRASP_POSES, calibration_motion, free_motion, grasp_motion, static_motion
@@ -44,7 +45,7 @@ from ._noise import EVAL_NOISE, MPU9250_DATASHEET, ImuNoise
 from ._quat import angle_deg, heading_inclination_deg
 from ._recording import ImuRecording, ImuTruth
 from ._simulate import SkinMotion, simulate_imu
-from ._vectors import chain_model, seel_joint_positions, truth_chain_model
+from ._vectors import seel_joint_positions, truth_chain_model
 
 __all__ = ["FILTERS", "HELDOUT", "TUNING", "SimConfig", "evaluate", "make_filter"]
 
@@ -139,10 +140,7 @@ def _calibrate(config: SimConfig, placement: ImuPlacement):
     quiet = dataclasses.replace(config.noise, disturbances=())
     cal = simulate_imu(calibration_motion(), hand=hand, noise=quiet, skin=config.skin,
                        seed=config.seed + 7)
-    model = chain_model(cal)
-    frames = link_frames(cal, model)
-    zero = zero_offsets(cal, frames)
-    return cal, model, frames, zero
+    return cal, calibrate(cal)
 
 
 def _vector_report(cal, model, config: SimConfig, placement, lsq_rec) -> dict:
@@ -185,7 +183,7 @@ def _vector_report(cal, model, config: SimConfig, placement, lsq_rec) -> dict:
     }
 
 
-def _trial(rec, filters, model, frames, zero, series: dict | None = None) -> dict:
+def _trial(rec, filters, calib: ImuCalibration, series: dict | None = None) -> dict:
     truth = _truth(rec)
     motion_start = next((b for s, _, b in truth.segments if s == "align"), 0)
     sl = slice(motion_start, None)
@@ -194,7 +192,7 @@ def _trial(rec, filters, model, frames, zero, series: dict | None = None) -> dic
     kp = truth.keypoints
     true_angles = truth.angles[:, 9:]
     for name in filters:
-        q = make_filter(name, model).run(rec)
+        q = make_filter(name, calib.model).run(rec)
         err = angle_deg(q[:, sl], truth.quat[:, sl])
         head, incl = heading_inclination_deg(q[:, sl], truth.quat[:, sl])
         if series is not None:
@@ -203,11 +201,11 @@ def _trial(rec, filters, model, frames, zero, series: dict | None = None) -> dic
         out["orientation_rmse_deg"][name] = dict(zip(rec.sensors, _rmse(err, axis=1).tolist()))
         out["heading_rmse_deg"][name] = float(_rmse(head))
         out["inclination_rmse_deg"][name] = float(_rmse(incl))
-        ang, _ = joint_angles(q, rec.sensors, frames, zero=zero)
+        ang, _ = joint_angles(q, rec.sensors, calib.frames, zero=calib.zero, cmc=calib.cmc)
         je = _rmse(ang[sl] - true_angles[sl], axis=0)
         out["joint_rmse_deg"][name] = {n: float(v) for n, v in zip(JOINT_NAMES, je)
                                        if np.isfinite(v)}
-        tips = fingertip_positions(q, rec.sensors, model)
+        tips = fingertip_positions(q, rec.sensors, calib.model)
         fe, fw = {}, {}
         for f, chain in CHAINS.items():
             true = kp[:, POINTS.index(f"{f}_tip")] - kp[:, POINTS.index("elbow")]
@@ -231,7 +229,7 @@ def _trial(rec, filters, model, frames, zero, series: dict | None = None) -> dic
     return out
 
 
-def _grasp_report(config, placement, filters, model, frames, zero) -> dict:
+def _grasp_report(config, placement, filters, calib: ImuCalibration) -> dict:
     hand = ImuHand(config.shape, placement=placement)
     rec = simulate_imu(grasp_motion(), hand=hand, noise=config.noise, skin=config.skin,
                        seed=config.seed + 31)
@@ -240,8 +238,8 @@ def _grasp_report(config, placement, filters, model, frames, zero) -> dict:
     holds = [(s.split(":", 1)[1], a, b) for s, a, b in truth.segments if s.startswith("grasp:")]
     out: dict = {"classes": list(classes), "accuracy": {}}
     for name in filters:
-        q = make_filter(name, model).run(rec)
-        ang, _ = joint_angles(q, rec.sensors, frames, zero=zero)
+        q = make_filter(name, calib.model).run(rec)
+        ang, _ = joint_angles(q, rec.sensors, calib.frames, zero=calib.zero, cmc=calib.cmc)
         hits = [classify_grasp(ang[a:b].mean(axis=0, keepdims=True), classes)[0] == g
                 for g, a, b in holds]
         out["accuracy"][name] = float(np.mean(hits))
@@ -277,7 +275,7 @@ def evaluate(config: SimConfig = HELDOUT, *, durations=(15.0, 30.0), elbows=("fi
         if f not in FILTERS:
             raise InvalidInputError(f"unknown filter {f!r}; expected one of {', '.join(FILTERS)}")
     placement = config.placement()
-    cal, model, frames, zero = _calibrate(config, placement)
+    cal, calib = _calibrate(config, placement)
     hand = ImuHand(config.shape, placement=placement)
     trials = []
     lsq_rec = None
@@ -288,14 +286,14 @@ def evaluate(config: SimConfig = HELDOUT, *, durations=(15.0, 30.0), elbows=("fi
                                hand=hand, noise=config.noise, skin=config.skin, seed=seed + 50)
             lsq_rec = lsq_rec or rec
             last = k == len(durations) - 1 and m == len(elbows) - 1
-            t = _trial(rec, filters, model, frames, zero, series if last else None)
+            t = _trial(rec, filters, calib, series if last else None)
             t.update(duration_s=float(dur), elbow=elbow)
             trials.append(t)
     report = {"config": config.describe(), "filters": list(filters),
-              "vectors": _vector_report(cal, model, config, placement, lsq_rec),
+              "vectors": _vector_report(cal, calib.model, config, placement, lsq_rec),
               "trials": trials, "summary": _summary(trials, filters)}
     if grasps:
-        report["grasps"] = _grasp_report(config, placement, filters, model, frames, zero)
+        report["grasps"] = _grasp_report(config, placement, filters, calib)
     return report
 
 

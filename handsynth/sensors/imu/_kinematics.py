@@ -14,8 +14,12 @@ extension (minus flexion), psi about z is abduction.  In canonical names:
 ``<f>_mcp_flex = -phi``, ``<f>_mcp_abd = psi`` (right hand; the sign is
 flipped for the left), ``pip/dip/ip/thumb mcp flex = -phi``.  The thumb CMC
 has oblique axes that the z-y-x decomposition does not separate into the
-model's ``thumb_cmc_flex``/``thumb_cmc_abd``; its Euler angles are returned
-separately and the canonical entries are NaN.  Angles are measured from the
+model's ``thumb_cmc_flex``/``thumb_cmc_abd`` (its Euler angles are returned
+separately).  Beyond the thesis, :func:`thumb_cmc_model` learns the two CMC
+axes from the calibration's two CMC rotations (the metacarpal's gyro, as
+eq. 5.1 does for the flexion axes) and :func:`joint_angles` reads the CMC
+angles as the rotation vector of the metacarpal relative to its static pose,
+resolved on those two axes (least squares).  Angles are measured from the
 calibration's static pose (the anatomical zero).
 
 Fingertips (eq. 3.12): the sum of the link vectors, each turned by its
@@ -24,7 +28,10 @@ sensor's attitude, from the elbow.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from ...errors import EstimationError, InvalidInputError
 from ...models import JOINT_NAMES
@@ -35,10 +42,12 @@ from ._vectors import ChainModel, _segment
 
 __all__ = [
     "JOINT_LINKS",
+    "ThumbCmcModel",
     "classify_grasp",
     "fingertip_positions",
     "joint_angles",
     "link_frames",
+    "thumb_cmc_model",
     "truth_link_frames",
     "zero_offsets",
 ]
@@ -110,6 +119,61 @@ def link_frames(cal: ImuRecording, model: ChainModel, *, hold_s: float = 0.5) ->
     return out
 
 
+@dataclass(frozen=True)
+class ThumbCmcModel:
+    """The thumb CMC's two axes and the metacarpal's static pose (beyond the thesis).
+
+    Attributes
+    ----------
+    axes : ndarray, shape (2, 3)
+        Unit flexion and abduction axes in the metacarpal's link frame at
+        the static pose, signed so that the calibration's move toward
+        mid-range (flexion and palmar abduction) is positive.
+    rest : ndarray, shape (3, 3)
+        Hand (radial) link frame to metacarpal link frame at the static pose.
+    """
+
+    axes: np.ndarray
+    rest: np.ndarray
+
+    def angles(self, relative: np.ndarray) -> np.ndarray:
+        """``thumb_cmc_flex`` and ``thumb_cmc_abd`` (N, 2), degrees, from L_hand_R_L_meta (N, 3, 3)."""
+        d = np.einsum("ji,njk->nik", self.rest, relative)
+        r = Rotation.from_matrix(d).as_rotvec(degrees=True)                # (N, 3)
+        sol, *_ = np.linalg.lstsq(self.axes.T, r.T, rcond=None)
+        return sol.T
+
+
+def thumb_cmc_model(cal: ImuRecording, frames: dict, *, static=None,
+                    hold_s: float = 0.5) -> ThumbCmcModel:
+    """Learn the thumb CMC's axes from the calibration's ``thumb_cmc_flex``/``_abd`` rotations.
+
+    Each axis is the principal direction of the metacarpal's gyro during that
+    rotation (the hand still), turned into the metacarpal's link frame; its
+    sign makes the mean angle of the rotation positive: the calibration moves
+    the joint toward mid-range (flexion, palmar abduction) before it
+    oscillates (:func:`calibration_motion`).  The static pose comes from the
+    attitudes of the static start, as :func:`zero_offsets` takes them.
+    """
+    from ._attitude import initial_attitude
+    from ._vectors import _calibration_static
+
+    hold = max(3, int(hold_s * cal.rate_hz))
+    k = cal.index("thumb_metacarpal")
+    axes = []
+    for label in ("thumb_cmc_flex", "thumb_cmc_abd"):
+        a, b = _segment(cal.labelled(), label)
+        w = cal.gyr[k, a:b] - cal.gyr[k, a:a + hold].mean(axis=0)
+        _, _, vt = np.linalg.svd(w, full_matrices=False)
+        x = vt[0]
+        if np.mean(np.cumsum(w @ x)) < 0:                                    # toward mid-range
+            x = -x
+        axes.append(frames["thumb_metacarpal"] @ x)
+    q0 = initial_attitude(cal, static or _calibration_static(cal))
+    rest = _relative(q0[:, None], cal.sensors, frames, "hand_radial", "thumb_metacarpal")[0]
+    return ThumbCmcModel(np.stack(axes), rest)
+
+
 def truth_link_frames(rec: ImuRecording, model: ChainModel, hand) -> dict:
     """Link frames from the model's true flexion axes (for reference)."""
     import mujoco
@@ -147,7 +211,8 @@ def _relative(quats, sensors, frames, prox, dist):
 
 
 def joint_angles(quats, sensors, frames: dict, *, side: str = "right",
-                 zero: np.ndarray | None = None) -> tuple[np.ndarray, dict]:
+                 zero: np.ndarray | None = None,
+                 cmc: ThumbCmcModel | None = None) -> tuple[np.ndarray, dict]:
     """Joint angles in canonical order from sensor attitudes (eqs. 5.4-5.5).
 
     Parameters
@@ -160,11 +225,14 @@ def joint_angles(quats, sensors, frames: dict, *, side: str = "right",
     zero : ndarray, shape (20,), keyword-only
         Angles of the anatomical zero pose as this function measures them
         (subtracted); see :func:`zero_offsets`.
+    cmc : ThumbCmcModel, keyword-only
+        The thumb CMC's axes (:func:`thumb_cmc_model`); without it the
+        thumb CMC entries are NaN.
 
     Returns
     -------
     angles : ndarray, shape (N, 20), degrees
-        Canonical :data:`JOINT_NAMES`; the thumb CMC entries are NaN.
+        Canonical :data:`JOINT_NAMES`.
     extra : dict
         ``"thumb_cmc_euler"``: (N, 3) phi, theta, psi in degrees.
     """
@@ -174,16 +242,18 @@ def joint_angles(quats, sensors, frames: dict, *, side: str = "right",
     sign = 1.0 if side == "right" else -1.0
     extra = {}
     for joint, (prox, dist) in JOINT_LINKS.items():
-        phi, theta, psi = (np.degrees(a) for a in _euler_zyx(
-            _relative(quats, sensors, frames, prox, dist)))
+        rel = _relative(quats, sensors, frames, prox, dist)
+        phi, theta, psi = (np.degrees(a) for a in _euler_zyx(rel))
         if joint == "thumb_cmc":
             extra["thumb_cmc_euler"] = np.stack([phi, theta, psi], axis=1)
+            if cmc is not None:
+                out[:, :2] = cmc.angles(rel)
             continue
         out[:, JOINT_NAMES.index(f"{joint}_flex")] = -phi
         if joint.endswith("_mcp") and not joint.startswith("thumb"):
             out[:, JOINT_NAMES.index(f"{joint}_abd")] = sign * psi
     if zero is not None:
-        out -= zero
+        out -= np.nan_to_num(zero)
     return out, extra
 
 

@@ -4,7 +4,12 @@ import numpy as np
 import pytest
 
 from handsynth.errors import RecordingError
-from handsynth.sensors.imu import ImuCalibration, segments_from_seconds, truth_chain_model
+from handsynth.sensors.imu import (
+    ImuCalibration,
+    ThumbCmcModel,
+    segments_from_seconds,
+    truth_chain_model,
+)
 
 
 def test_save_load_round_trip(tmp_path, ideal_rec):
@@ -15,6 +20,12 @@ def test_save_load_round_trip(tmp_path, ideal_rec):
     assert back.sensors == cal.sensors and np.array_equal(back.zero, cal.zero)
     for k, v in cal.model.links.items():
         assert np.allclose(back.model.links[k], v)
+    assert back.cmc is None  # a calibration without the thumb CMC axes (version 1 files)
+    with_cmc = ImuCalibration(model, cal.frames, cal.zero, cal.sensors,
+                              ThumbCmcModel(np.eye(3)[:2], np.eye(3)))
+    again = ImuCalibration.load(with_cmc.save(tmp_path / "d.json"))
+    assert np.array_equal(again.cmc.axes, np.eye(3)[:2]) and np.array_equal(again.cmc.rest,
+                                                                            np.eye(3))
 
 
 def test_bad_calibration_files(tmp_path):

@@ -7,6 +7,7 @@ from handsynth.sensors.imu import (
     classify_grasp,
     fingertip_positions,
     joint_angles,
+    simulate_imu,
     truth_chain_model,
     truth_link_frames,
 )
@@ -41,3 +42,22 @@ def test_grasp_classifier_recovers_perturbed_postures():
     rows = np.stack([GRASP_POSES[g] + rng.normal(0, 4.0, 20) for g in names])
     rows[:, :2] = np.nan  # the thumb CMC is not measured
     assert classify_grasp(rows, {g: GRASP_POSES[g] for g in names}) == names
+
+
+def test_thumb_cmc_axes_learnt_from_the_calibration_give_its_canonical_angles(imu_hand,
+                                                                             ideal_rec):
+    from handsynth.sensors.imu import calibration_motion, thumb_cmc_model
+
+    cal = simulate_imu(calibration_motion(), hand=imu_hand, noise=None)
+    model = truth_chain_model(cal)
+    frames = truth_link_frames(cal, model, imu_hand)
+    cmc = thumb_cmc_model(cal, frames)
+    assert np.allclose(np.linalg.norm(cmc.axes, axis=1), 1.0)
+    angles, _ = joint_angles(ideal_rec.truth.quat, ideal_rec.sensors, frames, cmc=cmc)
+    true = ideal_rec.truth.angles[:, 9:11]
+    err = angles[:, :2] - true
+    rmse = np.sqrt(np.mean(err**2, axis=0))
+    const = np.sqrt(np.mean(true**2, axis=0))  # the zero pose held
+    assert np.all(rmse < 1.5) and np.all(rmse < 0.2 * const), (rmse, const)
+    # the flexion and abduction rotations are told apart (not one axis twice)
+    assert abs(cmc.axes[0] @ cmc.axes[1]) < 0.5
