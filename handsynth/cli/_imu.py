@@ -114,7 +114,9 @@ def eval_(config_name, filters, durations, elbows, no_grasps, json_out, plot_dir
 @click.argument("recording", type=click.Path(dir_okay=False))
 @click.option("--segments", "segments_path", type=click.Path(dir_okay=False), required=True,
               help='JSON {"static": [0, 2], "elbow_flex": [2, 9.5], ...}: the labelled '
-                   "calibration rotations, seconds.")
+                   "calibration rotations, seconds; with static poses \"acc_pose_0\" .. "
+                   "(nine or more with the static start) the accelerometers and gyros are "
+                   "calibrated first.")
 @_unit_options
 @click.option("--out", "out_path", type=click.Path(dir_okay=False), required=True,
               help="Calibration JSON (link model, link frames, zero pose).")

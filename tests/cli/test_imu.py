@@ -123,7 +123,7 @@ def test_calibrate_then_track_joint_angles(tmp_path):
     from handsynth.sensors.imu import ImuHand, calibration_motion
 
     hand = ImuHand(tip_sensors=True)
-    cal = simulate_imu(calibration_motion(), hand=hand, seed=11)
+    cal = simulate_imu(calibration_motion(acc_poses=True), hand=hand, seed=11)
     cal_csv, seg_json, model = tmp_path / "cal.csv", tmp_path / "seg.json", tmp_path / "cal.json"
     write_imu_csv(cal, cal_csv)
     seg_json.write_text(json.dumps({lab: [a / cal.rate_hz, b / cal.rate_hz]

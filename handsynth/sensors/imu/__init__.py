@@ -50,6 +50,7 @@ from ._model import (
     imu_hand_mjcf,
 )
 from ._motion import (
+    ACC_POSES,
     CALIBRATION_PLAN,
     GRASP_POSES,
     Motion,
@@ -77,6 +78,7 @@ from ._recording import (
     read_imu_csv,
     write_imu_csv,
 )
+from ._sensorcal import SensorCalibration, fit_sensor_calibration
 from ._simulate import SkinMotion, simulate_imu
 from ._vectors import (
     ROTATIONS,
@@ -91,6 +93,7 @@ from ._vectors import (
 )
 
 __all__ = [
+    "ACC_POSES",
     "ARM_JOINTS",
     "BROAD_FILTERS",
     "CALIBRATION_PLAN",
@@ -134,6 +137,7 @@ __all__ = [
     "Motion",
     "OrientationEstimator",
     "RawIntegration",
+    "SensorCalibration",
     "SimConfig",
     "SkinMotion",
     "StaticStart",
@@ -153,6 +157,7 @@ __all__ = [
     "evaluate",
     "find_broad_trials",
     "fingertip_positions",
+    "fit_sensor_calibration",
     "free_motion",
     "grasp_motion",
     "gyro_bias",

@@ -27,6 +27,7 @@ from ._kinematics import (
     zero_offsets,
 )
 from ._recording import ImuRecording
+from ._sensorcal import POSE_PREFIX, fit_sensor_calibration
 from ._vectors import ChainModel, chain_model
 
 __all__ = ["ImuCalibration", "calibrate", "segments_from_seconds"]
@@ -138,12 +139,20 @@ class ImuCalibration:
         return cls(model, frames, zero, tuple(d["sensors"]), cmc)
 
 
-def calibrate(rec: ImuRecording) -> ImuCalibration:
+def calibrate(rec: ImuRecording, *, sensor_calibration: bool = True) -> ImuCalibration:
     """Calibrate from a recording with labelled stretches (see :func:`calibration_motion`).
 
     Needs the five fingertip sensors of the calibration (:data:`TIP_SENSORS`)
-    for the distal link vectors (seed 003 Table 3.5).
+    for the distal link vectors (seed 003 Table 3.5).  When the recording
+    has labelled static poses (``acc_pose_<k>``, see
+    :func:`fit_sensor_calibration`), the accelerometers and gyros are first
+    corrected for scale, cross-axis error and accelerometer bias; the
+    correction is used for the link model only and is not stored
+    (``sensor_calibration=False`` skips it, e.g. for a recording already
+    corrected).
     """
+    if sensor_calibration and sum(name.startswith(POSE_PREFIX) for name, _, _ in rec.labelled()) >= 8:
+        rec = fit_sensor_calibration(rec).apply(rec)
     model = chain_model(rec)
     frames = link_frames(rec, model)
     zero = zero_offsets(rec, frames)

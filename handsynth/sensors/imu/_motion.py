@@ -23,6 +23,7 @@ from ...models import JOINT_LIMITS_DEG, JOINT_NAMES
 from ._model import ARM_JOINTS, MODEL_JOINTS
 
 __all__ = [
+    "ACC_POSES",
     "CALIBRATION_PLAN",
     "GRASP_POSES",
     "Motion",
@@ -161,8 +162,46 @@ _CAL_CENTRE = {"elbow_flex": 30.0, "thumb_cmc_abd": 30.0, "thumb_cmc_flex": 10.0
                   for j, c in (("mcp_flex", 40.0), ("pip_flex", 40.0), ("dip_flex", 35.0))}}
 
 
+#: Arm postures (elbow_flex, forearm_rot, wrist_flex), deg, held still for the
+#: accelerometer calibration (multi-position fit, :mod:`._acccal`): elbow
+#: flexion and wrist flexion turn every segment about the hand's x axis,
+#: forearm rotation about its y axis, so gravity takes 13 directions in every
+#: sensor frame, 14 with the static start.
+ACC_POSES: tuple[tuple[float, float, float], ...] = (
+    (30.0, 80.0, 0.0), (30.0, -80.0, 0.0), (120.0, 0.0, 0.0), (120.0, 80.0, 0.0),
+    (120.0, -80.0, 0.0), (30.0, 0.0, 65.0), (30.0, 0.0, -60.0), (120.0, 0.0, -60.0),
+    (30.0, 80.0, 60.0), (30.0, -80.0, -55.0), (-5.0, 80.0, 0.0), (-5.0, -80.0, 0.0),
+    (120.0, 60.0, 60.0),
+)
+
+
+def _pose_sequence(rest, poses, rate_hz, *, move_s=1.0, hold_s=1.5) -> list[Motion]:
+    pieces = []
+    cur = rest.copy()
+    arm = (_J["elbow_flex"], _J["forearm_rot"], _J["wrist_flex"])
+    targets = []
+    for pose in poses:
+        p = rest.copy()
+        p[list(arm)] = pose
+        targets.append(p)
+    targets.append(rest.copy())
+    for k, p in enumerate(targets):
+        last = k == len(targets) - 1
+        t = _grid(move_s + (0.5 if last else hold_s), rate_hz)
+        q, qd, qdd = _base(t.size, cur)
+        for j in arm:
+            if p[j] != cur[j]:
+                _minjerk_add(t, q, qd, qdd, j, p[j] - cur[j], 0.0, move_s)
+        a = int(round(move_s * rate_hz))
+        segs = () if last else ((f"acc_pose_{k}", a, t.size),)
+        pieces.append(Motion(rate_hz, q, qd, qdd, "acc_poses", segs))
+        cur = p
+    return pieces
+
+
 def calibration_motion(*, rate_hz: float = 100.0, cycles: float = 5.0, static_s: float = 2.0,
-                       plan=CALIBRATION_PLAN, rest_pose=None) -> Motion:
+                       plan=CALIBRATION_PLAN, rest_pose=None, acc_poses: bool = False
+                       ) -> Motion:
     """Static start, then each joint of `plan` rotated alone, the others still.
 
     Each rotation starts with 0.5 s still at the rest pose, then is
@@ -177,6 +216,11 @@ def calibration_motion(*, rate_hz: float = 100.0, cycles: float = 5.0, static_s:
     rest_pose : (29,) float, keyword-only
         Posture between rotations; by default every joint at its oscillation
         centre's neighbour zero except the elbow at 30 deg.
+    acc_poses : bool, keyword-only
+        After the static start, hold the arm still in the postures of
+        :data:`ACC_POSES` (1 s move, 1.5 s hold each, labelled
+        ``acc_pose_<k>``) for the accelerometer calibration, then return to
+        the rest pose.
 
     Returns
     -------
@@ -186,6 +230,8 @@ def calibration_motion(*, rate_hz: float = 100.0, cycles: float = 5.0, static_s:
     rest = _full_pose(arm={"elbow_flex": _CAL_CENTRE["elbow_flex"]}) if rest_pose is None \
         else np.asarray(rest_pose, float)
     pieces = [static_motion(static_s, rate_hz=rate_hz, pose=rest)]
+    if acc_poses:
+        pieces += _pose_sequence(rest, ACC_POSES, rate_hz)
     hold = 0.5  # still at the rest pose at the start of every rotation
     for label, joints, amp, freq in plan:
         dur = hold + cycles / freq + 1.0

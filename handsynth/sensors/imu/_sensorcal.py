@@ -1,0 +1,189 @@
+"""Per-sensor accelerometer and gyro calibration from static poses.
+
+A MEMS accelerometer reads ``a_m = M a + b`` with a scale/cross-axis matrix M
+near the identity and a bias b (the MPU-9250 datasheet allows +/-3 %
+sensitivity and +/-2 % cross-axis error for both the accelerometer and the
+gyro, PS-MPU-9250A-01 rev 1.1 Tables 1-2).  Held still in K different
+orientations the accelerometer reads gravity only, so the corrected readings
+``C (a_m - b)`` must all have the length of gravity.  The symmetric C (6
+unknowns) and b (3) follow from the K means by least squares on
+``|C (a_m,k - b)| - g`` (the "multi-position" or ellipsoid fit: Skog &
+Haendel, "Calibration of a MEMS inertial measurement unit", XVII IMEKO World
+Congress 2006; Frosio, Pedersini & Borghese, "Autocalibration of MEMS
+accelerometers", IEEE Trans. Instrum. Meas. 58:2034-2041, 2009).  The
+antisymmetric part of M (a small rotation) cannot be told from a mounting
+rotation by gravity; it is left to the link frames.
+
+The gyro's scale/cross-axis matrix G (``w = G (w_m - b_w)``) follows from the
+moves between the poses (Tedaldi, Pretto & Menegatti, "A robust and easy to
+implement method for IMU calibration without external equipments", IEEE ICRA
+2014): the gyro integrated over a move must turn the calibrated gravity
+direction of one pose into that of the next.  Each move fixes two of G's
+nine entries' combinations; a weak prior (`prior`) keeps the combinations
+that no move excites at the identity.  The gyro bias is the mean over the
+pose before each move.
+
+Poses come from :func:`calibration_motion` with ``acc_poses=True``: the
+static start and stretches labelled ``acc_pose_<k>``, nine or more.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from ...errors import EstimationError, InvalidInputError
+from ._filters import integrate_gyro
+from ._model import GRAVITY_MPS2
+from ._quat import quat_to_mat
+from ._recording import ImuRecording
+
+__all__ = ["SensorCalibration", "fit_sensor_calibration"]
+
+#: Label prefix of the static poses in a calibration recording.
+POSE_PREFIX = "acc_pose_"
+
+_IU = np.triu_indices(3)
+
+
+@dataclass(frozen=True)
+class SensorCalibration:
+    """Corrections ``a = C (a_m - b)`` and ``w = G w_m`` of every sensor.
+
+    Attributes
+    ----------
+    sensors : tuple of str
+    acc_matrix : ndarray, shape (S, 3, 3), float64
+        Symmetric accelerometer correction C, dimensionless.
+    acc_bias_mps2 : ndarray, shape (S, 3), float64
+        Accelerometer bias b, m/s^2.
+    gyr_matrix : ndarray, shape (S, 3, 3), float64
+        Gyro correction G, dimensionless (the gyro bias drifts and is taken
+        from each recording's own static start, not from here).
+    acc_residual_mps2 : ndarray, shape (S,), float64
+        RMS of ``|C (a_m,k - b)| - g`` over the poses.
+    gyr_residual : ndarray, shape (S,), float64
+        RMS misfit of the unit gravity direction after each move.
+    """
+
+    sensors: tuple
+    acc_matrix: np.ndarray
+    acc_bias_mps2: np.ndarray
+    gyr_matrix: np.ndarray
+    acc_residual_mps2: np.ndarray
+    gyr_residual: np.ndarray
+
+    def apply(self, rec: ImuRecording, *, gyro: bool = True) -> ImuRecording:
+        """`rec` with corrected accelerometer (and gyro) readings, sensors matched by name."""
+        missing = [s for s in rec.sensors if s not in self.sensors]
+        if missing:
+            raise InvalidInputError(
+                f"sensor calibration has no sensor {missing[0]!r}; it holds "
+                f"{', '.join(self.sensors)}")
+        idx = [self.sensors.index(s) for s in rec.sensors]
+        acc = np.einsum("sij,snj->sni", self.acc_matrix[idx],
+                        rec.acc - self.acc_bias_mps2[idx][:, None, :])
+        gyr = np.einsum("sij,snj->sni", self.gyr_matrix[idx], rec.gyr) if gyro else rec.gyr
+        return dataclasses.replace(rec, acc=acc, gyr=gyr)
+
+
+def _poses(rec: ImuRecording) -> list[tuple[int, int]]:
+    stretches = [(a, b) for name, a, b in rec.labelled()
+                 if name == "static" or name.startswith(POSE_PREFIX)]
+    if len(stretches) < 9:
+        raise InvalidInputError(
+            f"sensor calibration needs >= 9 static poses (stretches 'static' and "
+            f"'{POSE_PREFIX}<k>'), the recording has {len(stretches)}")
+    return sorted(stretches)
+
+
+def _fit_acc(means: np.ndarray, g: float) -> tuple[np.ndarray, np.ndarray, float]:
+    def unpack(x):
+        c = np.zeros((3, 3))
+        c[_IU] = x[:6]
+        return c + np.triu(c, 1).T, x[6:]
+
+    def residual(x):
+        c, b = unpack(x)
+        return np.linalg.norm((means - b) @ c.T, axis=1) - g
+
+    sol = least_squares(residual, np.r_[1.0, 0, 0, 1.0, 0, 1.0, 0, 0, 0], method="lm")
+    c, b = unpack(sol.x)
+    return c, b, float(np.sqrt(np.mean(sol.fun**2)))
+
+
+def _fit_gyr(moves: np.ndarray, u0: np.ndarray, u1: np.ndarray, rate_hz: float,
+             prior: float) -> tuple[np.ndarray, float]:
+    q0 = np.tile([1.0, 0.0, 0.0, 0.0], (len(moves), 1))
+
+    def misfit(x):
+        g = np.eye(3) + x.reshape(3, 3)
+        r = quat_to_mat(integrate_gyro(q0, moves @ g.T, rate_hz)[:, -1])   # S0 <- S1
+        return (np.einsum("mji,mj->mi", r, u0) - u1).ravel()
+
+    sol = least_squares(lambda x: np.r_[misfit(x), prior * x], np.zeros(9), method="lm")
+    return np.eye(3) + sol.x.reshape(3, 3), float(np.sqrt(np.mean(misfit(sol.x) ** 2)))
+
+
+def fit_sensor_calibration(rec: ImuRecording, *, skip_s: float = 0.3, prior: float = 0.01,
+                           max_correction: float = 0.15) -> SensorCalibration:
+    """Fit accelerometer scale, cross-axis and bias, and gyro scale and cross-axis.
+
+    Parameters
+    ----------
+    rec : ImuRecording
+        A calibration recording with labelled static poses (see module).
+    skip_s : float, keyword-only
+        Time dropped at the start of every pose (the motion settling), s.
+    prior : float, keyword-only
+        Weight of the gyro matrix's pull toward the identity (per unit of
+        unit-vector misfit).
+    max_correction : float, keyword-only
+        Largest accepted deviation of C or G from the identity (any
+        element); a larger one means the poses were not still or not varied.
+
+    Returns
+    -------
+    SensorCalibration
+
+    Raises
+    ------
+    InvalidInputError
+        Fewer than nine poses.
+    EstimationError
+        A sensor whose fit deviates more than `max_correction` from the
+        identity (named in the message).
+    """
+    poses = _poses(rec)
+    skip = int(round(skip_s * rec.rate_hz))
+    for first, end in poses:
+        if end - first <= skip + 2:
+            raise InvalidInputError(f"static pose at samples {first}-{end} is shorter than "
+                                    f"skip_s={skip_s} s plus 3 samples")
+    spans = [(first + skip, end) for first, end in poses]
+    means = np.stack([rec.acc[:, i:j].mean(axis=1) for i, j in spans], axis=1)   # (S, K, 3)
+    wbias = np.stack([rec.gyr[:, i:j].mean(axis=1) for i, j in spans], axis=1)
+    length = max(b1 - (b0 - 1) for (_, b0), (_, b1) in zip(poses[:-1], spans[1:]))
+    out: dict[str, list] = {"c": [], "b": [], "g": [], "rc": [], "rg": []}
+    for k, name in enumerate(rec.sensors):
+        c, b, rc = _fit_acc(means[k], GRAVITY_MPS2)
+        up = (means[k] - b) @ c.T
+        up /= np.linalg.norm(up, axis=1, keepdims=True)
+        moves = np.zeros((len(poses) - 1, length, 3))
+        for m, ((_, b0), (a1, _)) in enumerate(zip(poses[:-1], spans[1:])):
+            w = rec.gyr[k, b0 - 1:a1] - wbias[k, m]
+            moves[m, :len(w)] = w                       # zero-padded: no rotation after
+        g, rg = _fit_gyr(moves, up[:-1], up[1:], rec.rate_hz, prior)
+        for label, mat in (("accelerometer", c), ("gyro", g)):
+            dev = float(np.abs(mat - np.eye(3)).max())
+            if not np.isfinite(dev) or dev > max_correction:
+                raise EstimationError(
+                    f"sensor {name!r}: {label} calibration deviates {dev:.3g} from the identity "
+                    f"(max_correction={max_correction}); poses not still or not varied")
+        for key, v in zip(("c", "b", "g", "rc", "rg"), (c, b, g, rc, rg)):
+            out[key].append(v)
+    return SensorCalibration(tuple(rec.sensors), np.array(out["c"]), np.array(out["b"]),
+                             np.array(out["g"]), np.array(out["rc"]), np.array(out["rg"]))

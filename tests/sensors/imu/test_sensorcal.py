@@ -1,0 +1,96 @@
+import dataclasses
+
+import numpy as np
+import pytest
+
+from handsynth.errors import InvalidInputError
+from handsynth.models import HandShape
+from handsynth.sensors.imu import (
+    ACC_POSES,
+    EVAL_NOISE,
+    GRAVITY_MPS2,
+    ImuHand,
+    ImuPlacement,
+    SensorCalibration,
+    calibration_motion,
+    fit_sensor_calibration,
+    simulate_imu,
+    static_motion,
+)
+
+
+@pytest.fixture(scope="module")
+def pose_recs():
+    """The static poses alone, on another hand, tilted sensors, the held-out noise."""
+    placement = ImuPlacement(tilts_deg={"index_middle": (4.0, -3.0, 6.0)})
+    hand = ImuHand(HandShape(length=1.05, width=0.95), placement=placement)
+    motion = calibration_motion(plan=(), acc_poses=True)
+    noise = dataclasses.replace(EVAL_NOISE, disturbances=())
+    noisy = simulate_imu(motion, hand=hand, noise=noise, seed=3)
+    ideal = simulate_imu(motion, hand=hand, noise=None)
+    return noisy, ideal
+
+
+@pytest.fixture(scope="module")
+def fitted(pose_recs):
+    return fit_sensor_calibration(pose_recs[0])
+
+
+def _holds(rec):
+    return [(a + 30, b) for name, a, b in rec.labelled()
+            if name == "static" or name.startswith("acc_pose_")]
+
+
+@pytest.mark.slow
+def test_gravity_length_restored_in_every_pose(pose_recs, fitted):
+    noisy, _ = pose_recs
+    fixed = fitted.apply(noisy)
+    for rec, limit in ((noisy, None), (fixed, 0.02)):
+        err = np.array([np.linalg.norm(rec.acc[:, a:b].mean(axis=1), axis=-1) - GRAVITY_MPS2
+                        for a, b in _holds(rec)])
+        rms = float(np.sqrt(np.mean(err**2)))
+        if limit is None:
+            raw = rms
+        else:
+            assert rms < limit < raw        # raw: 2 % scale errors, about 0.1-0.2 m/s^2
+
+
+def test_gyro_scale_corrected_against_the_ideal_signal(pose_recs, fitted):
+    noisy, ideal = pose_recs
+    fixed = fitted.apply(noisy)
+    moving = np.linalg.norm(ideal.gyr, axis=-1) > 0.5             # rad/s, during the moves
+
+    def scale_err(rec):
+        bias = rec.gyr[:, :150].mean(axis=1, keepdims=True)       # static start
+        ratio = np.linalg.norm(rec.gyr - bias, axis=-1)[moving] / \
+            np.linalg.norm(ideal.gyr, axis=-1)[moving]
+        return float(np.sqrt(np.mean((ratio - 1) ** 2)))
+
+    raw, cor = scale_err(noisy), scale_err(fixed)
+    assert cor < 0.5 * raw, (raw, cor)
+
+
+def test_too_few_poses_is_named():
+    rec = simulate_imu(static_motion(1.0), hand=ImuHand(), noise=None)
+    with pytest.raises(InvalidInputError, match="static poses"):
+        fit_sensor_calibration(rec)
+
+
+def test_apply_names_a_missing_sensor(pose_recs):
+    noisy, _ = pose_recs
+    one = SensorCalibration(("forearm_1",), np.eye(3)[None], np.zeros((1, 3)), np.eye(3)[None],
+                            np.zeros(1), np.zeros(1))
+    with pytest.raises(InvalidInputError, match="forearm_2"):
+        one.apply(noisy)
+
+
+def test_poses_are_still_and_varied():
+    m = calibration_motion(plan=(), acc_poses=True)
+    holds = [(a, b) for name, a, b in m.segments if name.startswith("acc_pose_")]
+    assert len(holds) == len(ACC_POSES)
+    for a, b in holds:
+        assert np.abs(m.qd[a:b]).max() == 0.0
+    # the arm postures differ pairwise
+    poses = np.array([m.q[a] for a, _ in holds])
+    d = np.abs(poses[:, None] - poses[None]).max(axis=-1)
+    assert d[~np.eye(len(holds), dtype=bool)].min() > 20.0
