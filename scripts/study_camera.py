@@ -41,6 +41,12 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 
 import numpy as np
 
+from handsynth.eval import (
+    mesh_test_hands,
+    model_test_hands,
+    natural_test_poses,
+    relaxed_rest_posture,
+)
 from handsynth.render import CameraMount
 
 _FLEX = [4, 6, 7, 8, 10, 11, 12, 14, 15, 16, 18, 19]  # the 12 finger flexions
@@ -69,13 +75,6 @@ def _photos() -> list[np.ndarray]:
 
 
 def backgrounds(cache) -> None:
-    from handsynth.eval import (
-        mesh_test_hands,
-        model_test_hands,
-        natural_test_poses,
-        relaxed_rest_posture,
-    )
-
     mount = CameraMount.paper()
     est = _estimator(cache)
     photos = _photos()
@@ -117,13 +116,6 @@ def _minjerk(n: int) -> np.ndarray:
 
 
 def jitter(cache) -> None:
-    from handsynth.eval import (
-        mesh_test_hands,
-        model_test_hands,
-        natural_test_poses,
-        relaxed_rest_posture,
-    )
-
     mount = CameraMount.paper()
     est = _estimator(cache)
     rng = np.random.default_rng(11)
@@ -151,8 +143,6 @@ def jitter(cache) -> None:
 
 def observability() -> None:
     import cv2
-
-    from handsynth.eval import model_test_hands
 
     mount = CameraMount.paper()
     late = []
