@@ -86,22 +86,30 @@ def _open_lookup(db_dir, shape_name, measurements, temporal, err, personal=False
     return PoseLookup.open(db_dir, shape=shape, measurements=meas, temporal=temporal)
 
 
+def _calibration_frame(source, image, mount, side, err, *, synthetic: str, prompt: str):
+    """The calibration frame and where it came from: `image`, the synthetic hand, or the
+    source's first frame showing a hand (after telling the user `prompt`)."""
+    from ..live import first_hand_frame
+
+    if image is not None:
+        return image, "the calibration image"
+    if hasattr(source, "open_frame"):
+        return source.open_frame(), synthetic
+    click.echo(f"calibrating: {prompt}", err=err)
+    return (first_hand_frame(source, mount=mount, side=side, max_reads=CALIBRATION_READS),
+            "the first frame showing a hand")
+
+
 def _calibrate(lookup, source, open_image, db_dir, mount, side, build, err):
     """The lookup calibrated to the open hand: `open_image`, or the source's first hand."""
     import time
 
     from ..estimate import PoseLookup
-    from ..live import default_database_dir, first_hand_frame
+    from ..live import default_database_dir
 
-    if open_image is not None:
-        open_frame, where = open_image, "the calibration image"
-    elif hasattr(source, "open_frame"):
-        open_frame, where = source.open_frame(), "the synthetic hand held open"
-    else:
-        click.echo("calibrating: hold the hand open and flat", err=err)
-        open_frame = first_hand_frame(source, mount=mount, side=side,
-                                      max_reads=CALIBRATION_READS)
-        where = "the first frame showing a hand"
+    open_frame, where = _calibration_frame(source, open_image, mount, side, err,
+                                           synthetic="the synthetic hand held open",
+                                           prompt="hold the hand open and flat")
     t = time.perf_counter()
     if lookup is None:
         lookup = PoseLookup.from_open_frame(db_dir or default_database_dir(), open_frame,
@@ -169,16 +177,9 @@ def _open_learned(cache, kind, hands, smoothing, side, err):
 
 def _calibrate_learned(est, source, rest_image, mount, side, err):
     """The learnt estimator calibrated to the hand at rest."""
-    from ..live import first_hand_frame
-
-    if rest_image is not None:
-        rest, where = rest_image, "the calibration image"
-    elif hasattr(source, "open_frame"):
-        rest, where = source.open_frame(), "the synthetic hand at rest (open)"
-    else:
-        click.echo("calibrating: let the hand rest, relaxed", err=err)
-        rest = first_hand_frame(source, mount=mount, side=side, max_reads=CALIBRATION_READS)
-        where = "the first frame showing a hand"
+    rest, where = _calibration_frame(source, rest_image, mount, side, err,
+                                     synthetic="the synthetic hand at rest (open)",
+                                     prompt="let the hand rest, relaxed")
     est = est.calibrated(rest)
     click.echo(f"calibrated to {where}", err=err)
     return est

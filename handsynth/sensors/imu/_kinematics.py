@@ -95,6 +95,18 @@ def _frame(x, v) -> np.ndarray:
     return np.stack([x, y, z])                                              # eq. 5.2
 
 
+def _rotation_axis(cal: ImuRecording, sensor: str, label: str,
+                   hold_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """Principal direction (3,) of `sensor`'s angular velocity in the rotation `label`
+    (eq. 5.1, all samples), and that angular velocity less the still start's, (N, 3)."""
+    a, b = _segment(cal.labelled(), label)
+    k = cal.index(sensor)
+    hold = max(3, int(hold_s * cal.rate_hz))
+    w = cal.gyr[k, a:b] - cal.gyr[k, a:a + hold].mean(axis=0)
+    _, _, vt = np.linalg.svd(w, full_matrices=False)
+    return vt[0], w
+
+
 def link_frames(cal: ImuRecording, model: ChainModel, *, hold_s: float = 0.5) -> dict:
     """L_R_S of every link sensor from the calibration rotations (eqs. 5.1-5.2).
 
@@ -104,14 +116,8 @@ def link_frames(cal: ImuRecording, model: ChainModel, *, hold_s: float = 0.5) ->
         sensor -> (3, 3) rotation from sensor frame to link frame.
     """
     out = {}
-    hold = max(3, int(hold_s * cal.rate_hz))
     for s in model.own:
-        a, b = _segment(cal.labelled(), _FRAME_ROTATION[s])
-        k = cal.index(s)
-        w = cal.gyr[k, a:b] - cal.gyr[k, a:a + hold].mean(axis=0)
-        # principal direction of the angular velocity (eq. 5.1, all samples)
-        _, _, vt = np.linalg.svd(w, full_matrices=False)
-        x = vt[0]
+        x, _ = _rotation_axis(cal, s, _FRAME_ROTATION[s], hold_s)
         v = _frame_vector(model, s)
         if np.dot(np.cross(x, v), [0.0, 0.0, 1.0]) < 0:  # extension positive
             x = -x
@@ -158,14 +164,9 @@ def thumb_cmc_model(cal: ImuRecording, frames: dict, *, static=None,
     from ._attitude import initial_attitude
     from ._vectors import _calibration_static
 
-    hold = max(3, int(hold_s * cal.rate_hz))
-    k = cal.index("thumb_metacarpal")
     axes = []
     for label in ("thumb_cmc_flex", "thumb_cmc_abd"):
-        a, b = _segment(cal.labelled(), label)
-        w = cal.gyr[k, a:b] - cal.gyr[k, a:a + hold].mean(axis=0)
-        _, _, vt = np.linalg.svd(w, full_matrices=False)
-        x = vt[0]
+        x, w = _rotation_axis(cal, "thumb_metacarpal", label, hold_s)
         if np.mean(np.cumsum(w @ x)) < 0:                                    # toward mid-range
             x = -x
         axes.append(frames["thumb_metacarpal"] @ x)
