@@ -9,7 +9,7 @@ import click
 
 from ._main import cli
 
-_TRACK_FILTERS = ("raw", "filter1", "vqf", "madgwick", "mahony", "ahrs_ekf", "constant")
+_TRACK_FILTERS = ("raw", "filter1", "gated", "vqf", "madgwick", "mahony", "ahrs_ekf", "constant")
 
 
 def _unit_options(f):

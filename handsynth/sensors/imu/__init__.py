@@ -25,6 +25,7 @@ from ._filters import (
     VQFEstimator,
     integrate_gyro,
 )
+from ._gated import GatedFilter, GatedOptions, gated_orientation
 from ._kinematics import (
     JOINT_LINKS,
     ThumbCmcModel,
@@ -124,6 +125,8 @@ __all__ = [
     "ConstantEstimator",
     "Filter1",
     "Filter1Options",
+    "GatedFilter",
+    "GatedOptions",
     "ImuCalibration",
     "ImuHand",
     "ImuNoise",
@@ -159,6 +162,7 @@ __all__ = [
     "fingertip_positions",
     "fit_sensor_calibration",
     "free_motion",
+    "gated_orientation",
     "grasp_motion",
     "gyro_bias",
     "imu_hand_mjcf",

@@ -37,6 +37,7 @@ from ._filters import (
     RawIntegration,
     VQFEstimator,
 )
+from ._gated import GatedFilter
 from ._kinematics import classify_grasp, fingertip_positions, joint_angles
 from ._layout import CHAINS, LINKS, POINTS
 from ._model import SENSOR_NAMES, ImuHand, ImuPlacement
@@ -51,8 +52,8 @@ from ._vectors import seel_joint_positions, truth_chain_model
 __all__ = ["FILTERS", "HELDOUT", "TUNING", "SimConfig", "evaluate", "make_filter"]
 
 #: Names of the orientation estimators that :func:`evaluate` can run.
-FILTERS: tuple[str, ...] = ("constant", "raw", "filter1", "filter4", "vqf", "madgwick", "mahony",
-                            "ahrs_ekf")
+FILTERS: tuple[str, ...] = ("constant", "raw", "filter1", "filter4", "gated", "vqf", "madgwick",
+                            "mahony", "ahrs_ekf")
 
 
 @dataclass(frozen=True)
@@ -102,8 +103,8 @@ HELDOUT = SimConfig("heldout", HandShape(length=1.08, width=0.93, palm=0.95), EV
 def make_filter(name: str, model=None):
     """An estimator by name (``filter4`` needs the link model)."""
     table = {"constant": ConstantEstimator, "raw": RawIntegration, "filter1": Filter1,
-             "vqf": VQFEstimator, "madgwick": MadgwickEstimator, "mahony": MahonyEstimator,
-             "ahrs_ekf": AhrsEKFEstimator}
+             "gated": GatedFilter, "vqf": VQFEstimator, "madgwick": MadgwickEstimator,
+             "mahony": MahonyEstimator, "ahrs_ekf": AhrsEKFEstimator}
     if name == "filter4":
         if model is None:
             raise InvalidInputError("filter4 needs a link model (calibration)")

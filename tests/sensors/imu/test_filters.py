@@ -7,6 +7,7 @@ from handsynth.sensors.imu import (
     AhrsEKFEstimator,
     ConstantEstimator,
     Filter1,
+    GatedFilter,
     MadgwickEstimator,
     MahonyEstimator,
     OrientationEstimator,
@@ -20,7 +21,7 @@ from handsynth.sensors.imu import (
 )
 from handsynth.sensors.imu._quat import angle_deg, heading_inclination_deg
 
-ALL = [ConstantEstimator(), RawIntegration(), Filter1(), VQFEstimator(), MadgwickEstimator(),
+ALL = [ConstantEstimator(), RawIntegration(), Filter1(), GatedFilter(), VQFEstimator(), MadgwickEstimator(),
        MahonyEstimator(), AhrsEKFEstimator()]
 
 
