@@ -5,6 +5,7 @@ Usage::
     python scripts/study_camera.py --cache DIR backgrounds
     python scripts/study_camera.py --cache DIR jitter
     python scripts/study_camera.py observability
+    python scripts/study_camera.py --cache DIR bound
 
 ``backgrounds``
     Two held-out model hands (seed 3, 1.5 times the learning spread) and the
@@ -27,6 +28,21 @@ Usage::
     following at 0.7) flexes by 20 deg from 0, 20, 40, 60 and 80 deg, on
     three held-out model hands (seed 1), beside the change of growing the
     outline by 2 pixels.  Last line: ``pip_60_80_px=<mean>``.
+
+``bound``
+    What the silhouette can tell of the index PIP at best.  Four held-out
+    model hands (seed 5) and the two glTF hands, 600 paper-protocol frames
+    each from a relaxed rest (seed 7); on the frames whose index PIP is
+    flexed more than 20 deg beyond rest (at most 30 per hand) an oracle that
+    knows the hand and every other joint exactly sweeps the index PIP over
+    its range (-5 to 100 deg in 1-deg steps, DIP keeping the frame's
+    DIP-to-PIP ratio) and keeps the angles whose silhouette differs from the
+    frame's by nothing thicker than 2 pixels (fewer than 20 pixels survive an
+    erosion by a 3x3 disc: a 1-pixel outline error is not information);
+    under a uniform prior its best answer is the median of those angles.
+    Beside it, on the same frames: the per-digit estimator (calibrated on
+    the rest frame) and the constant open hand.  Last line:
+    ``oracle_mae=<mean> estimator_mae=<mean> constant_mae=<mean>``.
 
 The learnt estimator is read from ``--cache`` (or learnt there first).
 """
@@ -164,10 +180,52 @@ def observability() -> None:
     print(f"pip_60_80_px={np.mean(late):.0f}")
 
 
+def bound(cache) -> None:
+    import cv2
+
+    from handsynth.eval import paper_protocol_poses
+    from handsynth.models import JOINT_LIMITS_DEG
+
+    mount = CameraMount.paper()
+    est = _estimator(cache)
+    disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (3, 3))
+    sweep = np.arange(-5.0, 100.5, 1.0)
+    rng = np.random.default_rng(7)
+    rows = []
+    for hand in model_test_hands(4, seed=5, mount=mount) + mesh_test_hands(mount=mount):
+        made = hand.make()
+        rest = relaxed_rest_posture(rng)
+        poses, _ = paper_protocol_poses(rest, 600, rng)
+        moving = np.nonzero(poses[:, 6] - rest[6] > 20)[0][:30]
+        cal = est.calibrated(made.mask(rest))
+        oracle, spans, mine = [], [], []
+        for i in moving:
+            pose = poses[i]
+            seen = made.mask(pose)
+            ratio = pose[7] / pose[6]
+            kept = []
+            for pip in sweep:
+                q = pose.copy()
+                q[6], q[7] = pip, np.clip(ratio * pip, *JOINT_LIMITS_DEG[7])
+                diff = (made.mask(q) ^ seen).view(np.uint8)
+                if cv2.erode(diff, disc).sum() < 20:
+                    kept.append(pip)
+            oracle.append(abs(np.median(kept) - pose[6]))
+            spans.append(max(kept) - min(kept))
+            mine.append(abs(cal.estimate(seen).angles[6] - pose[6]))
+        const = np.abs(poses[moving, 6])
+        rows.append((np.mean(oracle), np.mean(mine), const.mean()))
+        print(f"{hand.name:15s} {len(moving):2d} frames: index PIP MAE oracle {rows[-1][0]:5.1f} deg "
+              f"(indistinguishable span median {np.median(spans):3.0f} deg), estimator "
+              f"{rows[-1][1]:5.1f}, constant {rows[-1][2]:5.1f}", flush=True)
+    m = np.mean(rows, axis=0)
+    print(f"oracle_mae={m[0]:.2f} estimator_mae={m[1]:.2f} constant_mae={m[2]:.2f}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cache", default=None, help="folder of the learnt estimator")
-    ap.add_argument("study", choices=["backgrounds", "jitter", "observability"])
+    ap.add_argument("study", choices=["backgrounds", "jitter", "observability", "bound"])
     args = ap.parse_args()
     if args.study != "observability" and args.cache is None:
         ap.error(f"{args.study} needs --cache DIR")
@@ -175,6 +233,8 @@ def main() -> None:
         backgrounds(args.cache)
     elif args.study == "jitter":
         jitter(args.cache)
+    elif args.study == "bound":
+        bound(args.cache)
     else:
         observability()
 
