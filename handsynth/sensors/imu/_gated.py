@@ -35,6 +35,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 
 from ...errors import InvalidInputError
 from ._attitude import StaticStart, gyro_bias, initial_attitude
@@ -140,6 +141,7 @@ def _kernel(q0, gyr, acc, mag, b0, dt, g, acc_k, mag_k, bias_k, acc_tol, rate_ga
     return out
 
 
+@njit(cache=True)
 def _qmul(a, b):
     return np.array([a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
                      a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
@@ -147,6 +149,7 @@ def _qmul(a, b):
                      a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0]])
 
 
+@njit(cache=True)
 def _qexp(v):
     angle = math.sqrt(v[0] ** 2 + v[1] ** 2 + v[2] ** 2)
     if angle < 1e-12:
@@ -155,6 +158,7 @@ def _qexp(v):
     return np.array([math.cos(0.5 * angle), s * v[0], s * v[1], s * v[2]])
 
 
+@njit(cache=True)
 def _rot(q, v):
     """G_R_S v for a unit quaternion (w, x, y, z)."""
     w, x, y, z = q[0], q[1], q[2], q[3]
@@ -164,22 +168,9 @@ def _rot(q, v):
         2 * (x * z - w * y) * v[0] + 2 * (y * z + w * x) * v[1] + (1 - 2 * (x * x + y * y)) * v[2]])
 
 
-_compiled: dict = {}
-
-
-def _fast():
-    if not _compiled:
-        from numba import njit
-
-        for f in (_qmul, _qexp, _rot):
-            _compiled[f.__name__] = njit(cache=True)(f)
-        g = dict(_kernel.__globals__)
-        g.update(_compiled)
-        import types
-
-        kernel = types.FunctionType(_kernel.__code__, g, "_kernel_fast")
-        _compiled["kernel"] = njit(cache=False)(kernel)
-    return _compiled["kernel"]
+#: The compiled loop; ``_kernel`` itself is the plain reference (it calls the
+#: compiled helpers, which run from Python as they are).
+_kernel_fast = njit(cache=True)(_kernel)
 
 
 def gated_orientation(rec: ImuRecording, options: GatedOptions | None = None, *,
@@ -205,7 +196,7 @@ def gated_orientation(rec: ImuRecording, options: GatedOptions | None = None, *,
     dt = 1.0 / rec.rate_hz
     q0 = initial_attitude(rec, static)
     b0 = gyro_bias(rec, static)
-    kernel = _fast() if fast else _kernel
+    kernel = _kernel_fast if fast else _kernel
     out = np.empty((len(rec.sensors), rec.n, 4))
     for s in range(len(rec.sensors)):
         out[s] = kernel(np.ascontiguousarray(q0[s], np.float64),
