@@ -77,7 +77,17 @@ class SensorCalibration:
     gyr_residual: np.ndarray
 
     def apply(self, rec: ImuRecording, *, gyro: bool = True) -> ImuRecording:
-        """`rec` with corrected accelerometer (and gyro) readings, sensors matched by name."""
+        """`rec` with corrected accelerometer (and gyro) readings, sensors matched by name.
+
+        Any recording of the same physical sensors can be corrected, the
+        calibration recording or a later one; the gyro bias is left in (the
+        estimators take it from each recording's static start).
+
+        Raises
+        ------
+        InvalidInputError
+            A sensor of `rec` that the calibration does not hold.
+        """
         missing = [s for s in rec.sensors if s not in self.sensors]
         if missing:
             raise InvalidInputError(
@@ -88,6 +98,45 @@ class SensorCalibration:
                         rec.acc - self.acc_bias_mps2[idx][:, None, :])
         gyr = np.einsum("sij,snj->sni", self.gyr_matrix[idx], rec.gyr) if gyro else rec.gyr
         return dataclasses.replace(rec, acc=acc, gyr=gyr)
+
+
+    def to_dict(self) -> dict:
+        """JSON-ready ``{sensor: {field: list}}``."""
+        return {s: {"acc_matrix": self.acc_matrix[k].tolist(),
+                    "acc_bias_mps2": self.acc_bias_mps2[k].tolist(),
+                    "gyr_matrix": self.gyr_matrix[k].tolist(),
+                    "acc_residual_mps2": float(self.acc_residual_mps2[k]),
+                    "gyr_residual": float(self.gyr_residual[k])}
+                for k, s in enumerate(self.sensors)}
+
+    @classmethod
+    def from_dict(cls, d: dict, *, source: str = "sensor calibration") -> SensorCalibration:
+        """Inverse of :meth:`to_dict`; `source` names the origin in errors.
+
+        Raises
+        ------
+        InvalidInputError
+            A missing field, a wrong shape or a non-finite value (named).
+        """
+        if not isinstance(d, dict) or not d:
+            raise InvalidInputError(f"{source}: expected an object of sensor: fields")
+        shapes = {"acc_matrix": (3, 3), "acc_bias_mps2": (3,), "gyr_matrix": (3, 3),
+                  "acc_residual_mps2": (), "gyr_residual": ()}
+        out: dict[str, list] = {k: [] for k in shapes}
+        for sensor, fields in d.items():
+            for key, shape in shapes.items():
+                if not isinstance(fields, dict) or key not in fields:
+                    raise InvalidInputError(f"{source}: sensor {sensor!r} lacks {key!r}")
+                try:
+                    v = np.array(fields[key], float)
+                except (TypeError, ValueError):
+                    raise InvalidInputError(f"{source}: sensor {sensor!r} {key!r} is not "
+                                            f"numeric: {fields[key]!r}") from None
+                if v.shape != shape or not np.all(np.isfinite(v)):
+                    raise InvalidInputError(f"{source}: sensor {sensor!r} {key!r} must be "
+                                            f"finite with shape {shape}, got {fields[key]!r}")
+                out[key].append(v)
+        return cls(tuple(d), *(np.array(out[k]) for k in shapes))
 
 
 def _poses(rec: ImuRecording) -> list[tuple[int, int]]:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import zlib
 from dataclasses import dataclass
 
 import numpy as np
@@ -11,7 +12,7 @@ from ...models import HandShape
 from ._layout import FLEX_JOINT, POINTS
 from ._model import MODEL_JOINTS, ImuHand, ImuPlacement
 from ._motion import Motion
-from ._noise import MPU9250_DATASHEET, ImuNoise, apply_axis_noise
+from ._noise import MPU9250_DATASHEET, ImuNoise, apply_axis_noise, draw_fixed_errors
 from ._recording import ImuRecording, ImuTruth
 
 __all__ = ["SkinMotion", "simulate_imu"]
@@ -42,7 +43,7 @@ def _quat_mul(a, b):
 def simulate_imu(motion: Motion, *, shape: HandShape | None = None, side: str = "right",
                  placement: ImuPlacement | None = None, noise: ImuNoise | None = MPU9250_DATASHEET,
                  skin: SkinMotion | None = None, seed: int = 0,
-                 hand: ImuHand | None = None) -> ImuRecording:
+                 device_seed: int | None = None, hand: ImuHand | None = None) -> ImuRecording:
     """Run `motion` on the IMU hand and return what the 20 IMUs measure.
 
     Parameters
@@ -54,7 +55,14 @@ def simulate_imu(motion: Motion, *, shape: HandShape | None = None, side: str = 
         None gives MuJoCo's ideal signals.
     skin : SkinMotion or None, keyword-only
     seed : int, keyword-only
-        Seed of every random term.
+        Seed of every random term of this recording.
+    device_seed : int or None, keyword-only
+        Seed of the physical sensors: each sensor's accelerometer and gyro
+        scale/cross-axis matrices and turn-on biases are drawn from it and
+        the sensor's name, so recordings with the same `device_seed` (a
+        calibration and later tracking) share them, whichever sensors they
+        hold.  None draws them from `seed` (new sensors every recording).
+        The magnetometer's errors are drawn from `seed` either way.
     hand : ImuHand, keyword-only
         A compiled hand to reuse.
 
@@ -131,12 +139,26 @@ def simulate_imu(motion: Motion, *, shape: HandShape | None = None, side: str = 
         m.site_sameframe[site_ids] = sameframe0
     if noise is not None:
         rng = np.random.default_rng(seed)
-        acc = apply_axis_noise(acc, noise.accel, motion.rate_hz, rng)
-        gyr = apply_axis_noise(gyr, noise.gyro, motion.rate_hz, rng)
+        fixed_acc = fixed_gyr = None
+        if device_seed is not None:
+            fixed_acc, fixed_gyr = _fixed_errors(noise, names, device_seed)
+        acc = apply_axis_noise(acc, noise.accel, motion.rate_hz, rng, fixed=fixed_acc)
+        gyr = apply_axis_noise(gyr, noise.gyro, motion.rate_hz, rng, fixed=fixed_gyr)
         mag = _mag_noise(mag, quat, noise, motion.rate_hz, rng, names)
     truth = ImuTruth(quat=quat, sensor_pos=spos, keypoints=pts, elbow=pts[:, 0].copy(),
                      angles=motion.q.copy(), joint_vectors=vectors, segments=motion.segments)
     return ImuRecording(motion.rate_hz, names, acc, gyr, mag, truth)
+
+
+def _fixed_errors(noise: ImuNoise, names, device_seed: int):
+    """Per-sensor fixed errors, one generator per sensor name (order-independent)."""
+    acc, gyr = [], []
+    for name in names:
+        rng = np.random.default_rng([int(device_seed), zlib.crc32(name.encode())])
+        acc.append(draw_fixed_errors(noise.accel, 1, rng))
+        gyr.append(draw_fixed_errors(noise.gyro, 1, rng))
+    return ((np.concatenate([a[0] for a in acc]), np.concatenate([a[1] for a in acc])),
+            (np.concatenate([g[0] for g in gyr]), np.concatenate([g[1] for g in gyr])))
 
 
 def _rot_from_quat(q):
