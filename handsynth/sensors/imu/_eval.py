@@ -166,6 +166,8 @@ def _vector_report(cal, model, config: SimConfig, placement, lsq_rec) -> dict:
     truth = _truth(cal).joint_vectors
     vec = calibrate_vectors(cal)
     rot = {k: v.vector for k, v in vec.items() if not k[0].endswith("_tip")}
+    plain = {k: v.vector for k, v in calibrate_vectors(cal, static_pose=False).items()
+             if not k[0].endswith("_tip")}
     # baseline 1: the standard hand with sensors where they should be
     std = simulate_imu(static_motion(0.1), hand=ImuHand(tip_sensors=True), noise=None)
     std_vec = _truth(std).joint_vectors
@@ -191,6 +193,7 @@ def _vector_report(cal, model, config: SimConfig, placement, lsq_rec) -> dict:
     lv = np.array(list(link_err.values()))
     return {
         "rotation_method": _vector_errors(rot, truth),
+        "rotation_method_eq310_only": _vector_errors(plain, truth),
         "rotation_method_on_lsq_pairs": _vector_errors(rot_common, truth),
         "least_squares_seel": _vector_errors(lsq, truth),
         "baseline_standard_hand": _vector_errors(nominal, truth),

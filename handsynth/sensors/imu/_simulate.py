@@ -25,7 +25,10 @@ class SkinMotion:
     Per 90 deg of the flexion joint at the segment's proximal end the sensor
     slides `slide_mm` along the segment and tilts `tilt_deg` about the
     flexion axis (skin stretches over a flexing joint; seed 003 section 2.4.2
-    measured up to 25 % strain on the back of the hand near the wrist).
+    measured up to 25 % strain on the back of the hand near the wrist).  The
+    sensor feels that motion: its gyro reads the tilt rate on top of the
+    segment's rotation, its accelerometer the sliding's relative and
+    Coriolis accelerations.
     """
 
     slide_mm: float = 2.0
@@ -115,6 +118,9 @@ def simulate_imu(motion: Motion, *, shape: HandShape | None = None, side: str = 
             acc[:, i] = sd[acc_adr[:, None] + off3]
             gyr[:, i] = sd[gyr_adr[:, None] + off3]
             mag[:, i] = sd[mag_adr[:, None] + off3]
+            if skin is not None:
+                _add_skin_kinematics(acc[:, i], gyr[:, i], d, site_ids, body_of_site, skin,
+                                     motion.qd[i, flex_col] / 90.0, motion.qdd[i, flex_col] / 90.0)
             spos[:, i] = d.site_xpos[site_ids]
             for k, b in enumerate(body_of_site):
                 mujoco.mju_mulQuat(bq, d.xquat[b], site_quat0[k])
@@ -148,6 +154,25 @@ def simulate_imu(motion: Motion, *, shape: HandShape | None = None, side: str = 
     truth = ImuTruth(quat=quat, sensor_pos=spos, keypoints=pts, elbow=pts[:, 0].copy(),
                      angles=motion.q.copy(), joint_vectors=vectors, segments=motion.segments)
     return ImuRecording(motion.rate_hz, names, acc, gyr, mag, truth)
+
+
+def _add_skin_kinematics(acc, gyr, d, site_ids, body_of_site, skin: SkinMotion, fd, fdd) -> None:
+    """Add what MuJoCo leaves out of a sensor that moves on its body (in place).
+
+    MuJoCo's sensors treat the (moved) site as fixed on its body.  A sensor
+    sliding along the body's y axis by ``s(t)`` and tilting about its own x
+    axis by ``-tilt(t)`` also feels the relative acceleration and the
+    Coriolis term, ``R_S^T (s'' y_B + 2 w x s' y_B)``, and turns at the body's
+    rate plus ``-tilt'`` about x.  `fd`, `fdd`: rate and acceleration of the
+    flexion angle in units of 90 deg (1/s, 1/s^2), shape (S,).
+    """
+    r_site = d.site_xmat[site_ids].reshape(-1, 3, 3)
+    y_body = d.xmat[body_of_site].reshape(-1, 3, 3)[:, :, 1]
+    w_world = np.einsum("sij,sj->si", r_site, gyr)
+    v_rel = 1e-3 * skin.slide_mm * fd[:, None] * y_body
+    a_rel = 1e-3 * skin.slide_mm * fdd[:, None] * y_body + 2 * np.cross(w_world, v_rel)
+    acc += np.einsum("sji,sj->si", r_site, a_rel)
+    gyr[:, 0] -= np.radians(skin.tilt_deg) * fd
 
 
 def _fixed_errors(noise: ImuNoise, names, device_seed: int):

@@ -113,3 +113,32 @@ def test_bias_repeatability_changes_the_bias_between_recordings(imu_hand):
          for s in range(6)]
     change = np.std(np.array(d), axis=0)                          # over recordings, per axis
     assert 0.02 < float(np.sqrt(np.mean(change**2))) < 0.08
+
+
+def test_skin_motion_is_felt_by_the_sensor(imu_hand):
+    """With skin motion the gyro and accelerometer follow the sensor's actual motion."""
+    from handsynth.sensors.imu import FLEX_JOINT, MODEL_JOINTS
+
+    skin = SkinMotion(slide_mm=3.0, tilt_deg=8.0)
+    rec = simulate_imu(free_motion(6.0, seed=4, speed=2.0), hand=imu_hand, noise=None, skin=skin)
+    dt = 1 / rec.rate_hz
+    for name in ("index_middle", "little_proximal", "thumb_distal"):
+        k = rec.sensors.index(name)
+        flex = rec.truth.angles[:, MODEL_JOINTS.index(FLEX_JOINT[name])]
+        a = -np.radians(skin.tilt_deg * flex / 90.0)            # tilt about the sensor's x axis
+        rx = np.zeros((rec.n, 3, 3))
+        rx[:, 0, 0], rx[:, 1, 1], rx[:, 2, 2] = 1.0, np.cos(a), np.cos(a)
+        rx[:, 1, 2], rx[:, 2, 1] = -np.sin(a), np.sin(a)
+        r = quat_to_mat(rec.truth.quat[k]) @ rx                    # actual sensor -> world
+        p = rec.truth.sensor_pos[k]
+        gyr_err, acc_err, tilt_rate = [], [], []
+        for i in range(450, 590, 7):
+            dr = r[i].T @ r[i + 1]
+            w = np.array([dr[2, 1] - dr[1, 2], dr[0, 2] - dr[2, 0], dr[1, 0] - dr[0, 1]]) / 2 / dt
+            gyr_err.append(np.linalg.norm(w - 0.5 * (rec.gyr[k, i] + rec.gyr[k, i + 1])))
+            tilt_rate.append(abs(a[i + 1] - a[i]) / dt)
+            acc = r[i].T @ ((p[i + 1] - 2 * p[i] + p[i - 1]) / dt**2 + [0, 0, GRAVITY_MPS2])
+            acc_err.append(np.linalg.norm(acc - rec.acc[k, i]))
+        # the tilt rate alone is far above what is left
+        assert np.max(gyr_err) < 0.02 < 0.2 * np.max(tilt_rate), (name, max(gyr_err))
+        assert np.max(acc_err) < 0.05, (name, max(acc_err))
