@@ -32,7 +32,7 @@ def main() -> None:
     gain = float("nan")
     for name, config in (("tuning", TUNING), ("held-out", HELDOUT)):
         placement = config.placement()
-        _, calib = _calibrate(config, placement)
+        _, calib, _ = _calibrate(config, placement)
         hand = ImuHand(config.shape, placement=placement)
         still = simulate_imu(static_motion(120.0), hand=hand,
                              noise=dataclasses.replace(config.noise, disturbances=()), seed=3)

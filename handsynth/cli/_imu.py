@@ -66,11 +66,15 @@ def imu() -> None:
 @click.option("--elbow", "elbows", type=click.Choice(("fixed", "moving")), multiple=True,
               help="Elbow condition(s) (default both).")
 @click.option("--no-grasps", is_flag=True, help="Skip the grasp classification.")
+@click.option("--no-sensor-calibration", is_flag=True,
+              help="Leave the trials uncorrected (the accelerometer/gyro calibration is "
+                   "applied to every trial by default).")
 @click.option("--json", "json_out", type=click.Path(dir_okay=False), required=True,
               help="Write the full report as JSON.")
 @click.option("--plots", "plot_dir", type=click.Path(file_okay=False),
               help="Write orientation_error.png and stick_figure.png (last trial) here.")
-def eval_(config_name, filters, durations, elbows, no_grasps, json_out, plot_dir) -> None:
+def eval_(config_name, filters, durations, elbows, no_grasps, no_sensor_calibration, json_out,
+          plot_dir) -> None:
     """Reproduce the thesis' tables on simulated data, beside trivial baselines."""
     from ..sensors.imu import (
         FILTERS,
@@ -84,7 +88,8 @@ def eval_(config_name, filters, durations, elbows, no_grasps, json_out, plot_dir
     config = HELDOUT if config_name == "heldout" else TUNING
     series: dict = {}
     rep = evaluate(config, durations=durations or (15.0, 30.0), elbows=elbows or ("fixed", "moving"),
-                   filters=_filters(filters, FILTERS), grasps=not no_grasps, series=series)
+                   filters=_filters(filters, FILTERS), grasps=not no_grasps,
+                   sensor_calibration=not no_sensor_calibration, series=series)
     _write_json(json_out, rep)
     if plot_dir:
         out = Path(plot_dir)
@@ -144,6 +149,11 @@ def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz
     lengths = ", ".join(f"{a}->{b} {1e3 * float((v @ v) ** 0.5):.0f} mm"
                         for (s, a, b), v in cal.model.links.items() if s.startswith("index"))
     click.echo(f"calibrated {len(cal.sensors)} sensors -> {out_path}; index links: {lengths}")
+    sc = cal.sensor_calibration
+    click.echo("accelerometer/gyro calibration: " + (
+        "none (no static poses acc_pose_<k> in the segments)" if sc is None else
+        f"{len(sc.sensors)} sensors, largest accelerometer residual "
+        f"{float(sc.acc_residual_mps2.max()):.3f} m/s^2 (stored; 'track' applies it)"))
 
 
 @imu.command()
@@ -165,8 +175,11 @@ def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz
 @click.option("--tips-out", type=click.Path(dir_okay=False),
               help="CSV of fingertip positions from the elbow centre, mm, in the world frame "
                    "of the initial attitude (eq. 3.12; needs --calibration).")
+@click.option("--no-sensor-calibration", is_flag=True,
+              help="Do not apply the calibration file's accelerometer/gyro corrections "
+                   "(for readings already corrected).")
 def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_units, rate_hz,
-          static_s, align, out_path, angles_out, tips_out) -> None:
+          static_s, align, out_path, angles_out, tips_out, no_sensor_calibration) -> None:
     """Orientation of every sensor of a CSV RECORDING (columns <sensor>_acc_x .. _mag_z)."""
     import dataclasses
 
@@ -183,7 +196,8 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
         read_imu_csv,
     )
 
-    for flag, given in (("--angles-out", angles_out), ("--tips-out", tips_out)):
+    for flag, given in (("--angles-out", angles_out), ("--tips-out", tips_out),
+                        ("--no-sensor-calibration", no_sensor_calibration)):
         if given and not calibration_path:
             raise InvalidInputError(f"{flag} needs --calibration")
     rec = read_imu_csv(recording, acc_units=acc_units, gyr_units=gyr_units, mag_units=mag_units,
@@ -200,8 +214,10 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
     t = np.arange(rec.n) / rec.rate_hz
     if calibration_path:
         cal = ImuCalibration.load(calibration_path)
-        res = cal.track(rec, static=static)
+        res = cal.track(rec, static=static, sensor_calibration=not no_sensor_calibration)
         q, sensors, name = res["quat"], cal.sensors, "filter4"
+        if res["sensor_calibration"]:
+            name += ", accelerometer/gyro calibration applied"
         if angles_out:
             _write_table(angles_out, ["time_s", *JOINT_NAMES], np.column_stack([t, res["angles"]]))
         if tips_out:

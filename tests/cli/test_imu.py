@@ -120,10 +120,12 @@ def test_eval_unknown_filter_is_one_line(tmp_path):
 @pytest.mark.slow
 def test_calibrate_then_track_joint_angles(tmp_path):
     from handsynth.models import JOINT_NAMES
-    from handsynth.sensors.imu import ImuHand, calibration_motion
+    from handsynth.sensors.imu import MPU9250_DATASHEET, ImuHand, calibration_motion
+    from handsynth.sensors.imu._simulate import _fixed_errors
 
     hand = ImuHand(tip_sensors=True)
-    cal = simulate_imu(calibration_motion(acc_poses=True), hand=hand, seed=11)
+    # the same physical sensors (device_seed) in the calibration and the later recording
+    cal = simulate_imu(calibration_motion(acc_poses=True), hand=hand, seed=11, device_seed=5)
     cal_csv, seg_json, model = tmp_path / "cal.csv", tmp_path / "seg.json", tmp_path / "cal.json"
     write_imu_csv(cal, cal_csv)
     seg_json.write_text(json.dumps({lab: [a / cal.rate_hz, b / cal.rate_hz]
@@ -131,13 +133,34 @@ def test_calibrate_then_track_joint_angles(tmp_path):
     res = CliRunner().invoke(cli, ["imu", "calibrate", str(cal_csv), "--segments", str(seg_json),
                                    "--out", str(model)])
     assert res.exit_code == 0, res.output
-    rec = simulate_imu(free_motion(10.0, seed=12), seed=13)
+    assert "accelerometer/gyro calibration: 25 sensors" in res.output
+    # the file holds corrections that undo the sensors' own errors
+    stored = json.loads(model.read_text())
+    assert stored["version"] == 3 and len(stored["sensor_calibration"]) == 25
+    (m_acc, b_acc), (m_gyr, _) = _fixed_errors(MPU9250_DATASHEET, cal.sensors, 5)
+    ratio: dict = {"acc": [], "gyr": [], "bias": []}
+    for k, s in enumerate(cal.sensors):
+        sc = stored["sensor_calibration"][s]
+        c, g = np.array(sc["acc_matrix"]), np.array(sc["gyr_matrix"])
+        # accelerometer: C M a rotation (lengths kept; a rotation is left to the link frames)
+        ca = c @ m_acc[k]
+        ratio["acc"].append(np.abs(ca.T @ ca - np.eye(3)).max()
+                            / np.abs(m_acc[k].T @ m_acc[k] - np.eye(3)).max())
+        ratio["gyr"].append(np.abs(g @ m_gyr[k] - np.eye(3)).max() / np.abs(m_gyr[k] - np.eye(3)).max())
+        ratio["bias"].append(np.linalg.norm(np.array(sc["acc_bias_mps2"]) - b_acc[k])
+                             / np.linalg.norm(b_acc[k]))
+    # median over the 25 sensors (the forearm plate's poses are the least varied: its
+    # sensors 1 and 2 are fitted worst)
+    med = {k: float(np.median(v)) for k, v in ratio.items()}
+    assert med["acc"] < 0.3 and med["gyr"] < 0.6 and med["bias"] < 0.3, med
+    rec = simulate_imu(free_motion(10.0, seed=12), seed=13, device_seed=5)
     rec_csv, q_csv, ang_csv = tmp_path / "rec.csv", tmp_path / "q.csv", tmp_path / "a.csv"
     write_imu_csv(rec, rec_csv)
     res = CliRunner().invoke(cli, ["imu", "track", str(rec_csv), "--calibration", str(model),
                                    "--align", "2,4", "--out", str(q_csv), "--angles-out", str(ang_csv),
                                    "--tips-out", str(tmp_path / "tips.csv")])
     assert res.exit_code == 0, res.output
+    assert "accelerometer/gyro calibration applied" in res.output
     with open(tmp_path / "tips.csv", encoding="utf-8") as fh:
         header = fh.readline().strip().split(",")
     assert header[:4] == ["time_s", "thumb_tip_x_mm", "thumb_tip_y_mm", "thumb_tip_z_mm"]
@@ -159,6 +182,23 @@ def test_calibrate_then_track_joint_angles(tmp_path):
     # against a constant answer (the first frame held) the error is far larger
     const = ang[400:400 + 1] - rec.truth.angles[400:, 9:]
     assert np.sqrt(np.mean(err[:, j] ** 2)) < 0.3 * np.sqrt(np.mean(const[:, j] ** 2))
+    # the same recording without the stored accelerometer/gyro calibration: worse angles
+    raw_csv = tmp_path / "a_raw.csv"
+    res = CliRunner().invoke(cli, ["imu", "track", str(rec_csv), "--calibration", str(model),
+                                   "--align", "2,4", "--out", str(q_csv), "--angles-out",
+                                   str(raw_csv), "--no-sensor-calibration"])
+    assert res.exit_code == 0 and "calibration applied" not in res.output, res.output
+    raw = np.loadtxt(raw_csv, delimiter=",", skiprows=1)[:, 1:]
+    err_raw = raw[400:] - rec.truth.angles[400:, 9:]
+    assert np.sqrt(np.nanmean(err**2)) < 0.5 * np.sqrt(np.nanmean(err_raw**2))
+
+
+def test_no_sensor_calibration_needs_the_calibration(tmp_path, sim):
+    src = tmp_path / "rec.csv"
+    write_imu_csv(sim.subset(("forearm_1",)), src)
+    res = CliRunner().invoke(cli, ["imu", "track", str(src), "--out", str(tmp_path / "q.csv"),
+                                   "--no-sensor-calibration"])
+    assert res.exit_code == 2 and "--no-sensor-calibration needs --calibration" in res.output
 
 
 def test_calibrate_segment_outside_is_named(tmp_path, sim):

@@ -69,6 +69,7 @@ from ._noise import (
     MagDisturbance,
     MagNoise,
     apply_axis_noise,
+    draw_fixed_errors,
 )
 from ._plot import plot_orientation_error, plot_stick_figure
 from ._recording import (
@@ -157,6 +158,7 @@ __all__ = [
     "check_recording",
     "classify_grasp",
     "concat_motions",
+    "draw_fixed_errors",
     "evaluate",
     "find_broad_trials",
     "fingertip_positions",

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ..._io import atomic_open
-from ...errors import RecordingError
+from ...errors import InvalidInputError, RecordingError
 from ._ekf import ChainEKF
 from ._kinematics import (
     ThumbCmcModel,
@@ -27,12 +27,14 @@ from ._kinematics import (
     zero_offsets,
 )
 from ._recording import ImuRecording
-from ._sensorcal import POSE_PREFIX, fit_sensor_calibration
+from ._sensorcal import POSE_PREFIX, SensorCalibration, fit_sensor_calibration
 from ._vectors import ChainModel, chain_model
 
 __all__ = ["ImuCalibration", "calibrate", "segments_from_seconds"]
 
-_VERSION = 2  # 2: the thumb CMC axes (version 1 files load without them)
+# 2: the thumb CMC axes; 3: the accelerometer/gyro calibration (older files
+# load without them)
+_VERSION = 3
 
 
 def segments_from_seconds(spans: dict, rate_hz: float, n: int) -> tuple:
@@ -65,6 +67,10 @@ class ImuCalibration:
         The sensors the tracker expects (the link model's).
     cmc : ThumbCmcModel or None
         The thumb CMC's axes; None (files of version 1): CMC angles are NaN.
+    sensor_calibration : SensorCalibration or None
+        Accelerometer and gyro corrections of the same physical sensors;
+        None (no static poses, or files before version 3): readings are
+        used as they come.
     """
 
     model: ChainModel
@@ -72,27 +78,55 @@ class ImuCalibration:
     zero: np.ndarray
     sensors: tuple
     cmc: ThumbCmcModel | None = None
+    sensor_calibration: SensorCalibration | None = None
 
-    def track(self, rec: ImuRecording, *, static=None) -> dict:
-        """Attitudes (Filter 4), joint angles and fingertips of a recording.
+    def correct(self, rec: ImuRecording, *, sensor_calibration: bool = True) -> ImuRecording:
+        """The calibrated sensors of `rec`, the sensor calibration applied (if any and asked).
 
-        Returns
-        -------
-        dict
-            ``quat`` (S, N, 4), ``angles`` (N, 20) degrees, ``tips``
-            finger -> (N, 3) metres from the elbow.
+        Raises
+        ------
+        RecordingError
+            `rec` lacks a calibrated sensor.
         """
         missing = [s for s in self.sensors if s not in rec.sensors]
         if missing:
             raise RecordingError(f"the recording lacks sensor(s) {', '.join(missing)} "
                                  "of the calibration")
         sub = rec.subset(self.sensors)
+        if self.sensor_calibration is None or not sensor_calibration:
+            return sub
+        try:
+            return self.sensor_calibration.apply(sub)
+        except InvalidInputError as exc:
+            raise RecordingError(f"calibration file inconsistent: {exc}") from None
+
+    def track(self, rec: ImuRecording, *, static=None, sensor_calibration: bool = True) -> dict:
+        """Attitudes (Filter 4), joint angles and fingertips of a recording.
+
+        Parameters
+        ----------
+        rec : ImuRecording
+            Raw readings of (at least) the calibrated sensors.
+        static : StaticStart, keyword-only
+        sensor_calibration : bool, keyword-only
+            Apply the stored accelerometer/gyro calibration first (False:
+            `rec` is already corrected).
+
+        Returns
+        -------
+        dict
+            ``quat`` (S, N, 4), ``angles`` (N, 20) degrees, ``tips``
+            finger -> (N, 3) metres from the elbow, ``sensor_calibration``
+            whether a sensor calibration was applied.
+        """
+        sub = self.correct(rec, sensor_calibration=sensor_calibration)
+        applied = sensor_calibration and self.sensor_calibration is not None
         est = ChainEKF(self.model) if static is None else ChainEKF(self.model, static=static)
         q = est.run(sub)
         angles, _ = joint_angles(q, sub.sensors, self.frames, zero=self.zero, cmc=self.cmc)
         tips = {f: v for f, v in fingertip_positions(q, sub.sensors, self.model).items()
                 if not f.endswith("_joints")}
-        return {"quat": q, "angles": angles, "tips": tips}
+        return {"quat": q, "angles": angles, "tips": tips, "sensor_calibration": applied}
 
     def to_dict(self) -> dict:
         return {"format": "handsynth-imu-calibration", "version": _VERSION,
@@ -102,7 +136,9 @@ class ImuCalibration:
                 "frames": {s: v.tolist() for s, v in self.frames.items()},
                 "zero_deg": self.zero.tolist(),
                 **({} if self.cmc is None else {"thumb_cmc": {
-                    "axes": self.cmc.axes.tolist(), "rest": self.cmc.rest.tolist()}})}
+                    "axes": self.cmc.axes.tolist(), "rest": self.cmc.rest.tolist()}}),
+                **({} if self.sensor_calibration is None else {
+                    "sensor_calibration": self.sensor_calibration.to_dict()})}
 
     def save(self, path) -> Path:
         """Write JSON atomically (never a half-written file under `path`)."""
@@ -125,6 +161,10 @@ class ImuCalibration:
         missing = [k for k in ("sensors", "own_m", "links_m", "frames", "zero_deg") if k not in d]
         if missing:
             raise RecordingError(f"{path}: missing field(s) {', '.join(missing)}")
+        version = d.get("version", 1)
+        if not isinstance(version, int) or version > _VERSION:
+            raise RecordingError(f"{path}: calibration file version {version!r} is newer than "
+                                 f"this handsynth reads (<= {_VERSION})")
         try:
             model = ChainModel({s: np.array(v, float) for s, v in d["own_m"].items()},
                                {(s, a, b): np.array(v, float) for s, a, b, v in d["links_m"]})
@@ -136,7 +176,18 @@ class ImuCalibration:
                                     np.array(d["thumb_cmc"]["rest"], float).reshape(3, 3))
         except (TypeError, ValueError, KeyError) as exc:
             raise RecordingError(f"{path}: malformed calibration values ({exc})") from None
-        return cls(model, frames, zero, tuple(d["sensors"]), cmc)
+        sensor_cal = None
+        if "sensor_calibration" in d:
+            try:
+                sensor_cal = SensorCalibration.from_dict(d["sensor_calibration"],
+                                                         source=f"{path}: sensor_calibration")
+            except InvalidInputError as exc:
+                raise RecordingError(str(exc)) from None
+            lacking = [s for s in d["sensors"] if s not in sensor_cal.sensors]
+            if lacking:
+                raise RecordingError(f"{path}: sensor_calibration lacks sensor(s) "
+                                     f"{', '.join(lacking)}")
+        return cls(model, frames, zero, tuple(d["sensors"]), cmc, sensor_cal)
 
 
 def calibrate(rec: ImuRecording, *, sensor_calibration: bool = True) -> ImuCalibration:
@@ -146,14 +197,17 @@ def calibrate(rec: ImuRecording, *, sensor_calibration: bool = True) -> ImuCalib
     for the distal link vectors (seed 003 Table 3.5).  When the recording
     has labelled static poses (``acc_pose_<k>``, see
     :func:`fit_sensor_calibration`), the accelerometers and gyros are first
-    corrected for scale, cross-axis error and accelerometer bias; the
-    correction is used for the link model only and is not stored
-    (``sensor_calibration=False`` skips it, e.g. for a recording already
-    corrected).
+    corrected for scale, cross-axis error and accelerometer bias, and the
+    correction is kept in the result (:meth:`ImuCalibration.track` applies
+    it to every recording); ``sensor_calibration=False`` skips it, e.g. for
+    a recording already corrected.
     """
+    sensor_cal = None
     if sensor_calibration and sum(name.startswith(POSE_PREFIX) for name, _, _ in rec.labelled()) >= 8:
-        rec = fit_sensor_calibration(rec).apply(rec)
+        sensor_cal = fit_sensor_calibration(rec)
+        rec = sensor_cal.apply(rec)
     model = chain_model(rec)
     frames = link_frames(rec, model)
     zero = zero_offsets(rec, frames)
-    return ImuCalibration(model, frames, zero, tuple(model.own), thumb_cmc_model(rec, frames))
+    return ImuCalibration(model, frames, zero, tuple(model.own), thumb_cmc_model(rec, frames),
+                          sensor_cal)

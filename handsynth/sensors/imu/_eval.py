@@ -10,6 +10,12 @@ Two simulator configurations:
   sensor tilted (5 deg s.d. per axis) and shifted (2 mm s.d.) on its segment,
   and skin motion (:class:`SkinMotion`).  Nothing was tuned on it.
 
+Every recording of one configuration is made with the same physical
+sensors (``device_seed``): their scale/cross-axis errors and turn-on biases
+are fixed, so the accelerometer/gyro calibration fitted on the calibration
+recording is applied to every trial (``sensor_calibration=False`` leaves the
+trials uncorrected).
+
 Each trial is a free motion of 15 or 30 s with the elbow fixed or moving
 (as the thesis' section 4.4); orientation RMSE is per segment over the
 motion (after the static start and the alignment rotation).  Beside every
@@ -45,7 +51,7 @@ from ._motion import GRASP_POSES, calibration_motion, free_motion, grasp_motion,
 from ._noise import EVAL_NOISE, MPU9250_DATASHEET, ImuNoise
 from ._quat import angle_deg, heading_inclination_deg
 from ._recording import ImuRecording, ImuTruth
-from ._sensorcal import fit_sensor_calibration
+from ._sensorcal import SensorCalibration
 from ._simulate import SkinMotion, simulate_imu
 from ._vectors import seel_joint_positions, truth_chain_model
 
@@ -137,16 +143,22 @@ def _vector_errors(est: dict, truth: dict) -> dict:
             "max_mm": float(vals.max()), "n": int(vals.size), "per_vector_mm": err}
 
 
+def _device_seed(config: SimConfig) -> int:
+    return config.seed + 900
+
+
 def _calibrate(config: SimConfig, placement: ImuPlacement):
     hand = ImuHand(config.shape, placement=placement, tip_sensors=True)
     quiet = dataclasses.replace(config.noise, disturbances=())
     cal = simulate_imu(calibration_motion(acc_poses=True), hand=hand, noise=quiet,
-                       skin=config.skin, seed=config.seed + 7)
-    # accelerometer and gyro scale/cross-axis from the static poses; the
-    # simulator draws these errors afresh for every recording, so they
-    # correct the calibration recording only
-    cal = fit_sensor_calibration(cal).apply(cal)
-    return cal, calibrate(cal, sensor_calibration=False)
+                       skin=config.skin, seed=config.seed + 7, device_seed=_device_seed(config))
+    # accelerometer and gyro scale/cross-axis from the static poses, kept in
+    # the calibration for the later recordings of the same sensors
+    calib = calibrate(cal)
+    sensor_cal = calib.sensor_calibration
+    if sensor_cal is None:
+        raise InvalidInputError("the calibration recording has no static poses")
+    return sensor_cal.apply(cal), calib, sensor_cal
 
 
 def _vector_report(cal, model, config: SimConfig, placement, lsq_rec) -> dict:
@@ -155,6 +167,8 @@ def _vector_report(cal, model, config: SimConfig, placement, lsq_rec) -> dict:
     truth = _truth(cal).joint_vectors
     vec = calibrate_vectors(cal)
     rot = {k: v.vector for k, v in vec.items() if not k[0].endswith("_tip")}
+    plain = {k: v.vector for k, v in calibrate_vectors(cal, static_pose=False).items()
+             if not k[0].endswith("_tip")}
     # baseline 1: the standard hand with sensors where they should be
     std = simulate_imu(static_motion(0.1), hand=ImuHand(tip_sensors=True), noise=None)
     std_vec = _truth(std).joint_vectors
@@ -180,6 +194,7 @@ def _vector_report(cal, model, config: SimConfig, placement, lsq_rec) -> dict:
     lv = np.array(list(link_err.values()))
     return {
         "rotation_method": _vector_errors(rot, truth),
+        "rotation_method_eq310_only": _vector_errors(plain, truth),
         "rotation_method_on_lsq_pairs": _vector_errors(rot_common, truth),
         "least_squares_seel": _vector_errors(lsq, truth),
         "baseline_standard_hand": _vector_errors(nominal, truth),
@@ -235,10 +250,13 @@ def _trial(rec, filters, calib: ImuCalibration, series: dict | None = None) -> d
     return out
 
 
-def _grasp_report(config, placement, filters, calib: ImuCalibration) -> dict:
+def _grasp_report(config, placement, filters, calib: ImuCalibration,
+                  sensor_cal: SensorCalibration | None) -> dict:
     hand = ImuHand(config.shape, placement=placement)
     rec = simulate_imu(grasp_motion(), hand=hand, noise=config.noise, skin=config.skin,
-                       seed=config.seed + 31)
+                       seed=config.seed + 31, device_seed=_device_seed(config))
+    if sensor_cal is not None:
+        rec = sensor_cal.apply(rec)
     classes = {g: p for g, p in GRASP_POSES.items() if g != "open"}
     truth = _truth(rec)
     holds = [(s.split(":", 1)[1], a, b) for s, a, b in truth.segments if s.startswith("grasp:")]
@@ -258,7 +276,7 @@ def _grasp_report(config, placement, filters, calib: ImuCalibration) -> dict:
 
 def evaluate(config: SimConfig = HELDOUT, *, durations=(15.0, 30.0), elbows=("fixed", "moving"),
              filters=FILTERS, grasps: bool = True, speed: float = 1.0,
-             series: dict | None = None) -> dict:
+             sensor_calibration: bool = True, series: dict | None = None) -> dict:
     """Run the evaluation and return a JSON-ready dict.
 
     Parameters
@@ -273,6 +291,9 @@ def evaluate(config: SimConfig = HELDOUT, *, durations=(15.0, 30.0), elbows=("fi
         Also classify the grasps of :func:`grasp_motion`.
     speed : float, keyword-only
         Frequency scale of the free motions.
+    sensor_calibration : bool, keyword-only
+        Apply the accelerometer/gyro calibration to every trial (it is
+        always applied to the calibration recording itself).
     series : dict, keyword-only
         Filled with the last trial's error time series and a stick-figure
         instant (for :mod:`._plot`).
@@ -281,7 +302,7 @@ def evaluate(config: SimConfig = HELDOUT, *, durations=(15.0, 30.0), elbows=("fi
         if f not in FILTERS:
             raise InvalidInputError(f"unknown filter {f!r}; expected one of {', '.join(FILTERS)}")
     placement = config.placement()
-    cal, calib = _calibrate(config, placement)
+    cal, calib, sensor_cal = _calibrate(config, placement)
     hand = ImuHand(config.shape, placement=placement)
     trials = []
     lsq_rec = None
@@ -289,17 +310,22 @@ def evaluate(config: SimConfig = HELDOUT, *, durations=(15.0, 30.0), elbows=("fi
         for m, elbow in enumerate(elbows):
             seed = config.seed * 100 + 10 * k + m
             rec = simulate_imu(free_motion(float(dur), seed=seed, elbow=elbow, speed=speed),
-                               hand=hand, noise=config.noise, skin=config.skin, seed=seed + 50)
+                               hand=hand, noise=config.noise, skin=config.skin, seed=seed + 50,
+                               device_seed=_device_seed(config))
+            if sensor_calibration:
+                rec = sensor_cal.apply(rec)     # keeps the truth
             lsq_rec = lsq_rec or rec
             last = k == len(durations) - 1 and m == len(elbows) - 1
             t = _trial(rec, filters, calib, series if last else None)
             t.update(duration_s=float(dur), elbow=elbow)
             trials.append(t)
-    report = {"config": config.describe(), "filters": list(filters),
+    report = {"config": {**config.describe(), "sensor_calibration_applied": sensor_calibration},
+              "filters": list(filters),
               "vectors": _vector_report(cal, calib.model, config, placement, lsq_rec),
               "trials": trials, "summary": _summary(trials, filters)}
     if grasps:
-        report["grasps"] = _grasp_report(config, placement, filters, calib)
+        report["grasps"] = _grasp_report(config, placement, filters, calib,
+                                         sensor_cal if sensor_calibration else None)
     return report
 
 

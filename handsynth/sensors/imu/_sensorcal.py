@@ -77,7 +77,17 @@ class SensorCalibration:
     gyr_residual: np.ndarray
 
     def apply(self, rec: ImuRecording, *, gyro: bool = True) -> ImuRecording:
-        """`rec` with corrected accelerometer (and gyro) readings, sensors matched by name."""
+        """`rec` with corrected accelerometer (and gyro) readings, sensors matched by name.
+
+        Any recording of the same physical sensors can be corrected, the
+        calibration recording or a later one; the gyro bias is left in (the
+        estimators take it from each recording's static start).
+
+        Raises
+        ------
+        InvalidInputError
+            A sensor of `rec` that the calibration does not hold.
+        """
         missing = [s for s in rec.sensors if s not in self.sensors]
         if missing:
             raise InvalidInputError(
@@ -90,6 +100,45 @@ class SensorCalibration:
         return dataclasses.replace(rec, acc=acc, gyr=gyr)
 
 
+    def to_dict(self) -> dict:
+        """JSON-ready ``{sensor: {field: list}}``."""
+        return {s: {"acc_matrix": self.acc_matrix[k].tolist(),
+                    "acc_bias_mps2": self.acc_bias_mps2[k].tolist(),
+                    "gyr_matrix": self.gyr_matrix[k].tolist(),
+                    "acc_residual_mps2": float(self.acc_residual_mps2[k]),
+                    "gyr_residual": float(self.gyr_residual[k])}
+                for k, s in enumerate(self.sensors)}
+
+    @classmethod
+    def from_dict(cls, d: dict, *, source: str = "sensor calibration") -> SensorCalibration:
+        """Inverse of :meth:`to_dict`; `source` names the origin in errors.
+
+        Raises
+        ------
+        InvalidInputError
+            A missing field, a wrong shape or a non-finite value (named).
+        """
+        if not isinstance(d, dict) or not d:
+            raise InvalidInputError(f"{source}: expected an object of sensor: fields")
+        shapes = {"acc_matrix": (3, 3), "acc_bias_mps2": (3,), "gyr_matrix": (3, 3),
+                  "acc_residual_mps2": (), "gyr_residual": ()}
+        out: dict[str, list] = {k: [] for k in shapes}
+        for sensor, fields in d.items():
+            for key, shape in shapes.items():
+                if not isinstance(fields, dict) or key not in fields:
+                    raise InvalidInputError(f"{source}: sensor {sensor!r} lacks {key!r}")
+                try:
+                    v = np.array(fields[key], float)
+                except (TypeError, ValueError):
+                    raise InvalidInputError(f"{source}: sensor {sensor!r} {key!r} is not "
+                                            f"numeric: {fields[key]!r}") from None
+                if v.shape != shape or not np.all(np.isfinite(v)):
+                    raise InvalidInputError(f"{source}: sensor {sensor!r} {key!r} must be "
+                                            f"finite with shape {shape}, got {fields[key]!r}")
+                out[key].append(v)
+        return cls(tuple(d), *(np.array(out[k]) for k in shapes))
+
+
 def _poses(rec: ImuRecording) -> list[tuple[int, int]]:
     stretches = [(a, b) for name, a, b in rec.labelled()
                  if name == "static" or name.startswith(POSE_PREFIX)]
@@ -100,19 +149,21 @@ def _poses(rec: ImuRecording) -> list[tuple[int, int]]:
     return sorted(stretches)
 
 
-def _fit_acc(means: np.ndarray, g: float) -> tuple[np.ndarray, np.ndarray, float]:
+def _fit_acc(means: np.ndarray, g: float, prior: float) -> tuple[np.ndarray, np.ndarray, float]:
     def unpack(x):
         c = np.zeros((3, 3))
         c[_IU] = x[:6]
         return c + np.triu(c, 1).T, x[6:]
 
+    x0 = np.r_[1.0, 0, 0, 1.0, 0, 1.0, 0, 0, 0]
+
     def residual(x):
         c, b = unpack(x)
         return np.linalg.norm((means - b) @ c.T, axis=1) - g
 
-    sol = least_squares(residual, np.r_[1.0, 0, 0, 1.0, 0, 1.0, 0, 0, 0], method="lm")
+    sol = least_squares(lambda x: np.r_[residual(x), prior * (x - x0)], x0, method="lm")
     c, b = unpack(sol.x)
-    return c, b, float(np.sqrt(np.mean(sol.fun**2)))
+    return c, b, float(np.sqrt(np.mean(residual(sol.x) ** 2)))
 
 
 def _fit_gyr(moves: np.ndarray, u0: np.ndarray, u1: np.ndarray, rate_hz: float,
@@ -129,7 +180,8 @@ def _fit_gyr(moves: np.ndarray, u0: np.ndarray, u1: np.ndarray, rate_hz: float,
 
 
 def fit_sensor_calibration(rec: ImuRecording, *, skip_s: float = 0.3, prior: float = 0.01,
-                           max_correction: float = 0.15) -> SensorCalibration:
+                           acc_prior: float = 0.03, max_correction: float = 0.15
+                           ) -> SensorCalibration:
     """Fit accelerometer scale, cross-axis and bias, and gyro scale and cross-axis.
 
     Parameters
@@ -141,6 +193,11 @@ def fit_sensor_calibration(rec: ImuRecording, *, skip_s: float = 0.3, prior: flo
     prior : float, keyword-only
         Weight of the gyro matrix's pull toward the identity (per unit of
         unit-vector misfit).
+    acc_prior : float, keyword-only
+        Weight of the accelerometer matrix's and bias's pull toward the
+        identity and zero (m/s^2 of misfit per unit).  The forearm plate's
+        poses leave one combination of bias and scale nearly unseen; without
+        the pull it follows the noise (chosen on the datasheet noise).
     max_correction : float, keyword-only
         Largest accepted deviation of C or G from the identity (any
         element); a larger one means the poses were not still or not varied.
@@ -169,7 +226,7 @@ def fit_sensor_calibration(rec: ImuRecording, *, skip_s: float = 0.3, prior: flo
     length = max(b1 - (b0 - 1) for (_, b0), (_, b1) in zip(poses[:-1], spans[1:]))
     out: dict[str, list] = {"c": [], "b": [], "g": [], "rc": [], "rg": []}
     for k, name in enumerate(rec.sensors):
-        c, b, rc = _fit_acc(means[k], GRAVITY_MPS2)
+        c, b, rc = _fit_acc(means[k], GRAVITY_MPS2, acc_prior)
         up = (means[k] - b) @ c.T
         up /= np.linalg.norm(up, axis=1, keepdims=True)
         moves = np.zeros((len(poses) - 1, length, 3))

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import zlib
 from dataclasses import dataclass
 
 import numpy as np
@@ -11,7 +12,7 @@ from ...models import HandShape
 from ._layout import FLEX_JOINT, POINTS
 from ._model import MODEL_JOINTS, ImuHand, ImuPlacement
 from ._motion import Motion
-from ._noise import MPU9250_DATASHEET, ImuNoise, apply_axis_noise
+from ._noise import MPU9250_DATASHEET, ImuNoise, apply_axis_noise, draw_fixed_errors
 from ._recording import ImuRecording, ImuTruth
 
 __all__ = ["SkinMotion", "simulate_imu"]
@@ -24,7 +25,10 @@ class SkinMotion:
     Per 90 deg of the flexion joint at the segment's proximal end the sensor
     slides `slide_mm` along the segment and tilts `tilt_deg` about the
     flexion axis (skin stretches over a flexing joint; seed 003 section 2.4.2
-    measured up to 25 % strain on the back of the hand near the wrist).
+    measured up to 25 % strain on the back of the hand near the wrist).  The
+    sensor feels that motion: its gyro reads the tilt rate on top of the
+    segment's rotation, its accelerometer the sliding's relative and
+    Coriolis accelerations.
     """
 
     slide_mm: float = 2.0
@@ -42,7 +46,7 @@ def _quat_mul(a, b):
 def simulate_imu(motion: Motion, *, shape: HandShape | None = None, side: str = "right",
                  placement: ImuPlacement | None = None, noise: ImuNoise | None = MPU9250_DATASHEET,
                  skin: SkinMotion | None = None, seed: int = 0,
-                 hand: ImuHand | None = None) -> ImuRecording:
+                 device_seed: int | None = None, hand: ImuHand | None = None) -> ImuRecording:
     """Run `motion` on the IMU hand and return what the 20 IMUs measure.
 
     Parameters
@@ -54,7 +58,14 @@ def simulate_imu(motion: Motion, *, shape: HandShape | None = None, side: str = 
         None gives MuJoCo's ideal signals.
     skin : SkinMotion or None, keyword-only
     seed : int, keyword-only
-        Seed of every random term.
+        Seed of every random term of this recording.
+    device_seed : int or None, keyword-only
+        Seed of the physical sensors: each sensor's accelerometer and gyro
+        scale/cross-axis matrices and turn-on biases are drawn from it and
+        the sensor's name, so recordings with the same `device_seed` (a
+        calibration and later tracking) share them, whichever sensors they
+        hold.  None draws them from `seed` (new sensors every recording).
+        The magnetometer's errors are drawn from `seed` either way.
     hand : ImuHand, keyword-only
         A compiled hand to reuse.
 
@@ -107,6 +118,9 @@ def simulate_imu(motion: Motion, *, shape: HandShape | None = None, side: str = 
             acc[:, i] = sd[acc_adr[:, None] + off3]
             gyr[:, i] = sd[gyr_adr[:, None] + off3]
             mag[:, i] = sd[mag_adr[:, None] + off3]
+            if skin is not None:
+                _add_skin_kinematics(acc[:, i], gyr[:, i], d, site_ids, body_of_site, skin,
+                                     motion.qd[i, flex_col] / 90.0, motion.qdd[i, flex_col] / 90.0)
             spos[:, i] = d.site_xpos[site_ids]
             for k, b in enumerate(body_of_site):
                 mujoco.mju_mulQuat(bq, d.xquat[b], site_quat0[k])
@@ -131,12 +145,45 @@ def simulate_imu(motion: Motion, *, shape: HandShape | None = None, side: str = 
         m.site_sameframe[site_ids] = sameframe0
     if noise is not None:
         rng = np.random.default_rng(seed)
-        acc = apply_axis_noise(acc, noise.accel, motion.rate_hz, rng)
-        gyr = apply_axis_noise(gyr, noise.gyro, motion.rate_hz, rng)
+        fixed_acc = fixed_gyr = None
+        if device_seed is not None:
+            fixed_acc, fixed_gyr = _fixed_errors(noise, names, device_seed)
+        acc = apply_axis_noise(acc, noise.accel, motion.rate_hz, rng, fixed=fixed_acc)
+        gyr = apply_axis_noise(gyr, noise.gyro, motion.rate_hz, rng, fixed=fixed_gyr)
         mag = _mag_noise(mag, quat, noise, motion.rate_hz, rng, names)
     truth = ImuTruth(quat=quat, sensor_pos=spos, keypoints=pts, elbow=pts[:, 0].copy(),
                      angles=motion.q.copy(), joint_vectors=vectors, segments=motion.segments)
     return ImuRecording(motion.rate_hz, names, acc, gyr, mag, truth)
+
+
+def _add_skin_kinematics(acc, gyr, d, site_ids, body_of_site, skin: SkinMotion, fd, fdd) -> None:
+    """Add what MuJoCo leaves out of a sensor that moves on its body (in place).
+
+    MuJoCo's sensors treat the (moved) site as fixed on its body.  A sensor
+    sliding along the body's y axis by ``s(t)`` and tilting about its own x
+    axis by ``-tilt(t)`` also feels the relative acceleration and the
+    Coriolis term, ``R_S^T (s'' y_B + 2 w x s' y_B)``, and turns at the body's
+    rate plus ``-tilt'`` about x.  `fd`, `fdd`: rate and acceleration of the
+    flexion angle in units of 90 deg (1/s, 1/s^2), shape (S,).
+    """
+    r_site = d.site_xmat[site_ids].reshape(-1, 3, 3)
+    y_body = d.xmat[body_of_site].reshape(-1, 3, 3)[:, :, 1]
+    w_world = np.einsum("sij,sj->si", r_site, gyr)
+    v_rel = 1e-3 * skin.slide_mm * fd[:, None] * y_body
+    a_rel = 1e-3 * skin.slide_mm * fdd[:, None] * y_body + 2 * np.cross(w_world, v_rel)
+    acc += np.einsum("sji,sj->si", r_site, a_rel)
+    gyr[:, 0] -= np.radians(skin.tilt_deg) * fd
+
+
+def _fixed_errors(noise: ImuNoise, names, device_seed: int):
+    """Per-sensor fixed errors, one generator per sensor name (order-independent)."""
+    acc, gyr = [], []
+    for name in names:
+        rng = np.random.default_rng([int(device_seed), zlib.crc32(name.encode())])
+        acc.append(draw_fixed_errors(noise.accel, 1, rng))
+        gyr.append(draw_fixed_errors(noise.gyro, 1, rng))
+    return ((np.concatenate([a[0] for a in acc]), np.concatenate([a[1] for a in acc])),
+            (np.concatenate([g[0] for g in gyr]), np.concatenate([g[1] for g in gyr])))
 
 
 def _rot_from_quat(q):

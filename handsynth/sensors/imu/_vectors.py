@@ -18,6 +18,13 @@ rotation) as in eq. 3.10.  One-axis joints pair their rotation with a
 non-parallel rotation of the proximal two-axis joint for the direction and
 use their own rotation alone for the length (Fig. 3.3).
 
+Skin (an addition to the thesis): a sensor whose segment's proximal joint is
+the one rotating slides and tilts with that joint's angle, so eq. 3.10 gives
+its vector at the oscillation's mid-angle, not at the static pose.  With
+``static_pose=True`` the vector is estimated from the turning points nearer
+to and farther from the static pose separately and extrapolated linearly to
+the static pose's angle.
+
 Link vectors (eq. 3.6, 3.11): the link from J1 to J2 measured by sensor S1 is
 R_S1^T R_S2 (S2 P^J1 - S2 P^J2), S2 being the next link's sensor (the
 temporary fingertip sensor for the distal phalanges, minus its height above
@@ -42,7 +49,7 @@ from scipy.signal import savgol_filter
 
 from ...errors import EstimationError, InvalidInputError
 from ._attitude import StaticStart, initial_attitude
-from ._layout import CHAINS, LINKS
+from ._layout import CHAINS, FLEX_JOINT, LINKS
 from ._model import GRAVITY_MPS2
 from ._quat import quat_to_mat
 from ._recording import ImuRecording
@@ -132,41 +139,8 @@ def _rotation_data(rec: ImuRecording, k: int, a: int, b: int, hold: int):
     return gyr_s, dgyr, acc - gs                        # eq. 3.7
 
 
-def rotation_vector(rec: ImuRecording, sensor: str, point: str, *, hold_s: float = 0.5
-                    ) -> VectorEstimate:
-    """Vector from `point` (a joint centre) to `sensor` from calibration rotations.
-
-    Parameters
-    ----------
-    rec : ImuRecording
-        A recording of :func:`calibration_motion` (its truth's ``segments``
-        locate the rotations; recordings from elsewhere pass the same names).
-    sensor : str
-    point : str
-        A key of :data:`ROTATIONS`.
-    hold_s : float, keyword-only
-        Still time at the start of every rotation (gravity and gyro bias).
-
-    Returns
-    -------
-    VectorEstimate
-    """
-    if point not in ROTATIONS:
-        raise InvalidInputError(f"no calibration rotations for {point!r}; expected one of "
-                                f"{', '.join(ROTATIONS)}")
-    segments = rec.labelled()
-    k = rec.index(sensor)
-    hold = max(3, int(hold_s * rec.rate_hz))
-    dir_rot, len_rot = ROTATIONS[point]
-    data = {}
-    for lab in dir_rot:
-        a, b = _segment(segments, lab)
-        data[lab] = _rotation_data(rec, k, a, b, hold)
-    pts = {lab: _turning_points(data[lab][0], data[lab][1]) for lab in dir_rot}
-    for lab, idx in pts.items():
-        if idx.size < 2:
-            raise EstimationError(f"sensor {sensor!r}: rotation {lab!r} has {idx.size} usable "
-                                  "turning points (need >= 2; rotate faster or longer)")
+def _direction_and_length(data: dict, pts: dict, dir_rot, len_rot) -> tuple[np.ndarray, int, float]:
+    """Eqs. 3.2-3.10 on the turning points `pts` (label -> sample indices)."""
     a1 = data[dir_rot[0]][2][pts[dir_rot[0]]]
     a2 = data[dir_rot[1]][2][pts[dir_rot[1]]]
     dw1 = data[dir_rot[0]][1][pts[dir_rot[0]]]
@@ -201,7 +175,71 @@ def rotation_vector(rec: ImuRecording, sensor: str, point: str, *, hold_s: float
     length = float(np.sum(x_all * y) / np.sum(x_all * x_all))
     res = y - length * x_all
     r2 = 1.0 - float(np.sum(res**2) / max(np.sum((y - y.mean()) ** 2), 1e-12))
-    return VectorEstimate(length * u_mean, int(len(u)), r2)            # eq. 3.5
+    return length * u_mean, int(len(u)), r2                             # eq. 3.5
+
+
+def _turned_angle(gyr_s: np.ndarray, rate_hz: float) -> np.ndarray:
+    """Angle turned since the still start about the rotation's main axis, rad."""
+    axis = np.linalg.svd(gyr_s, full_matrices=False)[2][0]
+    return np.cumsum(gyr_s @ axis) / rate_hz
+
+
+def rotation_vector(rec: ImuRecording, sensor: str, point: str, *, hold_s: float = 0.5,
+                    static_pose: bool = True) -> VectorEstimate:
+    """Vector from `point` (a joint centre) to `sensor` from calibration rotations.
+
+    Parameters
+    ----------
+    rec : ImuRecording
+        A recording of :func:`calibration_motion` (its truth's ``segments``
+        locate the rotations; recordings from elsewhere pass the same names).
+    sensor : str
+    point : str
+        A key of :data:`ROTATIONS`.
+    hold_s : float, keyword-only
+        Still time at the start of every rotation (gravity and gyro bias).
+    static_pose : bool, keyword-only
+        For a sensor whose own segment's flexion is the rotation (its skin
+        moves with the angle), estimate the vector twice, from the turning
+        points nearer to and farther from the static pose, and extrapolate
+        linearly to the static pose's angle (an addition to the thesis; the
+        skin moves the sensor, so eq. 3.10 alone gives the vector at the
+        oscillation's mid-angle).  False: eqs. 3.2-3.10 alone.
+
+    Returns
+    -------
+    VectorEstimate
+    """
+    if point not in ROTATIONS:
+        raise InvalidInputError(f"no calibration rotations for {point!r}; expected one of "
+                                f"{', '.join(ROTATIONS)}")
+    segments = rec.labelled()
+    k = rec.index(sensor)
+    hold = max(3, int(hold_s * rec.rate_hz))
+    dir_rot, len_rot = ROTATIONS[point]
+    data = {}
+    for lab in dir_rot:
+        a, b = _segment(segments, lab)
+        data[lab] = _rotation_data(rec, k, a, b, hold)
+    pts = {lab: _turning_points(data[lab][0], data[lab][1]) for lab in dir_rot}
+    for lab, idx in pts.items():
+        if idx.size < 2:
+            raise EstimationError(f"sensor {sensor!r}: rotation {lab!r} has {idx.size} usable "
+                                  "turning points (need >= 2; rotate faster or longer)")
+    vector, pairs, r2 = _direction_and_length(data, pts, dir_rot, len_rot)
+    flex = len_rot[0]
+    if static_pose and FLEX_JOINT.get(sensor) == flex and pts[flex].size >= 4:
+        phi = _turned_angle(data[flex][0], rec.rate_hz)[pts[flex]]
+        near = np.abs(phi) <= np.median(np.abs(phi))
+        ends = []
+        for part in (near, ~near):
+            sub = dict(pts, **{flex: pts[flex][part]})
+            ends.append((_direction_and_length(data, sub, dir_rot, len_rot)[0],
+                         float(phi[part].mean())))
+        (p_near, a_near), (p_far, a_far) = ends
+        if abs(a_far - a_near) > np.radians(10.0):
+            vector = p_near - a_near / (a_far - a_near) * (p_far - p_near)
+    return VectorEstimate(vector, pairs, r2)
 
 
 def _child(sensor: str, dist: str) -> str:
@@ -214,8 +252,11 @@ def _child(sensor: str, dist: str) -> str:
     return dist  # e.g. "index_tip" is also the tip sensor's name
 
 
-def calibrate_vectors(rec: ImuRecording, *, hold_s: float = 0.5) -> dict:
+def calibrate_vectors(rec: ImuRecording, *, hold_s: float = 0.5, static_pose: bool = True
+                      ) -> dict:
     """Every vector the link model and the EKF need, from a calibration recording.
+
+    `hold_s` and `static_pose` as :func:`rotation_vector`.
 
     Returns
     -------
@@ -233,11 +274,12 @@ def calibrate_vectors(rec: ImuRecording, *, hold_s: float = 0.5) -> dict:
             wanted.append((s1, j1))
         for s, p in wanted:
             if (s, p) not in out:
-                out[(s, p)] = rotation_vector(rec, s, p, hold_s=hold_s)
+                out[(s, p)] = rotation_vector(rec, s, p, hold_s=hold_s, static_pose=static_pose)
     # the distal sensors' and tip sensors' own DIP/IP vectors
     for chain in CHAINS.values():
         _, j_prox, tip = chain[-1]
-        out.setdefault((tip, j_prox), rotation_vector(rec, tip, j_prox, hold_s=hold_s))
+        out.setdefault((tip, j_prox), rotation_vector(rec, tip, j_prox, hold_s=hold_s,
+                                                      static_pose=static_pose))
     return out
 
 

@@ -49,3 +49,66 @@ def test_segments_from_seconds():
     assert segments_from_seconds({"static": [0, 2]}, 100.0, 500) == (("static", 0, 200),)
     with pytest.raises(RecordingError, match="must be \\[start_s, end_s\\]"):
         segments_from_seconds({"static": 3}, 100.0, 500)
+
+
+def _sensor_cal(sensors, scale=1.02):
+    from handsynth.sensors.imu import SensorCalibration
+
+    n = len(sensors)
+    return SensorCalibration(tuple(sensors), np.tile(np.eye(3) * scale, (n, 1, 1)),
+                             np.full((n, 3), 0.1), np.tile(np.eye(3) / scale, (n, 1, 1)),
+                             np.zeros(n), np.zeros(n))
+
+
+def test_sensor_calibration_is_stored_and_applied(tmp_path, ideal_rec):
+    model = truth_chain_model(ideal_rec)
+    sensors = tuple(model.own)
+    cal = ImuCalibration(model, {s: np.eye(3) for s in sensors}, np.zeros(20), sensors,
+                         sensor_calibration=_sensor_cal(ideal_rec.sensors))
+    path = cal.save(tmp_path / "c.json")
+    d = json.loads(path.read_text())
+    assert d["version"] == 3 and set(d["sensor_calibration"]) == set(ideal_rec.sensors)
+    back = ImuCalibration.load(path)
+    assert np.array_equal(back.sensor_calibration.acc_matrix, cal.sensor_calibration.acc_matrix)
+    fixed = back.correct(ideal_rec)
+    k, j = ideal_rec.index("index_distal"), fixed.sensors.index("index_distal")
+    assert np.allclose(fixed.acc[j], 1.02 * (ideal_rec.acc[k] - 0.1))
+    assert np.allclose(fixed.gyr[j], ideal_rec.gyr[k] / 1.02)
+    raw = back.correct(ideal_rec, sensor_calibration=False)
+    assert np.array_equal(raw.acc[j], ideal_rec.acc[k])
+
+
+def test_version_2_file_loads_without_sensor_calibration(tmp_path, ideal_rec):
+    model = truth_chain_model(ideal_rec)
+    sensors = tuple(model.own)
+    d = ImuCalibration(model, {s: np.eye(3) for s in sensors}, np.zeros(20), sensors).to_dict()
+    d["version"] = 2
+    p = tmp_path / "v2.json"
+    p.write_text(json.dumps(d))
+    back = ImuCalibration.load(p)
+    assert back.sensor_calibration is None
+    assert np.array_equal(back.correct(ideal_rec).acc[0], ideal_rec.subset(sensors).acc[0])
+
+
+def test_bad_sensor_calibration_in_the_file_is_named(tmp_path, ideal_rec):
+    model = truth_chain_model(ideal_rec)
+    sensors = tuple(model.own)
+    good = ImuCalibration(model, {s: np.eye(3) for s in sensors}, np.zeros(20), sensors,
+                          sensor_calibration=_sensor_cal(ideal_rec.sensors)).to_dict()
+    p = tmp_path / "c.json"
+    d = json.loads(json.dumps(good))
+    d["sensor_calibration"]["thumb_distal"]["acc_matrix"] = [[1, 0], [0, 1]]
+    p.write_text(json.dumps(d))
+    with pytest.raises(RecordingError, match="c.json: sensor_calibration: sensor 'thumb_distal' "
+                                             "'acc_matrix' must be finite with shape"):
+        ImuCalibration.load(p)
+    d = json.loads(json.dumps(good))
+    del d["sensor_calibration"]["forearm_2"]
+    p.write_text(json.dumps(d))
+    with pytest.raises(RecordingError, match="sensor_calibration lacks sensor\\(s\\) forearm_2"):
+        ImuCalibration.load(p)
+    d = json.loads(json.dumps(good))
+    d["version"] = 9
+    p.write_text(json.dumps(d))
+    with pytest.raises(RecordingError, match="version 9 is newer"):
+        ImuCalibration.load(p)
