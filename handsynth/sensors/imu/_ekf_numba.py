@@ -6,6 +6,7 @@ import numpy as np
 from numba import njit
 
 from ._model import GRAVITY_MPS2
+from ._quat_numba import _qexp, _qmat, _qmul
 
 __all__ = ["observe_fast"]
 
@@ -125,31 +126,6 @@ def observe_fast(tree, r, w, dw, a, mag, mh, fnorm0, rz, fast, options):
                    np.ascontiguousarray(dw), np.ascontiguousarray(a), np.ascontiguousarray(mag),
                    mh, fnorm0, rz, np.ascontiguousarray(fast), o.use_h2,
                    o.switch_dps is not None, o.acc_sd, o.demoted, o.mag_sd, o.mag_gate)
-
-
-@njit(cache=True)
-def _qmul(a, b):
-    return np.array([a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
-                     a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
-                     a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
-                     a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0]])
-
-
-@njit(cache=True)
-def _qexp(v):
-    ang = np.sqrt(np.sum(v * v))
-    if ang < 1e-12:
-        return np.array([1.0, 0.5 * v[0], 0.5 * v[1], 0.5 * v[2]])
-    s = np.sin(0.5 * ang) / ang
-    return np.array([np.cos(0.5 * ang), s * v[0], s * v[1], s * v[2]])
-
-
-@njit(cache=True)
-def _qmat(q):
-    w, x, y, z = q[0], q[1], q[2], q[3]
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
 
 
 @njit(cache=True)

@@ -40,6 +40,7 @@ from numba import njit
 from ...errors import InvalidInputError
 from ._attitude import StaticStart, gyro_bias, initial_attitude
 from ._model import GRAVITY_MPS2
+from ._quat_numba import _qexp, _qmat, _qmul
 from ._recording import ImuRecording
 
 __all__ = ["GatedFilter", "GatedOptions", "gated_orientation"]
@@ -101,7 +102,7 @@ def _kernel(q0, gyr, acc, mag, b0, dt, g, acc_k, mag_k, bias_k, acc_tol, rate_ga
     q = q0.copy()
     b = b0.copy()
     # the field at the start, in the world: strength, dip, horizontal direction
-    m_ref = _rot(q, mag[0])
+    m_ref = _qmat(q) @ mag[0]
     f_ref = math.sqrt(m_ref[0] ** 2 + m_ref[1] ** 2 + m_ref[2] ** 2)
     dip_ref = math.atan2(m_ref[2], math.hypot(m_ref[0], m_ref[1]))
     psi_ref = math.atan2(m_ref[1], m_ref[0])
@@ -114,14 +115,14 @@ def _kernel(q0, gyr, acc, mag, b0, dt, g, acc_k, mag_k, bias_k, acc_tol, rate_ga
         a_len = math.sqrt(acc[i, 0] ** 2 + acc[i, 1] ** 2 + acc[i, 2] ** 2)
         calm = abs(a_len - g) < acc_tol
         if calm and speed < rate_gate and a_len > 0:
-            a_w = _rot(q, acc[i]) / a_len
+            a_w = (_qmat(q) @ acc[i]) / a_len
             # rotation taking the measured up toward the world's up (0, 0, 1)
             axis = np.array([a_w[1], -a_w[0], 0.0])
             s = math.sqrt(axis[0] ** 2 + axis[1] ** 2)
             if s > 1e-12:
                 angle = math.atan2(s, a_w[2]) * acc_k
                 q = _qmul(_qexp(axis / s * angle), q)
-        m_w = _rot(q, mag[i])
+        m_w = _qmat(q) @ mag[i]
         f = math.sqrt(m_w[0] ** 2 + m_w[1] ** 2 + m_w[2] ** 2)
         if f > 0 and abs(f / f_ref - 1.0) < mag_tol:
             dip = math.atan2(m_w[2], math.hypot(m_w[0], m_w[1]))
@@ -139,33 +140,6 @@ def _kernel(q0, gyr, acc, mag, b0, dt, g, acc_k, mag_k, bias_k, acc_tol, rate_ga
         q = q / math.sqrt(q[0] ** 2 + q[1] ** 2 + q[2] ** 2 + q[3] ** 2)
         out[i] = q
     return out
-
-
-@njit(cache=True)
-def _qmul(a, b):
-    return np.array([a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
-                     a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
-                     a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
-                     a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0]])
-
-
-@njit(cache=True)
-def _qexp(v):
-    angle = math.sqrt(v[0] ** 2 + v[1] ** 2 + v[2] ** 2)
-    if angle < 1e-12:
-        return np.array([1.0, 0.5 * v[0], 0.5 * v[1], 0.5 * v[2]])
-    s = math.sin(0.5 * angle) / angle
-    return np.array([math.cos(0.5 * angle), s * v[0], s * v[1], s * v[2]])
-
-
-@njit(cache=True)
-def _rot(q, v):
-    """G_R_S v for a unit quaternion (w, x, y, z)."""
-    w, x, y, z = q[0], q[1], q[2], q[3]
-    return np.array([
-        (1 - 2 * (y * y + z * z)) * v[0] + 2 * (x * y - w * z) * v[1] + 2 * (x * z + w * y) * v[2],
-        2 * (x * y + w * z) * v[0] + (1 - 2 * (x * x + z * z)) * v[1] + 2 * (y * z - w * x) * v[2],
-        2 * (x * z - w * y) * v[0] + 2 * (y * z + w * x) * v[1] + (1 - 2 * (x * x + y * y)) * v[2]])
 
 
 #: The compiled loop; ``_kernel`` itself is the plain reference (it calls the
