@@ -67,8 +67,8 @@ def imu() -> None:
               help="Elbow condition(s) (default both).")
 @click.option("--no-grasps", is_flag=True, help="Skip the grasp classification.")
 @click.option("--no-sensor-calibration", is_flag=True,
-              help="Leave the trials uncorrected (the accelerometer/gyro calibration is "
-                   "applied to every trial by default).")
+              help="Leave the trials uncorrected (the accelerometer/gyro/magnetometer "
+                   "calibration is applied to every trial by default).")
 @click.option("--json", "json_out", type=click.Path(dir_okay=False), required=True,
               help="Write the full report as JSON.")
 @click.option("--plots", "plot_dir", type=click.Path(file_okay=False),
@@ -150,10 +150,12 @@ def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz
                         for (s, a, b), v in cal.model.links.items() if s.startswith("index"))
     click.echo(f"calibrated {len(cal.sensors)} sensors -> {out_path}; index links: {lengths}")
     sc = cal.sensor_calibration
-    click.echo("accelerometer/gyro calibration: " + (
+    click.echo("accelerometer/gyro/magnetometer calibration: " + (
         "none (no static poses acc_pose_<k> in the segments)" if sc is None else
         f"{len(sc.sensors)} sensors, largest accelerometer residual "
-        f"{float(sc.acc_residual_mps2.max()):.3f} m/s^2 (stored; 'track' applies it)"))
+        f"{float(sc.acc_residual_mps2.max()):.3f} m/s^2, largest magnetometer residual "
+        f"{float(sc.mag_residual.max()) if sc.mag_residual is not None else 0.0:.2%} "
+        "(stored; 'track' applies it)"))
 
 
 @imu.command()
@@ -176,7 +178,8 @@ def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz
               help="CSV of fingertip positions from the elbow centre, mm, in the world frame "
                    "of the initial attitude (eq. 3.12; needs --calibration).")
 @click.option("--no-sensor-calibration", is_flag=True,
-              help="Do not apply the calibration file's accelerometer/gyro corrections "
+              help="Do not apply the calibration file's accelerometer/gyro/magnetometer "
+                   "corrections "
                    "(for readings already corrected).")
 def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_units, rate_hz,
           static_s, align, out_path, angles_out, tips_out, no_sensor_calibration) -> None:
@@ -217,7 +220,7 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
         res = cal.track(rec, static=static, sensor_calibration=not no_sensor_calibration)
         q, sensors, name = res["quat"], cal.sensors, "filter4"
         if res["sensor_calibration"]:
-            name += ", accelerometer/gyro calibration applied"
+            name += ", sensor calibration applied"
         if angles_out:
             _write_table(angles_out, ["time_s", *JOINT_NAMES], np.column_stack([t, res["angles"]]))
         if tips_out:

@@ -30,7 +30,9 @@ def test_track_csv_writes_quaternions(tmp_path, sim):
     from handsynth.sensors.imu._quat import angle_deg
 
     err = angle_deg(q, sim.truth.quat[[0, 16]])
-    assert np.sqrt(np.mean(err**2)) < 5.0
+    # two uncalibrated compasses (4.5 deg azimuth s.d., 1 uT hard iron) leave about
+    # 5 deg of common heading error; a wrong column order or convention gives tens
+    assert np.sqrt(np.mean(err**2)) < 8.0
 
 
 def test_track_wrong_units_is_one_line(tmp_path, sim):
@@ -133,10 +135,10 @@ def test_calibrate_then_track_joint_angles(tmp_path):
     res = CliRunner().invoke(cli, ["imu", "calibrate", str(cal_csv), "--segments", str(seg_json),
                                    "--out", str(model)])
     assert res.exit_code == 0, res.output
-    assert "accelerometer/gyro calibration: 25 sensors" in res.output
+    assert "accelerometer/gyro/magnetometer calibration: 25 sensors" in res.output
     # the file holds corrections that undo the sensors' own errors
     stored = json.loads(model.read_text())
-    assert stored["version"] == 3 and len(stored["sensor_calibration"]) == 25
+    assert stored["version"] == 4 and len(stored["sensor_calibration"]) == 25
     (m_acc, b_acc), (m_gyr, _) = _fixed_errors(MPU9250_DATASHEET, cal.sensors, 5)
     ratio: dict = {"acc": [], "gyr": [], "bias": []}
     for k, s in enumerate(cal.sensors):
@@ -160,7 +162,7 @@ def test_calibrate_then_track_joint_angles(tmp_path):
                                    "--align", "2,4", "--out", str(q_csv), "--angles-out", str(ang_csv),
                                    "--tips-out", str(tmp_path / "tips.csv")])
     assert res.exit_code == 0, res.output
-    assert "accelerometer/gyro calibration applied" in res.output
+    assert "sensor calibration applied" in res.output
     with open(tmp_path / "tips.csv", encoding="utf-8") as fh:
         header = fh.readline().strip().split(",")
     assert header[:4] == ["time_s", "thumb_tip_x_mm", "thumb_tip_y_mm", "thumb_tip_z_mm"]
@@ -182,7 +184,7 @@ def test_calibrate_then_track_joint_angles(tmp_path):
     # against a constant answer (the first frame held) the error is far larger
     const = ang[400:400 + 1] - rec.truth.angles[400:, 9:]
     assert np.sqrt(np.mean(err[:, j] ** 2)) < 0.3 * np.sqrt(np.mean(const[:, j] ** 2))
-    # the same recording without the stored accelerometer/gyro calibration: worse angles
+    # the same recording without the stored sensor calibration: worse angles
     raw_csv = tmp_path / "a_raw.csv"
     res = CliRunner().invoke(cli, ["imu", "track", str(rec_csv), "--calibration", str(model),
                                    "--align", "2,4", "--out", str(q_csv), "--angles-out",

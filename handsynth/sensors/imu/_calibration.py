@@ -32,9 +32,9 @@ from ._vectors import ChainModel, chain_model
 
 __all__ = ["ImuCalibration", "calibrate", "segments_from_seconds"]
 
-# 2: the thumb CMC axes; 3: the accelerometer/gyro calibration (older files
-# load without them)
-_VERSION = 3
+# 2: the thumb CMC axes; 3: the accelerometer/gyro calibration; 4: the
+# magnetometer calibration (older files load without them)
+_VERSION = 4
 
 
 def segments_from_seconds(spans: dict, rate_hz: float, n: int) -> tuple:
@@ -109,7 +109,7 @@ class ImuCalibration:
             Raw readings of (at least) the calibrated sensors.
         static : StaticStart, keyword-only
         sensor_calibration : bool, keyword-only
-            Apply the stored accelerometer/gyro calibration first (False:
+            Apply the stored accelerometer/gyro/magnetometer calibration first (False:
             `rec` is already corrected).
 
         Returns

@@ -11,10 +11,10 @@ Two simulator configurations:
   and skin motion (:class:`SkinMotion`).  Nothing was tuned on it.
 
 Every recording of one configuration is made with the same physical
-sensors (``device_seed``): their scale/cross-axis errors and turn-on biases
-are fixed, so the accelerometer/gyro calibration fitted on the calibration
-recording is applied to every trial (``sensor_calibration=False`` leaves the
-trials uncorrected).
+sensors (``device_seed``): their scale/cross-axis errors, turn-on biases and
+magnetometer hard and soft iron are fixed, so the accelerometer, gyro and
+magnetometer calibration fitted on the calibration recording is applied to
+every trial (``sensor_calibration=False`` leaves the trials uncorrected).
 
 Each trial is a free motion of 15 or 30 s with the elbow fixed or moving
 (as the thesis' section 4.4); orientation RMSE is per segment over the
@@ -152,7 +152,7 @@ def _calibrate(config: SimConfig, placement: ImuPlacement):
     quiet = dataclasses.replace(config.noise, disturbances=())
     cal = simulate_imu(calibration_motion(acc_poses=True), hand=hand, noise=quiet,
                        skin=config.skin, seed=config.seed + 7, device_seed=_device_seed(config))
-    # accelerometer and gyro scale/cross-axis from the static poses, kept in
+    # accelerometer, gyro and magnetometer corrections from the static poses, kept in
     # the calibration for the later recordings of the same sensors
     calib = calibrate(cal)
     sensor_cal = calib.sensor_calibration
@@ -292,7 +292,7 @@ def evaluate(config: SimConfig = HELDOUT, *, durations=(15.0, 30.0), elbows=("fi
     speed : float, keyword-only
         Frequency scale of the free motions.
     sensor_calibration : bool, keyword-only
-        Apply the accelerometer/gyro calibration to every trial (it is
+        Apply the accelerometer/gyro/magnetometer calibration to every trial (it is
         always applied to the calibration recording itself).
     series : dict, keyword-only
         Filled with the last trial's error time series and a stick-figure

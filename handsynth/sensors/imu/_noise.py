@@ -135,6 +135,10 @@ class MagNoise:
     azimuth_sd_deg : float
         s.d. of a per-sensor rotation of the magnetometer axes about the
         sensor z axis (the between-sensor azimuth spread, seed 003 Table 4.2).
+    hard_iron_repeatability_ut : float
+        s.d. of the hard iron's change per axis between two recordings of
+        the same physical sensor (an assumption: the AK8963 datasheet gives
+        no figure).
     full_scale_ut, lsb_ut : float
     """
 
@@ -142,6 +146,7 @@ class MagNoise:
     hard_iron_ut: float = 1.0
     soft_iron: float = 0.02
     azimuth_sd_deg: float = 4.5
+    hard_iron_repeatability_ut: float = 0.2
     full_scale_ut: float = 4800.0
     lsb_ut: float = 0.15
 
@@ -208,7 +213,8 @@ EVAL_NOISE = ImuNoise(
                     bias_repeatability=0.005 * _G,
                     scale_error=0.02, cross_axis=0.01, full_scale=16 * _G,
                     lsb=16 * _G / 32768),
-    mag=MagNoise(white_ut=0.5, hard_iron_ut=2.0, soft_iron=0.04, azimuth_sd_deg=6.0),
+    mag=MagNoise(white_ut=0.5, hard_iron_ut=2.0, soft_iron=0.04, azimuth_sd_deg=6.0,
+                 hard_iron_repeatability_ut=0.5),
     disturbances=(MagDisturbance(14.0, 19.0, (12.0, -8.0, 6.0)),),
     label="eval-heldout",
 )

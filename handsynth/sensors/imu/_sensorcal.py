@@ -23,6 +23,19 @@ nine entries' combinations; a weak prior (`prior`) keeps the combinations
 that no move excites at the identity.  The gyro bias is the mean over the
 pose before each move.
 
+The magnetometer reads ``m_m = M B_s + h`` with the sensor-frame field B_s,
+a hard-iron offset h and a matrix M holding soft iron and the rotation of
+the magnetometer's axes against the accelerometer's (the between-sensor
+azimuth spread of seed 003 Table 4.2).  In every still pose the corrected
+reading ``D (m_m - h)`` has the same length and the same angle to gravity
+(the local field does not turn with the hand); D (a full 3x3 matrix) and h
+follow by least squares on both (the dot-product invariant of Li & Li,
+"Calibration of a MEMS magnetometer using the dot product invariant", IEEE
+Sensors J. 11:3000-3006, 2011, fitted here without a separate
+accelerometer step since the accelerometer is already calibrated).  A
+rotation of D about the sensor's z axis changes the angle to gravity only
+in poses where that axis is tilted, so the poses must tilt the hand.
+
 Poses come from :func:`calibration_motion` with ``acc_poses=True``: the
 static start and stretches labelled ``acc_pose_<k>``, nine or more.
 """
@@ -51,7 +64,7 @@ _IU = np.triu_indices(3)
 
 @dataclass(frozen=True)
 class SensorCalibration:
-    """Corrections ``a = C (a_m - b)`` and ``w = G w_m`` of every sensor.
+    """Corrections ``a = C (a_m - b)``, ``w = G w_m``, ``m = D (m_m - h)`` of every sensor.
 
     Attributes
     ----------
@@ -67,6 +80,15 @@ class SensorCalibration:
         RMS of ``|C (a_m,k - b)| - g`` over the poses.
     gyr_residual : ndarray, shape (S,), float64
         RMS misfit of the unit gravity direction after each move.
+    mag_matrix : ndarray, shape (S, 3, 3), float64 or None
+        Magnetometer correction D, dimensionless (the corrected field keeps
+        the raw readings' median length).  None: the magnetometers are left
+        as read (calibration files before version 4).
+    mag_bias_ut : ndarray, shape (S, 3), float64 or None
+        Hard iron h, microtesla.
+    mag_residual : ndarray, shape (S,), float64 or None
+        RMS over the poses of the corrected field's length and
+        gravity-angle-cosine misfits, relative to the field's length.
     """
 
     sensors: tuple
@@ -75,9 +97,14 @@ class SensorCalibration:
     gyr_matrix: np.ndarray
     acc_residual_mps2: np.ndarray
     gyr_residual: np.ndarray
+    mag_matrix: np.ndarray | None = None
+    mag_bias_ut: np.ndarray | None = None
+    mag_residual: np.ndarray | None = None
 
     def apply(self, rec: ImuRecording, *, gyro: bool = True) -> ImuRecording:
-        """`rec` with corrected accelerometer (and gyro) readings, sensors matched by name.
+        """`rec` with corrected accelerometer, magnetometer (and gyro) readings.
+
+        Sensors are matched by name.
 
         Any recording of the same physical sensors can be corrected, the
         calibration recording or a later one; the gyro bias is left in (the
@@ -97,21 +124,27 @@ class SensorCalibration:
         acc = np.einsum("sij,snj->sni", self.acc_matrix[idx],
                         rec.acc - self.acc_bias_mps2[idx][:, None, :])
         gyr = np.einsum("sij,snj->sni", self.gyr_matrix[idx], rec.gyr) if gyro else rec.gyr
-        return dataclasses.replace(rec, acc=acc, gyr=gyr)
+        mag = rec.mag
+        if self.mag_matrix is not None and self.mag_bias_ut is not None:
+            mag = np.einsum("sij,snj->sni", self.mag_matrix[idx],
+                            rec.mag - self.mag_bias_ut[idx][:, None, :])
+        return dataclasses.replace(rec, acc=acc, gyr=gyr, mag=mag)
 
 
     def to_dict(self) -> dict:
         """JSON-ready ``{sensor: {field: list}}``."""
-        return {s: {"acc_matrix": self.acc_matrix[k].tolist(),
-                    "acc_bias_mps2": self.acc_bias_mps2[k].tolist(),
-                    "gyr_matrix": self.gyr_matrix[k].tolist(),
-                    "acc_residual_mps2": float(self.acc_residual_mps2[k]),
-                    "gyr_residual": float(self.gyr_residual[k])}
-                for k, s in enumerate(self.sensors)}
+        out = {}
+        for k, s in enumerate(self.sensors):
+            out[s] = {key: getattr(self, key)[k].tolist() for key in _SHAPES
+                      if getattr(self, key) is not None}
+        return out
 
     @classmethod
     def from_dict(cls, d: dict, *, source: str = "sensor calibration") -> SensorCalibration:
         """Inverse of :meth:`to_dict`; `source` names the origin in errors.
+
+        The magnetometer fields are optional (files before version 4 lack
+        them), but all three or none.
 
         Raises
         ------
@@ -120,23 +153,37 @@ class SensorCalibration:
         """
         if not isinstance(d, dict) or not d:
             raise InvalidInputError(f"{source}: expected an object of sensor: fields")
-        shapes = {"acc_matrix": (3, 3), "acc_bias_mps2": (3,), "gyr_matrix": (3, 3),
-                  "acc_residual_mps2": (), "gyr_residual": ()}
-        out: dict[str, list] = {k: [] for k in shapes}
+        out: dict[str, list] = {k: [] for k in _SHAPES}
         for sensor, fields in d.items():
-            for key, shape in shapes.items():
-                if not isinstance(fields, dict) or key not in fields:
+            if not isinstance(fields, dict):
+                raise InvalidInputError(f"{source}: sensor {sensor!r}: expected an object, "
+                                        f"got {fields!r}")
+            keys = [k for k in _SHAPES if k not in _MAG or any(m in fields for m in _MAG)]
+            for key in keys:
+                if key not in fields:
                     raise InvalidInputError(f"{source}: sensor {sensor!r} lacks {key!r}")
                 try:
                     v = np.array(fields[key], float)
                 except (TypeError, ValueError):
                     raise InvalidInputError(f"{source}: sensor {sensor!r} {key!r} is not "
                                             f"numeric: {fields[key]!r}") from None
-                if v.shape != shape or not np.all(np.isfinite(v)):
+                if v.shape != _SHAPES[key] or not np.all(np.isfinite(v)):
                     raise InvalidInputError(f"{source}: sensor {sensor!r} {key!r} must be "
-                                            f"finite with shape {shape}, got {fields[key]!r}")
+                                            f"finite with shape {_SHAPES[key]}, got "
+                                            f"{fields[key]!r}")
                 out[key].append(v)
-        return cls(tuple(d), *(np.array(out[k]) for k in shapes))
+        with_mag = {len(out[k]) for k in _MAG}
+        if with_mag != {0} and with_mag != {len(d)}:
+            raise InvalidInputError(f"{source}: the magnetometer fields ({', '.join(_MAG)}) "
+                                    "are given for some sensors only")
+        mag = {k: np.array(out[k]) for k in _MAG if out[k]}
+        return cls(tuple(d), *(np.array(out[k]) for k in _SHAPES if k not in _MAG), **mag)
+
+
+_SHAPES = {"acc_matrix": (3, 3), "acc_bias_mps2": (3,), "gyr_matrix": (3, 3),
+           "acc_residual_mps2": (), "gyr_residual": (), "mag_matrix": (3, 3),
+           "mag_bias_ut": (3,), "mag_residual": ()}
+_MAG = ("mag_matrix", "mag_bias_ut", "mag_residual")
 
 
 def _poses(rec: ImuRecording) -> list[tuple[int, int]]:
@@ -166,6 +213,23 @@ def _fit_acc(means: np.ndarray, g: float, prior: float) -> tuple[np.ndarray, np.
     return c, b, float(np.sqrt(np.mean(residual(sol.x) ** 2)))
 
 
+def _fit_mag(mag: np.ndarray, up: np.ndarray, prior: float
+             ) -> tuple[np.ndarray, np.ndarray, float]:
+    """D and h from the pose means `mag` (K, 3) and unit up directions `up` (K, 3)."""
+    scale = float(np.median(np.linalg.norm(mag, axis=1)))
+    m = mag / scale
+    x0 = np.r_[np.eye(3).ravel(), 0.0, 0.0, 0.0, np.mean(np.sum(m * up, axis=1))]
+
+    def residual(x):
+        f = (m - x[9:12]) @ x[:9].reshape(3, 3).T
+        return np.r_[np.linalg.norm(f, axis=1) - 1.0, np.sum(f * up, axis=1) - x[12]]
+
+    sol = least_squares(lambda x: np.r_[residual(x), prior * (x[:12] - x0[:12])], x0,
+                        method="lm")
+    return (sol.x[:9].reshape(3, 3), sol.x[9:12] * scale,
+            float(np.sqrt(np.mean(residual(sol.x) ** 2))))
+
+
 def _fit_gyr(moves: np.ndarray, u0: np.ndarray, u1: np.ndarray, rate_hz: float,
              prior: float) -> tuple[np.ndarray, float]:
     q0 = np.tile([1.0, 0.0, 0.0, 0.0], (len(moves), 1))
@@ -180,9 +244,10 @@ def _fit_gyr(moves: np.ndarray, u0: np.ndarray, u1: np.ndarray, rate_hz: float,
 
 
 def fit_sensor_calibration(rec: ImuRecording, *, skip_s: float = 0.3, prior: float = 0.01,
-                           acc_prior: float = 0.03, max_correction: float = 0.15
+                           acc_prior: float = 0.03, mag_prior: float = 0.01,
+                           max_correction: float = 0.15, mag_max_correction: float = 0.4
                            ) -> SensorCalibration:
-    """Fit accelerometer scale, cross-axis and bias, and gyro scale and cross-axis.
+    """Fit accelerometer, gyro and magnetometer corrections from still poses.
 
     Parameters
     ----------
@@ -198,9 +263,16 @@ def fit_sensor_calibration(rec: ImuRecording, *, skip_s: float = 0.3, prior: flo
         identity and zero (m/s^2 of misfit per unit).  The forearm plate's
         poses leave one combination of bias and scale nearly unseen; without
         the pull it follows the noise (chosen on the datasheet noise).
+    mag_prior : float, keyword-only
+        Weight of the magnetometer matrix's and hard iron's pull toward the
+        identity and zero (per unit of relative misfit; hard iron in units
+        of the field's length).
     max_correction : float, keyword-only
         Largest accepted deviation of C or G from the identity (any
         element); a larger one means the poses were not still or not varied.
+    mag_max_correction : float, keyword-only
+        The same for D (soft iron and the magnetometer's axis rotation are
+        larger than the accelerometer's errors).
 
     Returns
     -------
@@ -223,8 +295,9 @@ def fit_sensor_calibration(rec: ImuRecording, *, skip_s: float = 0.3, prior: flo
     spans = [(first + skip, end) for first, end in poses]
     means = np.stack([rec.acc[:, i:j].mean(axis=1) for i, j in spans], axis=1)   # (S, K, 3)
     wbias = np.stack([rec.gyr[:, i:j].mean(axis=1) for i, j in spans], axis=1)
+    mmeans = np.stack([rec.mag[:, i:j].mean(axis=1) for i, j in spans], axis=1)
     length = max(b1 - (b0 - 1) for (_, b0), (_, b1) in zip(poses[:-1], spans[1:]))
-    out: dict[str, list] = {"c": [], "b": [], "g": [], "rc": [], "rg": []}
+    out: dict[str, list] = {k: [] for k in _SHAPES}
     for k, name in enumerate(rec.sensors):
         c, b, rc = _fit_acc(means[k], GRAVITY_MPS2, acc_prior)
         up = (means[k] - b) @ c.T
@@ -234,13 +307,15 @@ def fit_sensor_calibration(rec: ImuRecording, *, skip_s: float = 0.3, prior: flo
             w = rec.gyr[k, b0 - 1:a1] - wbias[k, m]
             moves[m, :len(w)] = w                       # zero-padded: no rotation after
         g, rg = _fit_gyr(moves, up[:-1], up[1:], rec.rate_hz, prior)
-        for label, mat in (("accelerometer", c), ("gyro", g)):
+        d, h, rm = _fit_mag(mmeans[k], up, mag_prior)
+        for label, mat, most in (("accelerometer", c, max_correction),
+                                 ("gyro", g, max_correction),
+                                 ("magnetometer", d, mag_max_correction)):
             dev = float(np.abs(mat - np.eye(3)).max())
-            if not np.isfinite(dev) or dev > max_correction:
+            if not np.isfinite(dev) or dev > most:
                 raise EstimationError(
                     f"sensor {name!r}: {label} calibration deviates {dev:.3g} from the identity "
-                    f"(max_correction={max_correction}); poses not still or not varied")
-        for key, v in zip(("c", "b", "g", "rc", "rg"), (c, b, g, rc, rg)):
+                    f"(limit {most}); poses not still or not varied")
+        for key, v in zip(_SHAPES, (c, b, g, rc, rg, d, h, rm)):
             out[key].append(v)
-    return SensorCalibration(tuple(rec.sensors), np.array(out["c"]), np.array(out["b"]),
-                             np.array(out["g"]), np.array(out["rc"]), np.array(out["rg"]))
+    return SensorCalibration(tuple(rec.sensors), **{k: np.array(v) for k, v in out.items()})

@@ -65,7 +65,10 @@ def simulate_imu(motion: Motion, *, shape: HandShape | None = None, side: str = 
         the sensor's name, so recordings with the same `device_seed` (a
         calibration and later tracking) share them, whichever sensors they
         hold.  None draws them from `seed` (new sensors every recording).
-        The magnetometer's errors are drawn from `seed` either way.
+        The magnetometer's hard iron, soft iron and axis rotation belong to
+        the physical sensor too (drawn from `device_seed` when given); its
+        hard iron also changes by ``hard_iron_repeatability_ut`` at every
+        recording.
     hand : ImuHand, keyword-only
         A compiled hand to reuse.
 
@@ -150,7 +153,7 @@ def simulate_imu(motion: Motion, *, shape: HandShape | None = None, side: str = 
             fixed_acc, fixed_gyr = _fixed_errors(noise, names, device_seed)
         acc = apply_axis_noise(acc, noise.accel, motion.rate_hz, rng, fixed=fixed_acc)
         gyr = apply_axis_noise(gyr, noise.gyro, motion.rate_hz, rng, fixed=fixed_gyr)
-        mag = _mag_noise(mag, quat, noise, motion.rate_hz, rng, names)
+        mag = _mag_noise(mag, quat, noise, motion.rate_hz, rng, names, device_seed)
     truth = ImuTruth(quat=quat, sensor_pos=spos, keypoints=pts, elbow=pts[:, 0].copy(),
                      angles=motion.q.copy(), joint_vectors=vectors, segments=motion.segments)
     return ImuRecording(motion.rate_hz, names, acc, gyr, mag, truth)
@@ -195,7 +198,19 @@ def _rot_from_quat(q):
     ], -2)
 
 
-def _mag_noise(mag, quat, noise: ImuNoise, rate_hz: float, rng, names) -> np.ndarray:
+def _mag_fixed(mn, s: int, rng) -> tuple[np.ndarray, np.ndarray]:
+    """Axis rotation times soft iron (S, 3, 3) and hard iron (S, 3) of S magnetometers."""
+    ang = np.radians(rng.normal(0.0, mn.azimuth_sd_deg, s))
+    c, si = np.cos(ang), np.sin(ang)
+    rz = np.zeros((s, 3, 3))
+    rz[:, 0, 0], rz[:, 0, 1], rz[:, 1, 0], rz[:, 1, 1], rz[:, 2, 2] = c, -si, si, c, 1.0
+    soft = rng.normal(0.0, mn.soft_iron, (s, 3, 3))
+    soft = np.eye(3) + 0.5 * (soft + soft.transpose(0, 2, 1))
+    return soft @ rz, rng.normal(0.0, mn.hard_iron_ut, (s, 3))
+
+
+def _mag_noise(mag, quat, noise: ImuNoise, rate_hz: float, rng, names,
+               device_seed: int | None = None) -> np.ndarray:
     mn = noise.mag
     s, n, _ = mag.shape
     t = np.arange(n) / rate_hz
@@ -209,14 +224,15 @@ def _mag_noise(mag, quat, noise: ImuNoise, rate_hz: float, rng, names) -> np.nda
         extra = np.einsum("snji,j->sni", r, np.asarray(dist.field_ut, float)) * w[None, :, None]
         mask = np.array([not dist.sensors or name in dist.sensors for name in names])
         mag = mag + extra * mask[:, None, None]
-    ang = np.radians(rng.normal(0.0, mn.azimuth_sd_deg, s))
-    c, si = np.cos(ang), np.sin(ang)
-    rz = np.zeros((s, 3, 3))
-    rz[:, 0, 0], rz[:, 0, 1], rz[:, 1, 0], rz[:, 1, 1], rz[:, 2, 2] = c, -si, si, c, 1.0
-    soft = rng.normal(0.0, mn.soft_iron, (s, 3, 3))
-    soft = np.eye(3) + 0.5 * (soft + soft.transpose(0, 2, 1))
-    y = np.einsum("sij,sjk,snk->sni", soft, rz, mag)
-    y += rng.normal(0.0, mn.hard_iron_ut, (s, 1, 3))
+    if device_seed is None:
+        matrix, hard = _mag_fixed(mn, s, rng)
+    else:
+        per = [_mag_fixed(mn, 1, np.random.default_rng(
+            [int(device_seed), zlib.crc32(name.encode()), 1])) for name in names]
+        matrix = np.concatenate([p[0] for p in per])
+        hard = np.concatenate([p[1] for p in per])
+    y = np.einsum("sij,snj->sni", matrix, mag)
+    y += (hard + rng.normal(0.0, mn.hard_iron_repeatability_ut, (s, 3)))[:, None, :]
     y += rng.normal(0.0, mn.white_ut, y.shape)
     y = np.clip(y, -mn.full_scale_ut, mn.full_scale_ut)
     if mn.lsb_ut > 0:

@@ -51,13 +51,15 @@ def test_segments_from_seconds():
         segments_from_seconds({"static": 3}, 100.0, 500)
 
 
-def _sensor_cal(sensors, scale=1.02):
+def _sensor_cal(sensors, scale=1.02, mag=True):
     from handsynth.sensors.imu import SensorCalibration
 
     n = len(sensors)
+    extra = dict(mag_matrix=np.tile(np.eye(3) * 0.97, (n, 1, 1)), mag_bias_ut=np.full((n, 3), 1.5),
+                 mag_residual=np.zeros(n)) if mag else {}
     return SensorCalibration(tuple(sensors), np.tile(np.eye(3) * scale, (n, 1, 1)),
                              np.full((n, 3), 0.1), np.tile(np.eye(3) / scale, (n, 1, 1)),
-                             np.zeros(n), np.zeros(n))
+                             np.zeros(n), np.zeros(n), **extra)
 
 
 def test_sensor_calibration_is_stored_and_applied(tmp_path, ideal_rec):
@@ -67,15 +69,33 @@ def test_sensor_calibration_is_stored_and_applied(tmp_path, ideal_rec):
                          sensor_calibration=_sensor_cal(ideal_rec.sensors))
     path = cal.save(tmp_path / "c.json")
     d = json.loads(path.read_text())
-    assert d["version"] == 3 and set(d["sensor_calibration"]) == set(ideal_rec.sensors)
+    assert d["version"] == 4 and set(d["sensor_calibration"]) == set(ideal_rec.sensors)
     back = ImuCalibration.load(path)
     assert np.array_equal(back.sensor_calibration.acc_matrix, cal.sensor_calibration.acc_matrix)
     fixed = back.correct(ideal_rec)
     k, j = ideal_rec.index("index_distal"), fixed.sensors.index("index_distal")
     assert np.allclose(fixed.acc[j], 1.02 * (ideal_rec.acc[k] - 0.1))
     assert np.allclose(fixed.gyr[j], ideal_rec.gyr[k] / 1.02)
+    assert np.allclose(fixed.mag[j], 0.97 * (ideal_rec.mag[k] - 1.5))
     raw = back.correct(ideal_rec, sensor_calibration=False)
     assert np.array_equal(raw.acc[j], ideal_rec.acc[k])
+
+
+def test_version_3_file_leaves_the_magnetometers_as_read(tmp_path, ideal_rec):
+    model = truth_chain_model(ideal_rec)
+    sensors = tuple(model.own)
+    d = ImuCalibration(model, {s: np.eye(3) for s in sensors}, np.zeros(20), sensors,
+                       sensor_calibration=_sensor_cal(ideal_rec.sensors, mag=False)).to_dict()
+    assert "mag_matrix" not in d["sensor_calibration"]["index_distal"]
+    d["version"] = 3
+    p = tmp_path / "v3.json"
+    p.write_text(json.dumps(d))
+    back = ImuCalibration.load(p)
+    assert back.sensor_calibration.mag_matrix is None
+    fixed = back.correct(ideal_rec)
+    k, j = ideal_rec.index("index_distal"), fixed.sensors.index("index_distal")
+    assert np.array_equal(fixed.mag[j], ideal_rec.mag[k])
+    assert np.allclose(fixed.acc[j], 1.02 * (ideal_rec.acc[k] - 0.1))
 
 
 def test_version_2_file_loads_without_sensor_calibration(tmp_path, ideal_rec):

@@ -70,7 +70,7 @@ def test_white_noise_only_beats_raw_integration(imu_hand):
 
     d = MPU9250_DATASHEET
     white = ImuNoise(AxisNoise(d.gyro.white, 0, 0), AxisNoise(d.accel.white, 0, 0),
-                     MagNoise(0.3, 0, 0, 0))
+                     MagNoise(0.3, 0, 0, 0, 0))
     rec = simulate_imu(free_motion(12.0, seed=4), hand=imu_hand, noise=white, seed=5)
 
     def rmse(q):
