@@ -43,6 +43,7 @@ static start and stretches labelled ``acc_pose_<k>``, nine or more.
 from __future__ import annotations
 
 import dataclasses
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -245,8 +246,8 @@ def _fit_gyr(moves: np.ndarray, u0: np.ndarray, u1: np.ndarray, rate_hz: float,
 
 def fit_sensor_calibration(rec: ImuRecording, *, skip_s: float = 0.3, prior: float = 0.01,
                            acc_prior: float = 0.03, mag_prior: float = 0.01,
-                           max_correction: float = 0.15, mag_max_correction: float = 0.4
-                           ) -> SensorCalibration:
+                           max_correction: float = 0.15, mag_max_correction: float = 0.4,
+                           mag_warn: float = 0.02) -> SensorCalibration:
     """Fit accelerometer, gyro and magnetometer corrections from still poses.
 
     Parameters
@@ -273,6 +274,10 @@ def fit_sensor_calibration(rec: ImuRecording, *, skip_s: float = 0.3, prior: flo
     mag_max_correction : float, keyword-only
         The same for D (soft iron and the magnetometer's axis rotation are
         larger than the accelerometer's errors).
+    mag_warn : float, keyword-only
+        A sensor whose poses still disagree by more than this share of the
+        field's length after the fit is warned about (a magnetic disturbance
+        during the poses; simulated sensors leave 0.1-0.2 %).
 
     Returns
     -------
@@ -285,6 +290,11 @@ def fit_sensor_calibration(rec: ImuRecording, *, skip_s: float = 0.3, prior: flo
     EstimationError
         A sensor whose fit deviates more than `max_correction` from the
         identity (named in the message).
+
+    Warns
+    -----
+    UserWarning
+        Sensors whose magnetometer residual exceeds `mag_warn` (named).
     """
     poses = _poses(rec)
     skip = int(round(skip_s * rec.rate_hz))
@@ -318,4 +328,10 @@ def fit_sensor_calibration(rec: ImuRecording, *, skip_s: float = 0.3, prior: flo
                     f"(limit {most}); poses not still or not varied")
         for key, v in zip(_SHAPES, (c, b, g, rc, rg, d, h, rm)):
             out[key].append(v)
+    bad = [f"{name} {r:.1%}" for name, r in zip(rec.sensors, out["mag_residual"]) if r > mag_warn]
+    if bad:
+        warnings.warn(f"magnetometer poses disagree after the calibration ({', '.join(bad)} of "
+                      f"the field's length; limit {mag_warn:.0%}): a magnetic disturbance during "
+                      "the poses? Those sensors' headings will be off; calibrate away from iron",
+                      UserWarning, stacklevel=2)
     return SensorCalibration(tuple(rec.sensors), **{k: np.array(v) for k, v in out.items()})

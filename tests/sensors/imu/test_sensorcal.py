@@ -181,6 +181,21 @@ def test_magnetometer_calibration_carries_to_a_later_recording(device_recs):
     assert rms(_start_heading_errors(cal.apply(other))) > 0.6 * rms(_start_heading_errors(other))
 
 
+def test_magnetic_disturbance_during_the_poses_is_warned():
+    """A magnet near some of the poses: the calibration names the sensors it spoils."""
+    from handsynth.sensors.imu import MagDisturbance
+
+    motion = calibration_motion(plan=(), acc_poses=True)
+    poses = [(a, b) for name, a, b in motion.segments if name.startswith("acc_pose_")]
+    start, end = poses[2][0] / motion.rate_hz, poses[5][1] / motion.rate_hz
+    noise = dataclasses.replace(EVAL_NOISE, disturbances=(
+        MagDisturbance(start, end, (15.0, -10.0, 8.0), sensors=("index_distal",)),))
+    rec = simulate_imu(motion, hand=ImuHand(), noise=noise, seed=5)
+    with pytest.warns(UserWarning, match="disagree .*index_distal") as got:
+        fit_sensor_calibration(rec)
+    assert "middle_distal" not in str(got[0].message)
+
+
 @pytest.mark.slow
 def test_forearm_plate_accelerometers_are_not_made_worse(device_recs):
     """The forearm plate sees the least varied gravity: one combination is nearly unseen.
