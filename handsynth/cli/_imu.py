@@ -179,8 +179,7 @@ def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz
                    "of the initial attitude (eq. 3.12; needs --calibration).")
 @click.option("--no-sensor-calibration", is_flag=True,
               help="Do not apply the calibration file's accelerometer/gyro/magnetometer "
-                   "corrections "
-                   "(for readings already corrected).")
+                   "corrections (for readings already corrected).")
 def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_units, rate_hz,
           static_s, align, out_path, angles_out, tips_out, no_sensor_calibration) -> None:
     """Orientation of every sensor of a CSV RECORDING (columns <sensor>_acc_x .. _mag_z)."""

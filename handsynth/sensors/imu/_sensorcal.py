@@ -62,6 +62,14 @@ POSE_PREFIX = "acc_pose_"
 
 _IU = np.triu_indices(3)
 
+#: Fields of one sensor in a calibration file and their shapes; the
+#: magnetometer's (`_MAG`) are optional (files before version 4).
+_SHAPES = {"acc_matrix": (3, 3), "acc_bias_mps2": (3,), "gyr_matrix": (3, 3),
+           "acc_residual_mps2": (), "gyr_residual": (), "mag_matrix": (3, 3),
+           "mag_bias_ut": (3,), "mag_residual": ()}
+_MAG = ("mag_matrix", "mag_bias_ut", "mag_residual")
+
+
 
 @dataclass(frozen=True)
 class SensorCalibration:
@@ -179,12 +187,6 @@ class SensorCalibration:
                                     "are given for some sensors only")
         mag = {k: np.array(out[k]) for k in _MAG if out[k]}
         return cls(tuple(d), *(np.array(out[k]) for k in _SHAPES if k not in _MAG), **mag)
-
-
-_SHAPES = {"acc_matrix": (3, 3), "acc_bias_mps2": (3,), "gyr_matrix": (3, 3),
-           "acc_residual_mps2": (), "gyr_residual": (), "mag_matrix": (3, 3),
-           "mag_bias_ut": (3,), "mag_residual": ()}
-_MAG = ("mag_matrix", "mag_bias_ut", "mag_residual")
 
 
 def _poses(rec: ImuRecording) -> list[tuple[int, int]]:
