@@ -262,6 +262,10 @@ class EvalTestData:
         ``"second_user_raw"``.
     normalizer : RangeNormalizer or None
         The range calibration of this session (None for ``"second_user_raw"``).
+    session_seed : int
+        The `seed` of :func:`simulate_session` that made ``recording`` (with
+        ``user``, ``donning``, the motions of the set and the setup's
+        ``test_trials``).
     """
 
     condition: str
@@ -271,6 +275,7 @@ class EvalTestData:
     recording: GloveRecording
     sensors: np.ndarray
     normalizer: RangeNormalizer | None
+    session_seed: int
 
 
 @dataclass(frozen=True, eq=False)
@@ -326,12 +331,10 @@ class EvalSetup:
         user = self.users["calibration" if condition == "new_session" else "second"]
         don = self.donnings[condition]
         s_seed = self.seed + (20 if condition == "new_session" else 30)
-        if motion_set == "representative":
-            rec = simulate_session(user, don, motions_for(self.kind), trials=self.test_trials,
-                                   seed=s_seed)
-        else:
-            rec = simulate_session(user, don, list(OTHER_MOTIONS), trials=self.test_trials,
-                                   seed=s_seed + 1)
+        motions = motions_for(self.kind) if motion_set == "representative" else OTHER_MOTIONS
+        session_seed = s_seed + (0 if motion_set == "representative" else 1)
+        rec = simulate_session(user, don, list(motions), trials=self.test_trials,
+                               seed=session_seed)
         norm = None
         if condition != "second_user_raw":
             src = range_readings(_range_holds(user, don, s_seed + 2))
@@ -341,7 +344,8 @@ class EvalSetup:
                                    target_fist=self.range_reference[1])
         sensors = norm.apply(rec.sensors) if norm is not None else rec.sensors
         return EvalTestData(condition=condition, motion_set=motion_set, user=user, donning=don,
-                            recording=rec, sensors=sensors, normalizer=norm)
+                            recording=rec, sensors=sensors, normalizer=norm,
+                            session_seed=session_seed)
 
 
 def eval_setup(options: EvalOptions | None = None, seed: int | None = None) -> EvalSetup:

@@ -8,10 +8,12 @@ from handsynth.models import FINGERS
 from handsynth.sensors.glove import (
     CONDITIONS,
     LATER_CONDITIONS,
+    OTHER_MOTIONS,
     EvalOptions,
     eval_setup,
     evaluate,
     finger_joints,
+    simulate_session,
 )
 
 
@@ -63,6 +65,9 @@ def test_setup_gives_the_evaluation_s_own_samples(result):
         data = setup.test_data(cond, "other")
         assert data.recording.n_samples == len(data.sensors)
         assert (data.normalizer is None) == (cond == "second_user_raw")
+        again = simulate_session(data.user, data.donning, list(OTHER_MOTIONS), trials=1,
+                                 seed=data.session_seed)
+        assert np.array_equal(again.sensors, data.recording.sensors)
         truth = data.recording.truth[:, mcp]
         summary = result["conditions"][cond]["other"]["summary"]
         for name, variant in (("model4", "model4/mixed"), ("synergy", "synergy")):
