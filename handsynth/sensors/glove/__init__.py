@@ -31,7 +31,16 @@ from ._estimators import (
     SynergyEstimator,
     estimator_from_dict,
 )
-from ._eval import CONDITIONS, EvalOptions, evaluate
+from ._eval import (
+    CONDITIONS,
+    LATER_CONDITIONS,
+    MOTION_SETS,
+    EvalOptions,
+    EvalSetup,
+    EvalTestData,
+    eval_setup,
+    evaluate,
+)
 from ._mixing import MotionMixer, fit_mixer
 from ._models import (
     DIP_PIP_RATIO,
@@ -74,8 +83,10 @@ __all__ = [
     "CYBERGLOVE_COLUMNS",
     "DIP_PIP_RATIO",
     "GLOVE_KINDS",
+    "LATER_CONDITIONS",
     "MODELS",
     "MOTIONS",
+    "MOTION_SETS",
     "NAMED_MOTIONS",
     "OTHER_MOTIONS",
     "RANGE_LABELS",
@@ -84,6 +95,8 @@ __all__ = [
     "CalibrationOptions",
     "ConstantEstimator",
     "EvalOptions",
+    "EvalSetup",
+    "EvalTestData",
     "GatedEstimator",
     "GloveEstimator",
     "GloveRecording",
@@ -104,6 +117,7 @@ __all__ = [
     "default_synergies",
     "don_glove",
     "estimator_from_dict",
+    "eval_setup",
     "evaluate",
     "finger_joints",
     "fit_mixer",

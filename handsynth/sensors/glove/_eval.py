@@ -41,9 +41,19 @@ from ._estimators import RangeNormalizer, RegressionEstimator
 from ._models import MODELS, finger_joints
 from ._motions import OTHER_MOTIONS, motions_for
 from ._recording import GloveRecording
-from ._simulate import don_glove, make_user, simulate_poses, simulate_session
+from ._sensors import SensorParams
+from ._simulate import GloveUser, don_glove, make_user, simulate_poses, simulate_session
 
-__all__ = ["CONDITIONS", "EvalOptions", "evaluate"]
+__all__ = [
+    "CONDITIONS",
+    "LATER_CONDITIONS",
+    "MOTION_SETS",
+    "EvalOptions",
+    "EvalSetup",
+    "EvalTestData",
+    "eval_setup",
+    "evaluate",
+]
 
 CONDITIONS = ("loto", "new_session", "second_user", "second_user_raw")
 _J = finger_joints()
@@ -223,20 +233,158 @@ def evaluate(options: EvalOptions | None = None) -> dict:
     return out
 
 
+#: The conditions after the calibration session (a later wearing or wearer).
+LATER_CONDITIONS = ("new_session", "second_user", "second_user_raw")
+#: The motion sets of a later condition.
+MOTION_SETS = ("representative", "other")
+
+
+@dataclass(frozen=True, eq=False)
+class EvalTestData:
+    """The test samples of one cell of :func:`evaluate`, with what made them.
+
+    Attributes
+    ----------
+    condition : str
+        One of :data:`LATER_CONDITIONS`.
+    motion_set : str
+        ``"representative"`` (the calibrated motions) or ``"other"``
+        (:data:`OTHER_MOTIONS`).
+    user : GloveUser
+        The wearer of this session.
+    donning : SensorParams
+        The glove as worn in this session (the simulator's true sensor model).
+    recording : GloveRecording
+        The session: raw readings, motion labels and the noise-free ``truth``.
+    sensors : ndarray, shape (N, 5), counts
+        The readings the estimators are given: the raw ones mapped onto the
+        calibration's by the range calibration, or the raw ones for
+        ``"second_user_raw"``.
+    normalizer : RangeNormalizer or None
+        The range calibration of this session (None for ``"second_user_raw"``).
+    session_seed : int
+        The `seed` of :func:`simulate_session` that made ``recording`` (with
+        ``user``, ``donning``, the motions of the set and the setup's
+        ``test_trials``).
+    """
+
+    condition: str
+    motion_set: str
+    user: GloveUser
+    donning: SensorParams
+    recording: GloveRecording
+    sensors: np.ndarray
+    normalizer: RangeNormalizer | None
+    session_seed: int
+
+
+@dataclass(frozen=True, eq=False)
+class EvalSetup:
+    """What one seed of :func:`evaluate` simulates and calibrates.
+
+    Made by :func:`eval_setup`; :meth:`test_data` gives the samples of each
+    later cell, so that other studies can use exactly the evaluation's data.
+
+    Attributes
+    ----------
+    kind : str
+    seed : int
+    test_trials : int
+        Trials per motion of each later session.
+    users : dict of str to GloveUser
+        ``"calibration"`` (the calibration user) and ``"second"``.
+    donnings : dict of str to SensorParams
+        The glove as worn in the calibration session (``"calibration"``)
+        and in each of :data:`LATER_CONDITIONS`.
+    calibration : GloveRecording
+        The calibration session (trials of the representative motions).
+    range_reference : tuple of ndarray
+        Median readings (open hand, fist) of the calibration session's range
+        holds, each shape (5,).
+    estimators : dict of str to GloveEstimator
+        Everything :func:`calibrate` fits on ``calibration``.
+    """
+
+    kind: str
+    seed: int
+    test_trials: int
+    users: dict
+    donnings: dict
+    calibration: GloveRecording
+    range_reference: tuple
+    estimators: dict
+
+    def test_data(self, condition: str, motion_set: str) -> EvalTestData:
+        """The samples of cell (`condition`, `motion_set`) of :func:`evaluate`.
+
+        Raises
+        ------
+        InvalidInputError
+            Unknown condition or motion set.
+        """
+        if condition not in LATER_CONDITIONS:
+            raise InvalidInputError(f"condition must be one of {', '.join(LATER_CONDITIONS)}, "
+                                    f"got {condition!r}")
+        if motion_set not in MOTION_SETS:
+            raise InvalidInputError(f"motion set must be one of {', '.join(MOTION_SETS)}, "
+                                    f"got {motion_set!r}")
+        user = self.users["calibration" if condition == "new_session" else "second"]
+        don = self.donnings[condition]
+        s_seed = self.seed + (20 if condition == "new_session" else 30)
+        motions = motions_for(self.kind) if motion_set == "representative" else OTHER_MOTIONS
+        session_seed = s_seed + (0 if motion_set == "representative" else 1)
+        rec = simulate_session(user, don, list(motions), trials=self.test_trials,
+                               seed=session_seed)
+        norm = None
+        if condition != "second_user_raw":
+            src = range_readings(_range_holds(user, don, s_seed + 2))
+            assert src is not None  # _range_holds labels both holds
+            norm = RangeNormalizer(source_open=src[0], source_fist=src[1],
+                                   target_open=self.range_reference[0],
+                                   target_fist=self.range_reference[1])
+        sensors = norm.apply(rec.sensors) if norm is not None else rec.sensors
+        return EvalTestData(condition=condition, motion_set=motion_set, user=user, donning=don,
+                            recording=rec, sensors=sensors, normalizer=norm,
+                            session_seed=session_seed)
+
+
+def eval_setup(options: EvalOptions | None = None, seed: int | None = None) -> EvalSetup:
+    """Users, donnings, calibration session and estimators of one seed of :func:`evaluate`.
+
+    Parameters
+    ----------
+    options : EvalOptions
+        Kind, trials, test trials and calibration options.
+    seed : int
+        The seed (default ``options.seed``).
+
+    Returns
+    -------
+    EvalSetup
+    """
+    o = options or EvalOptions()
+    seed = o.seed if seed is None else int(seed)
+    user_a = make_user(seed, name="calibration user", hand_length=1.04)
+    user_b = make_user(seed + 1000, name="second user", hand_length=0.94)
+    don_a1 = don_glove(user_a, o.kind, seed=seed + 1, glove_seed=seed)
+    don_a2 = don_glove(user_a, o.kind, seed=seed + 2, glove_seed=seed)
+    don_b = don_glove(user_b, o.kind, seed=seed + 3, glove_seed=seed)
+    cal = simulate_session(user_a, don_a1, motions_for(o.kind), trials=o.trials, seed=seed + 10)
+    ref = range_readings(_range_holds(user_a, don_a1, seed + 11))
+    assert ref is not None  # _range_holds labels both holds
+    return EvalSetup(kind=o.kind, seed=seed, test_trials=o.test_trials,
+                     users={"calibration": user_a, "second": user_b},
+                     donnings={"calibration": don_a1, "new_session": don_a2,
+                               "second_user": don_b, "second_user_raw": don_b},
+                     calibration=cal, range_reference=ref,
+                     estimators=calibrate(cal, options=o.calibration))
+
+
 def _evaluate_one(o: EvalOptions, seed: int) -> dict:
     kind = o.kind
     rep = motions_for(kind)
-    user_a = make_user(seed, name="calibration user", hand_length=1.04)
-    user_b = make_user(seed + 1000, name="second user", hand_length=0.94)
-    don_a1 = don_glove(user_a, kind, seed=seed + 1, glove_seed=seed)
-    don_a2 = don_glove(user_a, kind, seed=seed + 2, glove_seed=seed)
-    don_b = don_glove(user_b, kind, seed=seed + 3, glove_seed=seed)
-
-    cal = simulate_session(user_a, don_a1, rep, trials=o.trials, seed=seed + 10)
-    holds_a = _range_holds(user_a, don_a1, seed + 11)
-    estimators = calibrate(cal, options=o.calibration)
-    ref = range_readings(holds_a)
-    assert ref is not None  # _range_holds labels both holds
+    setup = eval_setup(o, seed)
+    cal, estimators = setup.calibration, setup.estimators
 
     conditions = {}
     # leave one trial out (the seed's setting)
@@ -253,24 +401,11 @@ def _evaluate_one(o: EvalOptions, seed: int) -> dict:
     conditions["loto"] = {"representative": _table(
         {n: np.vstack(p) for n, p in preds.items()}, loto)}
 
-    for cond, user, don, normalise in (("new_session", user_a, don_a2, True),
-                                       ("second_user", user_b, don_b, True),
-                                       ("second_user_raw", user_b, don_b, False)):
-        s_seed = seed + (20 if user is user_a else 30)
-        sessions = {"representative": simulate_session(user, don, rep, trials=o.test_trials,
-                                                       seed=s_seed),
-                    "other": simulate_session(user, don, list(OTHER_MOTIONS),
-                                              trials=o.test_trials, seed=s_seed + 1)}
-        holds = _range_holds(user, don, s_seed + 2)
-        norm = None
-        if normalise:
-            src = range_readings(holds)
-            assert src is not None
-            norm = RangeNormalizer(source_open=src[0], source_fist=src[1],
-                                   target_open=ref[0], target_fist=ref[1])
+    for cond in LATER_CONDITIONS:
         conditions[cond] = {}
-        for set_name, rec in sessions.items():
-            sensors = norm.apply(rec.sensors) if norm is not None else rec.sensors
+        for set_name in MOTION_SETS:
+            data = setup.test_data(cond, set_name)
+            rec, sensors = data.recording, data.sensors
             res = _evaluate_on(estimators, rec, sensors, set_name == "representative")
             m4 = estimators.get("model4")
             if set_name == "representative" and isinstance(m4, RegressionEstimator):
@@ -297,7 +432,7 @@ def _evaluate_one(o: EvalOptions, seed: int) -> dict:
                    "errors": "mean absolute error against the simulated truth, deg"},
         "users": {u.name: {"hand_length": round(u.hand_length, 3),
                            "dip_ratio": [round(float(x), 3) for x in u.dip_ratio]}
-                  for u in (user_a, user_b)},
+                  for u in setup.users.values()},
         "fit_r2": fit_r2,
         "conditions": conditions,
     }

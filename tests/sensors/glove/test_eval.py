@@ -1,10 +1,20 @@
 import json
 
+import numpy as np
 import pytest
 
 from handsynth.errors import InvalidInputError
 from handsynth.models import FINGERS
-from handsynth.sensors.glove import CONDITIONS, EvalOptions, evaluate
+from handsynth.sensors.glove import (
+    CONDITIONS,
+    LATER_CONDITIONS,
+    OTHER_MOTIONS,
+    EvalOptions,
+    eval_setup,
+    evaluate,
+    finger_joints,
+    simulate_session,
+)
 
 
 @pytest.fixture(scope="module")
@@ -46,3 +56,27 @@ def test_options_are_checked():
         EvalOptions(trials=2)
     with pytest.raises(InvalidInputError, match="glove kind"):
         EvalOptions(kind="cyber")
+
+
+def test_setup_gives_the_evaluation_s_own_samples(result):
+    setup = eval_setup(EvalOptions(kind="dg5", trials=3, test_trials=1, seed=4))
+    mcp = [f["j3"] for f in finger_joints()]
+    for cond in LATER_CONDITIONS:
+        data = setup.test_data(cond, "other")
+        assert data.recording.n_samples == len(data.sensors)
+        assert (data.normalizer is None) == (cond == "second_user_raw")
+        again = simulate_session(data.user, data.donning, list(OTHER_MOTIONS), trials=1,
+                                 seed=data.session_seed)
+        assert np.array_equal(again.sensors, data.recording.sensors)
+        truth = data.recording.truth[:, mcp]
+        summary = result["conditions"][cond]["other"]["summary"]
+        for name, variant in (("model4", "model4/mixed"), ("synergy", "synergy")):
+            pred = setup.estimators[name].predict(data.sensors)[:, mcp]
+            assert np.abs(pred - truth).mean() == pytest.approx(
+                summary[variant]["mcp_error_deg"], abs=1e-3)
+    assert set(setup.test_data("new_session", "representative").recording.motion) == {
+        "standard", "lateral_contact", "tripod"}
+    with pytest.raises(InvalidInputError, match="condition must be one of"):
+        setup.test_data("loto", "other")
+    with pytest.raises(InvalidInputError, match="motion set must be one of"):
+        setup.test_data("new_session", "named")
