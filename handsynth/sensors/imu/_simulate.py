@@ -178,11 +178,19 @@ def _add_skin_kinematics(acc, gyr, d, site_ids, body_of_site, skin: SkinMotion, 
     gyr[:, 0] -= np.radians(skin.tilt_deg) * fd
 
 
+def _device_rng(device_seed: int, name: str, *stream: int) -> np.random.Generator:
+    """The generator of one physical sensor's fixed errors (order-independent).
+
+    `stream` keeps the magnetometer's draws apart from the accelerometer's
+    and gyro's."""
+    return np.random.default_rng([int(device_seed), zlib.crc32(name.encode()), *stream])
+
+
 def _fixed_errors(noise: ImuNoise, names, device_seed: int):
-    """Per-sensor fixed errors, one generator per sensor name (order-independent)."""
+    """Per-sensor accelerometer and gyro fixed errors, one generator per sensor name."""
     acc, gyr = [], []
     for name in names:
-        rng = np.random.default_rng([int(device_seed), zlib.crc32(name.encode())])
+        rng = _device_rng(device_seed, name)
         acc.append(draw_fixed_errors(noise.accel, 1, rng))
         gyr.append(draw_fixed_errors(noise.gyro, 1, rng))
     return ((np.concatenate([a[0] for a in acc]), np.concatenate([a[1] for a in acc])),
@@ -227,8 +235,7 @@ def _mag_noise(mag, quat, noise: ImuNoise, rate_hz: float, rng, names,
     if device_seed is None:
         matrix, hard = _mag_fixed(mn, s, rng)
     else:
-        per = [_mag_fixed(mn, 1, np.random.default_rng(
-            [int(device_seed), zlib.crc32(name.encode()), 1])) for name in names]
+        per = [_mag_fixed(mn, 1, _device_rng(device_seed, name, 1)) for name in names]
         matrix = np.concatenate([p[0] for p in per])
         hard = np.concatenate([p[1] for p in per])
     y = np.einsum("sij,snj->sni", matrix, mag)
