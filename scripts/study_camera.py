@@ -6,6 +6,7 @@ Usage::
     python scripts/study_camera.py --cache DIR jitter
     python scripts/study_camera.py observability
     python scripts/study_camera.py --cache DIR bound
+    python scripts/study_camera.py --cache DIR rests
 
 ``backgrounds``
     Two held-out model hands (seed 3, 1.5 times the learning spread) and the
@@ -43,6 +44,15 @@ Usage::
     Beside it, on the same frames: the per-digit estimator (calibrated on
     the rest frame) and the constant open hand.  Last line:
     ``oracle_mae=<mean> estimator_mae=<mean> constant_mae=<mean>``.
+
+``rests``
+    How a hand's paper-frame skill depends on the rest posture drawn: the
+    protocol's paper frames (300 per hand) of the two glTF hands under pose
+    seeds 0-9 (each seed its own rest posture), per-digit estimator.  Per
+    seed and hand the flexion MAE, the constant's, the skill and the index
+    PIP error where it moves; per hand the skill's mean, range and its value
+    pooled over the seeds (``1 - sum MAE / sum MAE_constant``).  Last line:
+    ``<hand>_pooled_skill=<value> ...``.
 
 The learnt estimator is read from ``--cache`` (or learnt there first).
 """
@@ -222,10 +232,38 @@ def bound(cache) -> None:
     print(f"oracle_mae={m[0]:.2f} estimator_mae={m[1]:.2f} constant_mae={m[2]:.2f}")
 
 
+def rests(cache) -> None:
+    from handsynth.eval import ProtocolOptions, run_protocol
+
+    est = _estimator(cache)
+    rows: dict = {}
+    for seed in range(10):
+        res = run_protocol({"fingers": lambda rest, _hand: est.calibrated(rest)}, mesh_test_hands(),
+                           ProtocolOptions(frames=300, seed=seed, pose_sets=("paper",)))
+        for name, rec in res["hands"].items():
+            st = rec["paper"]["fingers"]
+            pip = st["method"]["joints"]["index_pip_flex"]
+            row = (st["method"]["groups_mae_deg"]["finger_flexion"],
+                   st["constant"]["groups_mae_deg"]["finger_flexion"], st["skill"]["finger_flexion"],
+                   pip["moving_mae_deg"] or 0.0, pip["moving_frames"])
+            rows.setdefault(name, []).append(row)
+            print(f"seed {seed} {name}: flexion MAE {row[0]:.2f} (constant {row[1]:.2f}, skill "
+                  f"{row[2]:.2f}); index PIP where it moves {row[3]:.1f} (n={row[4]})", flush=True)
+    last = []
+    for name, v in rows.items():
+        a = np.array(v, float)
+        pooled = 1.0 - a[:, 0].sum() / a[:, 1].sum()
+        pip = (a[:, 3] * a[:, 4]).sum() / max(a[:, 4].sum(), 1)
+        print(f"{name}: skill mean {a[:, 2].mean():.2f}, range {a[:, 2].min():.2f}-{a[:, 2].max():.2f}, "
+              f"pooled {pooled:.2f}; index PIP where it moves {pip:.1f} (n={int(a[:, 4].sum())})")
+        last.append(f"{name}_pooled_skill={pooled:.3f}")
+    print(" ".join(last))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cache", default=None, help="folder of the learnt estimator")
-    ap.add_argument("study", choices=["backgrounds", "jitter", "observability", "bound"])
+    ap.add_argument("study", choices=["backgrounds", "jitter", "observability", "bound", "rests"])
     args = ap.parse_args()
     if args.study != "observability" and args.cache is None:
         ap.error(f"{args.study} needs --cache DIR")
@@ -235,6 +273,8 @@ def main() -> None:
         jitter(args.cache)
     elif args.study == "bound":
         bound(args.cache)
+    elif args.study == "rests":
+        rests(args.cache)
     else:
         observability()
 
