@@ -185,11 +185,55 @@ def _inputs(grids: np.ndarray, rest: np.ndarray | None) -> np.ndarray:
     return np.hstack([x, x - r])
 
 
-def _pca(z: np.ndarray, k: int, rng: np.random.Generator, sample: int = 20000
+class _Rows:
+    """The regressors' inputs of a learning set, made on demand a block of rows at a time.
+
+    The float inputs of every frame (:func:`_inputs`: the frame's coverage
+    and its difference from its hand's rest frame) take 8 bytes per cell and
+    frame; made all at once they outgrew the memory of ordinary machines
+    beyond a few thousand hands.  This keeps the uint8 grids and makes the
+    inputs of the rows asked for.
+
+    Parameters
+    ----------
+    grids : ndarray, shape (N, D) uint8
+    rest : ndarray, shape (H, D) uint8, optional
+        Rest grid of each hand; row ``i`` is paired with ``rest[hand[i]]``.
+    hand : ndarray, shape (N,) int, optional
+    """
+
+    def __init__(self, grids: np.ndarray, rest: np.ndarray | None = None,
+                 hand: np.ndarray | None = None) -> None:
+        self.grids, self.rest, self.hand = grids, rest, hand
+        self.width = grids.shape[1] * (1 if rest is None else 2)
+
+    def __len__(self) -> int:
+        return len(self.grids)
+
+    def take(self, rows) -> np.ndarray:
+        """Inputs (n, width) float32 of `rows` (a slice or an index array)."""
+        rest = None if self.rest is None else self.rest[self.hand[rows]]
+        return _inputs(self.grids[rows], rest)
+
+    def blocks(self, rows: int = 20000):
+        """(slice, inputs) of consecutive blocks of at most `rows` rows."""
+        for start in range(0, len(self), rows):
+            sl = slice(start, min(start + rows, len(self)))
+            yield sl, self.take(sl)
+
+
+def _pca(z: _Rows, k: int, rng: np.random.Generator, sample: int = 20000, *,
+         cols: np.ndarray | None = None, weight: np.ndarray | None = None
          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Mean (D,), components (D, k) and their s.d. (k,) of rows `z`."""
+    """Mean (D,), components (D, k) and their s.d. (k,) of a sample of `sample` rows of `z`.
+
+    With `cols` (and `weight`), of those input columns (times `weight`).
+    """
     idx = rng.choice(len(z), size=min(sample, len(z)), replace=False)
-    s = z[idx].astype(np.float64)
+    s = z.take(idx)
+    if cols is not None:
+        s = s[:, cols] * weight
+    s = s.astype(np.float64)
     mean = s.mean(axis=0)
     s -= mean
     if len(s) > s.shape[1]:
@@ -620,27 +664,22 @@ def train_learned(data: LearningSet, options: LearnedOptions | None = None, *,
         raise InvalidInputError(f"data must be a LearningSet, got {type(data).__name__}")
     rng = np.random.default_rng(opts.seed)
     y = data.angles.astype(np.float32)
+    rows = _Rows(data.grids, data.rest_grids, data.hand) if opts.use_rest else _Rows(data.grids)
     if opts.kind == "fingers":
-        rest = data.rest_grids[data.hand] if opts.use_rest else None
-        arrays = _fit_digits(_inputs(data.grids, rest), y, opts, rng, data.grids.shape[1])
+        arrays = _fit_digits(rows, y, opts, rng)
         est = LearnedEstimator(arrays, options=opts, mount=data.mount, side=data.side,
                                cells=data.options.cells)
         pick = np.sort(rng.choice(len(y), size=min(1000, len(y)), replace=False))
-        z = _inputs(data.grids[pick], None if rest is None else rest[pick])
-        limit = np.array(est._novelty_limit(z, pick, data.hand), np.float32)
+        limit = np.array(est._novelty_limit(rows.take(pick), pick, data.hand), np.float32)
         limit.setflags(write=False)
         est._a["novelty_limit"] = limit
         return est
-    if opts.use_rest:
-        rest = data.rest_grids[data.hand]
-        arrays = _fit(_inputs(data.grids, rest), y - data.rest_angles[data.hand]
-                      if opts.target == "delta" else y, opts, rng, "", progress)
-        if opts.target == "delta":
-            grids = np.vstack([data.grids, data.rest_grids])
-            y_abs = np.vstack([y, data.rest_angles.astype(np.float32)])
-            arrays.update(_fit(_inputs(grids, None), y_abs, opts, rng, "abs_", progress))
-    else:
-        arrays = _fit(_inputs(data.grids, None), y, opts, rng, "", progress)
+    arrays = _fit(rows, y - data.rest_angles[data.hand] if opts.target == "delta" and opts.use_rest
+                  else y, opts, rng, "", progress)
+    if opts.use_rest and opts.target == "delta":
+        both = _Rows(np.vstack([data.grids, data.rest_grids]))
+        y_abs = np.vstack([y, data.rest_angles.astype(np.float32)])
+        arrays.update(_fit(both, y_abs, opts, rng, "abs_", progress))
     return LearnedEstimator(arrays, options=opts, mount=data.mount, side=data.side,
                             cells=data.options.cells)
 
@@ -652,40 +691,71 @@ _DIGIT_JOINTS = ((0, 1, 2, 3), *(tuple(range(4 + 4 * k, 8 + 4 * k)) for k in ran
 _REGION_CORR = 0.1
 
 
-def _fit_digits(z: np.ndarray, y: np.ndarray, opts: LearnedOptions, rng: np.random.Generator,
-                n_cells: int) -> dict:
-    """Per digit: the cells whose coverage follows its angles, their components and a kNN."""
-    x = z[:, :n_cells]
-    xs = (x - x.mean(axis=0)) / np.maximum(x.std(axis=0), 1e-6)
-    ys = (y - y.mean(axis=0)) / np.maximum(y.std(axis=0), 1e-6)
-    corr = np.abs(xs.T @ ys) / len(z)  # (cells, 20)
-    del xs
+def _correlations(z: _Rows, y: np.ndarray, n_cells: int, block: int) -> np.ndarray:
+    """|Pearson correlation| (n_cells, 20) of each cell's coverage with each angle.
+
+    Accumulated over blocks of rows (float64 sums), so that the inputs of
+    the whole set are never held at once; a cell or angle that never varies
+    correlates 0.
+    """
+    n = len(z)
+    sx = np.zeros(n_cells)
+    sxx = np.zeros(n_cells)
+    sxy = np.zeros((n_cells, y.shape[1]))
+    for sl, x in z.blocks(block):
+        x = x[:, :n_cells].astype(np.float64)
+        sx += x.sum(axis=0)
+        sxx += np.einsum("ij,ij->j", x, x)
+        sxy += x.T @ y[sl].astype(np.float64)
+    yd = y.astype(np.float64)
+    mx, my = sx / n, yd.mean(axis=0)
+    sdx = np.maximum(np.sqrt(np.maximum(sxx / n - mx * mx, 0.0)), 1e-6)
+    sdy = np.maximum(yd.std(axis=0), 1e-6)
+    return np.abs(sxy / n - np.outer(mx, my)) / np.outer(sdx, sdy)
+
+
+def _fit_digits(z: _Rows, y: np.ndarray, opts: LearnedOptions, rng: np.random.Generator, *,
+                block: int = 20000) -> dict:
+    """Per digit: the cells whose coverage follows its angles, their components and a kNN.
+
+    `block`: rows of inputs made at a time (the result does not depend on it).
+    """
+    n_cells = z.grids.shape[1]
+    corr = _correlations(z, y, n_cells, block)
     arrays: dict = {}
-    blocks = z.shape[1] // n_cells
+    blocks = z.width // n_cells
+    digits = []
     for d, joints in enumerate(_DIGIT_JOINTS):
         w = corr[:, list(joints)].max(axis=1)
         cells = np.nonzero(w > max(_REGION_CORR, 4.0 / np.sqrt(len(z))))[0]
         cols = np.concatenate([cells + b * n_cells for b in range(blocks)])
         weight = np.tile(w[cells], blocks).astype(np.float32)
-        zd = z[:, cols] * weight
-        mean, comps, _ = _pca(zd, min(opts.components, 64, len(cols)), rng)
+        mean, comps, _ = _pca(z, min(opts.components, 64, len(cols)), rng, cols=cols,
+                              weight=weight)
         p = f"d{d}_"
         arrays.update({p + "cols": cols, p + "w": weight, p + "mean": mean, p + "components": comps,
-                       p + "codes": ((zd - mean) @ comps).astype(np.float32),
+                       p + "codes": np.empty((len(z), comps.shape[1]), np.float32),
                        p + "angles": np.ascontiguousarray(y[:, list(joints)], np.float32)})
+        digits.append(p)
+    for sl, x in z.blocks(block):
+        for p in digits:
+            arrays[p + "codes"][sl] = (x[:, arrays[p + "cols"]] * arrays[p + "w"]
+                                       - arrays[p + "mean"]) @ arrays[p + "components"]
     return arrays
 
 
-def _fit(z: np.ndarray, y: np.ndarray, opts: LearnedOptions, rng: np.random.Generator,
-         prefix: str, progress) -> dict:
+def _fit(z: _Rows, y: np.ndarray, opts: LearnedOptions, rng: np.random.Generator,
+         prefix: str, progress, *, block: int = 20000) -> dict:
     """Principal components of inputs `z` and a regressor of `y` on them, as named arrays."""
-    k = min(opts.components, z.shape[1])
+    k = min(opts.components, z.width)
     mean, comps, sd = _pca(z, k, rng)
     # one scale for every component (the first one's s.d.): whitening each
     # component gave the perceptron the noise of the small ones at full weight
     # (model hands, paper frames: flexion skill 0.17 whitened, 0.38 not)
     scale = np.full_like(sd, sd[0])
-    codes = ((z - mean) @ comps).astype(np.float32)
+    codes = np.empty((len(z), comps.shape[1]), np.float32)
+    for sl, x in z.blocks(block):
+        codes[sl] = (x - mean) @ comps
     y = np.asarray(y, np.float32)
     arrays: dict = {"mean": mean, "components": comps, "scale": scale}
     if opts.kind == "knn":

@@ -201,3 +201,29 @@ def test_the_inverted_file_with_one_cell_answers_as_the_exact_search(data):
     for pose in (np.full(20, 12.0), np.full(20, 18.0)):
         frame = SilhouetteRasterizer().mask(pose)
         np.testing.assert_allclose(a.estimate(frame).angles, b.estimate(frame).angles, atol=1e-4)
+
+
+def test_training_a_block_of_rows_at_a_time_equals_the_whole_set_at_once(data):
+    """The inputs are made a block at a time; the plain reference makes them all at once."""
+    from handsynth.estimate._learned import _correlations, _fit_digits, _inputs, _Rows
+
+    rows = _Rows(data.grids, data.rest_grids, data.hand)
+    whole = _inputs(data.grids, data.rest_grids[data.hand])
+    np.testing.assert_array_equal(rows.take(slice(None)), whole)
+    # reference correlation: numpy's corrcoef of each cell with each angle
+    y = data.angles.astype(np.float64)
+    x = whole[:, :data.grids.shape[1]].astype(np.float64)
+    with np.errstate(invalid="ignore", divide="ignore"):  # constant cells correlate 0
+        ref = np.nan_to_num(np.abs(np.corrcoef(x.T, y.T)[:x.shape[1], x.shape[1]:]))
+    got = _correlations(rows, data.angles, data.grids.shape[1], block=7)
+    np.testing.assert_allclose(got, ref, atol=1e-9)
+    opts = LearnedOptions(components=16)
+    small = _fit_digits(rows, data.angles, opts, np.random.default_rng(3), block=7)
+    big = _fit_digits(rows, data.angles, opts, np.random.default_rng(3), block=10**9)
+    assert small.keys() == big.keys()
+    for key in small:
+        np.testing.assert_allclose(small[key], big[key], rtol=1e-5, atol=1e-5, err_msg=key)
+    # the codes are the components of the whole inputs' digit columns
+    p = "d1_"
+    ref_codes = (whole[:, big[p + "cols"]] * big[p + "w"] - big[p + "mean"]) @ big[p + "components"]
+    np.testing.assert_allclose(big[p + "codes"], ref_codes, rtol=1e-5, atol=1e-5)
