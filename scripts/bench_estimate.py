@@ -5,7 +5,7 @@ Usage::
     python scripts/bench_estimate.py [--db FOLDER] [--entries 20448] [--frames 2000]
                                      [--calibrated]
     python scripts/bench_estimate.py --learned FOLDER [--kind ensemble|fingers|mlp]
-                                     [--frames 2000] [--hands 2000] [--poses-per-hand 100]
+                                     [--frames 2000] [--hands 4000] [--poses-per-hand 100]
 
 The database of the standard hand is read from ``FOLDER/<HandShape().name>.h5``
 or, without ``--db``, rendered into a temporary folder (about 30 s for
@@ -153,7 +153,7 @@ def main() -> None:
                     help="time the learnt estimator (read from FOLDER or learnt there first)")
     ap.add_argument("--kind", default="ensemble", choices=["ensemble", "fingers", "mlp"],
                     help="--learned: which learnt estimator")
-    ap.add_argument("--hands", type=int, default=2000, help="--learned: learning set hands")
+    ap.add_argument("--hands", type=int, default=4000, help="--learned: learning set hands")
     ap.add_argument("--poses-per-hand", type=int, default=100,
                     help="--learned: learning set frames per hand")
     args = ap.parse_args()

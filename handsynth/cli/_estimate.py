@@ -247,7 +247,7 @@ def _progress(stream):
               help="Folder of the learnt estimator and its learning set [default: "
                    "~/.cache/handsynth/learned].")
 @click.option("--learned-hands", type=int, default=None, metavar="N",
-              help="Random hands of the learning set [default: 2,000 x 100 frames].")
+              help="Random hands of the learning set [default: 4,000 x 100 frames].")
 @click.option("--side", type=click.Choice(["right", "left"]), default=None,
               help="With --learned: the hand wearing the device [default: right] (the "
                    "lookups take it from the database).")

@@ -79,7 +79,7 @@ class LearningSetOptions:
     seed : int
     """
 
-    hands: int = 2000
+    hands: int = 4000
     poses_per_hand: int = 100
     mix: tuple[float, float, float] = (0.4, 0.4, 0.2)
     hand_spread: float = 1.0

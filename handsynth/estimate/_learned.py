@@ -42,7 +42,7 @@ Three regressors share that input (:class:`LearnedOptions` ``kind``):
 
 Chosen on model hands of random geometry (README, "Camera estimator for
 unseen hands"): ``"fingers"`` with ``k = 128`` and the local linear fit on a
-200,000-frame learning set, alone or averaged with ``"mlp"``
+400,000-frame learning set (4,000 hands), alone or averaged with ``"mlp"``
 (:class:`~handsynth.estimate.EnsembleEstimator`).
 
 Everything learnt is kept in a folder the caller names
