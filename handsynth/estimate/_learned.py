@@ -204,6 +204,8 @@ class _Rows:
 
     def __init__(self, grids: np.ndarray, rest: np.ndarray | None = None,
                  hand: np.ndarray | None = None) -> None:
+        if (rest is None) != (hand is None):
+            raise ValueError("rest and hand are given together or not at all")
         self.grids, self.rest, self.hand = grids, rest, hand
         self.width = grids.shape[1] * (1 if rest is None else 2)
 
@@ -212,7 +214,9 @@ class _Rows:
 
     def take(self, rows) -> np.ndarray:
         """Inputs (n, width) float32 of `rows` (a slice or an index array)."""
-        rest = None if self.rest is None else self.rest[self.hand[rows]]
+        rest = None
+        if self.rest is not None and self.hand is not None:
+            rest = self.rest[self.hand[rows]]
         return _inputs(self.grids[rows], rest)
 
     def blocks(self, rows: int = 20000):
