@@ -69,12 +69,15 @@ def imu() -> None:
 @click.option("--no-sensor-calibration", is_flag=True,
               help="Leave the trials uncorrected (the accelerometer/gyro/magnetometer "
                    "calibration is applied to every trial by default).")
+@click.option("--no-plate-fusion", is_flag=True,
+              help="Keep each forearm plate sensor's own attitude (by default the three are "
+                   "fused into one after every filter).")
 @click.option("--json", "json_out", type=click.Path(dir_okay=False), required=True,
               help="Write the full report as JSON.")
 @click.option("--plots", "plot_dir", type=click.Path(file_okay=False),
               help="Write orientation_error.png and stick_figure.png (last trial) here.")
-def eval_(config_name, filters, durations, elbows, no_grasps, no_sensor_calibration, json_out,
-          plot_dir) -> None:
+def eval_(config_name, filters, durations, elbows, no_grasps, no_sensor_calibration,
+          no_plate_fusion, json_out, plot_dir) -> None:
     """Reproduce the thesis' tables on simulated data, beside trivial baselines."""
     from ..sensors.imu import (
         FILTERS,
@@ -89,7 +92,8 @@ def eval_(config_name, filters, durations, elbows, no_grasps, no_sensor_calibrat
     series: dict = {}
     rep = evaluate(config, durations=durations or (15.0, 30.0), elbows=elbows or ("fixed", "moving"),
                    filters=_filters(filters, FILTERS), grasps=not no_grasps,
-                   sensor_calibration=not no_sensor_calibration, series=series)
+                   sensor_calibration=not no_sensor_calibration,
+                   plate_fusion=not no_plate_fusion, series=series)
     _write_json(json_out, rep)
     if plot_dir:
         out = Path(plot_dir)
@@ -220,6 +224,8 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
         q, sensors, name = res["quat"], cal.sensors, "filter4"
         if res["sensor_calibration"]:
             name += ", sensor calibration applied"
+        if cal.plate is not None:
+            name += ", forearm plate fused"
         if angles_out:
             _write_table(angles_out, ["time_s", *JOINT_NAMES], np.column_stack([t, res["angles"]]))
         if tips_out:

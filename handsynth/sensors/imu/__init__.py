@@ -5,7 +5,8 @@ the back of the hand (2) and every phalanx (15) of the handsynth hand, noise
 as Allan-deviation figures; Allan variance; orientation estimators sharing
 one :class:`OrientationEstimator` protocol (gyro integration, the thesis'
 Filter 1 and EKF "Filter 4", and the VQF, Madgwick, Mahony and ahrs-EKF
-baselines); sensor-to-joint vectors; joint angles and fingertip positions.
+baselines); sensor-to-joint vectors; the forearm plate's three sensors fused
+into one attitude; joint angles and fingertip positions.
 """
 
 from ._attitude import StaticStart, azimuth_correction, gyro_bias, initial_attitude
@@ -71,6 +72,7 @@ from ._noise import (
     apply_axis_noise,
     draw_fixed_errors,
 )
+from ._plate import PLATE_SENSORS, fuse_plate, plate_rotations
 from ._plot import plot_orientation_error, plot_stick_figure
 from ._recording import (
     UNITS,
@@ -111,6 +113,7 @@ __all__ = [
     "LINKS",
     "MODEL_JOINTS",
     "MPU9250_DATASHEET",
+    "PLATE_SENSORS",
     "POINTS",
     "ROTATIONS",
     "SENSOR_BODIES",
@@ -164,6 +167,7 @@ __all__ = [
     "fingertip_positions",
     "fit_sensor_calibration",
     "free_motion",
+    "fuse_plate",
     "gated_orientation",
     "grasp_motion",
     "gyro_bias",
@@ -174,6 +178,7 @@ __all__ = [
     "link_frames",
     "link_vectors",
     "make_filter",
+    "plate_rotations",
     "plot_orientation_error",
     "plot_stick_figure",
     "read_broad_trial",

@@ -26,6 +26,7 @@ from ._kinematics import (
     thumb_cmc_model,
     zero_offsets,
 )
+from ._plate import PLATE_SENSORS, fuse_plate, plate_rotations
 from ._recording import ImuRecording
 from ._sensorcal import POSE_PREFIX, SensorCalibration, fit_sensor_calibration
 from ._vectors import ChainModel, chain_model
@@ -33,8 +34,9 @@ from ._vectors import ChainModel, chain_model
 __all__ = ["ImuCalibration", "calibrate", "segments_from_seconds"]
 
 # 2: the thumb CMC axes; 3: the accelerometer/gyro calibration; 4: the
-# magnetometer calibration (older files load without them)
-_VERSION = 4
+# magnetometer calibration; 5: the forearm plate's rotations (older files load
+# without them)
+_VERSION = 5
 
 
 def segments_from_seconds(spans: dict, rate_hz: float, n: int) -> tuple:
@@ -71,6 +73,11 @@ class ImuCalibration:
         Accelerometer and gyro corrections of the same physical sensors;
         None (no static poses, or files before version 3): readings are
         used as they come.
+    plate : dict or None
+        The forearm plate's constant rotations (:func:`plate_rotations`):
+        sensor -> rotation from its frame to the first plate sensor's.  None
+        (files before version 5): every forearm sensor keeps its own
+        attitude.
     """
 
     model: ChainModel
@@ -79,6 +86,22 @@ class ImuCalibration:
     sensors: tuple
     cmc: ThumbCmcModel | None = None
     sensor_calibration: SensorCalibration | None = None
+    plate: dict | None = None
+
+    def fuse(self, quats, sensors, *, plate_fusion: bool = True) -> np.ndarray:
+        """Attitudes with the forearm plate's sensors fused into one (:func:`fuse_plate`).
+
+        Parameters
+        ----------
+        quats : ndarray, shape (S, N, 4)
+            Any filter's sensor-to-world quaternions.
+        sensors : sequence of str, length S
+        plate_fusion : bool, keyword-only
+            False (or no plate rotations stored) returns `quats` unchanged.
+        """
+        if not plate_fusion or self.plate is None:
+            return quats
+        return fuse_plate(quats, sensors, self.plate)
 
     def correct(self, rec: ImuRecording, *, sensor_calibration: bool = True) -> ImuRecording:
         """The calibrated sensors of `rec`, the sensor calibration applied (if any and asked).
@@ -100,7 +123,8 @@ class ImuCalibration:
         except InvalidInputError as exc:
             raise RecordingError(f"calibration file inconsistent: {exc}") from None
 
-    def track(self, rec: ImuRecording, *, static=None, sensor_calibration: bool = True) -> dict:
+    def track(self, rec: ImuRecording, *, static=None, sensor_calibration: bool = True,
+              plate_fusion: bool = True) -> dict:
         """Attitudes (Filter 4), joint angles and fingertips of a recording.
 
         Parameters
@@ -111,6 +135,9 @@ class ImuCalibration:
         sensor_calibration : bool, keyword-only
             Apply the stored accelerometer/gyro/magnetometer calibration first (False:
             `rec` is already corrected).
+        plate_fusion : bool, keyword-only
+            Fuse the forearm plate's three attitudes into one (:meth:`fuse`;
+            needs the plate rotations of a version-5 file).
 
         Returns
         -------
@@ -122,7 +149,7 @@ class ImuCalibration:
         sub = self.correct(rec, sensor_calibration=sensor_calibration)
         applied = sensor_calibration and self.sensor_calibration is not None
         est = ChainEKF(self.model) if static is None else ChainEKF(self.model, static=static)
-        q = est.run(sub)
+        q = self.fuse(est.run(sub), sub.sensors, plate_fusion=plate_fusion)
         angles, _ = joint_angles(q, sub.sensors, self.frames, zero=self.zero, cmc=self.cmc)
         tips = {f: v for f, v in fingertip_positions(q, sub.sensors, self.model).items()
                 if not f.endswith("_joints")}
@@ -138,7 +165,9 @@ class ImuCalibration:
                 **({} if self.cmc is None else {"thumb_cmc": {
                     "axes": self.cmc.axes.tolist(), "rest": self.cmc.rest.tolist()}}),
                 **({} if self.sensor_calibration is None else {
-                    "sensor_calibration": self.sensor_calibration.to_dict()})}
+                    "sensor_calibration": self.sensor_calibration.to_dict()}),
+                **({} if self.plate is None else {
+                    "plate": {s: v.tolist() for s, v in self.plate.items()}})}
 
     def save(self, path) -> Path:
         """Write JSON atomically (never a half-written file under `path`)."""
@@ -187,7 +216,18 @@ class ImuCalibration:
             if lacking:
                 raise RecordingError(f"{path}: sensor_calibration lacks sensor(s) "
                                      f"{', '.join(lacking)}")
-        return cls(model, frames, zero, tuple(d["sensors"]), cmc, sensor_cal)
+        plate = None
+        if "plate" in d:
+            try:
+                plate = {str(s): np.array(v, float).reshape(3, 3) for s, v in d["plate"].items()}
+            except (AttributeError, TypeError, ValueError) as exc:
+                raise RecordingError(f"{path}: malformed plate rotations ({exc})") from None
+            bad = [s for s, r in plate.items() if s not in d["sensors"]
+                   or not np.allclose(r.T @ r, np.eye(3), atol=1e-6)]
+            if bad:
+                raise RecordingError(f"{path}: plate rotation(s) of {', '.join(bad)} are not "
+                                     "rotations of calibrated sensors")
+        return cls(model, frames, zero, tuple(d["sensors"]), cmc, sensor_cal, plate)
 
 
 def calibrate(rec: ImuRecording, *, sensor_calibration: bool = True) -> ImuCalibration:
@@ -200,7 +240,8 @@ def calibrate(rec: ImuRecording, *, sensor_calibration: bool = True) -> ImuCalib
     corrected for scale, cross-axis error and accelerometer bias, and the
     correction is kept in the result (:meth:`ImuCalibration.track` applies
     it to every recording); ``sensor_calibration=False`` skips it, e.g. for
-    a recording already corrected.
+    a recording already corrected.  The forearm plate's constant rotations
+    (:func:`plate_rotations`) are stored too when all its sensors are there.
     """
     sensor_cal = None
     if sensor_calibration and sum(name.startswith(POSE_PREFIX) for name, _, _ in rec.labelled()) >= 8:
@@ -209,5 +250,6 @@ def calibrate(rec: ImuRecording, *, sensor_calibration: bool = True) -> ImuCalib
     model = chain_model(rec)
     frames = link_frames(rec, model)
     zero = zero_offsets(rec, frames)
+    plate = plate_rotations(rec) if all(s in rec.sensors for s in PLATE_SENSORS) else None
     return ImuCalibration(model, frames, zero, tuple(model.own), thumb_cmc_model(rec, frames),
-                          sensor_cal)
+                          sensor_cal, plate)

@@ -204,7 +204,8 @@ def _vector_report(cal, model, config: SimConfig, placement, lsq_rec) -> dict:
     }
 
 
-def _trial(rec, filters, calib: ImuCalibration, series: dict | None = None) -> dict:
+def _trial(rec, filters, calib: ImuCalibration, series: dict | None = None, *,
+           plate_fusion: bool = True) -> dict:
     truth = _truth(rec)
     motion_start = next((b for s, _, b in truth.segments if s == "align"), 0)
     sl = slice(motion_start, None)
@@ -213,7 +214,8 @@ def _trial(rec, filters, calib: ImuCalibration, series: dict | None = None) -> d
     kp = truth.keypoints
     true_angles = truth.angles[:, 9:]
     for name in filters:
-        q = make_filter(name, calib.model).run(rec)
+        q = calib.fuse(make_filter(name, calib.model).run(rec), rec.sensors,
+                       plate_fusion=plate_fusion)
         err = angle_deg(q[:, sl], truth.quat[:, sl])
         head, incl = heading_inclination_deg(q[:, sl], truth.quat[:, sl])
         if series is not None:
@@ -251,7 +253,7 @@ def _trial(rec, filters, calib: ImuCalibration, series: dict | None = None) -> d
 
 
 def _grasp_report(config, placement, filters, calib: ImuCalibration,
-                  sensor_cal: SensorCalibration | None) -> dict:
+                  sensor_cal: SensorCalibration | None, plate_fusion: bool = True) -> dict:
     hand = ImuHand(config.shape, placement=placement)
     rec = simulate_imu(grasp_motion(), hand=hand, noise=config.noise, skin=config.skin,
                        seed=config.seed + 31, device_seed=_device_seed(config))
@@ -262,7 +264,8 @@ def _grasp_report(config, placement, filters, calib: ImuCalibration,
     holds = [(s.split(":", 1)[1], a, b) for s, a, b in truth.segments if s.startswith("grasp:")]
     out: dict = {"classes": list(classes), "accuracy": {}}
     for name in filters:
-        q = make_filter(name, calib.model).run(rec)
+        q = calib.fuse(make_filter(name, calib.model).run(rec), rec.sensors,
+                       plate_fusion=plate_fusion)
         ang, _ = joint_angles(q, rec.sensors, calib.frames, zero=calib.zero, cmc=calib.cmc)
         hits = [classify_grasp(ang[a:b].mean(axis=0, keepdims=True), classes)[0] == g
                 for g, a, b in holds]
@@ -276,7 +279,8 @@ def _grasp_report(config, placement, filters, calib: ImuCalibration,
 
 def evaluate(config: SimConfig = HELDOUT, *, durations=(15.0, 30.0), elbows=("fixed", "moving"),
              filters=FILTERS, grasps: bool = True, speed: float = 1.0,
-             sensor_calibration: bool = True, series: dict | None = None) -> dict:
+             sensor_calibration: bool = True, plate_fusion: bool = True,
+             series: dict | None = None) -> dict:
     """Run the evaluation and return a JSON-ready dict.
 
     Parameters
@@ -294,6 +298,9 @@ def evaluate(config: SimConfig = HELDOUT, *, durations=(15.0, 30.0), elbows=("fi
     sensor_calibration : bool, keyword-only
         Apply the accelerometer/gyro/magnetometer calibration to every trial (it is
         always applied to the calibration recording itself).
+    plate_fusion : bool, keyword-only
+        Fuse the forearm plate's three attitudes into one after every filter
+        (:func:`fuse_plate`); False keeps each forearm sensor's own.
     series : dict, keyword-only
         Filled with the last trial's error time series and a stick-figure
         instant (for :mod:`._plot`).
@@ -316,16 +323,18 @@ def evaluate(config: SimConfig = HELDOUT, *, durations=(15.0, 30.0), elbows=("fi
                 rec = sensor_cal.apply(rec)     # keeps the truth
             lsq_rec = lsq_rec or rec
             last = k == len(durations) - 1 and m == len(elbows) - 1
-            t = _trial(rec, filters, calib, series if last else None)
+            t = _trial(rec, filters, calib, series if last else None,
+                       plate_fusion=plate_fusion)
             t.update(duration_s=float(dur), elbow=elbow)
             trials.append(t)
-    report = {"config": {**config.describe(), "sensor_calibration_applied": sensor_calibration},
+    report = {"config": {**config.describe(), "sensor_calibration_applied": sensor_calibration,
+                         "plate_fusion": plate_fusion},
               "filters": list(filters),
               "vectors": _vector_report(cal, calib.model, config, placement, lsq_rec),
               "trials": trials, "summary": _summary(trials, filters)}
     if grasps:
         report["grasps"] = _grasp_report(config, placement, filters, calib,
-                                         sensor_cal if sensor_calibration else None)
+                                         sensor_cal if sensor_calibration else None, plate_fusion)
     return report
 
 

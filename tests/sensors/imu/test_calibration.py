@@ -69,7 +69,7 @@ def test_sensor_calibration_is_stored_and_applied(tmp_path, ideal_rec):
                          sensor_calibration=_sensor_cal(ideal_rec.sensors))
     path = cal.save(tmp_path / "c.json")
     d = json.loads(path.read_text())
-    assert d["version"] == 4 and set(d["sensor_calibration"]) == set(ideal_rec.sensors)
+    assert d["version"] == 5 and set(d["sensor_calibration"]) == set(ideal_rec.sensors)
     back = ImuCalibration.load(path)
     assert np.array_equal(back.sensor_calibration.acc_matrix, cal.sensor_calibration.acc_matrix)
     fixed = back.correct(ideal_rec)

@@ -1,0 +1,121 @@
+"""The forearm plate as one rigid body (an addition to seed 003).
+
+The three forearm sensors sit on one rigid plate (seed 003 Fig. 2.15), so the
+rotation between any two of them is constant.  The thesis gives each its own
+attitude and chain (sensor 1 for the index/middle fingers, 2 for ring/little,
+3 for the thumb).  Here the constant rotations are read from the
+calibration's static start -- the same attitudes (eqs. 2.9-2.11 with the
+azimuth alignment of eqs. 4.18-4.22) that give the forearm link vectors
+(eq. 3.6) -- and every plate sensor's attitude estimate is turned into the
+first sensor's frame and averaged, sample by sample; the average, turned back
+into each sensor's frame, replaces the three estimates.
+
+With R_k the estimated attitude of plate sensor k and C_k its static-start
+attitude in the calibration, the fused elbow-to-wrist vector of every chain
+is mean_k(R_k C_k^T) applied to the same world vector of the calibration's
+static pose: the plate's rotation since that pose, averaged over the three
+sensors, instead of one sensor's.  The forearm link vectors need no change:
+they were computed from the same static-start attitudes, so the three chains
+place the wrist at one point.
+
+The average is the quaternion mean of Markley et al., "Averaging
+quaternions", J. Guidance, Control, and Dynamics 30(4), 2007: the unit
+eigenvector of the largest eigenvalue of sum_k q_k q_k^T, which does not
+depend on the quaternions' signs.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ...errors import InvalidInputError
+from ._attitude import StaticStart, initial_attitude
+from ._quat import mat_to_quat, qconj, qmul, quat_to_mat
+from ._recording import ImuRecording
+
+__all__ = ["PLATE_SENSORS", "fuse_plate", "plate_rotations"]
+
+#: The sensors on the forearm plate, the reference sensor first.
+PLATE_SENSORS: tuple[str, ...] = ("forearm_1", "forearm_2", "forearm_3")
+
+
+def plate_rotations(cal: ImuRecording, *, sensors=PLATE_SENSORS,
+                    static: StaticStart | None = None) -> dict:
+    """Constant rotations between the plate's sensors from a calibration's static start.
+
+    Parameters
+    ----------
+    cal : ImuRecording
+        The calibration recording (sensor-corrected, as for the link vectors),
+        with a labelled ``static`` stretch and an ``elbow_flex`` rotation
+        (the azimuth alignment), or the stretches given by `static`.
+    sensors : sequence of str, keyword-only
+        The plate's sensors, the reference first (at least two).
+    static : StaticStart, keyword-only
+        The static start and common rotation; default: the calibration's
+        labelled ones, as :func:`link_vectors` takes them.
+
+    Returns
+    -------
+    dict
+        sensor -> (3, 3) rotation from that sensor's frame to the reference
+        sensor's frame (the identity for the reference).
+    """
+    from ._vectors import _calibration_static
+
+    sensors = tuple(sensors)
+    if len(sensors) < 2:
+        raise InvalidInputError(f"a plate needs at least two sensors, got {sensors!r}")
+    missing = [s for s in sensors if s not in cal.sensors]
+    if missing:
+        raise InvalidInputError(f"the calibration recording lacks plate sensor(s) "
+                                f"{', '.join(missing)}")
+    q0 = initial_attitude(cal, static or _calibration_static(cal))
+    r = quat_to_mat(q0[[cal.index(s) for s in sensors]])
+    return {s: r[0].T @ r[k] for k, s in enumerate(sensors)}
+
+
+def fuse_plate(quats, sensors, rotations: dict) -> np.ndarray:
+    """One attitude for the plate's sensors from their separate estimates.
+
+    Parameters
+    ----------
+    quats : ndarray, shape (S, N, 4)
+        Sensor-to-world quaternions of every sensor (any filter's output).
+    sensors : sequence of str, length S
+    rotations : dict
+        From :func:`plate_rotations`: plate sensor -> rotation from its frame
+        to the reference sensor's.  Plate sensors absent from `sensors` are
+        left out of the average.
+
+    Returns
+    -------
+    ndarray, shape (S, N, 4)
+        A copy of `quats` in which every plate sensor's attitude is the
+        averaged plate attitude turned into its own frame; other sensors
+        unchanged.  With fewer than two plate sensors present, an unchanged
+        copy.
+    """
+    quats = np.asarray(quats, dtype=float)
+    sensors = tuple(sensors)
+    if quats.ndim != 3 or quats.shape[0] != len(sensors) or quats.shape[2] != 4:
+        raise InvalidInputError(f"quats must have shape ({len(sensors)}, N, 4), "
+                                f"got {quats.shape}")
+    out = quats.copy()
+    present = [s for s in rotations if s in sensors]
+    if len(present) < 2:
+        return out
+    for s in present:
+        r = np.asarray(rotations[s], dtype=float)
+        if r.shape != (3, 3) or not np.allclose(r.T @ r, np.eye(3), atol=1e-6):
+            raise InvalidInputError(f"plate rotation of {s!r} is not a rotation matrix")
+    rel = {s: mat_to_quat(rotations[s]) for s in present}                   # ref <- sensor
+    # each sensor's estimate of the reference frame's attitude, world <- ref
+    ref = np.stack([qmul(quats[sensors.index(s)], qconj(rel[s])) for s in present])
+    m = np.einsum("kni,knj->nij", ref, ref)                                  # (N, 4, 4)
+    _, vec = np.linalg.eigh(m)
+    mean = vec[..., -1]                                                      # largest eigenvalue
+    mean *= np.where(np.sum(mean * ref[0], axis=-1) < 0, -1.0, 1.0)[:, None]
+    for s in present:
+        out[sensors.index(s)] = qmul(mean, rel[s])
+    return out
