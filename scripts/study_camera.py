@@ -4,6 +4,7 @@ Usage::
 
     python scripts/study_camera.py --cache DIR backgrounds
     python scripts/study_camera.py --cache DIR jitter
+    python scripts/study_camera.py --cache DIR holds
     python scripts/study_camera.py observability
     python scripts/study_camera.py --cache DIR bound
     python scripts/study_camera.py --cache DIR rests
@@ -24,6 +25,20 @@ Usage::
     smoothing 0, 0.3, 0.5, 0.7 the flexion MAE and the RMS second difference
     of the flexion angles (deg/frame^2).  Last line: ``jitter_0=<mean>
     jitter_0.3=<mean> ...``.
+``holds``
+    Exponential smoothing against the One Euro filter where jitter shows:
+    natural grasps from a relaxed rest, each held 10-30 frames and reached in
+    12-30 frames (minimum jerk, 30 fps), every frame's outline flickering
+    (each pixel within one of the silhouette's edge flipped with
+    probability 0.3, as a camera's binarization flickers), per-digit
+    estimator.  Per filter: the flexion MAE, its MAE while moving and the RMS
+    second difference of the flexion angles while held and over all frames
+    (deg/frame^2).  Three held-out model hands (seed 21) to choose the One
+    Euro constants on (a grid of minimum cut-offs and speed coefficients),
+    then two other model hands (seed 7) and the two glTF hands with the
+    defaults of :class:`handsynth.estimate.OneEuroOptions`.  Last line:
+    ``hold_jitter_raw=<mean> hold_jitter_exp0.5=<mean> hold_jitter_one_euro=<mean>
+    mae_raw=<mean> mae_exp0.5=<mean> mae_one_euro=<mean>`` (the second set).
 ``observability``
     How many silhouette pixels (720x480) change when the index PIP (DIP
     following at 0.7) flexes by 20 deg from 0, 20, 40, 60 and 80 deg, on
@@ -167,6 +182,96 @@ def jitter(cache) -> None:
     print(" ".join(f"jitter_{a:g}={np.mean(v):.3f}" for a, v in totals.items()))
 
 
+def _flicker(mask: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """`mask` with each pixel within one of its edge flipped with probability 0.3."""
+    import cv2
+
+    m = mask.astype(np.uint8)
+    ring = cv2.dilate(m, np.ones((3, 3), np.uint8)) != cv2.erode(m, np.ones((3, 3), np.uint8))
+    return mask.astype(bool) ^ (ring & (rng.random(mask.shape) < 0.3))
+
+
+def _held_motion(rest: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """Angles (N, 20) of 8 natural grasps from and back to `rest` with holds, and a moving flag."""
+    keys, _ = natural_test_poses(rest, 8, rng)
+    keys = np.vstack([rest, keys, rest])
+    parts = []
+    for a, b in itertools.pairwise(keys):
+        parts.append(np.repeat(a[None], int(rng.integers(10, 30)), axis=0))
+        parts.append(a + (b - a) * _minjerk(int(rng.integers(12, 30)))[:, None])
+    parts.append(np.repeat(keys[-1][None], 20, axis=0))
+    seq = np.vstack(parts)
+    return seq, np.r_[False, np.any(np.diff(seq, axis=0) != 0, axis=1)]
+
+
+def _steadiness(got: np.ndarray, seq: np.ndarray, moving: np.ndarray) -> tuple:
+    """Flexion MAE, MAE while moving, RMS second difference while held and overall."""
+    err = np.abs(got[:, _FLEX] - seq[:, _FLEX])
+    d2 = np.diff(got[:, _FLEX], 2, axis=0)
+    held = ~(moving[:-2] | moving[1:-1] | moving[2:])
+    return (err.mean(), err[moving].mean(), float(np.sqrt(np.mean(d2[held] ** 2))),
+            float(np.sqrt(np.mean(d2**2))))
+
+
+def holds(cache) -> None:
+    from handsynth.estimate import OneEuroOptions, one_euro
+
+    mount = CameraMount.paper()
+    est = _estimator(cache)
+    rate = 30.0
+
+    def exponential(x: np.ndarray, a: float) -> np.ndarray:
+        y = x.copy()
+        for i in range(1, len(x)):
+            y[i] = a * y[i - 1] + (1 - a) * x[i]
+        return y
+
+    def answers(hands, seed: int) -> list:
+        rng, noise = np.random.default_rng(seed), np.random.default_rng(seed + 1)
+        out = []
+        for hand in hands:
+            made = hand.make()
+            rest = relaxed_rest_posture(rng)
+            seq, moving = _held_motion(rest, rng)
+            cal = est.calibrated(made.mask(rest))
+            got = np.stack([cal.estimate(_flicker(made.mask(p), noise)).angles for p in seq])
+            out.append((hand.name, got, seq, moving))
+        return out
+
+    filters = {"raw": lambda x: x, **{f"exp{a}": (lambda x, a=a: exponential(x, a))
+                                      for a in (0.3, 0.5, 0.7)},
+               "one_euro": lambda x: one_euro(x, rate_hz=rate)}
+    print("-- choosing the One Euro constants: three held-out model hands (seed 21); mean of "
+          "MAE, MAE moving, jitter held, jitter (deg, deg/frame^2)")
+    chosen = answers(model_test_hands(3, seed=21, mount=mount, spread=1.5), 5)
+    grid = {f"exp{a}": filters[f"exp{a}"] for a in (0.3, 0.5, 0.7)}
+    for cut in (0.3, 0.5, 1.0, 2.0):
+        for beta in (0.01, 0.02, 0.05, 0.1):
+            o = OneEuroOptions(min_cutoff_hz=cut, beta=beta)
+            grid[f"one_euro {cut} Hz, beta {beta}"] = lambda x, o=o: one_euro(x, rate_hz=rate,
+                                                                              options=o)
+    raw = np.mean([_steadiness(g, s, m) for _, g, s, m in chosen], axis=0)
+    print(f"{'raw':28s} {raw[0]:6.2f} {raw[1]:6.2f} {raw[2]:5.2f} {raw[3]:5.2f}")
+    for name, f in grid.items():
+        r = np.mean([_steadiness(f(g), s, m) for _, g, s, m in chosen], axis=0)
+        print(f"{name:28s} {r[0]:6.2f} {r[1]:6.2f} {r[2]:5.2f} {r[3]:5.2f}  "
+              f"(MAE {r[0] - raw[0]:+.2f})", flush=True)
+    print(f"-- {OneEuroOptions()}: other hands")
+    totals: dict = {k: [] for k in filters}
+    for name, got, seq, moving in answers(
+            model_test_hands(2, seed=7, mount=mount, spread=1.5) + mesh_test_hands(mount=mount),
+            11):
+        for k, f in filters.items():
+            r = _steadiness(f(got), seq, moving)
+            totals[k].append(r)
+            print(f"{name:15s} {k:9s} flexion MAE {r[0]:5.2f} (moving {r[1]:5.2f}), jitter held "
+                  f"{r[2]:4.2f}, overall {r[3]:4.2f} deg/frame^2", flush=True)
+    mean = {k: np.mean(v, axis=0) for k, v in totals.items()}
+    print(" ".join(f"hold_jitter_{k}={mean[k][2]:.3f}"
+                   for k in ("raw", "exp0.5", "one_euro")) + " " +
+          " ".join(f"mae_{k}={mean[k][0]:.2f}" for k in ("raw", "exp0.5", "one_euro")))
+
+
 def observability() -> None:
     import cv2
 
@@ -263,7 +368,8 @@ def rests(cache) -> None:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cache", default=None, help="folder of the learnt estimator")
-    ap.add_argument("study", choices=["backgrounds", "jitter", "observability", "bound", "rests"])
+    ap.add_argument("study", choices=["backgrounds", "jitter", "holds", "observability", "bound",
+                                      "rests"])
     args = ap.parse_args()
     if args.study != "observability" and args.cache is None:
         ap.error(f"{args.study} needs --cache DIR")
@@ -271,6 +377,8 @@ def main() -> None:
         backgrounds(args.cache)
     elif args.study == "jitter":
         jitter(args.cache)
+    elif args.study == "holds":
+        holds(args.cache)
     elif args.study == "bound":
         bound(args.cache)
     elif args.study == "rests":

@@ -19,6 +19,9 @@
   (:func:`learned_estimator`, :class:`LearnedOptions`, :func:`train_learned`,
   :func:`fit_mlp`), calibrated by a frame of the user's relaxed hand;
   :class:`EnsembleEstimator` averages several.
+* Steady angles over time (beyond the paper): the One Euro filter
+  (:class:`OneEuroFilter`, :class:`OneEuroOptions`, :func:`one_euro`) and
+  :class:`SmoothedEstimator`, which wraps any estimator with it.
 * Calibration from one open-hand frame (beyond the paper):
   :func:`select_shape_from_frame`, :class:`Calibration` and the masked search
   (:func:`masked_search` / :func:`masked_search_reference`,
@@ -53,6 +56,13 @@ from ._masked import (
 )
 from ._search import SearchOptions, SearchResult, SearchTables, search, search_reference
 from ._selection import Selection, SelectionOptions, select_shape, shape_ratios
+from ._smoothing import (
+    OneEuroFilter,
+    OneEuroOptions,
+    OneEuroState,
+    SmoothedEstimator,
+    one_euro,
+)
 
 __all__ = [
     "ApproximateIndex",
@@ -63,6 +73,9 @@ __all__ = [
     "LearnedEstimator",
     "LearnedOptions",
     "MaskedMatch",
+    "OneEuroFilter",
+    "OneEuroOptions",
+    "OneEuroState",
     "PoseEstimate",
     "PoseEstimator",
     "PoseLookup",
@@ -71,12 +84,14 @@ __all__ = [
     "SearchTables",
     "Selection",
     "SelectionOptions",
+    "SmoothedEstimator",
     "fit_mlp",
     "learned_estimator",
     "local_linear",
     "masked_band_areas",
     "masked_search",
     "masked_search_reference",
+    "one_euro",
     "reference_silhouette",
     "search",
     "search_reference",

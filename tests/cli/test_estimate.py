@@ -23,6 +23,7 @@ from handsynth.db import (
     render_entries,
     write_database,
 )
+from handsynth.estimate import one_euro
 from handsynth.live import live_columns
 from handsynth.live._writers import KEYPOINT_COLUMNS, TRUTH_COLUMNS
 from handsynth.models import JOINT_LIMITS_DEG, JOINT_NAMES, HandShape, paper_pose_set
@@ -458,6 +459,13 @@ def test_learned_estimator_on_a_synthetic_hand_learns_once_then_reads_its_cache(
     smooth = np.array([[float(r[n]) for n in JOINT_NAMES] for r in smooth_rows])
     np.testing.assert_allclose(smooth[0], est[0])  # nothing to smooth with yet
     np.testing.assert_allclose(smooth[1], 0.5 * smooth[0] + 0.5 * est[1], atol=1e-3)
+    steady = _run(*args, "--one-euro", "--out", str(tmp_path / "steady.csv"))
+    assert steady.exit_code == 0, steady.output
+    _, steady_rows = _read_csv(tmp_path / "steady.csv")
+    got = np.array([[float(r[n]) for n in JOINT_NAMES] for r in steady_rows])
+    # the frames' own answers through the One Euro filter at the synthetic source's rate
+    np.testing.assert_allclose(got, one_euro(est, rate_hz=8.0), atol=2e-3)
+    assert np.abs(got - est).max() > 0.01
 
 
 def test_learned_estimator_for_the_left_hand(tmp_path):
@@ -476,6 +484,9 @@ def test_learned_estimator_for_the_left_hand(tmp_path):
     (["--learned-kind", "ensemble"], "apply with --learned only"),
     (["--smoothing", "0.3"], "apply with --learned only"),
     (["--side", "left"], "apply with --learned only"),
+    (["--one-euro"], "--smoothing and --one-euro apply with --learned only"),
+    (["--learned", "--one-euro", "--smoothing", "0.3"],
+     "--one-euro and --smoothing are two ways to steady the angles; give one"),
     (["--learned", "--smoothing", "1"], "--smoothing must be in [0, 1), got 1.0"),
     (["--learned", "--learned-hands", "0"], "--learned-hands must be a positive integer, got 0"),
 ])
