@@ -382,7 +382,7 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
             if one_euro:
                 from ..estimate import SmoothedEstimator
 
-                lookup = SmoothedEstimator(lookup, rate_hz=source.fps or fps)
+                lookup = SmoothedEstimator(lookup, rate_hz=getattr(source, "fps", None) or fps)
         elif calibrate:
             lookup = _calibrate(lookup, source, open_image, db_dir, mount, side, build, info_err)
         if lookup is not None and not learned:
