@@ -21,16 +21,21 @@ place the wrist at one point.
 The average is the quaternion mean of Markley et al., "Averaging
 quaternions", J. Guidance, Control, and Dynamics 30(4), 2007: the unit
 eigenvector of the largest eigenvalue of sum_k q_k q_k^T, which does not
-depend on the quaternions' signs.
+depend on the quaternions' signs.  A mean is not robust: where one of three
+sensors strays from the mean by more than ``disagree_deg`` (a failing or
+disturbed sensor; the filters agree to a few degrees), it is left out of
+that sample's average and a warning names it.
 """
 
 from __future__ import annotations
+
+import warnings
 
 import numpy as np
 
 from ...errors import InvalidInputError
 from ._attitude import StaticStart, initial_attitude
-from ._quat import mat_to_quat, qconj, qmul, quat_to_mat
+from ._quat import angle_deg, mat_to_quat, qconj, qmul, quat_to_mat
 from ._recording import ImuRecording
 
 __all__ = ["PLATE_SENSORS", "fuse_plate", "plate_rotations"]
@@ -75,7 +80,15 @@ def plate_rotations(cal: ImuRecording, *, sensors=PLATE_SENSORS,
     return {s: r[0].T @ r[k] for k, s in enumerate(sensors)}
 
 
-def fuse_plate(quats, sensors, rotations: dict) -> np.ndarray:
+def _markley_mean(q: np.ndarray, weight: np.ndarray) -> np.ndarray:
+    """Weighted quaternion mean (N, 4) of `q` (K, N, 4) with weights (K, N), sign of q[0]."""
+    m = np.einsum("kn,kni,knj->nij", weight, q, q)                      # (N, 4, 4)
+    _, vec = np.linalg.eigh(m)
+    mean = vec[..., -1]                                                  # largest eigenvalue
+    return mean * np.where(np.sum(mean * q[0], axis=-1) < 0, -1.0, 1.0)[:, None]
+
+
+def fuse_plate(quats, sensors, rotations: dict, *, disagree_deg: float = 10.0) -> np.ndarray:
     """One attitude for the plate's sensors from their separate estimates.
 
     Parameters
@@ -87,6 +100,10 @@ def fuse_plate(quats, sensors, rotations: dict) -> np.ndarray:
         From :func:`plate_rotations`: plate sensor -> rotation from its frame
         to the reference sensor's.  Plate sensors absent from `sensors` are
         left out of the average.
+    disagree_deg : float, keyword-only
+        With three or more plate sensors, a sensor farther than this from the
+        plate's mean attitude in a sample is left out of that sample's mean
+        (with a warning naming it and the share of samples).
 
     Returns
     -------
@@ -112,10 +129,21 @@ def fuse_plate(quats, sensors, rotations: dict) -> np.ndarray:
     rel = {s: mat_to_quat(rotations[s]) for s in present}                   # ref <- sensor
     # each sensor's estimate of the reference frame's attitude, world <- ref
     ref = np.stack([qmul(quats[sensors.index(s)], qconj(rel[s])) for s in present])
-    m = np.einsum("kni,knj->nij", ref, ref)                                  # (N, 4, 4)
-    _, vec = np.linalg.eigh(m)
-    mean = vec[..., -1]                                                      # largest eigenvalue
-    mean *= np.where(np.sum(mean * ref[0], axis=-1) < 0, -1.0, 1.0)[:, None]
+    weight = np.ones(ref.shape[:2])
+    mean = _markley_mean(ref, weight)
+    if len(present) >= 3:
+        dev = angle_deg(ref, mean[None])                                     # (K, N)
+        worst = np.argmax(dev, axis=0)
+        stray = dev[worst, np.arange(dev.shape[1])] > disagree_deg
+        if stray.any():
+            weight[worst[stray], np.flatnonzero(stray)] = 0.0
+            mean = _markley_mean(ref, weight)
+            counts = np.bincount(worst[stray], minlength=len(present))
+            named = ", ".join(f"{present[k]} in {c} samples" for k, c in enumerate(counts) if c)
+            warnings.warn(f"forearm plate: a sensor's attitude strayed more than "
+                          f"{disagree_deg:g} deg from the other plate sensors' ({named} of "
+                          f"{dev.shape[1]}); left out of the plate's attitude there",
+                          UserWarning, stacklevel=2)
     for s in present:
         out[sensors.index(s)] = qmul(mean, rel[s])
     return out

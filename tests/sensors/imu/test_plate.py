@@ -90,6 +90,28 @@ def test_fusion_averages_the_sensors_errors_away():
     assert errs is not None
 
 
+def test_a_stray_sensor_is_left_out_with_a_warning():
+    q, rel, plate, mounts, _ = _plate_case(n=300, spread_deg=1.0)
+    true = [_scalar_first((plate * mounts[k]).as_quat()) for k in range(3)]
+    bad = q.copy()
+    off = Rotation.from_rotvec(np.radians([0.0, 40.0, 0.0]))
+    bad[2, 100:160] = _scalar_first((off * Rotation.from_quat(_scalar_last(q[2, 100:160])))
+                                    .as_quat())
+    with pytest.warns(UserWarning, match="forearm_2 in 60 samples of 300"):
+        out = fuse_plate(bad, SENSORS, rel)
+    clean = fuse_plate(q, SENSORS, rel)
+    for k in range(3):       # where it strayed, the other two carry the plate
+        assert angle_deg(out[1 + k, 100:160], true[k][100:160]).max() < 4.0
+    np.testing.assert_allclose(out[:, :100], clean[:, :100])
+    # without the exclusion the stray sensor would have pulled every plate sensor off
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        loose = fuse_plate(bad, SENSORS, rel, disagree_deg=90.0)
+    assert angle_deg(loose[1, 100:160], true[0][100:160]).min() > 8.0
+
+
 def test_fusion_ignores_quaternion_signs_and_absent_sensors():
     q, rel, *_ = _plate_case()
     flipped = q.copy()
