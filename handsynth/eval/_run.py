@@ -140,8 +140,8 @@ def evaluate(options: EvalOptions, *,
                        ties=options.ties)
 
     conds = options.conditions
-    rec: dict[str, dict[str, list[np.ndarray]]] = {k: {c: [] for c in conds}
-           for k in ("est", "entry", "conf", "low", "none", "dist")}
+    rec: dict[str, dict[str, list[np.ndarray]]] = {
+        k: {c: [] for c in conds} for k in ("est", "entry", "conf", "low", "none", "dist")}
     hand_index, set_names, truth = [], [], []
     for hand in hands:
         poses = [make_pose_set(name, options.frames_per_hand,
