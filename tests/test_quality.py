@@ -11,7 +11,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 #: mypy errors on ``handsynth`` (config in pyproject.toml) when the gate was set.
 #: It may only shrink: lower it (and the README's figure) when the count falls.
-MYPY_BASELINE = 88
+MYPY_BASELINE = 0
 
 
 def _run(*args: str) -> subprocess.CompletedProcess:

@@ -96,7 +96,9 @@ def _lookup_demo(db_dir: Path, frames: int) -> None:
         open_mask = r.mask(np.zeros(len(poses[0])))
     _report(f"looked up {frames} frames of hand {user.name}", lookup, masks, poses)
     calibrated = lookup.calibrated(open_mask)
-    ignored = int(calibrated.calibration.ignore.sum())
+    calibration = calibrated.calibration
+    assert calibration is not None  # calibrated() always sets one
+    ignored = int(calibration.ignore.sum())
     _report(f"calibrated to its open hand ({ignored} pixels ignored)", calibrated, masks, poses)
 
 

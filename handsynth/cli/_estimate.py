@@ -356,7 +356,9 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
     open_image = read_image(calibrate_image, what="calibration image") \
         if calibrate_image is not None else None
 
-    source = sink = video = None
+    source: CameraSource | VideoSource | SyntheticSource | None = None
+    video: SideBySideWriter | None = None
+    sink = None
     try:
         if camera is not None:
             source, what = CameraSource(camera), f"camera {camera}"
@@ -373,10 +375,14 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
         mount = getattr(lookup, "mount", None) or CameraMount.paper()
         side = getattr(lookup, "side", None) or side or "right"
         if synthetic:
+            # --synthetic parsed its frame size and hand shape above
+            assert size is not None and user_shape is not None
             source = SyntheticSource(user_shape, mount, side=side,
                                      motion=SyntheticMotion(poses=synthetic_motion), fps=fps,
                                      width_px=size[0], height_px=size[1])
             what = f"synthetic hand {user_shape.name} ({synthetic_motion} poses)"
+        # exactly one of --camera, --video and --synthetic was given (checked above)
+        assert source is not None
         if learned:
             lookup = _calibrate_learned(lookup, source, open_image, mount, side, info_err)
             if one_euro:
@@ -385,7 +391,9 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
                 lookup = SmoothedEstimator(lookup, rate_hz=getattr(source, "fps", None) or fps)
         elif calibrate:
             lookup = _calibrate(lookup, source, open_image, db_dir, mount, side, build, info_err)
-        if lookup is not None and not learned:
+        # opened above, or made from the open hand by the calibration
+        assert lookup is not None
+        if not learned:
             inputs.append(lookup.database.path)
         if out is not None and video_out is not None and not to_stdout \
                 and Path(out).resolve() == Path(video_out).resolve():
@@ -420,9 +428,9 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
     if show is not None:
         sys.stderr.write("\n")
     click.echo(summary.format(), err=info_err)
-    if out is not None and not to_stdout:
+    if sink is not None and not to_stdout:
         click.echo(f"rows: {Path(out)} ({sink.rows} rows, {sink.format})", err=info_err)
-    if video_out is not None:
+    if video is not None:
         click.echo(f"video: {Path(video_out)} ({video.frames} frames, input | matched entry)",
                    err=info_err)
     if summary.stop_reason == "dead":

@@ -25,7 +25,7 @@ def read_image(path, *, what: str = "image"):
         raise InvalidInputError(f"cannot read the {what} {str(path)!r}: no such file or not an "
                                 "image OpenCV can decode")
     if img.dtype == np.uint16:
-        img = (img >> 8).astype(np.uint8)
+        img = (np.asarray(img, dtype=np.uint16) >> 8).astype(np.uint8)  # asarray: the same array, typed
     if img.dtype != np.uint8:
         raise InvalidInputError(f"{what} {str(path)!r} has {img.dtype} pixels; give an 8- or "
                                 "16-bit image")

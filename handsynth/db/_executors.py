@@ -27,6 +27,7 @@ import threading
 import time
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from typing import TypeVar
 
 from ..errors import InvalidInputError
 
@@ -34,6 +35,9 @@ __all__ = ["EXECUTORS", "run_tasks"]
 
 #: Names accepted by ``executor=``.
 EXECUTORS: tuple[str, ...] = ("process", "ray")
+
+_T = TypeVar("_T")  # a task
+_R = TypeVar("_R")  # its result
 
 #: Rendering threads per worker process.
 _WORKER_ENV = {"LP_NUM_THREADS": "1"}
@@ -94,12 +98,13 @@ def _terminate(pool: ProcessPoolExecutor) -> None:
     pool.shutdown(wait=False, cancel_futures=True)
 
 
-def _run_inline(fn: Callable, tasks: Sequence) -> Iterator[tuple[int, object]]:
+def _run_inline(fn: Callable[[_T], _R], tasks: Sequence[_T]) -> Iterator[tuple[int, _R]]:
     for i, task in enumerate(tasks):
         yield i, fn(task)
 
 
-def _run_process(fn: Callable, tasks: Sequence, workers: int) -> Iterator[tuple[int, object]]:
+def _run_process(fn: Callable[[_T], _R], tasks: Sequence[_T],
+                 workers: int) -> Iterator[tuple[int, _R]]:
     # "spawn": a worker must not inherit the parent's GL state or threads.
     ctx = multiprocessing.get_context("spawn")
     pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx,
@@ -140,7 +145,7 @@ def _import_ray():
     return ray
 
 
-def _run_ray(fn: Callable, tasks: Sequence, workers: int) -> Iterator[tuple[int, object]]:
+def _run_ray(fn: Callable[[_T], _R], tasks: Sequence[_T], workers: int) -> Iterator[tuple[int, _R]]:
     ray = _import_ray()
     started_here = False
     if not ray.is_initialized():
@@ -168,8 +173,8 @@ def _run_ray(fn: Callable, tasks: Sequence, workers: int) -> Iterator[tuple[int,
             ray.shutdown()
 
 
-def run_tasks(fn: Callable, tasks: Sequence, *, workers: int,
-              executor: str = "process") -> Iterator[tuple[int, object]]:
+def run_tasks(fn: Callable[[_T], _R], tasks: Sequence[_T], *, workers: int,
+              executor: str = "process") -> Iterator[tuple[int, _R]]:
     """Run ``fn(task)`` for every task; yield ``(task index, result)`` as they finish.
 
     Parameters

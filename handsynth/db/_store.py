@@ -396,7 +396,7 @@ def write_database(
     _hash_header(hasher)
     for name, _, dtype, _ in _DATASETS:
         _hash_dataset_header(hasher, name, dtype, arrays[name].shape)
-        hasher.update(memoryview(arrays[name]).cast("B"))
+        hasher.update(arrays[name].data.cast("B"))  # .data: the array's memoryview
     _hash_meta(hasher, meta_json)
     checksum = "sha256:" + hasher.hexdigest()
 
@@ -624,7 +624,7 @@ def _read_open(path: Path, f, keep: bool, field: _Field):
                 stop = min(n, start + step)
                 field.name = f"dataset {name!r} rows {start}-{stop - 1}"
                 block = np.ascontiguousarray(ds[start:stop], dtype=dtype)
-                hasher.update(memoryview(block).cast("B"))
+                hasher.update(block.data.cast("B"))
                 if keep:
                     out[start:stop] = block
             if keep:

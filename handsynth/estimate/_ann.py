@@ -213,7 +213,7 @@ def tables_fingerprint(tables: SearchTables) -> str:
     for name in ("hlac", "sil_bits", "ridge_bits", "ridge_area"):
         arr = np.ascontiguousarray(getattr(tables, name))
         h.update(f"{name}\0{arr.dtype.str}\0{arr.shape}\0".encode())
-        h.update(memoryview(arr).cast("B"))
+        h.update(arr.data.cast("B"))  # .data: the array's memoryview
     return "sha256:" + h.hexdigest()
 
 
@@ -590,6 +590,7 @@ class ApproximateIndex:
         n = len(tables)
         used = _resolve(opts, n)
         nlist = used.nlist
+        assert nlist is not None  # _resolve fills it in
         m = min(n, max(used.train_size, nlist))
         pick = np.arange(n) if m >= n else np.sort(
             np.random.default_rng(seed).choice(n, size=m, replace=False))
@@ -683,11 +684,10 @@ class ApproximateIndex:
         path = Path(path)
         meta = {"format": _FORMAT, "version": _FORMAT_VERSION, "key": self.key,
                 "options": asdict(self.options), "seed": self.seed, "entries": len(self.tables)}
-        arrays = {"projection": self.projection, "centroids": self.centroids, "order": self.order,
-                  "offsets": self.offsets, "codes": self.codes, "step": self.step,
-                  "meta": np.frombuffer(json.dumps(meta, sort_keys=True).encode(), np.uint8)}
+        meta_bytes = np.frombuffer(json.dumps(meta, sort_keys=True).encode(), np.uint8)
         with atomic_open(path, "wb", what="approximate index", error=DatabaseError) as f:
-            np.savez(f, **arrays)
+            np.savez(f, projection=self.projection, centroids=self.centroids, order=self.order,
+                     offsets=self.offsets, codes=self.codes, step=self.step, meta=meta_bytes)
         return path
 
     @classmethod
@@ -707,6 +707,7 @@ class ApproximateIndex:
         except (OSError, ValueError, KeyError, EOFError, UnicodeDecodeError):
             return None
         n, nlist, dims = len(tables), options.nlist, options.dims
+        assert nlist is not None  # the options went through _resolve
         shapes = {"projection": (dims, HLAC_SIZE), "centroids": (nlist, dims), "order": (n,),
                   "offsets": (nlist + 1,), "codes": (n, dims), "step": (dims,)}
         if any(name not in arrays or arrays[name].shape != shape

@@ -119,8 +119,9 @@ class PoseEstimate:
 
     def as_row(self) -> dict:
         """One flat row: ``entry, no_hand, confidence, low_confidence`` and the 20 angles."""
-        row = {"entry": self.entry, "no_hand": self.no_hand,
-               "confidence": round(self.confidence, 6), "low_confidence": self.low_confidence}
+        row: dict[str, int | float | bool | None] = {
+            "entry": self.entry, "no_hand": self.no_hand, "confidence": round(self.confidence, 6),
+            "low_confidence": self.low_confidence}
         row.update({n: (None if np.isnan(v) else round(float(v), 4))
                     for n, v in zip(JOINT_NAMES, self.angles, strict=True)})
         return row
@@ -507,7 +508,7 @@ class PoseLookup:
                                 keypoints=np.full((21, 3), np.nan, np.float32), confidence=0.0,
                                 entry=-1, error=float("inf"), low_confidence=True, no_hand=True)
         if self.calibration is not None:
-            return self._estimate_calibrated(sil)
+            return self._estimate_calibrated(sil, self.calibration)
         f = extract_features(sil)
         seed = self._last if self.temporal and self._last >= 0 else None
         if self.approximate is not None:
@@ -524,8 +525,8 @@ class PoseLookup:
                             entry=r.index, error=r.error, low_confidence=r.low_confidence,
                             no_hand=False)
 
-    def _estimate_calibrated(self, sil: np.ndarray) -> PoseEstimate:
-        m = masked_search(sil, self.tables.sil_bits, self.calibration,
+    def _estimate_calibrated(self, sil: np.ndarray, calibration: Calibration) -> PoseEstimate:
+        m = masked_search(sil, self.tables.sil_bits, calibration,
                           band_areas=self._band_areas)
         angles, keypoints = self._pose(m.index, m.near, m.weights)
         return PoseEstimate(angles=angles, keypoints=keypoints,

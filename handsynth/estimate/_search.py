@@ -204,8 +204,8 @@ class SearchTables:
                                  ("ridge_area", a, (n,))):
             if arr.shape != shape:
                 raise InvalidInputError(f"{name} must have shape {shape}, got {arr.shape}")
-        for arr in (h, s, r, a):
-            arr.setflags(write=False)
+        for table in (h, s, r, a):
+            table.setflags(write=False)
         return cls(hlac=h, sil_bits=s, ridge_bits=r, ridge_area=a)
 
     def __len__(self) -> int:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -68,6 +69,12 @@ class _TestHand:
             return float("nan")
         return ratio_distance(self.ratios, self.databases[condition])
 
+    def model_ratios(self) -> HandShape:
+        """The true ratios of a model hand: the shape it is rendered with."""
+        # _plan_hands gives every model hand its ratios; only a mesh hand's may be unknown
+        assert self.kind == "model" and self.ratios is not None
+        return self.ratios
+
     def as_dict(self) -> dict:
         return {
             "index": self.index,
@@ -97,10 +104,11 @@ def _mesh_measurements(renderer) -> HandMeasurements | None:
 def _plan_hands(options: EvalOptions, mesh_measurements: HandMeasurements | None) -> list[_TestHand]:
     standard = HandShape()
     hands = []
-    shapes = options.hand_shapes
-    if options.hand == "model" and shapes is None:
-        shapes = random_hand_shapes(options.n_hands, seed=options.seed,
-                                    margin=options.ratio_margin)
+    shapes: Sequence[HandShape] = ()  # the model hands' true ratios
+    if options.hand == "model":
+        shapes = (options.hand_shapes if options.hand_shapes is not None else
+                  random_hand_shapes(options.n_hands, seed=options.seed,
+                                     margin=options.ratio_margin))
     for i in range(options.n_hands):
         if options.hand == "model":
             hand = _TestHand(i, "model", shapes[i], model_measurements(shapes[i]))
@@ -145,9 +153,11 @@ def _personal_shape(hand: _TestHand, options: EvalOptions) -> HandShape:
             hand.note = "no measurements from the test hand: personal = standard database"
             return HandShape()
         return HandShape.from_name(hand.ratios.name)
+    # a model hand is planned with its true ratios and their measurements
+    assert hand.measurements is not None
     rng = np.random.default_rng([options.seed, hand.index, 0x50484F54])
     scale = options.photo_mm_per_px
-    photo = render_measurement_photo(hand.ratios, mm_per_px=scale, side=options.side,
+    photo = render_measurement_photo(hand.model_ratios(), mm_per_px=scale, side=options.side,
                                      roll_deg=float(rng.uniform(-180.0, 180.0)))
     try:
         shape = measure_photo(photo.image, mm_per_px=scale).shape

@@ -39,7 +39,7 @@ def _save(fig, path: Path) -> Path:
 
 
 def _plot_histograms(report: EvalReport, path: Path) -> Path:
-    conds = [c for c in ("standard", "selected") if c in report.conditions] or \
+    conds: list[str] = [c for c in ("standard", "selected") if c in report.conditions] or \
         list(report.conditions[:1])
     errs = {c: report.errors(c) for c in conds}
     fig = _figure((13, 14))

@@ -305,9 +305,9 @@ class EvalReport:
                 label = f"{ps} poses, {name} where it moves (n={moving[conds[0]].n[j]})"
                 lines.append(f"{label}:\n{'':<16}" + "".join(f"{x:>{width}}" for x in cells))
         for cond in TARGET_CONDITIONS:
-            for ps in (None, *self.options.pose_sets):
-                where = f"{cond}, " + ("all frames" if ps is None else f"{ps} poses")
-                for name, t in self.targets(pose_set=ps, condition=cond).items():
+            for subset in (None, *self.options.pose_sets):  # None: all frames
+                where = f"{cond}, " + ("all frames" if subset is None else f"{subset} poses")
+                for name, t in self.targets(pose_set=subset, condition=cond).items():
                     verdict = "met" if t["met"] else "MISSED"
                     if "limit" in t:
                         lines.append(f"target ({where}) {name} <= {t['limit']}: {t['value']} "

@@ -5,6 +5,7 @@ from __future__ import annotations
 import time
 from collections import OrderedDict
 from collections.abc import Callable
+from dataclasses import replace
 
 import numpy as np
 
@@ -59,7 +60,7 @@ def _calibration_frames(hands: list[_TestHand], options: EvalOptions, mesh) -> d
         if mesh is not None:
             frame = mesh.masks(zero)[0]
         else:
-            with _model_renderer(hand.ratios, options) as r:
+            with _model_renderer(hand.model_ratios(), options) as r:
                 frame = r.masks(zero)[0]
         sel = select_shape_from_frame(frame, mount=options.camera(), side=options.side)
         hand.databases["calibrated"] = sel.shape
@@ -102,7 +103,7 @@ def evaluate(options: EvalOptions, *,
     DatabaseError
         A database could not be built or read.
     """
-    from ..db import build_databases, database_path
+    from ..db import BuildOptions, build_databases, database_path
 
     if not isinstance(options, EvalOptions):
         raise InvalidInputError(f"options must be EvalOptions, got {type(options).__name__}")
@@ -124,14 +125,14 @@ def evaluate(options: EvalOptions, *,
     for hand in hands:
         for shape in hand.databases.values():
             needed.setdefault(shape.name, shape)
-    build_fields = {"pose_set": options.db_pose_set, "count": options.count,
-                    "seed": options.db_seed, "side": options.side}
+    build = BuildOptions(pose_set=options.db_pose_set, count=options.count, seed=options.db_seed,
+                         side=options.side)
     if options.render_size is not None:
-        build_fields["render_size"] = options.render_size
+        build = replace(build, render_size=options.render_size)
     say(f"databases: {len(needed)} shape(s) of {options.count} entries in {options.db_folder}")
     t = time.perf_counter()
     summary = build_databases(options.db_folder, list(needed.values()), mount,
-                              workers=options.workers, **build_fields)
+                              options=build, workers=options.workers)
     timing["build"] = time.perf_counter() - t
     say(f"databases: {len(summary.built)} built, {len(summary.skipped)} verified and kept "
         f"({timing['build']:.1f} s)")
@@ -139,8 +140,8 @@ def evaluate(options: EvalOptions, *,
                        ties=options.ties)
 
     conds = options.conditions
-    rec = {k: {c: [] for c in conds}
-           for k in ("est", "entry", "conf", "low", "none", "dist")}
+    rec: dict[str, dict[str, list[np.ndarray]]] = {
+        k: {c: [] for c in conds} for k in ("est", "entry", "conf", "low", "none", "dist")}
     hand_index, set_names, truth = [], [], []
     for hand in hands:
         poses = [make_pose_set(name, options.frames_per_hand,
@@ -152,12 +153,12 @@ def evaluate(options: EvalOptions, *,
         if mesh is not None:
             frames = mesh.masks(angles)
         else:
-            with _model_renderer(hand.ratios, options) as r:
+            with _model_renderer(hand.model_ratios(), options) as r:
                 frames = r.masks(angles)
-        own = None
+        cond_frames = dict.fromkeys(conds, frames)  # own_shape: rendered from its own database
         if "own_shape" in conds:
             with _model_renderer(hand.databases["own_shape"], options) as r:
-                own = r.masks(angles)
+                cond_frames["own_shape"] = r.masks(angles)
         timing["render"] += time.perf_counter() - t
         t = time.perf_counter()
         for cond in conds:
@@ -166,7 +167,7 @@ def evaluate(options: EvalOptions, *,
                 lookup = lookup.calibrated(open_frames[hand.index],
                                            dilation_px=CALIBRATION_DILATION_PX,
                                            temperature_px=CALIBRATION_TEMPERATURE_PX)
-            src = own if cond == "own_shape" else frames
+            src = cond_frames[cond]
             ests = [lookup.estimate(src[i]) for i in range(n)]
             rec["est"][cond].append(np.stack([e.angles for e in ests]))
             rec["entry"][cond].append(np.array([e.entry for e in ests], np.int64))
@@ -178,7 +179,7 @@ def evaluate(options: EvalOptions, *,
         hand_index.append(np.full(n, hand.index, np.int64))
         set_names.append(np.repeat(np.array(options.pose_sets), options.frames_per_hand))
         truth.append(angles)
-        desc = hand.ratios.name if hand.kind == "model" else hand.kind
+        desc = hand.model_ratios().name if hand.kind == "model" else hand.kind
         say(f"hand {hand.index + 1}/{len(hands)} ({desc}): {n} frames, databases "
             + ", ".join(f"{c}={s.name}" for c, s in hand.databases.items()))
     if mesh is not None and hasattr(mesh, "close"):

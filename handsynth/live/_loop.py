@@ -7,6 +7,7 @@ import time
 from array import array
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TypeGuard
 
 import numpy as np
 
@@ -165,8 +166,8 @@ class LiveSummary:
              f" ms, lookup {self._per_frame_ms(self.lookup_s):.2f} ms, whole loop "
              f"{self._per_frame_ms(self.steady_wall_s):.2f} ms"),
         ]
-        if self.mae_deg is not None:
-            j = self.mae_per_joint_deg
+        j = self.mae_per_joint_deg
+        if self.mae_deg is not None and j is not None:
             lines.append(
                 f"mean absolute error vs truth {self.mae_deg:.2f} deg over {self.truth_frames} "
                 f"frames (index PIP {j[JOINT_NAMES.index('index_pip_flex')]:.2f}, thumb CMC "
@@ -181,7 +182,7 @@ class _Tally:
         self.no_hand = self.low_confidence = self.truth_frames = 0
         self.latencies = array("d")
         self.abs_err = np.zeros(len(JOINT_NAMES))
-        self.first_done_s = None  # loop time when the first frame was done
+        self.first_done_s: float | None = None  # loop time when the first frame was done
         self.read_s = 0.0  # time in read() after the first frame
 
     def summary(self, wall_s: float, stop_reason: str, message: str) -> LiveSummary:
@@ -204,7 +205,7 @@ class _Tally:
             mae_per_joint_deg=per_joint)
 
 
-def _usable(frame) -> bool:
+def _usable(frame: np.ndarray | None) -> TypeGuard[np.ndarray]:
     return frame is not None and not (isinstance(frame, np.ndarray) and frame.size == 0)
 
 
@@ -313,12 +314,13 @@ def run_live(lookup, source: FrameSource, *, sink=None, video_out=None,
     if not callable(getattr(lookup, "estimate", None)):
         raise InvalidInputError(
             f"lookup must have an estimate(frame) method, got {type(lookup).__name__}")
-    video, own_video = None, False
+    video: SideBySideWriter | None = None
+    own_video: SideBySideWriter | None = None  # opened here, so closed here
     if isinstance(video_out, SideBySideWriter):
         video = video_out
     elif video_out is not None:
-        video = SideBySideWriter(video_out, lookup, fps=getattr(source, "fps", None) or 30.0)
-        own_video = True
+        video = own_video = SideBySideWriter(video_out, lookup,
+                                             fps=getattr(source, "fps", None) or 30.0)
 
     sink_columns = getattr(sink, "columns", None)
     truth_in_rows = sink_columns is None or TRUTH_COLUMNS[0] in sink_columns
@@ -368,6 +370,8 @@ def run_live(lookup, source: FrameSource, *, sink=None, video_out=None,
                 if opts.retry_delay_s:
                     time.sleep(opts.retry_delay_s)
                 continue
+            # dead is 0 only when this read was usable and its estimate succeeded
+            assert frame is not None
             tally.frames += 1
             tally.no_hand += bool(est.no_hand)
             tally.low_confidence += bool(est.low_confidence and not est.no_hand)
@@ -390,8 +394,8 @@ def run_live(lookup, source: FrameSource, *, sink=None, video_out=None,
     except KeyboardInterrupt:
         stop, message = "interrupted", "interrupted (Ctrl-C)"
     finally:
-        if own_video:
-            video.close()
+        if own_video is not None:
+            own_video.close()
     return tally.summary(clock() - t0, stop, message)
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -14,6 +14,11 @@ from ..models import JOINT_LIMITS_DEG, JOINT_NAMES, HandShape, as_angles
 from ..models import pose_set as make_pose_set
 from ..render import CameraMount
 from ._checks import _check_float, _check_int, _quiet_opencv
+
+if TYPE_CHECKING:
+    import cv2
+
+    from ..render import SilhouetteRenderer
 
 __all__ = ["CameraSource", "FrameSource", "SyntheticMotion", "SyntheticSource", "VideoSource"]
 
@@ -100,6 +105,8 @@ class CameraSource(_Source):
     on Ctrl-C or after too many consecutive drops.
     """
 
+    _cap: cv2.VideoCapture | None
+
     def __init__(self, index: int, *, width_px: int | None = None,
                  height_px: int | None = None) -> None:
         import cv2
@@ -161,6 +168,8 @@ class VideoSource(_Source):
     frame's index divided by the file's frame rate (OpenCV's position in
     milliseconds when the file has no rate).
     """
+
+    _cap: cv2.VideoCapture | None
 
     def __init__(self, path) -> None:
         import cv2
@@ -317,6 +326,10 @@ class SyntheticSource(_Source):
     >>> src.read().shape, src.truth_deg.shape                                       # doctest: +SKIP
     ((120, 180), (20,))
     """
+
+    fps: float
+    motion: SyntheticMotion | None
+    _renderer: SilhouetteRenderer | None
 
     def __init__(self, shape: HandShape | None = None, mount: CameraMount | None = None, *,
                  motion: SyntheticMotion | np.ndarray | None = None, fps: float = 30.0,

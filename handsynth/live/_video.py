@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -10,6 +11,11 @@ from .._io import PendingOutput
 from ..errors import InvalidInputError, OutputError
 from ..models import JOINT_LIMITS_DEG
 from ._checks import _check_float, _quiet_opencv
+
+if TYPE_CHECKING:
+    import cv2
+
+    from ..render import SilhouetteRenderer
 
 __all__ = ["SideBySideWriter"]
 
@@ -89,9 +95,9 @@ class SideBySideWriter:
         self.codec = codec
         self.labels = bool(labels)
         self.frames = 0
-        self._writer = None
-        self._renderer = None
-        self._size = None
+        self._writer: cv2.VideoWriter | None = None
+        self._renderer: SilhouetteRenderer | None = None
+        self._size: tuple[int, int] | None = None
         self._pending: PendingOutput | None = PendingOutput(self.path, what="video",
                                                             inputs=inputs, keep_suffix=True)
 
@@ -104,7 +110,7 @@ class SideBySideWriter:
         if pending is None:
             raise InvalidInputError(f"video {str(self.path)!r} is already closed")
         with _quiet_opencv():
-            writer = cv2.VideoWriter(str(pending.tmp), cv2.VideoWriter_fourcc(*self.codec),
+            writer = cv2.VideoWriter(str(pending.tmp), cv2.VideoWriter.fourcc(*self.codec),
                                      self.fps, (2 * w, h))
             opened = writer.isOpened()
         if not opened:
@@ -133,14 +139,17 @@ class SideBySideWriter:
         left = _to_bgr(frame)
         if self._writer is None:
             self._open(left.shape[1], left.shape[0])
-        w, h = self._size
+        writer, renderer, size = self._writer, self._renderer, self._size
+        # _open sets the writer, the renderer and the size together (or raises)
+        assert writer is not None and renderer is not None and size is not None
+        w, h = size
         if left.shape[:2] != (h, w):
             left = cv2.resize(left, (w, h), interpolation=cv2.INTER_NEAREST)
         right = np.zeros_like(left)
         if not estimate.no_hand:
             pose = np.clip(np.asarray(self.lookup.database.angles[estimate.entry], np.float64),
                            JOINT_LIMITS_DEG[:, 0], JOINT_LIMITS_DEG[:, 1])
-            right[self._renderer.mask(pose)] = _MATCH_BGR
+            right[renderer.mask(pose)] = _MATCH_BGR
         if self.labels:
             scale, thick = max(0.35, h / 600), max(1, round(h / 300))
             y = max(12, round(22 * scale * 1.6))
@@ -152,7 +161,7 @@ class SideBySideWriter:
                      + (" low" if estimate.low_confidence else ""))
             cv2.putText(right, label, (6, y), cv2.FONT_HERSHEY_SIMPLEX, scale, (0, 160, 255),
                         thick, cv2.LINE_AA)
-        self._writer.write(np.hstack([left, right]))
+        writer.write(np.hstack([left, right]))
         self.frames += 1
 
     def close(self) -> None:
@@ -175,6 +184,8 @@ class SideBySideWriter:
             if pending is not None:
                 pending.discard()
             return
+        # _open makes a writer only for a pending output, and both are dropped together
+        assert pending is not None
         writer.release()
         with _quiet_opencv():
             cap = cv2.VideoCapture(str(pending.tmp))

@@ -80,6 +80,7 @@ class _RowWriter:
         self._pending: list[str] = []
         self._complete = 0  # bytes of complete lines in the file
         self._failed = False
+        self.path: Path | None  # None when writing to a stream
         if isinstance(target, (str, os.PathLike)) and str(target) != "-":
             self.path = check_output(target, what="row file", inputs=inputs)
             try:

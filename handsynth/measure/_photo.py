@@ -190,9 +190,9 @@ def _foreground(image: np.ndarray) -> np.ndarray:
     band = cv2.dilate(strong, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1)))
     out = np.where((scaled > weak_t) & (band > 0), 255, strong).astype(np.uint8)
     kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (3, 3))
-    out = cv2.morphologyEx(out, cv2.MORPH_OPEN, kernel)
-    out = cv2.morphologyEx(out, cv2.MORPH_CLOSE, kernel)
-    return out > 0
+    opened = cv2.morphologyEx(out, cv2.MORPH_OPEN, kernel)
+    closed = cv2.morphologyEx(opened, cv2.MORPH_CLOSE, kernel)
+    return closed > 0
 
 
 def _hand_and_reference(mask: np.ndarray, want_reference: bool):
@@ -339,7 +339,7 @@ def _fingertips(contour: np.ndarray, shape_hw: tuple[int, int], px_per_mm: float
     if cand.all():
         return np.array([int(np.argmax(depth))]), depth[[int(np.argmax(depth))]]
     start = int(np.flatnonzero(~cand)[0])  # walk the circle from a non-candidate
-    tips = []
+    tips: list[int] = []
     run: list[int] = []
     for j in range(start, start + n + 1):
         i = j % n
@@ -348,8 +348,8 @@ def _fingertips(contour: np.ndarray, shape_hw: tuple[int, int], px_per_mm: float
         elif run:
             tips.append(run[int(np.argmax(depth[run]))])
             run = []
-    tips = np.array(sorted(tips), np.intp)
-    return tips, depth[tips]
+    rows = np.array(sorted(tips), np.intp)
+    return rows, depth[rows]
 
 
 def _arc(n: int, i0: int, i1: int, step: int) -> np.ndarray:
@@ -432,7 +432,8 @@ class _Axis:
 
 
 def _fit_axis(score: np.ndarray, tip: np.ndarray, base_a: np.ndarray, base_b: np.ndarray,
-              max_width_px: float, *, t_range=(0.15, 0.85), n_sections: int = 15) -> _Axis:
+              max_width_px: float, *, t_range: tuple[float, float] = (0.15, 0.85),
+              n_sections: int = 15) -> _Axis:
     """Fit a digit's axis: the line through the midpoints of sections across it.
 
     `n_sections` sections perpendicular to the current axis, spread over
@@ -584,7 +585,7 @@ def _fit_knuckles(axes: list[_Axis], palm_ratio: float | None, px_per_mm: float,
         phi = math.atan2(hand_y[1], hand_y[0])
     z, a, _ = solve(phi)
     uh, nh = frame_axes(phi)
-    ratio = float(z[6]) if free else float(palm_ratio)
+    ratio = float(z[6]) if palm_ratio is None else float(palm_ratio)  # None: fitted (free)
     knuckles = c + z[:4, None] * u
     template = z[4:6] + ratio * tm[:, :1] * nh + tm[:, 1:] * uh
     rms_mm = float(np.sqrt(np.mean(np.sum((knuckles - template) ** 2, axis=1)))) / px_per_mm
@@ -1110,7 +1111,7 @@ def measure_photo(image, *, mm_per_px: float | None = None,
     widths = [v for d in digits for v in d.widths_mm]
     _check_plausible(lengths, widths, std)
     meas = HandMeasurements(
-        L=lengths, W=widths, P_width=palm.width_mm, P_height=-palm.y_wrist,
+        L=tuple(lengths), W=tuple(widths), P_width=palm.width_mm, P_height=-palm.y_wrist,
         T_width=abs(palm.x_cmc), T_height=palm.y_cmc - palm.y_wrist)
     selection = select_shape(meas, options=SelectionOptions(normalize=opts.normalize))
     raw = shape_ratios(meas, std, normalize="none")

@@ -215,8 +215,8 @@ class HandMeasurements:
                 f"measurements have unknown names {unknown} and missing names {missing}"
             )
         return cls(
-            L=[values[f"L{i}"] for i in range(1, 15)],
-            W=[values[f"W{i}"] for i in range(1, 15)],
+            L=tuple(values[f"L{i}"] for i in range(1, 15)),
+            W=tuple(values[f"W{i}"] for i in range(1, 15)),
             **{n: values[n] for n in _SCALARS},
         )
 
@@ -275,9 +275,9 @@ def _model_measurements(shape: HandShape) -> HandMeasurements:
     bodies = {}
     stack = [spec.root]
     while stack:
-        b = stack.pop()
-        bodies[b.name] = b
-        stack.extend(b.children)
+        body = stack.pop()
+        bodies[body.name] = body
+        stack.extend(body.children)
     widths = []
     for (f, seg), length in zip(SEGMENTS, lengths):
         mesh = bodies[f"{f}_{seg}"].mesh  # body frame: y along the segment, x across
@@ -288,8 +288,8 @@ def _model_measurements(shape: HandShape) -> HandMeasurements:
     y_mid = 0.5 * (cmc[1] + kp[mcp_rows, 1].mean())
     p_width = hull_width_at(spec.root.mesh[:, :2], y_mid)
     return HandMeasurements(
-        L=lengths,
-        W=widths,
+        L=tuple(lengths),
+        W=tuple(widths),
         P_width=p_width,
         P_height=float(kp[9, 1] - kp[0, 1]),
         T_width=float(abs(kp[9, 0] - cmc[0])),

@@ -164,7 +164,9 @@ def check_frame(frame) -> np.ndarray:
 
 @lru_cache(maxsize=32)
 def _keep_cached(mount: CameraMount, side: str, w: int, h: int) -> np.ndarray:
-    y_cut = mount.wrist_cut_mm * 1e-3
+    cut_mm = mount.wrist_cut_mm
+    assert cut_mm is not None  # callers skip mounts without a wrist cut
+    y_cut = cut_mm * 1e-3
     z = DORSUM_Z_MM * 1e-3
     p = mount.project(np.array([[-0.2, y_cut, z], [0.2, y_cut, z], [0.0, y_cut - 0.05, z]]),
                       side=side, width_px=w, height_px=h)

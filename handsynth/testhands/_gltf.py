@@ -292,8 +292,9 @@ class _Gltf:
                                     f"bufferViews[{a['bufferView']}]")
         arr = np.ndarray((count, n), dtype=dtype, buffer=data, offset=start,
                          strides=(stride, dtype.itemsize)).copy()
-        if a.get("normalized") and dtype.kind == "u":
-            return arr.astype(np.float64) / np.iinfo(dtype).max
+        scalar = dtype.type
+        if a.get("normalized") and issubclass(scalar, np.unsignedinteger):
+            return arr.astype(np.float64) / np.iinfo(scalar).max
         return arr
 
     def node_local(self, i: int) -> np.ndarray:
