@@ -388,7 +388,7 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
             if one_euro:
                 from ..estimate import SmoothedEstimator
 
-                lookup = SmoothedEstimator(lookup, rate_hz=getattr(source, "fps", None) or fps)
+                lookup = SmoothedEstimator(lookup, rate_hz=source.fps or fps)
         elif calibrate:
             lookup = _calibrate(lookup, source, open_image, db_dir, mount, side, build, info_err)
         # opened above, or made from the open hand by the calibration
