@@ -257,8 +257,9 @@ def _progress(stream):
                    "third at no cost in accuracy, 0.5 by half at up to 0.3 deg (README).")
 @click.option("--one-euro", "one_euro", is_flag=True,
               help="With --learned: steady the angles with the One Euro filter instead (cut-off "
-                   "0.5 Hz while still, rising with speed); on held-out hands held poses "
-                   "jittered 7 times less for 0.02 deg more error (README).")
+                   "0.5 Hz while still, rising with speed; at the source's frame rate, --fps "
+                   "where it reports none); on held-out hands held poses jittered 7 times "
+                   "less for 0.02 deg more error (README).")
 @click.option("--frames", type=int, default=None, metavar="N",
               help=f"Stop after N frames [--synthetic default: {SYNTHETIC_FRAMES}].")
 @click.option("--seconds", type=float, default=None, metavar="S", help="Stop after S seconds.")
@@ -277,7 +278,8 @@ def _progress(stream):
 @click.option("--synthetic-size", default="720x480", show_default=True, metavar="WxH",
               help="Frame size of --synthetic.")
 @click.option("--fps", type=float, default=30.0, show_default=True,
-              help="Media frame rate of --synthetic (timestamps and speed of the motion).")
+              help="Media frame rate of --synthetic (timestamps and speed of the motion), and "
+                   "the rate --one-euro assumes for a source that reports none.")
 @click.option("--no-temporal", is_flag=True,
               help="Do not score the previous frame's answer first.")
 @click.option("--max-dead", type=int, default=100, show_default=True, metavar="N",
