@@ -103,7 +103,8 @@ def fuse_plate(quats, sensors, rotations: dict, *, disagree_deg: float = 10.0) -
     disagree_deg : float, keyword-only
         With three or more plate sensors, a sensor farther than this from the
         plate's mean attitude in a sample is left out of that sample's mean
-        (with a warning naming it and the share of samples).
+        (with a warning naming it and the share of samples); with two, a
+        warning says where they are farther apart than twice this.
 
     Returns
     -------
@@ -144,6 +145,13 @@ def fuse_plate(quats, sensors, rotations: dict, *, disagree_deg: float = 10.0) -
                           f"{disagree_deg:g} deg from the other plate sensors' ({named} of "
                           f"{dev.shape[1]}); left out of the plate's attitude there",
                           UserWarning, stacklevel=2)
+    else:
+        apart = angle_deg(ref[0], ref[1]) > 2 * disagree_deg     # each is disagree_deg off the mean
+        if apart.any():
+            warnings.warn(f"forearm plate: {present[0]} and {present[1]} disagree by more than "
+                          f"{2 * disagree_deg:g} deg in {int(apart.sum())} of {len(apart)} "
+                          "samples; with two sensors the stray one cannot be told, so their mean "
+                          "is kept", UserWarning, stacklevel=2)
     for s in present:
         out[sensors.index(s)] = qmul(mean, rel[s])
     return out

@@ -110,6 +110,11 @@ def test_a_stray_sensor_is_left_out_with_a_warning():
         warnings.simplefilter("ignore")
         loose = fuse_plate(bad, SENSORS, rel, disagree_deg=90.0)
     assert angle_deg(loose[1, 100:160], true[0][100:160]).min() > 8.0
+    # two sensors: no telling which strayed; the mean is kept and the disagreement said
+    with pytest.warns(UserWarning, match="forearm_1 and forearm_2 disagree by more than 20 deg "
+                                         "in 60 of 300 samples"):
+        two = fuse_plate(bad[:3], SENSORS[:3], rel)
+    assert angle_deg(two[1, 100:160], true[0][100:160]).min() > 8.0
 
 
 def test_fusion_ignores_quaternion_signs_and_absent_sensors():
