@@ -64,7 +64,7 @@ import numpy as np
 
 from .._io import atomic_open, os_error_reason
 from ..db import LearningSet, LearningSetOptions, learning_set
-from ..errors import DatabaseCorruptError, DatabaseError, InvalidInputError
+from ..errors import DatabaseCorruptError, DatabaseError, DatabaseMismatchError, InvalidInputError
 from ..models import JOINT_LIMITS_DEG
 from ..render import CameraMount, coverage
 from ._lookup import PoseEstimate
@@ -170,7 +170,20 @@ class LearnedOptions:
             raise InvalidInputError("LearnedOptions.learning_rate must be > 0 and weight_decay >= 0")
 
     def digest(self) -> str:
-        return hashlib.sha256(json.dumps(asdict(self), sort_keys=True).encode()).hexdigest()[:16]
+        """Hash of the options that shape what is learnt (the cache's name).
+
+        The options used only when frames are read (:data:`_READING_OPTIONS`)
+        are left out: changing them reads the same learnt arrays.
+        """
+        learnt = {k: v for k, v in asdict(self).items() if k not in _READING_OPTIONS}
+        return hashlib.sha256(json.dumps(learnt, sort_keys=True).encode()).hexdigest()[:16]
+
+
+#: :class:`LearnedOptions` fields used only when an estimator reads frames
+#: (how many neighbours, and how their angles become the answer), not when it
+#: learns.  ``lists`` and ``probes`` are not among them: the novelty limit is
+#: learnt through the same search.
+_READING_OPTIONS = ("k", "local", "ridge")
 
 
 # ---------------------------------------------------------------------------
@@ -625,13 +638,23 @@ class LearnedEstimator:
             np.savez(f, meta=np.array(json.dumps(meta)), **self._a)
 
     @classmethod
-    def load(cls, path) -> LearnedEstimator:
+    def load(cls, path, *, options: LearnedOptions | None = None) -> LearnedEstimator:
         """Read an estimator written by :meth:`save`.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+        options : LearnedOptions, keyword-only, optional
+            Read with these options (their reading options, such as ``k`` or
+            ``ridge``, may differ from the file's; what is learnt may not).
+            Default: the options it was learnt with.
 
         Raises
         ------
         DatabaseCorruptError
             The file is unreadable, incomplete or of another format.
+        DatabaseMismatchError
+            `options` differ from the file's in what is learnt.
         """
         try:
             with np.load(path) as z:
@@ -644,7 +667,13 @@ class LearnedEstimator:
                                        f"expected {_FORMAT}")
         o = dict(meta["options"])
         o["hidden"] = tuple(o["hidden"])
-        return cls(arrays, options=LearnedOptions(**o), mount=CameraMount(**meta["mount"]),
+        stored = LearnedOptions(**o)
+        if options is not None and options.digest() != stored.digest():
+            differ = [k for k, v in asdict(options).items()
+                      if k not in _READING_OPTIONS and v != getattr(stored, k)]
+            raise DatabaseMismatchError(f"learnt estimator {path} was learnt with other options "
+                                        f"({', '.join(f'{k}={getattr(stored, k)!r}' for k in differ)})")
+        return cls(arrays, options=options or stored, mount=CameraMount(**meta["mount"]),
                    side=meta["side"], cells=tuple(meta["cells"]))
 
 
@@ -806,7 +835,7 @@ def learned_estimator(folder, options: LearnedOptions | None = None, *,
     path = Path(folder) / f"learned_{opts.kind}_{key}.npz"
     if path.is_file():
         try:
-            return LearnedEstimator.load(path)
+            return LearnedEstimator.load(path, options=opts)
         except DatabaseCorruptError:
             pass
     say = progress or (lambda _line: None)

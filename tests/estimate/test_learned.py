@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from handsynth.db import LearningSetOptions, render_learning_set
-from handsynth.errors import InvalidInputError
+from handsynth.errors import DatabaseMismatchError, InvalidInputError
 from handsynth.estimate import (
     LearnedEstimator,
     LearnedOptions,
@@ -227,3 +227,26 @@ def test_training_a_block_of_rows_at_a_time_equals_the_whole_set_at_once(data):
     p = "d1_"
     ref_codes = (whole[:, big[p + "cols"]] * big[p + "w"] - big[p + "mean"]) @ big[p + "components"]
     np.testing.assert_allclose(big[p + "codes"], ref_codes, rtol=1e-5, atol=1e-5)
+
+
+def test_reading_options_read_the_same_learnt_arrays(tmp_path):
+    small = LearningSetOptions(hands=2, poses_per_hand=5, seed=1)
+    first = LearnedOptions(kind="fingers", components=8, k=8, lists=0)
+    a = learned_estimator(tmp_path, first, data=small)
+    learnt = sorted(p.name for p in tmp_path.glob("learned_*.npz"))
+    other = LearnedOptions(kind="fingers", components=8, k=4, ridge=0.5, local="mean", lists=0)
+    b = learned_estimator(tmp_path, other, data=small)
+    assert sorted(p.name for p in tmp_path.glob("learned_*.npz")) == learnt   # read, not learnt
+    assert b.options == other and a.options == first
+    # what it answers is what an estimator learnt with those options answers
+    fresh = learned_estimator(tmp_path / "fresh", other, data=small)
+    frame = SilhouetteRasterizer().mask(np.full(20, 20.0))
+    rest = SilhouetteRasterizer().mask(np.full(20, 5.0))
+    np.testing.assert_array_equal(b.calibrated(rest).estimate(frame).angles,
+                                  fresh.calibrated(rest).estimate(frame).angles)
+    # an option that shapes what is learnt makes another file, and cannot read this one
+    c = learned_estimator(tmp_path, LearnedOptions(kind="fingers", components=6, lists=0),
+                          data=small)
+    assert len(list(tmp_path.glob("learned_*.npz"))) == 2 and c.options.components == 6
+    with pytest.raises(DatabaseMismatchError, match="learnt with other options \\(components=8\\)"):
+        LearnedEstimator.load(tmp_path / learnt[0], options=LearnedOptions(components=6, lists=0))
