@@ -56,10 +56,13 @@ def _write_broad(path, rec, sensor, kind):
                   movement=movement, sampling_rate=np.array([[rec.rate_hz]]))
     if kind == "mat":
         savemat(path, fields)
-    else:
+    else:  # the dataset's layout: arrays as datasets, the rate as the file's attribute
         with h5py.File(path, "w") as f:
             for k, v in fields.items():
-                f[k] = v
+                if k == "sampling_rate":
+                    f.attrs[k] = float(rec.rate_hz)
+                else:
+                    f[k] = v
 
 
 def test_broad_on_a_synthetic_trial(tmp_path, sim):

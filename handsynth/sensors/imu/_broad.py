@@ -13,8 +13,10 @@ code:
 - ``movement`` (N,) bool: the samples the error metric uses;
 - ``sampling_rate`` scalar, Hz.
 
-That the HDF5 files store these as top-level datasets of the same names is
-an assumption (the example code reads the ``.mat`` files).  The metric is
+The HDF5 files store the arrays as top-level datasets of the same names
+and the sampling rate as the file's attribute ``sampling_rate`` (read off
+the dataset's own files; a dataset of that name is accepted too).  The
+metric is
 the dataset's: RMSE over the movement phases of the total error angle, the
 heading error (rotation about the vertical of the earth-frame error
 quaternion q_imu q_opt^-1) and the inclination error.
@@ -52,7 +54,10 @@ def _load(path: Path) -> dict:
 
     try:
         with h5py.File(path, "r") as f:
-            return {k: np.asarray(f[k]) for k in _FIELDS if k in f}
+            d = {k: np.asarray(f[k]) for k in _FIELDS if k in f}
+            if "sampling_rate" not in d and "sampling_rate" in f.attrs:
+                d["sampling_rate"] = np.asarray(f.attrs["sampling_rate"])
+            return d
     except OSError as exc:
         raise RecordingError(f"{path}: not a readable HDF5 file ({exc})") from None
 

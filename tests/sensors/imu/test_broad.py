@@ -1,3 +1,4 @@
+import h5py
 import numpy as np
 import pytest
 from scipy.io import savemat
@@ -22,6 +23,29 @@ def test_read_mat_trial(tmp_path):
     assert opt.shape == (500, 4)
     assert rec.rate_hz == 200.0 and rec.sensors == ("05_test",) and movement.sum() == 400
     assert [p.name for p in find_broad_trials(tmp_path)] == ["05_test.mat"]
+
+
+def test_read_hdf5_trial_with_the_rate_as_an_attribute(tmp_path):
+    """The dataset's HDF5 files keep the sampling rate as a file attribute."""
+    fields = _fields()
+    with h5py.File(tmp_path / "06_test.hdf5", "w") as f:
+        for k, v in fields.items():
+            if k == "sampling_rate":
+                f.attrs[k] = 285.7142857142857
+            else:
+                f[k] = np.asarray(v).reshape(500, -1).squeeze() if k == "movement" else v
+    rec, opt, movement = read_broad_trial(tmp_path / "06_test.hdf5")
+    savemat(tmp_path / "06_test.mat", fields)
+    mat_rec, mat_opt, mat_movement = read_broad_trial(tmp_path / "06_test.mat")
+    assert rec.rate_hz == pytest.approx(285.7142857142857)
+    np.testing.assert_array_equal(rec.gyr, mat_rec.gyr)
+    np.testing.assert_array_equal(opt, mat_opt)
+    np.testing.assert_array_equal(movement, mat_movement)
+    with h5py.File(tmp_path / "07_norate.hdf5", "w") as f:
+        for k in ("imu_acc", "imu_gyr", "imu_mag", "opt_quat", "movement"):
+            f[k] = fields[k]
+    with pytest.raises(RecordingError, match="07_norate.hdf5: missing BROAD field.s. sampling_rate"):
+        read_broad_trial(tmp_path / "07_norate.hdf5")
 
 
 def test_metric_splits_heading_and_inclination():
