@@ -14,7 +14,8 @@ forearm plate fusion that follows every filter (:func:`fuse_plate`).  The
 target of issue 18 is >= 10x for 20 sensors at 100 Hz.
 
 The last line is machine-readable: ``filter4_x_realtime=<n> raw_x_realtime=<n>
-filter1_x_realtime=<n> vqf_x_realtime=<n> sensors=20 rate_hz=<n>``.
+filter1_x_realtime=<n> gated_x_realtime=<n> vqf_x_realtime=<n> plate_fusion_s=<s>
+sensors=20 rate_hz=<n>``.
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ import time
 from handsynth.sensors.imu import (
     ChainEKF,
     Filter1,
+    GatedFilter,
     ImuHand,
     RawIntegration,
     VQFEstimator,
@@ -58,7 +60,7 @@ def main() -> None:
           f"({rec.duration_s:.0f} s), one core")
     results = {}
     q = None
-    for est in (RawIntegration(), Filter1(), ChainEKF(model), VQFEstimator()):
+    for est in (RawIntegration(), Filter1(), GatedFilter(), ChainEKF(model), VQFEstimator()):
         est.run(rec.slice(0, 300))  # warm-up (numba compilation)
         best = float("inf")
         for _ in range(args.repeat):
@@ -77,7 +79,8 @@ def main() -> None:
     print(f"  forearm plate fusion {fuse_s:7.3f} s for {rec.duration_s:.0f} s of data (after "
           "any filter)")
     print(f"filter4_x_realtime={results['filter4']:.1f} raw_x_realtime={results['raw']:.1f} "
-          f"filter1_x_realtime={results['filter1']:.1f} vqf_x_realtime={results['vqf']:.1f} "
+          f"filter1_x_realtime={results['filter1']:.1f} gated_x_realtime={results['gated']:.1f} "
+          f"vqf_x_realtime={results['vqf']:.1f} "
           f"plate_fusion_s={fuse_s:.4f} sensors={len(rec.sensors)} rate_hz={rec.rate_hz:g}")
 
 

@@ -32,7 +32,7 @@ errors) and a slowly varying correction ``q_cor`` (that frame to the world):
    for ``rest_s``), the bias follows the gyro with time constant
    ``bias_tau_s``.
 
-Steps 2's low-pass and 3's mean reference are this release's; without them
+Step 2's low-pass and step 3's mean reference are this release's; without them
 (each sample's accelerometer trusted through the gates, the reference field
 read from the first sample) the filter erred by 5.37 deg on BROAD against
 2.91 with them (README).
