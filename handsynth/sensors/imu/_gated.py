@@ -50,7 +50,7 @@ import numpy as np
 from numba import njit
 
 from ...errors import InvalidInputError
-from ._attitude import StaticStart, gyro_bias, initial_attitude
+from ._attitude import StaticStart, _n, gyro_bias, initial_attitude
 from ._model import GRAVITY_MPS2
 from ._quat_numba import _qexp, _qmat, _qmul
 from ._recording import ImuRecording
@@ -196,7 +196,7 @@ def gated_orientation(rec: ImuRecording, options: GatedOptions | None = None, *,
     dt = 1.0 / rec.rate_hz
     q0 = initial_attitude(rec, static)
     b0 = gyro_bias(rec, static)
-    mag0 = rec.mag[:, : max(1, min(rec.n, round(static.static_s * rec.rate_hz)))].mean(axis=1)
+    mag0 = rec.mag[:, : _n(rec, static.static_s)].mean(axis=1)
     kernel = _kernel_fast if fast else _kernel
     out = np.empty((len(rec.sensors), rec.n, 4))
     for s in range(len(rec.sensors)):
