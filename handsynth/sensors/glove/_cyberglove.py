@@ -25,11 +25,11 @@ with a header is read by name, a file without one in that order; pass
 
 from __future__ import annotations
 
-import csv
 from pathlib import Path
 
 import numpy as np
 
+from ..._csv import read_rows
 from ...errors import RecordingError
 from ...models import JOINT_LIMITS_DEG, JOINT_NAMES
 
@@ -87,18 +87,16 @@ def read_cyberglove_csv(path, *, units: str = "deg",
     if units not in ("deg", "rad"):
         raise RecordingError(f"units must be 'deg' or 'rad', got {units!r}")
     path = Path(path)
-    if not path.is_file():
-        raise RecordingError(f"cannot read glove export {str(path)!r}: no such file")
-    with path.open(newline="") as f:
-        rows = [r for r in csv.reader(f) if any(c.strip() for c in r)]
+    content = read_rows(path, what="glove export")
+    rows = content.rows
     if not rows:
         raise RecordingError(f"{path}: empty file")
-    first = [c.strip() for c in rows[0]]
+    first = rows[0]
     if all(_is_number(c) for c in first):
         names = list(columns or CYBERGLOVE_COLUMNS)
-        body, line0 = rows, 1
+        body, lines = rows, content.lines
     else:
-        names, body, line0 = first, rows[1:], 2
+        names, body, lines = first, rows[1:], content.lines[1:]
     missing = [c for c in CYBERGLOVE_COLUMNS[:19] if c not in names]
     if missing:
         raise RecordingError(f"{path}: missing column(s) {', '.join(missing)}; expected the "
@@ -108,19 +106,19 @@ def read_cyberglove_csv(path, *, units: str = "deg",
     col = {n: i for i, n in enumerate(names)}
     scale = 180.0 / np.pi if units == "rad" else 1.0
     raw = np.empty((len(body), len(CYBERGLOVE_COLUMNS[:19])))
-    for i, r in enumerate(body):
+    for i, (r, line) in enumerate(zip(body, lines)):
         if len(r) < len(names):
-            raise RecordingError(f"{path}, line {i + line0}: {len(r)} fields, expected "
+            raise RecordingError(f"{path}, line {line}: {len(r)} fields, expected "
                                  f"{len(names)}")
         for k, name in enumerate(CYBERGLOVE_COLUMNS[:19]):
-            cell = r[col[name]].strip()
+            cell = r[col[name]]
             if cell == "" or cell.lower() == "nan":
                 raw[i, k] = np.nan
                 continue
             try:
                 raw[i, k] = float(cell) * scale
             except ValueError:
-                raise RecordingError(f"{path}, line {i + line0}: {name} is {cell!r}, not a "
+                raise RecordingError(f"{path}, line {line}: {name} is {cell!r}, not a "
                                      "number") from None
     g = dict(zip(CYBERGLOVE_COLUMNS[:19], raw.T))
     out = np.empty((len(body), len(JOINT_NAMES)))

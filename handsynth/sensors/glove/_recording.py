@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..._csv import read_rows
 from ..._io import atomic_open
 from ...errors import RecordingError
 from ...models import JOINT_NAMES
@@ -218,13 +219,11 @@ def read_glove_csv(path, *, kind: str = "", adc_max: float = 4095.0) -> GloveRec
         number; the message names the file, line and column.
     """
     path = Path(path)
-    if not path.is_file():
-        raise RecordingError(f"cannot read glove CSV {str(path)!r}: no such file")
-    with path.open(newline="") as f:
-        rows = list(csv.reader(f))
+    content = read_rows(path, what="glove CSV")
+    rows = content.rows
     if not rows:
         raise RecordingError(f"{path}: empty file, expected a header line")
-    header = [h.strip() for h in rows[0]]
+    header = rows[0]
     missing = [c for c in SENSOR_NAMES if c not in header]
     if missing:
         raise RecordingError(f"{path}: missing sensor column(s) {', '.join(missing)}; "
@@ -235,7 +234,7 @@ def read_glove_csv(path, *, kind: str = "", adc_max: float = 4095.0) -> GloveRec
         raise RecordingError(f"{path}: joint columns are incomplete, missing "
                              f"{', '.join(absent)}")
     col = {h: i for i, h in enumerate(header)}
-    body = [r for r in rows[1:] if any(c.strip() for c in r)]
+    body = rows[1:]
     if not body:
         raise RecordingError(f"{path}: no data rows after the header")
     n = len(body)
@@ -244,8 +243,7 @@ def read_glove_csv(path, *, kind: str = "", adc_max: float = 4095.0) -> GloveRec
     motion = np.full(n, "", dtype=object)
     trial = np.zeros(n, dtype=np.int64)
     time_s = np.arange(n, dtype=np.float64)
-    for i, r in enumerate(body):
-        line = i + 2
+    for i, (r, line) in enumerate(zip(body, content.lines[1:])):
         if len(r) != len(header):
             raise RecordingError(f"{path}, line {line}: {len(r)} fields, header has "
                                  f"{len(header)}")
@@ -257,7 +255,7 @@ def read_glove_csv(path, *, kind: str = "", adc_max: float = 4095.0) -> GloveRec
         if "time_s" in col:
             time_s[i] = _num(r[col["time_s"]], path, line, "time_s")
         if "motion" in col:
-            motion[i] = r[col["motion"]].strip()
+            motion[i] = r[col["motion"]]
         if "trial" in col:
             v = _num(r[col["trial"]], path, line, "trial")
             if v != int(v):

@@ -11,12 +11,12 @@ sample, or returns the warnings it found.
 
 from __future__ import annotations
 
-import csv
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from ..._csv import read_rows
 from ..._io import atomic_open
 from ...errors import RecordingError
 from ._model import GRAVITY_MPS2
@@ -250,6 +250,9 @@ def read_imu_csv(path, *, acc_units: str = "m/s2", gyr_units: str = "rad/s",
     Columns: ``time_s`` (or ``time_ms``) and, for every sensor,
     ``<sensor>_acc_x`` .. ``<sensor>_mag_z``; lines starting with ``#`` are
     comments.  Sensors are taken in the order of their first column.
+    Spreadsheet exports are read as they come (``;`` or tab between the
+    fields, decimal commas, quoted cells, a byte-order mark;
+    :func:`handsynth._csv.read_rows`).
 
     Parameters
     ----------
@@ -275,18 +278,26 @@ def read_imu_csv(path, *, acc_units: str = "m/s2", gyr_units: str = "rad/s",
             raise RecordingError(f"unknown {ch} units {u!r}; expected one of {', '.join(UNITS[ch])}")
     if not path.is_file():
         raise RecordingError(f"{path}: no such file")
-    with open(path, newline="") as f:
-        lines = [ln for ln in f if ln.strip() and not ln.lstrip().startswith("#")]
-    if len(lines) < 3:
-        raise RecordingError(f"{path}: needs a header and at least 2 rows, got {len(lines)} lines")
-    header = next(csv.reader([lines[0]]))
-    header = [h.strip() for h in header]
+    content = read_rows(path, what="IMU recording")
+    if len(content.rows) < 3:
+        raise RecordingError(f"{path}: needs a header and at least 2 rows, got "
+                             f"{len(content.rows)} lines")
+    header = content.rows[0]
+    for row, line in zip(content.rows[1:], content.lines[1:]):
+        if len(row) != len(header):
+            raise RecordingError(f"{path}, line {line}: {len(row)} values but "
+                                 f"{len(header)} columns")
     try:
-        table = np.loadtxt(lines[1:], delimiter=",", ndmin=2)
-    except ValueError as exc:
-        raise RecordingError(f"{path}: a cell is not a number ({exc})") from None
-    if table.shape[1] != len(header):
-        raise RecordingError(f"{path}: {table.shape[1]} values per row but {len(header)} columns")
+        table = np.array(content.rows[1:], dtype=np.float64)
+    except ValueError:  # find the cell to name
+        for row, line in zip(content.rows[1:], content.lines[1:]):
+            for name, cell in zip(header, row):
+                try:
+                    float(cell)
+                except ValueError:
+                    raise RecordingError(f"{path}, line {line}: {name} is {cell!r}, "
+                                         "not a number") from None
+        raise
     col = {h: i for i, h in enumerate(header)}
     if "time_s" in col:
         t = table[:, col["time_s"]]

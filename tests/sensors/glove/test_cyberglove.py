@@ -46,6 +46,16 @@ def test_header_file_round_trip_in_radians(tmp_path, poses):
     np.testing.assert_allclose(got, poses, atol=1e-6)
 
 
+def test_semicolon_export_with_decimal_commas(tmp_path, poses):
+    """A 22-sensor export saved by a spreadsheet that writes decimal commas."""
+    data = _export(poses, np.random.default_rng(2))
+    lines = [";".join(CYBERGLOVE_COLUMNS)]
+    lines += [";".join(f"{v:.6f}".replace(".", ",") for v in row) for row in data]
+    p = tmp_path / "glove.csv"
+    p.write_bytes(("\ufeff" + "\r\n".join(lines) + "\r\n").encode("utf-8"))
+    np.testing.assert_allclose(read_cyberglove_csv(p), poses, atol=1e-5)
+
+
 def test_headerless_file_in_default_order_and_synergies(tmp_path, poses):
     data = _export(poses, np.random.default_rng(1))
     p = tmp_path / "glove.csv"

@@ -33,6 +33,15 @@ def test_sensors_only_and_nan_cells(tmp_path):
     assert np.isnan(rec.sensors[1, [1, 3]]).all()
 
 
+def test_a_byte_order_mark_does_not_hide_the_first_column(tmp_path):
+    """A spreadsheet's "CSV UTF-8" starts with a byte-order mark; the first
+    column (here time_s) must still be found by name."""
+    p = tmp_path / "bom.csv"
+    p.write_bytes(("\ufefftime_s," + ",".join(SENSOR_NAMES) + "\r\n0.5,1,2,3,4,5\r\n"
+                   "0.75,1,2,3,4,5\r\n").encode("utf-8"))
+    assert read_glove_csv(p).time_s.tolist() == [0.5, 0.75]
+
+
 @pytest.mark.parametrize("text, msg", [
     ("a,b\n1,2\n", "missing sensor column"),
     ("time_s," + ",".join(SENSOR_NAMES) + "\n0,1,2,x,4,5\n", r"line 2: sensor_middle is 'x'"),

@@ -65,6 +65,22 @@ def test_csv_round_trip_and_units(tmp_path, free_rec):
     assert np.allclose(slow.gyr * 180 / np.pi, small.gyr, atol=1e-6)
 
 
+def test_csv_as_a_spreadsheet_writes_it(tmp_path, free_rec):
+    """The same recording saved by a spreadsheet in a decimal-comma locale (';'
+    between the fields, quoted names, a byte-order mark, CRLF) reads the same."""
+    p = tmp_path / "rec.csv"
+    small = free_rec.subset(("forearm_1",)).slice(0, 100)
+    write_imu_csv(small, p)
+    lines = [ln for ln in p.read_text().splitlines() if not ln.startswith("#")]
+    out = [";".join(f'"{c}"' for c in lines[0].split(","))]
+    out += [";".join(c.replace(".", ",") for c in ln.split(",")) for ln in lines[1:]]
+    sheet = tmp_path / "sheet.csv"
+    sheet.write_bytes(("\ufeff" + "\r\n".join(out) + "\r\n").encode("utf-8"))
+    back = read_imu_csv(sheet)
+    assert back.sensors == ("forearm_1",) and back.rate_hz == pytest.approx(100.0)
+    assert np.allclose(back.acc, small.acc, rtol=1e-8) and np.allclose(back.gyr, small.gyr, atol=1e-8)
+
+
 def test_csv_gap_and_bad_cells(tmp_path, free_rec):
     p = tmp_path / "rec.csv"
     write_imu_csv(free_rec.subset(("forearm_1",)).slice(0, 50), p)
@@ -75,7 +91,7 @@ def test_csv_gap_and_bad_cells(tmp_path, free_rec):
         read_imu_csv(gapped)
     bad = tmp_path / "bad.csv"
     bad.write_text("\n".join(lines[:5] + [lines[5].replace(",", ",x", 1)] + lines[6:]) + "\n")
-    with pytest.raises(RecordingError, match="not a number"):
+    with pytest.raises(RecordingError, match=r"bad.csv, line 6: forearm_1_acc_x is 'x.*not a number"):
         read_imu_csv(bad)
     with pytest.raises(RecordingError, match="unknown gyr units 'rpm'"):
         read_imu_csv(p, gyr_units="rpm")

@@ -1,0 +1,35 @@
+import pytest
+
+from handsynth._csv import read_rows
+from handsynth.errors import RecordingError
+
+
+def test_a_spreadsheet_export_is_read_as_it_comes(tmp_path):
+    """Byte-order mark, ';' and decimal commas, quotes, CRLF, comments, empty rows."""
+    p = tmp_path / "export.csv"
+    p.write_bytes("\ufefftime_s;\"acc x\";label\r\n# a comment\r\n0;-1,5;\"a;b\"\r\n;;\r\n"
+                  "0,01;2,25e-3;c\r\n".encode("utf-8"))
+    got = read_rows(p)
+    assert got.rows == [["time_s", "acc x", "label"], ["0", "-1.5", "a;b"], ["0.01", "2.25e-3", "c"]]
+    assert got.lines == [1, 3, 5]
+    assert got.delimiter == ";" and got.decimal_comma
+
+
+def test_comma_and_tab_files(tmp_path):
+    p = tmp_path / "plain.csv"
+    p.write_text("a,b\n1.5,\"2\"\n")
+    got = read_rows(p)
+    assert got.rows == [["a", "b"], ["1.5", "2"]] and got.delimiter == "," and not got.decimal_comma
+    t = tmp_path / "tabs.txt"
+    t.write_text("a\tb\n1,5\t2\n")
+    got = read_rows(t)
+    assert got.rows == [["a", "b"], ["1.5", "2"]] and got.delimiter == "\t" and got.decimal_comma
+
+
+def test_binary_and_missing_files_are_named(tmp_path):
+    b = tmp_path / "rec.npy"
+    b.write_bytes(b"\x93NUMPY\x01\x00\x00\x00")
+    with pytest.raises(RecordingError, match="rec.npy: a binary file, not a IMU recording"):
+        read_rows(b, what="IMU recording")
+    with pytest.raises(RecordingError, match="cannot read glove CSV .*missing.csv.*no such file"):
+        read_rows(tmp_path / "missing.csv", what="glove CSV")
