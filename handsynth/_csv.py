@@ -54,7 +54,7 @@ def _text(path: Path, what: str) -> str:
     except OSError as exc:
         raise RecordingError(f"cannot read {what} {str(path)!r}: {exc.strerror or exc}") from None
     if b"\x00" in raw[:65536]:
-        raise RecordingError(f"{path}: a binary file, not a {what} (CSV text)")
+        raise RecordingError(f"{path}: binary content; expected CSV text ({what})")
     try:
         return raw.decode("utf-8-sig")
     except UnicodeDecodeError:

@@ -29,7 +29,7 @@ def test_comma_and_tab_files(tmp_path):
 def test_binary_and_missing_files_are_named(tmp_path):
     b = tmp_path / "rec.npy"
     b.write_bytes(b"\x93NUMPY\x01\x00\x00\x00")
-    with pytest.raises(RecordingError, match="rec.npy: a binary file, not a IMU recording"):
+    with pytest.raises(RecordingError, match=r"rec.npy: binary content; expected CSV text \(IMU recording\)"):
         read_rows(b, what="IMU recording")
     with pytest.raises(RecordingError, match="cannot read glove CSV .*missing.csv.*no such file"):
         read_rows(tmp_path / "missing.csv", what="glove CSV")
