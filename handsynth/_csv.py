@@ -4,7 +4,7 @@ Exports differ from the :mod:`csv` module's defaults in ways that are easy to
 miss and turn a good recording into an error or, worse, into silently wrong
 columns: a byte-order mark before the first name (a spreadsheet's "CSV
 UTF-8"), ``;`` between the fields and a decimal comma (``1,5``; spreadsheets
-in locales that write numbers so), tabs, quoted cells, CRLF line ends and
+in locales that write numbers so), tabs or spaces, quoted cells, CRLF line ends and
 comment lines.  :func:`read_rows` reads all of these into rows of stripped
 cells and records what it found, so that the CSV readers of recordings
 agree on it and can name the line of a bad cell.
@@ -37,7 +37,7 @@ class Rows:
     lines : list of int
         Line of each row in the file (1 = the first line).
     delimiter : str
-        ``","``, ``";"`` or ``"\\t"``.
+        ``","``, ``";"``, ``"\\t"`` or ``" "`` (runs of spaces).
     decimal_comma : bool
         Numbers were written with a decimal comma.
     """
@@ -66,8 +66,9 @@ def read_rows(path, *, what: str = "CSV table") -> Rows:
 
     The delimiter is the one of ``;``, tab and ``,`` found on most of the
     first 50 lines (in that order of preference: ``;`` and tab files often
-    hold decimal commas, a ``,`` file cannot).  With ``;`` or tab, cells
-    that are numbers written with a decimal comma get a decimal point.
+    hold decimal commas, a ``,`` file cannot), else runs of spaces where
+    most lines have several fields.  Unless it is ``,``, cells that are
+    numbers written with a decimal comma get a decimal point.
 
     Parameters
     ----------
@@ -87,13 +88,19 @@ def read_rows(path, *, what: str = "CSV table") -> Rows:
                if ln.strip() and not ln.lstrip().startswith("#")]
     sample = [ln for _, ln in content[:50]]
     delimiter = ","
-    for d in (";", "\t"):
+    for d in (";", "\t", ","):
         if sample and sum(d in ln for ln in sample) > len(sample) // 2:
             delimiter = d
             break
+    else:
+        if sample and sum(len(ln.split()) > 1 for ln in sample) > len(sample) // 2:
+            delimiter = " "  # a logger's text columns
     rows, lines = [], []
     for no, ln in content:
-        cells = [c.strip() for c in next(csv.reader([ln], delimiter=delimiter))]
+        if delimiter == " ":
+            cells = ln.split()
+        else:
+            cells = [c.strip() for c in next(csv.reader([ln], delimiter=delimiter))]
         if any(cells):  # a spreadsheet's empty row is a line of delimiters
             rows.append(cells)
             lines.append(no)

@@ -33,3 +33,11 @@ def test_binary_and_missing_files_are_named(tmp_path):
         read_rows(b, what="IMU recording")
     with pytest.raises(RecordingError, match="cannot read glove CSV .*missing.csv.*no such file"):
         read_rows(tmp_path / "missing.csv", what="glove CSV")
+
+
+def test_space_separated_columns(tmp_path):
+    p = tmp_path / "logger.txt"
+    p.write_text("time  a   b\n0.0  1.5 -2\n0.1\t2.5 -3\n")
+    got = read_rows(p)
+    assert got.rows == [["time", "a", "b"], ["0.0", "1.5", "-2"], ["0.1", "2.5", "-3"]]
+    assert got.delimiter == " " and not got.decimal_comma
