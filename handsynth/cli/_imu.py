@@ -141,7 +141,7 @@ def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz
                        rate_hz=rate_hz)
     try:
         spans = json.loads(Path(segments_path).read_text())
-    except (OSError, json.JSONDecodeError) as exc:
+    except (OSError, ValueError) as exc:  # JSON and text decoding errors are ValueErrors
         raise RecordingError(f"{segments_path}: cannot read the segments JSON ({exc})") from None
     if not isinstance(spans, dict):
         raise RecordingError(f"{segments_path}: expected an object of label: [start_s, end_s]")

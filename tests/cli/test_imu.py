@@ -213,3 +213,13 @@ def test_calibrate_segment_outside_is_named(tmp_path, sim):
     res = CliRunner().invoke(cli, ["imu", "calibrate", str(src), "--segments", str(seg),
                                    "--out", str(tmp_path / "c.json")])
     assert res.exit_code == 2 and "segment 'elbow_flex' = [5.0, 99.0] s lies outside" in res.output
+
+
+def test_calibrate_segments_file_not_text_is_one_line(tmp_path, sim):
+    src, seg = tmp_path / "rec.csv", tmp_path / "seg.json"
+    write_imu_csv(sim.subset(("forearm_1",)), src)
+    seg.write_bytes(b"\xff\xfe\x00{")
+    res = CliRunner().invoke(cli, ["imu", "calibrate", str(src), "--segments", str(seg),
+                                   "--out", str(tmp_path / "c.json")])
+    assert res.exit_code == 2 and "seg.json: cannot read the segments JSON" in res.output
+    assert "Traceback" not in res.output and not (tmp_path / "c.json").exists()
