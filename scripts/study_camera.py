@@ -7,6 +7,7 @@ Usage::
     python scripts/study_camera.py --cache DIR holds
     python scripts/study_camera.py observability
     python scripts/study_camera.py --cache DIR bound
+    python scripts/study_camera.py bound_mcp
     python scripts/study_camera.py --cache DIR rests
 
 ``backgrounds``
@@ -59,6 +60,17 @@ Usage::
     Beside it, on the same frames: the per-digit estimator (calibrated on
     the rest frame) and the constant open hand.  Last line:
     ``oracle_mae=<mean> estimator_mae=<mean> constant_mae=<mean>``.
+
+``bound_mcp``
+    The same oracle on the same frames (hands, rest postures and poses as
+    ``bound``), but not told the index MCP: it sweeps the MCP (-5 to 90 deg)
+    and the PIP (-5 to 100 deg) together in 2.5-deg steps and keeps every
+    pair whose silhouette differs from the frame's by nothing thicker than 2
+    pixels; its answer is the median PIP of the pairs kept.  Beside it the
+    oracle told the MCP (the ``bound`` oracle, on the 2.5-deg grid).  How much
+    of the index PIP the silhouette holds when the joint next to it is not
+    known.  Last line: ``oracle_mcp_known_mae=<mean> oracle_mcp_unknown_mae=<mean>
+    constant_mae=<mean>``.
 
 ``rests``
     How a hand's paper-frame skill depends on the rest posture drawn: the
@@ -337,6 +349,56 @@ def bound(cache) -> None:
     print(f"oracle_mae={m[0]:.2f} estimator_mae={m[1]:.2f} constant_mae={m[2]:.2f}")
 
 
+def bound_mcp() -> None:
+    import cv2
+
+    from handsynth.eval import paper_protocol_poses
+    from handsynth.models import JOINT_LIMITS_DEG
+
+    mount = CameraMount.paper()
+    disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (3, 3))
+    mcps, pips = np.arange(-5.0, 90.1, 2.5), np.arange(-5.0, 100.1, 2.5)
+    rng = np.random.default_rng(7)  # the frames of ``bound``
+    rows = []
+    for hand in model_test_hands(4, seed=5, mount=mount) + mesh_test_hands(mount=mount):
+        made = hand.make()
+        rest = relaxed_rest_posture(rng)
+        poses, _ = paper_protocol_poses(rest, 600, rng)
+        moving = np.nonzero(poses[:, 6] - rest[6] > 20)[0][:30]
+        known, unknown, spans = [], [], []
+        for i in moving:
+            pose = poses[i]
+            seen = made.mask(pose)
+            ratio = pose[7] / pose[6]
+            grid = np.array([(m, p) for m in mcps for p in pips])
+            q = np.tile(pose, (len(grid), 1))
+            q[:, 4], q[:, 6] = grid[:, 0], grid[:, 1]
+            q[:, 7] = np.clip(ratio * grid[:, 1], *JOINT_LIMITS_DEG[7])
+            ok = np.concatenate([[cv2.erode((m ^ seen).view(np.uint8), disc).sum() < 20
+                                  for m in made.masks(q[k:k + 256])]
+                                 for k in range(0, len(q), 256)])
+            near_mcp = np.abs(grid[:, 0] - pose[4]) <= 1.25
+            kept_known = grid[ok & near_mcp, 1]
+            kept = grid[ok, 1]
+            if kept.size == 0:  # nothing on the grid explains the frame: leave it out
+                continue
+            if kept_known.size:
+                known.append(abs(np.median(kept_known) - pose[6]))
+            unknown.append(abs(np.median(kept) - pose[6]))
+            spans.append(np.ptp(kept))
+        const = np.abs(poses[moving, 6])
+        rows.append((np.mean(known), np.mean(unknown), const.mean()))
+        print(f"{hand.name:15s} {len(unknown):2d} frames: index PIP MAE oracle told the MCP "
+              f"{rows[-1][0]:5.1f} deg, not told {rows[-1][1]:5.1f} (span of the PIPs kept, "
+              f"median {np.median(spans):3.0f} deg), constant {rows[-1][2]:5.1f}", flush=True)
+        close = getattr(made, "close", None)
+        if close is not None:
+            close()
+    m = np.mean(rows, axis=0)
+    print(f"oracle_mcp_known_mae={m[0]:.2f} oracle_mcp_unknown_mae={m[1]:.2f} "
+          f"constant_mae={m[2]:.2f}")
+
+
 def rests(cache) -> None:
     from handsynth.eval import ProtocolOptions, run_protocol
 
@@ -369,9 +431,9 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cache", default=None, help="folder of the learnt estimator")
     ap.add_argument("study", choices=["backgrounds", "jitter", "holds", "observability", "bound",
-                                      "rests"])
+                                      "bound_mcp", "rests"])
     args = ap.parse_args()
-    if args.study != "observability" and args.cache is None:
+    if args.study not in ("observability", "bound_mcp") and args.cache is None:
         ap.error(f"{args.study} needs --cache DIR")
     if args.study == "backgrounds":
         backgrounds(args.cache)
@@ -381,6 +443,8 @@ def main() -> None:
         holds(args.cache)
     elif args.study == "bound":
         bound(args.cache)
+    elif args.study == "bound_mcp":
+        bound_mcp()
     elif args.study == "rests":
         rests(args.cache)
     else:
