@@ -66,7 +66,8 @@ Usage::
     ``bound``), but not told the index MCP: it sweeps the MCP (-5 to 90 deg)
     and the PIP (-5 to 100 deg) together in 2.5-deg steps and keeps every
     pair whose silhouette differs from the frame's by nothing thicker than 2
-    pixels; its answer is the median PIP of the pairs kept.  Beside it the
+    pixels; its answer is the median PIP of the pairs kept (a frame no pair
+    of the grid matches so closely is left out).  Beside it the
     oracle told the MCP (the ``bound`` oracle, on the 2.5-deg grid).  How much
     of the index PIP the silhouette holds when the joint next to it is not
     known.  Last line: ``oracle_mcp_known_mae=<mean> oracle_mcp_unknown_mae=<mean>
@@ -307,23 +308,35 @@ def observability() -> None:
     print(f"pip_60_80_px={np.mean(late):.0f}")
 
 
-def bound(cache) -> None:
-    import cv2
-
+def _bound_frames():
+    """The paper frames of ``bound`` and ``bound_mcp``: per hand (hand, its mask maker,
+    rest posture, 600 poses, the indices of at most 30 whose index PIP moves > 20 deg)."""
     from handsynth.eval import paper_protocol_poses
-    from handsynth.models import JOINT_LIMITS_DEG
 
     mount = CameraMount.paper()
-    est = _estimator(cache)
-    disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (3, 3))
-    sweep = np.arange(-5.0, 100.5, 1.0)
     rng = np.random.default_rng(7)
-    rows = []
     for hand in model_test_hands(4, seed=5, mount=mount) + mesh_test_hands(mount=mount):
         made = hand.make()
         rest = relaxed_rest_posture(rng)
         poses, _ = paper_protocol_poses(rest, 600, rng)
-        moving = np.nonzero(poses[:, 6] - rest[6] > 20)[0][:30]
+        try:
+            yield hand, made, rest, poses, np.nonzero(poses[:, 6] - rest[6] > 20)[0][:30]
+        finally:
+            close = getattr(made, "close", None)
+            if close is not None:
+                close()
+
+
+def bound(cache) -> None:
+    import cv2
+
+    from handsynth.models import JOINT_LIMITS_DEG
+
+    est = _estimator(cache)
+    disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (3, 3))
+    sweep = np.arange(-5.0, 100.5, 1.0)
+    rows = []
+    for hand, made, rest, poses, moving in _bound_frames():
         cal = est.calibrated(made.mask(rest))
         oracle, spans, mine = [], [], []
         for i in moving:
@@ -352,19 +365,12 @@ def bound(cache) -> None:
 def bound_mcp() -> None:
     import cv2
 
-    from handsynth.eval import paper_protocol_poses
     from handsynth.models import JOINT_LIMITS_DEG
 
-    mount = CameraMount.paper()
     disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (3, 3))
     mcps, pips = np.arange(-5.0, 90.1, 2.5), np.arange(-5.0, 100.1, 2.5)
-    rng = np.random.default_rng(7)  # the frames of ``bound``
     rows = []
-    for hand in model_test_hands(4, seed=5, mount=mount) + mesh_test_hands(mount=mount):
-        made = hand.make()
-        rest = relaxed_rest_posture(rng)
-        poses, _ = paper_protocol_poses(rest, 600, rng)
-        moving = np.nonzero(poses[:, 6] - rest[6] > 20)[0][:30]
+    for hand, made, _rest, poses, moving in _bound_frames():
         known, unknown, spans = [], [], []
         for i in moving:
             pose = poses[i]
@@ -391,9 +397,6 @@ def bound_mcp() -> None:
         print(f"{hand.name:15s} {len(unknown):2d} frames: index PIP MAE oracle told the MCP "
               f"{rows[-1][0]:5.1f} deg, not told {rows[-1][1]:5.1f} (span of the PIPs kept, "
               f"median {np.median(spans):3.0f} deg), constant {rows[-1][2]:5.1f}", flush=True)
-        close = getattr(made, "close", None)
-        if close is not None:
-            close()
     m = np.mean(rows, axis=0)
     print(f"oracle_mcp_known_mae={m[0]:.2f} oracle_mcp_unknown_mae={m[1]:.2f} "
           f"constant_mae={m[2]:.2f}")
