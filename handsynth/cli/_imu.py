@@ -253,7 +253,8 @@ def broad(directory, filters, json_out) -> None:
     """Run the filters on the BROAD trials present in DIRECTORY (the dataset's metric)."""
     from ..sensors.imu import BROAD_FILTERS, run_broad
 
-    res = run_broad(directory, filters=_filters(filters, BROAD_FILTERS))
+    res = run_broad(directory, filters=_filters(filters, BROAD_FILTERS),
+                    progress=lambda line: click.echo(line, err=True))
     if json_out:
         _write_json(json_out, res)
     click.echo(f"{len(res['trials'])} BROAD trial(s); mean RMSE over the movement phases, deg "

@@ -82,6 +82,7 @@ def test_broad_on_a_synthetic_trial(tmp_path, sim):
     assert m["raw"]["total_rmse_deg"] < m["constant"]["total_rmse_deg"]
     assert m["vqf"]["total_rmse_deg"] < 15.0
     assert "2.9" in res.output
+    assert "01_synthetic_a: best" in res.output and "02_synthetic_b: best" in res.output
 
 
 def test_broad_missing_field_is_named(tmp_path, sim):

@@ -139,12 +139,22 @@ def find_broad_trials(directory) -> list[Path]:
     return [files[k] for k in sorted(files)]
 
 
-def run_broad(directory, *, filters=BROAD_FILTERS) -> dict:
+def run_broad(directory, *, filters=BROAD_FILTERS, progress=None) -> dict:
     """Run every filter on every trial present; the dataset's error metric per trial.
 
     The static start for the thesis' estimators is the rest before the first
     movement sample (at most 2 s); BROAD has no common rotation, so there is
     no azimuth alignment.
+
+    Parameters
+    ----------
+    directory : path-like
+        The dataset's folder (or its ``data_mat`` / ``data_hdf5``).
+    filters : sequence of str, keyword-only
+        Names from :data:`BROAD_FILTERS`.
+    progress : callable, keyword-only, optional
+        Called with a line of text after each trial (the ahrs filters take
+        seconds per trial).
     """
     from ._eval import make_filter
 
@@ -165,6 +175,9 @@ def run_broad(directory, *, filters=BROAD_FILTERS) -> dict:
             q_enu = qmul(qconj(_Q_NWU_FROM_ENU), q)
             res[name] = broad_errors(q_enu, opt, movement)
         out["trials"][path.stem] = res
+        if progress is not None:
+            best = min(res, key=lambda k: res[k]["total_rmse_deg"])
+            progress(f"{path.stem}: best {best} {res[best]['total_rmse_deg']:.2f} deg")
     for name in filters:
         out["mean"][name] = {m: float(np.mean([t[name][m] for t in out["trials"].values()]))
                              for m in ("total_rmse_deg", "heading_rmse_deg", "inclination_rmse_deg")}
