@@ -14,12 +14,13 @@ from __future__ import annotations
 
 import csv
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
 from .errors import RecordingError
 
-__all__ = ["Rows", "read_rows"]
+__all__ = ["Rows", "read_rows", "read_text"]
 
 _COMMA_NUMBER = re.compile(r"[-+]?\d*,\d+(?:[eE][-+]?\d+)?")
 
@@ -48,17 +49,39 @@ class Rows:
     decimal_comma: bool
 
 
-def _text(path: Path, what: str) -> str:
+def read_text(path, *, what: str, signatures: Mapping[bytes, str] | None = None) -> str:
+    """The text of the file `path`, refusing binary content.
+
+    Decoded as UTF-8 without a byte-order mark, else as Latin-1 (any byte
+    decodes, so names stay readable enough to report).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    what : str, keyword-only
+        What the file should be, for messages ("a Polhemus text export").
+    signatures : mapping of bytes to str, keyword-only, optional
+        Leading bytes of binary files users give by mistake, and what each is.
+
+    Raises
+    ------
+    RecordingError
+        Unreadable, or binary (a NUL byte in the first 64 KiB).
+    """
+    path = Path(path)
     try:
         raw = path.read_bytes()
     except OSError as exc:
-        raise RecordingError(f"cannot read {what} {str(path)!r}: {exc.strerror or exc}") from None
+        raise RecordingError(f"cannot read {str(path)!r}: {exc.strerror or exc}") from None
+    for magic, kind in (signatures or {}).items():
+        if raw.startswith(magic):
+            raise RecordingError(f"{path}: {kind}; expected {what}")
     if b"\x00" in raw[:65536]:
-        raise RecordingError(f"{path}: binary content; expected CSV text ({what})")
+        raise RecordingError(f"{path}: binary content; expected {what}")
     try:
         return raw.decode("utf-8-sig")
     except UnicodeDecodeError:
-        return raw.decode("latin-1")  # any byte decodes; names stay readable enough to report
+        return raw.decode("latin-1")
 
 
 def read_rows(path, *, what: str = "CSV table") -> Rows:
@@ -84,7 +107,8 @@ def read_rows(path, *, what: str = "CSV table") -> Rows:
     path = Path(path)
     if not path.is_file():
         raise RecordingError(f"cannot read {what} {str(path)!r}: no such file")
-    content = [(no, ln) for no, ln in enumerate(_text(path, what).splitlines(), start=1)
+    text = read_text(path, what=f"CSV text ({what})")
+    content = [(no, ln) for no, ln in enumerate(text.splitlines(), start=1)
                if ln.strip() and not ln.lstrip().startswith("#")]
     sample = [ln for _, ln in content[:50]]
     delimiter = ","

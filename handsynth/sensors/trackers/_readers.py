@@ -49,6 +49,7 @@ import numpy as np
 from scipy.ndimage import median_filter
 from scipy.spatial.transform import Rotation
 
+from ..._csv import read_text
 from ...errors import InvalidInputError, RecordingError
 from ._recording import Recording
 
@@ -80,24 +81,10 @@ class _Table:
 
 
 def _read_text(path: Path) -> str:
-    try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise RecordingError(f"cannot read {str(path)!r}: {exc.strerror or exc}") from None
-    if not raw.strip():
+    text = read_text(path, what="a Polhemus text export", signatures=_BINARY_MAGIC)
+    if not text.strip():
         raise RecordingError(f"{str(path)!r} is empty")
-    for magic, what in _BINARY_MAGIC.items():
-        if raw.startswith(magic):
-            raise RecordingError(f"{str(path)!r} is {what}, not a Polhemus text export")
-    if b"\x00" in raw[:65536]:
-        raise RecordingError(f"{str(path)!r} is a binary file, not a Polhemus text export")
-    try:
-        return raw.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        try:
-            return raw.decode("latin-1")
-        except UnicodeDecodeError:  # pragma: no cover - latin-1 decodes any byte
-            raise RecordingError(f"{str(path)!r} is not a text file") from None
+    return text
 
 
 def _split(line: str, sep: str, decimal_comma: bool) -> list[str]:
