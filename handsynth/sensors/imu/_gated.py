@@ -1,4 +1,4 @@
-"""One IMU's orientation with gated corrections (beyond the thesis: its switch for a single sensor).
+"""One IMU's orientation with gated corrections (beyond the thesis, after its Filter 4).
 
 The thesis' Filter 1 trusts each sample's accelerometer and compass (seed
 003 Table 4.3), so every linear acceleration tilts it and every magnetic
