@@ -165,6 +165,15 @@ class GatedOptions:
                                     f"eigenvalue of an isotropic spread), got {self.iron_span_min!r}")
 
 
+@njit(cache=True)
+def _field_passes(m_w, f_ref, dip_ref, mag_tol, dip_tol):
+    """Whether a world-frame field has the start's strength and dip, within the tolerances."""
+    f = math.sqrt(m_w[0] ** 2 + m_w[1] ** 2 + m_w[2] ** 2)
+    if not (f > 0 and abs(f / f_ref - 1.0) < mag_tol):
+        return False
+    return abs(math.atan2(m_w[2], math.hypot(m_w[0], m_w[1])) - dip_ref) < dip_tol
+
+
 def _kernel(q0, gyr, acc, mag, mag0, b0, dt, g, acc_k, lp_k, mag_k, bias_k, acc_tol, rate_gate,
             mag_tol, dip_tol, rest_rate, rest_n, iron_k, iron_rate, reset_n, info_k,
             info_min):
@@ -210,11 +219,7 @@ def _kernel(q0, gyr, acc, mag, mag0, b0, dt, g, acc_k, lp_k, mag_k, bias_k, acc_
                     q_cor = _qmul(_qexp(axis / s * angle), q_cor)
         r_now = _qmat(_qmul(q_cor, q_gyr))
         m_w = r_now @ mag[i]
-        f = math.sqrt(m_w[0] ** 2 + m_w[1] ** 2 + m_w[2] ** 2)
-        ok = False
-        if f > 0 and abs(f / f_ref - 1.0) < mag_tol:
-            dip = math.atan2(m_w[2], math.hypot(m_w[0], m_w[1]))
-            ok = abs(dip - dip_ref) < dip_tol
+        ok = _field_passes(m_w, f_ref, dip_ref, mag_tol, dip_tol)
         calm = calm + 1 if ok else 0
         if iron_k > 0:
             if calm >= reset_n:
@@ -230,9 +235,8 @@ def _kernel(q0, gyr, acc, mag, mag0, b0, dt, g, acc_k, lp_k, mag_k, bias_k, acc_
                         v = r_now[2]
                         h = h + iron_k * ((f - f_ref) * u + (m_w[2] - m_ref[2]) * v)
                         info = info + info_k * (0.5 * (np.outer(u, u) + np.outer(v, v)) - info)
-                    if np.linalg.eigvalsh(info)[0] > info_min and abs(f / f_ref - 1.0) < mag_tol:
-                        dip = math.atan2(m_w[2], math.hypot(m_w[0], m_w[1]))
-                        ok = abs(dip - dip_ref) < dip_tol
+                    ok = (_field_passes(m_w, f_ref, dip_ref, mag_tol, dip_tol)
+                          and np.linalg.eigvalsh(info)[0] > info_min)
         if ok:
             err = math.atan2(m_w[1], m_w[0]) - psi_ref
             err = (err + math.pi) % (2 * math.pi) - math.pi
