@@ -67,7 +67,7 @@ import json
 import numpy as np
 
 from handsynth.sensors.imu import MPU9250_DATASHEET, TUNING, ImuRecording, StaticStart
-from handsynth.sensors.imu._eval import _calibrate, _device_seed, _truth
+from handsynth.sensors.imu._eval import _calibrate, _truth, free_trials
 from handsynth.sensors.imu._filters import VQFEstimator
 from handsynth.sensors.imu._gated import GatedOptions, gated_orientation
 from handsynth.sensors.imu._model import GRAVITY_MPS2, ImuHand
@@ -224,12 +224,14 @@ def iron_study(single, fixed) -> None:
 
 def score_single(trials, options: GatedOptions) -> float:
     """Mean over trials of the orientation RMSE after the first rest, deg."""
-    vals = []
-    for rec, q in trials:
-        est = gated_orientation(rec, options, static=_STATIC)[0]
-        e = angle_deg(est[int(5 * RATE_HZ):], q[int(5 * RATE_HZ):])
-        vals.append(float(np.sqrt(np.mean(e ** 2))))
-    return float(np.mean(vals))
+    return float(np.mean([_rmse_after_rest(gated_orientation(rec, options, static=_STATIC)[0], q)
+                          for rec, q in trials]))
+
+
+def _rmse_after_rest(est: np.ndarray, q: np.ndarray) -> float:
+    """Orientation RMSE (deg) of `est` against `q` after the 5-s rest."""
+    n = int(5 * RATE_HZ)
+    return float(np.sqrt(np.mean(angle_deg(est[n:], q[n:]) ** 2)))
 
 
 def hand_trials():
@@ -237,15 +239,7 @@ def hand_trials():
     placement = TUNING.placement()
     _, calib, sensor_cal = _calibrate(TUNING, placement)
     hand = ImuHand(TUNING.shape, placement=placement)
-    recs = []
-    for k, dur in enumerate((15.0, 30.0)):
-        for m, elbow in enumerate(("fixed", "moving")):
-            seed = TUNING.seed * 100 + 10 * k + m
-            rec = simulate_imu(free_motion(dur, seed=seed, elbow=elbow), hand=hand,
-                               noise=TUNING.noise, seed=seed + 50,
-                               device_seed=_device_seed(TUNING))
-            recs.append(sensor_cal.apply(rec))
-    return recs, calib
+    return [sensor_cal.apply(rec) for _, _, rec in free_trials(TUNING, hand)], calib
 
 
 def score_hand(data, options: GatedOptions) -> float:
@@ -287,9 +281,7 @@ def main() -> None:
         print(f"acc {o.acc_tau_s:4} lp {o.acc_lowpass_s:4} mag {o.mag_tau_s:5} gate "
               f"{o.rate_gate_dps:6.0f}  single {s:.3f}  hand {h:.3f}", flush=True)
     vqf = dataclasses.replace(VQFEstimator(), static=_STATIC)
-    v = float(np.mean([np.sqrt(np.mean(angle_deg(vqf.run(rec)[0][int(5 * RATE_HZ):],
-                                                  q[int(5 * RATE_HZ):]) ** 2))
-                       for rec, q in single]))
+    v = float(np.mean([_rmse_after_rest(vqf.run(rec)[0], q) for rec, q in single]))
     print(f"vqf single {v:.3f}")
     best_hand = min(r["hand_deg"] for r in rows)
     chosen = min((r for r in rows if r["hand_deg"] <= best_hand + 0.005),

@@ -277,6 +277,27 @@ def _grasp_report(config, placement, filters, calib: ImuCalibration,
     return out
 
 
+def free_trials(config: SimConfig, hand: ImuHand, *, durations=(15.0, 30.0),
+                elbows=("fixed", "moving"), speed: float = 1.0):
+    """The free-motion recordings of :func:`evaluate`, uncorrected.
+
+    Yields
+    ------
+    duration_s : float
+    elbow : str
+    recording : ImuRecording
+        Made with the configuration's noise, skin motion and physical
+        sensors (``device_seed``), one seed per duration and elbow.
+    """
+    for k, dur in enumerate(durations):
+        for m, elbow in enumerate(elbows):
+            seed = config.seed * 100 + 10 * k + m
+            yield float(dur), elbow, simulate_imu(
+                free_motion(float(dur), seed=seed, elbow=elbow, speed=speed), hand=hand,
+                noise=config.noise, skin=config.skin, seed=seed + 50,
+                device_seed=_device_seed(config))
+
+
 def evaluate(config: SimConfig = HELDOUT, *, durations=(15.0, 30.0), elbows=("fixed", "moving"),
              filters=FILTERS, grasps: bool = True, speed: float = 1.0,
              sensor_calibration: bool = True, plate_fusion: bool = True,
@@ -313,20 +334,15 @@ def evaluate(config: SimConfig = HELDOUT, *, durations=(15.0, 30.0), elbows=("fi
     hand = ImuHand(config.shape, placement=placement)
     trials = []
     lsq_rec = None
-    for k, dur in enumerate(durations):
-        for m, elbow in enumerate(elbows):
-            seed = config.seed * 100 + 10 * k + m
-            rec = simulate_imu(free_motion(float(dur), seed=seed, elbow=elbow, speed=speed),
-                               hand=hand, noise=config.noise, skin=config.skin, seed=seed + 50,
-                               device_seed=_device_seed(config))
-            if sensor_calibration:
-                rec = sensor_cal.apply(rec)     # keeps the truth
-            lsq_rec = lsq_rec or rec
-            last = k == len(durations) - 1 and m == len(elbows) - 1
-            t = _trial(rec, filters, calib, series if last else None,
-                       plate_fusion=plate_fusion)
-            t.update(duration_s=float(dur), elbow=elbow)
-            trials.append(t)
+    runs = list(free_trials(config, hand, durations=durations, elbows=elbows, speed=speed))
+    for i, (dur, elbow, rec) in enumerate(runs):
+        if sensor_calibration:
+            rec = sensor_cal.apply(rec)     # keeps the truth
+        lsq_rec = lsq_rec or rec
+        t = _trial(rec, filters, calib, series if i == len(runs) - 1 else None,
+                   plate_fusion=plate_fusion)
+        t.update(duration_s=dur, elbow=elbow)
+        trials.append(t)
     report = {"config": {**config.describe(), "sensor_calibration_applied": sensor_calibration,
                          "plate_fusion": plate_fusion},
               "filters": list(filters),
