@@ -50,6 +50,10 @@ PROTOCOL_DEFAULT = "standard,calibrated,fingers,fingers_mean,mlp,ensemble"
                    "[default: 4,000 x 100 frames].")
 @click.option("--hand-spread", type=float, default=1.5, show_default=True,
               help="--protocol: variation of the model hands' geometry (the learning set's is 1).")
+@click.option("--rest", type=click.Choice(["relaxed", "open"]), default="relaxed",
+              show_default=True,
+              help="--protocol: the test hands' rest postures: relaxed (flexion growing toward "
+                   "the little finger) or open (every finger joint flexed 3-5 deg).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), default=None,
               help="Folder for the plots (eval_*.png); none written if not given.")
 @click.option("--prefix", default=None,
@@ -92,7 +96,7 @@ PROTOCOL_DEFAULT = "standard,calibrated,fingers,fingers_mean,mlp,ensemble"
               help="Scale of the photos that measure model hands for the personal condition.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress lines.")
 @click.pass_context
-def eval_(ctx, db_folder, protocol, mesh, learned_hands, hand_spread, out_dir, prefix,
+def eval_(ctx, db_folder, protocol, mesh, learned_hands, hand_spread, rest, out_dir, prefix,
           json_path, json_frames, n_hands, frames, pose_sets, hand, conditions, count,
           db_pose_set, seed, ratio_margin, mount, frame_size, render_size, workers, ties,
           photo_mm_per_px, quiet) -> None:
@@ -124,9 +128,9 @@ def eval_(ctx, db_folder, protocol, mesh, learned_hands, hand_spread, out_dir, p
                                     "to the paper's experiment, not to --protocol")
         _protocol(db_folder, mesh, learned_hands, hand_spread, json_path, n_hands, frames,
                   _parse_list(pose_sets, "--pose-sets"),
-                  _parse_list(conditions or PROTOCOL_DEFAULT, "--conditions"), seed, say)
+                  _parse_list(conditions or PROTOCOL_DEFAULT, "--conditions"), seed, rest, say)
         return
-    for n in ("mesh", "learned_hands", "hand_spread"):
+    for n in ("mesh", "learned_hands", "hand_spread", "rest"):
         if ctx.get_parameter_source(n) == click.core.ParameterSource.COMMANDLINE:
             raise InvalidInputError(f"--{n.replace('_', '-')} applies with --protocol only")
     conditions = conditions or "standard,selected,selected_none,personal,calibrated,own_shape"
@@ -152,7 +156,7 @@ def eval_(ctx, db_folder, protocol, mesh, learned_hands, hand_spread, out_dir, p
 
 
 def _protocol(folder, mesh, learned_hands, hand_spread, json_path, n_hands, frames, pose_sets,
-              methods, seed, say) -> None:
+              methods, seed, rest, say) -> None:
     import json
     import time
 
@@ -175,7 +179,7 @@ def _protocol(folder, mesh, learned_hands, hand_spread, json_path, n_hands, fram
         raise InvalidInputError(f"--learned-hands must be a positive integer, got {learned_hands}")
     if not hand_spread > 0:
         raise InvalidInputError(f"--hand-spread must be a positive number, got {hand_spread}")
-    options = ProtocolOptions(frames=frames, pose_sets=pose_sets, seed=seed)
+    options = ProtocolOptions(frames=frames, pose_sets=pose_sets, seed=seed, rest=rest)
     mount = CameraMount.paper()
     meshes = [m.strip() for m in mesh.split(",") if m.strip()]
     hands = model_test_hands(n_hands, seed=seed + 1, mount=mount, spread=hand_spread)

@@ -126,7 +126,13 @@ from ._protocol import (
 from ._report import EvalReport
 from ._run import evaluate
 from ._stats import JointStats, joint_stats, ratio_distance, silhouette_ambiguity
-from ._testposes import natural_test_poses, paper_protocol_poses, relaxed_rest_posture
+from ._testposes import (
+    REST_POSTURES,
+    natural_test_poses,
+    open_rest_posture,
+    paper_protocol_poses,
+    relaxed_rest_posture,
+)
 
 __all__ = [
     "CONDITIONS",
@@ -134,6 +140,7 @@ __all__ = [
     "LEARNED_METHODS",
     "MOVING_DEG",
     "PROTOCOL_METHODS",
+    "REST_POSTURES",
     "EvalOptions",
     "EvalReport",
     "JointStats",
@@ -146,6 +153,7 @@ __all__ = [
     "mesh_test_hands",
     "model_test_hands",
     "natural_test_poses",
+    "open_rest_posture",
     "paper_protocol_poses",
     "protocol_headline",
     "protocol_methods",

@@ -41,7 +41,7 @@ import numpy as np
 from ..errors import InvalidInputError
 from ..models import JOINT_NAMES, HandShape
 from ..render import CameraMount, HandVariation, VariedRasterizer
-from ._testposes import natural_test_poses, paper_protocol_poses, relaxed_rest_posture
+from ._testposes import REST_POSTURES, natural_test_poses, paper_protocol_poses
 
 __all__ = [
     "JOINT_GROUPS",
@@ -78,11 +78,14 @@ class ProtocolOptions:
     seed : int
         Seed of the test poses and rest postures (independent of any
         estimator's seeds: it is mixed with a constant of this module).
+    rest : {"relaxed", "open"}
+        The test hands' rest postures (:data:`REST_POSTURES`).
     """
 
     frames: int = 200
     pose_sets: tuple[str, ...] = ("paper", "natural")
     seed: int = 0
+    rest: str = "relaxed"
 
     def __post_init__(self) -> None:
         if isinstance(self.frames, bool) or not isinstance(self.frames, (int, np.integer)) \
@@ -93,6 +96,9 @@ class ProtocolOptions:
         if bad or not self.pose_sets:
             raise InvalidInputError(f"ProtocolOptions.pose_sets must name 'paper' and/or "
                                     f"'natural', got {self.pose_sets!r}")
+        if self.rest not in REST_POSTURES:
+            raise InvalidInputError(f"ProtocolOptions.rest must be one of "
+                                    f"{', '.join(REST_POSTURES)}, got {self.rest!r}")
 
 
 @dataclass
@@ -262,10 +268,11 @@ def run_protocol(methods: dict, hands: list[TestHand], options: ProtocolOptions 
     if not methods:
         raise InvalidInputError("run_protocol needs at least one method")
     out: dict = {"options": {"frames": opts.frames, "pose_sets": list(opts.pose_sets),
-                             "seed": opts.seed, "moving_deg": MOVING_DEG}, "hands": {}}
+                             "seed": opts.seed, "rest": opts.rest, "moving_deg": MOVING_DEG},
+                 "hands": {}}
     for hand in hands:
         rng = np.random.default_rng(_seed(opts.seed, hand.name, "rest"))
-        rest = relaxed_rest_posture(rng)
+        rest = REST_POSTURES[opts.rest](rng)
         maker = hand.make()
         try:
             rest_frame = maker.mask(rest)

@@ -10,7 +10,8 @@ so that an estimator that has learnt a generator's habits gains nothing:
   relaxation level shared by the fingers, flexion increasing toward the
   little finger (the cascade of a relaxed hand), DIP following PIP by half,
   the fingers fanned by one spread level, the thumb at a varied rest; every
-  joint jittered (normal, s.d. 2-3 deg);
+  joint jittered (normal, s.d. 2-3 deg); or a near-open one
+  (:func:`open_rest_posture`: every finger joint flexed 3-5 deg);
 * **paper** frames (:func:`paper_protocol_poses`): that rest posture with one
   digit moving: one finger flexing at its MCP only, at its PIP and DIP only,
   or at all three; one finger abducting; or the thumb moving;
@@ -27,7 +28,8 @@ import numpy as np
 from ..errors import InvalidInputError
 from ..models import JOINT_LIMITS_DEG
 
-__all__ = ["natural_test_poses", "paper_protocol_poses", "relaxed_rest_posture"]
+__all__ = ["REST_POSTURES", "natural_test_poses", "open_rest_posture", "paper_protocol_poses",
+           "relaxed_rest_posture"]
 
 _LO, _HI = JOINT_LIMITS_DEG[:, 0], JOINT_LIMITS_DEG[:, 1]
 _SPREAD_DEG = np.array([6.0, 0.0, -5.0, -11.0])  # index, middle, ring, little at full spread
@@ -58,6 +60,30 @@ def relaxed_rest_posture(rng: np.random.Generator) -> np.ndarray:
         a[j + 2] = 3 + 15 * r + 2 * k + rng.normal(0, 3)
         a[j + 3] = 0.5 * a[j + 2] + rng.normal(0, 3)
     return np.clip(a, _LO, _HI)
+
+
+def open_rest_posture(rng: np.random.Generator) -> np.ndarray:
+    """A near-open rest posture (degrees, shape (20,)): the hand held open, not flat.
+
+    The thumb as in :func:`relaxed_rest_posture` (whose draws come first);
+    every finger flexion (MCP, PIP, DIP) ``U(3, 5) + N(0, 1)``, as the issue
+    describes a natural rest ("non-moving finger joints flexed 3-5 deg,
+    fingers fanned"); the fingers fanned by a new spread level ``s ~ U(0,
+    1)`` with ``N(0, 2)`` jitter.
+    """
+    a = relaxed_rest_posture(rng)
+    s = rng.uniform(0, 1)
+    for k in range(4):
+        j = _fj(k)
+        a[j] = rng.uniform(3, 5) + rng.normal(0, 1.0)
+        a[j + 1] = s * _SPREAD_DEG[k] + rng.normal(0, 2)
+        a[j + 2] = rng.uniform(3, 5) + rng.normal(0, 1.0)
+        a[j + 3] = rng.uniform(3, 5) + rng.normal(0, 1.0)
+    return np.clip(a, _LO, _HI)
+
+
+#: The rest postures :func:`~handsynth.eval.run_protocol` can draw.
+REST_POSTURES = {"relaxed": relaxed_rest_posture, "open": open_rest_posture}
 
 
 def _check(n) -> int:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 from click.testing import CliRunner
 
@@ -85,10 +86,15 @@ def test_protocol_puts_the_constant_beside_every_method_and_writes_json(tmp_path
     js = tmp_path / "protocol.json"
     res = _run("--protocol", "--db", str(tmp_path / "cache"), "--hands", "1", "--mesh", "mrtk",
                "--frames", "6", "--pose-sets", "natural", "--learned-hands", "8",
-               "--conditions", "fingers,fingers_mean,ensemble", "--json", str(js), "-q")
+               "--conditions", "fingers,fingers_mean,ensemble", "--json", str(js), "-q",
+               "--rest", "open")
     assert res.exit_code == 0, res.output
     d = json.loads(js.read_text())
     assert set(d["hands"]) == {"model0", "mrtk"}
+    assert d["options"]["rest"] == "open"
+    for hand in d["hands"].values():  # every finger joint rests flexed a few degrees
+        flex = np.array(hand["rest_deg"])[[4, 6, 7, 8, 10, 11, 12, 14, 15, 16, 18, 19]]
+        assert flex.min() > -1 and flex.max() < 9
     head = d["headline"]
     assert set(head) == {f"{kind}/natural/{m}" for kind in ("model", "mesh")
                          for m in ("fingers", "fingers_mean", "ensemble")}
@@ -105,6 +111,7 @@ def test_protocol_puts_the_constant_beside_every_method_and_writes_json(tmp_path
 @pytest.mark.parametrize(("args", "message"), [
     (["--protocol", "--count", "100"], "--count applies to the paper's experiment, not to --protocol"),
     (["--mesh", "mrtk"], "--mesh applies with --protocol only"),
+    (["--rest", "open"], "--rest applies with --protocol only"),
     (["--protocol", "--conditions", "fingers,tree"], "methods must be distinct names from"),
     (["--protocol", "--hands", "0", "--mesh", ""], "no test hands"),
 ])

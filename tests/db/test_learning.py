@@ -54,6 +54,24 @@ def test_learning_poses_stay_within_the_limits_and_from_rest_poses_move_one_digi
     assert (many >= 3).mean() > 0.3  # fingers moving together
 
 
+def test_a_share_of_hands_rests_near_open():
+    rng = np.random.default_rng(1)
+    flex = list(range(4, 20))
+    flex = [j for j in flex if (j - 4) % 4 != 1]
+    near = np.stack([random_rest_posture(rng, near_open=True) for _ in range(200)])[:, flex]
+    relaxed = np.stack([random_rest_posture(rng) for _ in range(200)])[:, flex]
+    assert near.min() >= -3 and near.max() <= 8 and relaxed.max() > 20
+    half = render_learning_set(LearningSetOptions(hands=40, poses_per_hand=1, seed=5,
+                                                  open_rest_share=0.5))
+    share = (half.rest_angles[:, flex].max(axis=1) <= 8).mean()
+    assert 0.3 < share < 0.8
+    # sets made before the option (share 0) keep their names; a share names its own
+    assert LearningSetOptions(open_rest_share=0).digest() == "869345c1d0e4489c"
+    assert LearningSetOptions(open_rest_share=0.5).digest() != LearningSetOptions().digest()
+    with pytest.raises(InvalidInputError, match="open_rest_share"):
+        LearningSetOptions(open_rest_share=1.5)
+
+
 def test_bad_options_are_refused_by_name():
     with pytest.raises(InvalidInputError, match="hands"):
         LearningSetOptions(hands=0)

@@ -11,6 +11,7 @@ from handsynth.eval import (
     condition_stats,
     model_test_hands,
     natural_test_poses,
+    open_rest_posture,
     paper_protocol_poses,
     relaxed_rest_posture,
     run_protocol,
@@ -28,6 +29,18 @@ def test_rest_postures_are_relaxed_not_zero_and_within_the_limits():
     flex = rests[:, list(JOINT_GROUPS["finger_flexion"])]
     assert flex.mean() > 3 and (np.abs(flex) > 0.5).mean() > 0.8
     assert rests.std(axis=0).min() > 1.0  # every joint varies between hands
+
+
+def test_open_rest_postures_flex_every_finger_joint_a_few_degrees():
+    rng = np.random.default_rng(3)
+    rests = np.stack([open_rest_posture(rng) for _ in range(200)])
+    assert np.all(rests >= LO) and np.all(rests <= HI)
+    flex = rests[:, list(JOINT_GROUPS["finger_flexion"])]
+    assert 3.5 < flex.mean() < 4.5 and flex.min() > -1 and flex.max() < 9
+    assert rests[:, [5, 17]].std(axis=0).min() > 2.0  # the fan varies between hands
+    assert rests[:, :4].std(axis=0).min() > 3.0        # and the thumb's rest
+    with pytest.raises(InvalidInputError, match="rest"):
+        ProtocolOptions(rest="flat")
 
 
 def test_paper_protocol_moves_one_digit_from_the_rest_posture():
