@@ -179,7 +179,7 @@ def _calibrate_learned(est, source, rest_image, mount, side, err):
     """The learnt estimator calibrated to the hand at rest."""
     rest, where = _calibration_frame(source, rest_image, mount, side, err,
                                      synthetic="the synthetic hand at rest (open)",
-                                     prompt="let the hand rest, relaxed")
+                                     prompt="hold the hand open, not stiff")
     est = est.calibrated(rest)
     click.echo(f"calibrated to {where}", err=err)
     return est
