@@ -140,8 +140,9 @@ def _check_learned_options(db_dir, shape_name, measurements, personal, build_cou
                                 "--calibrate-image gives that frame)")
 
 
-def _open_learned(cache, kind, hands, smoothing, side, err):
+def _open_learned(cache, kind, hands, rest, smoothing, side, err):
     """The learnt estimator (read from `cache`, or learnt there first)."""
+    import dataclasses
     import time
 
     from ..db import LearningSetOptions
@@ -155,7 +156,9 @@ def _open_learned(cache, kind, hands, smoothing, side, err):
     folder = Path(cache) if cache is not None else default_database_dir().parent / "learned"
     if folder.exists() and not folder.is_dir():
         raise InvalidInputError(f"--learned-cache {str(folder)!r} is a file; give a folder")
-    data = LearningSetOptions() if hands is None else LearningSetOptions(hands=hands)
+    data = LearningSetOptions()
+    data = dataclasses.replace(data, hands=data.hands if hands is None else hands,
+                               open_rest_share=0.0 if rest == "relaxed" else data.open_rest_share)
     t = time.perf_counter()
 
     def say(line: str) -> None:
@@ -248,6 +251,10 @@ def _progress(stream):
                    "~/.cache/handsynth/learned].")
 @click.option("--learned-hands", type=int, default=None, metavar="N",
               help="Random hands of the learning set [default: 4,000 x 100 frames].")
+@click.option("--learned-rest", type=click.Choice(["open", "relaxed"]), default=None,
+              help="With --learned: the rest postures it learns from: three hands in four "
+                   "held open [default], or relaxed only (the previous release's; reads a "
+                   "relaxed wearer better, README).")
 @click.option("--side", type=click.Choice(["right", "left"]), default=None,
               help="With --learned: the hand wearing the device [default: right] (the "
                    "lookups take it from the database).")
@@ -287,7 +294,8 @@ def _progress(stream):
 @click.option("--quiet", "-q", is_flag=True, help="No progress line.")
 def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, personal,
              build_count, calibrate, calibrate_image, learned, learned_kind, learned_cache,
-             learned_hands, side, smoothing, one_euro, frames, seconds, out, fmt, keypoints,
+             learned_hands, learned_rest, side, smoothing, one_euro, frames, seconds, out, fmt,
+             keypoints,
              video_out, synthetic_shape, synthetic_motion, synthetic_size, fps, no_temporal,
              max_dead, quiet) -> None:
     """Look up the hand pose of every frame of a camera, a video file or a synthetic hand.
@@ -336,11 +344,12 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
         _check_learned_options(db_dir, shape_name, measurements, personal, build_count,
                                calibrate, video_out, no_temporal, keypoints)
     elif learned_cache is not None or learned_hands is not None or smoothing is not None or \
-            side is not None or one_euro or \
+            side is not None or one_euro or learned_rest is not None or \
             click.get_current_context().get_parameter_source("learned_kind") \
             == click.core.ParameterSource.COMMANDLINE:
-        raise InvalidInputError("--learned-kind, --learned-cache, --learned-hands, --side, "
-                                "--smoothing and --one-euro apply with --learned only")
+        raise InvalidInputError("--learned-kind, --learned-cache, --learned-hands, "
+                                "--learned-rest, --side, --smoothing and --one-euro apply with "
+                                "--learned only")
     if one_euro and smoothing is not None:
         raise InvalidInputError("--one-euro and --smoothing are two ways to steady the angles; "
                                 "give one")
@@ -368,8 +377,8 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
             source, what = VideoSource(video_in), f"video {video_in}"
         lookup = None
         if learned:
-            lookup = _open_learned(learned_cache, learned_kind, learned_hands, smoothing,
-                                   side or "right", info_err)
+            lookup = _open_learned(learned_cache, learned_kind, learned_hands, learned_rest,
+                                   smoothing, side or "right", info_err)
         elif not calibrate or chosen_db:
             lookup = _open_lookup(db_dir, shape_name, measurements,
                                   False if no_temporal else None, info_err,

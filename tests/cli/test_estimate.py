@@ -468,6 +468,16 @@ def test_learned_estimator_on_a_synthetic_hand_learns_once_then_reads_its_cache(
     assert np.abs(got - est).max() > 0.01
 
 
+def test_learned_estimator_from_relaxed_rests_is_learnt_beside_the_default(tmp_path):
+    args = ["--synthetic", "--learned", "--learned-cache", str(tmp_path), "--learned-hands", "6",
+            "--learned-kind", "fingers", "--frames", "4", *SMALL]
+    for extra in ([], ["--learned-rest", "relaxed"]):
+        res = _run(*args, *extra)
+        assert res.exit_code == 0, res.output
+        assert "learning set: 6 hands x 100 frames" in res.output  # each learns its own
+    assert len(list(tmp_path.glob("learning_*.npz"))) == 2
+
+
 def test_learned_estimator_for_the_left_hand(tmp_path):
     res = _run("--synthetic", "--learned", "--side", "left", "--learned-cache", str(tmp_path),
                "--learned-hands", "6", "--learned-kind", "fingers", "--frames", "4", *SMALL)
@@ -484,6 +494,7 @@ def test_learned_estimator_for_the_left_hand(tmp_path):
     (["--learned-kind", "ensemble"], "apply with --learned only"),
     (["--smoothing", "0.3"], "apply with --learned only"),
     (["--side", "left"], "apply with --learned only"),
+    (["--learned-rest", "relaxed"], "apply with --learned only"),
     (["--one-euro"], "--smoothing and --one-euro apply with --learned only"),
     (["--learned", "--one-euro", "--smoothing", "0.3"],
      "--one-euro and --smoothing are two ways to steady the angles; give one"),
