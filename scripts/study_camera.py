@@ -79,7 +79,8 @@ Usage::
     seeds 0-9 (each seed its own rest posture), per-digit estimator.  Per
     seed and hand the flexion MAE, the constant's, the skill and the index
     PIP error where it moves; per hand the skill's mean, range and its value
-    pooled over the seeds (``1 - sum MAE / sum MAE_constant``).  Last line:
+    pooled over the seeds (``1 - sum MAE / sum MAE_constant``).  ``--rest
+    open``: near-open rest postures instead of relaxed ones.  Last line:
     ``<hand>_pooled_skill=<value> ...``.
 
 The learnt estimator is read from ``--cache`` (or learnt there first).
@@ -402,14 +403,14 @@ def bound_mcp() -> None:
           f"constant_mae={m[2]:.2f}")
 
 
-def rests(cache) -> None:
+def rests(cache, rest: str = "relaxed") -> None:
     from handsynth.eval import ProtocolOptions, run_protocol
 
     est = _estimator(cache)
     rows: dict = {}
     for seed in range(10):
         res = run_protocol({"fingers": lambda rest, _hand: est.calibrated(rest)}, mesh_test_hands(),
-                           ProtocolOptions(frames=300, seed=seed, pose_sets=("paper",)))
+                           ProtocolOptions(frames=300, seed=seed, pose_sets=("paper",), rest=rest))
         for name, rec in res["hands"].items():
             st = rec["paper"]["fingers"]
             pip = st["method"]["joints"]["index_pip_flex"]
@@ -433,6 +434,8 @@ def rests(cache) -> None:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cache", default=None, help="folder of the learnt estimator")
+    ap.add_argument("--rest", choices=["relaxed", "open"], default="relaxed",
+                    help="rests: the test hands' rest postures")
     ap.add_argument("study", choices=["backgrounds", "jitter", "holds", "observability", "bound",
                                       "bound_mcp", "rests"])
     args = ap.parse_args()
@@ -449,7 +452,7 @@ def main() -> None:
     elif args.study == "bound_mcp":
         bound_mcp()
     elif args.study == "rests":
-        rests(args.cache)
+        rests(args.cache, args.rest)
     else:
         observability()
 
