@@ -89,8 +89,10 @@ def _bench_learned(args) -> None:
     mount = CameraMount.paper()
     from handsynth.eval import LEARNED_METHODS as LEARNED
 
-    data = LearningSetOptions(hands=args.hands, poses_per_hand=args.poses_per_hand,
-                              open_rest_share=args.open_rest_share)
+    data = LearningSetOptions(hands=args.hands, poses_per_hand=args.poses_per_hand)
+    if args.open_rest_share is not None:
+        data = LearningSetOptions(hands=args.hands, poses_per_hand=args.poses_per_hand,
+                                  open_rest_share=args.open_rest_share)
     members = {k: learned_estimator(args.learned, LEARNED[k], data=data, mount=mount, progress=print)
                for k in (("fingers", "mlp") if args.kind == "ensemble" else (args.kind,))}
     est = EnsembleEstimator(list(members.values())) if args.kind == "ensemble" \
@@ -157,8 +159,9 @@ def main() -> None:
     ap.add_argument("--hands", type=int, default=4000, help="--learned: learning set hands")
     ap.add_argument("--poses-per-hand", type=int, default=100,
                     help="--learned: learning set frames per hand")
-    ap.add_argument("--open-rest-share", type=float, default=0.75,
-                    help="--learned: share of learning hands resting near open (the default's)")
+    ap.add_argument("--open-rest-share", type=float, default=None,
+                    help="--learned: share of learning hands resting near open "
+                         "[default: the library's]")
     args = ap.parse_args()
     if args.learned is not None:
         _bench_learned(args)
