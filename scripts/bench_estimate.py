@@ -89,10 +89,8 @@ def _bench_learned(args) -> None:
     mount = CameraMount.paper()
     from handsynth.eval import LEARNED_METHODS as LEARNED
 
-    data = LearningSetOptions(hands=args.hands, poses_per_hand=args.poses_per_hand)
-    if args.open_rest_share is not None:
-        data = LearningSetOptions(hands=args.hands, poses_per_hand=args.poses_per_hand,
-                                  open_rest_share=args.open_rest_share)
+    share = {} if args.open_rest_share is None else {"open_rest_share": args.open_rest_share}
+    data = LearningSetOptions(hands=args.hands, poses_per_hand=args.poses_per_hand, **share)
     members = {k: learned_estimator(args.learned, LEARNED[k], data=data, mount=mount, progress=print)
                for k in (("fingers", "mlp") if args.kind == "ensemble" else (args.kind,))}
     est = EnsembleEstimator(list(members.values())) if args.kind == "ensemble" \
