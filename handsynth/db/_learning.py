@@ -185,12 +185,13 @@ def random_rest_posture(rng: np.random.Generator, *, near_open: bool = False) ->
     a[2] = rng.uniform(-5, 25)
     a[3] = rng.uniform(-10, 30)
     fan = rng.uniform(-0.3, 1.0)
+    mcp, pip, dip = ((-3, 8),) * 3 if near_open else ((-5, 20), (0, 30), (0, 20))
     for k in range(4):
         j = 4 + 4 * k
-        a[j] = rng.uniform(-3, 8) if near_open else rng.uniform(-5, 20)
+        a[j] = rng.uniform(*mcp)
         a[j + 1] = fan * _FAN_DEG[k] + rng.normal(0, 3)
-        a[j + 2] = rng.uniform(-3, 8) if near_open else rng.uniform(0, 30)
-        a[j + 3] = rng.uniform(-3, 8) if near_open else rng.uniform(0, 20)
+        a[j + 2] = rng.uniform(*pip)
+        a[j + 3] = rng.uniform(*dip)
     return np.clip(a, _LO, _HI)
 
 
