@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InvalidInputError
+from ._learned import LearnedEstimator
 from ._lookup import PoseEstimate
 
 __all__ = ["EnsembleEstimator"]
@@ -65,9 +66,20 @@ class EnsembleEstimator:
         PoseEstimate
             ``angles``: the weighted mean of the members' (NaN when any finds
             no hand); ``keypoints`` the mean of those given (NaN if none);
-            ``confidence`` the weighted mean; ``entry`` -1.
+            ``confidence`` the weighted mean; ``entry`` -1.  Learnt members
+            of the same mount, side and cells share one coverage grid of the
+            frame (:meth:`LearnedEstimator.estimate_grid`).
         """
-        got = [m.estimate(frame) for m in self.members]
+        grids: dict = {}  # learnt members of one mount, side and cells read one grid
+        got = []
+        for m in self.members:
+            if isinstance(m, LearnedEstimator):
+                key = (m.mount, m.side, m.cells)
+                if key not in grids:
+                    grids[key] = m.grid(frame)
+                got.append(m.estimate_grid(grids[key]))
+            else:
+                got.append(m.estimate(frame))
         if any(e.no_hand for e in got):
             return PoseEstimate(angles=np.full(20, np.nan), keypoints=np.full((21, 3), np.nan,
                                 np.float32), confidence=0.0, entry=-1, error=float("inf"),

@@ -171,6 +171,13 @@ def test_bad_options_are_refused_by_name():
         LearnedOptions(ridge=-1.0)
 
 
+def test_a_grid_of_other_cells_is_refused_with_its_shape(data):
+    est = train_learned(data, LearnedOptions(kind="fingers", k=2, lists=0))
+    with pytest.raises(InvalidInputError, match=r"30x45 uint8 coverage grid, got uint8 of "
+                                                r"shape \(45, 30\)"):
+        est.estimate_grid(np.zeros((45, 30), np.uint8))
+
+
 def test_an_ensemble_reports_the_weighted_mean_and_calibrates_its_members(data):
     from handsynth.estimate import EnsembleEstimator
 
@@ -191,16 +198,28 @@ def test_an_ensemble_reports_the_weighted_mean_and_calibrates_its_members(data):
         EnsembleEstimator([])
 
 
-def test_the_inverted_file_with_one_cell_answers_as_the_exact_search(data):
+@pytest.mark.parametrize("quantize", [False, True])
+def test_the_inverted_file_with_one_cell_answers_as_the_exact_search(data, quantize):
     exact = train_learned(data, LearnedOptions(kind="fingers", k=5, lists=0))
-    ivf = train_learned(data, LearnedOptions(kind="fingers", k=5, lists=1, probes=1))
-    assert type(ivf._index["d1_"]).__name__ == "IndexIVFFlat"
+    ivf = train_learned(data, LearnedOptions(kind="fingers", k=5, lists=1, probes=1,
+                                             quantize=quantize))
+    kind = "IndexIVFScalarQuantizer" if quantize else "IndexIVFFlat"
+    assert type(ivf._index["d1_"]).__name__ == kind
     assert type(exact._index["d1_"]).__name__ == "IndexFlatL2"
     rest = SilhouetteRasterizer().mask(np.full(20, 4.0))
     a, b = exact.calibrated(rest), ivf.calibrated(rest)
-    for pose in (np.full(20, 12.0), np.full(20, 18.0)):
+    for pose in (np.full(20, 12.0), np.full(20, 18.0), np.full(20, 8.0)):
         frame = SilhouetteRasterizer().mask(pose)
-        np.testing.assert_allclose(a.estimate(frame).angles, b.estimate(frame).angles, atol=1e-4)
+        ea, eb = a.estimate(frame), b.estimate(frame)
+        np.testing.assert_allclose(ea.angles, eb.angles, atol=1e-4)
+        # distances re-measured on the float codes: the quantised search reports exact ones
+        assert eb.error == pytest.approx(ea.error, rel=1e-5)
+
+
+def test_the_quantised_search_is_a_reading_option(tmp_path):
+    assert LearnedOptions(quantize=False).digest() == LearnedOptions().digest()
+    with pytest.raises(InvalidInputError, match="quantize must be True or False, got 'no'"):
+        LearnedOptions(quantize="no")
 
 
 def test_training_a_block_of_rows_at_a_time_equals_the_whole_set_at_once(data):
