@@ -21,14 +21,15 @@ one thread.  The last line is machine-readable (paper-set frames):
 
 ``--learned FOLDER`` times the estimator learnt from randomised model hands
 instead (README, "Camera estimator for unseen hands"; read from ``FOLDER`` or
-learnt there first: minutes), ``--kind ensemble`` (default: the mean of the
-per-digit estimator and the perceptron), ``fingers`` or ``mlp``, on frames of
+learnt there first: minutes), ``--kind ensemble`` (default: the weighted mean
+of :data:`handsynth.estimate.LEARNED_ENSEMBLE`, the per-digit estimator and two
+perceptrons), ``fingers`` or ``mlp``, on frames of
 the glTF hands of :mod:`handsynth.testhands` (Godot XR Tools and MRTK, not
 the model it learnt from) in natural poses, painted as skin on a dark
 background (BGR uint8).  It is calibrated to each hand's rest frame once,
 not timed.  It also prints the median cost of its parts: binarizing (Otsu),
-the coverage grid (wrist cut, cell averages) and each member's estimate from
-the mask.  Its last line: ``learned_fps_median=<number>
+the coverage grid (wrist cut, cell averages, made once for every member) and
+each member's estimate from the grid.  Its last line: ``learned_fps_median=<number>
 latency_p99_ms=<number>``.
 
 ``--calibrated`` times :meth:`PoseLookup.calibrated` instead (calibrated
@@ -81,7 +82,7 @@ def _bench_learned(args) -> None:
         os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
 
     from handsynth.db import LearningSetOptions
-    from handsynth.estimate import EnsembleEstimator, learned_estimator
+    from handsynth.estimate import learned_ensemble, learned_estimator
     from handsynth.eval import natural_test_poses, relaxed_rest_posture
     from handsynth.render import CameraMount, binarize, coverage
     from handsynth.testhands import TEST_HANDS, MeshHandRenderer, shipped_hand_path
@@ -91,10 +92,14 @@ def _bench_learned(args) -> None:
 
     share = {} if args.open_rest_share is None else {"open_rest_share": args.open_rest_share}
     data = LearningSetOptions(hands=args.hands, poses_per_hand=args.poses_per_hand, **share)
-    members = {k: learned_estimator(args.learned, LEARNED[k], data=data, mount=mount, progress=print)
-               for k in (("fingers", "mlp") if args.kind == "ensemble" else (args.kind,))}
-    est = EnsembleEstimator(list(members.values())) if args.kind == "ensemble" \
-        else members[args.kind]
+    if args.kind == "ensemble":
+        est = learned_ensemble(args.learned, data=data, mount=mount, progress=print)
+        names = [f"{m.options.kind} (seed {m.options.seed}, weight {w:.2f})"
+                 for m, w in zip(est.members, est.weights)]
+    else:
+        est = learned_estimator(args.learned, LEARNED[args.kind], data=data, mount=mount,
+                                progress=print)
+        names = [args.kind]
     rng = np.random.default_rng(0)
     skin, dark = np.array([120, 150, 210], np.uint8), np.array([25, 20, 15], np.uint8)
 
@@ -134,12 +139,13 @@ def _bench_learned(args) -> None:
         "coverage grid (wrist cut, cell means)": _median_ms(lambda m: coverage(m, mount), masks, n),
     }
     members_cal = cal.members if args.kind == "ensemble" else [cal]
-    for name, m in zip(members, members_cal):
-        parts[f"{name}: estimate from the mask"] = _median_ms(m.estimate, masks, n)
+    grids = [members_cal[0].grid(m) for m in masks]
+    for name, m in zip(names, members_cal):
+        parts[f"{name}: estimate from the grid"] = _median_ms(m.estimate_grid, grids, n)
     print(f"{args.kind}: median {med * 1e3:.3f} ms ({1 / med:.0f} fps), p99 {p99 * 1e3:.3f} ms, "
           f"one core, {args.frames} frames")
     for k, v in parts.items():
-        print(f"  {k:45s} {v:.3f} ms")
+        print(f"  {k:55s} {v:.3f} ms")
     print(f"learned_fps_median={1.0 / med:.1f} latency_p99_ms={p99 * 1e3:.3f}")
 
 

@@ -146,7 +146,7 @@ def _open_learned(cache, kind, hands, rest, smoothing, side, err):
     import time
 
     from ..db import LearningSetOptions
-    from ..estimate import EnsembleEstimator, LearnedOptions, learned_estimator
+    from ..estimate import LearnedOptions, learned_ensemble, learned_estimator
     from ..live import default_database_dir
 
     if hands is not None and hands < 1:
@@ -165,14 +165,11 @@ def _open_learned(cache, kind, hands, rest, smoothing, side, err):
         if not line.startswith("epoch"):
             click.echo(line, err=err)
 
-    members = [learned_estimator(folder, LearnedOptions(kind="fingers"), data=data, side=side,
-                                 progress=say)]
-    if kind == "ensemble":
-        members.append(learned_estimator(folder, LearnedOptions(kind="mlp"), data=data,
-                                         side=side, progress=say))
-    for m in members:
+    est = (learned_ensemble(folder, data=data, side=side, progress=say) if kind == "ensemble"
+           else learned_estimator(folder, LearnedOptions(kind="fingers"), data=data, side=side,
+                                  progress=say))
+    for m in (est.members if kind == "ensemble" else [est]):
         m.smoothing = smoothing or 0.0
-    est = EnsembleEstimator(members) if kind == "ensemble" else members[0]
     click.echo(f"learnt estimator ({kind}, {side} hand) ready in "
                f"{time.perf_counter() - t:.1f} s ({folder})", err=err)
     return est
@@ -243,9 +240,9 @@ def _progress(stream):
                    "into --learned-cache (minutes), then read.")
 @click.option("--learned-kind", type=click.Choice(["fingers", "ensemble"]), default="ensemble",
               show_default=True,
-              help="With --learned: the mean of the per-digit estimator and the perceptron "
-                   "(the more accurate on natural poses), or the per-digit estimator alone "
-                   "(learnt a few minutes faster).")
+              help="With --learned: the weighted mean of the per-digit estimator and two "
+                   "perceptrons (the more accurate on natural poses), or the per-digit "
+                   "estimator alone (learnt about 15 minutes faster).")
 @click.option("--learned-cache", default=None, metavar="FOLDER",
               help="Folder of the learnt estimator and its learning set [default: "
                    "~/.cache/handsynth/learned].")

@@ -18,7 +18,8 @@
   search or a perceptron learnt from randomised model hands
   (:func:`learned_estimator`, :class:`LearnedOptions`, :func:`train_learned`,
   :func:`fit_mlp`), calibrated by a frame of the user's relaxed hand;
-  :class:`EnsembleEstimator` averages several.
+  :class:`EnsembleEstimator` averages several, :func:`learned_ensemble`
+  makes the default one (:data:`LEARNED_ENSEMBLE`).
 * Steady angles over time (beyond the paper): the One Euro filter
   (:class:`OneEuroFilter`, :class:`OneEuroOptions`, :func:`one_euro`) and
   :class:`SmoothedEstimator`, which wraps any estimator with it.
@@ -38,7 +39,7 @@ from ._calibration import (
     reference_silhouette,
     select_shape_from_frame,
 )
-from ._ensemble import EnsembleEstimator
+from ._ensemble import LEARNED_ENSEMBLE, EnsembleEstimator, learned_ensemble
 from ._learned import (
     LearnedEstimator,
     LearnedOptions,
@@ -65,6 +66,7 @@ from ._smoothing import (
 )
 
 __all__ = [
+    "LEARNED_ENSEMBLE",
     "ApproximateIndex",
     "ApproximateOptions",
     "Calibration",
@@ -86,6 +88,7 @@ __all__ = [
     "SelectionOptions",
     "SmoothedEstimator",
     "fit_mlp",
+    "learned_ensemble",
     "learned_estimator",
     "local_linear",
     "masked_band_areas",

@@ -18,7 +18,13 @@ import numpy as np
 
 from ..db import BuildOptions, LearningSetOptions, build_databases
 from ..errors import InvalidInputError
-from ..estimate import EnsembleEstimator, LearnedOptions, PoseLookup, learned_estimator, select_shape
+from ..estimate import (
+    LearnedOptions,
+    PoseLookup,
+    learned_ensemble,
+    learned_estimator,
+    select_shape,
+)
 from ..models import HandShape
 from ..render import CameraMount
 
@@ -36,8 +42,8 @@ LEARNED_METHODS: dict[str, LearnedOptions] = {
 }
 
 #: Every name :func:`protocol_methods` knows: the paper's lookups, the
-#: calibrated lookup, the learnt estimators and ``ensemble`` (the mean of
-#: ``fingers`` and ``mlp``).
+#: calibrated lookup, the learnt estimators and ``ensemble`` (the weighted mean
+#: of :data:`~handsynth.estimate.LEARNED_ENSEMBLE`: ``fingers`` and two perceptrons).
 PROTOCOL_METHODS: tuple[str, ...] = ("standard", "selected", "calibrated", *LEARNED_METHODS,
                                      "ensemble")
 
@@ -102,7 +108,7 @@ def protocol_methods(names, folder, *, data: LearningSetOptions | None = None,
     if "calibrated" in names:
         out["calibrated"] = lambda rest, hand: PoseLookup.from_open_frame(dbs, rest, mount=mount,
                                                                           workers=1)
-    needed = set(names) | ({"fingers", "mlp"} if "ensemble" in names else set())
+    needed = set(names)
     built = {}
     for name, opts in LEARNED_METHODS.items():
         if name in needed:
@@ -114,7 +120,8 @@ def protocol_methods(names, folder, *, data: LearningSetOptions | None = None,
             out[name] = ((lambda rest, hand, est=est: est.calibrated(rest))
                          if est.options.use_rest else (lambda rest, hand, est=est: est))
     if "ensemble" in names:
-        ens = EnsembleEstimator([built["fingers"], built["mlp"]])
+        ens = learned_ensemble(folder, data=data, mount=mount, progress=say,
+                               learnt=built.values())
         out["ensemble"] = lambda rest, hand: ens.calibrated(rest)
     return {n: out[n] for n in names}
 

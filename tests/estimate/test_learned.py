@@ -269,3 +269,25 @@ def test_reading_options_read_the_same_learnt_arrays(tmp_path):
     assert len(list(tmp_path.glob("learned_*.npz"))) == 2 and c.options.components == 6
     with pytest.raises(DatabaseMismatchError, match="learnt with other options \\(components=8\\)"):
         LearnedEstimator.load(tmp_path / learnt[0], options=LearnedOptions(components=6, lists=0))
+
+
+def test_learned_ensemble_weights_its_members_and_reuses_those_already_read(tmp_path):
+    from handsynth.estimate import EnsembleEstimator, learned_ensemble
+
+    fingers = LearnedOptions(kind="fingers", components=6, k=4, lists=0)
+    members = ((fingers, 0.5), (LearnedOptions(kind="mlp", components=8, hidden=(8,), epochs=1,
+                                               seed=0), 0.2),
+               (LearnedOptions(kind="mlp", components=8, hidden=(8,), epochs=1, seed=1), 0.3))
+    first = learned_estimator(tmp_path, fingers, data=DATA)
+    ens = learned_ensemble(tmp_path, members=members, data=DATA, learnt=[first])
+    assert isinstance(ens, EnsembleEstimator) and ens.members[0] is first
+    np.testing.assert_allclose(ens.weights, [0.5, 0.2, 0.3])
+    assert [m.options.seed for m in ens.members[1:]] == [0, 1]
+    # perceptrons of two seeds are two estimators, each kept in the folder
+    assert not np.allclose(ens.members[1]._a["w0"], ens.members[2]._a["w0"])
+    assert len(list(tmp_path.glob("learned_mlp_*.npz"))) == 2
+    again = learned_ensemble(tmp_path, members=members, data=DATA)
+    rest = SilhouetteRasterizer().mask(np.full(20, 4.0))
+    frame = SilhouetteRasterizer().mask(np.full(20, 12.0))
+    np.testing.assert_allclose(again.calibrated(rest).estimate(frame).angles,
+                               ens.calibrated(rest).estimate(frame).angles)
