@@ -42,8 +42,8 @@ LEARNED_METHODS: dict[str, LearnedOptions] = {
 }
 
 #: Every name :func:`protocol_methods` knows: the paper's lookups, the
-#: calibrated lookup, the learnt estimators and ``ensemble`` (the weighted mean
-#: of :data:`~handsynth.estimate.LEARNED_ENSEMBLE`: ``fingers`` and two perceptrons).
+#: calibrated lookup, the learnt estimators and ``ensemble``
+#: (:data:`~handsynth.estimate.LEARNED_ENSEMBLE`: the mean of ``fingers`` and ``mlp``).
 PROTOCOL_METHODS: tuple[str, ...] = ("standard", "selected", "calibrated", *LEARNED_METHODS,
                                      "ensemble")
 
