@@ -5,7 +5,8 @@ Usage::
     python scripts/bench_estimate.py [--db FOLDER] [--entries 20448] [--frames 2000]
                                      [--calibrated]
     python scripts/bench_estimate.py --learned FOLDER [--kind ensemble|fingers|mlp]
-                                     [--frames 2000] [--hands 4000] [--poses-per-hand 100]
+                                     [--scene natural|paper|photo] [--frames 2000]
+                                     [--hands 4000] [--poses-per-hand 100]
 
 The database of the standard hand is read from ``FOLDER/<HandShape().name>.h5``
 or, without ``--db``, rendered into a temporary folder (about 30 s for
@@ -26,8 +27,11 @@ learnt there first: minutes), ``--kind ensemble`` (default:
 estimator and the perceptron), ``fingers`` or ``mlp``, on frames of
 the glTF hands of :mod:`handsynth.testhands` (Godot XR Tools and MRTK, not
 the model it learnt from) in natural poses, painted as skin on a dark
-background (BGR uint8).  It is calibrated to each hand's rest frame once,
-not timed.  It also prints the median cost of its parts: binarizing (Otsu),
+background (BGR uint8); ``--scene paper`` times paper-protocol poses instead,
+``--scene photo`` natural poses over photographs
+(:func:`handsynth.eval.background_photos`: frames unlike any learnt, which
+the searches might find slower).  It is calibrated to each hand's rest frame
+once, not timed.  It also prints the median cost of its parts: binarizing (Otsu),
 the coverage grid (wrist cut, cell averages, made once for every member) and
 each member's estimate from the grid.  Its last line: ``learned_fps_median=<number>
 latency_p99_ms=<number>``.
@@ -63,6 +67,12 @@ def _build(folder: Path, n: int) -> None:
                                       seed=0, render_size=(720, 480)))
 
 
+#: ``--scene``: what the frames of ``--learned`` show.
+_SCENES = {"natural": "natural poses, dark background",
+           "paper": "paper-protocol poses (one digit moving from rest), dark background",
+           "photo": "natural poses over photographs (skimage.data; the rest frame on dark)"}
+
+
 def _median_ms(fn, items, repeat: int) -> float:
     times = []
     for i in range(repeat):
@@ -83,7 +93,12 @@ def _bench_learned(args) -> None:
 
     from handsynth.db import LearningSetOptions
     from handsynth.estimate import learned_ensemble, learned_estimator
-    from handsynth.eval import natural_test_poses, relaxed_rest_posture
+    from handsynth.eval import (
+        background_photos,
+        natural_test_poses,
+        paper_protocol_poses,
+        relaxed_rest_posture,
+    )
     from handsynth.render import CameraMount, binarize, coverage
     from handsynth.testhands import TEST_HANDS, MeshHandRenderer, shipped_hand_path
 
@@ -102,10 +117,11 @@ def _bench_learned(args) -> None:
         names = [args.kind]
     rng = np.random.default_rng(0)
     skin, dark = np.array([120, 150, 210], np.uint8), np.array([25, 20, 15], np.uint8)
+    photos = background_photos() if args.scene == "photo" else []
 
-    def bgr(mask):
+    def bgr(mask, i=None):
         f = np.empty(mask.shape + (3,), np.uint8)
-        f[...] = dark
+        f[...] = dark if i is None else photos[i % len(photos)]
         f[mask] = skin
         return f
 
@@ -113,10 +129,14 @@ def _bench_learned(args) -> None:
     for name in sorted(TEST_HANDS):
         with MeshHandRenderer(mount, path=shipped_hand_path(name)) as r:
             rest = relaxed_rest_posture(rng)
-            poses, _ = natural_test_poses(rest, 50, rng)
-            per_hand.append((est.calibrated(bgr(r.mask(rest))), [bgr(m) for m in r.masks(poses)]))
+            if args.scene == "paper":
+                poses = paper_protocol_poses(rest, 50, rng)[0]
+            else:
+                poses, _ = natural_test_poses(rest, 50, rng)
+            frames = [bgr(m, i if photos else None) for i, m in enumerate(r.masks(poses))]
+            per_hand.append((est.calibrated(bgr(r.mask(rest))), frames))
     print(f"frames: {sum(len(f) for _, f in per_hand)} BGR 720x480 of {len(per_hand)} mesh hands "
-          f"({', '.join(sorted(TEST_HANDS))}), natural poses")
+          f"({', '.join(sorted(TEST_HANDS))}), {_SCENES[args.scene]}")
 
     for cal, frames in per_hand:  # warm up
         for f in frames[:20]:
@@ -163,6 +183,9 @@ def main() -> None:
     ap.add_argument("--hands", type=int, default=4000, help="--learned: learning set hands")
     ap.add_argument("--poses-per-hand", type=int, default=100,
                     help="--learned: learning set frames per hand")
+    ap.add_argument("--scene", default="natural", choices=list(_SCENES),
+                    help="--learned: the frames timed (natural poses on a dark background, "
+                         "paper-protocol poses, or natural poses over photographs)")
     ap.add_argument("--open-rest-share", type=float, default=None,
                     help="--learned: share of learning hands resting near open "
                          "[default: the library's]")

@@ -97,6 +97,7 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 import numpy as np
 
 from handsynth.eval import (
+    background_photos,
     mesh_test_hands,
     model_test_hands,
     natural_test_poses,
@@ -106,8 +107,6 @@ from handsynth.render import CameraMount
 
 _FLEX = [4, 6, 7, 8, 10, 11, 12, 14, 15, 16, 18, 19]  # the 12 finger flexions
 _SKIN = np.array([120, 150, 210], np.uint8)             # BGR
-_PHOTOS = ("astronaut", "coffee", "chelsea", "rocket", "camera", "coins", "page", "moon",
-           "text", "clock")
 
 
 def _estimator(cache):
@@ -116,23 +115,10 @@ def _estimator(cache):
     return learned_estimator(cache, LearnedOptions())
 
 
-def _photos() -> list[np.ndarray]:
-    import cv2
-    import skimage.data
-
-    out = []
-    for name in _PHOTOS:
-        im = getattr(skimage.data, name)()
-        if im.ndim == 2:
-            im = np.stack([im] * 3, -1)
-        out.append(cv2.resize(cv2.cvtColor(im[..., :3], cv2.COLOR_RGB2BGR), (720, 480)))
-    return out
-
-
 def backgrounds(cache) -> None:
     mount = CameraMount.paper()
     est = _estimator(cache)
-    photos = _photos()
+    photos = background_photos()
     grounds = {"dark": lambda i: np.full((480, 720, 3), 20, np.uint8),
                "photo": lambda i: photos[i % len(photos)].copy(),
                "photo x0.5": lambda i: photos[i % len(photos)] // 2}

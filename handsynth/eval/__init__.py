@@ -104,6 +104,7 @@ pose set (``docs/eval/model_hands_20448.json``):
   the proximal phalanx does not change what the dorsal camera sees.
 """
 
+from ._backgrounds import BACKGROUND_PHOTOS, background_photos
 from ._hands import random_hand_shapes
 from ._methods import (
     LEARNED_METHODS,
@@ -135,6 +136,7 @@ from ._testposes import (
 )
 
 __all__ = [
+    "BACKGROUND_PHOTOS",
     "CONDITIONS",
     "JOINT_GROUPS",
     "LEARNED_METHODS",
@@ -146,6 +148,7 @@ __all__ = [
     "JointStats",
     "ProtocolOptions",
     "TestHand",
+    "background_photos",
     "condition_stats",
     "evaluate",
     "format_headline",
