@@ -193,9 +193,11 @@ class LearnedOptions:
 
 
 #: :class:`LearnedOptions` fields used only when an estimator reads frames
-#: (how many neighbours, and how their angles become the answer), not when it
-#: learns.  ``lists`` and ``probes`` are not among them: the novelty limit is
-#: learnt through the same search.
+#: (how many neighbours, how their angles become the answer, how the codes are
+#: stored for the search), not when it learns.  ``lists`` and ``probes`` are
+#: not among them: the novelty limit is learnt through the same search, which
+#: they shape; ``quantize`` changes only which neighbours are found, each
+#: measured on its float code either way.
 _READING_OPTIONS = ("k", "local", "ridge", "quantize")
 
 
