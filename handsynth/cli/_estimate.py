@@ -292,9 +292,8 @@ def _progress(stream):
 def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, personal,
              build_count, calibrate, calibrate_image, learned, learned_kind, learned_cache,
              learned_hands, learned_rest, side, smoothing, one_euro, frames, seconds, out, fmt,
-             keypoints,
-             video_out, synthetic_shape, synthetic_motion, synthetic_size, fps, no_temporal,
-             max_dead, quiet) -> None:
+             keypoints, video_out, synthetic_shape, synthetic_motion, synthetic_size, fps,
+             no_temporal, max_dead, quiet) -> None:
     """Look up the hand pose of every frame of a camera, a video file or a synthetic hand.
 
     Prints the frame rate of the lookup alone and of the whole loop; with
