@@ -70,6 +70,9 @@ class LearningSetOptions:
         Shares of ``from_rest``, ``fingers`` and ``natural`` poses.
     hand_spread : float
         ``spread`` of :meth:`HandVariation.random`.
+    segment_width_sd : float
+        ``segment_width_sd`` of :meth:`HandVariation.random`: each segment's
+        own breadth factor (0: a digit's segments share one).
     mount_variation : MountVariation
         How the device moves between wearers.
     edge_px : int
@@ -98,6 +101,7 @@ class LearningSetOptions:
     poses_per_hand: int = 100
     mix: tuple[float, float, float] = (0.4, 0.4, 0.2)
     hand_spread: float = 1.0
+    segment_width_sd: float = 0.0
     mount_variation: MountVariation = field(default_factory=MountVariation)
     edge_px: int = 4
     cells: tuple[int, int] = DEFAULT_CELLS
@@ -121,6 +125,10 @@ class LearningSetOptions:
         if not isinstance(self.mount_variation, MountVariation):
             raise InvalidInputError("LearningSetOptions.mount_variation must be a MountVariation")
         object.__setattr__(self, "cells", tuple(int(c) for c in self.cells))
+        sd = self.segment_width_sd
+        if isinstance(sd, bool) or not isinstance(sd, (int, float)) or not 0 <= sd <= 1:
+            raise InvalidInputError(f"LearningSetOptions.segment_width_sd must be in [0, 1], "
+                                    f"got {sd!r}")
         share = self.open_rest_share
         if isinstance(share, bool) or not isinstance(share, (int, float)) or not 0 <= share <= 1:
             raise InvalidInputError(f"LearningSetOptions.open_rest_share must be in [0, 1], "
@@ -129,8 +137,9 @@ class LearningSetOptions:
     def digest(self) -> str:
         """A short digest of the options (names the cached file)."""
         d = asdict(self)
-        if not d["open_rest_share"]:
-            del d["open_rest_share"]  # the sets made before the option keep their names
+        for name in ("open_rest_share", "segment_width_sd"):
+            if not d[name]:
+                del d[name]  # the sets made before the option keep their names
         d["format"] = _FORMAT
         return hashlib.sha256(json.dumps(d, sort_keys=True).encode()).hexdigest()[:16]
 
@@ -304,7 +313,8 @@ def render_learning_set(options: LearningSetOptions | None = None, *,
             shapes[key] = VariedRasterizer(HandShape(length=key[0], width=key[1]), mount,
                                            side=side)
         r = shapes[key]
-        r.vary(HandVariation.random(rng, spread=opts.hand_spread))
+        r.vary(HandVariation.random(rng, spread=opts.hand_spread,
+                                    segment_width_sd=opts.segment_width_sd))
         r.set_mount(opts.mount_variation.sample(mount, rng))
         edge = int(rng.integers(-opts.edge_px, opts.edge_px + 1))
         near_open = opts.open_rest_share > 0 and rng.uniform() < opts.open_rest_share

@@ -34,7 +34,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -128,25 +128,31 @@ class TestHand:
 
 
 def model_test_hands(n: int, *, seed: int = 0, mount: CameraMount | None = None,
-                     spread: float = 1.0) -> list[TestHand]:
+                     spread: float = 1.0, segment_width_sd: float = 0.0) -> list[TestHand]:
     """`n` model hands with random geometry beyond the four ratios.
 
     Each hand is a random :class:`HandShape` (each ratio uniform over the
     grid's range and one grid step beyond it on either side) varied by
     :meth:`HandVariation.random` at `spread`, seen through `mount` (the
-    paper's device by default) at 720x480.  Seeds are mixed with a constant
-    of this module, so they never repeat a learning set's hands.
+    paper's device by default) at 720x480, each segment with its own
+    breadth when `segment_width_sd` is not 0 (the hands are otherwise those
+    of the same seed without it).  Seeds are mixed with a constant of this
+    module, so they never repeat a learning set's hands.
     """
     from ..models import GRID_LEVELS
 
     mount = mount or CameraMount.paper()
     rng = np.random.default_rng(np.random.SeedSequence([seed, 0x7E57]))
+    width_rng = np.random.default_rng(np.random.SeedSequence([seed, 0x7E57, 0x5E6]))
     out = []
     for i in range(n):
         ratios = {k: float(rng.uniform(lo - (mid - lo), hi + (hi - mid)))
                   for k, (lo, mid, hi) in GRID_LEVELS.items()}
         shape = HandShape(**ratios)
         var = HandVariation.random(rng, spread=spread)
+        if segment_width_sd:
+            widths = np.exp(width_rng.normal(0.0, segment_width_sd * spread, 15))
+            var = replace(var, segment_width=tuple(widths))
 
         def make(shape=shape, var=var):
             r = VariedRasterizer(shape, mount)

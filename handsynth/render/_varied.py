@@ -18,7 +18,7 @@ microseconds and a learning set can draw a different hand every few frames.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
@@ -59,6 +59,10 @@ class HandVariation:
         proximal, middle, distal).
     digit_width : tuple of 5 float
         Breadth and depth of every segment of each digit.
+    segment_width : tuple of 15 float
+        Breadth and depth of each segment on top of its digit's
+        ``digit_width`` (same order as ``segment_length``): how a finger
+        tapers, or a knuckle bulges, differs from the built hand's.
     palm_length : float
         Distance of the MCP joints and the thumb CMC from the wrist (hand
         frame y), and the palm's extent along the hand.
@@ -79,6 +83,7 @@ class HandVariation:
 
     segment_length: tuple[float, ...] = (1.0,) * 15
     digit_width: tuple[float, ...] = (1.0,) * 5
+    segment_width: tuple[float, ...] = (1.0,) * 15
     palm_length: float = 1.0
     palm_width: float = 1.0
     palm_depth: float = 1.0
@@ -86,7 +91,8 @@ class HandVariation:
     thumb_offset_mm: tuple[float, ...] = (0.0,) * 3
 
     def __post_init__(self) -> None:
-        sizes = {"segment_length": 15, "digit_width": 5, "mcp_offset_mm": 8, "thumb_offset_mm": 3}
+        sizes = {"segment_length": 15, "digit_width": 5, "segment_width": 15, "mcp_offset_mm": 8,
+                 "thumb_offset_mm": 3}
         for f in fields(self):
             v = np.asarray(getattr(self, f.name), dtype=np.float64)
             n = sizes.get(f.name)
@@ -102,7 +108,8 @@ class HandVariation:
             object.__setattr__(self, f.name, float(v) if n is None else tuple(map(float, v)))
 
     @classmethod
-    def random(cls, rng: np.random.Generator, *, spread: float = 1.0) -> HandVariation:
+    def random(cls, rng: np.random.Generator, *, spread: float = 1.0,
+               segment_width_sd: float = 0.0) -> HandVariation:
         """A random hand: independent log-normal factors and normal offsets.
 
         The s.d.s (at ``spread=1``) are wide on purpose, wider than adult
@@ -120,10 +127,17 @@ class HandVariation:
         rng : numpy.random.Generator
         spread : float, keyword-only
             Multiplies every s.d. (0: the built hand unchanged).
+        segment_width_sd : float, keyword-only
+            S.d. of the log of each segment's own width factor
+            (``segment_width``), also multiplied by `spread`.  0 (the default)
+            leaves every segment at its digit's width and draws nothing, so
+            the hands of a seed are those drawn before the option existed.
         """
         s = float(spread)
+        if not (np.isfinite(segment_width_sd) and 0.0 <= segment_width_sd <= 1.0):
+            raise InvalidShapeError(f"segment_width_sd must be in [0, 1], got {segment_width_sd!r}")
         common = rng.normal(0.0, 0.07 * s)
-        return cls(
+        out = cls(
             segment_length=tuple(np.exp(common + rng.normal(0.0, 0.15 * s, 15))),
             digit_width=tuple(np.exp(rng.normal(0.0, 0.10 * s, 5))),
             palm_length=float(np.exp(common + rng.normal(0.0, 0.12 * s))),
@@ -132,6 +146,10 @@ class HandVariation:
             mcp_offset_mm=tuple(rng.normal(0.0, 3.0 * s, 8)),
             thumb_offset_mm=tuple(rng.normal(0.0, 5.0 * s, 3)),
         )
+        if segment_width_sd:
+            widths = np.exp(rng.normal(0.0, segment_width_sd * s, 15))
+            out = replace(out, segment_width=tuple(widths))
+        return out
 
 
 @dataclass(frozen=True)
@@ -210,8 +228,8 @@ class VariedRasterizer(SilhouetteRasterizer):
         m.site_pos[:] = self._site_pos0
         scale = {}  # body id -> per-axis scale of its own frame
         for d, bodies in enumerate(_DIGIT_BODIES.values()):
-            w = v.digit_width[d]
             for k, name in enumerate(bodies):
+                w = v.digit_width[d] * v.segment_width[3 * d + k]
                 scale[self._bid[name]] = np.array([w, v.segment_length[3 * d + k], w])
         palm = self._bid["palm"]
         scale[palm] = np.array([v.palm_width, v.palm_length, v.palm_depth])

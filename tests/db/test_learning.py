@@ -79,3 +79,16 @@ def test_bad_options_are_refused_by_name():
         LearningSetOptions(mix=(0.5, 0.5, 0.5))
     with pytest.raises(InvalidInputError, match="edge_px"):
         LearningSetOptions(edge_px=50)
+    with pytest.raises(InvalidInputError, match="segment_width_sd"):
+        LearningSetOptions(segment_width_sd=-0.1)
+
+
+def test_segment_widths_vary_the_learning_hands_and_name_their_own_set():
+    opts = dict(hands=3, poses_per_hand=2, seed=2)
+    same = render_learning_set(LearningSetOptions(**opts))
+    varied = render_learning_set(LearningSetOptions(**opts, segment_width_sd=0.2))
+    assert not np.array_equal(varied.grids, same.grids)
+    assert np.array_equal(render_learning_set(LearningSetOptions(**opts, segment_width_sd=0.2)).grids,
+                          varied.grids)
+    assert LearningSetOptions(segment_width_sd=0).digest() == LearningSetOptions().digest()
+    assert LearningSetOptions(segment_width_sd=0.1).digest() != LearningSetOptions().digest()

@@ -61,6 +61,38 @@ def test_segment_length_moves_the_joints_and_tips_by_its_factor(varied):
     varied.vary(HandVariation())
 
 
+def test_a_segment_s_own_width_widens_only_that_segment(varied):
+    varied.vary(HandVariation())
+    pose = np.zeros(20)
+    base = varied.mask(pose).astype(bool)
+    widths = [1.0] * 15
+    widths[3] = 1.4  # the index proximal phalanx
+    varied.vary(HandVariation(segment_width=tuple(widths)))
+    wide = varied.mask(pose).astype(bool)
+    assert wide.sum() > base.sum() and not (base & ~wide).any()  # grows, nothing shrinks
+    # the same factor on the whole digit covers more than on one segment of it
+    varied.vary(HandVariation(digit_width=(1.0, 1.4, 1.0, 1.0, 1.0)))
+    assert varied.mask(pose).sum() > wide.sum()
+    # joints do not move: a width changes breadth and depth only
+    varied.hand.set_pose(pose)
+    kp0 = varied.hand.keypoints()
+    varied.vary(HandVariation(segment_width=tuple(widths)))
+    varied.hand.set_pose(pose)
+    np.testing.assert_allclose(varied.hand.keypoints(), kp0, atol=1e-12)
+    varied.vary(HandVariation())
+
+
+def test_segment_widths_are_drawn_after_everything_else():
+    plain = HandVariation.random(np.random.default_rng(8), spread=1.5)
+    drawn = HandVariation.random(np.random.default_rng(8), spread=1.5, segment_width_sd=0.1)
+    assert plain.segment_width == (1.0,) * 15
+    assert drawn.segment_length == plain.segment_length and drawn.mcp_offset_mm == plain.mcp_offset_mm
+    log_w = np.log(drawn.segment_width)
+    assert 0.05 < log_w.std() < 0.3 and len(set(drawn.segment_width)) == 15
+    with pytest.raises(InvalidShapeError, match="segment_width_sd"):
+        HandVariation.random(np.random.default_rng(8), segment_width_sd=-0.1)
+
+
 def test_a_moved_mount_draws_what_a_rasterizer_built_with_it_draws(varied):
     varied.vary(HandVariation())
     mount = MountVariation().sample(CameraMount.paper(), np.random.default_rng(0))
@@ -74,6 +106,8 @@ def test_a_moved_mount_draws_what_a_rasterizer_built_with_it_draws(varied):
 def test_bad_variations_are_refused_by_name():
     with pytest.raises(InvalidShapeError, match="segment_length must have 15"):
         HandVariation(segment_length=(1.0,) * 14)
+    with pytest.raises(InvalidShapeError, match="segment_width must have 15"):
+        HandVariation(segment_width=(1.0,) * 5)
     with pytest.raises(InvalidShapeError, match="palm_length out of range"):
         HandVariation(palm_length=0.1)
     with pytest.raises(InvalidShapeError, match="mcp_offset_mm out of range"):
