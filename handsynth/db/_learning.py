@@ -73,6 +73,9 @@ class LearningSetOptions:
     segment_width_sd : float
         ``segment_width_sd`` of :meth:`HandVariation.random`: each segment's
         own breadth factor (0: a digit's segments share one).
+    flesh_offset_sd_mm : float
+        ``flesh_offset_sd_mm`` of :meth:`HandVariation.random`: where each
+        segment's surface sits on its joints (0: as the model's).
     mount_variation : MountVariation
         How the device moves between wearers.
     edge_px : int
@@ -102,6 +105,7 @@ class LearningSetOptions:
     mix: tuple[float, float, float] = (0.4, 0.4, 0.2)
     hand_spread: float = 1.0
     segment_width_sd: float = 0.0
+    flesh_offset_sd_mm: float = 0.0
     mount_variation: MountVariation = field(default_factory=MountVariation)
     edge_px: int = 4
     cells: tuple[int, int] = DEFAULT_CELLS
@@ -125,10 +129,11 @@ class LearningSetOptions:
         if not isinstance(self.mount_variation, MountVariation):
             raise InvalidInputError("LearningSetOptions.mount_variation must be a MountVariation")
         object.__setattr__(self, "cells", tuple(int(c) for c in self.cells))
-        sd = self.segment_width_sd
-        if isinstance(sd, bool) or not isinstance(sd, (int, float)) or not 0 <= sd <= 1:
-            raise InvalidInputError(f"LearningSetOptions.segment_width_sd must be in [0, 1], "
-                                    f"got {sd!r}")
+        for name, top in (("segment_width_sd", 1), ("flesh_offset_sd_mm", 10)):
+            sd = getattr(self, name)
+            if isinstance(sd, bool) or not isinstance(sd, (int, float)) or not 0 <= sd <= top:
+                raise InvalidInputError(f"LearningSetOptions.{name} must be in [0, {top}], "
+                                        f"got {sd!r}")
         share = self.open_rest_share
         if isinstance(share, bool) or not isinstance(share, (int, float)) or not 0 <= share <= 1:
             raise InvalidInputError(f"LearningSetOptions.open_rest_share must be in [0, 1], "
@@ -137,7 +142,7 @@ class LearningSetOptions:
     def digest(self) -> str:
         """A short digest of the options (names the cached file)."""
         d = asdict(self)
-        for name in ("open_rest_share", "segment_width_sd"):
+        for name in ("open_rest_share", "segment_width_sd", "flesh_offset_sd_mm"):
             if not d[name]:
                 del d[name]  # the sets made before the option keep their names
         d["format"] = _FORMAT
@@ -314,7 +319,8 @@ def render_learning_set(options: LearningSetOptions | None = None, *,
                                            side=side)
         r = shapes[key]
         r.vary(HandVariation.random(rng, spread=opts.hand_spread,
-                                    segment_width_sd=opts.segment_width_sd))
+                                    segment_width_sd=opts.segment_width_sd,
+                                    flesh_offset_sd_mm=opts.flesh_offset_sd_mm))
         r.set_mount(opts.mount_variation.sample(mount, rng))
         edge = int(rng.integers(-opts.edge_px, opts.edge_px + 1))
         near_open = opts.open_rest_share > 0 and rng.uniform() < opts.open_rest_share

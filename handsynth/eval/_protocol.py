@@ -128,15 +128,17 @@ class TestHand:
 
 
 def model_test_hands(n: int, *, seed: int = 0, mount: CameraMount | None = None,
-                     spread: float = 1.0, segment_width_sd: float = 0.0) -> list[TestHand]:
+                     spread: float = 1.0, segment_width_sd: float = 0.0,
+                     flesh_offset_sd_mm: float = 0.0) -> list[TestHand]:
     """`n` model hands with random geometry beyond the four ratios.
 
     Each hand is a random :class:`HandShape` (each ratio uniform over the
     grid's range and one grid step beyond it on either side) varied by
     :meth:`HandVariation.random` at `spread`, seen through `mount` (the
     paper's device by default) at 720x480, each segment with its own
-    breadth when `segment_width_sd` is not 0 (the hands are otherwise those
-    of the same seed without it).  Seeds are mixed with a constant of this
+    breadth when `segment_width_sd` is not 0 and its flesh moved on its
+    joints when `flesh_offset_sd_mm` is not 0 (the hands are otherwise those
+    of the same seed without them).  Seeds are mixed with a constant of this
     module, so they never repeat a learning set's hands.
     """
     from ..models import GRID_LEVELS
@@ -153,6 +155,9 @@ def model_test_hands(n: int, *, seed: int = 0, mount: CameraMount | None = None,
         if segment_width_sd:
             widths = np.exp(width_rng.normal(0.0, segment_width_sd * spread, 15))
             var = replace(var, segment_width=tuple(widths))
+        if flesh_offset_sd_mm:
+            offsets = width_rng.normal(0.0, flesh_offset_sd_mm * spread, 30)
+            var = replace(var, flesh_offset_mm=tuple(offsets))
 
         def make(shape=shape, var=var):
             r = VariedRasterizer(shape, mount)

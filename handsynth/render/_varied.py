@@ -63,6 +63,12 @@ class HandVariation:
         Breadth and depth of each segment on top of its digit's
         ``digit_width`` (same order as ``segment_length``): how a finger
         tapers, or a knuckle bulges, differs from the built hand's.
+    flesh_offset_mm : tuple of 30 float
+        Where each segment's flesh sits on its joints: an (along the segment,
+        dorsal-palmar) offset of the segment's surface in its own frame, mm,
+        15 pairs in ``segment_length``'s order; the joints stay.  A rig puts
+        its joint nodes at its own depth in the finger, and a real joint's
+        centre of rotation is not the middle of the skin around it.
     palm_length : float
         Distance of the MCP joints and the thumb CMC from the wrist (hand
         frame y), and the palm's extent along the hand.
@@ -84,6 +90,7 @@ class HandVariation:
     segment_length: tuple[float, ...] = (1.0,) * 15
     digit_width: tuple[float, ...] = (1.0,) * 5
     segment_width: tuple[float, ...] = (1.0,) * 15
+    flesh_offset_mm: tuple[float, ...] = (0.0,) * 30
     palm_length: float = 1.0
     palm_width: float = 1.0
     palm_depth: float = 1.0
@@ -91,8 +98,8 @@ class HandVariation:
     thumb_offset_mm: tuple[float, ...] = (0.0,) * 3
 
     def __post_init__(self) -> None:
-        sizes = {"segment_length": 15, "digit_width": 5, "segment_width": 15, "mcp_offset_mm": 8,
-                 "thumb_offset_mm": 3}
+        sizes = {"segment_length": 15, "digit_width": 5, "segment_width": 15, "flesh_offset_mm": 30,
+                 "mcp_offset_mm": 8, "thumb_offset_mm": 3}
         for f in fields(self):
             v = np.asarray(getattr(self, f.name), dtype=np.float64)
             n = sizes.get(f.name)
@@ -109,7 +116,7 @@ class HandVariation:
 
     @classmethod
     def random(cls, rng: np.random.Generator, *, spread: float = 1.0,
-               segment_width_sd: float = 0.0) -> HandVariation:
+               segment_width_sd: float = 0.0, flesh_offset_sd_mm: float = 0.0) -> HandVariation:
         """A random hand: independent log-normal factors and normal offsets.
 
         The s.d.s (at ``spread=1``) are wide on purpose, wider than adult
@@ -132,10 +139,15 @@ class HandVariation:
             (``segment_width``), also multiplied by `spread`.  0 (the default)
             leaves every segment at its digit's width and draws nothing, so
             the hands of a seed are those drawn before the option existed.
+        flesh_offset_sd_mm : float, keyword-only
+            S.d. of each ``flesh_offset_mm`` (times `spread`), drawn after the
+            widths; 0 (the default) draws nothing.
         """
         s = float(spread)
         if not (np.isfinite(segment_width_sd) and 0.0 <= segment_width_sd <= 1.0):
             raise InvalidShapeError(f"segment_width_sd must be in [0, 1], got {segment_width_sd!r}")
+        if not (np.isfinite(flesh_offset_sd_mm) and 0.0 <= flesh_offset_sd_mm <= 10.0):
+            raise InvalidShapeError(f"flesh_offset_sd_mm must be in [0, 10], got {flesh_offset_sd_mm!r}")
         common = rng.normal(0.0, 0.07 * s)
         out = cls(
             segment_length=tuple(np.exp(common + rng.normal(0.0, 0.15 * s, 15))),
@@ -149,6 +161,9 @@ class HandVariation:
         if segment_width_sd:
             widths = np.exp(rng.normal(0.0, segment_width_sd * s, 15))
             out = replace(out, segment_width=tuple(widths))
+        if flesh_offset_sd_mm:
+            offsets = rng.normal(0.0, flesh_offset_sd_mm * s, 30)
+            out = replace(out, flesh_offset_mm=tuple(offsets))
         return out
 
 
@@ -227,10 +242,14 @@ class VariedRasterizer(SilhouetteRasterizer):
         m.body_pos[:] = self._body_pos0
         m.site_pos[:] = self._site_pos0
         scale = {}  # body id -> per-axis scale of its own frame
+        flesh = {}  # body id -> offset of its parts in its own frame, m
         for d, bodies in enumerate(_DIGIT_BODIES.values()):
             for k, name in enumerate(bodies):
-                w = v.digit_width[d] * v.segment_width[3 * d + k]
-                scale[self._bid[name]] = np.array([w, v.segment_length[3 * d + k], w])
+                i = 3 * d + k
+                w = v.digit_width[d] * v.segment_width[i]
+                scale[self._bid[name]] = np.array([w, v.segment_length[i], w])
+                along, depth = v.flesh_offset_mm[2 * i: 2 * i + 2]
+                flesh[self._bid[name]] = np.array([0.0, along, depth]) * 1e-3
         palm = self._bid["palm"]
         scale[palm] = np.array([v.palm_width, v.palm_length, v.palm_depth])
         # joint positions: a child sits at its parent's scaled offset
@@ -254,7 +273,7 @@ class VariedRasterizer(SilhouetteRasterizer):
             if body not in scale:
                 continue
             a, e = self._starts[g], self._starts[g + 1]
-            p = (pos + self._verts0[a:e] @ rot.T) * scale[body]
+            p = (pos + self._verts0[a:e] @ rot.T) * scale[body] + flesh.get(body, 0.0)
             verts[a:e] = (p - pos) @ rot
         self._verts = np.ascontiguousarray(verts)
         self.variation = v

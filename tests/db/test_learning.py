@@ -81,6 +81,8 @@ def test_bad_options_are_refused_by_name():
         LearningSetOptions(edge_px=50)
     with pytest.raises(InvalidInputError, match="segment_width_sd"):
         LearningSetOptions(segment_width_sd=-0.1)
+    with pytest.raises(InvalidInputError, match="flesh_offset_sd_mm"):
+        LearningSetOptions(flesh_offset_sd_mm=11)
 
 
 def test_segment_widths_vary_the_learning_hands_and_name_their_own_set():
@@ -92,3 +94,6 @@ def test_segment_widths_vary_the_learning_hands_and_name_their_own_set():
                           varied.grids)
     assert LearningSetOptions(segment_width_sd=0).digest() == LearningSetOptions().digest()
     assert LearningSetOptions(segment_width_sd=0.1).digest() != LearningSetOptions().digest()
+    assert LearningSetOptions(flesh_offset_sd_mm=0).digest() == LearningSetOptions().digest()
+    assert LearningSetOptions(flesh_offset_sd_mm=1.5).digest() not in (
+        LearningSetOptions().digest(), LearningSetOptions(segment_width_sd=0.1).digest())

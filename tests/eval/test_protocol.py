@@ -112,12 +112,14 @@ def test_bad_options_are_refused():
         run_protocol({}, [])
 
 
-def test_model_test_hands_with_segment_widths_are_the_same_hands_otherwise():
+def test_model_test_hands_with_segment_widths_and_flesh_offsets_are_the_same_hands_otherwise():
     plain = model_test_hands(3, seed=6, spread=1.5)
-    wide = model_test_hands(3, seed=6, spread=1.5, segment_width_sd=0.1)
+    wide = model_test_hands(3, seed=6, spread=1.5, segment_width_sd=0.1, flesh_offset_sd_mm=1.0)
     for p, w in zip(plain, wide):
         assert p.info["shape"] == w.info["shape"]
         pv, wv = p.info["variation"], w.info["variation"]
-        assert {k: v for k, v in pv.items() if k != "segment_width"} == \
-            {k: v for k, v in wv.items() if k != "segment_width"}
+        new = ("segment_width", "flesh_offset_mm")
+        assert {k: v for k, v in pv.items() if k not in new} == \
+            {k: v for k, v in wv.items() if k not in new}
         assert pv["segment_width"] == [1.0] * 15 and len(set(wv["segment_width"])) == 15
+        assert pv["flesh_offset_mm"] == [0.0] * 30 and len(set(wv["flesh_offset_mm"])) == 30

@@ -82,6 +82,24 @@ def test_a_segment_s_own_width_widens_only_that_segment(varied):
     varied.vary(HandVariation())
 
 
+def test_a_flesh_offset_moves_a_segment_s_surface_and_not_its_joints(varied):
+    varied.vary(HandVariation())
+    pose = named_pose("point")
+    varied.hand.set_pose(pose)
+    kp0 = varied.hand.keypoints()
+    base = varied.mask(pose).astype(bool)
+    offsets = [0.0] * 30
+    offsets[6:8] = 4.0, 0.0  # the index proximal phalanx's flesh 4 mm toward its tip
+    varied.vary(HandVariation(flesh_offset_mm=tuple(offsets)))
+    varied.hand.set_pose(pose)
+    np.testing.assert_allclose(varied.hand.keypoints(), kp0, atol=1e-12)
+    moved = varied.mask(pose).astype(bool)
+    assert (moved & ~base).any() and (base & ~moved).any()
+    # undone by the next variation
+    varied.vary(HandVariation())
+    assert np.array_equal(varied.mask(pose).astype(bool), base)
+
+
 def test_segment_widths_are_drawn_after_everything_else():
     plain = HandVariation.random(np.random.default_rng(8), spread=1.5)
     drawn = HandVariation.random(np.random.default_rng(8), spread=1.5, segment_width_sd=0.1)
@@ -91,6 +109,12 @@ def test_segment_widths_are_drawn_after_everything_else():
     assert 0.05 < log_w.std() < 0.3 and len(set(drawn.segment_width)) == 15
     with pytest.raises(InvalidShapeError, match="segment_width_sd"):
         HandVariation.random(np.random.default_rng(8), segment_width_sd=-0.1)
+    flesh = HandVariation.random(np.random.default_rng(8), spread=1.5, segment_width_sd=0.1,
+                                 flesh_offset_sd_mm=2.0)
+    assert flesh.segment_width == drawn.segment_width and plain.flesh_offset_mm == (0.0,) * 30
+    assert 1.5 < np.std(flesh.flesh_offset_mm) < 5.0
+    with pytest.raises(InvalidShapeError, match="flesh_offset_sd_mm"):
+        HandVariation.random(np.random.default_rng(8), flesh_offset_sd_mm=50.0)
 
 
 def test_a_moved_mount_draws_what_a_rasterizer_built_with_it_draws(varied):
@@ -108,6 +132,8 @@ def test_bad_variations_are_refused_by_name():
         HandVariation(segment_length=(1.0,) * 14)
     with pytest.raises(InvalidShapeError, match="segment_width must have 15"):
         HandVariation(segment_width=(1.0,) * 5)
+    with pytest.raises(InvalidShapeError, match="flesh_offset_mm out of range"):
+        HandVariation(flesh_offset_mm=(0.0,) * 29 + (40.0,))
     with pytest.raises(InvalidShapeError, match="palm_length out of range"):
         HandVariation(palm_length=0.1)
     with pytest.raises(InvalidShapeError, match="mcp_offset_mm out of range"):
