@@ -34,7 +34,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -145,19 +145,15 @@ def model_test_hands(n: int, *, seed: int = 0, mount: CameraMount | None = None,
 
     mount = mount or CameraMount.paper()
     rng = np.random.default_rng(np.random.SeedSequence([seed, 0x7E57]))
-    width_rng = np.random.default_rng(np.random.SeedSequence([seed, 0x7E57, 0x5E6]))
+    surface_rng = np.random.default_rng(np.random.SeedSequence([seed, 0x7E57, 0x5E6]))
     out = []
     for i in range(n):
         ratios = {k: float(rng.uniform(lo - (mid - lo), hi + (hi - mid)))
                   for k, (lo, mid, hi) in GRID_LEVELS.items()}
         shape = HandShape(**ratios)
-        var = HandVariation.random(rng, spread=spread)
-        if segment_width_sd:
-            widths = np.exp(width_rng.normal(0.0, segment_width_sd * spread, 15))
-            var = replace(var, segment_width=tuple(widths))
-        if flesh_offset_sd_mm:
-            offsets = width_rng.normal(0.0, flesh_offset_sd_mm * spread, 30)
-            var = replace(var, flesh_offset_mm=tuple(offsets))
+        var = HandVariation.random(rng, spread=spread).with_random_surface(
+            surface_rng, spread=spread, segment_width_sd=segment_width_sd,
+            flesh_offset_sd_mm=flesh_offset_sd_mm)
 
         def make(shape=shape, var=var):
             r = VariedRasterizer(shape, mount)

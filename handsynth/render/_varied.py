@@ -144,10 +144,6 @@ class HandVariation:
             widths; 0 (the default) draws nothing.
         """
         s = float(spread)
-        if not (np.isfinite(segment_width_sd) and 0.0 <= segment_width_sd <= 1.0):
-            raise InvalidShapeError(f"segment_width_sd must be in [0, 1], got {segment_width_sd!r}")
-        if not (np.isfinite(flesh_offset_sd_mm) and 0.0 <= flesh_offset_sd_mm <= 10.0):
-            raise InvalidShapeError(f"flesh_offset_sd_mm must be in [0, 10], got {flesh_offset_sd_mm!r}")
         common = rng.normal(0.0, 0.07 * s)
         out = cls(
             segment_length=tuple(np.exp(common + rng.normal(0.0, 0.15 * s, 15))),
@@ -158,11 +154,33 @@ class HandVariation:
             mcp_offset_mm=tuple(rng.normal(0.0, 3.0 * s, 8)),
             thumb_offset_mm=tuple(rng.normal(0.0, 5.0 * s, 3)),
         )
+        return out.with_random_surface(rng, spread=s, segment_width_sd=segment_width_sd,
+                                       flesh_offset_sd_mm=flesh_offset_sd_mm)
+
+    def with_random_surface(self, rng: np.random.Generator, *, spread: float = 1.0,
+                            segment_width_sd: float = 0.0,
+                            flesh_offset_sd_mm: float = 0.0) -> HandVariation:
+        """This hand with random ``segment_width`` and ``flesh_offset_mm``.
+
+        Draws the widths (log-normal, s.d. ``segment_width_sd * spread``) and
+        then the offsets (normal, s.d. ``flesh_offset_sd_mm * spread``, mm);
+        an s.d. of 0 draws nothing and keeps the field as it is.
+
+        Raises
+        ------
+        InvalidShapeError
+            An s.d. outside [0, 1] (widths) or [0, 10] mm (offsets), naming it.
+        """
+        if not (np.isfinite(segment_width_sd) and 0.0 <= segment_width_sd <= 1.0):
+            raise InvalidShapeError(f"segment_width_sd must be in [0, 1], got {segment_width_sd!r}")
+        if not (np.isfinite(flesh_offset_sd_mm) and 0.0 <= flesh_offset_sd_mm <= 10.0):
+            raise InvalidShapeError(f"flesh_offset_sd_mm must be in [0, 10], got {flesh_offset_sd_mm!r}")
+        out = self
         if segment_width_sd:
-            widths = np.exp(rng.normal(0.0, segment_width_sd * s, 15))
+            widths = np.exp(rng.normal(0.0, segment_width_sd * spread, 15))
             out = replace(out, segment_width=tuple(widths))
         if flesh_offset_sd_mm:
-            offsets = rng.normal(0.0, flesh_offset_sd_mm * s, 30)
+            offsets = rng.normal(0.0, flesh_offset_sd_mm * spread, 30)
             out = replace(out, flesh_offset_mm=tuple(offsets))
         return out
 
