@@ -23,8 +23,8 @@ one thread.  The last line is machine-readable (paper-set frames):
 ``--learned FOLDER`` times the estimator learnt from randomised model hands
 instead (README, "Camera estimator for unseen hands"; read from ``FOLDER`` or
 learnt there first: minutes), ``--kind ensemble`` (default:
-:data:`handsynth.estimate.LEARNED_ENSEMBLE`, the mean of the per-digit
-estimator and the perceptron), ``fingers`` or ``mlp``, on frames of
+:data:`handsynth.estimate.LEARNED_ENSEMBLE`, the weighted mean of the
+per-digit estimator and two perceptrons), ``fingers`` or ``mlp``, on frames of
 the glTF hands of :mod:`handsynth.testhands` (Godot XR Tools and MRTK, not
 the model it learnt from) in natural poses, painted as skin on a dark
 background (BGR uint8); ``--scene paper`` times paper-protocol poses instead,

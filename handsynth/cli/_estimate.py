@@ -240,9 +240,9 @@ def _progress(stream):
                    "into --learned-cache (minutes), then read.")
 @click.option("--learned-kind", type=click.Choice(["fingers", "ensemble"]), default="ensemble",
               show_default=True,
-              help="With --learned: the mean of the per-digit estimator and the perceptron "
-                   "(the more accurate on natural poses), or the per-digit estimator alone "
-                   "(learnt a few minutes faster).")
+              help="With --learned: the weighted mean of the per-digit estimator and two "
+                   "perceptrons (the more accurate on natural poses), or the per-digit "
+                   "estimator alone (learnt a few minutes faster).")
 @click.option("--learned-cache", default=None, metavar="FOLDER",
               help="Folder of the learnt estimator and its learning set [default: "
                    "~/.cache/handsynth/learned].")

@@ -43,7 +43,8 @@ LEARNED_METHODS: dict[str, LearnedOptions] = {
 
 #: Every name :func:`protocol_methods` knows: the paper's lookups, the
 #: calibrated lookup, the learnt estimators and ``ensemble``
-#: (:data:`~handsynth.estimate.LEARNED_ENSEMBLE`: the mean of ``fingers`` and ``mlp``).
+#: (:data:`~handsynth.estimate.LEARNED_ENSEMBLE`: the weighted mean of ``fingers`` and two
+#: perceptrons).
 PROTOCOL_METHODS: tuple[str, ...] = ("standard", "selected", "calibrated", *LEARNED_METHODS,
                                      "ensemble")
 
