@@ -250,8 +250,8 @@ def _progress(stream):
               help="Random hands of the learning set [default: 4,000 x 100 frames].")
 @click.option("--learned-rest", type=click.Choice(["open", "relaxed"]), default=None,
               help="With --learned: the rest postures it learns from: three hands in four "
-                   "held open [default], or relaxed only (the previous release's; reads a "
-                   "relaxed wearer better, README).")
+                   "held open [default], or relaxed only (an earlier release's learning set; "
+                   "reads a relaxed wearer better, README).")
 @click.option("--side", type=click.Choice(["right", "left"]), default=None,
               help="With --learned: the hand wearing the device [default: right] (the "
                    "lookups take it from the database).")
