@@ -49,7 +49,8 @@ class HandVariation:
     """How one hand differs from a built model hand, beyond its four ratios.
 
     Every factor multiplies the built hand's value (1 = unchanged); offsets
-    are added in the hand frame.
+    are added in the hand frame, except ``flesh_offset_mm`` (in each
+    segment's own frame).
 
     Parameters
     ----------
