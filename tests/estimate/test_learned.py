@@ -1,3 +1,5 @@
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -214,6 +216,62 @@ def test_the_inverted_file_with_one_cell_answers_as_the_exact_search(data, quant
         np.testing.assert_allclose(ea.angles, eb.angles, atol=1e-4)
         # distances re-measured on the float codes: the quantised search reports exact ones
         assert eb.error == pytest.approx(ea.error, rel=1e-5)
+
+
+@pytest.mark.parametrize("quantize", [False, True])
+def test_a_saved_estimator_reads_its_inverted_files_back_instead_of_training_them(
+        data, tmp_path, monkeypatch, quantize):
+    import faiss
+
+    opts = LearnedOptions(kind="fingers", k=5, lists=1, probes=1, quantize=quantize)
+    est = train_learned(data, opts)
+    est.save(tmp_path / "f.npz")
+    suffix = "ivf_sq8" if quantize else "ivf_flat"
+    with np.load(tmp_path / "f.npz") as z:
+        assert sorted(k for k in z.files if "ivf" in k) == [f"d{d}_{suffix}" for d in range(5)]
+    kind = faiss.IndexIVFScalarQuantizer if quantize else faiss.IndexIVFFlat
+
+    def no_training(*_args):
+        raise AssertionError("trained, not read")
+
+    with monkeypatch.context() as m:
+        m.setattr(kind, "train", no_training)
+        back = LearnedEstimator.load(tmp_path / "f.npz")
+    assert sorted(back._a) == sorted(est._a)  # the inverted files are not learnt arrays
+    def neighbours(e, d):
+        q = np.ascontiguousarray(est._a[f"d{d}_codes"][::3] + 0.01, np.float32)
+        return e._index[f"d{d}_"].search(q, 5)[1]
+
+    for d in range(5):
+        assert type(back._index[f"d{d}_"]) is kind
+        np.testing.assert_array_equal(neighbours(back, d), neighbours(est, d))
+    # the other reading option trains its own, as an estimator learnt with it has
+    flip = replace(opts, quantize=not quantize)
+    other = LearnedEstimator.load(tmp_path / "f.npz", options=flip)
+    assert type(other._index["d1_"]) is not kind and sorted(other._a) == sorted(est._a)
+    np.testing.assert_array_equal(neighbours(other, 1), neighbours(train_learned(data, flip), 1))
+
+
+def test_a_stored_inverted_file_that_does_not_fit_the_codes_is_trained_afresh(data):
+    from handsynth.estimate._learned import _search_index
+
+    opts = LearnedOptions(kind="fingers", lists=1, probes=1)
+    codes = np.ascontiguousarray(data.grids[:, :8], np.float32)
+    fresh = _search_index(codes, opts)
+    for stored in (np.zeros(16, np.uint8),                                    # not an index
+                   _search_index_bytes(codes[:-1], opts),                    # other codes
+                   _search_index_bytes(codes, replace(opts, quantize=False))):  # other kind
+        index = _search_index(codes, opts, stored=stored)
+        assert type(index) is type(fresh) and index.ntotal == len(codes)
+        np.testing.assert_array_equal(index.search(codes[:4], 3)[1], fresh.search(codes[:4], 3)[1])
+
+
+def _search_index_bytes(codes, opts):
+    import faiss
+
+    from handsynth.estimate._learned import _search_index
+
+    return faiss.serialize_index(_search_index(codes, opts))
 
 
 def test_the_quantised_search_is_a_reading_option(tmp_path):
