@@ -197,6 +197,10 @@ class LearnedOptions:
         are left out: changing them reads the same learnt arrays.
         """
         learnt = {k: v for k, v in asdict(self).items() if k not in _READING_OPTIONS}
+        if self.kind == "mlp":
+            # a perceptron searches nothing: hashed with the search options earlier
+            # releases had, so that changing them keeps its cache (7 min to learn)
+            learnt.update(_SEARCH_OPTIONS_OF_PERCEPTRONS)
         return hashlib.sha256(json.dumps(learnt, sort_keys=True).encode()).hexdigest()[:16]
 
 
@@ -207,6 +211,11 @@ class LearnedOptions:
 #: they shape; ``quantize`` changes only which neighbours are found, each
 #: measured on its float code either way.
 _READING_OPTIONS = ("k", "local", "ridge", "quantize")
+
+#: The search options a perceptron's cache name is hashed with, whatever they
+#: are (:meth:`LearnedOptions.digest`): the defaults when perceptrons were
+#: first cached.
+_SEARCH_OPTIONS_OF_PERCEPTRONS = {"lists": 256, "probes": 16}
 
 
 # ---------------------------------------------------------------------------

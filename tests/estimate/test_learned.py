@@ -274,6 +274,17 @@ def _search_index_bytes(codes, opts):
     return faiss.serialize_index(_search_index(codes, opts))
 
 
+def test_search_options_do_not_rename_a_perceptron_s_cache():
+    # a perceptron searches nothing; its cache keeps the name earlier releases gave it
+    assert LearnedOptions(kind="mlp").digest() == "f981de6f398ffdd8"
+    assert LearnedOptions(kind="mlp", seed=1).digest() == "21e795ea8342a7c2"
+    assert (LearnedOptions(kind="mlp", lists=64, probes=2).digest()
+            == LearnedOptions(kind="mlp").digest())
+    # what a perceptron learns still names it, and the search still names the per-digit kind
+    assert LearnedOptions(kind="mlp", epochs=3).digest() != LearnedOptions(kind="mlp").digest()
+    assert LearnedOptions(probes=2).digest() != LearnedOptions().digest()
+
+
 def test_the_quantised_search_is_a_reading_option(tmp_path):
     assert LearnedOptions(quantize=False).digest() == LearnedOptions().digest()
     with pytest.raises(InvalidInputError, match="quantize must be True or False, got 'no'"):
