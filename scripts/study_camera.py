@@ -8,7 +8,7 @@ Usage::
     python scripts/study_camera.py observability
     python scripts/study_camera.py --cache DIR bound
     python scripts/study_camera.py bound_mcp
-    python scripts/study_camera.py --cache DIR rests
+    python scripts/study_camera.py --cache DIR [--rest open] [--ensemble] rests
 
 ``backgrounds``
     Two held-out model hands (seed 3, 1.5 times the learning spread) and the
@@ -80,7 +80,9 @@ Usage::
     seed and hand the flexion MAE, the constant's, the skill and the index
     PIP error where it moves; per hand the skill's mean, range and its value
     pooled over the seeds (``1 - sum MAE / sum MAE_constant``).  ``--rest
-    open``: near-open rest postures instead of relaxed ones.  Last line:
+    open``: near-open rest postures instead of relaxed ones; ``--ensemble``:
+    the default learnt ensemble (:func:`handsynth.estimate.learned_ensemble`,
+    the CLI's default) instead of its per-digit member.  Last line:
     ``<hand>_pooled_skill=<value> ...``.
 
 The learnt estimator is read from ``--cache`` (or learnt there first).
@@ -389,10 +391,11 @@ def bound_mcp() -> None:
           f"constant_mae={m[2]:.2f}")
 
 
-def rests(cache, rest: str = "relaxed") -> None:
+def rests(cache, rest: str = "relaxed", *, ensemble: bool = False) -> None:
+    from handsynth.estimate import learned_ensemble
     from handsynth.eval import ProtocolOptions, run_protocol
 
-    est = _estimator(cache)
+    est = learned_ensemble(cache) if ensemble else _estimator(cache)
     rows: dict = {}
     for seed in range(10):
         res = run_protocol({"fingers": lambda rest, _hand: est.calibrated(rest)}, mesh_test_hands(),
@@ -422,6 +425,8 @@ def main() -> None:
     ap.add_argument("--cache", default=None, help="folder of the learnt estimator")
     ap.add_argument("--rest", choices=["relaxed", "open"], default="relaxed",
                     help="rests: the test hands' rest postures")
+    ap.add_argument("--ensemble", action="store_true",
+                    help="rests: the default learnt ensemble instead of its per-digit member")
     ap.add_argument("study", choices=["backgrounds", "jitter", "holds", "observability", "bound",
                                       "bound_mcp", "rests"])
     args = ap.parse_args()
@@ -438,7 +443,7 @@ def main() -> None:
     elif args.study == "bound_mcp":
         bound_mcp()
     elif args.study == "rests":
-        rests(args.cache, args.rest)
+        rests(args.cache, args.rest, ensemble=args.ensemble)
     else:
         observability()
 
