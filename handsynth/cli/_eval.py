@@ -160,10 +160,12 @@ def _protocol(folder, mesh, learned_hands, hand_spread, json_path, n_hands, fram
     import json
     import time
 
+    from .. import __version__
     from .._io import write_text
     from ..db import LearningSetOptions
     from ..eval import (
         ProtocolOptions,
+        describe_methods,
         format_headline,
         mesh_test_hands,
         model_test_hands,
@@ -193,6 +195,8 @@ def _protocol(folder, mesh, learned_hands, hand_spread, json_path, n_hands, fram
     result = run_protocol(factories, hands, options, progress=say)
     result["seconds"] = round(time.perf_counter() - t0, 1)
     result["headline"] = protocol_headline(result)
+    result["methods"] = describe_methods(methods, data=data)
+    result["handsynth"] = __version__
     click.echo(format_headline(result["headline"]))
     if json_path:
         path = write_text(json_path, json.dumps(result, indent=1), what="JSON report")

@@ -109,6 +109,7 @@ from ._hands import random_hand_shapes
 from ._methods import (
     LEARNED_METHODS,
     PROTOCOL_METHODS,
+    describe_methods,
     format_headline,
     protocol_headline,
     protocol_methods,
@@ -150,6 +151,7 @@ __all__ = [
     "TestHand",
     "background_photos",
     "condition_stats",
+    "describe_methods",
     "evaluate",
     "format_headline",
     "joint_stats",

@@ -12,6 +12,7 @@ where it moves).
 from __future__ import annotations
 
 import time
+from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +20,7 @@ import numpy as np
 from ..db import BuildOptions, LearningSetOptions, build_databases
 from ..errors import InvalidInputError
 from ..estimate import (
+    LEARNED_ENSEMBLE,
     LearnedOptions,
     PoseLookup,
     learned_ensemble,
@@ -28,8 +30,8 @@ from ..estimate import (
 from ..models import HandShape
 from ..render import CameraMount
 
-__all__ = ["LEARNED_METHODS", "PROTOCOL_METHODS", "format_headline", "protocol_headline",
-           "protocol_methods"]
+__all__ = ["LEARNED_METHODS", "PROTOCOL_METHODS", "describe_methods", "format_headline",
+           "protocol_headline", "protocol_methods"]
 
 #: The learnt estimators by name (options chosen on model hands: README, "Camera
 #: estimator for unseen hands").
@@ -125,6 +127,54 @@ def protocol_methods(names, folder, *, data: LearningSetOptions | None = None,
                                learnt=built.values())
         out["ensemble"] = lambda rest, hand: ens.calibrated(rest)
     return {n: out[n] for n in names}
+
+
+def describe_methods(names, *, data: LearningSetOptions | None = None) -> dict:
+    """What each method of :func:`protocol_methods` is, as JSON-ready values.
+
+    So that a protocol's report says which estimators its figures belong to:
+    the learnt estimators' options (those of every ensemble member, with its
+    weight) and their learning set; the lookups by what they read.
+
+    Parameters
+    ----------
+    names : sequence of str
+        From :data:`PROTOCOL_METHODS`.
+    data : LearningSetOptions, keyword-only, optional
+        The learnt estimators' learning set (the default set when omitted).
+
+    Returns
+    -------
+    dict
+        Name to a description: ``{"lookup": ...}`` for the database
+        lookups, ``{"learnt": options}`` for a learnt estimator and
+        ``{"ensemble": [{"learnt": options, "weight": w}, ...]}``; the key
+        ``"learning_set"`` holds the learning set's options when a learnt
+        method is among `names`.
+
+    Raises
+    ------
+    InvalidInputError
+        A name not in :data:`PROTOCOL_METHODS`.
+    """
+    lookups = {"standard": "the paper's lookup, standard hand's 20,448-entry database",
+               "selected": "the paper's lookup, database chosen by formulas (1)-(4)",
+               "calibrated": "PoseLookup.from_open_frame on the hand's rest frame"}
+    out: dict = {}
+    for name in names:
+        if name in lookups:
+            out[name] = {"lookup": lookups[name]}
+        elif name in LEARNED_METHODS:
+            out[name] = {"learnt": asdict(LEARNED_METHODS[name])}
+        elif name == "ensemble":
+            out[name] = {"ensemble": [{"learnt": asdict(o), "weight": w}
+                                      for o, w in LEARNED_ENSEMBLE]}
+        else:
+            raise InvalidInputError(f"methods must be names from {', '.join(PROTOCOL_METHODS)}, "
+                                    f"got {name!r}")
+    if any("lookup" not in v for v in out.values()):
+        out["learning_set"] = asdict(data or LearningSetOptions())
+    return out
 
 
 def protocol_headline(result: dict) -> dict:

@@ -104,6 +104,16 @@ def test_protocol_puts_the_constant_beside_every_method_and_writes_json(tmp_path
         assert f"{key:32s} flexion MAE {v['flexion_mae']:6.2f}" in res.stdout
     mrtk = d["hands"]["mrtk"]["natural"]["fingers"]
     assert list(mrtk["method"]["joints"]) == list(JOINT_NAMES)
+    # the report says which estimators its figures belong to, and learnt from what
+    from handsynth import __version__
+    from handsynth.estimate import LEARNED_ENSEMBLE
+
+    assert d["handsynth"] == __version__
+    assert d["methods"]["fingers_mean"]["learnt"]["local"] == "mean"
+    members = d["methods"]["ensemble"]["ensemble"]
+    assert [(m["learnt"]["kind"], m["learnt"]["seed"], m["weight"]) for m in members] == [
+        (o.kind, o.seed, w) for o, w in LEARNED_ENSEMBLE]
+    assert d["methods"]["learning_set"]["hands"] == 8
     assert mrtk["constant"]["groups_mae_deg"]["finger_flexion"] == pytest.approx(
         head["mesh/natural/fingers"]["constant"], abs=0.006)
 

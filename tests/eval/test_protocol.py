@@ -123,3 +123,20 @@ def test_model_test_hands_with_segment_widths_and_flesh_offsets_are_the_same_han
             {k: v for k, v in wv.items() if k not in new}
         assert pv["segment_width"] == [1.0] * 15 and len(set(wv["segment_width"])) == 15
         assert pv["flesh_offset_mm"] == [0.0] * 30 and len(set(wv["flesh_offset_mm"])) == 30
+
+
+def test_describe_methods_names_every_learnt_option_and_refuses_unknown_names():
+    from dataclasses import asdict
+
+    from handsynth.db import LearningSetOptions
+    from handsynth.errors import InvalidInputError
+    from handsynth.estimate import LearnedOptions
+    from handsynth.eval import describe_methods
+
+    d = describe_methods(["standard", "fingers"], data=LearningSetOptions(hands=12))
+    assert d["standard"] == {"lookup": "the paper's lookup, standard hand's 20,448-entry database"}
+    assert d["fingers"] == {"learnt": asdict(LearnedOptions(kind="fingers"))}
+    assert d["learning_set"] == asdict(LearningSetOptions(hands=12))
+    assert "learning_set" not in describe_methods(["calibrated"])
+    with pytest.raises(InvalidInputError, match="got 'tree'"):
+        describe_methods(["fingers", "tree"])
