@@ -33,8 +33,10 @@ background (BGR uint8); ``--scene paper`` times paper-protocol poses instead,
 the searches might find slower).  It is calibrated to each hand's rest frame
 once, not timed.  It also prints the median cost of its parts: binarizing (Otsu),
 the coverage grid (wrist cut, cell averages, made once for every member) and
-each member's estimate from the grid.  Its last line: ``learned_fps_median=<number>
-latency_p99_ms=<number>``.
+each member's estimate from the grid, and how long the estimator took to be
+ready (read from ``FOLDER``, including its search indices; or learnt there
+first).  Its last line: ``learned_fps_median=<number> latency_p99_ms=<number>
+ready_s=<number>``.
 
 ``--calibrated`` times :meth:`PoseLookup.calibrated` instead (calibrated
 with the off-grid hand's open-hand frame: entries are bounded, then scored
@@ -107,6 +109,7 @@ def _bench_learned(args) -> None:
 
     share = {} if args.open_rest_share is None else {"open_rest_share": args.open_rest_share}
     data = LearningSetOptions(hands=args.hands, poses_per_hand=args.poses_per_hand, **share)
+    t_ready = time.perf_counter()
     if args.kind == "ensemble":
         est = learned_ensemble(args.learned, data=data, mount=mount, progress=print)
         names = [f"{m.options.kind} (seed {m.options.seed}, weight {w:.2f})"
@@ -115,6 +118,7 @@ def _bench_learned(args) -> None:
         est = learned_estimator(args.learned, LEARNED[args.kind], data=data, mount=mount,
                                 progress=print)
         names = [args.kind]
+    ready_s = time.perf_counter() - t_ready
     rng = np.random.default_rng(0)
     skin, dark = np.array([120, 150, 210], np.uint8), np.array([25, 20, 15], np.uint8)
     photos = background_photos() if args.scene == "photo" else []
@@ -166,7 +170,9 @@ def _bench_learned(args) -> None:
           f"one core, {args.frames} frames")
     for k, v in parts.items():
         print(f"  {k:55s} {v:.3f} ms")
-    print(f"learned_fps_median={1.0 / med:.1f} latency_p99_ms={p99 * 1e3:.3f}")
+    print(f"ready in {ready_s:.1f} s (read from {args.learned}, or learnt there first)")
+    print(f"learned_fps_median={1.0 / med:.1f} latency_p99_ms={p99 * 1e3:.3f} "
+          f"ready_s={ready_s:.1f}")
 
 
 def main() -> None:
