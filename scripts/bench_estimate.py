@@ -24,7 +24,7 @@ one thread.  The last line is machine-readable (paper-set frames):
 instead (README, "Camera estimator for unseen hands"; read from ``FOLDER`` or
 learnt there first: minutes), ``--kind ensemble`` (default:
 :data:`handsynth.estimate.LEARNED_ENSEMBLE`, the weighted mean of the
-per-digit estimator and two perceptrons), ``fingers`` or ``mlp``, on frames of
+per-digit estimator and three perceptrons), ``fingers`` or ``mlp``, on frames of
 the glTF hands of :mod:`handsynth.testhands` (Godot XR Tools and MRTK, not
 the model it learnt from) in natural poses, painted as skin on a dark
 background (BGR uint8); ``--scene paper`` times paper-protocol poses instead,
@@ -94,7 +94,7 @@ def _bench_learned(args) -> None:
         os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
 
     from handsynth.db import LearningSetOptions
-    from handsynth.estimate import learned_ensemble, learned_estimator
+    from handsynth.estimate import LEARNED_ENSEMBLE, learned_ensemble, learned_estimator
     from handsynth.eval import (
         background_photos,
         natural_test_poses,
@@ -112,8 +112,9 @@ def _bench_learned(args) -> None:
     t_ready = time.perf_counter()
     if args.kind == "ensemble":
         est = learned_ensemble(args.learned, data=data, mount=mount, progress=print)
-        names = [f"{m.options.kind} (seed {m.options.seed}, weight {w:.2f})"
-                 for m, w in zip(est.members, est.weights)]
+        names = [f"{m.options.kind} (seed {m.options.seed}, weight {w:.2f}"
+                 + (f", {', '.join(f'{k} {v}' for k, v in member[2])})" if member[2] else ")")
+                 for m, w, member in zip(est.members, est.weights, LEARNED_ENSEMBLE)]
     else:
         est = learned_estimator(args.learned, LEARNED[args.kind], data=data, mount=mount,
                                 progress=print)

@@ -240,9 +240,10 @@ def _progress(stream):
                    "into --learned-cache (minutes), then read.")
 @click.option("--learned-kind", type=click.Choice(["fingers", "ensemble"]), default="ensemble",
               show_default=True,
-              help="With --learned: the weighted mean of the per-digit estimator and two "
-                   "perceptrons (the more accurate on natural poses), or the per-digit "
-                   "estimator alone (learnt a few minutes faster).")
+              help="With --learned: the weighted mean of the per-digit estimator and three "
+                   "perceptrons, one of them learnt from hands resting relaxed (the more "
+                   "accurate), or the per-digit estimator alone (learnt about 25 minutes "
+                   "faster, from one learning set).")
 @click.option("--learned-cache", default=None, metavar="FOLDER",
               help="Folder of the learnt estimator and its learning set [default: "
                    "~/.cache/handsynth/learned].")
@@ -251,7 +252,8 @@ def _progress(stream):
 @click.option("--learned-rest", type=click.Choice(["open", "relaxed"]), default=None,
               help="With --learned: the rest postures it learns from: three hands in four "
                    "held open [default], or relaxed only (an earlier release's learning set; "
-                   "reads a relaxed wearer better, README).")
+                   "reads a relaxed wearer better, README; the ensemble's relaxed-rest "
+                   "perceptron is then its seed-0 perceptron again).")
 @click.option("--side", type=click.Choice(["right", "left"]), default=None,
               help="With --learned: the hand wearing the device [default: right] (the "
                    "lookups take it from the database).")

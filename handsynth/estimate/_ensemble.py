@@ -11,25 +11,35 @@ the default one (:data:`LEARNED_ENSEMBLE`).
 
 from __future__ import annotations
 
+from dataclasses import fields, replace
+
 import numpy as np
 
+from ..db import LearningSetOptions
 from ..errors import InvalidInputError
 from ._learned import LearnedEstimator, LearnedOptions, learned_estimator
 from ._lookup import PoseEstimate
 
 __all__ = ["LEARNED_ENSEMBLE", "EnsembleEstimator", "learned_ensemble"]
 
-#: The default learnt estimator's members and their weights: the per-digit
-#: estimator at 0.4 and perceptrons started from seeds 0 and 1 at 0.3 each,
-#: chosen on held-out model hands by a rule fixed before the runs.  A mean of
-#: perceptrons errs by no more than their mean error on any frame (the
-#: triangle inequality), and one perceptron's error on unseen hands depends on
-#: its start: on the glTF hands' relaxed paper frames starts 0, 1 and 2 erred
-#: by 5.1, 7.3 and 6.8 deg (README, "The learning set's draw").
-LEARNED_ENSEMBLE: tuple[tuple[LearnedOptions, float], ...] = (
-    (LearnedOptions(kind="fingers"), 0.4),
-    (LearnedOptions(kind="mlp", seed=0), 0.3),
-    (LearnedOptions(kind="mlp", seed=1), 0.3),
+#: The default learnt estimator's members: each member's options, its weight
+#: and what its learning set changes from the one given to
+#: :func:`learned_ensemble` (``(field, value)`` pairs of
+#: :class:`~handsynth.db.LearningSetOptions`; none: that set).  The per-digit
+#: estimator at 0.4, perceptrons started from seeds 0 and 1 at 0.2 each, and
+#: at 0.2 the seed-0 perceptron of the learning set whose hands all rest
+#: relaxed (``open_rest_share`` 0; the default set rests three hands in four
+#: near open).  Chosen on held-out model hands by rules fixed before the runs
+#: (README, "Ensemble members").  A mean of perceptrons errs by no more than
+#: their mean error on any frame (the triangle inequality), and one
+#: perceptron's error on unseen hands depends on its start and its learning
+#: set: on the glTF hands' relaxed paper frames starts 0, 1 and 2 erred by 5.1,
+#: 7.3 and 6.8 deg (README, "The learning set's draw").
+LEARNED_ENSEMBLE: tuple[tuple[LearnedOptions, float, tuple], ...] = (
+    (LearnedOptions(kind="fingers"), 0.4, ()),
+    (LearnedOptions(kind="mlp", seed=0), 0.2, ()),
+    (LearnedOptions(kind="mlp", seed=1), 0.2, ()),
+    (LearnedOptions(kind="mlp", seed=0), 0.2, (("open_rest_share", 0.0),)),
 )
 
 
@@ -116,19 +126,45 @@ def learned_ensemble(folder, *, members=LEARNED_ENSEMBLE, data=None, mount=None,
     ----------
     folder : str or os.PathLike
         As :func:`~handsynth.estimate.learned_estimator`'s.
-    members : sequence of (LearnedOptions, float), keyword-only
-        Each member's options and weight (default :data:`LEARNED_ENSEMBLE`).
+    members : sequence of (LearnedOptions, float) or (LearnedOptions, float, changes), keyword-only
+        Each member's options and weight, and optionally what its learning
+        set changes from `data` (``(field, value)`` pairs of
+        :class:`~handsynth.db.LearningSetOptions`; default
+        :data:`LEARNED_ENSEMBLE`).
     data, mount, side, progress
         As :func:`~handsynth.estimate.learned_estimator`'s, for every member.
     learnt : sequence of LearnedEstimator, keyword-only
-        Estimators already read (of the same learning set, mount and side),
-        used for the members with their options instead of reading them again.
+        Estimators already read (of the learning set `data`, mount and
+        side), used for the members with their options and no learning-set
+        changes instead of reading them again.
 
     Returns
     -------
     EnsembleEstimator
+
+    Raises
+    ------
+    InvalidInputError
+        A member that is not options and a weight (and changes), or changes
+        naming no field of the learning set's options.
     """
+    data = data or LearningSetOptions()
     have = {e.options: e for e in learnt}
-    ests = [have.get(opts) or learned_estimator(folder, opts, data=data, mount=mount, side=side,
-                                                progress=progress) for opts, _ in members]
-    return EnsembleEstimator(ests, weights=[w for _, w in members])
+    ests, weights = [], []
+    for member in members:
+        if not isinstance(member, tuple) or len(member) not in (2, 3):
+            raise InvalidInputError(f"an ensemble member is (LearnedOptions, weight) or "
+                                    f"(LearnedOptions, weight, changes), got {member!r}")
+        opts, weight, changes = (*member, ()) if len(member) == 2 else member
+        changes = dict(changes)
+        unknown = sorted(set(changes) - {f.name for f in fields(LearningSetOptions)})
+        if unknown:
+            raise InvalidInputError(f"an ensemble member's learning-set changes name no option "
+                                    f"of LearningSetOptions: {', '.join(unknown)}")
+        est = None if changes else have.get(opts)
+        if est is None:
+            est = learned_estimator(folder, opts, data=replace(data, **changes), mount=mount,
+                                    side=side, progress=progress)
+        ests.append(est)
+        weights.append(weight)
+    return EnsembleEstimator(ests, weights=weights)

@@ -45,8 +45,8 @@ LEARNED_METHODS: dict[str, LearnedOptions] = {
 
 #: Every name :func:`protocol_methods` knows: the paper's lookups, the
 #: calibrated lookup, the learnt estimators and ``ensemble``
-#: (:data:`~handsynth.estimate.LEARNED_ENSEMBLE`: the weighted mean of ``fingers`` and two
-#: perceptrons).
+#: (:data:`~handsynth.estimate.LEARNED_ENSEMBLE`: the weighted mean of ``fingers`` and three
+#: perceptrons, one of them learnt from relaxed rests).
 PROTOCOL_METHODS: tuple[str, ...] = ("standard", "selected", "calibrated", *LEARNED_METHODS,
                                      "ensemble")
 
@@ -148,7 +148,9 @@ def describe_methods(names, *, data: LearningSetOptions | None = None) -> dict:
     dict
         Name to a description: ``{"lookup": ...}`` for the database
         lookups, ``{"learnt": options}`` for a learnt estimator and
-        ``{"ensemble": [{"learnt": options, "weight": w}, ...]}``; the key
+        ``{"ensemble": [{"learnt": options, "weight": w,
+        "learning_set_changes": {...}}, ...]}`` (what a member's learning
+        set changes from the others'); the key
         ``"learning_set"`` holds the learning set's options when a learnt
         method is among `names`.
 
@@ -167,8 +169,9 @@ def describe_methods(names, *, data: LearningSetOptions | None = None) -> dict:
         elif name in LEARNED_METHODS:
             out[name] = {"learnt": asdict(LEARNED_METHODS[name])}
         elif name == "ensemble":
-            out[name] = {"ensemble": [{"learnt": asdict(o), "weight": w}
-                                      for o, w in LEARNED_ENSEMBLE]}
+            out[name] = {"ensemble": [{"learnt": asdict(o), "weight": w,
+                                       "learning_set_changes": dict(changes)}
+                                      for o, w, changes in LEARNED_ENSEMBLE]}
         else:
             raise InvalidInputError(f"methods must be names from {', '.join(PROTOCOL_METHODS)}, "
                                     f"got {name!r}")

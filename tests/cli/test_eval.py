@@ -111,8 +111,9 @@ def test_protocol_puts_the_constant_beside_every_method_and_writes_json(tmp_path
     assert d["handsynth"] == __version__
     assert d["methods"]["fingers_mean"]["learnt"]["local"] == "mean"
     members = d["methods"]["ensemble"]["ensemble"]
-    assert [(m["learnt"]["kind"], m["learnt"]["seed"], m["weight"]) for m in members] == [
-        (o.kind, o.seed, w) for o, w in LEARNED_ENSEMBLE]
+    assert [(m["learnt"]["kind"], m["learnt"]["seed"], m["weight"], m["learning_set_changes"])
+            for m in members] == [(o.kind, o.seed, w, dict(c)) for o, w, c in LEARNED_ENSEMBLE]
+    assert members[-1]["learning_set_changes"] == {"open_rest_share": 0.0}
     assert d["methods"]["learning_set"]["hands"] == 8
     assert mrtk["constant"]["groups_mae_deg"]["finger_flexion"] == pytest.approx(
         head["mesh/natural/fingers"]["constant"], abs=0.006)

@@ -340,6 +340,28 @@ def test_reading_options_read_the_same_learnt_arrays(tmp_path):
         LearnedEstimator.load(tmp_path / learnt[0], options=LearnedOptions(components=6, lists=0))
 
 
+def test_an_ensemble_member_can_learn_from_another_learning_set(tmp_path):
+    from handsynth.estimate import learned_ensemble
+
+    mlp = LearnedOptions(kind="mlp", components=8, hidden=(8,), epochs=1, seed=0)
+    first = learned_estimator(tmp_path, mlp, data=DATA)
+    ens = learned_ensemble(tmp_path, members=((mlp, 0.5), (mlp, 0.5, (("seed", 5),))),
+                           data=DATA, learnt=[first])
+    # the first member is the one already read; the second, with the same options, is learnt
+    # from the set the change makes, kept beside the first
+    assert ens.members[0] is first and ens.members[1] is not first
+    assert not np.allclose(ens.members[0]._a["mean"], ens.members[1]._a["mean"])
+    assert len(list(tmp_path.glob("learning_*.npz"))) == 2
+    assert len(list(tmp_path.glob("learned_mlp_*.npz"))) == 2
+    same = learned_estimator(tmp_path, mlp, data=LearningSetOptions(hands=6, poses_per_hand=10,
+                                                                     seed=5))
+    np.testing.assert_array_equal(same._a["mean"], ens.members[1]._a["mean"])
+    with pytest.raises(InvalidInputError, match="name no option of LearningSetOptions: hand"):
+        learned_ensemble(tmp_path, members=((mlp, 1.0, (("hand", 3),)),), data=DATA)
+    with pytest.raises(InvalidInputError, match="an ensemble member is"):
+        learned_ensemble(tmp_path, members=((mlp,),), data=DATA)
+
+
 def test_learned_ensemble_weights_its_members_and_reuses_those_already_read(tmp_path):
     from handsynth.estimate import EnsembleEstimator, learned_ensemble
 
