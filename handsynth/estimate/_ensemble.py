@@ -30,7 +30,7 @@ __all__ = ["LEARNED_ENSEMBLE", "EnsembleEstimator", "learned_ensemble"]
 #: at 0.2 the seed-0 perceptron of the learning set whose hands all rest
 #: relaxed (``open_rest_share`` 0; the default set rests three hands in four
 #: near open).  Chosen on held-out model hands by rules fixed before the runs
-#: (README, "Ensemble members").  A mean of perceptrons errs by no more than
+#: (README, "A perceptron of relaxed learning rests" and "Ensemble members").  A mean of perceptrons errs by no more than
 #: their mean error on any frame (the triangle inequality), and one
 #: perceptron's error on unseen hands depends on its start and its learning
 #: set: on the glTF hands' relaxed paper frames starts 0, 1 and 2 erred by 5.1,
@@ -152,10 +152,10 @@ def learned_ensemble(folder, *, members=LEARNED_ENSEMBLE, data=None, mount=None,
     have = {e.options: e for e in learnt}
     ests, weights = [], []
     for member in members:
-        if not isinstance(member, tuple) or len(member) not in (2, 3):
+        if not isinstance(member, (tuple, list)) or len(member) not in (2, 3):
             raise InvalidInputError(f"an ensemble member is (LearnedOptions, weight) or "
                                     f"(LearnedOptions, weight, changes), got {member!r}")
-        opts, weight, changes = (*member, ()) if len(member) == 2 else member
+        opts, weight, changes = (*member, ()) if len(member) == 2 else tuple(member)
         changes = dict(changes)
         unknown = sorted(set(changes) - {f.name for f in fields(LearningSetOptions)})
         if unknown:
