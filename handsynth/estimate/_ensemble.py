@@ -30,8 +30,9 @@ __all__ = ["LEARNED_ENSEMBLE", "EnsembleEstimator", "learned_ensemble"]
 #: at 0.2 the seed-0 perceptron of the learning set whose hands all rest
 #: relaxed (``open_rest_share`` 0; the default set rests three hands in four
 #: near open).  Chosen on held-out model hands by rules fixed before the runs
-#: (README, "A perceptron of relaxed learning rests" and "Ensemble members").  A mean of perceptrons errs by no more than
-#: their mean error on any frame (the triangle inequality), and one
+#: (README, "A perceptron of relaxed learning rests" and "Ensemble members").
+#: A mean of perceptrons errs by no more than their mean error on any frame
+#: (the triangle inequality), and one
 #: perceptron's error on unseen hands depends on its start and its learning
 #: set: on the glTF hands' relaxed paper frames starts 0, 1 and 2 erred by 5.1,
 #: 7.3 and 6.8 deg (README, "The learning set's draw").
