@@ -251,9 +251,10 @@ def _progress(stream):
               help="Random hands of the learning set [default: 4,000 x 100 frames].")
 @click.option("--learned-rest", type=click.Choice(["open", "relaxed"]), default=None,
               help="With --learned: the rest postures it learns from: three hands in four "
-                   "held open [default], or relaxed only (an earlier release's learning set; "
-                   "reads a relaxed wearer better, README; the ensemble's relaxed-rest "
-                   "perceptron is then its seed-0 perceptron again).")
+                   "held open [default], or relaxed only (an earlier release's learning set: "
+                   "at relaxed rests the glTF test hands read better with it and the model "
+                   "test hands worse, near open both much worse, README; the ensemble's "
+                   "relaxed-rest perceptron is then its seed-0 perceptron again).")
 @click.option("--side", type=click.Choice(["right", "left"]), default=None,
               help="With --learned: the hand wearing the device [default: right] (the "
                    "lookups take it from the database).")
