@@ -248,7 +248,8 @@ def _progress(stream):
               help="Folder of the learnt estimator and its learning set [default: "
                    "~/.cache/handsynth/learned].")
 @click.option("--learned-hands", type=int, default=None, metavar="N",
-              help="Random hands of the learning set [default: 4,000 x 100 frames].")
+              help="Random hands of the learning set [default: 4,000 x 100 frames; the "
+                   "ensemble's perceptrons learn from twice as many].")
 @click.option("--learned-rest", type=click.Choice(["open", "relaxed"]), default=None,
               help="With --learned: the rest postures it learns from: three hands in four "
                    "held open [default], or relaxed only (an earlier release's learning set: "

@@ -19,7 +19,8 @@
   (:func:`learned_estimator`, :class:`LearnedOptions`, :func:`train_learned`,
   :func:`fit_mlp`), calibrated by a frame of the user's relaxed hand;
   :class:`EnsembleEstimator` averages several, :func:`learned_ensemble`
-  makes the default one (:data:`LEARNED_ENSEMBLE`).
+  makes the default one (:data:`LEARNED_ENSEMBLE`), whose perceptrons are
+  shipped in ``shipped/`` (:func:`shipped_members`).
 * Steady angles over time (beyond the paper): the One Euro filter
   (:class:`OneEuroFilter`, :class:`OneEuroOptions`, :func:`one_euro`) and
   :class:`SmoothedEstimator`, which wraps any estimator with it.
@@ -39,7 +40,13 @@ from ._calibration import (
     reference_silhouette,
     select_shape_from_frame,
 )
-from ._ensemble import LEARNED_ENSEMBLE, EnsembleEstimator, learned_ensemble
+from ._ensemble import (
+    LEARNED_ENSEMBLE,
+    EnsembleEstimator,
+    learned_ensemble,
+    member_learning_set,
+    shipped_members,
+)
 from ._learned import (
     LearnedEstimator,
     LearnedOptions,
@@ -94,6 +101,7 @@ __all__ = [
     "masked_band_areas",
     "masked_search",
     "masked_search_reference",
+    "member_learning_set",
     "one_euro",
     "reference_silhouette",
     "search",
@@ -101,5 +109,6 @@ __all__ = [
     "select_shape",
     "select_shape_from_frame",
     "shape_ratios",
+    "shipped_members",
     "train_learned",
 ]

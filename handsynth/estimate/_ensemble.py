@@ -17,20 +17,27 @@ import numpy as np
 
 from ..db import LearningSetOptions
 from ..errors import InvalidInputError
-from ._learned import LearnedEstimator, LearnedOptions, learned_estimator
+from ..render import CameraMount
+from ._learned import LearnedEstimator, LearnedOptions, learned_estimator, learned_file_name
 from ._lookup import PoseEstimate
+from ._shipped import shipped_path
 
-__all__ = ["LEARNED_ENSEMBLE", "EnsembleEstimator", "learned_ensemble"]
+__all__ = ["LEARNED_ENSEMBLE", "EnsembleEstimator", "learned_ensemble", "member_learning_set",
+           "shipped_members"]
 
 #: The default learnt estimator's members: each member's options, its weight
 #: and what its learning set changes from the one given to
 #: :func:`learned_ensemble` (``(field, value)`` pairs of
-#: :class:`~handsynth.db.LearningSetOptions`; none: that set).  The per-digit
-#: estimator at 0.4, perceptrons started from seeds 0 and 1 at 0.2 each, and
-#: at 0.2 the seed-0 perceptron of the learning set whose hands all rest
-#: relaxed (``open_rest_share`` 0; the default set rests three hands in four
-#: near open).  Chosen on held-out model hands by rules fixed before the runs
-#: (README, "A perceptron of relaxed learning rests" and "Ensemble members").
+#: :class:`~handsynth.db.LearningSetOptions`, or ``("hands_factor", f)``:
+#: ``f`` times that set's hands; none: that set).  The per-digit estimator at
+#: 0.4; at 0.2 each, perceptrons started from seeds 0 and 1, learnt from
+#: twice the hands of that set (8,000 by default), and the seed-0 perceptron
+#: of as many hands that all rest relaxed (``open_rest_share`` 0; the default
+#: set rests three hands in four near open).  The default perceptrons are
+#: shipped with handsynth (:mod:`._shipped`), so a first run renders only the
+#: 4,000 hands the per-digit estimator needs.  Chosen on held-out model hands
+#: by rules fixed before the runs (README, "Perceptrons of 8,000 hands", "A
+#: perceptron of relaxed learning rests" and "Ensemble members").
 #: A mean of perceptrons errs by no more than their mean error on any frame
 #: (the triangle inequality), and one
 #: perceptron's error on unseen hands depends on its start and its learning
@@ -38,9 +45,9 @@ __all__ = ["LEARNED_ENSEMBLE", "EnsembleEstimator", "learned_ensemble"]
 #: 7.3 and 6.8 deg (README, "The learning set's draw").
 LEARNED_ENSEMBLE: tuple[tuple[LearnedOptions, float, tuple], ...] = (
     (LearnedOptions(kind="fingers"), 0.4, ()),
-    (LearnedOptions(kind="mlp", seed=0), 0.2, ()),
-    (LearnedOptions(kind="mlp", seed=1), 0.2, ()),
-    (LearnedOptions(kind="mlp", seed=0), 0.2, (("open_rest_share", 0.0),)),
+    (LearnedOptions(kind="mlp", seed=0), 0.2, (("hands_factor", 2),)),
+    (LearnedOptions(kind="mlp", seed=1), 0.2, (("hands_factor", 2),)),
+    (LearnedOptions(kind="mlp", seed=0), 0.2, (("hands_factor", 2), ("open_rest_share", 0.0))),
 )
 
 
@@ -119,8 +126,62 @@ class EnsembleEstimator:
                             low_confidence=any(e.low_confidence for e in got), no_hand=False)
 
 
+def member_learning_set(data: LearningSetOptions, changes) -> LearningSetOptions:
+    """The learning set of an ensemble member: `data` with `changes` made.
+
+    Parameters
+    ----------
+    data : LearningSetOptions
+    changes : sequence of (str, value)
+        Fields of :class:`~handsynth.db.LearningSetOptions` and their
+        values, or ``("hands_factor", f)``: ``f`` (> 0) times the hands of
+        `data`, rounded (at least one).
+
+    Raises
+    ------
+    InvalidInputError
+        A change naming no option, or a factor that is not a positive number.
+    """
+    changes = dict(changes)
+    unknown = sorted(set(changes) - {f.name for f in fields(LearningSetOptions)} - {"hands_factor"})
+    if unknown:
+        raise InvalidInputError(f"an ensemble member's learning-set changes name no option "
+                                f"of LearningSetOptions: {', '.join(unknown)}")
+    if "hands_factor" in changes:
+        factor = changes.pop("hands_factor")
+        if isinstance(factor, bool) or not isinstance(factor, (int, float)) or not factor > 0:
+            raise InvalidInputError(f"an ensemble member's hands_factor must be a positive "
+                                    f"number, got {factor!r}")
+        changes["hands"] = max(1, round(data.hands * factor))
+    return replace(data, **changes)
+
+
+def shipped_members(*, members=LEARNED_ENSEMBLE) -> list[LearnedEstimator]:
+    """The members of `members` shipped with handsynth, read from the package.
+
+    Those learnt from the default learning set (with each member's changes),
+    for the paper's mount and the right hand, whose shipped file is intact
+    (:mod:`._shipped`); the others are left out.  Reads nothing else and
+    learns nothing.
+
+    Returns
+    -------
+    list of LearnedEstimator
+        In the order of `members`.
+    """
+    mount = CameraMount.paper()
+    out = []
+    for opts, _weight, *changes in members:
+        data = member_learning_set(LearningSetOptions(), changes[0] if changes else ())
+        path = shipped_path(learned_file_name(opts, data, mount, "right"))
+        if path is not None:
+            out.append(LearnedEstimator.load(path, options=opts))
+    return out
+
+
 def learned_ensemble(folder, *, members=LEARNED_ENSEMBLE, data=None, mount=None,
-                     side: str = "right", progress=None, learnt=()) -> EnsembleEstimator:
+                     side: str = "right", progress=None, learnt=(),
+                     shipped: bool = True) -> EnsembleEstimator:
     """The weighted mean of learnt estimators, each read from `folder` or learnt there first.
 
     Parameters
@@ -129,10 +190,9 @@ def learned_ensemble(folder, *, members=LEARNED_ENSEMBLE, data=None, mount=None,
         As :func:`~handsynth.estimate.learned_estimator`'s.
     members : sequence of (LearnedOptions, float) or (LearnedOptions, float, changes), keyword-only
         Each member's options and weight, and optionally what its learning
-        set changes from `data` (``(field, value)`` pairs of
-        :class:`~handsynth.db.LearningSetOptions`; default
+        set changes from `data` (:func:`member_learning_set`; default
         :data:`LEARNED_ENSEMBLE`).
-    data, mount, side, progress
+    data, mount, side, progress, shipped
         As :func:`~handsynth.estimate.learned_estimator`'s, for every member.
     learnt : sequence of LearnedEstimator, keyword-only
         Estimators already read (of the learning set `data`, mount and
@@ -157,15 +217,10 @@ def learned_ensemble(folder, *, members=LEARNED_ENSEMBLE, data=None, mount=None,
             raise InvalidInputError(f"an ensemble member is (LearnedOptions, weight) or "
                                     f"(LearnedOptions, weight, changes), got {member!r}")
         opts, weight, changes = (*member, ()) if len(member) == 2 else tuple(member)
-        changes = dict(changes)
-        unknown = sorted(set(changes) - {f.name for f in fields(LearningSetOptions)})
-        if unknown:
-            raise InvalidInputError(f"an ensemble member's learning-set changes name no option "
-                                    f"of LearningSetOptions: {', '.join(unknown)}")
         est = None if changes else have.get(opts)
         if est is None:
-            est = learned_estimator(folder, opts, data=replace(data, **changes), mount=mount,
-                                    side=side, progress=progress)
+            est = learned_estimator(folder, opts, data=member_learning_set(data, changes),
+                                    mount=mount, side=side, progress=progress, shipped=shipped)
         ests.append(est)
         weights.append(weight)
     return EnsembleEstimator(ests, weights=weights)

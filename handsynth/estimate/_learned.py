@@ -47,7 +47,9 @@ unseen hands"): ``"fingers"`` with ``k = 128`` and the local linear fit on a
 
 Everything learnt is kept in a folder the caller names
 (:func:`learned_estimator`), as one ``.npz`` written to a temporary name and
-renamed when complete.
+renamed when complete; the default ensemble's perceptrons are shipped with
+handsynth and read from the package when that folder lacks them
+(:mod:`handsynth.estimate._shipped`).
 """
 
 from __future__ import annotations
@@ -68,6 +70,7 @@ from ..errors import DatabaseCorruptError, DatabaseError, DatabaseMismatchError,
 from ..models import JOINT_LIMITS_DEG
 from ..render import CameraMount, coverage
 from ._lookup import PoseEstimate
+from ._shipped import shipped_path
 
 __all__ = ["LearnedEstimator", "LearnedOptions", "fit_mlp", "learned_estimator", "local_linear",
            "train_learned"]
@@ -913,12 +916,14 @@ def _fit(z: _Rows, y: np.ndarray, opts: LearnedOptions, rng: np.random.Generator
 
 def learned_estimator(folder, options: LearnedOptions | None = None, *,
                       data: LearningSetOptions | None = None, mount: CameraMount | None = None,
-                      side: str = "right", progress=None) -> LearnedEstimator:
+                      side: str = "right", progress=None, shipped: bool = True) -> LearnedEstimator:
     """The estimator learnt with `options` from the learning set `data`, cached in `folder`.
 
     Renders the learning set (:func:`~handsynth.db.learning_set`) and learns
     the estimator when `folder` holds neither; both stay in `folder` (a
-    folder the caller chose, created if missing).
+    folder the caller chose, created if missing).  The default ensemble's
+    perceptrons are shipped with handsynth (:mod:`._shipped`) and read from
+    there when `folder` lacks them.
 
     Parameters
     ----------
@@ -930,19 +935,24 @@ def learned_estimator(folder, options: LearnedOptions | None = None, *,
     side : {"right", "left"}, keyword-only
     progress : callable, keyword-only, optional
         Called with a line of text at each stage.
+    shipped : bool, keyword-only
+        Read a shipped estimator of these options when there is one (default)
+        instead of learning it.
     """
     opts = options or LearnedOptions()
     data = data or LearningSetOptions()
     mount = mount or CameraMount.paper()
-    key = hashlib.sha256(json.dumps([opts.digest(), data.digest(), mount.as_dict(), side],
-                                    sort_keys=True).encode()).hexdigest()[:16]
-    path = Path(folder) / f"learned_{opts.kind}_{key}.npz"
-    if path.is_file():
-        try:
-            return LearnedEstimator.load(path, options=opts)
-        except DatabaseCorruptError:
-            pass
+    path = Path(folder) / learned_file_name(opts, data, mount, side)
     say = progress or (lambda _line: None)
+    for source in (path, shipped_path(path.name) if shipped else None):
+        if source is not None and source.is_file():
+            try:
+                est = LearnedEstimator.load(source, options=opts)
+            except DatabaseCorruptError:
+                continue
+            if source != path:
+                say(f"{opts.kind}: shipped with handsynth")
+            return est
     say(f"learning set: {data.hands} hands x {data.poses_per_hand} frames")
     ls = learning_set(folder, data, mount=mount, side=side)
     say(f"learning {opts.kind}")
@@ -950,3 +960,10 @@ def learned_estimator(folder, options: LearnedOptions | None = None, *,
     est.save(path)
     return est
 
+
+def learned_file_name(options: LearnedOptions, data: LearningSetOptions, mount: CameraMount,
+                      side: str) -> str:
+    """The name of the file :func:`learned_estimator` keeps these options' estimator in."""
+    key = hashlib.sha256(json.dumps([options.digest(), data.digest(), mount.as_dict(), side],
+                                    sort_keys=True).encode()).hexdigest()[:16]
+    return f"learned_{options.kind}_{key}.npz"

@@ -24,6 +24,10 @@ def test_demo_writes_pictures_and_looks_up_frames(tmp_path):
         row = next(x for x in res.output.splitlines() if x.startswith(f"mesh/{pose_set}/fingers"))
         mae, const = (float(v) for v in re.findall(r"MAE +([\d.]+) \(constant +([\d.]+)", row)[0])
         assert const > 0 and mae > 0
+        # the shipped perceptrons read the unseen glTF hand with skill
+        row = next(x for x in res.output.splitlines() if x.startswith(f"mesh/{pose_set}/shipped"))
+        mae, const = (float(v) for v in re.findall(r"MAE +([\d.]+) \(constant +([\d.]+)", row)[0])
+        assert 0 < mae < 0.8 * const
     assert sorted(p.name.split("_")[0] for p in (tmp_path / "learned").iterdir()) == [
         "learned", "learning"]
 

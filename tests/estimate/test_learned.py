@@ -362,6 +362,22 @@ def test_an_ensemble_member_can_learn_from_another_learning_set(tmp_path):
         learned_ensemble(tmp_path, members=((mlp,),), data=DATA)
 
 
+def test_a_member_learning_set_may_scale_the_hands():
+    from handsynth.estimate import member_learning_set
+
+    assert member_learning_set(DATA, ()) == DATA
+    assert member_learning_set(DATA, (("hands_factor", 2),)) == replace(DATA, hands=12)
+    assert member_learning_set(DATA, [("hands_factor", 0.01)]).hands == 1
+    both = member_learning_set(LearningSetOptions(), (("hands_factor", 2), ("open_rest_share", 0.0)))
+    assert both == LearningSetOptions(hands=8000, open_rest_share=0.0)
+    for bad in (0, -1, "2", True, float("nan")):
+        with pytest.raises(InvalidInputError, match=f"hands_factor must be a positive number, "
+                                                    f"got {bad!r}"):
+            member_learning_set(DATA, (("hands_factor", bad),))
+    with pytest.raises(InvalidInputError, match="name no option of LearningSetOptions: hands_scale"):
+        member_learning_set(DATA, (("hands_scale", 2),))
+
+
 def test_learned_ensemble_weights_its_members_and_reuses_those_already_read(tmp_path):
     from handsynth.estimate import EnsembleEstimator, learned_ensemble
 

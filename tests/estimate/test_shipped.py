@@ -1,0 +1,132 @@
+import json
+from dataclasses import asdict, replace
+
+import numpy as np
+import pytest
+
+from handsynth.db import LearningSetOptions, render_learning_set
+from handsynth.estimate import (
+    LEARNED_ENSEMBLE,
+    LearnedEstimator,
+    LearnedOptions,
+    _learned,
+    learned_estimator,
+    member_learning_set,
+    shipped_members,
+)
+from handsynth.estimate._learned import learned_file_name, train_learned
+from handsynth.estimate._shipped import (
+    SHIPPED_FOLDER,
+    fingerprint,
+    fingerprint_differs,
+    read_manifest,
+    ship,
+    shipped_path,
+)
+from handsynth.render import CameraMount
+
+PERCEPTRONS = [(opts, member_learning_set(LearningSetOptions(), changes))
+               for opts, _weight, changes in LEARNED_ENSEMBLE if opts.kind == "mlp"]
+
+
+def _same_arrays(a: LearnedEstimator, b: LearnedEstimator) -> bool:
+    return a._a.keys() == b._a.keys() and all(np.array_equal(a._a[k], b._a[k]) for k in a._a)
+
+
+@pytest.mark.parametrize(("opts", "data"), PERCEPTRONS)
+def test_every_perceptron_of_the_default_ensemble_is_shipped(opts, data):
+    name = learned_file_name(opts, data, CameraMount.paper(), "right")
+    path = shipped_path(name)
+    assert path is not None, f"{name} is not shipped: run scripts/ship_perceptrons.py"
+    entry = read_manifest()["files"][name]
+    assert entry["learning_set"] == json.loads(json.dumps(asdict(data)))
+    est = LearnedEstimator.load(path, options=opts)
+    assert est.options.digest() == opts.digest() and est.mount == CameraMount.paper()
+
+
+def test_shipped_learning_sets_still_render_as_when_shipped():
+    manifest = read_manifest()
+    assert manifest["files"], "nothing is shipped"
+    done = set()
+    for opts, data in PERCEPTRONS:
+        fp = manifest["files"][learned_file_name(opts, data, CameraMount.paper(), "right")]["fingerprint"]
+        if fp in done:
+            continue
+        done.add(fp)
+        with np.load(SHIPPED_FOLDER / fp) as z:
+            stored = {k: z[k] for k in z.files}
+        why = fingerprint_differs(stored, fingerprint(data, CameraMount.paper(), "right"))
+        assert why is None, (f"{fp}: {why}; the shipped perceptrons no longer match their learning "
+                             f"set: run scripts/ship_perceptrons.py")
+
+
+def test_fingerprint_differs_names_what_changed():
+    rng = np.random.default_rng(0)
+    fp = {"grids": rng.integers(0, 256, (20, 50), dtype=np.uint8),
+          "rest_grids": rng.integers(0, 256, (2, 50), dtype=np.uint8),
+          "angles": rng.normal(size=(20, 20)).astype(np.float32),
+          "rest_angles": rng.normal(size=(2, 20)).astype(np.float32)}
+    assert fingerprint_differs(fp, dict(fp)) is None
+    few = dict(fp, grids=np.clip(fp["grids"].astype(int) + (rng.random((20, 50)) < 0.1), 0, 255))
+    assert fingerprint_differs(fp, few) is None  # a few cells rounded the other way
+    moved = dict(fp, grids=np.roll(fp["grids"], 1, axis=1))
+    assert "grids differ" in fingerprint_differs(fp, moved)
+    posed = dict(fp, angles=fp["angles"] + 0.01)
+    assert "angles differ" in fingerprint_differs(fp, posed)
+    fewer = dict(fp, rest_grids=fp["rest_grids"][:1])
+    assert "rest_grids have shape" in fingerprint_differs(fp, fewer)
+
+
+def test_a_shipped_perceptron_is_read_instead_of_learnt(tmp_path, monkeypatch):
+    def no_learning(*args, **kwargs):
+        raise AssertionError("rendered a learning set")
+
+    monkeypatch.setattr(_learned, "learning_set", no_learning)
+    said = []
+    opts, data = PERCEPTRONS[0]
+    est = learned_estimator(tmp_path, opts, data=data, progress=said.append)
+    assert said == ["mlp: shipped with handsynth"]
+    name = learned_file_name(opts, data, CameraMount.paper(), "right")
+    assert _same_arrays(est, LearnedEstimator.load(SHIPPED_FOLDER / name))
+    with pytest.raises(AssertionError, match="rendered a learning set"):
+        learned_estimator(tmp_path, opts, data=data, shipped=False)
+    with pytest.raises(AssertionError, match="rendered a learning set"):  # other options: not shipped
+        learned_estimator(tmp_path, replace(opts, seed=7), data=data)
+
+
+def test_ship_writes_what_shipped_path_then_trusts(tmp_path):
+    data = LearningSetOptions(hands=4, poses_per_hand=10, seed=3)
+    opts = LearnedOptions(kind="mlp", components=8, hidden=(8,), epochs=1)
+    cache = tmp_path / "cache"
+    cache.mkdir()
+    src = cache / "learnt.npz"
+    train_learned(render_learning_set(data), opts).save(src)
+    out = tmp_path / "shipped"
+    out.mkdir()
+    (out / "stale.npz").write_bytes(b"old")
+    manifest = ship({"learned_mlp_x.npz": (src, data)}, folder=out)
+    assert sorted(p.name for p in out.iterdir()) == sorted(
+        ["learned_mlp_x.npz", "manifest.json", f"fingerprint_{data.digest()}.npz"])
+    assert manifest == read_manifest(out)
+    path = shipped_path("learned_mlp_x.npz", folder=out)
+    assert path is not None and path.read_bytes() == src.read_bytes()
+    with np.load(out / manifest["files"]["learned_mlp_x.npz"]["fingerprint"]) as z:
+        assert z["grids"].shape == (2 * 10, 30 * 45)
+        assert fingerprint_differs({k: z[k] for k in z.files},
+                                   fingerprint(data, CameraMount.paper(), "right")) is None
+    assert shipped_path("learned_mlp_y.npz", folder=out) is None  # not in the manifest
+    raw = bytearray(path.read_bytes())
+    raw[len(raw) // 2] ^= 1
+    path.write_bytes(bytes(raw))
+    assert shipped_path("learned_mlp_x.npz", folder=out) is None  # bytes differ
+    assert shipped_path("learned_mlp_x.npz", folder=tmp_path / "none") is None
+
+
+def test_shipped_members_reads_the_default_perceptrons_and_leaves_out_the_rest():
+    got = shipped_members()
+    assert [e.options for e in got] == [opts for opts, _data in PERCEPTRONS]
+    for est, (opts, data) in zip(got, PERCEPTRONS):
+        name = learned_file_name(opts, data, CameraMount.paper(), "right")
+        assert _same_arrays(est, LearnedEstimator.load(SHIPPED_FOLDER / name))
+    assert shipped_members(members=[(LearnedOptions(kind="fingers"), 1.0)]) == []
+    assert shipped_members(members=[(LearnedOptions(kind="mlp", seed=0), 1.0)]) == []  # 4,000 hands
