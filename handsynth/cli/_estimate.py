@@ -242,8 +242,8 @@ def _progress(stream):
               show_default=True,
               help="With --learned: the weighted mean of the per-digit estimator and three "
                    "perceptrons, one of them learnt from hands resting relaxed (the more "
-                   "accurate), or the per-digit estimator alone (learnt about 25 minutes "
-                   "faster, from one learning set).")
+                   "accurate; its perceptrons are shipped with handsynth, so both are "
+                   "learnt as fast), or the per-digit estimator alone.")
 @click.option("--learned-cache", default=None, metavar="FOLDER",
               help="Folder of the learnt estimator and its learning set [default: "
                    "~/.cache/handsynth/learned].")

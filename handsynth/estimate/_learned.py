@@ -944,14 +944,19 @@ def learned_estimator(folder, options: LearnedOptions | None = None, *,
     mount = mount or CameraMount.paper()
     path = Path(folder) / learned_file_name(opts, data, mount, side)
     say = progress or (lambda _line: None)
-    for source in (path, shipped_path(path.name) if shipped else None):
-        if source is not None and source.is_file():
-            try:
-                est = LearnedEstimator.load(source, options=opts)
-            except DatabaseCorruptError:
-                continue
-            if source != path:
-                say(f"{opts.kind}: shipped with handsynth")
+    if path.is_file():
+        try:
+            return LearnedEstimator.load(path, options=opts)
+        except DatabaseCorruptError:
+            pass
+    source = shipped_path(path.name) if shipped else None  # hashed only when needed
+    if source is not None:
+        try:
+            est = LearnedEstimator.load(source, options=opts)
+        except DatabaseCorruptError:
+            pass
+        else:
+            say(f"{opts.kind}: shipped with handsynth")
             return est
     say(f"learning set: {data.hands} hands x {data.poses_per_hand} frames")
     ls = learning_set(folder, data, mount=mount, side=side)
