@@ -1,7 +1,7 @@
 """Ship the default ensemble's perceptrons with handsynth (maintainers' tool).
 
-Reads (or learns, about 7 min each on two cores, plus 4 min for each
-learning set to render) every perceptron member of
+Reads (or learns, 16-20 min each on two cores, plus 9 min for each
+8,000-hand learning set to render) every perceptron member of
 :data:`handsynth.estimate.LEARNED_ENSEMBLE` from ``--cache`` with the shipped
 files ignored, then copies them into ``handsynth/estimate/shipped/`` with the
 fingerprints of their learning sets and a new ``manifest.json``

@@ -126,6 +126,14 @@ class EnsembleEstimator:
                             low_confidence=any(e.low_confidence for e in got), no_hand=False)
 
 
+def _member(member) -> tuple:
+    """An ensemble member as (options, weight, changes); raises InvalidInputError if not one."""
+    if not isinstance(member, (tuple, list)) or len(member) not in (2, 3):
+        raise InvalidInputError(f"an ensemble member is (LearnedOptions, weight) or "
+                                f"(LearnedOptions, weight, changes), got {member!r}")
+    return (*member, ()) if len(member) == 2 else tuple(member)
+
+
 def member_learning_set(data: LearningSetOptions, changes) -> LearningSetOptions:
     """The learning set of an ensemble member: `data` with `changes` made.
 
@@ -168,11 +176,17 @@ def shipped_members(*, members=LEARNED_ENSEMBLE) -> list[LearnedEstimator]:
     -------
     list of LearnedEstimator
         In the order of `members`.
+
+    Raises
+    ------
+    InvalidInputError
+        As :func:`learned_ensemble`, for a member or changes it cannot read.
     """
     mount = CameraMount.paper()
     out = []
-    for opts, _weight, *changes in members:
-        data = member_learning_set(LearningSetOptions(), changes[0] if changes else ())
+    for member in members:
+        opts, _weight, changes = _member(member)
+        data = member_learning_set(LearningSetOptions(), changes)
         path = shipped_path(learned_file_name(opts, data, mount, "right"))
         if path is not None:
             out.append(LearnedEstimator.load(path, options=opts))
@@ -213,10 +227,7 @@ def learned_ensemble(folder, *, members=LEARNED_ENSEMBLE, data=None, mount=None,
     have = {e.options: e for e in learnt}
     ests, weights = [], []
     for member in members:
-        if not isinstance(member, (tuple, list)) or len(member) not in (2, 3):
-            raise InvalidInputError(f"an ensemble member is (LearnedOptions, weight) or "
-                                    f"(LearnedOptions, weight, changes), got {member!r}")
-        opts, weight, changes = (*member, ()) if len(member) == 2 else tuple(member)
+        opts, weight, changes = _member(member)
         est = None if changes else have.get(opts)
         if est is None:
             est = learned_estimator(folder, opts, data=member_learning_set(data, changes),

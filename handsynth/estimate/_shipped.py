@@ -1,9 +1,9 @@
 """Learnt estimators shipped with handsynth: the default ensemble's perceptrons.
 
-Learning one perceptron of the default ensemble (:data:`LEARNED_ENSEMBLE`)
-takes about 7 min on two cores, and one of the three learns from a second
-learning set that takes another 4 min to render and 580 MB to keep.  A
-perceptron's file is 3 MB, so the three are learnt once and shipped in
+The default ensemble's perceptrons (:data:`LEARNED_ENSEMBLE`) learn from two
+8,000-hand learning sets, each 9 min to render and 1.1 GB to keep, and took
+16-20 min each to learn on two cores.  A perceptron's file is 3 MB, so the
+three are learnt once and shipped in
 ``handsynth/estimate/shipped/``, under the names
 :func:`~handsynth.estimate.learned_estimator` gives their cache files.  A
 first run then renders only the default learning set for the per-digit
