@@ -249,7 +249,7 @@ def _progress(stream):
                    "~/.cache/handsynth/learned].")
 @click.option("--learned-hands", type=int, default=None, metavar="N",
               help="Random hands of the learning set [default: 4,000 x 100 frames; the "
-                   "ensemble's perceptrons learn from twice as many].")
+                   "ensemble's perceptrons learn from four times as many].")
 @click.option("--learned-rest", type=click.Choice(["open", "relaxed"]), default=None,
               help="With --learned: the rest postures it learns from: three hands in four "
                    "held open [default], or relaxed only (an earlier release's learning set: "

@@ -48,7 +48,7 @@ PROTOCOL_DEFAULT = "standard,calibrated,fingers,fingers_mean,mlp,ensemble"
 @click.option("--learned-hands", type=int, default=None, metavar="N",
               help="--protocol: random hands of the learnt estimators' learning set "
                    "[default: 4,000 x 100 frames; the ensemble's perceptrons learn from "
-                   "twice as many].")
+                   "four times as many].")
 @click.option("--hand-spread", type=float, default=1.5, show_default=True,
               help="--protocol: variation of the model hands' geometry (the learning set's is 1).")
 @click.option("--rest", type=click.Choice(["relaxed", "open"]), default="relaxed",

@@ -20,7 +20,8 @@
   :func:`fit_mlp`), calibrated by a frame of the user's relaxed hand;
   :class:`EnsembleEstimator` averages several, :func:`learned_ensemble`
   makes the default one (:data:`LEARNED_ENSEMBLE`), whose perceptrons are
-  shipped in ``shipped/`` (:func:`shipped_members`).
+  shipped in ``shipped/`` (:func:`shipped_members`; for the default and
+  the relaxed-rest learning set, :func:`shipped_perceptrons`).
 * Steady angles over time (beyond the paper): the One Euro filter
   (:class:`OneEuroFilter`, :class:`OneEuroOptions`, :func:`one_euro`) and
   :class:`SmoothedEstimator`, which wraps any estimator with it.
@@ -42,10 +43,12 @@ from ._calibration import (
 )
 from ._ensemble import (
     LEARNED_ENSEMBLE,
+    SHIPPED_LEARNING_SETS,
     EnsembleEstimator,
     learned_ensemble,
     member_learning_set,
     shipped_members,
+    shipped_perceptrons,
 )
 from ._learned import (
     LearnedEstimator,
@@ -74,6 +77,7 @@ from ._smoothing import (
 
 __all__ = [
     "LEARNED_ENSEMBLE",
+    "SHIPPED_LEARNING_SETS",
     "ApproximateIndex",
     "ApproximateOptions",
     "Calibration",
@@ -110,5 +114,6 @@ __all__ = [
     "select_shape_from_frame",
     "shape_ratios",
     "shipped_members",
+    "shipped_perceptrons",
     "train_learned",
 ]

@@ -22,33 +22,42 @@ from ._learned import LearnedEstimator, LearnedOptions, learned_estimator, learn
 from ._lookup import PoseEstimate
 from ._shipped import shipped_path
 
-__all__ = ["LEARNED_ENSEMBLE", "EnsembleEstimator", "learned_ensemble", "member_learning_set",
-           "shipped_members"]
+__all__ = ["LEARNED_ENSEMBLE", "SHIPPED_LEARNING_SETS", "EnsembleEstimator", "learned_ensemble",
+           "member_learning_set", "shipped_members", "shipped_perceptrons"]
 
 #: The default learnt estimator's members: each member's options, its weight
 #: and what its learning set changes from the one given to
 #: :func:`learned_ensemble` (``(field, value)`` pairs of
 #: :class:`~handsynth.db.LearningSetOptions`, or ``("hands_factor", f)``:
 #: ``f`` times that set's hands; none: that set).  The per-digit estimator at
-#: 0.4; at 0.2 each, perceptrons started from seeds 0 and 1, learnt from
-#: twice the hands of that set (8,000 by default), and the seed-0 perceptron
+#: 0.3; at 0.7 / 3 each, perceptrons started from seeds 0 and 1, learnt from
+#: four times the hands of that set (16,000 by default), and the seed-0 perceptron
 #: of as many hands that all rest relaxed (``open_rest_share`` 0; the default
 #: set rests three hands in four near open).  The default perceptrons are
 #: shipped with handsynth (:mod:`._shipped`), so a first run renders only the
 #: 4,000 hands the per-digit estimator needs.  Chosen on held-out model hands
-#: by rules fixed before the runs (README, "Perceptrons of 8,000 hands", "A
-#: perceptron of relaxed learning rests" and "Ensemble members").
+#: by rules fixed before the runs (README, "Perceptrons of 16,000 hands and
+#: their weight", "A perceptron of relaxed learning rests" and "Ensemble
+#: members").
 #: A mean of perceptrons errs by no more than their mean error on any frame
 #: (the triangle inequality), and one
 #: perceptron's error on unseen hands depends on its start and its learning
 #: set: on the glTF hands' relaxed paper frames starts 0, 1 and 2 erred by 5.1,
 #: 7.3 and 6.8 deg (README, "The learning set's draw").
 LEARNED_ENSEMBLE: tuple[tuple[LearnedOptions, float, tuple], ...] = (
-    (LearnedOptions(kind="fingers"), 0.4, ()),
-    (LearnedOptions(kind="mlp", seed=0), 0.2, (("hands_factor", 2),)),
-    (LearnedOptions(kind="mlp", seed=1), 0.2, (("hands_factor", 2),)),
-    (LearnedOptions(kind="mlp", seed=0), 0.2, (("hands_factor", 2), ("open_rest_share", 0.0))),
+    (LearnedOptions(kind="fingers"), 0.3, ()),
+    (LearnedOptions(kind="mlp", seed=0), 0.7 / 3, (("hands_factor", 4),)),
+    (LearnedOptions(kind="mlp", seed=1), 0.7 / 3, (("hands_factor", 4),)),
+    (LearnedOptions(kind="mlp", seed=0), 0.7 / 3, (("hands_factor", 4), ("open_rest_share", 0.0))),
 )
+
+#: The learning sets, as given to :func:`learned_ensemble`, whose perceptron
+#: members (of :data:`LEARNED_ENSEMBLE`) are shipped with handsynth
+#: (:mod:`._shipped`, :func:`shipped_perceptrons`): the default one, and the
+#: one whose hands all rest relaxed (``handsynth estimate --learned-rest
+#: relaxed``).
+SHIPPED_LEARNING_SETS: tuple[LearningSetOptions, ...] = (
+    LearningSetOptions(), LearningSetOptions(open_rest_share=0.0))
 
 
 class EnsembleEstimator:
@@ -162,6 +171,34 @@ def member_learning_set(data: LearningSetOptions, changes) -> LearningSetOptions
                                     f"number, got {factor!r}")
         changes["hands"] = max(1, round(data.hands * factor))
     return replace(data, **changes)
+
+
+def shipped_perceptrons(*, members=LEARNED_ENSEMBLE, bases=SHIPPED_LEARNING_SETS
+                        ) -> list[tuple[LearnedOptions, LearningSetOptions]]:
+    """The perceptrons shipped with handsynth: what ``scripts/ship_perceptrons.py`` learns.
+
+    Parameters
+    ----------
+    members : sequence, keyword-only
+        Ensemble members, as :func:`learned_ensemble` takes them.
+    bases : sequence of LearningSetOptions, keyword-only
+        Learning sets as given to :func:`learned_ensemble`.
+
+    Returns
+    -------
+    list of (LearnedOptions, LearningSetOptions)
+        Each perceptron member's options with the learning set it learns
+        from (:func:`member_learning_set`) given each of `bases` in turn;
+        each pair once, in that order.
+    """
+    out: list[tuple[LearnedOptions, LearningSetOptions]] = []
+    for base in bases:
+        for member in members:
+            opts, _weight, changes = _member(member)
+            pair = (opts, member_learning_set(base, changes))
+            if opts.kind == "mlp" and pair not in out:
+                out.append(pair)
+    return out
 
 
 def shipped_members(*, members=LEARNED_ENSEMBLE) -> list[LearnedEstimator]:

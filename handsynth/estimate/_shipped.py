@@ -1,13 +1,14 @@
 """Learnt estimators shipped with handsynth: the default ensemble's perceptrons.
 
 The default ensemble's perceptrons (:data:`LEARNED_ENSEMBLE`) learn from two
-8,000-hand learning sets, each 9 min to render and 1.1 GB to keep, and took
-16-20 min each to learn on two cores.  A perceptron's file is 3 MB, so the
-three are learnt once and shipped in
-``handsynth/estimate/shipped/``, under the names
+16,000-hand learning sets, each 18-20 min to render and 2.3 GB to keep, and
+took 18-28 min each to learn on two cores.  A perceptron's file is 3 MB, so
+the three, and the seed-1 perceptron that the relaxed-rest learning set adds
+(:func:`~handsynth.estimate.shipped_perceptrons`), are learnt once and
+shipped in ``handsynth/estimate/shipped/``, under the names
 :func:`~handsynth.estimate.learned_estimator` gives their cache files.  A
-first run then renders only the default learning set for the per-digit
-estimator (whose 689 MB file cannot be shipped).
+first run then renders only the learning set of the per-digit estimator
+(whose 689 MB file cannot be shipped).
 
 ``manifest.json`` lists each shipped file with its SHA-256 and the options
 it was learnt with, and names a *fingerprint* of its learning set: the first

@@ -113,7 +113,7 @@ def test_protocol_puts_the_constant_beside_every_method_and_writes_json(tmp_path
     members = d["methods"]["ensemble"]["ensemble"]
     assert [(m["learnt"]["kind"], m["learnt"]["seed"], m["weight"], m["learning_set_changes"])
             for m in members] == [(o.kind, o.seed, w, dict(c)) for o, w, c in LEARNED_ENSEMBLE]
-    assert members[-1]["learning_set_changes"] == {"hands_factor": 2, "open_rest_share": 0.0}
+    assert members[-1]["learning_set_changes"] == {"hands_factor": 4, "open_rest_share": 0.0}
     assert d["methods"]["learning_set"]["hands"] == 8
     assert mrtk["constant"]["groups_mae_deg"]["finger_flexion"] == pytest.approx(
         head["mesh/natural/fingers"]["constant"], abs=0.006)

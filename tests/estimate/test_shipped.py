@@ -7,12 +7,14 @@ import pytest
 from handsynth.db import LearningSetOptions, render_learning_set
 from handsynth.estimate import (
     LEARNED_ENSEMBLE,
+    SHIPPED_LEARNING_SETS,
     LearnedEstimator,
     LearnedOptions,
     _learned,
     learned_estimator,
     member_learning_set,
     shipped_members,
+    shipped_perceptrons,
 )
 from handsynth.estimate._learned import learned_file_name, train_learned
 from handsynth.estimate._shipped import (
@@ -25,16 +27,29 @@ from handsynth.estimate._shipped import (
 )
 from handsynth.render import CameraMount
 
-PERCEPTRONS = [(opts, member_learning_set(LearningSetOptions(), changes))
-               for opts, _weight, changes in LEARNED_ENSEMBLE if opts.kind == "mlp"]
+DEFAULT_PERCEPTRONS = [(opts, member_learning_set(LearningSetOptions(), changes))
+                       for opts, _weight, changes in LEARNED_ENSEMBLE if opts.kind == "mlp"]
+PERCEPTRONS = shipped_perceptrons()
 
 
 def _same_arrays(a: LearnedEstimator, b: LearnedEstimator) -> bool:
     return a._a.keys() == b._a.keys() and all(np.array_equal(a._a[k], b._a[k]) for k in a._a)
 
 
+def test_shipped_perceptrons_are_the_members_of_each_shipped_learning_set():
+    relaxed = LearningSetOptions(open_rest_share=0.0)
+    assert (LearningSetOptions(), relaxed) == SHIPPED_LEARNING_SETS
+    of_relaxed = [(opts, member_learning_set(relaxed, changes))
+                  for opts, _weight, changes in LEARNED_ENSEMBLE if opts.kind == "mlp"]
+    # the default set's relaxed-rest member is also the relaxed set's seed-0 member: once
+    assert DEFAULT_PERCEPTRONS + [p for p in of_relaxed if p not in DEFAULT_PERCEPTRONS] == PERCEPTRONS
+    assert len(PERCEPTRONS) == len(set(PERCEPTRONS)) == 4
+    assert shipped_perceptrons(bases=()) == []
+    assert shipped_perceptrons(members=[(LearnedOptions(kind="fingers"), 1.0)]) == []
+
+
 @pytest.mark.parametrize(("opts", "data"), PERCEPTRONS)
-def test_every_perceptron_of_the_default_ensemble_is_shipped(opts, data):
+def test_every_perceptron_of_the_ensemble_is_shipped_for_each_learning_set(opts, data):
     name = learned_file_name(opts, data, CameraMount.paper(), "right")
     path = shipped_path(name)
     assert path is not None, f"{name} is not shipped: run scripts/ship_perceptrons.py"
@@ -82,12 +97,13 @@ def test_a_shipped_perceptron_is_read_instead_of_learnt(tmp_path, monkeypatch):
         raise AssertionError("rendered a learning set")
 
     monkeypatch.setattr(_learned, "learning_set", no_learning)
-    said = []
+    for opts, data in PERCEPTRONS:  # the relaxed-rest set's too (--learned-rest relaxed)
+        said = []
+        est = learned_estimator(tmp_path, opts, data=data, progress=said.append)
+        assert said == ["mlp: shipped with handsynth"]
+        name = learned_file_name(opts, data, CameraMount.paper(), "right")
+        assert _same_arrays(est, LearnedEstimator.load(SHIPPED_FOLDER / name))
     opts, data = PERCEPTRONS[0]
-    est = learned_estimator(tmp_path, opts, data=data, progress=said.append)
-    assert said == ["mlp: shipped with handsynth"]
-    name = learned_file_name(opts, data, CameraMount.paper(), "right")
-    assert _same_arrays(est, LearnedEstimator.load(SHIPPED_FOLDER / name))
     with pytest.raises(AssertionError, match="rendered a learning set"):
         learned_estimator(tmp_path, opts, data=data, shipped=False)
     with pytest.raises(AssertionError, match="rendered a learning set"):  # other options: not shipped
@@ -124,8 +140,8 @@ def test_ship_writes_what_shipped_path_then_trusts(tmp_path):
 
 def test_shipped_members_reads_the_default_perceptrons_and_leaves_out_the_rest():
     got = shipped_members()
-    assert [e.options for e in got] == [opts for opts, _data in PERCEPTRONS]
-    for est, (opts, data) in zip(got, PERCEPTRONS):
+    assert [e.options for e in got] == [opts for opts, _data in DEFAULT_PERCEPTRONS]
+    for est, (opts, data) in zip(got, DEFAULT_PERCEPTRONS):
         name = learned_file_name(opts, data, CameraMount.paper(), "right")
         assert _same_arrays(est, LearnedEstimator.load(SHIPPED_FOLDER / name))
     assert shipped_members(members=[(LearnedOptions(kind="fingers"), 1.0)]) == []
