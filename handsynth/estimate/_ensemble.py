@@ -204,15 +204,15 @@ def shipped_perceptrons(*, members=LEARNED_ENSEMBLE, bases=SHIPPED_LEARNING_SETS
 def shipped_members(*, members=LEARNED_ENSEMBLE) -> list[LearnedEstimator]:
     """The members of `members` shipped with handsynth, read from the package.
 
-    Those learnt from the default learning set (with each member's changes),
-    for the paper's mount and the right hand, whose shipped file is intact
-    (:mod:`._shipped`); the others are left out.  Reads nothing else and
-    learns nothing.
+    Its perceptrons learnt from the default learning set (with each member's
+    changes; :func:`shipped_perceptrons`), for the paper's mount and the
+    right hand, whose shipped file is intact (:mod:`._shipped`); the others
+    are left out.  Reads nothing else and learns nothing.
 
     Returns
     -------
     list of LearnedEstimator
-        In the order of `members`.
+        In the order of `members`, each once.
 
     Raises
     ------
@@ -221,9 +221,7 @@ def shipped_members(*, members=LEARNED_ENSEMBLE) -> list[LearnedEstimator]:
     """
     mount = CameraMount.paper()
     out = []
-    for member in members:
-        opts, _weight, changes = _member(member)
-        data = member_learning_set(LearningSetOptions(), changes)
+    for opts, data in shipped_perceptrons(members=members, bases=(LearningSetOptions(),)):
         path = shipped_path(learned_file_name(opts, data, mount, "right"))
         if path is not None:
             out.append(LearnedEstimator.load(path, options=opts))

@@ -135,16 +135,17 @@ def ship(sources: dict[str, tuple[Path, LearningSetOptions]], *, mount: CameraMo
     mount = mount or CameraMount.paper()
     folder.mkdir(parents=True, exist_ok=True)
     files: dict[str, dict] = {}
-    prints: dict[str, Any] = {}  # name -> fingerprint arrays
+    prints: set[str] = set()  # fingerprint files written
     for name, (src, data) in sources.items():
         content = Path(src).read_bytes()
         with atomic_open(folder / name, "wb", what="shipped estimator", error=DatabaseError) as f:
             f.write(content)
         fp = f"fingerprint_{data.digest()}.npz"
         if fp not in prints:
-            prints[fp] = fingerprint(data, mount, side)
+            prints.add(fp)
+            arrays: dict[str, Any] = fingerprint(data, mount, side)  # as savez's **kwds
             with atomic_open(folder / fp, "wb", what="fingerprint", error=DatabaseError) as f:
-                np.savez_compressed(f, **prints[fp])
+                np.savez_compressed(f, **arrays)
         files[name] = {"sha256": hashlib.sha256(content).hexdigest(), "bytes": len(content),
                        "learning_set": asdict(data), "fingerprint": fp}
     text = json.dumps({"format": 1, "mount": mount.as_dict(), "side": side, "files": files},
