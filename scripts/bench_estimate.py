@@ -4,7 +4,7 @@ Usage::
 
     python scripts/bench_estimate.py [--db FOLDER] [--entries 20448] [--frames 2000]
                                      [--calibrated]
-    python scripts/bench_estimate.py --learned FOLDER [--kind ensemble|fingers|mlp]
+    python scripts/bench_estimate.py --learned FOLDER [--kind ensemble|perceptrons|fingers|mlp]
                                      [--scene natural|paper|photo] [--frames 2000]
                                      [--hands 4000] [--poses-per-hand 100]
 
@@ -24,7 +24,9 @@ one thread.  The last line is machine-readable (paper-set frames):
 instead (README, "Camera estimator for unseen hands"; read from ``FOLDER`` or
 learnt there first: minutes), ``--kind ensemble`` (default:
 :data:`handsynth.estimate.LEARNED_ENSEMBLE`, the weighted mean of the
-per-digit estimator and three perceptrons), ``fingers`` or ``mlp``, on frames of
+per-digit estimator and three perceptrons), ``perceptrons``
+(:data:`handsynth.estimate.LEARNED_PERCEPTRONS`: those three alone),
+``fingers`` or ``mlp``, on frames of
 the glTF hands of :mod:`handsynth.testhands` (Godot XR Tools and MRTK, not
 the model it learnt from) in natural poses, painted as skin on a dark
 background (BGR uint8); ``--scene paper`` times paper-protocol poses instead,
@@ -94,7 +96,12 @@ def _bench_learned(args) -> None:
         os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
 
     from handsynth.db import LearningSetOptions
-    from handsynth.estimate import LEARNED_ENSEMBLE, learned_ensemble, learned_estimator
+    from handsynth.estimate import (
+        LEARNED_ENSEMBLE,
+        LEARNED_PERCEPTRONS,
+        learned_ensemble,
+        learned_estimator,
+    )
     from handsynth.eval import (
         background_photos,
         natural_test_poses,
@@ -110,11 +117,14 @@ def _bench_learned(args) -> None:
     share = {} if args.open_rest_share is None else {"open_rest_share": args.open_rest_share}
     data = LearningSetOptions(hands=args.hands, poses_per_hand=args.poses_per_hand, **share)
     t_ready = time.perf_counter()
-    if args.kind == "ensemble":
-        est = learned_ensemble(args.learned, data=data, mount=mount, progress=print)
+    ensembles = {"ensemble": LEARNED_ENSEMBLE, "perceptrons": LEARNED_PERCEPTRONS}
+    if args.kind in ensembles:
+        members = ensembles[args.kind]
+        est = learned_ensemble(args.learned, members=members, data=data, mount=mount,
+                               progress=print)
         names = [f"{m.options.kind} (seed {m.options.seed}, weight {w:.2f}"
                  + (f", {', '.join(f'{k} {v}' for k, v in member[2])})" if member[2] else ")")
-                 for m, w, member in zip(est.members, est.weights, LEARNED_ENSEMBLE)]
+                 for m, w, member in zip(est.members, est.weights, members)]
     else:
         est = learned_estimator(args.learned, LEARNED[args.kind], data=data, mount=mount,
                                 progress=print)
@@ -163,7 +173,7 @@ def _bench_learned(args) -> None:
         "binarize (Otsu) of the BGR frame": _median_ms(binarize, frames, n),
         "coverage grid (wrist cut, cell means)": _median_ms(lambda m: coverage(m, mount), masks, n),
     }
-    members_cal = cal.members if args.kind == "ensemble" else [cal]
+    members_cal = cal.members if args.kind in ensembles else [cal]
     grids = [members_cal[0].grid(m) for m in masks]
     for name, m in zip(names, members_cal):
         parts[f"{name}: estimate from the grid"] = _median_ms(m.estimate_grid, grids, n)
@@ -185,7 +195,8 @@ def main() -> None:
                     help="time a lookup calibrated with the hand's open-hand frame")
     ap.add_argument("--learned", type=Path, metavar="FOLDER",
                     help="time the learnt estimator (read from FOLDER or learnt there first)")
-    ap.add_argument("--kind", default="ensemble", choices=["ensemble", "fingers", "mlp"],
+    ap.add_argument("--kind", default="ensemble",
+                    choices=["ensemble", "perceptrons", "fingers", "mlp"],
                     help="--learned: which learnt estimator")
     ap.add_argument("--hands", type=int, default=4000, help="--learned: learning set hands")
     ap.add_argument("--poses-per-hand", type=int, default=100,

@@ -55,7 +55,7 @@ def _learned_demo(folder: Path, hands: int, frames: int) -> None:
     import time
 
     from ..db import LearningSetOptions
-    from ..estimate import LEARNED_ENSEMBLE, EnsembleEstimator, shipped_members
+    from ..estimate import LEARNED_PERCEPTRONS, EnsembleEstimator, shipped_members
     from ..eval import (
         ProtocolOptions,
         format_headline,
@@ -69,13 +69,12 @@ def _learned_demo(folder: Path, hands: int, frames: int) -> None:
     methods = protocol_methods(["fingers"], folder, data=LearningSetOptions(hands=hands))
     click.echo(f"learned estimator ({hands} hands x 100 frames) ready in "
                f"{time.perf_counter() - t:.1f} s in {folder}")
-    perceptrons = [m for m in LEARNED_ENSEMBLE if m[0].kind == "mlp"]
-    shipped_ones = shipped_members(members=perceptrons)
-    if shipped_ones and len(shipped_ones) == len(perceptrons):
-        shipped = EnsembleEstimator(shipped_ones)
-        methods["shipped"] = lambda rest, hand: shipped.calibrated(rest)
-        click.echo(f"also read: the default ensemble's {len(perceptrons)} perceptrons, shipped "
-                   "with handsynth (`shipped`: their mean)")
+    shipped_ones = shipped_members(members=LEARNED_PERCEPTRONS)
+    if shipped_ones and len(shipped_ones) == len(LEARNED_PERCEPTRONS):
+        shipped = EnsembleEstimator(shipped_ones, weights=[w for _o, w, _c in LEARNED_PERCEPTRONS])
+        methods["perceptrons"] = lambda rest, hand: shipped.calibrated(rest)
+        click.echo(f"also read: the default ensemble's {len(shipped_ones)} perceptrons, shipped "
+                   "with handsynth (`perceptrons`: their mean, `--learned-kind perceptrons`)")
     else:
         click.echo("the perceptrons shipped with handsynth are missing or damaged: skipped")
     result = run_protocol(methods, mesh_test_hands(["mrtk"]), ProtocolOptions(frames=frames))

@@ -146,7 +146,13 @@ def _open_learned(cache, kind, hands, rest, smoothing, side, err):
     import time
 
     from ..db import LearningSetOptions
-    from ..estimate import LearnedOptions, learned_ensemble, learned_estimator
+    from ..estimate import (
+        LEARNED_ENSEMBLE,
+        LEARNED_PERCEPTRONS,
+        LearnedOptions,
+        learned_ensemble,
+        learned_estimator,
+    )
     from ..live import default_database_dir
 
     if hands is not None and hands < 1:
@@ -165,10 +171,14 @@ def _open_learned(cache, kind, hands, rest, smoothing, side, err):
         if not line.startswith("epoch"):
             click.echo(line, err=err)
 
-    est = (learned_ensemble(folder, data=data, side=side, progress=say) if kind == "ensemble"
-           else learned_estimator(folder, LearnedOptions(kind="fingers"), data=data, side=side,
-                                  progress=say))
-    for m in (est.members if kind == "ensemble" else [est]):
+    if kind == "fingers":
+        est = learned_estimator(folder, LearnedOptions(kind="fingers"), data=data, side=side,
+                                progress=say)
+    else:
+        est = learned_ensemble(folder, data=data, side=side, progress=say,
+                               members=LEARNED_PERCEPTRONS if kind == "perceptrons"
+                               else LEARNED_ENSEMBLE)
+    for m in (est.members if kind != "fingers" else [est]):
         m.smoothing = smoothing or 0.0
     click.echo(f"learnt estimator ({kind}, {side} hand) ready in "
                f"{time.perf_counter() - t:.1f} s ({folder})", err=err)
@@ -238,12 +248,14 @@ def _progress(stream):
                    "calibrated to the user's hand at rest: --calibrate-image, else the first "
                    "frame showing a hand (--synthetic: the hand rendered open). Learnt once "
                    "into --learned-cache (minutes), then read.")
-@click.option("--learned-kind", type=click.Choice(["fingers", "ensemble"]), default="ensemble",
-              show_default=True,
+@click.option("--learned-kind", type=click.Choice(["ensemble", "perceptrons", "fingers"]),
+              default="ensemble", show_default=True,
               help="With --learned: the weighted mean of the per-digit estimator and three "
-                   "perceptrons, one of them learnt from hands resting relaxed (the more "
-                   "accurate; its perceptrons are shipped with handsynth, so both are "
-                   "learnt as fast), or the per-digit estimator alone.")
+                   "perceptrons, one of them learnt from hands resting relaxed (the most "
+                   "accurate on paper-protocol frames); those three perceptrons alone "
+                   "(shipped with handsynth: ready in seconds on a first run, where the "
+                   "per-digit estimator is learnt in about 5 min, and about twice as fast "
+                   "per frame); or the per-digit estimator alone.")
 @click.option("--learned-cache", default=None, metavar="FOLDER",
               help="Folder of the learnt estimator and its learning set [default: "
                    "~/.cache/handsynth/learned].")

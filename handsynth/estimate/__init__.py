@@ -21,7 +21,8 @@
   :class:`EnsembleEstimator` averages several, :func:`learned_ensemble`
   makes the default one (:data:`LEARNED_ENSEMBLE`), whose perceptrons are
   shipped in ``shipped/`` (:func:`shipped_members`; for the default and
-  the relaxed-rest learning set, :func:`shipped_perceptrons`).
+  the relaxed-rest learning set, :func:`shipped_perceptrons`), so that
+  :data:`LEARNED_PERCEPTRONS`, those perceptrons alone, learns nothing.
 * Steady angles over time (beyond the paper): the One Euro filter
   (:class:`OneEuroFilter`, :class:`OneEuroOptions`, :func:`one_euro`) and
   :class:`SmoothedEstimator`, which wraps any estimator with it.
@@ -43,6 +44,7 @@ from ._calibration import (
 )
 from ._ensemble import (
     LEARNED_ENSEMBLE,
+    LEARNED_PERCEPTRONS,
     SHIPPED_LEARNING_SETS,
     EnsembleEstimator,
     learned_ensemble,
@@ -77,6 +79,7 @@ from ._smoothing import (
 
 __all__ = [
     "LEARNED_ENSEMBLE",
+    "LEARNED_PERCEPTRONS",
     "SHIPPED_LEARNING_SETS",
     "ApproximateIndex",
     "ApproximateOptions",

@@ -22,8 +22,8 @@ from ._learned import LearnedEstimator, LearnedOptions, learned_estimator, learn
 from ._lookup import PoseEstimate
 from ._shipped import shipped_path
 
-__all__ = ["LEARNED_ENSEMBLE", "SHIPPED_LEARNING_SETS", "EnsembleEstimator", "learned_ensemble",
-           "member_learning_set", "shipped_members", "shipped_perceptrons"]
+__all__ = ["LEARNED_ENSEMBLE", "LEARNED_PERCEPTRONS", "SHIPPED_LEARNING_SETS", "EnsembleEstimator",
+           "learned_ensemble", "member_learning_set", "shipped_members", "shipped_perceptrons"]
 
 #: The default learnt estimator's members: each member's options, its weight
 #: and what its learning set changes from the one given to
@@ -50,6 +50,18 @@ LEARNED_ENSEMBLE: tuple[tuple[LearnedOptions, float, tuple], ...] = (
     (LearnedOptions(kind="mlp", seed=1), 0.7 / 3, (("hands_factor", 4),)),
     (LearnedOptions(kind="mlp", seed=0), 0.7 / 3, (("hands_factor", 4), ("open_rest_share", 0.0))),
 )
+
+#: The perceptrons of :data:`LEARNED_ENSEMBLE` alone, at equal weights: what
+#: ``handsynth estimate --learned --learned-kind perceptrons`` reads.  For the
+#: default learning set, the paper's mount and the right hand they are shipped
+#: with handsynth, so :func:`learned_ensemble` with these members renders and
+#: learns nothing (ready in about a second on a first run, where the full
+#: ensemble's per-digit member takes about 5 min), and a frame costs about half
+#: as much.  Measured beside the full ensemble in the README ("The perceptrons
+#: alone").
+_PERCEPTRON_MEMBERS = [m for m in LEARNED_ENSEMBLE if m[0].kind == "mlp"]
+LEARNED_PERCEPTRONS: tuple[tuple[LearnedOptions, float, tuple], ...] = tuple(
+    (opts, 1.0 / len(_PERCEPTRON_MEMBERS), changes) for opts, _w, changes in _PERCEPTRON_MEMBERS)
 
 #: The learning sets, as given to :func:`learned_ensemble`, whose perceptron
 #: members (of :data:`LEARNED_ENSEMBLE`) are shipped with handsynth

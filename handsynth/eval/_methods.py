@@ -21,6 +21,7 @@ from ..db import BuildOptions, LearningSetOptions, build_databases
 from ..errors import InvalidInputError
 from ..estimate import (
     LEARNED_ENSEMBLE,
+    LEARNED_PERCEPTRONS,
     LearnedOptions,
     PoseLookup,
     learned_ensemble,
@@ -46,9 +47,13 @@ LEARNED_METHODS: dict[str, LearnedOptions] = {
 #: Every name :func:`protocol_methods` knows: the paper's lookups, the
 #: calibrated lookup, the learnt estimators and ``ensemble``
 #: (:data:`~handsynth.estimate.LEARNED_ENSEMBLE`: the weighted mean of ``fingers`` and three
-#: perceptrons, one of them learnt from relaxed rests).
+#: perceptrons, one of them learnt from relaxed rests) and ``perceptrons``
+#: (:data:`~handsynth.estimate.LEARNED_PERCEPTRONS`: those perceptrons alone).
 PROTOCOL_METHODS: tuple[str, ...] = ("standard", "selected", "calibrated", *LEARNED_METHODS,
-                                     "ensemble")
+                                     "ensemble", "perceptrons")
+
+#: The ensembles of :data:`PROTOCOL_METHODS` and their members.
+_ENSEMBLES = {"ensemble": LEARNED_ENSEMBLE, "perceptrons": LEARNED_PERCEPTRONS}
 
 
 def protocol_methods(names, folder, *, data: LearningSetOptions | None = None,
@@ -64,7 +69,7 @@ def protocol_methods(names, folder, *, data: LearningSetOptions | None = None,
         hands without measurements are skipped), ``calibrated``
         (:meth:`PoseLookup.from_open_frame` on the hand's rest frame), the
         learnt estimators of :data:`LEARNED_METHODS` (calibrated to the rest
-        frame when they read one) and ``ensemble``.
+        frame when they read one), ``ensemble`` and ``perceptrons``.
     folder : str or os.PathLike
         Where databases (``folder/dbs``) and learnt estimators are built
         when missing and read when present.
@@ -122,10 +127,11 @@ def protocol_methods(names, folder, *, data: LearningSetOptions | None = None,
         if name in names:
             out[name] = ((lambda rest, hand, est=est: est.calibrated(rest))
                          if est.options.use_rest else (lambda rest, hand, est=est: est))
-    if "ensemble" in names:
-        ens = learned_ensemble(folder, data=data, mount=mount, progress=say,
-                               learnt=built.values())
-        out["ensemble"] = lambda rest, hand: ens.calibrated(rest)
+    for name, members in _ENSEMBLES.items():
+        if name in names:
+            ens = learned_ensemble(folder, members=members, data=data, mount=mount,
+                                   progress=say, learnt=built.values())
+            out[name] = lambda rest, hand, ens=ens: ens.calibrated(rest)
     return {n: out[n] for n in names}
 
 
@@ -168,10 +174,10 @@ def describe_methods(names, *, data: LearningSetOptions | None = None) -> dict:
             out[name] = {"lookup": lookups[name]}
         elif name in LEARNED_METHODS:
             out[name] = {"learnt": asdict(LEARNED_METHODS[name])}
-        elif name == "ensemble":
+        elif name in _ENSEMBLES:
             out[name] = {"ensemble": [{"learnt": asdict(o), "weight": w,
                                        "learning_set_changes": dict(changes)}
-                                      for o, w, changes in LEARNED_ENSEMBLE]}
+                                      for o, w, changes in _ENSEMBLES[name]]}
         else:
             raise InvalidInputError(f"methods must be names from {', '.join(PROTOCOL_METHODS)}, "
                                     f"got {name!r}")

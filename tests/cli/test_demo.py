@@ -25,7 +25,7 @@ def test_demo_writes_pictures_and_looks_up_frames(tmp_path):
         mae, const = (float(v) for v in re.findall(r"MAE +([\d.]+) \(constant +([\d.]+)", row)[0])
         assert const > 0 and mae > 0
         # the shipped perceptrons read the unseen glTF hand with skill
-        row = next(x for x in res.output.splitlines() if x.startswith(f"mesh/{pose_set}/shipped"))
+        row = next(x for x in res.output.splitlines() if x.startswith(f"mesh/{pose_set}/perceptrons"))
         mae, const = (float(v) for v in re.findall(r"MAE +([\d.]+) \(constant +([\d.]+)", row)[0])
         assert 0 < mae < 0.8 * const
     assert sorted(p.name.split("_")[0] for p in (tmp_path / "learned").iterdir()) == [

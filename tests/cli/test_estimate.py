@@ -478,6 +478,24 @@ def test_learned_estimator_from_relaxed_rests_is_learnt_beside_the_default(tmp_p
     assert len(list(tmp_path.glob("learning_*.npz"))) == 2
 
 
+def test_the_shipped_perceptrons_alone_run_on_a_first_run_without_learning_anything(tmp_path):
+    cache = tmp_path / "learned"
+    out = tmp_path / "rows.csv"
+    res = _run("--synthetic", "--learned", "--learned-kind", "perceptrons", "--learned-cache",
+               str(cache), "--frames", "24", "--synthetic-motion", "natural", "--out", str(out),
+               *SMALL)
+    assert res.exit_code == 0, res.output
+    assert "with the learnt estimator (perceptrons)" in res.output
+    assert res.output.count("mlp: shipped with handsynth") == 3
+    assert "learning set" not in res.output and not list(cache.glob("learning_*"))
+    _header, rows = _read_csv(out)
+    est = np.array([[float(r[n]) for n in JOINT_NAMES] for r in rows])
+    truth = np.array([[float(r["true_" + n]) for n in JOINT_NAMES] for r in rows])
+    assert est.shape == (24, 20) and np.isfinite(est).all()
+    # natural poses: far better than answering the open hand
+    assert np.abs(est - truth).mean() < 0.5 * np.abs(truth).mean()
+
+
 def test_learned_estimator_for_the_left_hand(tmp_path):
     res = _run("--synthetic", "--learned", "--side", "left", "--learned-cache", str(tmp_path),
                "--learned-hands", "6", "--learned-kind", "fingers", "--frames", "4", *SMALL)

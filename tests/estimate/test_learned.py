@@ -38,6 +38,25 @@ def test_fit_mlp_learns_a_smooth_function():
     assert np.mean((h - y) ** 2) < 0.02 * np.var(y)
 
 
+def test_fit_mlp_absolute_loss_answers_the_median_where_squared_answers_the_mean():
+    # one input, skewed answers: 70 % at 0, 30 % at 10 (mean 3, median 0)
+    rng = np.random.default_rng(1)
+    x = np.ones((4000, 1), np.float32)
+    y = np.where(rng.random((4000, 1)) < 0.3, 10.0, 0.0).astype(np.float32)
+    out = {}
+    for loss in ("squared", "absolute"):
+        w, b = fit_mlp(x, y, hidden=(8,), epochs=20, batch=100, learning_rate=1e-2, loss=loss)
+        out[loss] = float((np.maximum(x[:1] @ w[0] + b[0], 0) @ w[1] + b[1])[0, 0])
+    assert abs(out["squared"] - 3.0) < 0.5 and abs(out["absolute"]) < 0.5
+    with pytest.raises(InvalidInputError, match="loss must be 'squared' or 'absolute', got 'l1'"):
+        fit_mlp(x, y, loss="l1")
+
+
+def test_the_loss_names_a_new_cache_only_when_not_the_default():
+    assert LearnedOptions(kind="mlp").digest() == LearnedOptions(kind="mlp", loss="squared").digest()
+    assert LearnedOptions(kind="mlp").digest() != LearnedOptions(kind="mlp", loss="absolute").digest()
+
+
 @pytest.mark.parametrize(("kind", "target"), [("knn", "delta"), ("knn", "angles"), ("mlp", "delta"),
                                               ("mlp", "angles"), ("fingers", "angles")])
 def test_learned_estimators_implement_the_interface_and_need_the_rest_frame(data, kind, target):
@@ -171,6 +190,8 @@ def test_bad_options_are_refused_by_name():
         LearnedOptions(local="cubic")
     with pytest.raises(InvalidInputError, match="ridge"):
         LearnedOptions(ridge=-1.0)
+    with pytest.raises(InvalidInputError, match="loss must be 'squared' or 'absolute', got 'l2'"):
+        LearnedOptions(loss="l2")
 
 
 def test_a_grid_of_other_cells_is_refused_with_its_shape(data):

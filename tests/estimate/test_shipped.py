@@ -7,10 +7,12 @@ import pytest
 from handsynth.db import LearningSetOptions, render_learning_set
 from handsynth.estimate import (
     LEARNED_ENSEMBLE,
+    LEARNED_PERCEPTRONS,
     SHIPPED_LEARNING_SETS,
     LearnedEstimator,
     LearnedOptions,
     _learned,
+    learned_ensemble,
     learned_estimator,
     member_learning_set,
     shipped_members,
@@ -108,6 +110,20 @@ def test_a_shipped_perceptron_is_read_instead_of_learnt(tmp_path, monkeypatch):
         learned_estimator(tmp_path, opts, data=data, shipped=False)
     with pytest.raises(AssertionError, match="rendered a learning set"):  # other options: not shipped
         learned_estimator(tmp_path, replace(opts, seed=7), data=data)
+
+
+def test_the_perceptrons_alone_are_read_from_the_package_and_weigh_alike(tmp_path, monkeypatch):
+    def no_learning(*args, **kwargs):
+        raise AssertionError("rendered a learning set")
+
+    monkeypatch.setattr(_learned, "learning_set", no_learning)
+    assert [(o, c) for o, _w, c in LEARNED_PERCEPTRONS] == [
+        (o, c) for o, _w, c in LEARNED_ENSEMBLE if o.kind == "mlp"]
+    ens = learned_ensemble(tmp_path, members=LEARNED_PERCEPTRONS)
+    np.testing.assert_allclose(ens.weights, [1 / 3] * 3)
+    for est, shipped in zip(ens.members, shipped_members(members=LEARNED_PERCEPTRONS), strict=True):
+        assert _same_arrays(est, shipped)
+    assert not list(tmp_path.iterdir())  # nothing learnt, nothing written
 
 
 def test_ship_writes_what_shipped_path_then_trusts(tmp_path):

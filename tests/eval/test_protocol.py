@@ -138,5 +138,12 @@ def test_describe_methods_names_every_learnt_option_and_refuses_unknown_names():
     assert d["fingers"] == {"learnt": asdict(LearnedOptions(kind="fingers"))}
     assert d["learning_set"] == asdict(LearningSetOptions(hands=12))
     assert "learning_set" not in describe_methods(["calibrated"])
+    # the perceptrons alone: the ensemble's perceptron members at equal weights
+    from handsynth.estimate import LEARNED_ENSEMBLE
+
+    alone = describe_methods(["perceptrons"])["perceptrons"]["ensemble"]
+    assert [(m["learnt"], m["learning_set_changes"]) for m in alone] == [
+        (asdict(o), dict(c)) for o, _w, c in LEARNED_ENSEMBLE if o.kind == "mlp"]
+    assert [m["weight"] for m in alone] == pytest.approx([1 / 3] * 3)
     with pytest.raises(InvalidInputError, match="got 'tree'"):
         describe_methods(["fingers", "tree"])
