@@ -254,8 +254,8 @@ def _progress(stream):
                    "perceptrons, one of them learnt from hands resting relaxed (the most "
                    "accurate on paper-protocol frames); those three perceptrons alone "
                    "(shipped with handsynth: ready in seconds on a first run, where the "
-                   "per-digit estimator is learnt in about 5 min, and about twice as fast "
-                   "per frame); or the per-digit estimator alone.")
+                   "per-digit estimator is learnt in about 5 min, and about three times as "
+                   "fast per frame); or the per-digit estimator alone.")
 @click.option("--learned-cache", default=None, metavar="FOLDER",
               help="Folder of the learnt estimator and its learning set [default: "
                    "~/.cache/handsynth/learned].")

@@ -56,9 +56,9 @@ LEARNED_ENSEMBLE: tuple[tuple[LearnedOptions, float, tuple], ...] = (
 #: default learning set, the paper's mount and the right hand they are shipped
 #: with handsynth, so :func:`learned_ensemble` with these members renders and
 #: learns nothing (ready in about a second on a first run, where the full
-#: ensemble's per-digit member takes about 5 min), and a frame costs about half
-#: as much.  Measured beside the full ensemble in the README ("The perceptrons
-#: alone").
+#: ensemble's per-digit member takes about 5 min), and a frame costs about a
+#: third as much.  Measured beside the full ensemble in the README ("The
+#: perceptrons alone").
 _PERCEPTRON_MEMBERS = [m for m in LEARNED_ENSEMBLE if m[0].kind == "mlp"]
 LEARNED_PERCEPTRONS: tuple[tuple[LearnedOptions, float, tuple], ...] = tuple(
     (opts, 1.0 / len(_PERCEPTRON_MEMBERS), changes) for opts, _w, changes in _PERCEPTRON_MEMBERS)
