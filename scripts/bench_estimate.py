@@ -96,12 +96,7 @@ def _bench_learned(args) -> None:
         os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
 
     from handsynth.db import LearningSetOptions
-    from handsynth.estimate import (
-        LEARNED_ENSEMBLE,
-        LEARNED_PERCEPTRONS,
-        learned_ensemble,
-        learned_estimator,
-    )
+    from handsynth.estimate import LEARNED_ENSEMBLES, learned_ensemble, learned_estimator
     from handsynth.eval import (
         background_photos,
         natural_test_poses,
@@ -117,9 +112,8 @@ def _bench_learned(args) -> None:
     share = {} if args.open_rest_share is None else {"open_rest_share": args.open_rest_share}
     data = LearningSetOptions(hands=args.hands, poses_per_hand=args.poses_per_hand, **share)
     t_ready = time.perf_counter()
-    ensembles = {"ensemble": LEARNED_ENSEMBLE, "perceptrons": LEARNED_PERCEPTRONS}
-    if args.kind in ensembles:
-        members = ensembles[args.kind]
+    if args.kind in LEARNED_ENSEMBLES:
+        members = LEARNED_ENSEMBLES[args.kind]
         est = learned_ensemble(args.learned, members=members, data=data, mount=mount,
                                progress=print)
         names = [f"{m.options.kind} (seed {m.options.seed}, weight {w:.2f}"
@@ -173,7 +167,7 @@ def _bench_learned(args) -> None:
         "binarize (Otsu) of the BGR frame": _median_ms(binarize, frames, n),
         "coverage grid (wrist cut, cell means)": _median_ms(lambda m: coverage(m, mount), masks, n),
     }
-    members_cal = cal.members if args.kind in ensembles else [cal]
+    members_cal = cal.members if args.kind in LEARNED_ENSEMBLES else [cal]
     grids = [members_cal[0].grid(m) for m in masks]
     for name, m in zip(names, members_cal):
         parts[f"{name}: estimate from the grid"] = _median_ms(m.estimate_grid, grids, n)

@@ -146,13 +146,7 @@ def _open_learned(cache, kind, hands, rest, smoothing, side, err):
     import time
 
     from ..db import LearningSetOptions
-    from ..estimate import (
-        LEARNED_ENSEMBLE,
-        LEARNED_PERCEPTRONS,
-        LearnedOptions,
-        learned_ensemble,
-        learned_estimator,
-    )
+    from ..estimate import LEARNED_ENSEMBLES, LearnedOptions, learned_ensemble, learned_estimator
     from ..live import default_database_dir
 
     if hands is not None and hands < 1:
@@ -175,9 +169,8 @@ def _open_learned(cache, kind, hands, rest, smoothing, side, err):
         est = learned_estimator(folder, LearnedOptions(kind="fingers"), data=data, side=side,
                                 progress=say)
     else:
-        est = learned_ensemble(folder, data=data, side=side, progress=say,
-                               members=LEARNED_PERCEPTRONS if kind == "perceptrons"
-                               else LEARNED_ENSEMBLE)
+        est = learned_ensemble(folder, members=LEARNED_ENSEMBLES[kind], data=data, side=side,
+                               progress=say)
     for m in (est.members if kind != "fingers" else [est]):
         m.smoothing = smoothing or 0.0
     click.echo(f"learnt estimator ({kind}, {side} hand) ready in "

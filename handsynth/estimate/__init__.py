@@ -44,6 +44,7 @@ from ._calibration import (
 )
 from ._ensemble import (
     LEARNED_ENSEMBLE,
+    LEARNED_ENSEMBLES,
     LEARNED_PERCEPTRONS,
     SHIPPED_LEARNING_SETS,
     EnsembleEstimator,
@@ -79,6 +80,7 @@ from ._smoothing import (
 
 __all__ = [
     "LEARNED_ENSEMBLE",
+    "LEARNED_ENSEMBLES",
     "LEARNED_PERCEPTRONS",
     "SHIPPED_LEARNING_SETS",
     "ApproximateIndex",

@@ -12,6 +12,7 @@ the default one (:data:`LEARNED_ENSEMBLE`).
 from __future__ import annotations
 
 from dataclasses import fields, replace
+from types import MappingProxyType
 
 import numpy as np
 
@@ -22,8 +23,9 @@ from ._learned import LearnedEstimator, LearnedOptions, learned_estimator, learn
 from ._lookup import PoseEstimate
 from ._shipped import shipped_path
 
-__all__ = ["LEARNED_ENSEMBLE", "LEARNED_PERCEPTRONS", "SHIPPED_LEARNING_SETS", "EnsembleEstimator",
-           "learned_ensemble", "member_learning_set", "shipped_members", "shipped_perceptrons"]
+__all__ = ["LEARNED_ENSEMBLE", "LEARNED_ENSEMBLES", "LEARNED_PERCEPTRONS", "SHIPPED_LEARNING_SETS",
+           "EnsembleEstimator", "learned_ensemble", "member_learning_set", "shipped_members",
+           "shipped_perceptrons"]
 
 #: The default learnt estimator's members: each member's options, its weight
 #: and what its learning set changes from the one given to
@@ -62,6 +64,11 @@ LEARNED_ENSEMBLE: tuple[tuple[LearnedOptions, float, tuple], ...] = (
 _PERCEPTRON_MEMBERS = [m for m in LEARNED_ENSEMBLE if m[0].kind == "mlp"]
 LEARNED_PERCEPTRONS: tuple[tuple[LearnedOptions, float, tuple], ...] = tuple(
     (opts, 1.0 / len(_PERCEPTRON_MEMBERS), changes) for opts, _w, changes in _PERCEPTRON_MEMBERS)
+
+#: The ensembles by the name the CLI, the protocol and the benchmark give them
+#: (``--learned-kind``, ``--conditions``, ``--kind``): their members.
+LEARNED_ENSEMBLES = MappingProxyType({"ensemble": LEARNED_ENSEMBLE,
+                                      "perceptrons": LEARNED_PERCEPTRONS})
 
 #: The learning sets, as given to :func:`learned_ensemble`, whose perceptron
 #: members (of :data:`LEARNED_ENSEMBLE`) are shipped with handsynth

@@ -20,8 +20,7 @@ import numpy as np
 from ..db import BuildOptions, LearningSetOptions, build_databases
 from ..errors import InvalidInputError
 from ..estimate import (
-    LEARNED_ENSEMBLE,
-    LEARNED_PERCEPTRONS,
+    LEARNED_ENSEMBLES,
     LearnedOptions,
     PoseLookup,
     learned_ensemble,
@@ -50,10 +49,7 @@ LEARNED_METHODS: dict[str, LearnedOptions] = {
 #: perceptrons, one of them learnt from relaxed rests) and ``perceptrons``
 #: (:data:`~handsynth.estimate.LEARNED_PERCEPTRONS`: those perceptrons alone).
 PROTOCOL_METHODS: tuple[str, ...] = ("standard", "selected", "calibrated", *LEARNED_METHODS,
-                                     "ensemble", "perceptrons")
-
-#: The ensembles of :data:`PROTOCOL_METHODS` and their members.
-_ENSEMBLES = {"ensemble": LEARNED_ENSEMBLE, "perceptrons": LEARNED_PERCEPTRONS}
+                                     *LEARNED_ENSEMBLES)
 
 
 def protocol_methods(names, folder, *, data: LearningSetOptions | None = None,
@@ -127,7 +123,7 @@ def protocol_methods(names, folder, *, data: LearningSetOptions | None = None,
         if name in names:
             out[name] = ((lambda rest, hand, est=est: est.calibrated(rest))
                          if est.options.use_rest else (lambda rest, hand, est=est: est))
-    for name, members in _ENSEMBLES.items():
+    for name, members in LEARNED_ENSEMBLES.items():
         if name in names:
             ens = learned_ensemble(folder, members=members, data=data, mount=mount,
                                    progress=say, learnt=built.values())
@@ -174,10 +170,10 @@ def describe_methods(names, *, data: LearningSetOptions | None = None) -> dict:
             out[name] = {"lookup": lookups[name]}
         elif name in LEARNED_METHODS:
             out[name] = {"learnt": asdict(LEARNED_METHODS[name])}
-        elif name in _ENSEMBLES:
+        elif name in LEARNED_ENSEMBLES:
             out[name] = {"ensemble": [{"learnt": asdict(o), "weight": w,
                                        "learning_set_changes": dict(changes)}
-                                      for o, w, changes in _ENSEMBLES[name]]}
+                                      for o, w, changes in LEARNED_ENSEMBLES[name]]}
         else:
             raise InvalidInputError(f"methods must be names from {', '.join(PROTOCOL_METHODS)}, "
                                     f"got {name!r}")
