@@ -55,6 +55,10 @@ PROTOCOL_DEFAULT = "standard,calibrated,fingers,fingers_mean,mlp,ensemble"
               show_default=True,
               help="--protocol: the test hands' rest postures: relaxed (flexion growing toward "
                    "the little finger) or open (every finger joint flexed 3-5 deg).")
+@click.option("--slip", type=float, default=0.0, show_default=True, metavar="K",
+              help="--protocol: after the rest frame the device moves on the wrist by a normal "
+                   "draw of K times the learning set's mount s.d.s (height 10 mm, shifts 6 and "
+                   "8 mm, tilt and roll 4 deg), as a strap slips after calibration.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), default=None,
               help="Folder for the plots (eval_*.png); none written if not given.")
 @click.option("--prefix", default=None,
@@ -97,7 +101,7 @@ PROTOCOL_DEFAULT = "standard,calibrated,fingers,fingers_mean,mlp,ensemble"
               help="Scale of the photos that measure model hands for the personal condition.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress lines.")
 @click.pass_context
-def eval_(ctx, db_folder, protocol, mesh, learned_hands, hand_spread, rest, out_dir, prefix,
+def eval_(ctx, db_folder, protocol, mesh, learned_hands, hand_spread, rest, slip, out_dir, prefix,
           json_path, json_frames, n_hands, frames, pose_sets, hand, conditions, count,
           db_pose_set, seed, ratio_margin, mount, frame_size, render_size, workers, ties,
           photo_mm_per_px, quiet) -> None:
@@ -129,9 +133,9 @@ def eval_(ctx, db_folder, protocol, mesh, learned_hands, hand_spread, rest, out_
                                     "to the paper's experiment, not to --protocol")
         _protocol(db_folder, mesh, learned_hands, hand_spread, json_path, n_hands, frames,
                   _parse_list(pose_sets, "--pose-sets"),
-                  _parse_list(conditions or PROTOCOL_DEFAULT, "--conditions"), seed, rest, say)
+                  _parse_list(conditions or PROTOCOL_DEFAULT, "--conditions"), seed, rest, slip, say)
         return
-    for n in ("mesh", "learned_hands", "hand_spread", "rest"):
+    for n in ("mesh", "learned_hands", "hand_spread", "rest", "slip"):
         if ctx.get_parameter_source(n) == click.core.ParameterSource.COMMANDLINE:
             raise InvalidInputError(f"--{n.replace('_', '-')} applies with --protocol only")
     conditions = conditions or "standard,selected,selected_none,personal,calibrated,own_shape"
@@ -157,7 +161,7 @@ def eval_(ctx, db_folder, protocol, mesh, learned_hands, hand_spread, rest, out_
 
 
 def _protocol(folder, mesh, learned_hands, hand_spread, json_path, n_hands, frames, pose_sets,
-              methods, seed, rest, say) -> None:
+              methods, seed, rest, slip, say) -> None:
     import json
     import time
 
@@ -182,7 +186,7 @@ def _protocol(folder, mesh, learned_hands, hand_spread, json_path, n_hands, fram
         raise InvalidInputError(f"--learned-hands must be a positive integer, got {learned_hands}")
     if not hand_spread > 0:
         raise InvalidInputError(f"--hand-spread must be a positive number, got {hand_spread}")
-    options = ProtocolOptions(frames=frames, pose_sets=pose_sets, seed=seed, rest=rest)
+    options = ProtocolOptions(frames=frames, pose_sets=pose_sets, seed=seed, rest=rest, slip=slip)
     mount = CameraMount.paper()
     meshes = [m.strip() for m in mesh.split(",") if m.strip()]
     hands = model_test_hands(n_hands, seed=seed + 1, mount=mount, spread=hand_spread)

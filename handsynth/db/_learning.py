@@ -84,6 +84,17 @@ class LearningSetOptions:
     cells : (int, int)
         Coverage grid.
     seed : int
+    rest_slip : float
+        How far the device moves on the wrist between a hand's rest frame
+        and its other frames, as a multiple of ``mount_variation``'s s.d.s
+        (one normal draw per hand; 0: never, the frames and the rest frame
+        are seen from one place).  A user's strap slips after calibration:
+        perceptrons learnt with slips read slipped frames far better and
+        unmoved natural frames 0.9-2.8 deg worse (README, "The device
+        slipping after calibration"), so the default learns none.
+    rest_slip_share : float
+        Share of hands whose device slips when `rest_slip` is not 0 (the
+        others' frames are seen from where their rest frame was).
     open_rest_share : float
         Share of hands whose rest posture is near open
         (:func:`random_rest_posture` with ``near_open``); the others rest
@@ -111,6 +122,8 @@ class LearningSetOptions:
     cells: tuple[int, int] = DEFAULT_CELLS
     seed: int = 0
     open_rest_share: float = 0.75
+    rest_slip: float = 0.0
+    rest_slip_share: float = 1.0
 
     def __post_init__(self) -> None:
         for name in ("hands", "poses_per_hand"):
@@ -134,6 +147,13 @@ class LearningSetOptions:
             if isinstance(sd, bool) or not isinstance(sd, (int, float)) or not 0 <= sd <= top:
                 raise InvalidInputError(f"LearningSetOptions.{name} must be in [0, {top}], "
                                         f"got {sd!r}")
+        slip = self.rest_slip
+        if isinstance(slip, bool) or not isinstance(slip, (int, float)) or not 0 <= slip <= 5:
+            raise InvalidInputError(f"LearningSetOptions.rest_slip must be in [0, 5], got {slip!r}")
+        share = self.rest_slip_share
+        if isinstance(share, bool) or not isinstance(share, (int, float)) or not 0 <= share <= 1:
+            raise InvalidInputError(f"LearningSetOptions.rest_slip_share must be in [0, 1], "
+                                    f"got {share!r}")
         share = self.open_rest_share
         if isinstance(share, bool) or not isinstance(share, (int, float)) or not 0 <= share <= 1:
             raise InvalidInputError(f"LearningSetOptions.open_rest_share must be in [0, 1], "
@@ -142,9 +162,11 @@ class LearningSetOptions:
     def digest(self) -> str:
         """A short digest of the options (names the cached file)."""
         d = asdict(self)
-        for name in ("open_rest_share", "segment_width_sd", "flesh_offset_sd_mm"):
+        for name in ("open_rest_share", "segment_width_sd", "flesh_offset_sd_mm", "rest_slip"):
             if not d[name]:
                 del d[name]  # the sets made before the option keep their names
+        if d["rest_slip_share"] == 1.0:
+            del d["rest_slip_share"]
         d["format"] = _FORMAT
         return hashlib.sha256(json.dumps(d, sort_keys=True).encode()).hexdigest()[:16]
 
@@ -321,7 +343,8 @@ def render_learning_set(options: LearningSetOptions | None = None, *,
         r.vary(HandVariation.random(rng, spread=opts.hand_spread,
                                     segment_width_sd=opts.segment_width_sd,
                                     flesh_offset_sd_mm=opts.flesh_offset_sd_mm))
-        r.set_mount(opts.mount_variation.sample(mount, rng))
+        worn = opts.mount_variation.sample(mount, rng)
+        r.set_mount(worn)
         edge = int(rng.integers(-opts.edge_px, opts.edge_px + 1))
         near_open = opts.open_rest_share > 0 and rng.uniform() < opts.open_rest_share
         rest = random_rest_posture(rng, near_open=bool(near_open))
@@ -333,6 +356,9 @@ def render_learning_set(options: LearningSetOptions | None = None, *,
 
         rest_grids[h] = grid(rest).ravel()
         rest_angles[h] = rest
+        # drawn only with a slip: the sets made before the option stay the same
+        if opts.rest_slip and (opts.rest_slip_share == 1.0 or rng.uniform() < opts.rest_slip_share):
+            r.set_mount(opts.mount_variation.scaled(opts.rest_slip).sample(worn, rng))
         for i, pose in enumerate(poses):
             grids[h * per + i] = grid(pose).ravel()
         angles[h * per:(h + 1) * per] = poses

@@ -16,7 +16,9 @@ hand.  This protocol changes what was not modelled:
   (:func:`mesh_test_hands`) -- those stand for users' hands: constants are
   chosen on model hands only.
 * **Calibration**: an estimator that calibrates gets one frame of the test
-  hand at its own rest posture, not at the database's zero.
+  hand at its own rest posture, not at the database's zero.  With
+  ``ProtocolOptions.slip`` the device then moves on the wrist before the
+  other frames, as a strap slips after calibration.
 * **Baseline**: every figure stands beside the constant estimator that
   always answers the open hand (all angles 0) on the same frames, and the
   skill ``1 - MAE / MAE_constant`` (0: no better than the constant; 1:
@@ -40,7 +42,7 @@ import numpy as np
 
 from ..errors import InvalidInputError
 from ..models import JOINT_NAMES, HandShape
-from ..render import CameraMount, HandVariation, VariedRasterizer
+from ..render import CameraMount, HandVariation, MountVariation, VariedRasterizer
 from ._testposes import REST_POSTURES, natural_test_poses, paper_protocol_poses
 
 __all__ = [
@@ -80,12 +82,20 @@ class ProtocolOptions:
         estimator's seeds: it is mixed with a constant of this module).
     rest : {"relaxed", "open"}
         The test hands' rest postures (:data:`REST_POSTURES`).
+    slip : float
+        After the rest frame the device moves on the wrist by one normal
+        draw per hand of `slip` times the s.d.s of
+        :class:`~handsynth.render.MountVariation` (height 10 mm, shifts 6
+        and 8 mm, tilt and roll 4 deg), seeded by `seed` and the hand's
+        name; 0 (default): every frame is seen from where the rest frame
+        was.
     """
 
     frames: int = 200
     pose_sets: tuple[str, ...] = ("paper", "natural")
     seed: int = 0
     rest: str = "relaxed"
+    slip: float = 0.0
 
     def __post_init__(self) -> None:
         if isinstance(self.frames, bool) or not isinstance(self.frames, (int, np.integer)) \
@@ -96,6 +106,9 @@ class ProtocolOptions:
         if bad or not self.pose_sets:
             raise InvalidInputError(f"ProtocolOptions.pose_sets must name 'paper' and/or "
                                     f"'natural', got {self.pose_sets!r}")
+        if isinstance(self.slip, bool) or not isinstance(self.slip, (int, float)) \
+                or not 0 <= self.slip <= 5:
+            raise InvalidInputError(f"ProtocolOptions.slip must be in [0, 5], got {self.slip!r}")
         if self.rest not in REST_POSTURES:
             raise InvalidInputError(f"ProtocolOptions.rest must be one of "
                                     f"{', '.join(REST_POSTURES)}, got {self.rest!r}")
@@ -110,8 +123,9 @@ class TestHand:
     name : str
     kind : {"model", "mesh"}
     make : callable
-        ``make()`` returns a :class:`~handsynth.render.MaskMaker` (with
-        ``mask(angles)``) of this hand through the device.
+        ``make(mount=None)`` returns a :class:`~handsynth.render.MaskMaker`
+        (with ``mask(angles)``) of this hand through `mount` (the hand's
+        own device when None).
     info : dict
         What the hand is (JSON-ready).
     measurements : HandMeasurements or None
@@ -125,6 +139,7 @@ class TestHand:
     make: Callable
     info: dict = field(default_factory=dict)
     measurements: object = None
+    mount: CameraMount = field(default_factory=CameraMount.paper)
 
 
 def model_test_hands(n: int, *, seed: int = 0, mount: CameraMount | None = None,
@@ -155,15 +170,15 @@ def model_test_hands(n: int, *, seed: int = 0, mount: CameraMount | None = None,
             surface_rng, spread=spread, segment_width_sd=segment_width_sd,
             flesh_offset_sd_mm=flesh_offset_sd_mm)
 
-        def make(shape=shape, var=var):
-            r = VariedRasterizer(shape, mount)
+        def make(at=None, shape=shape, var=var):
+            r = VariedRasterizer(shape, at or mount)
             r.vary(var)
             return r
 
         out.append(TestHand(f"model{i}", "model", make,
                             info={"shape": shape.as_dict(), "variation": {
                                 k: (list(v) if isinstance(v, tuple) else v)
-                                for k, v in var.__dict__.items()}}))
+                                for k, v in var.__dict__.items()}}, mount=mount))
     return out
 
 
@@ -176,10 +191,10 @@ def mesh_test_hands(names=None, *, mount: CameraMount | None = None) -> list[Tes
     for name in (names or sorted(TEST_HANDS)):
         path = shipped_hand_path(name)
 
-        def make(path=path):
-            return MeshHandRenderer(mount, path=path)
+        def make(at=None, path=path):
+            return MeshHandRenderer(at or mount, path=path)
 
-        out.append(TestHand(name, "mesh", make, info={"file": path.name}))
+        out.append(TestHand(name, "mesh", make, info={"file": path.name}, mount=mount))
     return out
 
 
@@ -277,23 +292,30 @@ def run_protocol(methods: dict, hands: list[TestHand], options: ProtocolOptions 
     out: dict = {"options": {"frames": opts.frames, "pose_sets": list(opts.pose_sets),
                              "seed": opts.seed, "rest": opts.rest, "moving_deg": MOVING_DEG},
                  "hands": {}}
+    if opts.slip:
+        out["options"]["slip"] = opts.slip
     for hand in hands:
         rng = np.random.default_rng(_seed(opts.seed, hand.name, "rest"))
         rest = REST_POSTURES[opts.rest](rng)
-        maker = hand.make()
+        makers = [hand.make()]
         try:
-            rest_frame = maker.mask(rest)
-            if hand.measurements is None and callable(getattr(maker, "measurements", None)):
-                hand.measurements = maker.measurements()
+            rest_frame = makers[0].mask(rest)
+            if hand.measurements is None and callable(getattr(makers[0], "measurements", None)):
+                hand.measurements = makers[0].measurements()
             made = {name: est for name, make in methods.items()
                     if (est := make(rest_frame, hand)) is not None}
             rec: dict = {"info": hand.info, "kind": hand.kind,
                          "rest_deg": [round(float(v), 3) for v in rest]}
+            if opts.slip:  # the strap slips after calibration
+                srng = np.random.default_rng(_seed(opts.seed, hand.name, "slip"))
+                slipped = MountVariation().scaled(opts.slip).sample(hand.mount, srng)
+                rec["slipped_mount"] = {k: round(float(v), 3) for k, v in slipped.as_dict().items()}
+                makers.append(hand.make(slipped))
             for ps in opts.pose_sets:
                 prng = np.random.default_rng(_seed(opts.seed, hand.name, ps))
                 gen = paper_protocol_poses if ps == "paper" else natural_test_poses
                 poses, _ = gen(rest, opts.frames, prng)
-                frames = maker.masks(poses)
+                frames = makers[-1].masks(poses)
                 rec[ps] = {}
                 for name, est in made.items():
                     t0 = time.perf_counter()
@@ -309,8 +331,9 @@ def run_protocol(methods: dict, hands: list[TestHand], options: ProtocolOptions 
                                  f"{stats['skill']['finger_flexion']}), all {mae['all']} "
                                  f"(skill {stats['skill']['all']})")
         finally:
-            close = getattr(maker, "close", None)
-            if close is not None:
-                close()
+            for maker in makers:
+                close = getattr(maker, "close", None)
+                if close is not None:
+                    close()
         out["hands"][hand.name] = rec
     return out

@@ -202,6 +202,10 @@ class MountVariation:
     tilt_deg: float = 4.0
     roll_deg: float = 4.0
 
+    def scaled(self, factor: float) -> MountVariation:
+        """These s.d.s times `factor`."""
+        return MountVariation(**{f.name: getattr(self, f.name) * factor for f in fields(self)})
+
     def sample(self, mount: CameraMount, rng: np.random.Generator) -> CameraMount:
         """`mount` with every field offset by a normal draw of its s.d."""
         return mount.replace(**{f.name: getattr(mount, f.name) + rng.normal(0.0, getattr(self, f.name))

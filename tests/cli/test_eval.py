@@ -87,11 +87,12 @@ def test_protocol_puts_the_constant_beside_every_method_and_writes_json(tmp_path
     res = _run("--protocol", "--db", str(tmp_path / "cache"), "--hands", "1", "--mesh", "mrtk",
                "--frames", "6", "--pose-sets", "natural", "--learned-hands", "8",
                "--conditions", "fingers,fingers_mean,ensemble", "--json", str(js), "-q",
-               "--rest", "open")
+               "--rest", "open", "--slip", "0.5")
     assert res.exit_code == 0, res.output
     d = json.loads(js.read_text())
     assert set(d["hands"]) == {"model0", "mrtk"}
-    assert d["options"]["rest"] == "open"
+    assert d["options"]["rest"] == "open" and d["options"]["slip"] == 0.5
+    assert all(set(h["slipped_mount"]) >= {"height_mm", "tilt_deg"} for h in d["hands"].values())
     for hand in d["hands"].values():  # every finger joint rests flexed a few degrees
         flex = np.array(hand["rest_deg"])[[4, 6, 7, 8, 10, 11, 12, 14, 15, 16, 18, 19]]
         assert flex.min() > -1 and flex.max() < 9
@@ -123,6 +124,8 @@ def test_protocol_puts_the_constant_beside_every_method_and_writes_json(tmp_path
     (["--protocol", "--count", "100"], "--count applies to the paper's experiment, not to --protocol"),
     (["--mesh", "mrtk"], "--mesh applies with --protocol only"),
     (["--rest", "open"], "--rest applies with --protocol only"),
+    (["--slip", "0.5"], "--slip applies with --protocol only"),
+    (["--protocol", "--slip", "-1", "--hands", "1"], "ProtocolOptions.slip must be in [0, 5], got -1.0"),
     (["--protocol", "--conditions", "fingers,tree"], "methods must be distinct names from"),
     (["--protocol", "--hands", "0", "--mesh", ""], "no test hands"),
 ])

@@ -97,3 +97,24 @@ def test_segment_widths_vary_the_learning_hands_and_name_their_own_set():
     assert LearningSetOptions(flesh_offset_sd_mm=0).digest() == LearningSetOptions().digest()
     assert LearningSetOptions(flesh_offset_sd_mm=1.5).digest() not in (
         LearningSetOptions().digest(), LearningSetOptions(segment_width_sd=0.1).digest())
+
+
+def test_a_rest_slip_moves_the_device_between_a_hand_s_rest_frame_and_its_other_frames():
+    opts = dict(hands=2, poses_per_hand=3, seed=4)
+    still = render_learning_set(LearningSetOptions(**opts))
+    slipped = render_learning_set(LearningSetOptions(**opts, rest_slip=1.0))
+    # the first hand is drawn alike up to its rest frame and poses; its frames are seen elsewhere
+    assert np.array_equal(slipped.rest_grids[0], still.rest_grids[0])
+    assert np.array_equal(slipped.angles[:3], still.angles[:3])
+    assert not np.array_equal(slipped.grids[:3], still.grids[:3])
+    none = render_learning_set(LearningSetOptions(**opts, rest_slip=1.0, rest_slip_share=0.0))
+    assert np.array_equal(none.grids[:3], still.grids[:3])  # a share of hands does not slip
+    # sets made before the option keep their names
+    assert LearningSetOptions(rest_slip=0).digest() == LearningSetOptions().digest()
+    assert LearningSetOptions(rest_slip=0.5).digest() != LearningSetOptions().digest()
+    assert LearningSetOptions(rest_slip=0.5, rest_slip_share=0.5).digest() != \
+        LearningSetOptions(rest_slip=0.5).digest()
+    with pytest.raises(InvalidInputError, match="rest_slip"):
+        LearningSetOptions(rest_slip=-1)
+    with pytest.raises(InvalidInputError, match="rest_slip_share"):
+        LearningSetOptions(rest_slip=1, rest_slip_share=2)

@@ -103,6 +103,40 @@ def test_run_protocol_scores_methods_beside_the_constant():
     json.dumps(out)
 
 
+def test_a_slip_sees_the_frames_from_elsewhere_than_the_rest_frame():
+    class Keep:  # keeps the frames it is asked to read
+        def __init__(self, rest):
+            self.rest, self.frames = rest, []
+
+        def estimate(self, frame):
+            self.frames.append(frame)
+
+            class E:
+                angles = np.zeros(20)
+            return E()
+
+    made = {}
+
+    def make(rest, hand):
+        made.setdefault("est", []).append(Keep(rest))
+        return made["est"][-1]
+
+    hands = model_test_hands(1, seed=4)
+    opts = dict(frames=3, pose_sets=("paper",))
+    still = run_protocol({"keep": make}, hands, ProtocolOptions(**opts))
+    slipped = run_protocol({"keep": make}, hands, ProtocolOptions(**opts, slip=1.0))
+    a, b = made["est"]
+    assert np.array_equal(a.rest, b.rest)  # calibrated where the device was
+    assert all(not np.array_equal(f, g) for f, g in zip(a.frames, b.frames))
+    assert "slipped_mount" not in still["hands"]["model0"] and "slip" not in still["options"]
+    moved = slipped["hands"]["model0"]["slipped_mount"]
+    assert slipped["options"]["slip"] == 1.0 and moved["height_mm"] != 120.0
+    again = run_protocol({"keep": make}, hands, ProtocolOptions(**opts, slip=1.0))
+    assert again["hands"]["model0"]["slipped_mount"] == moved  # seeded
+    with pytest.raises(InvalidInputError, match="slip"):
+        ProtocolOptions(slip=-0.5)
+
+
 def test_bad_options_are_refused():
     with pytest.raises(InvalidInputError, match="frames"):
         ProtocolOptions(frames=1)
