@@ -9,6 +9,7 @@ Usage::
     python scripts/study_camera.py --cache DIR bound
     python scripts/study_camera.py bound_mcp
     python scripts/study_camera.py --cache DIR [--rest open] [--ensemble] rests
+    python scripts/study_camera.py [--axis FIELD] moved
 
 ``backgrounds``
     Two held-out model hands (seed 3, 1.5 times the learning spread) and the
@@ -84,6 +85,21 @@ Usage::
     the default learnt ensemble (:func:`handsynth.estimate.learned_ensemble`,
     the CLI's default) instead of its per-digit member.  Last line:
     ``<hand>_pooled_skill=<value> ...``.
+
+``moved``
+    Whether :class:`handsynth.estimate.MoveCheck` tells a device that slipped
+    on the wrist after the rest frame from one that stayed.  Per hand a rest
+    frame (near open for even hands, relaxed for odd ones) and 120 frames
+    (60 paper-protocol, 60 natural, shuffled), every outline flickering as in
+    ``holds``; the frames seen from where the rest frame was and from a
+    place drawn at 0.25, 0.5 and 1 times the learning set's mount s.d.s
+    (``--axis``: that field of :class:`handsynth.render.MountVariation`
+    alone).  Per hand and slip the smallest and largest median change over
+    30-frame windows; per set of hands the share of windows over the limit.
+    Hands: four model hands of seed 13 (the limit's choice: three times
+    their largest unmoved window median), four of seed 21 and the two glTF
+    hands.  Last line: ``unmoved_flagged=<share> moved_0.5_flagged=<share>
+    moved_1_flagged=<share>`` (seed 21 and glTF hands).
 
 The learnt estimator is read from ``--cache`` (or learnt there first).
 """
@@ -420,6 +436,58 @@ def rests(cache, rest: str = "relaxed", *, ensemble: bool = False) -> None:
     print(" ".join(last))
 
 
+def moved(axis: str | None = None) -> None:
+    from dataclasses import fields
+
+    from handsynth.estimate import MoveCheck, MoveCheckOptions
+    from handsynth.eval import paper_protocol_poses
+    from handsynth.eval._testposes import REST_POSTURES
+    from handsynth.render import MountVariation, coverage
+
+    paper = CameraMount.paper()
+    flick = np.random.default_rng(7)
+    limit, slips = MoveCheckOptions().limit, (0.0, 0.25, 0.5, 1.0)
+
+    def grids(maker, poses):
+        return [np.rint(coverage(_flicker(m, flick), paper) * 255).astype(np.uint8)
+                for m in maker.masks(poses)]
+
+    sets = {"seed 13": (13, model_test_hands(4, seed=13, spread=1.5)),
+            "seed 21": (21, model_test_hands(4, seed=21, spread=1.5)),
+            "glTF": (1, mesh_test_hands())}
+    medians: dict = {}
+    for label, (seed, hands) in sets.items():
+        for i, hand in enumerate(hands):
+            rng = np.random.default_rng([seed, i, 1])
+            rest = REST_POSTURES["relaxed" if i % 2 else "open"](rng)
+            poses = np.vstack([paper_protocol_poses(rest, 60, rng)[0],
+                               natural_test_poses(rest, 60, rng)[0]])
+            poses = poses[rng.permutation(len(poses))]
+            rest_grid = grids(hand.make(), rest[None])[0]
+            for k in slips:
+                var = MountVariation().scaled(k)
+                if axis:
+                    var = MountVariation(**{f.name: getattr(var, f.name) * (f.name == axis)
+                                            for f in fields(var)})
+                at = var.sample(paper, np.random.default_rng([98, seed, i])) if k else paper
+                check = MoveCheck(rest_grid, paper)
+                ch = np.array([check.change(g) for g in grids(hand.make(at), poses)])
+                med = np.array([np.median(ch[j - 30:j]) for j in range(30, len(ch) + 1)])
+                medians.setdefault((label, k), []).append(med)
+                print(f"{label} {hand.name} slip {k}: window medians {med.min():.4f}-{med.max():.4f}",
+                      flush=True)
+    for label in sets:
+        print(f"{label}: " + " | ".join(
+            f"slip {k}: {np.mean(np.concatenate(medians[(label, k)]) > limit):.2f} flagged, largest "
+            f"{max(m.max() for m in medians[(label, k)]):.4f}" for k in slips))
+    held = {k: np.concatenate(medians[("seed 21", k)] + medians[("glTF", k)]) for k in slips}
+    print(f"limit {limit}; three times the seed-13 hands' largest unmoved median "
+          f"{3 * max(m.max() for m in medians[('seed 13', 0.0)]):.4f}")
+    print(f"unmoved_flagged={np.mean(held[0.0] > limit):.3f} "
+          f"moved_0.5_flagged={np.mean(held[0.5] > limit):.3f} "
+          f"moved_1_flagged={np.mean(held[1.0] > limit):.3f}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cache", default=None, help="folder of the learnt estimator")
@@ -427,10 +495,13 @@ def main() -> None:
                     help="rests: the test hands' rest postures")
     ap.add_argument("--ensemble", action="store_true",
                     help="rests: the default learnt ensemble instead of its per-digit member")
+    ap.add_argument("--axis", default=None,
+                    choices=["height_mm", "thumb_offset_mm", "along_mm", "tilt_deg", "roll_deg"],
+                    help="moved: slip along this field of MountVariation alone")
     ap.add_argument("study", choices=["backgrounds", "jitter", "holds", "observability", "bound",
-                                      "bound_mcp", "rests"])
+                                      "bound_mcp", "rests", "moved"])
     args = ap.parse_args()
-    if args.study not in ("observability", "bound_mcp") and args.cache is None:
+    if args.study not in ("observability", "bound_mcp", "moved") and args.cache is None:
         ap.error(f"{args.study} needs --cache DIR")
     if args.study == "backgrounds":
         backgrounds(args.cache)
@@ -444,6 +515,8 @@ def main() -> None:
         bound_mcp()
     elif args.study == "rests":
         rests(args.cache, args.rest, ensemble=args.ensemble)
+    elif args.study == "moved":
+        moved(args.axis)
     else:
         observability()
 

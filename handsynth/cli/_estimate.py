@@ -307,7 +307,7 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
 
     Prints the frame rate of the lookup alone and of the whole loop; with
     --out writes one row per frame (frame, timestamp_s, no_hand,
-    confidence, low_confidence, entry, the 20 joint angles in degrees,
+    confidence, low_confidence, moved, entry, the 20 joint angles in degrees,
     optionally the keypoints; synthetic runs add the true angles and report
     the mean absolute error).  With --calibrate the run starts with the
     hand open and flat; that frame is not a row.  Dropped or unreadable

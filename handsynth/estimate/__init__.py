@@ -23,6 +23,9 @@
   shipped in ``shipped/`` (:func:`shipped_members`; for the default and
   the relaxed-rest learning set, :func:`shipped_perceptrons`), so that
   :data:`LEARNED_PERCEPTRONS`, those perceptrons alone, learns nothing.
+* Whether the device has moved on the wrist since the rest frame (beyond
+  the paper): :class:`MoveCheck` (:class:`MoveCheckOptions`,
+  :class:`MoveCheckState`), which sets :attr:`PoseEstimate.moved`.
 * Steady angles over time (beyond the paper): the One Euro filter
   (:class:`OneEuroFilter`, :class:`OneEuroOptions`, :func:`one_euro`) and
   :class:`SmoothedEstimator`, which wraps any estimator with it.
@@ -68,6 +71,7 @@ from ._masked import (
     masked_search,
     masked_search_reference,
 )
+from ._moved import MoveCheck, MoveCheckOptions, MoveCheckState
 from ._search import SearchOptions, SearchResult, SearchTables, search, search_reference
 from ._selection import Selection, SelectionOptions, select_shape, shape_ratios
 from ._smoothing import (
@@ -91,6 +95,9 @@ __all__ = [
     "LearnedEstimator",
     "LearnedOptions",
     "MaskedMatch",
+    "MoveCheck",
+    "MoveCheckOptions",
+    "MoveCheckState",
     "OneEuroFilter",
     "OneEuroOptions",
     "OneEuroState",

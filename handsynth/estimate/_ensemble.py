@@ -116,6 +116,13 @@ class EnsembleEstimator:
         """A copy whose members are calibrated to `rest_frame` (those that calibrate)."""
         members = [m.calibrated(rest_frame) if callable(getattr(m, "calibrated", None)) else m
                    for m in self.members]
+        checked = set()  # learnt members reading one grid check it for a moved device once
+        for m in members:
+            if isinstance(m, LearnedEstimator):
+                key = (m.mount, m.side, m.cells)
+                if key in checked:
+                    m._move_check = None
+                checked.add(key)
         return EnsembleEstimator(members, weights=self.weights)
 
     def estimate(self, frame: np.ndarray) -> PoseEstimate:
@@ -126,7 +133,8 @@ class EnsembleEstimator:
         PoseEstimate
             ``angles``: the weighted mean of the members' (NaN when any finds
             no hand); ``keypoints`` the mean of those given (NaN if none);
-            ``confidence`` the weighted mean; ``entry`` -1.  Learnt members
+            ``confidence`` the weighted mean; ``entry`` -1; ``low_confidence``
+            and ``moved`` when any member's is.  Learnt members
             of the same mount, side and cells share one coverage grid of the
             frame (:meth:`LearnedEstimator.estimate_grid`).
         """
@@ -151,7 +159,8 @@ class EnsembleEstimator:
         return PoseEstimate(angles=angles, keypoints=keypoints,
                             confidence=float(self.weights @ [e.confidence for e in got]),
                             entry=-1, error=float(self.weights @ [e.error for e in got]),
-                            low_confidence=any(e.low_confidence for e in got), no_hand=False)
+                            low_confidence=any(e.low_confidence for e in got), no_hand=False,
+                            moved=any(e.moved for e in got))
 
 
 def _member(member) -> tuple:

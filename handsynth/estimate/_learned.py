@@ -70,6 +70,7 @@ from ..errors import DatabaseCorruptError, DatabaseError, DatabaseMismatchError,
 from ..models import JOINT_LIMITS_DEG
 from ..render import CameraMount, coverage
 from ._lookup import PoseEstimate
+from ._moved import MoveCheck
 from ._shipped import shipped_path
 
 __all__ = ["LearnedEstimator", "LearnedOptions", "fit_mlp", "learned_estimator", "local_linear",
@@ -532,6 +533,7 @@ class LearnedEstimator:
             if isinstance(v, np.ndarray):
                 v.setflags(write=False)
         self._rest: np.ndarray | None = None
+        self._move_check: MoveCheck | None = None
         self.smoothing = 0.0
         self._previous: np.ndarray | None = None
         self._index: dict = {}
@@ -565,6 +567,7 @@ class LearnedEstimator:
             raise InvalidInputError("rest_frame shows no hand")
         out = copy.copy(self)
         out._rest = g.ravel()
+        out._move_check = MoveCheck(g, self.mount, side=self.side)
         out._previous = None
         if "abs_mean" in self._a:
             z = _inputs(out._rest[None], None) - self._a["abs_mean"]
@@ -746,9 +749,10 @@ class LearnedEstimator:
         if self.smoothing > 0 and self._previous is not None:
             angles = self.smoothing * self._previous + (1 - self.smoothing) * angles
         self._previous = angles if self.smoothing > 0 else None
+        moved = self._move_check is not None and self._move_check.update(g)
         return PoseEstimate(angles=angles, keypoints=np.full((21, 3), np.nan, np.float32),
                             confidence=min(max(conf, 0.0), 1.0), entry=-1, error=error,
-                            low_confidence=low, no_hand=False)
+                            low_confidence=low, no_hand=False, moved=moved)
 
     # -- storage -------------------------------------------------------------------
     def save(self, path) -> None:

@@ -107,6 +107,11 @@ class PoseEstimate:
         from every learning frame than 99 % of new hands' frames are.
     no_hand : bool
         The frame shows no hand (empty silhouette after preprocessing).
+    moved : bool
+        For an estimator calibrated to a rest frame
+        (:class:`~handsynth.estimate.LearnedEstimator`), the device seems to
+        have moved on the wrist since that frame (:class:`~handsynth.estimate.MoveCheck`): take
+        the rest frame again.  False otherwise.
     """
 
     angles: np.ndarray
@@ -116,6 +121,7 @@ class PoseEstimate:
     error: float
     low_confidence: bool
     no_hand: bool
+    moved: bool = False
 
     def as_row(self) -> dict:
         """One flat row: ``entry, no_hand, confidence, low_confidence`` and the 20 angles."""

@@ -86,6 +86,10 @@ class LiveSummary:
         Frames the estimator refused (wrong dtype or shape, NaN...).
     no_hand, low_confidence : int
         Looked-up frames with no hand / with a fallback answer.
+    moved : int
+        Looked-up frames read after the device seemed to have moved on the
+        wrist since the estimator's rest frame (:attr:`PoseEstimate.moved`):
+        take the rest frame again.
     lookup_s : float
         Time spent in ``estimate`` alone for all frames but the first, seconds.
     wall_s : float
@@ -138,6 +142,7 @@ class LiveSummary:
     truth_frames: int = 0
     mae_deg: float | None = None
     mae_per_joint_deg: tuple[float, ...] | None = None
+    moved: int = 0
 
     @property
     def fps_lookup(self) -> float:
@@ -166,6 +171,9 @@ class LiveSummary:
              f" ms, lookup {self._per_frame_ms(self.lookup_s):.2f} ms, whole loop "
              f"{self._per_frame_ms(self.steady_wall_s):.2f} ms"),
         ]
+        if self.moved:
+            lines.append(f"device moved: {self.moved} frames were read after the device seemed to "
+                         "have moved on the wrist since the rest frame; take it again")
         j = self.mae_per_joint_deg
         if self.mae_deg is not None and j is not None:
             lines.append(
@@ -179,7 +187,7 @@ class LiveSummary:
 class _Tally:
     def __init__(self) -> None:
         self.reads = self.frames = self.dropped = self.invalid = 0
-        self.no_hand = self.low_confidence = self.truth_frames = 0
+        self.no_hand = self.low_confidence = self.truth_frames = self.moved = 0
         self.latencies = array("d")
         self.abs_err = np.zeros(len(JOINT_NAMES))
         self.first_done_s: float | None = None  # loop time when the first frame was done
@@ -202,7 +210,7 @@ class _Tally:
             lookup_s=float(lat.sum()), wall_s=wall_s, steady_wall_s=steady, read_s=self.read_s,
             first_lookup_ms=first_ms, lookup_ms_median=med, lookup_ms_p99=p99, stop_reason=stop_reason,
             message=message, truth_frames=self.truth_frames, mae_deg=mae,
-            mae_per_joint_deg=per_joint)
+            mae_per_joint_deg=per_joint, moved=self.moved)
 
 
 def _usable(frame: np.ndarray | None) -> TypeGuard[np.ndarray]:
@@ -375,6 +383,7 @@ def run_live(lookup, source: FrameSource, *, sink=None, video_out=None,
             tally.frames += 1
             tally.no_hand += bool(est.no_hand)
             tally.low_confidence += bool(est.low_confidence and not est.no_hand)
+            tally.moved += bool(getattr(est, "moved", False))
             truth = getattr(source, "truth_deg", None)
             if truth is not None and not est.no_hand:
                 tally.abs_err += np.abs(np.asarray(est.angles, np.float64) - truth)

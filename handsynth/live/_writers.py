@@ -28,7 +28,7 @@ __all__ = ["CsvRowWriter", "JsonlRowWriter", "live_columns", "open_row_writer"]
 
 #: Fixed leading columns of every row.
 BASE_COLUMNS: tuple[str, ...] = ("frame", "timestamp_s", "no_hand", "confidence",
-                                 "low_confidence", "entry")
+                                 "low_confidence", "moved", "entry")
 #: Keypoint columns, metres, hand frame.
 KEYPOINT_COLUMNS: tuple[str, ...] = tuple(f"{s}_{a}_m" for s in KEYPOINT_SITES for a in "xyz")
 #: True-angle columns (sources that know the truth), degrees.
@@ -59,7 +59,8 @@ def _make_row(index: int, timestamp_s: float, est, *, keypoints: bool,
               truth: np.ndarray | None) -> dict:
     row = {"frame": index, "timestamp_s": round(float(timestamp_s), 6),
            "no_hand": bool(est.no_hand), "confidence": round(float(est.confidence), 6),
-           "low_confidence": bool(est.low_confidence), "entry": int(est.entry)}
+           "low_confidence": bool(est.low_confidence),
+           "moved": bool(getattr(est, "moved", False)), "entry": int(est.entry)}
     row.update((n, _finite_or_none(v, 4)) for n, v in zip(JOINT_NAMES, est.angles, strict=True))
     if keypoints:
         kp = np.asarray(est.keypoints, dtype=np.float64).reshape(-1)

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from handsynth.errors import EstimationError, InvalidInputError
-from handsynth.estimate import PoseLookup
+from handsynth.estimate import PoseEstimate, PoseLookup
 from handsynth.live import (
     CsvRowWriter,
     FrameSource,
@@ -347,3 +347,24 @@ def test_first_hand_frame_skips_drops_garbage_and_empty_frames(lookup):
         first_hand_frame(_Frames([np.zeros((H, W), bool)] * 5), max_reads=3)
     with pytest.raises(InvalidInputError, match="max_reads"):
         first_hand_frame(_Frames([hand]), max_reads=0)
+
+
+def test_frames_read_after_the_device_moved_are_flagged_in_rows_and_counted(tmp_path):
+    class Moves:  # an estimator that finds the device moved from the third frame on
+        def __init__(self):
+            self.n = 0
+
+        def estimate(self, frame):
+            self.n += 1
+            return PoseEstimate(angles=np.zeros(20), keypoints=np.full((21, 3), np.nan),
+                                confidence=1.0, entry=-1, error=0.0, low_confidence=False,
+                                no_hand=False, moved=self.n >= 3)
+
+    path = tmp_path / "rows.csv"
+    frames = [np.ones((H, W), bool)] * 5
+    with open_row_writer(path) as w:
+        summary = run_live(Moves(), _Frames(frames), sink=w)
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert [r["moved"] for r in rows] == ["0", "0", "1", "1", "1"]
+    assert summary.moved == 3 and "device moved: 3 frames" in summary.format()
