@@ -54,6 +54,11 @@ import tempfile
 import time
 from pathlib import Path
 
+# one core: the process is pinned to one CPU, where a second BLAS thread would only wait on
+# the first (with the other core busy it tripled a frame's time); set before numpy loads
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
 import numpy as np
 
 
