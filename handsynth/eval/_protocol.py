@@ -284,7 +284,9 @@ def run_protocol(methods: dict, hands: list[TestHand], options: ProtocolOptions 
     -------
     dict
         ``{"options", "hands": {name: {"info", "rest_deg", "<pose set>":
-        {method: condition_stats + "seconds_per_frame"}}}}``.
+        {method: condition_stats + "seconds_per_frame" + "moved_frames"}}}}``;
+        ``moved_frames`` counts the frames whose estimate said the device had
+        moved since the rest frame (:attr:`PoseEstimate.moved`).
     """
     opts = options or ProtocolOptions()
     if not methods:
@@ -319,10 +321,11 @@ def run_protocol(methods: dict, hands: list[TestHand], options: ProtocolOptions 
                 rec[ps] = {}
                 for name, est in made.items():
                     t0 = time.perf_counter()
-                    got = np.stack([est.estimate(f).angles for f in frames])
+                    read = [est.estimate(f) for f in frames]
                     dt = (time.perf_counter() - t0) / len(frames)
-                    stats = condition_stats(got, poses, rest)
+                    stats = condition_stats(np.stack([e.angles for e in read]), poses, rest)
                     stats["seconds_per_frame"] = round(dt, 6)
+                    stats["moved_frames"] = sum(bool(getattr(e, "moved", False)) for e in read)
                     rec[ps][name] = stats
                     if progress is not None:
                         mae, const = (stats[k]["groups_mae_deg"] for k in ("method", "constant"))

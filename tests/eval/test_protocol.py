@@ -100,6 +100,7 @@ def test_run_protocol_scores_methods_beside_the_constant():
     rec = out["hands"]["model0"]
     assert list(rec["paper"]) == ["zero"]
     assert rec["paper"]["zero"]["skill"]["all"] == 0.0
+    assert rec["paper"]["zero"]["moved_frames"] == 0  # an estimate without `moved` never moved
     json.dumps(out)
 
 
@@ -113,6 +114,7 @@ def test_a_slip_sees_the_frames_from_elsewhere_than_the_rest_frame():
 
             class E:
                 angles = np.zeros(20)
+                moved = True  # the protocol counts what the estimates say
             return E()
 
     made = {}
@@ -129,6 +131,7 @@ def test_a_slip_sees_the_frames_from_elsewhere_than_the_rest_frame():
     assert np.array_equal(a.rest, b.rest)  # calibrated where the device was
     assert all(not np.array_equal(f, g) for f, g in zip(a.frames, b.frames))
     assert "slipped_mount" not in still["hands"]["model0"] and "slip" not in still["options"]
+    assert slipped["hands"]["model0"]["paper"]["keep"]["moved_frames"] == 3
     moved = slipped["hands"]["model0"]["slipped_mount"]
     assert slipped["options"]["slip"] == 1.0 and moved["height_mm"] != 120.0
     again = run_protocol({"keep": make}, hands, ProtocolOptions(**opts, slip=1.0))
