@@ -84,17 +84,6 @@ class LearningSetOptions:
     cells : (int, int)
         Coverage grid.
     seed : int
-    rest_slip : float
-        How far the device moves on the wrist between a hand's rest frame
-        and its other frames, as a multiple of ``mount_variation``'s s.d.s
-        (one normal draw per hand; 0: never, the frames and the rest frame
-        are seen from one place).  A user's strap slips after calibration:
-        perceptrons learnt with slips read slipped frames far better and
-        unmoved natural frames 0.9-2.8 deg worse (README, "The device
-        slipping after calibration"), so the default learns none.
-    rest_slip_share : float
-        Share of hands whose device slips when `rest_slip` is not 0 (the
-        others' frames are seen from where their rest frame was).
     open_rest_share : float
         Share of hands whose rest posture is near open
         (:func:`random_rest_posture` with ``near_open``); the others rest
@@ -109,6 +98,18 @@ class LearningSetOptions:
         MAE over relaxed and near-open test rests, natural frames within 0.2
         deg of the best.  Share 0 / 0.5 / 0.75: paper 6.69 / 5.02 / 4.97,
         natural 11.12 / 10.55 / 10.37 deg.
+    rest_slip : float
+        How far the device moves on the wrist between a hand's rest frame
+        and its other frames, as a multiple of ``mount_variation``'s s.d.s
+        (one normal draw per hand; 0: never, the frames and the rest frame
+        are seen from one place).  A user's strap slips after calibration:
+        perceptrons learnt with slips of 0.5 read slipped frames far better
+        and unmoved frames worse (0.9-2.8 deg on natural frames at 4,000
+        hands, 0.2-0.3 deg at 16,000), which kept them out of the default
+        ensemble (README, "The device slipping after calibration").
+    rest_slip_share : float
+        Share of hands whose device slips when `rest_slip` is not 0 (the
+        others' frames are seen from where their rest frame was).
     """
 
     hands: int = 4000

@@ -702,7 +702,9 @@ class LearnedEstimator:
             explains); ``low_confidence`` (``"fingers"``) when ``error``
             exceeds what 99 % of frames of hands the estimator did not learn
             from show (:func:`train_learned`), e.g. a cluttered background;
-            ``no_hand`` when the frame shows no hand.
+            ``no_hand`` when the frame shows no hand; ``moved`` when the
+            device seems to have moved on the wrist since the rest frame
+            (:class:`~handsynth.estimate.MoveCheck`, calibrated estimators).
         """
         return self.estimate_grid(self.grid(frame))
 
