@@ -198,8 +198,9 @@ def _build_options(count: int):
 
 def _progress(stream):
     def show(s) -> None:
+        moved = f", DEVICE MOVED ({s.moved} frames): take the rest frame again" if s.moved else ""
         stream.write(f"\r{s.frames} frames, dropped {s.dropped}, lookup {s.fps_lookup:.0f} fps, "
-                     f"loop {s.fps_loop:.0f} fps   ")
+                     f"loop {s.fps_loop:.0f} fps{moved}   ")
         stream.flush()
 
     return show

@@ -526,3 +526,22 @@ def test_learned_options_that_do_not_apply_are_refused_by_name(tmp_path, extra, 
     assert res.exit_code == 2, res.output
     assert message in res.output
     assert "Traceback" not in res.output
+
+
+def test_the_progress_line_says_when_the_device_has_moved():
+    import io
+
+    from handsynth.cli._estimate import _progress
+    from handsynth.live import LiveSummary
+
+    def summary(moved):
+        return LiveSummary(reads=40, frames=40, dropped=0, invalid=0, no_hand=0, low_confidence=0,
+                           lookup_s=0.1, wall_s=0.2, steady_wall_s=0.2, read_s=0.05,
+                           first_lookup_ms=3.0, lookup_ms_median=2.5, lookup_ms_p99=4.0,
+                           stop_reason="running", message="running", moved=moved)
+
+    out = io.StringIO()
+    _progress(out)(summary(0))
+    assert "MOVED" not in out.getvalue()
+    _progress(out)(summary(11))
+    assert "DEVICE MOVED (11 frames): take the rest frame again" in out.getvalue()
