@@ -71,3 +71,26 @@ def test_the_calibrated_perceptrons_report_a_slip_and_the_ensemble_passes_it_on(
     got = [moved.estimate(m).moved for m in h.make(slipped).masks(poses)]
     window = MoveCheckOptions().window
     assert got[:window - 1] == [False] * (window - 1) and all(got[window - 1:])
+
+
+def test_a_left_hand_is_checked_alike():
+    from handsynth.models import HandShape
+    from handsynth.render import HandVariation, VariedRasterizer
+
+    def maker(mount):
+        r = VariedRasterizer(HandShape(), mount, side="left")
+        r.vary(HandVariation.random(np.random.default_rng(1)))
+        return r
+
+    rng = np.random.default_rng(3)
+    rest = relaxed_rest_posture(rng)
+    poses = natural_test_poses(rest, 10, rng)[0]
+    check = MoveCheck(_left(maker(PAPER).mask(rest)), PAPER, side="left")
+    assert check.available
+    assert max(check.change(_left(m)) for m in maker(PAPER).masks(poses)) < check.options.limit
+    slipped = maker(PAPER.replace(thumb_offset_mm=30.0, tilt_deg=2.0)).masks(poses)
+    assert min(check.change(_left(m)) for m in slipped) > 3 * check.options.limit
+
+
+def _left(mask):
+    return np.rint(coverage(mask, PAPER, side="left") * 255).astype(np.uint8)
