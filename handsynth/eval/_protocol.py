@@ -123,9 +123,9 @@ class TestHand:
     name : str
     kind : {"model", "mesh"}
     make : callable
-        ``make(mount=None)`` returns a :class:`~handsynth.render.MaskMaker`
-        (with ``mask(angles)``) of this hand through `mount` (the hand's
-        own device when None).
+        ``make()`` returns a :class:`~handsynth.render.MaskMaker` (with
+        ``mask(angles)``) of this hand through its own device, ``make(at)``
+        through the :class:`~handsynth.render.CameraMount` `at`.
     info : dict
         What the hand is (JSON-ready).
     measurements : HandMeasurements or None
