@@ -21,7 +21,7 @@ one thread.  The last line is machine-readable (paper-set frames):
 ``estimate_fps_median=<number> latency_p99_ms=<number>``.
 
 ``--learned FOLDER`` times the estimator learnt from randomised model hands
-instead (README, "Camera estimator for unseen hands"; read from ``FOLDER`` or
+instead (docs/camera_estimator.md; read from ``FOLDER`` or
 learnt there first: minutes), ``--kind ensemble`` (default:
 :data:`handsynth.estimate.LEARNED_ENSEMBLE`, the weighted mean of the
 per-digit estimator and three perceptrons), ``perceptrons``

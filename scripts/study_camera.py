@@ -1,4 +1,4 @@
-"""Studies of the learnt camera estimator that the README quotes (beyond the protocol).
+"""Studies of the learnt camera estimator that docs/camera_estimator.md quotes (beyond the protocol).
 
 Usage::
 

@@ -1,7 +1,7 @@
 """Would a second calibration frame in a hook pose tell the per-digit estimator the index PIP?
 
 The per-digit estimator reads a flexed index PIP poorly on paper frames
-(README, "Where it fails"): the index cells say "flexed" but not how much,
+(docs/camera_estimator.md, "Where it fails"): the index cells say "flexed" but not how much,
 because how far the silhouette shortens depends on the hand's own phalanx
 lengths.  A frame of the hand in a hook pose (knuckles straight, fingers
 bent at the middle joints) shows where the proximal phalanx ends, so a user

@@ -238,7 +238,7 @@ def _progress(stream):
                    "instead of the first frame (implies --calibrate).")
 @click.option("--learned", is_flag=True,
               help="Use the estimator learnt from randomised model hands (beyond the paper; "
-                   "README 'Camera estimator for unseen hands') instead of a database lookup, "
+                   "docs/camera_estimator.md) instead of a database lookup, "
                    "calibrated to the user's hand at rest: --calibrate-image, else the first "
                    "frame showing a hand (--synthetic: the hand rendered open). Learnt once "
                    "into --learned-cache (minutes), then read.")
@@ -260,20 +260,22 @@ def _progress(stream):
               help="With --learned: the rest postures it learns from: three hands in four "
                    "held open [default], or relaxed only (an earlier release's learning set: "
                    "at relaxed rests the glTF test hands read better with it and the model "
-                   "test hands worse, near open both much worse, README; the ensemble's "
-                   "relaxed-rest perceptron is then its seed-0 perceptron again).")
+                   "test hands worse, near open both much worse, docs/camera_estimator.md; "
+                   "the ensemble's relaxed-rest perceptron is then its seed-0 perceptron "
+                   "again).")
 @click.option("--side", type=click.Choice(["right", "left"]), default=None,
               help="With --learned: the hand wearing the device [default: right] (the "
                    "lookups take it from the database).")
 @click.option("--smoothing", type=float, default=None, metavar="A",
               help="With --learned: report A * previous + (1 - A) * new angles (0 <= A < 1) "
                    "[default: 0, none]. At 30 fps, 0.3 cut the frame-to-frame jitter by a "
-                   "third at no cost in accuracy, 0.5 by half at up to 0.3 deg (README).")
+                   "third at no cost in accuracy, 0.5 by half at up to 0.3 deg "
+                   "(docs/camera_estimator.md).")
 @click.option("--one-euro", "one_euro", is_flag=True,
               help="With --learned: steady the angles with the One Euro filter instead (cut-off "
                    "0.5 Hz while still, rising with speed; at the source's frame rate, --fps "
                    "where it reports none); on held-out hands held poses jittered 7 times "
-                   "less for 0.02 deg more error (README).")
+                   "less for 0.02 deg more error (docs/camera_estimator.md).")
 @click.option("--frames", type=int, default=None, metavar="N",
               help=f"Stop after N frames [--synthetic default: {SYNTHETIC_FRAMES}].")
 @click.option("--seconds", type=float, default=None, metavar="S", help="Stop after S seconds.")

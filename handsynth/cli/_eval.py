@@ -39,8 +39,8 @@ PROTOCOL_DEFAULT = "standard,calibrated,fingers,fingers_mean,mlp,ensemble"
               help="Database folder; the databases needed are built there when missing "
                    "(--protocol: also the learnt estimators).")
 @click.option("--protocol", is_flag=True,
-              help="The evaluation that cannot flatter (README, 'Camera estimator for unseen "
-                   "hands'): relaxed rest postures from an independent generator, --hands model "
+              help="The evaluation that cannot flatter (docs/camera_estimator.md): relaxed "
+                   "rest postures from an independent generator, --hands model "
                    "hands beyond the four ratios and the glTF hands, the constant open-hand "
                    f"answer beside every figure. --conditions default: {PROTOCOL_DEFAULT}.")
 @click.option("--mesh", default="godot_xr_tools,mrtk", show_default=True,

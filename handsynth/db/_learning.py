@@ -106,7 +106,7 @@ class LearningSetOptions:
         perceptrons learnt with slips of 0.5 read slipped frames far better
         and unmoved frames worse (0.9-2.8 deg on natural frames at 4,000
         hands, 0.2-0.3 deg at 16,000), which kept them out of the default
-        ensemble (README, "The device slipping after calibration").
+        ensemble (docs/camera_estimator.md, "The device slipping after calibration").
     rest_slip_share : float
         Share of hands whose device slips when `rest_slip` is not 0 (the
         others' frames are seen from where their rest frame was).

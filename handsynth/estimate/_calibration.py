@@ -34,7 +34,7 @@ and cannot leave pixels out, and its ridge penalties are built for a
 silhouette that fits.  :func:`select_shape_from_frame` chooses the database
 from the same frame: the shape whose open hand overlaps ``U`` most.
 
-Figures are in the README ("Calibrated lookup") and ``docs/eval``.
+Figures are in docs/lookup.md ("Calibrated lookup") and ``docs/eval``.
 """
 
 from __future__ import annotations
@@ -111,7 +111,7 @@ class Calibration:
         temperature_px : float, keyword-only
             ``T`` of the weighted mean (module docstring, step 4), 0 to 8
             pixels.  The default 1 was chosen on the mesh hand's frames of
-            seeds 2-5, which the recorded evaluations do not use (README,
+            seeds 2-5, which the recorded evaluations do not use (docs/lookup.md,
             "Calibrated lookup").
 
         min_open_iou : float, keyword-only, optional

@@ -5,7 +5,7 @@ nearest neighbours of :class:`~handsynth.estimate.LearnedEstimator`
 (``kind="fingers"``) average what similar learning frames did, the
 perceptron (``kind="mlp"``) interpolates between them.  Their mean is more
 accurate than either on the model hands of the evaluation protocol
-(README, "Camera estimator for unseen hands"); :func:`learned_ensemble` makes
+(docs/camera_estimator.md); :func:`learned_ensemble` makes
 the default one (:data:`LEARNED_ENSEMBLE`).
 """
 
@@ -38,14 +38,14 @@ __all__ = ["LEARNED_ENSEMBLE", "LEARNED_ENSEMBLES", "LEARNED_PERCEPTRONS", "SHIP
 #: set rests three hands in four near open).  The default perceptrons are
 #: shipped with handsynth (:mod:`._shipped`), so a first run renders only the
 #: 4,000 hands the per-digit estimator needs.  Chosen on held-out model hands
-#: by rules fixed before the runs (README, "Perceptrons of 16,000 hands and
+#: by rules fixed before the runs (docs/camera_estimator.md, "Perceptrons of 16,000 hands and
 #: their weight", "A perceptron of relaxed learning rests" and "Ensemble
 #: members").
 #: A mean of perceptrons errs by no more than their mean error on any frame
 #: (the triangle inequality), and one
 #: perceptron's error on unseen hands depends on its start and its learning
 #: set: on the glTF hands' relaxed paper frames starts 0, 1 and 2 erred by 5.1,
-#: 7.3 and 6.8 deg (README, "The learning set's draw").
+#: 7.3 and 6.8 deg (docs/camera_estimator.md, "The learning set's draw").
 LEARNED_ENSEMBLE: tuple[tuple[LearnedOptions, float, tuple], ...] = (
     (LearnedOptions(kind="fingers"), 0.3, ()),
     (LearnedOptions(kind="mlp", seed=0), 0.7 / 3, (("hands_factor", 4),)),
@@ -59,7 +59,7 @@ LEARNED_ENSEMBLE: tuple[tuple[LearnedOptions, float, tuple], ...] = (
 #: with handsynth, so :func:`learned_ensemble` with these members renders and
 #: learns nothing (ready in about a second on a first run, where the full
 #: ensemble's per-digit member takes about 5 min), and a frame costs about a
-#: third as much.  Measured beside the full ensemble in the README ("The
+#: third as much.  Measured beside the full ensemble in docs/camera_estimator.md ("The
 #: perceptrons alone").
 _PERCEPTRON_MEMBERS = [m for m in LEARNED_ENSEMBLE if m[0].kind == "mlp"]
 LEARNED_PERCEPTRONS: tuple[tuple[LearnedOptions, float, tuple], ...] = tuple(

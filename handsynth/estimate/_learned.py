@@ -40,7 +40,7 @@ Three regressors share that input (:class:`LearnedOptions` ``kind``):
     common scale), trained with Adam on the squared error of standardised
     angles (numpy only; :func:`fit_mlp`).
 
-Chosen on model hands of random geometry (README, "Camera estimator for
+Chosen on model hands of random geometry (docs/camera_estimator.md, "Camera estimator for
 unseen hands"): ``"fingers"`` with ``k = 128`` and the local linear fit on a
 400,000-frame learning set (4,000 hands), alone or averaged with ``"mlp"``
 (:class:`~handsynth.estimate.EnsembleEstimator`).
@@ -110,7 +110,7 @@ class LearnedOptions:
         What the perceptron's training minimises over standardised angles:
         the squared error (its answer tends to the mean angle of frames that
         look alike) or the absolute error (their median).  Measured on
-        held-out model hands with perceptrons of 4,000 hands (README, "The
+        held-out model hands with perceptrons of 4,000 hands (docs/camera_estimator.md, "The
         perceptron's loss"): the absolute error reads moving joints as
         nearer their rest and natural poses worse, so ``"squared"`` stays.
     weight_decay : float
@@ -124,7 +124,7 @@ class LearnedOptions:
         linear fit needs more neighbours than code dimensions; with fewer it
         falls back to the mean.  On model hands of random geometry it lowered
         the natural-pose flexion MAE from 11.3 to 10.5 deg and the paper-frame
-        MAE from 5.6 to 5.5 deg (README, "Camera estimator for unseen hands").
+        MAE from 5.6 to 5.5 deg (docs/camera_estimator.md).
     ridge : float
         Shrinkage of the local fit's slopes (:func:`local_linear`).
     lists, probes : int
@@ -138,7 +138,7 @@ class LearnedOptions:
         (3 % of the codes) find 95-97 % of the 128 nearest neighbours of
         glTF-hand frames among 400,000 codes per digit (16 cells: 98-99 %)
         in 0.15-0.19 ms per digit instead of 0.26-0.32 ms; chosen on
-        held-out model hands by a rule fixed before the runs (README,
+        held-out model hands by a rule fixed before the runs (docs/camera_estimator.md,
         "Camera estimator for unseen hands": the fewest probes within 0.05
         deg of 16 on paper frames and 0.1 deg on natural ones).
     quantize : bool

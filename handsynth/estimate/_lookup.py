@@ -349,7 +349,7 @@ class PoseLookup:
         The paper picks the nearest of 81 grid shapes because rendering a
         database took hours.  Here one of 20,448 entries takes about 5 s on
         two cores, so a hand can have its own: on off-grid model hands this
-        halves the error of the selected grid database (README, "The
+        halves the error of the selected grid database (docs/lookup.md, "The
         paper's experiment").  The file is ``<folder>/<shape.name>.h5``; a
         verified existing one is reused, one built with other options is
         rebuilt.
@@ -413,7 +413,7 @@ class PoseLookup:
         (building it first when missing, about 5 s for 20,448 entries on two
         cores) and calibrates it to the frame (:meth:`calibrated`).  On the
         realistic mesh hand this is the most accurate lookup handsynth has
-        (README, "Calibrated lookup").
+        (docs/lookup.md, "Calibrated lookup").
 
         Parameters
         ----------

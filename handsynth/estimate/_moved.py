@@ -2,7 +2,7 @@
 
 The learnt estimators read a frame against the user's rest frame and assume
 the device has stayed where it was when that frame was taken; a strap that
-slips costs them more than the constant answer (README, "The device slipping
+slips costs them more than the constant answer (docs/camera_estimator.md, "The device slipping
 after calibration").  The part of the hand next to the wrist cut -- the
 back of the hand between the wrist and the thumb's base -- is rigid with the
 device and moves with no finger: in the coverage grid its outline stays put
@@ -47,7 +47,7 @@ class MoveCheckOptions:
         moved: three times the largest median over 30-frame windows of frames
         seen from where the rest frame was (0.0055: four held-out model
         hands, fingers and thumb moving, outlines flickering; ``python
-        scripts/study_camera.py moved``; README, "The device slipping after
+        scripts/study_camera.py moved``; docs/camera_estimator.md, "The device slipping after
         calibration").
     """
 

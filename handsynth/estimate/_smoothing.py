@@ -41,7 +41,7 @@ class OneEuroOptions:
 
     The defaults were chosen on continuous motions with holds of three
     held-out model hands whose frames had their outline flickering
-    (``python scripts/study_camera.py --cache DIR holds``; README, "Jitter"):
+    (``python scripts/study_camera.py --cache DIR holds``; docs/camera_estimator.md, "Jitter"):
     among minimum cut-offs 0.3-2 Hz and speed coefficients 0.01-0.1 Hz per
     deg/s, the steadiest holds for at most 0.05 deg more flexion error, a
     tie (within 0.01 deg/frame^2: 0.3 and 0.5 Hz at 0.05) going to the higher

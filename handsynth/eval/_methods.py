@@ -5,7 +5,7 @@ estimator``; :func:`protocol_methods` makes them for the names users give
 (``handsynth eval --protocol --conditions ...``), building the databases and
 learning the estimators they need into one folder, and
 :func:`protocol_headline` reduces a protocol's result to the figures the
-README reports (finger flexion MAE beside the constant, skill, index PIP
+docs/camera_estimator.md reports (finger flexion MAE beside the constant, skill, index PIP
 where it moves).
 """
 
@@ -33,7 +33,7 @@ from ..render import CameraMount
 __all__ = ["LEARNED_METHODS", "PROTOCOL_METHODS", "describe_methods", "format_headline",
            "protocol_headline", "protocol_methods"]
 
-#: The learnt estimators by name (options chosen on model hands: README, "Camera
+#: The learnt estimators by name (options chosen on model hands: docs/camera_estimator.md, "Camera
 #: estimator for unseen hands").
 LEARNED_METHODS: dict[str, LearnedOptions] = {
     "fingers": LearnedOptions(kind="fingers"),

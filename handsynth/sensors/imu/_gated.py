@@ -50,7 +50,7 @@ errors) and a slowly varying correction ``q_cor`` (that frame to the world):
    for ``rest_s``), the bias follows the gyro with time constant
    ``bias_tau_s``.
 
-On BROAD (README) the filter erred by 5.37 deg with each sample's
+On BROAD (docs/imu.md) the filter erred by 5.37 deg with each sample's
 accelerometer trusted through the gates and the reference field read from
 the first sample, 2.91 deg with one low-pass stage and the mean reference,
 2.37 deg with two stages and this release's time constants, and 2.04 deg

@@ -138,7 +138,7 @@ class ArcJoint:
     flexion axis turns about the dorsal axis (``z``, not the bone) by
     ``axis_tilt_deg * theta / 90 deg``.  Like :class:`FingerJoint` this is a
     modelling choice, not a measurement; defaults are the ones of the
-    independent check reported in the README (1.5 mm slide, 4 deg tilt).
+    independent check reported in docs/trackers.md (1.5 mm slide, 4 deg tilt).
 
     Parameters
     ----------

@@ -39,7 +39,7 @@ def test_exact_hinge_has_one_still_direction_its_axis():
 def test_rom_sweep_never_answers_far_without_a_warning():
     """Issue 17: 10-70 deg, hinge and finger-like, both simulator configurations, every method.
 
-    Seed 5 was used neither while building the checks nor in the README's tables.
+    Seed 5 was used neither while building the checks nor in docs/trackers.md's tables.
     """
     rows = rom_sweep(duration_s=10.0, seeds=(5,))
     assert len(rows) == 2 * 2 * 8 * 4 * 2
