@@ -10,6 +10,7 @@ Usage::
     python scripts/study_camera.py bound_mcp
     python scripts/study_camera.py --cache DIR [--rest open] [--ensemble] rests
     python scripts/study_camera.py [--axis FIELD] moved
+    python scripts/study_camera.py --cache DIR imaging
 
 ``backgrounds``
     Two held-out model hands (seed 3, 1.5 times the learning spread) and the
@@ -100,6 +101,21 @@ Usage::
     their largest unmoved window median), four of seed 21 and the two glTF
     hands.  Last line: ``unmoved_flagged=<share> moved_0.5_flagged=<share>
     moved_1_flagged=<share>`` (seed 21 and glTF hands).
+
+``imaging``
+    Imaging conditions no learning frame had: the default ensemble on the
+    same frames as a bool mask, painted as skin on a dark background, then
+    with Gaussian noise (s.d. 8, 20 and 40 grey levels), 1 % of the pixels
+    white, a Gaussian blur (s.d. 2 px), JPEG at quality 40, a vignette (0.3
+    of the brightness at the corners), the hand shaded from 0.55 to 1 across
+    the frame, the hand dimmed to 0.35 with noise of s.d. 8, a grey
+    background (90), the frame at half resolution and as one grey channel.
+    Four held-out model hands (seed 31, 1.5 times the learning spread) and
+    the two glTF hands, a near-open and a relaxed rest in turn, 40 paper and
+    40 natural frames each; the rest frame is taken under the same
+    condition.  Per condition the pooled finger flexion MAE beside the
+    constant open-hand answer.  Last line: ``largest_change_paper=<deg>
+    largest_change_natural=<deg>`` (against the mask, over the conditions).
 
 The learnt estimator is read from ``--cache`` (or learnt there first).
 """
@@ -488,6 +504,87 @@ def moved(axis: str | None = None) -> None:
           f"moved_1_flagged={np.mean(held[1.0] > limit):.3f}")
 
 
+def _imaging_conditions() -> dict:
+    import cv2
+
+    yy, xx = np.mgrid[0:480, 0:720].astype(np.float32)
+    vignette = (1.0 - 0.35 * (((xx - 360) / 360) ** 2 + ((yy - 240) / 240) ** 2))[..., None]
+    shade = 0.55 + 0.45 * xx / 720
+
+    def paint(mask, ground=20, skin=1.0):
+        f = np.full((480, 720, 3), ground, np.float32)
+        f[mask] = _SKIN * (shade[mask, None] if skin == "shaded" else skin)
+        return f
+
+    def u8(f):
+        return np.clip(f, 0, 255).astype(np.uint8)
+
+    def noisy(sd, **kw):
+        return lambda m, rng: u8(paint(m, **kw) + rng.normal(0, sd, (480, 720, 3)))
+
+    def jpeg(m, rng):
+        return cv2.imdecode(cv2.imencode(".jpg", u8(paint(m)), [cv2.IMWRITE_JPEG_QUALITY, 40])[1],
+                            cv2.IMREAD_COLOR)
+
+    def salt(m, rng):
+        f = u8(paint(m))
+        f[rng.random(m.shape) < 0.01] = 255
+        return f
+
+    return {"mask": lambda m, rng: m,
+            "dark background": lambda m, rng: u8(paint(m)),
+            "noise 8": noisy(8), "noise 20": noisy(20), "noise 40": noisy(40),
+            "1 % white pixels": salt,
+            "blur 2 px": lambda m, rng: cv2.GaussianBlur(u8(paint(m)), (0, 0), 2.0),
+            "JPEG 40": jpeg,
+            "vignette": lambda m, rng: u8(paint(m) * vignette),
+            "shaded hand": lambda m, rng: u8(paint(m, skin="shaded")),
+            "dim hand + noise 8": noisy(8, skin=0.35),
+            "grey background": lambda m, rng: u8(paint(m, ground=90)),
+            "half resolution": lambda m, rng: cv2.resize(u8(paint(m)), (360, 240),
+                                                         interpolation=cv2.INTER_AREA),
+            "one grey channel": lambda m, rng: cv2.cvtColor(u8(paint(m)), cv2.COLOR_BGR2GRAY)}
+
+
+def imaging(cache) -> None:
+    from handsynth.estimate import learned_ensemble
+    from handsynth.eval import paper_protocol_poses
+    from handsynth.eval._testposes import REST_POSTURES
+
+    ens = learned_ensemble(cache)
+    conditions = _imaging_conditions()
+    groups = {"model hands": model_test_hands(4, seed=31, spread=1.5), "glTF hands": mesh_test_hands()}
+    errors: dict = {}
+    constant: dict = {}
+    for group, hands in groups.items():
+        for i, hand in enumerate(hands):
+            made = hand.make()
+            rng = np.random.default_rng([31, len(group), i])
+            rest = REST_POSTURES["relaxed" if i % 2 else "open"](rng)
+            sets = {"paper": paper_protocol_poses(rest, 40, rng)[0],
+                    "natural": natural_test_poses(rest, 40, rng)[0]}
+            for name, condition in conditions.items():
+                noise = np.random.default_rng(5)
+                cal = ens.calibrated(condition(made.mask(rest), noise))
+                for kind, poses in sets.items():
+                    got = np.stack([cal.estimate(condition(m, noise)).angles for m in made.masks(poses)])
+                    errors.setdefault((group, kind, name), []).append(
+                        np.abs(got[:, _FLEX] - poses[:, _FLEX]).mean())
+            for kind, poses in sets.items():
+                constant.setdefault((group, kind), []).append(np.abs(poses[:, _FLEX]).mean())
+            print(f"{group}: {hand.name} done", flush=True)
+    change = {"paper": 0.0, "natural": 0.0}
+    for group in groups:
+        print(f"{group}: finger flexion MAE, paper / natural frames (constant "
+              f"{np.mean(constant[(group, 'paper')]):.2f} / {np.mean(constant[(group, 'natural')]):.2f})")
+        for name in conditions:
+            mae = {k: np.mean(errors[(group, k, name)]) for k in change}
+            for k in change:
+                change[k] = max(change[k], abs(mae[k] - np.mean(errors[(group, k, "mask")])))
+            print(f"  {name:20s} {mae['paper']:6.2f} / {mae['natural']:6.2f}")
+    print(f"largest_change_paper={change['paper']:.2f} largest_change_natural={change['natural']:.2f}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cache", default=None, help="folder of the learnt estimator")
@@ -499,7 +596,7 @@ def main() -> None:
                     choices=["height_mm", "thumb_offset_mm", "along_mm", "tilt_deg", "roll_deg"],
                     help="moved: slip along this field of MountVariation alone")
     ap.add_argument("study", choices=["backgrounds", "jitter", "holds", "observability", "bound",
-                                      "bound_mcp", "rests", "moved"])
+                                      "bound_mcp", "rests", "moved", "imaging"])
     args = ap.parse_args()
     if args.study not in ("observability", "bound_mcp", "moved") and args.cache is None:
         ap.error(f"{args.study} needs --cache DIR")
@@ -517,6 +614,8 @@ def main() -> None:
         rests(args.cache, args.rest, ensemble=args.ensemble)
     elif args.study == "moved":
         moved(args.axis)
+    elif args.study == "imaging":
+        imaging(args.cache)
     else:
         observability()
 
