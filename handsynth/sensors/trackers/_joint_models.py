@@ -44,6 +44,15 @@ _Y = np.array([0.0, 1.0, 0.0])
 _Z = np.array([0.0, 0.0, 1.0])
 
 
+def _check_sliding_joint(joint) -> None:
+    """Raise InvalidInputError unless every field of `joint` is finite and its slide >= 0."""
+    for name, v in asdict(joint).items():
+        if not np.isfinite(v):
+            raise InvalidInputError(f"{name} must be finite, got {v!r}")
+    if joint.slide_mm < 0:
+        raise InvalidInputError(f"slide_mm must be >= 0, got {joint.slide_mm!r}")
+
+
 def _relative_rotation(axis: np.ndarray, theta: np.ndarray, psi: np.ndarray) -> np.ndarray:
     """Flexion by `theta` about `axis` after an abduction `psi` about ``+z``."""
     return axis_angle_matrix(axis, theta) @ axis_angle_matrix(_Z, psi)
@@ -102,11 +111,7 @@ class FingerJoint:
     kind = "finger"
 
     def __post_init__(self) -> None:
-        for name, v in asdict(self).items():
-            if not np.isfinite(v):
-                raise InvalidInputError(f"{name} must be finite, got {v!r}")
-        if self.slide_mm < 0:
-            raise InvalidInputError(f"slide_mm must be >= 0, got {self.slide_mm!r}")
+        _check_sliding_joint(self)
 
     def pose(self, theta: np.ndarray, psi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Lower segment in the upper segment frame; see :meth:`HingeJoint.pose`."""
@@ -157,11 +162,7 @@ class ArcJoint:
     kind = "arc"
 
     def __post_init__(self) -> None:
-        for name, v in asdict(self).items():
-            if not np.isfinite(v):
-                raise InvalidInputError(f"{name} must be finite, got {v!r}")
-        if self.slide_mm < 0:
-            raise InvalidInputError(f"slide_mm must be >= 0, got {self.slide_mm!r}")
+        _check_sliding_joint(self)
         if self.arc_radius_mm <= 0:
             raise InvalidInputError(f"arc_radius_mm must be > 0, got {self.arc_radius_mm!r}")
 
