@@ -44,7 +44,9 @@ PROTOCOL_DEFAULT = "standard,calibrated,fingers,fingers_mean,mlp,ensemble"
                    "hands beyond the four ratios and the glTF hands, the constant open-hand "
                    f"answer beside every figure. --conditions default: {PROTOCOL_DEFAULT}.")
 @click.option("--mesh", default="godot_xr_tools,mrtk", show_default=True,
-              help="--protocol: glTF hands to test, comma-separated ('' for none).")
+              help="--protocol: glTF hands to test, comma-separated ('' for none): shipped "
+                   "ones by name, or .gltf/.glb files of right hands rigged with OpenXR joint "
+                   "names (named by their file's stem).")
 @click.option("--learned-hands", type=int, default=None, metavar="N",
               help="--protocol: random hands of the learnt estimators' learning set "
                    "[default: 4,000 x 100 frames; the ensemble's perceptrons learn from "

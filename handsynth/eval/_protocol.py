@@ -37,6 +37,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -183,13 +184,41 @@ def model_test_hands(n: int, *, seed: int = 0, mount: CameraMount | None = None,
 
 
 def mesh_test_hands(names=None, *, mount: CameraMount | None = None) -> list[TestHand]:
-    """The glTF hands shipped in :mod:`handsynth.testhands` (all by default)."""
-    from ..testhands import TEST_HANDS, MeshHandRenderer, shipped_hand_path
+    """Rigged glTF hands as test hands: shipped ones by name, or any file.
+
+    Parameters
+    ----------
+    names : sequence of str or os.PathLike, optional
+        Each a key of :data:`handsynth.testhands.TEST_HANDS` (the hands
+        shipped in :mod:`handsynth.testhands`; all of them by default) or the
+        path of a ``.gltf`` / ``.glb`` file of a right hand rigged with
+        OpenXR joint names (:func:`handsynth.testhands.load_mesh_rig`), named
+        by its file's stem.
+    mount : CameraMount, keyword-only, optional
+        The paper's by default.
+
+    Raises
+    ------
+    InvalidInputError
+        A name that is neither a shipped hand nor a glTF file, or a file that
+        does not load as a rigged hand (the loader's message).
+    """
+    from ..testhands import TEST_HANDS, MeshHandRenderer, load_mesh_rig, shipped_hand_path
 
     mount = mount or CameraMount.paper()
-    out = []
-    for name in (names or sorted(TEST_HANDS)):
-        path = shipped_hand_path(name)
+    out: list[TestHand] = []
+    for entry in (names or sorted(TEST_HANDS)):
+        if str(entry) in TEST_HANDS:
+            name, path = str(entry), shipped_hand_path(str(entry))
+        elif Path(entry).suffix.lower() in (".gltf", ".glb"):
+            path = Path(entry)
+            if not path.is_file():
+                raise InvalidInputError(f"test hand file {str(path)!r} does not exist")
+            load_mesh_rig(path)  # a file that is no rigged hand fails here, not hours later
+            name = path.stem
+        else:
+            raise InvalidInputError(f"a test hand is one of {sorted(TEST_HANDS)} or a .gltf/.glb "
+                                    f"file, got {str(entry)!r}")
 
         def make(at=None, path=path):
             return MeshHandRenderer(at or mount, path=path)
@@ -287,10 +316,19 @@ def run_protocol(methods: dict, hands: list[TestHand], options: ProtocolOptions 
         {method: condition_stats + "seconds_per_frame" + "moved_frames"}}}}``;
         ``moved_frames`` counts the frames whose estimate said the device had
         moved since the rest frame (:attr:`PoseEstimate.moved`).
+
+    Raises
+    ------
+    InvalidInputError
+        No methods, or two test hands of one name (the result is keyed by it).
     """
     opts = options or ProtocolOptions()
     if not methods:
         raise InvalidInputError("run_protocol needs at least one method")
+    names = [h.name for h in hands]
+    if len(set(names)) < len(names):
+        twice = sorted({n for n in names if names.count(n) > 1})
+        raise InvalidInputError(f"test hands must have distinct names, got {', '.join(twice)} twice")
     out: dict = {"options": {"frames": opts.frames, "pose_sets": list(opts.pose_sets),
                              "seed": opts.seed, "rest": opts.rest, "moving_deg": MOVING_DEG},
                  "hands": {}}

@@ -128,6 +128,8 @@ def test_protocol_puts_the_constant_beside_every_method_and_writes_json(tmp_path
     (["--protocol", "--slip", "-1", "--hands", "1"], "ProtocolOptions.slip must be in [0, 5], got -1.0"),
     (["--protocol", "--conditions", "fingers,tree"], "methods must be distinct names from"),
     (["--protocol", "--hands", "0", "--mesh", ""], "no test hands"),
+    (["--protocol", "--hands", "0", "--mesh", "mrtk,nowhere/hand.glb"],
+     "test hand file 'nowhere/hand.glb' does not exist"),
 ])
 def test_protocol_options_are_checked_by_name(tmp_path, args, message):
     res = CliRunner().invoke(cli, ["eval", "--db", str(tmp_path / "c"), *args])

@@ -184,3 +184,38 @@ def test_describe_methods_names_every_learnt_option_and_refuses_unknown_names():
     assert [m["weight"] for m in alone] == pytest.approx([1 / 3] * 3)
     with pytest.raises(InvalidInputError, match="got 'tree'"):
         describe_methods(["fingers", "tree"])
+
+
+def test_a_glTF_file_of_ones_own_is_a_test_hand_named_by_its_stem(tmp_path):
+    import shutil
+
+    from handsynth.eval import mesh_test_hands
+    from handsynth.testhands import shipped_hand_path
+
+    mine = tmp_path / "my_hand.glb"
+    shutil.copyfile(shipped_hand_path("mrtk"), mine)
+    hands = mesh_test_hands(["godot_xr_tools", str(mine)])
+    assert [h.name for h in hands] == ["godot_xr_tools", "my_hand"]
+    assert hands[1].kind == "mesh" and hands[1].info == {"file": "my_hand.glb"}
+    rest = relaxed_rest_posture(np.random.default_rng(0))
+    np.testing.assert_array_equal(hands[1].make().mask(rest),
+                                  mesh_test_hands(["mrtk"])[0].make().mask(rest))
+
+
+def test_test_hands_that_are_not_glTF_hands_are_refused_by_name(tmp_path):
+    from handsynth.eval import mesh_test_hands
+
+    with pytest.raises(InvalidInputError, match="one of .* or a .gltf/.glb file, got 'hand.obj'"):
+        mesh_test_hands(["hand.obj"])
+    with pytest.raises(InvalidInputError, match="test hand file .*missing.glb' does not exist"):
+        mesh_test_hands([str(tmp_path / "missing.glb")])
+    broken = tmp_path / "broken.gltf"
+    broken.write_text("not json")
+    with pytest.raises(InvalidInputError, match="broken.gltf"):
+        mesh_test_hands([broken])
+
+
+def test_two_test_hands_of_one_name_are_refused():
+    twice = model_test_hands(1, seed=4) * 2
+    with pytest.raises(InvalidInputError, match="distinct names, got model0 twice"):
+        run_protocol({"skip": lambda rest, hand: None}, twice, ProtocolOptions(frames=2))
