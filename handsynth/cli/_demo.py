@@ -27,7 +27,10 @@ def demo(out_dir: Path, tile_width: int, frames: int, learned_hands: int) -> Non
     standard shape's small default database is built (or verified) in
     OUT/db, and frames of an off-grid hand in paper poses are matched
     against it, plainly and calibrated to the hand's open-hand frame; the
-    mean absolute joint-angle error and the rate are printed.
+    mean absolute joint-angle error and the rate are printed.  Last, a
+    small learned estimator and the shipped perceptrons read the MRTK glTF
+    hand beside the constant answer, and ``estimates_mrtk.png`` shows four of
+    the perceptrons' readings beside the truth.
     """
     import time
 
@@ -48,10 +51,10 @@ def demo(out_dir: Path, tile_width: int, frames: int, learned_hands: int) -> Non
     if frames:
         _lookup_demo(out_dir / "db", frames)
     if learned_hands:
-        _learned_demo(out_dir / "learned", learned_hands, max(frames, 20))
+        _learned_demo(out_dir, learned_hands, max(frames, 20), tile_width)
 
 
-def _learned_demo(folder: Path, hands: int, frames: int) -> None:
+def _learned_demo(out_dir: Path, hands: int, frames: int, tile_width: int) -> None:
     import time
 
     from ..db import LearningSetOptions
@@ -65,6 +68,7 @@ def _learned_demo(folder: Path, hands: int, frames: int) -> None:
         run_protocol,
     )
 
+    folder = out_dir / "learned"
     t = time.perf_counter()
     methods = protocol_methods(["fingers"], folder, data=LearningSetOptions(hands=hands))
     click.echo(f"learned estimator ({hands} hands x 100 frames) ready in "
@@ -76,12 +80,53 @@ def _learned_demo(folder: Path, hands: int, frames: int) -> None:
         click.echo(f"also read: the default ensemble's {len(shipped_ones)} perceptrons, shipped "
                    "with handsynth (`perceptrons`: their mean, `--learned-kind perceptrons`)")
     else:
+        shipped = None
         click.echo("the perceptrons shipped with handsynth are missing or damaged: skipped")
     result = run_protocol(methods, mesh_test_hands(["mrtk"]), ProtocolOptions(frames=frames))
     click.echo(f"learned estimators on {frames} frames of the MRTK glTF hand per pose set, "
                "beside the constant open-hand answer (the full evaluation: handsynth eval "
                "--protocol):")
     click.echo(format_headline(protocol_headline(result)))
+    if shipped is not None:
+        path = out_dir / "estimates_mrtk.png"
+        _estimates_picture(path, shipped, tile_width)
+        click.echo(f"wrote {path}")
+
+
+def _estimates_picture(path: Path, estimator, tile_width: int, count: int = 4) -> None:
+    """What `estimator` reads on the MRTK glTF hand: the device's view, the truth and the reading.
+
+    Natural poses from a relaxed rest (the protocol's generators); columns are
+    frames; rows show the mesh hand as the device sees it, and from the thumb
+    side at the true angles and at the estimated ones.
+    """
+    import cv2
+    import numpy as np
+
+    from ..eval import natural_test_poses, relaxed_rest_posture
+    from ..render import CameraMount, label_image, write_png
+    from ..testhands import MeshHandRenderer, shipped_hand_path
+
+    flex = [4, 6, 7, 8, 10, 11, 12, 14, 15, 16, 18, 19]  # the 12 finger flexions
+    mount = CameraMount.paper()
+    th = round(tile_width * mount.height_px / mount.width_px)
+    rng = np.random.default_rng(7)
+    rest = relaxed_rest_posture(rng)
+    poses = natural_test_poses(rest, count, rng)[0]
+    hand = shipped_hand_path("mrtk")
+    with MeshHandRenderer(mount, path=hand) as full:
+        reader = estimator.calibrated(full.mask(rest))
+        got = [reader.estimate(m).angles for m in full.masks(poses)]
+    rows: list[list[np.ndarray]] = [[], [], []]
+    with MeshHandRenderer(mount, width_px=tile_width, height_px=th, path=hand) as mesh:
+        for i, (truth, est) in enumerate(zip(poses, got)):
+            mae = float(np.abs(est[flex] - truth[flex]).mean())
+            rows[0].append(label_image(mesh.render_rgb(truth), f"frame {i + 1}: the device's view"))
+            rows[1].append(label_image(mesh.render_rgb(truth, camera="side"), "true angles, side view"))
+            rows[2].append(label_image(mesh.render_rgb(est, camera="side"),
+                                       f"estimated: flexion error {mae:.1f} deg"))
+    sheet = np.vstack([np.hstack(r) for r in rows])
+    write_png(path, cv2.copyMakeBorder(sheet, 2, 2, 2, 2, cv2.BORDER_CONSTANT, value=(255, 255, 255)))
 
 
 def _lookup_demo(db_dir: Path, frames: int) -> None:

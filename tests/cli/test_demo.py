@@ -14,6 +14,11 @@ def test_demo_writes_pictures_and_looks_up_frames(tmp_path):
     for name in ("hands_paper_mount.png", "hands_whole_hand_mount.png"):
         img = cv2.imread(str(tmp_path / name))
         assert img is not None and img.shape[1] == 4 * 96 + 4 and img.std() > 10
+    # four frames of the glTF hand: the device's view, the truth and the reading, side by side
+    img = cv2.imread(str(tmp_path / "estimates_mrtk.png"))
+    assert img is not None and img.shape == (3 * 64 + 4, 4 * 96 + 4, 3)
+    rows = [img[2 + 64 * i:2 + 64 * (i + 1), 2:-2] for i in range(3)]
+    assert all(r.std() > 10 for r in rows) and not (rows[1] == rows[2]).all()
     db = open_database(next((tmp_path / "db").glob("*.h5")))
     assert len(db) == 3000
     assert "looked up 20 frames" in res.output and "mean absolute error" in res.output
