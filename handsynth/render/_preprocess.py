@@ -143,8 +143,10 @@ def check_frame(frame) -> np.ndarray:
     if not isinstance(frame, np.ndarray):
         raise InvalidInputError(f"frame must be a numpy array, got {type(frame).__name__}")
     if frame.ndim not in (2, 3) or (frame.ndim == 3 and frame.shape[2] != 3):
+        hint = ("; drop the alpha channel: frame[..., :3]"
+                if frame.ndim == 3 and frame.shape[2] == 4 else "")
         raise InvalidInputError(
-            f"frame must have shape (H, W) or (H, W, 3), got {frame.shape}")
+            f"frame must have shape (H, W) or (H, W, 3), got {frame.shape}{hint}")
     if min(frame.shape[:2]) < MIN_FRAME_SIDE:
         raise InvalidInputError(
             f"frame is too small to hold a hand: must be at least "
@@ -153,8 +155,10 @@ def check_frame(frame) -> np.ndarray:
         raise InvalidInputError("frame must not contain NaN or inf; give a uint8 image or "
                                 "a bool mask")
     if frame.dtype not in (np.bool_, np.uint8):
+        hint = ("; a float image in [0, 1] is (frame * 255).astype(np.uint8), a float mask "
+                "frame > 0.5" if frame.dtype.kind == "f" else "")
         raise InvalidInputError(
-            f"frame must be a bool mask or a uint8 image, got dtype {frame.dtype}")
+            f"frame must be a bool mask or a uint8 image, got dtype {frame.dtype}{hint}")
     if frame.dtype == np.bool_ and frame.ndim == 3:
         raise InvalidInputError(
             f"a bool frame is a mask and must have shape (H, W), got {frame.shape}; give a "

@@ -56,8 +56,10 @@ def test_wrist_cut_removes_the_forearm():
 
 @pytest.mark.parametrize("frame, words", [
     (np.zeros((1, 1), np.uint8), "too small"),
-    (np.zeros((64, 64), np.float32), "dtype float32"),
-    (np.zeros((64, 64, 4), np.uint8), "shape"),
+    (np.zeros((64, 64), np.float32), r"dtype float32; a float image in \[0, 1\] is \(frame \* 255\)"),
+    (np.zeros((64, 64), np.uint16), "dtype uint16$"),
+    (np.zeros((64, 64, 4), np.uint8), r"shape .*\(64, 64, 4\); drop the alpha channel: frame\[..., :3\]"),
+    (np.zeros((64, 64, 2), np.uint8), r"got \(64, 64, 2\)$"),
     ([[1, 2]], "numpy array"),
 ])
 def test_garbage_frames_are_refused(frame, words):
