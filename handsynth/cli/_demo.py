@@ -103,11 +103,11 @@ def _estimates_picture(path: Path, estimator, tile_width: int, count: int = 4) -
     import cv2
     import numpy as np
 
-    from ..eval import natural_test_poses, relaxed_rest_posture
+    from ..eval import JOINT_GROUPS, natural_test_poses, relaxed_rest_posture
     from ..render import CameraMount, label_image, write_png
     from ..testhands import MeshHandRenderer, shipped_hand_path
 
-    flex = [4, 6, 7, 8, 10, 11, 12, 14, 15, 16, 18, 19]  # the 12 finger flexions
+    flex = list(JOINT_GROUPS["finger_flexion"])
     mount = CameraMount.paper()
     th = round(tile_width * mount.height_px / mount.width_px)
     rng = np.random.default_rng(7)
