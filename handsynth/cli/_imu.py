@@ -10,6 +10,7 @@ import click
 from ._main import cli
 
 _TRACK_FILTERS = ("raw", "filter1", "gated", "vqf", "madgwick", "mahony", "ahrs_ekf", "constant")
+_CHAIN_FILTERS = ("filter4", "filter4b")  # need the link model of a calibration
 
 
 def _unit_options(f):
@@ -164,8 +165,9 @@ def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz
 
 @imu.command()
 @click.argument("recording", type=click.Path(dir_okay=False))
-@click.option("--filter", "filter_name", type=click.Choice(_TRACK_FILTERS), default="vqf",
-              show_default=True, help="Orientation filter (without --calibration).")
+@click.option("--filter", "filter_name", type=click.Choice(_TRACK_FILTERS + _CHAIN_FILTERS),
+              default=None, help="Orientation filter [default: vqf; with --calibration filter4, "
+                                 "or filter4b: Filter 4 learning drifting gyro biases].")
 @click.option("--calibration", "calibration_path", type=click.Path(dir_okay=False),
               help="Calibration JSON from 'handsynth imu calibrate': run Filter 4 and "
                    "write joint angles too.")
@@ -194,6 +196,7 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
     from ..errors import InvalidInputError
     from ..models import JOINT_NAMES
     from ..sensors.imu import (
+        FILTER4B,
         ImuCalibration,
         StaticStart,
         check_recording,
@@ -203,9 +206,13 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
     )
 
     for flag, given in (("--angles-out", angles_out), ("--tips-out", tips_out),
-                        ("--no-sensor-calibration", no_sensor_calibration)):
+                        ("--no-sensor-calibration", no_sensor_calibration),
+                        (f"--filter {filter_name}", filter_name in _CHAIN_FILTERS)):
         if given and not calibration_path:
             raise InvalidInputError(f"{flag} needs --calibration")
+    if calibration_path and filter_name not in (None, *_CHAIN_FILTERS):
+        raise InvalidInputError(f"with --calibration the filter is one of {', '.join(_CHAIN_FILTERS)}, "
+                                f"got {filter_name}")
     rec = read_imu_csv(recording, acc_units=acc_units, gyr_units=gyr_units, mag_units=mag_units,
                        rate_hz=rate_hz)
     for w in check_recording(rec, static_s=static_s, source=str(recording)):
@@ -220,8 +227,10 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
     t = np.arange(rec.n) / rec.rate_hz
     if calibration_path:
         cal = ImuCalibration.load(calibration_path)
-        res = cal.track(rec, static=static, sensor_calibration=not no_sensor_calibration)
-        q, sensors, name = res["quat"], cal.sensors, "filter4"
+        name = filter_name or "filter4"
+        res = cal.track(rec, static=static, sensor_calibration=not no_sensor_calibration,
+                        options=FILTER4B if name == "filter4b" else None)
+        q, sensors = res["quat"], cal.sensors
         if res["sensor_calibration"]:
             name += ", sensor calibration applied"
         if cal.plate is not None:
@@ -234,8 +243,9 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
             _write_table(tips_out, ["time_s", *(f"{f}_tip_{c}_mm" for f in fingers for c in "xyz")],
                          np.column_stack([t, *(1e3 * tips[f] for f in fingers)]))
     else:
-        est = dataclasses.replace(make_filter(filter_name), static=static)
-        q, sensors, name = est.run(rec), rec.sensors, filter_name
+        name = filter_name or "vqf"
+        est = dataclasses.replace(make_filter(name), static=static)
+        q, sensors = est.run(rec), rec.sensors
     cols = ["time_s"] + [f"{s}_q{c}" for s in sensors for c in "wxyz"]
     _write_table(out_path, cols, np.column_stack([t] + [q[k, :, c] for k in range(q.shape[0])
                                                          for c in range(4)]))

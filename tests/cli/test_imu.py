@@ -197,6 +197,28 @@ def test_calibrate_then_track_joint_angles(tmp_path):
     raw = np.loadtxt(raw_csv, delimiter=",", skiprows=1)[:, 1:]
     err_raw = raw[400:] - rec.truth.angles[400:, 9:]
     assert np.sqrt(np.nanmean(err**2)) < 0.5 * np.sqrt(np.nanmean(err_raw**2))
+    # Filter 4 learning its gyro biases reads the same recording about as well
+    b_csv = tmp_path / "a_b.csv"
+    res = CliRunner().invoke(cli, ["imu", "track", str(rec_csv), "--calibration", str(model),
+                                   "--filter", "filter4b", "--align", "2,4", "--out", str(q_csv),
+                                   "--angles-out", str(b_csv)])
+    assert res.exit_code == 0 and "filter4b" in res.output, res.output
+    err_b = np.loadtxt(b_csv, delimiter=",", skiprows=1)[400:, 1:] - rec.truth.angles[400:, 9:]
+    assert np.sqrt(np.mean(err_b[:, j] ** 2)) < 5.0
+    assert not np.array_equal(err_b, err)
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--filter", "filter4b"], "--filter filter4b needs --calibration"),
+    (["--filter", "filter4"], "--filter filter4 needs --calibration"),
+    (["--calibration", "c.json", "--filter", "vqf"], "with --calibration the filter is one of filter4, "
+                                                     "filter4b, got vqf"),
+])
+def test_chain_filters_and_the_calibration_go_together(tmp_path, sim, args, message):
+    src = tmp_path / "rec.csv"
+    write_imu_csv(sim.subset(("forearm_1",)), src)
+    res = CliRunner().invoke(cli, ["imu", "track", str(src), "--out", str(tmp_path / "q.csv"), *args])
+    assert res.exit_code == 2 and message in res.output, res.output
 
 
 def test_no_sensor_calibration_needs_the_calibration(tmp_path, sim):

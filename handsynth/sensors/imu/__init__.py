@@ -12,7 +12,7 @@ into one attitude; joint angles and fingertip positions.
 from ._attitude import StaticStart, azimuth_correction, gyro_bias, initial_attitude
 from ._broad import BROAD_FILTERS, broad_errors, find_broad_trials, read_broad_trial, run_broad
 from ._calibration import ImuCalibration, calibrate, segments_from_seconds
-from ._ekf import ChainEKF, ChainEKFOptions, sensor_tree
+from ._ekf import FILTER4B, ChainEKF, ChainEKFOptions, sensor_tree
 from ._eval import FILTERS, HELDOUT, TUNING, SimConfig, evaluate, make_filter
 from ._filters import (
     AhrsEKFEstimator,
@@ -104,6 +104,7 @@ __all__ = [
     "CHAINS",
     "EARTH_FIELD_UT",
     "EVAL_NOISE",
+    "FILTER4B",
     "FILTERS",
     "FLEX_JOINT",
     "GRASP_POSES",

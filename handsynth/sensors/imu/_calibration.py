@@ -17,7 +17,8 @@ import numpy as np
 
 from ..._io import atomic_open
 from ...errors import InvalidInputError, RecordingError
-from ._ekf import ChainEKF
+from ._attitude import StaticStart
+from ._ekf import ChainEKF, ChainEKFOptions
 from ._kinematics import (
     ThumbCmcModel,
     fingertip_positions,
@@ -124,7 +125,7 @@ class ImuCalibration:
             raise RecordingError(f"calibration file inconsistent: {exc}") from None
 
     def track(self, rec: ImuRecording, *, static=None, sensor_calibration: bool = True,
-              plate_fusion: bool = True) -> dict:
+              plate_fusion: bool = True, options: ChainEKFOptions | None = None) -> dict:
         """Attitudes (Filter 4), joint angles and fingertips of a recording.
 
         Parameters
@@ -138,6 +139,9 @@ class ImuCalibration:
         plate_fusion : bool, keyword-only
             Fuse the forearm plate's three attitudes into one (:meth:`fuse`;
             needs the plate rotations of a version-5 file).
+        options : ChainEKFOptions, keyword-only, optional
+            Filter 4's options (its defaults, the thesis' filter, if None;
+            :data:`~handsynth.sensors.imu.FILTER4B` learns drifting gyro biases).
 
         Returns
         -------
@@ -148,7 +152,8 @@ class ImuCalibration:
         """
         sub = self.correct(rec, sensor_calibration=sensor_calibration)
         applied = sensor_calibration and self.sensor_calibration is not None
-        est = ChainEKF(self.model) if static is None else ChainEKF(self.model, static=static)
+        est = ChainEKF(self.model, options=options or ChainEKFOptions(),
+                       static=static or StaticStart())
         q = self.fuse(est.run(sub), sub.sensors, plate_fusion=plate_fusion)
         angles, _ = joint_angles(q, sub.sensors, self.frames, zero=self.zero, cmc=self.cmc)
         tips = {f: v for f, v in fingertip_positions(q, sub.sensors, self.model).items()

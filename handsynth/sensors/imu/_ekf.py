@@ -48,7 +48,7 @@ from ._quat import qexp, qmul, qnormalize, quat_to_mat
 from ._recording import ImuRecording
 from ._vectors import ChainModel
 
-__all__ = ["ChainEKF", "ChainEKFOptions", "sensor_tree"]
+__all__ = ["FILTER4B", "ChainEKF", "ChainEKFOptions", "sensor_tree"]
 
 
 @dataclass(frozen=True)
@@ -79,6 +79,14 @@ class ChainEKFOptions:
         Observation noise of H3 rows, uT.
     mag_gate : float
         Relative field-strength change that suspends H3 for a sensor.
+    bias_tau_s : float or None
+        Time constant (s) of a gyro bias learnt from the filter's own
+        corrections (not in the thesis): each step's correction of a sensor's
+        attitude, turned into the sensor's frame and divided by the time
+        constant, is taken off its gyro bias (an integral feedback; a bias
+        error b turns the predicted attitude by b dt a step, which the
+        corrections take back).  None: the static start's bias only, as in
+        the thesis.
     """
 
     use_h2: bool = True
@@ -89,12 +97,23 @@ class ChainEKFOptions:
     demoted: float = 3.0
     mag_sd: float = 30.0
     mag_gate: float = 0.1
+    bias_tau_s: float | None = None
 
     def __post_init__(self) -> None:
         for k in ("gyro_noise", "elbow_acc_sd", "acc_sd", "demoted", "mag_sd", "mag_gate"):
             v = getattr(self, k)
             if not (np.isfinite(v) and v > 0):
                 raise InvalidInputError(f"{k} must be positive, got {v!r}")
+        if self.bias_tau_s is not None and not (np.isfinite(self.bias_tau_s) and self.bias_tau_s > 0):
+            raise InvalidInputError(f"bias_tau_s must be positive or None, got {self.bias_tau_s!r}")
+
+
+#: ``filter4b``: Filter 4 that also learns each gyro's bias from its own
+#: corrections (:attr:`ChainEKFOptions.bias_tau_s`, not in the thesis), the
+#: time constant chosen on the tuning configuration with gyro biases drifting
+#: during 120-s recordings (``python scripts/study_imu_drift.py``; docs/imu.md,
+#: "A gyro bias that drifts").
+FILTER4B = ChainEKFOptions(bias_tau_s=5.0)
 
 
 def sensor_tree(sensors) -> tuple[list[int], list[tuple[str, str]]]:
@@ -308,8 +327,9 @@ class ChainEKF:
             return run_fast(tree, q, gyr, dgyr, rec.acc, rec.mag, dt, mh, fnorm0, rz, fast_w, o)
         out = np.empty((s_n, n, 4))
         out[:, 0] = q
+        bias = np.zeros((s_n, 3))                          # learnt beyond the static start's
         for i in range(1, n):
-            w = 0.5 * (gyr[:, i] + gyr[:, i - 1])
+            w = 0.5 * (gyr[:, i] + gyr[:, i - 1]) - bias
             q = qnormalize(qmul(q, qexp(w * dt)))                           # eq. 5.10
             idx = np.arange(3 * s_n)
             p_cov[idx, idx] += qn
@@ -317,14 +337,17 @@ class ChainEKF:
             p_cov[:, -3:] = 0.0
             p_cov[-3:, -3:] = np.eye(3) * o.elbow_acc_sd**2                 # eq. 4.38
             r = quat_to_mat(q)
-            z, hx, h, sd = observe(tree, r, gyr[:, i], dgyr[:, i], rec.acc[:, i], rec.mag[:, i],
-                                   mh=mh, fnorm0=fnorm0, rz=rz, fast=fast_w[:, i], options=o)
+            z, hx, h, sd = observe(tree, r, gyr[:, i] - bias, dgyr[:, i], rec.acc[:, i],
+                                   rec.mag[:, i], mh=mh, fnorm0=fnorm0, rz=rz, fast=fast_w[:, i],
+                                   options=o)
             vinv = 1.0 / sd**2                                              # eqs. 4.7-4.8
             info = np.linalg.inv(p_cov) + (h.T * vinv) @ h
             p_cov = np.linalg.inv(info)
             p_cov = 0.5 * (p_cov + p_cov.T)
             dx = p_cov @ (h.T @ (vinv * (z - hx)))
             q = qnormalize(qmul(qexp(dx[:3 * s_n].reshape(s_n, 3)), q))
+            if o.bias_tau_s is not None:
+                bias -= np.einsum("sji,sj->si", r, dx[:3 * s_n].reshape(s_n, 3)) / o.bias_tau_s
             out[:, i] = q
         return out
 

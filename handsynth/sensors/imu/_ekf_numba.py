@@ -130,19 +130,23 @@ def observe_fast(tree, r, w, dw, a, mag, mh, fnorm0, rz, fast, options):
 
 @njit(cache=True)
 def _loop(q0, gyr, dgyr, acc, mag, dt, parent, order, anc, via, own, vpar, ppar, children, roots,
-          mh, fnorm0, rz, fast, use_h2, switch, acc_sd, demoted, mag_sd, mag_gate, qn, elbow_var):
+          mh, fnorm0, rz, fast, use_h2, switch, acc_sd, demoted, mag_sd, mag_gate, qn, elbow_var,
+          bias_tau):
     s_n, n = gyr.shape[0], gyr.shape[1]
     nx = 3 * s_n + 3
     out = np.empty((s_n, n, 4))
     q = q0.copy()
     out[:, 0] = q
+    bias = np.zeros((s_n, 3))
+    w_i = np.empty((s_n, 3))
     p = np.eye(nx) * 1e-4
     for k in range(3):
         p[3 * s_n + k, 3 * s_n + k] = elbow_var
     r = np.empty((s_n, 3, 3))
     for i in range(1, n):
         for j in range(s_n):                                   # eq. 5.10
-            w = 0.5 * (gyr[j, i] + gyr[j, i - 1]) * dt
+            w = (0.5 * (gyr[j, i] + gyr[j, i - 1]) - bias[j]) * dt
+            w_i[j] = gyr[j, i] - bias[j]
             qj = _qmul(q[j], _qexp(w))
             q[j] = qj / np.sqrt(np.sum(qj * qj))
             r[j] = _qmat(q[j])
@@ -153,7 +157,7 @@ def _loop(q0, gyr, dgyr, acc, mag, dt, parent, order, anc, via, own, vpar, ppar,
         for k in range(3):
             p[3 * s_n + k, 3 * s_n + k] = elbow_var              # eq. 4.38
         z, hx, h, sd = _kernel(parent, order, anc, via, own, vpar, ppar, children, roots, r,
-                               np.ascontiguousarray(gyr[:, i]), np.ascontiguousarray(dgyr[:, i]),
+                               w_i, np.ascontiguousarray(dgyr[:, i]),
                                np.ascontiguousarray(acc[:, i]), np.ascontiguousarray(mag[:, i]),
                                mh, fnorm0, rz, fast[:, i], use_h2, switch, acc_sd, demoted,
                                mag_sd, mag_gate)
@@ -166,6 +170,8 @@ def _loop(q0, gyr, dgyr, acc, mag, dt, parent, order, anc, via, own, vpar, ppar,
         for j in range(s_n):
             qj = _qmul(_qexp(dx[3 * j:3 * j + 3]), q[j])
             q[j] = qj / np.sqrt(np.sum(qj * qj))
+            if bias_tau > 0.0:
+                bias[j] -= (r[j].T @ dx[3 * j:3 * j + 3]) / bias_tau
         out[:, i] = q
     return out
 
@@ -178,4 +184,4 @@ def run_fast(tree, q0, gyr, dgyr, acc, mag, dt, mh, fnorm0, rz, fast, options):
                  tree.anc, tree.via, tree.own, tree.vpar, tree.ppar, tree.children, tree.roots,
                  mh, fnorm0, rz, np.ascontiguousarray(fast), o.use_h2, o.switch_dps is not None,
                  o.acc_sd, o.demoted, o.mag_sd, o.mag_gate, (o.gyro_noise * dt) ** 2,
-                 o.elbow_acc_sd**2)
+                 o.elbow_acc_sd**2, o.bias_tau_s or 0.0)

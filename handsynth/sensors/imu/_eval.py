@@ -33,7 +33,7 @@ import numpy as np
 from ...errors import InvalidInputError
 from ...models import JOINT_NAMES, HandShape
 from ._calibration import ImuCalibration, calibrate
-from ._ekf import ChainEKF
+from ._ekf import FILTER4B, ChainEKF
 from ._filters import (
     AhrsEKFEstimator,
     ConstantEstimator,
@@ -58,8 +58,8 @@ from ._vectors import seel_joint_positions, truth_chain_model
 __all__ = ["FILTERS", "HELDOUT", "TUNING", "SimConfig", "evaluate", "make_filter"]
 
 #: Names of the orientation estimators that :func:`evaluate` can run.
-FILTERS: tuple[str, ...] = ("constant", "raw", "filter1", "filter4", "gated", "vqf", "madgwick",
-                            "mahony", "ahrs_ekf")
+FILTERS: tuple[str, ...] = ("constant", "raw", "filter1", "filter4", "filter4b", "gated", "vqf",
+                            "madgwick", "mahony", "ahrs_ekf")
 
 
 @dataclass(frozen=True)
@@ -111,10 +111,11 @@ def make_filter(name: str, model=None):
     table = {"constant": ConstantEstimator, "raw": RawIntegration, "filter1": Filter1,
              "gated": GatedFilter, "vqf": VQFEstimator, "madgwick": MadgwickEstimator,
              "mahony": MahonyEstimator, "ahrs_ekf": AhrsEKFEstimator}
-    if name == "filter4":
+    if name in ("filter4", "filter4b"):
         if model is None:
-            raise InvalidInputError("filter4 needs a link model (calibration)")
-        return ChainEKF(model)
+            raise InvalidInputError(f"{name} needs a link model (calibration)")
+        return ChainEKF(model) if name == "filter4" else ChainEKF(model, options=FILTER4B,
+                                                                  name="filter4b")
     if name not in table:
         raise InvalidInputError(f"unknown filter {name!r}; expected one of {', '.join(FILTERS)}")
     return table[name]()

@@ -81,6 +81,13 @@ class AxisNoise:
     bias_repeatability : float
         s.d. of the change of that bias from one recording (power-up) to the
         next, per axis (units); a calibration cannot remove it.
+    bias_drift_rate : float
+        s.d. of a steady change of the bias during a recording, per axis
+        (units/s), drawn per recording: a sensor warming on the skin.  The
+        MPU-9250 datasheet gives the gyro's zero-rate output a variation of
+        +-30 deg/s over -40 to 85 C (PS-MPU-9250A-01, table 1), up to 0.24
+        deg/s per C; how fast a sensor warms on a hand is an assumption.  0
+        (the default) leaves every other draw as it was.
     scale_error, cross_axis : float
         s.d. of the scale-factor error and of the cross-axis terms (fractions).
     full_scale : float
@@ -95,6 +102,7 @@ class AxisNoise:
     bias_corr_s: float = 100.0
     turn_on_bias: float = 0.0
     bias_repeatability: float = 0.0
+    bias_drift_rate: float = 0.0
     scale_error: float = 0.0
     cross_axis: float = 0.0
     full_scale: float = np.inf
@@ -102,7 +110,7 @@ class AxisNoise:
 
     def __post_init__(self) -> None:
         for k in ("white", "rate_random_walk", "bias_instability", "turn_on_bias",
-                  "bias_repeatability", "scale_error", "cross_axis", "lsb"):
+                  "bias_repeatability", "bias_drift_rate", "scale_error", "cross_axis", "lsb"):
             v = getattr(self, k)
             if not (np.isfinite(v) and v >= 0):
                 raise InvalidInputError(f"{k} must be finite and >= 0, got {v!r}")
@@ -117,7 +125,8 @@ class AxisNoise:
                        rate_random_walk=self.rate_random_walk * factor,
                        bias_instability=self.bias_instability * factor,
                        turn_on_bias=self.turn_on_bias * factor,
-                       bias_repeatability=self.bias_repeatability * factor)
+                       bias_repeatability=self.bias_repeatability * factor,
+                       bias_drift_rate=self.bias_drift_rate * factor)
 
 
 @dataclass(frozen=True)
@@ -292,6 +301,9 @@ def apply_axis_noise(x: np.ndarray, noise: AxisNoise, rate_hz: float,
         y += np.asarray(fixed[1], float)[:, None, :]
     if noise.bias_repeatability > 0:
         y += rng.normal(0.0, noise.bias_repeatability, (s, 1, 3))
+    if noise.bias_drift_rate > 0:
+        t_s = np.arange(y.shape[1]) * dt
+        y += rng.normal(0.0, noise.bias_drift_rate, (s, 1, 3)) * t_s[None, :, None]
     y = np.clip(y, -noise.full_scale, noise.full_scale)
     if noise.lsb > 0:
         y = np.round(y / noise.lsb) * noise.lsb

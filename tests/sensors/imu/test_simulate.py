@@ -1,5 +1,7 @@
 import numpy as np
+import pytest
 
+from handsynth.errors import InvalidInputError
 from handsynth.sensors.imu import (
     GRAVITY_MPS2,
     SENSOR_NAMES,
@@ -142,3 +144,21 @@ def test_skin_motion_is_felt_by_the_sensor(imu_hand):
         # the tilt rate alone is far above what is left
         assert np.max(gyr_err) < 0.02 < 0.2 * np.max(tilt_rate), (name, max(gyr_err))
         assert np.max(acc_err) < 0.05, (name, max(acc_err))
+
+
+def test_a_drifting_bias_changes_steadily_and_leaves_the_other_draws_alone():
+    from handsynth.sensors.imu import AxisNoise, apply_axis_noise
+
+    base = AxisNoise(white=1e-3, rate_random_walk=1e-5, bias_instability=1e-4, turn_on_bias=1e-2)
+    drifting = AxisNoise(white=1e-3, rate_random_walk=1e-5, bias_instability=1e-4, turn_on_bias=1e-2,
+                         bias_drift_rate=2e-3)
+    x = np.zeros((400, 1000, 3))  # 400 sensors, 10 s at 100 Hz
+    a = apply_axis_noise(x, base, 100.0, np.random.default_rng(3))
+    b = apply_axis_noise(x, drifting, 100.0, np.random.default_rng(3))
+    change = b - a  # the same draws but the drift's, which come last
+    np.testing.assert_allclose(change[:, 0], 0.0, atol=1e-12)
+    slope = change[:, -1] / 9.99
+    np.testing.assert_allclose(change[:, 500], slope * 5.0, rtol=1e-9, atol=1e-12)
+    assert np.std(slope) == pytest.approx(2e-3, rel=0.1)
+    with pytest.raises(InvalidInputError, match="bias_drift_rate"):
+        AxisNoise(white=1e-3, rate_random_walk=0.0, bias_instability=0.0, bias_drift_rate=-1.0)
