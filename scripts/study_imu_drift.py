@@ -14,7 +14,7 @@ corrected by the configuration's sensor calibration as in the eval.
    trials at most 0.02 deg of mean orientation RMSE, the one with the lowest
    mean over the two drifting sets.
 2. Held-out configuration: the filters side by side (raw integration, Filter
-   4, ``filter4b`` = Filter 4 with the chosen constant, gated, vqf) on the
+   4, ``filter4b`` = Filter 4 with the chosen constant, gated, vqf offline and online) on the
    eval's trials and on the drifting recordings.
 
 Prints orientation RMSE mean (worst segment), joint-angle RMSE and fingertip
@@ -95,7 +95,7 @@ def main() -> None:
     chosen = min(allowed, key=lambda t: np.mean([out["tuning"][k][f"f4t{t:g}"] for k in drifting]))
     print(f"rule: time constants within 0.02 deg on the eval's trials {allowed}; chosen {chosen:g} s "
           f"(filter4b uses {ev.FILTER4B.bias_tau_s:g} s)", flush=True)
-    compared = ("raw", "filter4", "filter4b", "gated", "vqf")
+    compared = ("raw", "filter4", "filter4b", "gated", "vqf", "vqf_online")
     for drift in (None,) + DRIFTS_DPS_PER_MIN:
         label = "held-out, eval trials" if drift is None else f"held-out, 120 s, {drift} deg/s/min"
         s = _run(HELDOUT, compared, drift)

@@ -9,7 +9,8 @@ import click
 
 from ._main import cli
 
-_TRACK_FILTERS = ("raw", "filter1", "gated", "vqf", "madgwick", "mahony", "ahrs_ekf", "constant")
+_TRACK_FILTERS = ("raw", "filter1", "gated", "vqf", "vqf_online", "madgwick", "mahony", "ahrs_ekf",
+                  "constant")
 _CHAIN_FILTERS = ("filter4", "filter4b")  # need the link model of a calibration
 
 

@@ -36,8 +36,8 @@ from ._recording import ImuRecording
 
 __all__ = ["BROAD_FILTERS", "broad_errors", "find_broad_trials", "read_broad_trial", "run_broad"]
 
-BROAD_FILTERS: tuple[str, ...] = ("constant", "raw", "filter1", "gated", "vqf", "madgwick",
-                                  "mahony", "ahrs_ekf")
+BROAD_FILTERS: tuple[str, ...] = ("constant", "raw", "filter1", "gated", "vqf", "vqf_online",
+                                  "madgwick", "mahony", "ahrs_ekf")
 _FIELDS = ("imu_acc", "imu_gyr", "imu_mag", "opt_quat", "movement", "sampling_rate")
 
 

@@ -59,7 +59,7 @@ __all__ = ["FILTERS", "HELDOUT", "TUNING", "SimConfig", "evaluate", "make_filter
 
 #: Names of the orientation estimators that :func:`evaluate` can run.
 FILTERS: tuple[str, ...] = ("constant", "raw", "filter1", "filter4", "filter4b", "gated", "vqf",
-                            "madgwick", "mahony", "ahrs_ekf")
+                            "vqf_online", "madgwick", "mahony", "ahrs_ekf")
 
 
 @dataclass(frozen=True)
@@ -116,6 +116,8 @@ def make_filter(name: str, model=None):
             raise InvalidInputError(f"{name} needs a link model (calibration)")
         return ChainEKF(model) if name == "filter4" else ChainEKF(model, options=FILTER4B,
                                                                   name="filter4b")
+    if name == "vqf_online":
+        return VQFEstimator(online=True, name="vqf_online")
     if name not in table:
         raise InvalidInputError(f"unknown filter {name!r}; expected one of {', '.join(FILTERS)}")
     return table[name]()

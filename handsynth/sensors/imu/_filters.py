@@ -204,19 +204,29 @@ def _prepared(rec: ImuRecording, static: StaticStart):
 
 @dataclass(frozen=True)
 class VQFEstimator:
-    """VQF, 9D (magnetometer on), default parameters of the ``vqf`` package."""
+    """VQF, 9D (magnetometer on), default parameters of the ``vqf`` package.
+
+    By default the package's offline variant (``offlineVQF``): it is acausal,
+    estimating the gyro bias from the whole recording, past and future, so
+    it cannot run live.  ``online=True`` runs the causal filter (``VQF``'s
+    ``updateBatch``), the one a live system can use: the fair baseline for
+    the causal filters here (Filter 4, gated, Madgwick).
+    """
 
     static: StaticStart = field(default_factory=StaticStart)
     name: str = "vqf"
+    online: bool = False
 
     def run(self, rec: ImuRecording) -> np.ndarray:
-        from vqf import offlineVQF
+        from vqf import VQF, offlineVQF
 
         gyr = _prepared(rec, self.static)
         out = np.empty((len(rec.sensors), rec.n, 4))
+        ts = 1.0 / rec.rate_hz
         for k in range(len(rec.sensors)):
-            res = offlineVQF(np.ascontiguousarray(gyr[k]), np.ascontiguousarray(rec.acc[k]),
-                             np.ascontiguousarray(rec.mag[k]), 1.0 / rec.rate_hz)
+            args = (np.ascontiguousarray(gyr[k]), np.ascontiguousarray(rec.acc[k]),
+                    np.ascontiguousarray(rec.mag[k]))
+            res = VQF(ts).updateBatch(*args) if self.online else offlineVQF(*args, ts)
             out[k] = qmul(_Q_NWU_FROM_ENU, res["quat9D"])
         return out
 

@@ -21,7 +21,8 @@ from handsynth.sensors.imu import (
 )
 from handsynth.sensors.imu._quat import angle_deg, heading_inclination_deg
 
-ALL = [ConstantEstimator(), RawIntegration(), Filter1(), GatedFilter(), VQFEstimator(), MadgwickEstimator(),
+ALL = [ConstantEstimator(), RawIntegration(), Filter1(), GatedFilter(), VQFEstimator(),
+       VQFEstimator(online=True, name="vqf_online"), MadgwickEstimator(),
        MahonyEstimator(), AhrsEKFEstimator()]
 
 
@@ -75,3 +76,12 @@ def test_raw_integration_beats_constant_on_moving_segments(free_rec):
 
     assert np.all(rmse(e_raw) < rmse(e_const))
     assert np.median(rmse(e_raw)) < 5.0
+
+
+def test_online_vqf_is_causal_and_the_offline_one_is_not(free_rec):
+    """The offline VQF uses future samples (its bias estimate); the online one cannot."""
+    half = free_rec.slice(0, free_rec.n // 2)
+    online = VQFEstimator(online=True)
+    np.testing.assert_allclose(online.run(half), online.run(free_rec)[:, :half.n], atol=1e-12)
+    offline = VQFEstimator()
+    assert angle_deg(offline.run(half), offline.run(free_rec)[:, :half.n]).max() > 1e-3
