@@ -26,14 +26,17 @@ and ``raw`` (gyro integration).
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import partial
+from typing import Any
 
 import numpy as np
 
 from ...errors import InvalidInputError
 from ...models import JOINT_NAMES, HandShape
 from ._calibration import ImuCalibration, calibrate
-from ._ekf import FILTER4B, ChainEKF
+from ._ekf import FILTER4B, ChainEKF, ChainEKFOptions
 from ._filters import (
     AhrsEKFEstimator,
     ConstantEstimator,
@@ -108,16 +111,16 @@ HELDOUT = SimConfig("heldout", HandShape(length=1.08, width=0.93, palm=0.95), EV
 
 def make_filter(name: str, model=None):
     """An estimator by name (``filter4`` needs the link model)."""
-    table = {"constant": ConstantEstimator, "raw": RawIntegration, "filter1": Filter1,
-             "gated": GatedFilter, "vqf": VQFEstimator, "madgwick": MadgwickEstimator,
-             "mahony": MahonyEstimator, "ahrs_ekf": AhrsEKFEstimator}
-    if name in ("filter4", "filter4b"):
+    table: dict[str, Callable[[], Any]] = {
+        "constant": ConstantEstimator, "raw": RawIntegration, "filter1": Filter1,
+        "gated": GatedFilter, "vqf": VQFEstimator,
+        "vqf_online": partial(VQFEstimator, online=True, name="vqf_online"),
+        "madgwick": MadgwickEstimator, "mahony": MahonyEstimator, "ahrs_ekf": AhrsEKFEstimator}
+    chain = {"filter4": ChainEKFOptions(), "filter4b": FILTER4B}  # need the link model
+    if name in chain:
         if model is None:
             raise InvalidInputError(f"{name} needs a link model (calibration)")
-        return ChainEKF(model) if name == "filter4" else ChainEKF(model, options=FILTER4B,
-                                                                  name="filter4b")
-    if name == "vqf_online":
-        return VQFEstimator(online=True, name="vqf_online")
+        return ChainEKF(model, options=chain[name], name=name)
     if name not in table:
         raise InvalidInputError(f"unknown filter {name!r}; expected one of {', '.join(FILTERS)}")
     return table[name]()
