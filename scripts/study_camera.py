@@ -659,26 +659,13 @@ def main() -> None:
     args = ap.parse_args()
     if args.study not in ("observability", "bound_mcp", "moved") and args.cache is None:
         ap.error(f"{args.study} needs --cache DIR")
-    if args.study == "backgrounds":
-        backgrounds(args.cache)
-    elif args.study == "jitter":
-        jitter(args.cache)
-    elif args.study == "holds":
-        holds(args.cache)
-    elif args.study == "bound":
-        bound(args.cache)
-    elif args.study == "bound_mcp":
-        bound_mcp()
-    elif args.study == "rests":
-        rests(args.cache, args.rest, ensemble=args.ensemble)
-    elif args.study == "moved":
-        moved(args.axis)
-    elif args.study == "imaging":
-        imaging(args.cache)
-    elif args.study == "mounts":
-        mounts(args.cache)
-    else:
-        observability()
+    studies = {"backgrounds": lambda: backgrounds(args.cache), "jitter": lambda: jitter(args.cache),
+               "holds": lambda: holds(args.cache), "observability": observability,
+               "bound": lambda: bound(args.cache), "bound_mcp": bound_mcp,
+               "rests": lambda: rests(args.cache, args.rest, ensemble=args.ensemble),
+               "moved": lambda: moved(args.axis), "imaging": lambda: imaging(args.cache),
+               "mounts": lambda: mounts(args.cache)}
+    studies[args.study]()
 
 
 if __name__ == "__main__":
