@@ -114,15 +114,16 @@ class EnsembleEstimator:
 
     def calibrated(self, rest_frame: np.ndarray) -> EnsembleEstimator:
         """A copy whose members are calibrated to `rest_frame` (those that calibrate)."""
-        members = [m.calibrated(rest_frame) if callable(getattr(m, "calibrated", None)) else m
-                   for m in self.members]
+        members = []
         checked = set()  # learnt members reading one grid check it for a moved device once
-        for m in members:
+        for m in self.members:
             if isinstance(m, LearnedEstimator):
                 key = (m.mount, m.side, m.cells)
-                if key in checked:
-                    m._move_check = None
+                members.append(m.calibrated(rest_frame, check_moved=key not in checked))
                 checked.add(key)
+            else:
+                members.append(m.calibrated(rest_frame)
+                               if callable(getattr(m, "calibrated", None)) else m)
         return EnsembleEstimator(members, weights=self.weights)
 
     def estimate(self, frame: np.ndarray) -> PoseEstimate:

@@ -548,7 +548,7 @@ class LearnedEstimator:
         self._hi = JOINT_LIMITS_DEG[:, 1]
 
     # -- calibration -----------------------------------------------------------
-    def calibrated(self, rest_frame: np.ndarray) -> LearnedEstimator:
+    def calibrated(self, rest_frame: np.ndarray, *, check_moved: bool = True) -> LearnedEstimator:
         """A copy of this estimator calibrated to a frame of the user's hand at rest.
 
         Parameters
@@ -556,6 +556,10 @@ class LearnedEstimator:
         rest_frame : ndarray, shape (H, W) or (H, W, 3)
             The user's hand relaxed (not necessarily open or flat) through
             the device, a mask or a camera frame as :meth:`estimate` takes.
+        check_moved : bool, keyword-only
+            Check each frame for a device moved since `rest_frame`
+            (:class:`~handsynth.estimate.MoveCheck`; False: ``moved`` is never
+            set, as for an ensemble member whose grid another member checks).
 
         Raises
         ------
@@ -567,7 +571,7 @@ class LearnedEstimator:
             raise InvalidInputError("rest_frame shows no hand")
         out = copy.copy(self)
         out._rest = g.ravel()
-        out._move_check = MoveCheck(g, self.mount, side=self.side)
+        out._move_check = MoveCheck(g, self.mount, side=self.side) if check_moved else None
         out._previous = None
         if "abs_mean" in self._a:
             z = _inputs(out._rest[None], None) - self._a["abs_mean"]
