@@ -12,6 +12,7 @@ Usage::
     python scripts/study_camera.py [--axis FIELD] moved
     python scripts/study_camera.py --cache DIR imaging
     python scripts/study_camera.py --cache DIR mounts
+    python scripts/study_camera.py --cache DIR sizes
 
 ``backgrounds``
     Two held-out model hands (seed 3, 1.5 times the learning spread) and the
@@ -130,6 +131,17 @@ Usage::
     constant open-hand answer and the share of frames flagged
     ``low_confidence``.  Last line: ``worst_paper=<deg> worst_natural=<deg>
     flagged=<share>``.
+``sizes``
+    Hands smaller and larger than any a learning set holds on average: each
+    glTF hand made larger or smaller about its wrist joint
+    (:meth:`handsynth.testhands.MeshRig.scaled`) to 145-235 mm in steps of
+    15 mm from the wrist joint to the middle fingertip (the shipped hands
+    measure 216 and 196 mm, the standard model hand 187 mm), a relaxed and
+    a near-open rest each (seed 53), 80 paper and 80 natural frames each,
+    default ensemble.  Per length the finger flexion MAE beside the constant
+    open-hand answer, the index PIP's error where it moves more than 20 deg
+    (paper / natural frames) and the share of frames flagged ``low_confidence``.  Last line:
+    ``paper_skill_min=<skill> natural_skill_min=<skill>``.
 
 The learnt estimator is read from ``--cache`` (or learnt there first).
 """
@@ -155,6 +167,10 @@ from handsynth.render import CameraMount
 
 _FLEX = [4, 6, 7, 8, 10, 11, 12, 14, 15, 16, 18, 19]  # the 12 finger flexions
 _SKIN = np.array([120, 150, 210], np.uint8)             # BGR
+#: wrist joint to the middle fingertip of the sizes study's hands, mm: around the
+#: 1988 US Army survey's means (women 180.4, men 193.8; handsynth.models._anthropometry)
+#: and well beyond them
+_HAND_LENGTHS_MM = (145, 160, 175, 190, 205, 220, 235)
 
 
 def _estimator(cache):
@@ -644,6 +660,53 @@ def mounts(cache) -> None:
           f"flagged={np.mean(flagged):.3f}")
 
 
+def sizes(cache) -> None:
+    from handsynth.estimate import learned_ensemble
+    from handsynth.eval import paper_protocol_poses
+    from handsynth.eval._testposes import REST_POSTURES
+    from handsynth.models import joint_index
+    from handsynth.testhands import TEST_HANDS, MeshHandRenderer, shipped_hand_path
+
+    ens = learned_ensemble(cache)
+    native = {}
+    for name in sorted(TEST_HANDS):
+        with MeshHandRenderer(width_px=72, height_px=48, path=shipped_hand_path(name)) as r:
+            native[name] = r.hand_length_mm
+    index_pip = joint_index("index_pip_flex")
+    skill = {"paper": [], "natural": []}
+    for length in _HAND_LENGTHS_MM:
+        mae: dict = {}
+        pip: dict = {"paper": [], "natural": []}
+        low = []
+        for name in sorted(TEST_HANDS):
+            scale = length / native[name]
+            hand = mesh_test_hands([name], scale=scale)[0]
+            made = hand.make()
+            for r, rest_kind in enumerate(("relaxed", "open")):
+                rng = np.random.default_rng([53, r, len(name)])
+                rest = REST_POSTURES[rest_kind](rng)
+                cal = ens.calibrated(made.mask(rest))
+                for kind, poses in (("paper", paper_protocol_poses(rest, 80, rng)[0]),
+                                    ("natural", natural_test_poses(rest, 80, rng)[0])):
+                    got = [cal.estimate(m) for m in made.masks(poses)]
+                    angles = np.stack([g.angles for g in got])
+                    mae.setdefault(kind, []).append(np.abs(angles[:, _FLEX] - poses[:, _FLEX]).mean())
+                    mae.setdefault(kind + " constant", []).append(np.abs(poses[:, _FLEX]).mean())
+                    moving = np.abs(poses[:, index_pip] - rest[index_pip]) > 20
+                    pip[kind] += list(np.abs(angles[moving, index_pip] - poses[moving, index_pip]))
+                    low += [g.low_confidence for g in got]
+            made.close()
+        m = {k: float(np.mean(v)) for k, v in mae.items()}
+        for kind in skill:
+            skill[kind].append(1 - m[kind] / m[kind + " constant"])
+        print(f"hand length {length:3d} mm: paper {m['paper']:5.2f} (constant {m['paper constant']:5.2f}, "
+              f"skill {skill['paper'][-1]:.2f})  natural {m['natural']:5.2f} (constant "
+              f"{m['natural constant']:5.2f})  index PIP where it moves {np.mean(pip['paper']):4.1f} / "
+              f"{np.mean(pip['natural']):4.1f} (n={len(pip['paper'])} / {len(pip['natural'])})  "
+              f"low_confidence {np.mean(low):.2f}", flush=True)
+    print(f"paper_skill_min={min(skill['paper']):.2f} natural_skill_min={min(skill['natural']):.2f}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cache", default=None, help="folder of the learnt estimator")
@@ -655,7 +718,7 @@ def main() -> None:
                     choices=["height_mm", "thumb_offset_mm", "along_mm", "tilt_deg", "roll_deg"],
                     help="moved: slip along this field of MountVariation alone")
     ap.add_argument("study", choices=["backgrounds", "jitter", "holds", "observability", "bound",
-                                      "bound_mcp", "rests", "moved", "imaging", "mounts"])
+                                      "bound_mcp", "rests", "moved", "imaging", "mounts", "sizes"])
     args = ap.parse_args()
     if args.study not in ("observability", "bound_mcp", "moved") and args.cache is None:
         ap.error(f"{args.study} needs --cache DIR")
@@ -664,7 +727,7 @@ def main() -> None:
                "bound": lambda: bound(args.cache), "bound_mcp": bound_mcp,
                "rests": lambda: rests(args.cache, args.rest, ensemble=args.ensemble),
                "moved": lambda: moved(args.axis), "imaging": lambda: imaging(args.cache),
-               "mounts": lambda: mounts(args.cache)}
+               "mounts": lambda: mounts(args.cache), "sizes": lambda: sizes(args.cache)}
     studies[args.study]()
 
 

@@ -47,6 +47,9 @@ PROTOCOL_DEFAULT = "standard,calibrated,fingers,fingers_mean,mlp,ensemble"
               help="--protocol: glTF hands to test, comma-separated ('' for none): shipped "
                    "ones by name, or .gltf/.glb files of right hands rigged with OpenXR joint "
                    "names (named by their file's stem).")
+@click.option("--mesh-scale", type=float, default=1.0, show_default=True, metavar="F",
+              help="--protocol: the glTF hands made larger or smaller about the wrist by this "
+                   "factor (0.5-2), for a hand of another size than the file's.")
 @click.option("--learned-hands", type=int, default=None, metavar="N",
               help="--protocol: random hands of the learnt estimators' learning set "
                    "[default: 4,000 x 100 frames; the ensemble's perceptrons learn from "
@@ -103,7 +106,7 @@ PROTOCOL_DEFAULT = "standard,calibrated,fingers,fingers_mean,mlp,ensemble"
               help="Scale of the photos that measure model hands for the personal condition.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress lines.")
 @click.pass_context
-def eval_(ctx, db_folder, protocol, mesh, learned_hands, hand_spread, rest, slip, out_dir, prefix,
+def eval_(ctx, db_folder, protocol, mesh, mesh_scale, learned_hands, hand_spread, rest, slip, out_dir, prefix,
           json_path, json_frames, n_hands, frames, pose_sets, hand, conditions, count,
           db_pose_set, seed, ratio_margin, mount, frame_size, render_size, workers, ties,
           photo_mm_per_px, quiet) -> None:
@@ -133,11 +136,11 @@ def eval_(ctx, db_folder, protocol, mesh, learned_hands, hand_spread, rest, slip
         if given:
             raise InvalidInputError(f"{', '.join(given)} appl{'ies' if len(given) == 1 else 'y'} "
                                     "to the paper's experiment, not to --protocol")
-        _protocol(db_folder, mesh, learned_hands, hand_spread, json_path, n_hands, frames,
+        _protocol(db_folder, mesh, mesh_scale, learned_hands, hand_spread, json_path, n_hands, frames,
                   _parse_list(pose_sets, "--pose-sets"),
                   _parse_list(conditions or PROTOCOL_DEFAULT, "--conditions"), seed, rest, slip, say)
         return
-    for n in ("mesh", "learned_hands", "hand_spread", "rest", "slip"):
+    for n in ("mesh", "mesh_scale", "learned_hands", "hand_spread", "rest", "slip"):
         if ctx.get_parameter_source(n) == click.core.ParameterSource.COMMANDLINE:
             raise InvalidInputError(f"--{n.replace('_', '-')} applies with --protocol only")
     conditions = conditions or "standard,selected,selected_none,personal,calibrated,own_shape"
@@ -162,7 +165,7 @@ def eval_(ctx, db_folder, protocol, mesh, learned_hands, hand_spread, rest, slip
     sys.stdout.flush()
 
 
-def _protocol(folder, mesh, learned_hands, hand_spread, json_path, n_hands, frames, pose_sets,
+def _protocol(folder, mesh, mesh_scale, learned_hands, hand_spread, json_path, n_hands, frames, pose_sets,
               methods, seed, rest, slip, say) -> None:
     import json
     import time
@@ -192,7 +195,7 @@ def _protocol(folder, mesh, learned_hands, hand_spread, json_path, n_hands, fram
     mount = CameraMount.paper()
     meshes = [m.strip() for m in mesh.split(",") if m.strip()]
     hands = model_test_hands(n_hands, seed=seed + 1, mount=mount, spread=hand_spread)
-    hands += mesh_test_hands(meshes, mount=mount) if meshes else []
+    hands += mesh_test_hands(meshes, mount=mount, scale=mesh_scale) if meshes else []
     if not hands:
         raise InvalidInputError("no test hands: give --hands N > 0 or --mesh NAMES")
     data = (LearningSetOptions() if learned_hands is None

@@ -183,7 +183,8 @@ def model_test_hands(n: int, *, seed: int = 0, mount: CameraMount | None = None,
     return out
 
 
-def mesh_test_hands(names=None, *, mount: CameraMount | None = None) -> list[TestHand]:
+def mesh_test_hands(names=None, *, mount: CameraMount | None = None,
+                    scale: float = 1.0) -> list[TestHand]:
     """Rigged glTF hands as test hands: shipped ones by name, or any file.
 
     Parameters
@@ -196,12 +197,16 @@ def mesh_test_hands(names=None, *, mount: CameraMount | None = None) -> list[Tes
         by its file's stem.
     mount : CameraMount, keyword-only, optional
         The paper's by default.
+    scale : float, keyword-only
+        Every hand made larger or smaller about its wrist joint by this
+        factor (:meth:`handsynth.testhands.MeshRig.scaled`); 1 by default.
 
     Raises
     ------
     InvalidInputError
-        A name that is neither a shipped hand nor a glTF file, or a file that
-        does not load as a rigged hand (the loader's message).
+        A name that is neither a shipped hand nor a glTF file, a file that
+        does not load as a rigged hand (the loader's message), or a `scale`
+        outside [0.5, 2].
     """
     from ..testhands import TEST_HANDS, MeshHandRenderer, load_mesh_rig, shipped_hand_path
 
@@ -214,16 +219,19 @@ def mesh_test_hands(names=None, *, mount: CameraMount | None = None) -> list[Tes
             path = Path(entry)
             if not path.is_file():
                 raise InvalidInputError(f"test hand file {str(path)!r} does not exist")
-            load_mesh_rig(path)  # a file that is no rigged hand fails here, not hours later
             name = path.stem
         else:
             raise InvalidInputError(f"a test hand is one of {sorted(TEST_HANDS)} or a .gltf/.glb "
                                     f"file, got {str(entry)!r}")
 
-        def make(at=None, path=path):
-            return MeshHandRenderer(at or mount, path=path)
+        # a file that is no rigged hand, or a bad scale, fails here, not hours later
+        load_mesh_rig(path).scaled(scale)
 
-        out.append(TestHand(name, "mesh", make, info={"file": path.name}, mount=mount))
+        def make(at=None, path=path):
+            return MeshHandRenderer(at or mount, path=path, scale=scale)
+
+        info = {"file": path.name, **({"scale": float(scale)} if scale != 1.0 else {})}
+        out.append(TestHand(name, "mesh", make, info=info, mount=mount))
     return out
 
 

@@ -83,7 +83,7 @@ import json
 import os
 import re
 import struct
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -377,6 +377,35 @@ class MeshRig:
 
     def bone(self, name: str) -> int:
         return self.bone_names.index(name)
+
+    def scaled(self, factor: float) -> MeshRig:
+        """The same hand made larger or smaller about its wrist joint.
+
+        Parameters
+        ----------
+        factor : float
+            Multiplies every length (vertices, joint centres, fingertip
+            distances); 1 gives the rig unchanged.  Between 0.5 and 2.
+
+        Returns
+        -------
+        MeshRig
+            Same bones, weights, frames and faces.
+
+        Raises
+        ------
+        InvalidInputError
+            A `factor` that is not a number in [0.5, 2].
+        """
+        if isinstance(factor, bool) or not isinstance(factor, (int, float, np.floating)) \
+                or not 0.5 <= factor <= 2.0:
+            raise InvalidInputError(f"scale must be a number in [0.5, 2], got {factor!r}")
+        f = float(factor)
+        to_hand = self.to_hand.copy()
+        to_hand[:3] *= f  # the hand frame's origin is the wrist joint
+        return replace(self, vertices=self.vertices * f,
+                       joints={k: v * f for k, v in self.joints.items()},
+                       tip_mm={k: v * f for k, v in self.tip_mm.items()}, to_hand=to_hand)
 
 
 def _canonical_bone(name: str) -> str | None:
@@ -873,6 +902,9 @@ class MeshHandRenderer(GLContextOwner, MaskMaker):
         view is kept and pixels are square.
     path : str or path-like, keyword-only
         A rigged hand ``.gltf``; :func:`default_mesh_path` by default.
+    scale : float, keyword-only
+        The hand made larger or smaller about its wrist joint
+        (:meth:`MeshRig.scaled`); 1 (the default) as in the file.
 
     Raises
     ------
@@ -894,7 +926,7 @@ class MeshHandRenderer(GLContextOwner, MaskMaker):
 
     def __init__(self, mount: CameraMount | None = None, *, side: str = "right",
                  width_px: int | None = None, height_px: int | None = None,
-                 path: str | os.PathLike | None = None) -> None:
+                 path: str | os.PathLike | None = None, scale: float = 1.0) -> None:
         if side not in ("right", "left"):
             raise InvalidCameraError(f"side must be 'right' or 'left', got {side!r}")
         if mount is not None and not isinstance(mount, CameraMount):
@@ -909,6 +941,8 @@ class MeshHandRenderer(GLContextOwner, MaskMaker):
         self.side = side
         self.width_px, self.height_px = self.mount.size(width_px, height_px)
         self.rig = load_mesh_rig(path)
+        if scale != 1.0:
+            self.rig = self.rig.scaled(scale)
         self.path = self.rig.path
         self._poser = _Poser(self.rig)
         self._faces = self.rig.faces if side == "right" else self.rig.faces[:, ::-1]

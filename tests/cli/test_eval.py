@@ -87,10 +87,11 @@ def test_protocol_puts_the_constant_beside_every_method_and_writes_json(tmp_path
     res = _run("--protocol", "--db", str(tmp_path / "cache"), "--hands", "1", "--mesh", "mrtk",
                "--frames", "6", "--pose-sets", "natural", "--learned-hands", "8",
                "--conditions", "fingers,fingers_mean,ensemble", "--json", str(js), "-q",
-               "--rest", "open", "--slip", "0.5")
+               "--rest", "open", "--slip", "0.5", "--mesh-scale", "0.9")
     assert res.exit_code == 0, res.output
     d = json.loads(js.read_text())
     assert set(d["hands"]) == {"model0", "mrtk"}
+    assert d["hands"]["mrtk"]["info"] == {"file": "hand_r.glb", "scale": 0.9}
     assert d["options"]["rest"] == "open" and d["options"]["slip"] == 0.5
     assert all(set(h["slipped_mount"]) >= {"height_mm", "tilt_deg"} for h in d["hands"].values())
     for hand in d["hands"].values():  # every finger joint rests flexed a few degrees
@@ -125,6 +126,8 @@ def test_protocol_puts_the_constant_beside_every_method_and_writes_json(tmp_path
     (["--mesh", "mrtk"], "--mesh applies with --protocol only"),
     (["--rest", "open"], "--rest applies with --protocol only"),
     (["--slip", "0.5"], "--slip applies with --protocol only"),
+    (["--mesh-scale", "0.9"], "--mesh-scale applies with --protocol only"),
+    (["--protocol", "--hands", "0", "--mesh-scale", "3"], "scale must be a number in [0.5, 2], got 3.0"),
     (["--protocol", "--slip", "-1", "--hands", "1"], "ProtocolOptions.slip must be in [0, 5], got -1.0"),
     (["--protocol", "--conditions", "fingers,tree"], "methods must be distinct names from"),
     (["--protocol", "--hands", "0", "--mesh", ""], "no test hands"),

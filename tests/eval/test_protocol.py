@@ -219,3 +219,14 @@ def test_two_test_hands_of_one_name_are_refused():
     twice = model_test_hands(1, seed=4) * 2
     with pytest.raises(InvalidInputError, match="distinct names, got model0 twice"):
         run_protocol({"skip": lambda rest, hand: None}, twice, ProtocolOptions(frames=2))
+
+
+def test_mesh_test_hands_scaled_say_so_and_refuse_a_bad_scale():
+    from handsynth.eval import mesh_test_hands
+
+    hands = mesh_test_hands(["mrtk"], scale=0.9)
+    assert hands[0].info == {"file": "hand_r.glb", "scale": 0.9}
+    assert hands[0].make().hand_length_mm == pytest.approx(
+        0.9 * mesh_test_hands(["mrtk"])[0].make().hand_length_mm)
+    with pytest.raises(InvalidInputError, match=r"scale must be a number in \[0.5, 2\], got 4"):
+        mesh_test_hands(scale=4)

@@ -270,3 +270,29 @@ def test_truncated_glb_is_refused(tmp_path):
     bad.write_bytes(raw[: len(raw) // 2])
     with pytest.raises(InvalidInputError, match="cut.glb"):
         load_mesh_rig(bad)
+
+
+def test_a_scaled_rig_is_the_same_hand_larger_about_its_wrist():
+    rig = load_mesh_rig()
+    big = rig.scaled(1.25)
+    for name, p in rig.joints.items():
+        np.testing.assert_allclose(big.joints[name], 1.25 * p, atol=1e-12)
+    np.testing.assert_allclose(big.vertices, 1.25 * rig.vertices, atol=1e-12)
+    assert big.tip_mm["index"] == pytest.approx(1.25 * rig.tip_mm["index"])
+    np.testing.assert_array_equal(big.faces, rig.faces)
+    for name, frame in rig.frames.items():
+        np.testing.assert_array_equal(big.frames[name], frame)
+    with MeshHandRenderer(CameraMount.whole_hand(), width_px=W, height_px=H) as one, \
+            MeshHandRenderer(CameraMount.whole_hand(), width_px=W, height_px=H, scale=0.8) as small:
+        assert small.hand_length_mm == pytest.approx(0.8 * one.hand_length_mm)
+        np.testing.assert_allclose(small.keypoints(named_pose("fist")),
+                                   0.8 * one.keypoints(named_pose("fist")), atol=1e-12)
+        # a smaller hand covers less of the same camera's frame
+        pose = named_pose("open")
+        assert 0.5 < small.mask(pose).sum() / one.mask(pose).sum() < 0.8
+
+
+@pytest.mark.parametrize("bad", [0.3, 2.5, float("nan"), "1", True])
+def test_a_scale_out_of_range_is_refused_by_value(bad):
+    with pytest.raises(InvalidInputError, match=r"scale must be a number in \[0.5, 2\], got"):
+        load_mesh_rig().scaled(bad)
