@@ -264,8 +264,9 @@ def _progress(stream):
                    "the ensemble's relaxed-rest perceptron is then its seed-0 perceptron "
                    "again).")
 @click.option("--side", type=click.Choice(["right", "left"]), default=None,
-              help="With --learned: the hand wearing the device [default: right] (the "
-                   "lookups take it from the database).")
+              help="With --learned: the hand wearing the device [default: right]; a left "
+                   "hand is read by the right hand's estimator mirrored, nothing learnt "
+                   "again (the lookups take the side from the database).")
 @click.option("--smoothing", type=float, default=None, metavar="A",
               help="With --learned: report A * previous + (1 - A) * new angles (0 <= A < 1) "
                    "[default: 0, none]. At 30 fps, 0.3 cut the frame-to-frame jitter by a "

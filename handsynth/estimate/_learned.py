@@ -524,6 +524,9 @@ class LearnedEstimator:
         self.options = options
         self.mount = mount
         self.side = side
+        # what the arrays were learnt from; mirrored() reads the other hand's frames upside down
+        self._learnt_view = (mount, side)
+        self._mirror = False
         self.cells: tuple[int, int] = (int(cells[0]), int(cells[1]))
         arrays = dict(arrays)
         # inverted files stored by save(): read below instead of trained, not learnt arrays
@@ -546,6 +549,29 @@ class LearnedEstimator:
         self._rest_angles: np.ndarray | None = None
         self._lo = JOINT_LIMITS_DEG[:, 0]
         self._hi = JOINT_LIMITS_DEG[:, 1]
+
+    def mirrored(self) -> LearnedEstimator:
+        """This estimator reading the other hand's frames.
+
+        A left hand is the mirror image of the right with the same joint
+        senses, and its frame through a device is the right hand's frame
+        through the mirrored device (:meth:`CameraMount.mirrored`) turned
+        upside down, pixel for pixel.  So the mirrored estimator turns each
+        frame upside down and reads it as learnt: no learning set of the
+        other hand, the same figures.
+
+        Returns
+        -------
+        LearnedEstimator
+            A copy (calibration kept, turned with it) whose ``side`` is the
+            other hand and whose ``mount`` is the mirrored device;
+            ``mirrored().mirrored()`` reads as this one.
+        """
+        out = copy.copy(self)
+        out._mirror = not self._mirror
+        out.side = "left" if self.side == "right" else "right"
+        out.mount = self.mount.mirrored()
+        return out
 
     # -- calibration -----------------------------------------------------------
     def calibrated(self, rest_frame: np.ndarray, *, check_moved: bool = True) -> LearnedEstimator:
@@ -571,7 +597,8 @@ class LearnedEstimator:
             raise InvalidInputError("rest_frame shows no hand")
         out = copy.copy(self)
         out._rest = g.ravel()
-        out._move_check = MoveCheck(g, self.mount, side=self.side) if check_moved else None
+        mount, side = self._learnt_view
+        out._move_check = MoveCheck(g, mount, side=side) if check_moved else None
         out._previous = None
         if "abs_mean" in self._a:
             z = _inputs(out._rest[None], None) - self._a["abs_mean"]
@@ -673,7 +700,10 @@ class LearnedEstimator:
                     f"frame is {shape[1]}x{shape[0]} pixels; this estimator learnt the "
                     f"device's {self.mount.width_px}x{self.mount.height_px} view: give frames "
                     "of that width-to-height ratio (scaled, not cropped)")
-        c = coverage(frame, self.mount, side=self.side, cells=self.cells)
+        if self._mirror and len(shape) in (2, 3):
+            frame = np.asarray(frame)[::-1]
+        mount, side = self._learnt_view
+        c = coverage(frame, mount, side=side, cells=self.cells)
         return np.rint(c * 255).astype(np.uint8)
 
     # -- estimation ---------------------------------------------------------------
@@ -762,10 +792,15 @@ class LearnedEstimator:
 
     # -- storage -------------------------------------------------------------------
     def save(self, path) -> None:
-        """Write the learnt arrays to `path` (``.npz``), complete or not at all."""
+        """Write the learnt arrays to `path` (``.npz``), complete or not at all.
+
+        A :meth:`mirrored` estimator writes the one it mirrors (the file says
+        what was learnt); :meth:`load` it and mirror it again.
+        """
         path = Path(path)
-        meta = {"format": _FORMAT, "options": asdict(self.options), "mount": self.mount.as_dict(),
-                "side": self.side, "cells": list(self.cells)}
+        mount, side = self._learnt_view
+        meta = {"format": _FORMAT, "options": asdict(self.options), "mount": mount.as_dict(),
+                "side": side, "cells": list(self.cells)}
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
@@ -967,6 +1002,10 @@ def learned_estimator(folder, options: LearnedOptions | None = None, *,
     mount : CameraMount, keyword-only, optional
         The device (the paper's by default).
     side : {"right", "left"}, keyword-only
+        The hand wearing the device.  A left hand's estimator is the right
+        hand's :meth:`~LearnedEstimator.mirrored` (learnt, or shipped, for
+        the mirrored device), so both hands share one learning set and the
+        shipped perceptrons.
     progress : callable, keyword-only, optional
         Called with a line of text at each stage.
     shipped : bool, keyword-only
@@ -976,6 +1015,11 @@ def learned_estimator(folder, options: LearnedOptions | None = None, *,
     opts = options or LearnedOptions()
     data = data or LearningSetOptions()
     mount = mount or CameraMount.paper()
+    if side not in ("right", "left"):
+        raise InvalidInputError(f"side must be 'right' or 'left', got {side!r}")
+    if side == "left":
+        return learned_estimator(folder, opts, data=data, mount=mount.mirrored(), side="right",
+                                 progress=progress, shipped=shipped).mirrored()
     path = Path(folder) / learned_file_name(opts, data, mount, side)
     say = progress or (lambda _line: None)
     if path.is_file():

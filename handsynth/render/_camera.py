@@ -128,6 +128,16 @@ class CameraMount:
         """A copy with some fields changed (validated again)."""
         return replace(self, **changes)
 
+    def mirrored(self) -> CameraMount:
+        """The device seen in the mirror: the roll turned the other way.
+
+        A left hand's frame through this mount is the right hand's frame
+        through ``mirrored()`` turned upside down (rows reversed), and the
+        other way round; height, shifts and tilt keep their senses (the
+        shift is toward the thumb on either hand).
+        """
+        return replace(self, roll_deg=0.0 - self.roll_deg)  # never -0.0: as_dict names caches
+
     def as_dict(self) -> dict:
         """The fields as a plain dict (for JSON and HDF5 attributes)."""
         return {f.name: getattr(self, f.name) for f in fields(self)}
@@ -156,7 +166,7 @@ class CameraMount:
         # Untilted: image right = +y (toward the fingers), optical axis = -z,
         # image down = z cross x = +x (away from a right hand's thumb).  A
         # left hand keeps the same axes, so its frames are the right hand's
-        # frames flipped top to bottom (the mirror image of the device).
+        # frames flipped top to bottom through the mirrored device (mirrored()).
         r0 = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
         # tilt about the hand x axis turns the optical axis from -z toward +y
         tilt = _axis_rot(np.array([1.0, 0.0, 0.0]), math.radians(self.tilt_deg))

@@ -478,12 +478,13 @@ def test_learned_estimator_from_relaxed_rests_is_learnt_beside_the_default(tmp_p
     assert len(list(tmp_path.glob("learning_*.npz"))) == 2
 
 
-def test_the_shipped_perceptrons_alone_run_on_a_first_run_without_learning_anything(tmp_path):
+@pytest.mark.parametrize("side", ["right", "left"])  # a left hand: the right's perceptrons mirrored
+def test_the_shipped_perceptrons_alone_run_on_a_first_run_without_learning_anything(tmp_path, side):
     cache = tmp_path / "learned"
     out = tmp_path / "rows.csv"
     res = _run("--synthetic", "--learned", "--learned-kind", "perceptrons", "--learned-cache",
                str(cache), "--frames", "24", "--synthetic-motion", "natural", "--out", str(out),
-               *SMALL)
+               "--side", side, *SMALL)
     assert res.exit_code == 0, res.output
     assert "with the learnt estimator (perceptrons)" in res.output
     assert res.output.count("mlp: shipped with handsynth") == 3

@@ -14,6 +14,7 @@ from handsynth.estimate import (
     local_linear,
     train_learned,
 )
+from handsynth.models import named_pose
 from handsynth.render import SilhouetteRasterizer
 
 DATA = LearningSetOptions(hands=6, poses_per_hand=10, seed=2)
@@ -419,3 +420,35 @@ def test_learned_ensemble_weights_its_members_and_reuses_those_already_read(tmp_
     frame = SilhouetteRasterizer().mask(np.full(20, 12.0))
     np.testing.assert_allclose(again.calibrated(rest).estimate(frame).angles,
                                ens.calibrated(rest).estimate(frame).angles)
+
+
+def test_a_mirrored_estimator_reads_a_left_hand_as_the_right_reads_its_frame_upside_down(data):
+    est = train_learned(data, LearnedOptions(kind="mlp", components=8, hidden=(8,), epochs=1))
+    left = est.mirrored()
+    assert (left.side, est.side) == ("left", "right") and left.mount == est.mount.mirrored()
+    raster = SilhouetteRasterizer(mount=left.mount, side="left")
+    rest, frame = raster.mask(np.full(20, 4.0)), raster.mask(named_pose("pinch"))
+    got = left.calibrated(rest).estimate(frame)
+    want = est.calibrated(rest[::-1]).estimate(frame[::-1])
+    np.testing.assert_array_equal(got.angles, want.angles)
+    assert got.moved == want.moved and not got.moved
+    # calibrated then mirrored twice reads as the original; the mirror of a rest frame is no rest
+    np.testing.assert_array_equal(est.calibrated(rest[::-1]).mirrored().mirrored().estimate(
+        frame[::-1]).angles, want.angles)
+    assert not np.array_equal(est.calibrated(rest).estimate(frame).angles, want.angles)
+
+
+def test_a_left_hand_s_estimator_is_the_right_hand_s_mirrored_and_saves_what_was_learnt(tmp_path):
+    opts = LearnedOptions(kind="mlp", components=8, hidden=(8,), epochs=1)
+    small = LearningSetOptions(hands=2, poses_per_hand=5, seed=1)
+    right = learned_estimator(tmp_path, opts, data=small)
+    left = learned_estimator(tmp_path, opts, data=small, side="left")
+    assert left.side == "left" and len(list(tmp_path.glob("*.npz"))) == 2  # nothing learnt again
+    left.save(tmp_path / "again.npz")
+    back = LearnedEstimator.load(tmp_path / "again.npz")
+    assert back.side == "right"
+    frame = SilhouetteRasterizer().mask(np.full(20, 5.0))
+    np.testing.assert_array_equal(back.calibrated(frame).estimate(frame).angles,
+                                  right.calibrated(frame).estimate(frame).angles)
+    with pytest.raises(InvalidInputError, match="side must be 'right' or 'left', got 'both'"):
+        learned_estimator(tmp_path, opts, data=small, side="both")
