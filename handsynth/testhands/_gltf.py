@@ -20,8 +20,9 @@ Method
    vertices are the skinned vertices at the nodes' own transforms.
 2. *Bones*: nodes named ``<digit>_<bone>[_R|_L]`` with digit in thumb, index,
    middle, ring, little and bone in metacarpal, proximal, intermediate, distal,
-   tip (the OpenXR hand-joint naming), and ``wrist``.  A node's origin is its
-   joint centre.
+   tip (the OpenXR hand-joint naming), or their WebXR Hand Input spellings
+   (``index-finger-phalanx-proximal``, ``pinky-finger-tip``, ...), and
+   ``wrist``.  A node's origin is its joint centre.
 3. *Hand frame* (README "Conventions"): origin at the wrist node, +y toward
    the middle-finger MCP (the ``middle_proximal`` node), the palm plane
    through the index-to-little MCP line, +z out of the back of the hand (the
@@ -415,6 +416,9 @@ def _canonical_bone(name: str) -> str | None:
     if n == "wrist":
         return "wrist"
     n = n.replace("pinky", "little")
+    # WebXR Hand Input names: index-finger-phalanx-proximal, thumb-phalanx-distal, ...
+    n = re.sub(r"[._\s-]finger(?=[._\s-])", "", n)
+    n = re.sub(r"phalanx[._\s-]", "", n)
     m = re.fullmatch(r"(thumb|index|middle|ring|little)[._\s-]*"
                      r"(metacarpal|proximal|intermediate|distal|tip)", n)
     return f"{m.group(1)}_{m.group(2)}" if m else None

@@ -259,6 +259,28 @@ def test_a_rig_without_a_wrist_bone_is_refused_by_name(tmp_path):
         load_mesh_rig(bad)
 
 
+def test_webxr_joint_names_read_as_their_openxr_spellings(tmp_path):
+    doc = json.loads(shipped_hand_path("godot_xr_tools").read_text())
+    webxr = {"Metacarpal": "metacarpal", "Proximal": "phalanx-proximal",
+             "Intermediate": "phalanx-intermediate", "Distal": "phalanx-distal", "Tip": "tip"}
+    for n in doc["nodes"]:
+        digit, _, rest = n.get("name", "").partition("_")
+        bone = rest.removesuffix("_R")
+        if digit in ("Index", "Middle", "Ring", "Little", "Thumb") and bone in webxr:
+            word = {"Little": "pinky", "Thumb": "thumb"}.get(digit, digit.lower())
+            finger = "" if digit == "Thumb" else "-finger"
+            n["name"] = f"{word}{finger}-{webxr[bone]}"
+        elif n.get("name") == "Wrist_R":
+            n["name"] = "wrist"
+    path = tmp_path / "webxr.gltf"
+    path.write_text(json.dumps(doc))
+    assert "index-finger-phalanx-proximal" in path.read_text()
+    got, want = load_mesh_rig(path), load_mesh_rig(shipped_hand_path("godot_xr_tools"))
+    assert got.bone_names == want.bone_names
+    for name, p in want.joints.items():
+        np.testing.assert_array_equal(got.joints[name], p)
+
+
 def test_unknown_test_hand_is_refused():
     with pytest.raises(InvalidInputError, match="test hand"):
         shipped_hand_path("robot")
