@@ -8,7 +8,7 @@ Usage::
     python scripts/study_camera.py observability
     python scripts/study_camera.py --cache DIR bound
     python scripts/study_camera.py bound_mcp
-    python scripts/study_camera.py --cache DIR [--rest open] [--ensemble] rests
+    python scripts/study_camera.py --cache DIR [--rest open] [--ensemble] [--mesh NAMES] rests
     python scripts/study_camera.py [--axis FIELD] moved
     python scripts/study_camera.py --cache DIR imaging
     python scripts/study_camera.py --cache DIR mounts
@@ -86,7 +86,8 @@ Usage::
     pooled over the seeds (``1 - sum MAE / sum MAE_constant``).  ``--rest
     open``: near-open rest postures instead of relaxed ones; ``--ensemble``:
     the default learnt ensemble (:func:`handsynth.estimate.learned_ensemble`,
-    the CLI's default) instead of its per-digit member.  Last line:
+    the CLI's default) instead of its per-digit member; ``--mesh NAMES``:
+    other glTF hands (``webxr_generic``, or files).  Last line:
     ``<hand>_pooled_skill=<value> ...``.
 
 ``moved``
@@ -453,14 +454,14 @@ def bound_mcp() -> None:
           f"constant_mae={m[2]:.2f}")
 
 
-def rests(cache, rest: str = "relaxed", *, ensemble: bool = False) -> None:
+def rests(cache, rest: str = "relaxed", *, ensemble: bool = False, mesh=None) -> None:
     from handsynth.estimate import learned_ensemble
     from handsynth.eval import ProtocolOptions, run_protocol
 
     est = learned_ensemble(cache) if ensemble else _estimator(cache)
     rows: dict = {}
     for seed in range(10):
-        res = run_protocol({"fingers": lambda rest, _hand: est.calibrated(rest)}, mesh_test_hands(),
+        res = run_protocol({"fingers": lambda rest, _hand: est.calibrated(rest)}, mesh_test_hands(mesh),
                            ProtocolOptions(frames=300, seed=seed, pose_sets=("paper",), rest=rest))
         for name, rec in res["hands"].items():
             st = rec["paper"]["fingers"]
@@ -665,11 +666,11 @@ def sizes(cache) -> None:
     from handsynth.eval import paper_protocol_poses
     from handsynth.eval._testposes import REST_POSTURES
     from handsynth.models import joint_index
-    from handsynth.testhands import TEST_HANDS, MeshHandRenderer, shipped_hand_path
+    from handsynth.testhands import PROTOCOL_HANDS, MeshHandRenderer, shipped_hand_path
 
     ens = learned_ensemble(cache)
     native = {}
-    for name in sorted(TEST_HANDS):
+    for name in PROTOCOL_HANDS:
         with MeshHandRenderer(width_px=72, height_px=48, path=shipped_hand_path(name)) as r:
             native[name] = r.hand_length_mm
     index_pip = joint_index("index_pip_flex")
@@ -678,7 +679,7 @@ def sizes(cache) -> None:
         mae: dict = {}
         pip: dict = {"paper": [], "natural": []}
         low = []
-        for name in sorted(TEST_HANDS):
+        for name in PROTOCOL_HANDS:
             scale = length / native[name]
             hand = mesh_test_hands([name], scale=scale)[0]
             made = hand.make()
@@ -712,6 +713,8 @@ def main() -> None:
     ap.add_argument("--cache", default=None, help="folder of the learnt estimator")
     ap.add_argument("--rest", choices=["relaxed", "open"], default="relaxed",
                     help="rests: the test hands' rest postures")
+    ap.add_argument("--mesh", default=None,
+                    help="rests: glTF hands, comma-separated [default: the protocol's two]")
     ap.add_argument("--ensemble", action="store_true",
                     help="rests: the default learnt ensemble instead of its per-digit member")
     ap.add_argument("--axis", default=None,
@@ -725,7 +728,8 @@ def main() -> None:
     studies = {"backgrounds": lambda: backgrounds(args.cache), "jitter": lambda: jitter(args.cache),
                "holds": lambda: holds(args.cache), "observability": observability,
                "bound": lambda: bound(args.cache), "bound_mcp": bound_mcp,
-               "rests": lambda: rests(args.cache, args.rest, ensemble=args.ensemble),
+               "rests": lambda: rests(args.cache, args.rest, ensemble=args.ensemble,
+                                      mesh=args.mesh.split(",") if args.mesh else None),
                "moved": lambda: moved(args.axis), "imaging": lambda: imaging(args.cache),
                "mounts": lambda: mounts(args.cache), "sizes": lambda: sizes(args.cache)}
     studies[args.study]()

@@ -191,9 +191,10 @@ def mesh_test_hands(names=None, *, mount: CameraMount | None = None,
     ----------
     names : sequence of str or os.PathLike, optional
         Each a key of :data:`handsynth.testhands.TEST_HANDS` (the hands
-        shipped in :mod:`handsynth.testhands`; all of them by default) or the
+        shipped in :mod:`handsynth.testhands`; by default
+        :data:`~handsynth.testhands.PROTOCOL_HANDS`) or the
         path of a ``.gltf`` / ``.glb`` file of a right hand rigged with
-        OpenXR joint names (:func:`handsynth.testhands.load_mesh_rig`), named
+        OpenXR or WebXR joint names (:func:`handsynth.testhands.load_mesh_rig`), named
         by its file's stem.
     mount : CameraMount, keyword-only, optional
         The paper's by default.
@@ -208,11 +209,17 @@ def mesh_test_hands(names=None, *, mount: CameraMount | None = None,
         does not load as a rigged hand (the loader's message), or a `scale`
         outside [0.5, 2].
     """
-    from ..testhands import TEST_HANDS, MeshHandRenderer, load_mesh_rig, shipped_hand_path
+    from ..testhands import (
+        PROTOCOL_HANDS,
+        TEST_HANDS,
+        MeshHandRenderer,
+        load_mesh_rig,
+        shipped_hand_path,
+    )
 
     mount = mount or CameraMount.paper()
     out: list[TestHand] = []
-    for entry in (names or sorted(TEST_HANDS)):
+    for entry in (names or PROTOCOL_HANDS):
         if str(entry) in TEST_HANDS:
             name, path = str(entry), shipped_hand_path(str(entry))
         elif Path(entry).suffix.lower() in (".gltf", ".glb"):

@@ -2,13 +2,16 @@
 
 The databases are built from handsynth's own parametric hand; these hands
 are not, so looking up their frames measures what a real user's hand would
-meet.  Two hands ship with the package, with their licences
+meet.  Three hands ship with the package, with their licences
 (:data:`TEST_HANDS`, :func:`shipped_hand_path`): the Godot XR Tools hand
-(CC0) and the MRTK3 hand (BSD-3-Clause / MIT).  Any rigged glTF 2.0 hand
-with OpenXR joint names loads the same way (:func:`load_mesh_rig`).
+(CC0), the MRTK3 hand (BSD-3-Clause / MIT) and the WebXR generic hand (MIT);
+the protocol tests on the first two unless told otherwise
+(:data:`PROTOCOL_HANDS`).  Any rigged glTF 2.0 hand with OpenXR or WebXR
+joint names loads the same way (:func:`load_mesh_rig`).
 """
 
 from ._gltf import (
+    PROTOCOL_HANDS,
     TEST_HANDS,
     MeshHandRenderer,
     MeshRig,
@@ -19,6 +22,7 @@ from ._gltf import (
 )
 
 __all__ = [
+    "PROTOCOL_HANDS",
     "TEST_HANDS",
     "MeshHandRenderer",
     "MeshRig",

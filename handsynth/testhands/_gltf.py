@@ -99,6 +99,7 @@ from ..models import FINGERS, JOINT_NAMES, as_angles, standard_layout_mm
 from ..render import CameraMount, GLContextOwner, MaskMaker, ensure_backend
 
 __all__ = [
+    "PROTOCOL_HANDS",
     "TEST_HANDS",
     "MeshHandRenderer",
     "MeshRig",
@@ -132,7 +133,12 @@ _N_COMPONENTS = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT4": 16}
 TEST_HANDS: dict[str, str] = {
     "godot_xr_tools": "godot_xr_tools/hand_r.gltf",  # CC0 (License.md)
     "mrtk": "mrtk/hand_r.glb",  # BSD-3-Clause / MIT (License.txt)
+    "webxr_generic": "webxr_generic/hand_r.glb",  # MIT (License.md)
 }
+#: The glTF hands the protocol and the studies test on unless told otherwise.  The
+#: development runs printed their figures (no choice followed them);
+#: ``webxr_generic`` came after every choice and is measured when named.
+PROTOCOL_HANDS: tuple[str, ...] = ("godot_xr_tools", "mrtk")
 DATA_DIR = Path(__file__).resolve().parent / "data"
 
 

@@ -223,6 +223,18 @@ def test_every_shipped_hand_has_its_licence(name):
     assert path.is_file() and any(p.name.lower().startswith("license") for p in path.parent.iterdir())
 
 
+@pytest.mark.parametrize("name", sorted(TEST_HANDS))
+def test_every_shipped_hand_is_a_right_hand_of_adult_size_seen_by_the_device(name):
+    from handsynth.testhands import PROTOCOL_HANDS
+
+    assert set(PROTOCOL_HANDS) <= set(TEST_HANDS)
+    with MeshHandRenderer(width_px=W, height_px=H, path=shipped_hand_path(name)) as r:
+        assert r.rig.source_side == "right" and 180.0 < r.hand_length_mm < 230.0
+        m = r.mask(named_pose("open"))
+        assert m[H // 2, W // 2] and 0.25 < m.mean() < 0.8
+        assert r.mask(named_pose("fist")).sum() < 0.8 * m.sum()
+
+
 def test_binary_gltf_with_nodes_one_joint_proximal_of_their_names_loads():
     # The MRTK hand (GLB) puts each node one joint proximal of its OpenXR name
     # (node index_intermediate at the index MCP, index_tip_end at the fingertip)
