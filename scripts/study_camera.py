@@ -10,9 +10,10 @@ Usage::
     python scripts/study_camera.py bound_mcp
     python scripts/study_camera.py --cache DIR [--rest open] [--ensemble] [--mesh NAMES] rests
     python scripts/study_camera.py [--axis FIELD] moved
-    python scripts/study_camera.py --cache DIR imaging
+    python scripts/study_camera.py --cache DIR [--segment colour] imaging
     python scripts/study_camera.py --cache DIR mounts
     python scripts/study_camera.py --cache DIR sizes
+    python scripts/study_camera.py --cache DIR skin
 
 ``backgrounds``
     Two held-out model hands (seed 3, 1.5 times the learning spread) and the
@@ -23,6 +24,19 @@ Usage::
     constant open-hand answer, the share of frames flagged
     ``low_confidence`` and the MAE of the frames not flagged.  Last line:
     ``photo_flagged=<mean share> photo_mae=<mean> dark_mae=<mean>``.
+``skin``
+    The hand told from the background by brightness (Otsu's threshold, the
+    default) and by the colour of the skin on the back of the hand in the
+    rest frame (``segment="colour"``), and as the default chooses between the
+    two on the rest frame (``segment="auto"``), default ensemble.  The hands and poses
+    of ``backgrounds`` (the same seeds), each painted in two skin tones
+    (BGR 120/150/210 and 60/85/125), shaded from 0.55 to 1 across the frame,
+    with noise of 4 grey levels, over the same grounds; the photographs
+    split into the four colour ones and the six grey ones.  Per ground and
+    method the finger flexion MAE over hands and tones beside the constant
+    open-hand answer and the share flagged ``low_confidence``.  Last line:
+    ``photo_brightness=<mae> photo_colour=<mae> dark_brightness=<mae>
+    dark_colour=<mae>``.
 ``jitter``
     Continuous motions: 8 natural grasps from and back to a relaxed rest,
     each reached in 0.8 s with a minimum-jerk profile at 30 fps, on two
@@ -119,6 +133,8 @@ Usage::
     condition.  Per condition the pooled finger flexion MAE beside the
     constant open-hand answer.  Last line: ``largest_change_paper=<deg>
     largest_change_natural=<deg>`` (against the mask, over the conditions).
+    ``--segment colour``: camera frames told by the skin's colour
+    (``segment="colour"``) instead of brightness, without the grey condition.
 
 ``mounts``
     Devices worn beyond the learning set's spread of mounts (s.d. 10 mm in
@@ -214,6 +230,64 @@ def backgrounds(cache) -> None:
                   flush=True)
     print(f"photo_flagged={np.mean(summary['photo'][1]):.3f} "
           f"photo_mae={np.mean(summary['photo'][0]):.2f} dark_mae={np.mean(summary['dark'][0]):.2f}")
+
+
+def skin(cache) -> None:
+    from handsynth.estimate import learned_ensemble
+
+    mount = CameraMount.paper()
+    ens = learned_ensemble(cache)
+    photos = background_photos()
+    colour = [i for i, p in enumerate(photos) if not (p[..., 0] == p[..., 1]).all()]
+    grounds = {"dark": lambda i: np.full((480, 720, 3), 20, np.float32),
+               "photo": lambda i: photos[i % len(photos)].astype(np.float32),
+               "photo x0.5": lambda i: photos[i % len(photos)].astype(np.float32) / 2}
+    shade = np.linspace(0.55, 1.0, 720, dtype=np.float32)[None, :, None]
+    tones = (_SKIN.astype(np.float32), np.array([60, 85, 125], np.float32))
+    rng = np.random.default_rng(5)
+    err: dict = {}
+    chose: dict = {}
+    for hand in model_test_hands(2, seed=3, mount=mount, spread=1.5) + mesh_test_hands(mount=mount):
+        made = hand.make()
+        rest = relaxed_rest_posture(rng)
+        poses, _ = natural_test_poses(rest, 60, rng)
+        masks = made.masks(poses)
+        noise = np.random.default_rng(len(hand.name))
+        for tone in tones:
+            for name, ground in grounds.items():
+                def frame(mask, i, ground=ground, tone=tone, noise=noise):
+                    f = ground(i)
+                    f[mask] = (tone * shade * np.ones_like(f))[mask]
+                    return np.clip(f + noise.normal(0, 4, f.shape), 0, 255).astype(np.uint8)
+
+                frames = [frame(m, i + 1) for i, m in enumerate(masks)]
+                kinds = np.array(["colour photo" if (i + 1) % len(photos) in colour else "grey photo"
+                                  for i in range(len(masks))]) if name != "dark" else None
+                for method in ("brightness", "colour", "auto"):
+                    cal = ens.calibrated(frame(made.mask(rest), 0), segment=method)
+                    if method == "auto":
+                        chose.setdefault(name, []).append(cal.segment)
+                    got = [cal.estimate(f) for f in frames]
+                    e = np.abs(np.stack([g.angles for g in got])[:, _FLEX] - poses[:, _FLEX]).mean(1)
+                    low = np.array([g.low_confidence for g in got])
+                    groups = {name: np.ones(len(e), bool)}
+                    if kinds is not None:
+                        groups.update({f"{name}, {k}": kinds == k for k in ("colour photo", "grey photo")})
+                    for g, sel in groups.items():
+                        err.setdefault((g, method), []).append((e[sel].mean(), low[sel].mean()))
+                        err.setdefault((g, "constant"), []).append(
+                            (np.abs(poses[sel][:, _FLEX]).mean(), 0.0))
+        print(f"{hand.name} done", flush=True)
+    for g in dict.fromkeys(k[0] for k in err):
+        row = {m: np.mean(err[(g, m)], axis=0) for m in ("brightness", "colour", "auto", "constant")}
+        print(f"{g:25s} brightness {row['brightness'][0]:6.2f} (flagged {row['brightness'][1]:.2f})  "
+              f"colour {row['colour'][0]:6.2f} (flagged {row['colour'][1]:.2f})  "
+              f"auto {row['auto'][0]:6.2f}  constant {row['constant'][0]:6.2f}")
+    for name, picks in chose.items():
+        print(f"auto chose colour on {picks.count('colour')} of {len(picks)} rest frames ({name})")
+    m = {k: np.mean(v, axis=0)[0] for k, v in err.items()}
+    print(f"photo_brightness={m[('photo', 'brightness')]:.2f} photo_colour={m[('photo', 'colour')]:.2f} "
+          f"dark_brightness={m[('dark', 'brightness')]:.2f} dark_colour={m[('dark', 'colour')]:.2f}")
 
 
 def _minjerk(n: int) -> np.ndarray:
@@ -577,13 +651,16 @@ def _imaging_conditions() -> dict:
             "one grey channel": lambda m, rng: cv2.cvtColor(u8(paint(m)), cv2.COLOR_BGR2GRAY)}
 
 
-def imaging(cache) -> None:
+def imaging(cache, segment: str = "brightness") -> None:
     from handsynth.estimate import learned_ensemble
     from handsynth.eval import paper_protocol_poses
     from handsynth.eval._testposes import REST_POSTURES
 
     ens = learned_ensemble(cache)
     conditions = _imaging_conditions()
+    if segment == "colour":  # colour frames only; the masks stay as the reference
+        for name in ("one grey channel",):
+            conditions.pop(name)
     groups = {"model hands": model_test_hands(4, seed=31, spread=1.5), "glTF hands": mesh_test_hands()}
     errors: dict = {}
     constant: dict = {}
@@ -596,7 +673,8 @@ def imaging(cache) -> None:
                     "natural": natural_test_poses(rest, 40, rng)[0]}
             for name, condition in conditions.items():
                 noise = np.random.default_rng(5)
-                cal = ens.calibrated(condition(made.mask(rest), noise))
+                cal = ens.calibrated(condition(made.mask(rest), noise),
+                                     segment="brightness" if name == "mask" else segment)
                 for kind, poses in sets.items():
                     got = np.stack([cal.estimate(condition(m, noise)).angles for m in made.masks(poses)])
                     errors.setdefault((group, kind, name), []).append(
@@ -715,13 +793,16 @@ def main() -> None:
                     help="rests: the test hands' rest postures")
     ap.add_argument("--mesh", default=None,
                     help="rests: glTF hands, comma-separated [default: the protocol's two]")
+    ap.add_argument("--segment", choices=["brightness", "colour"], default="brightness",
+                    help="imaging: how the ensemble tells the hand in camera frames")
     ap.add_argument("--ensemble", action="store_true",
                     help="rests: the default learnt ensemble instead of its per-digit member")
     ap.add_argument("--axis", default=None,
                     choices=["height_mm", "thumb_offset_mm", "along_mm", "tilt_deg", "roll_deg"],
                     help="moved: slip along this field of MountVariation alone")
     ap.add_argument("study", choices=["backgrounds", "jitter", "holds", "observability", "bound",
-                                      "bound_mcp", "rests", "moved", "imaging", "mounts", "sizes"])
+                                      "bound_mcp", "rests", "moved", "imaging", "mounts", "sizes",
+                                      "skin"])
     args = ap.parse_args()
     if args.study not in ("observability", "bound_mcp", "moved") and args.cache is None:
         ap.error(f"{args.study} needs --cache DIR")
@@ -730,8 +811,10 @@ def main() -> None:
                "bound": lambda: bound(args.cache), "bound_mcp": bound_mcp,
                "rests": lambda: rests(args.cache, args.rest, ensemble=args.ensemble,
                                       mesh=args.mesh.split(",") if args.mesh else None),
-               "moved": lambda: moved(args.axis), "imaging": lambda: imaging(args.cache),
-               "mounts": lambda: mounts(args.cache), "sizes": lambda: sizes(args.cache)}
+               "moved": lambda: moved(args.axis),
+               "imaging": lambda: imaging(args.cache, args.segment),
+               "mounts": lambda: mounts(args.cache), "sizes": lambda: sizes(args.cache),
+               "skin": lambda: skin(args.cache)}
     studies[args.study]()
 
 

@@ -178,13 +178,14 @@ def _open_learned(cache, kind, hands, rest, smoothing, side, err):
     return est
 
 
-def _calibrate_learned(est, source, rest_image, mount, side, err):
+def _calibrate_learned(est, source, rest_image, mount, side, err, *, segment: str):
     """The learnt estimator calibrated to the hand at rest."""
     rest, where = _calibration_frame(source, rest_image, mount, side, err,
                                      synthetic="the synthetic hand at rest (open)",
                                      prompt="hold the hand open, not stiff")
-    est = est.calibrated(rest)
-    click.echo(f"calibrated to {where}", err=err)
+    est = est.calibrated(rest, segment=segment)
+    told = "by the skin's colour" if est.segment == "colour" else "by brightness"
+    click.echo(f"calibrated to {where}; the hand is told {told}", err=err)
     return est
 
 
@@ -272,6 +273,12 @@ def _progress(stream):
                    "[default: 0, none]. At 30 fps, 0.3 cut the frame-to-frame jitter by a "
                    "third at no cost in accuracy, 0.5 by half at up to 0.3 deg "
                    "(docs/camera_estimator.md).")
+@click.option("--segment", type=click.Choice(["auto", "brightness", "colour"]), default=None,
+              help="With --learned: tell the hand from the background by brightness (Otsu's "
+                   "threshold: a dark background), or by the colour of the skin on the back "
+                   "of the hand in the rest frame (an ordinary background; colour frames) "
+                   "[default: auto, colour where the two disagree on the rest frame] "
+                   "(docs/camera_estimator.md, Backgrounds).")
 @click.option("--one-euro", "one_euro", is_flag=True,
               help="With --learned: steady the angles with the One Euro filter instead (cut-off "
                    "0.5 Hz while still, rising with speed; at the source's frame rate, --fps "
@@ -304,7 +311,7 @@ def _progress(stream):
 @click.option("--quiet", "-q", is_flag=True, help="No progress line.")
 def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, personal,
              build_count, calibrate, calibrate_image, learned, learned_kind, learned_cache,
-             learned_hands, learned_rest, side, smoothing, one_euro, frames, seconds, out, fmt,
+             learned_hands, learned_rest, side, smoothing, segment, one_euro, frames, seconds, out, fmt,
              keypoints, video_out, synthetic_shape, synthetic_motion, synthetic_size, fps,
              no_temporal, max_dead, quiet) -> None:
     """Look up the hand pose of every frame of a camera, a video file or a synthetic hand.
@@ -353,12 +360,12 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
         _check_learned_options(db_dir, shape_name, measurements, personal, build_count,
                                calibrate, video_out, no_temporal, keypoints)
     elif learned_cache is not None or learned_hands is not None or smoothing is not None or \
-            side is not None or one_euro or learned_rest is not None or \
+            side is not None or one_euro or learned_rest is not None or segment is not None or \
             click.get_current_context().get_parameter_source("learned_kind") \
             == click.core.ParameterSource.COMMANDLINE:
         raise InvalidInputError("--learned-kind, --learned-cache, --learned-hands, "
-                                "--learned-rest, --side, --smoothing and --one-euro apply with "
-                                "--learned only")
+                                "--learned-rest, --side, --smoothing, --segment and --one-euro "
+                                "apply with --learned only")
     if one_euro and smoothing is not None:
         raise InvalidInputError("--one-euro and --smoothing are two ways to steady the angles; "
                                 "give one")
@@ -404,7 +411,8 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
         # exactly one of --camera, --video and --synthetic was given (checked above)
         assert source is not None
         if learned:
-            lookup = _calibrate_learned(lookup, source, open_image, mount, side, info_err)
+            lookup = _calibrate_learned(lookup, source, open_image, mount, side, info_err,
+                                        segment=segment or "auto")
             if one_euro:
                 from ..estimate import SmoothedEstimator
 

@@ -57,6 +57,7 @@ from ._ensemble import (
     shipped_perceptrons,
 )
 from ._learned import (
+    AUTO_OVERLAP,
     LearnedEstimator,
     LearnedOptions,
     fit_mlp,
@@ -83,6 +84,7 @@ from ._smoothing import (
 )
 
 __all__ = [
+    "AUTO_OVERLAP",
     "LEARNED_ENSEMBLE",
     "LEARNED_ENSEMBLES",
     "LEARNED_PERCEPTRONS",

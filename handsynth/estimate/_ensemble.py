@@ -111,15 +111,23 @@ class EnsembleEstimator:
             raise InvalidInputError(f"weights must be {len(self.members)} non-negative numbers "
                                     f"with a positive sum, got {weights!r}")
         self.weights = w / w.sum()
+        #: how the calibrated members tell the hand in camera frames (LearnedEstimator.calibrated)
+        self.segment = next((m.segment for m in self.members if isinstance(m, LearnedEstimator)),
+                            "brightness")
 
-    def calibrated(self, rest_frame: np.ndarray) -> EnsembleEstimator:
-        """A copy whose members are calibrated to `rest_frame` (those that calibrate)."""
+    def calibrated(self, rest_frame: np.ndarray, *, segment: str = "auto") -> EnsembleEstimator:
+        """A copy whose members are calibrated to `rest_frame` (those that calibrate).
+
+        `segment` is passed to the learnt members
+        (:meth:`LearnedEstimator.calibrated`).
+        """
         members = []
         checked = set()  # learnt members reading one grid check it for a moved device once
         for m in self.members:
             if isinstance(m, LearnedEstimator):
                 key = (m.mount, m.side, m.cells)
-                members.append(m.calibrated(rest_frame, check_moved=key not in checked))
+                members.append(m.calibrated(rest_frame, check_moved=key not in checked,
+                                            segment=segment))
                 checked.add(key)
             else:
                 members.append(m.calibrated(rest_frame)

@@ -68,7 +68,14 @@ from .._io import atomic_open, os_error_reason
 from ..db import LearningSet, LearningSetOptions, learning_set
 from ..errors import DatabaseCorruptError, DatabaseError, DatabaseMismatchError, InvalidInputError
 from ..models import JOINT_LIMITS_DEG
-from ..render import CameraMount, coverage
+from ..render import (
+    CameraMount,
+    SkinColour,
+    brightness_overlap,
+    coverage,
+    fit_skin_colour,
+    skin_mask,
+)
 from ._lookup import PoseEstimate
 from ._moved import MoveCheck
 from ._shipped import shipped_path
@@ -77,6 +84,11 @@ __all__ = ["LearnedEstimator", "LearnedOptions", "fit_mlp", "learned_estimator",
            "train_learned"]
 
 _FORMAT = 2  # 2: novelty_limit
+#: ``segment="auto"`` tells the hand by colour when Otsu's mask and the skin's colour mask
+#: of the rest frame overlap less than this (intersection over union): 0.92-0.94 on a dark
+#: background, 0.01-0.86 over photographs (docs/camera_estimator.md, "Backgrounds");
+#: chosen before those were measured.
+AUTO_OVERLAP = 0.8
 
 
 @dataclass(frozen=True)
@@ -536,6 +548,8 @@ class LearnedEstimator:
             if isinstance(v, np.ndarray):
                 v.setflags(write=False)
         self._rest: np.ndarray | None = None
+        self._skin: SkinColour | None = None
+        self.segment = "brightness"
         self._move_check: MoveCheck | None = None
         self.smoothing = 0.0
         self._previous: np.ndarray | None = None
@@ -574,7 +588,8 @@ class LearnedEstimator:
         return out
 
     # -- calibration -----------------------------------------------------------
-    def calibrated(self, rest_frame: np.ndarray, *, check_moved: bool = True) -> LearnedEstimator:
+    def calibrated(self, rest_frame: np.ndarray, *, check_moved: bool = True,
+                   segment: str = "auto") -> LearnedEstimator:
         """A copy of this estimator calibrated to a frame of the user's hand at rest.
 
         Parameters
@@ -586,18 +601,45 @@ class LearnedEstimator:
             Check each frame for a device moved since `rest_frame`
             (:class:`~handsynth.estimate.MoveCheck`; False: ``moved`` is never
             set, as for an ensemble member whose grid another member checks).
+        segment : {"auto", "brightness", "colour"}, keyword-only
+            How camera frames are told into hand and background (masks are
+            read as they are): ``"brightness"`` by Otsu's threshold
+            (:func:`~handsynth.render.binarize`: a hand brighter than a dark
+            background); ``"colour"`` by the colour of the skin on the back of
+            the hand in `rest_frame` (:func:`~handsynth.render.skin_mask`: the
+            hand need not be the brightest thing in view; colour frames);
+            ``"auto"`` (default) brightness unless `rest_frame` is a colour
+            frame on which the two disagree (their masks' intersection over
+            union under :data:`AUTO_OVERLAP`: the background is not dark).
+            The choice is kept as the attribute ``segment``.
 
         Raises
         ------
         InvalidInputError
-            The frame shows no hand, or is not an image.
+            The frame shows no hand, or is not an image; ``"colour"`` with a
+            rest frame that is not a colour frame; an unknown `segment`.
         """
-        g = self.grid(rest_frame)
+        if segment not in ("auto", "brightness", "colour"):
+            raise InvalidInputError(f"segment must be 'auto', 'brightness' or 'colour', "
+                                    f"got {segment!r}")
+        out = copy.copy(self)
+        out._skin = None
+        view = np.asarray(rest_frame)[::-1] if self._mirror else rest_frame
+        mount, side = self._learnt_view
+        if segment == "colour":
+            out._skin = fit_skin_colour(view, mount, side=side)
+        elif segment == "auto" and _is_colour(view):
+            try:
+                skin = fit_skin_colour(view, mount, side=side)
+            except InvalidInputError:  # no lit skin where the hand always is: brightness decides
+                skin = None
+            if skin is not None and brightness_overlap(view, skin) < AUTO_OVERLAP:
+                out._skin = skin
+        out.segment = "colour" if out._skin is not None else "brightness"
+        g = out.grid(rest_frame)
         if not g.any():
             raise InvalidInputError("rest_frame shows no hand")
-        out = copy.copy(self)
         out._rest = g.ravel()
-        mount, side = self._learnt_view
         out._move_check = MoveCheck(g, mount, side=side) if check_moved else None
         out._previous = None
         if "abs_mean" in self._a:
@@ -703,6 +745,8 @@ class LearnedEstimator:
         if self._mirror and len(shape) in (2, 3):
             frame = np.asarray(frame)[::-1]
         mount, side = self._learnt_view
+        if self._skin is not None and len(shape) == 3 and getattr(frame, "dtype", None) == np.uint8:
+            frame = skin_mask(frame, self._skin)
         c = coverage(frame, mount, side=side, cells=self.cells)
         return np.rint(c * 255).astype(np.uint8)
 
@@ -981,6 +1025,15 @@ def _fit(z: _Rows, y: np.ndarray, opts: LearnedOptions, rng: np.random.Generator
         for i, (w, b) in enumerate(zip(weights, biases)):
             arrays[f"w{i}"], arrays[f"b{i}"] = w, b
     return {prefix + k: v for k, v in arrays.items()}
+
+
+def _is_colour(frame) -> bool:
+    """A uint8 (H, W, 3) frame whose channels are not all equal."""
+    f = np.asarray(frame)
+    if f.ndim != 3 or f.dtype != np.uint8 or f.shape[2] != 3:
+        return False
+    s = f[::8, ::8]
+    return bool((s[..., 0] != s[..., 1]).any() or (s[..., 1] != s[..., 2]).any())
 
 
 def learned_estimator(folder, options: LearnedOptions | None = None, *,

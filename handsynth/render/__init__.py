@@ -6,8 +6,10 @@ GL context and the mask interface of :class:`SilhouetteRenderer`),
 :func:`offscreen_renderer`, :func:`scene_parts` and :func:`label_image`.
 
 Beyond the paper: :func:`coverage` (the fixed-frame grid of the learned
-estimator) and :class:`VariedRasterizer` with :class:`HandVariation` and
-:class:`MountVariation` (model hands beyond the four ratios, a moved device).
+estimator), :func:`fit_skin_colour` and :func:`skin_mask` (the hand told
+from an ordinary background by the colour of the user's skin) and
+:class:`VariedRasterizer` with :class:`HandVariation` and :class:`MountVariation`
+(model hands beyond the four ratios, a moved device).
 """
 
 from .._gl import backend, ensure_backend
@@ -32,11 +34,20 @@ from ._renderer import (
     render_rgb,
 )
 from ._scene import scene_include_mjcf, scene_mjcf, scene_parts, standard_assets
+from ._segment import (
+    WORK_WIDTH_PX,
+    SkinColour,
+    brightness_overlap,
+    fit_skin_colour,
+    palm_region,
+    skin_mask,
+)
 from ._sheet import contact_sheet, label_image
 from ._varied import HandVariation, MountVariation, VariedRasterizer
 
 __all__ = [
     "DEFAULT_CELLS",
+    "WORK_WIDTH_PX",
     "CameraMount",
     "GLContextOwner",
     "HandVariation",
@@ -44,23 +55,28 @@ __all__ = [
     "MountVariation",
     "SilhouetteRasterizer",
     "SilhouetteRenderer",
+    "SkinColour",
     "VariedRasterizer",
     "backend",
     "binarize",
+    "brightness_overlap",
     "check_frame",
     "contact_sheet",
     "coverage",
     "crop_resize",
     "ensure_backend",
+    "fit_skin_colour",
     "label_image",
     "largest_component",
     "offscreen_renderer",
+    "palm_region",
     "preprocess",
     "preprocess_reference",
     "render_rgb",
     "scene_include_mjcf",
     "scene_mjcf",
     "scene_parts",
+    "skin_mask",
     "standard_assets",
     "wrist_cut_keep",
     "write_png",

@@ -514,7 +514,8 @@ def test_learned_estimator_for_the_left_hand(tmp_path):
     (["--smoothing", "0.3"], "apply with --learned only"),
     (["--side", "left"], "apply with --learned only"),
     (["--learned-rest", "relaxed"], "apply with --learned only"),
-    (["--one-euro"], "--smoothing and --one-euro apply with --learned only"),
+    (["--one-euro"], "--segment and --one-euro apply with --learned only"),
+    (["--segment", "colour"], "--segment and --one-euro apply with --learned only"),
     (["--learned", "--one-euro", "--smoothing", "0.3"],
      "--one-euro and --smoothing are two ways to steady the angles; give one"),
     (["--learned", "--smoothing", "1"], "--smoothing must be in [0, 1), got 1.0"),
@@ -546,3 +547,14 @@ def test_the_progress_line_says_when_the_device_has_moved():
     assert "MOVED" not in out.getvalue()
     _progress(out)(summary(11))
     assert "DEVICE MOVED (11 frames): take the rest frame again" in out.getvalue()
+
+
+def test_telling_the_skin_by_colour_needs_colour_frames(tmp_path):
+    res = _run("--synthetic", "--learned", "--learned-kind", "perceptrons", "--learned-cache",
+               str(tmp_path), "--frames", "3", "--segment", "colour", *SMALL)
+    assert res.exit_code == 2, res.output
+    assert "rest_frame must be a uint8 colour (H, W, 3) frame" in res.output
+    assert "Traceback" not in res.output
+    res = _run("--synthetic", "--learned", "--learned-kind", "perceptrons", "--learned-cache",
+               str(tmp_path), "--frames", "3", "--segment", "brightness", *SMALL)
+    assert res.exit_code == 0, res.output

@@ -452,3 +452,36 @@ def test_a_left_hand_s_estimator_is_the_right_hand_s_mirrored_and_saves_what_was
                                   right.calibrated(frame).estimate(frame).angles)
     with pytest.raises(InvalidInputError, match="side must be 'right' or 'left', got 'both'"):
         learned_estimator(tmp_path, opts, data=small, side="both")
+
+
+def test_segment_by_colour_is_an_option_of_the_calibration_and_follows_the_mirror(data):
+    est = train_learned(data, LearnedOptions(kind="mlp", components=8, hidden=(8,), epochs=1))
+    raster = SilhouetteRasterizer()
+    rest_mask, mask = raster.mask(np.full(20, 4.0)), raster.mask(named_pose("pinch"))
+
+    def paint(m):  # a skin-coloured hand over a ground brighter than it, where Otsu fails
+        f = np.zeros(m.shape + (3,), np.uint8)
+        f[:] = (230, 240, 200)
+        f[m] = (120, 150, 210)
+        return f
+
+    with pytest.raises(InvalidInputError,
+                       match="segment must be 'auto', 'brightness' or 'colour', got 'x'"):
+        est.calibrated(paint(rest_mask), segment="x")
+    with pytest.raises(InvalidInputError, match="rest_frame must be a uint8 colour"):
+        est.calibrated(rest_mask, segment="colour")
+    by_colour = est.calibrated(paint(rest_mask), segment="colour")
+    assert ((by_colour.grid(paint(mask)) > 127) == (est.grid(mask) > 127)).mean() > 0.97
+    by_brightness = est.calibrated(paint(rest_mask), segment="brightness")
+    # Otsu's threshold takes the brighter ground for hand
+    assert ((by_brightness.grid(paint(mask)) > 127) != (est.grid(mask) > 127)).mean() > 0.3
+    # auto: by colour where the two disagree on the rest frame, by brightness where they agree
+    assert (by_colour.segment, by_brightness.segment) == ("colour", "brightness")
+    assert est.calibrated(paint(rest_mask)).segment == "colour"
+    dark = paint(rest_mask)
+    dark[~rest_mask] = 15
+    assert est.calibrated(dark).segment == "brightness"
+    assert est.calibrated(rest_mask).segment == "brightness"
+    left = est.mirrored().calibrated(paint(rest_mask)[::-1], segment="colour")
+    np.testing.assert_array_equal(left.estimate(paint(mask)[::-1]).angles,
+                                  by_colour.estimate(paint(mask)).angles)

@@ -208,3 +208,40 @@ def test_camera_frames_made_worse_read_as_their_masks(tmp_path):
     assert np.isfinite(b).all()
     assert np.abs(a - b).mean() < 0.5
     assert np.abs(a - b).max() < 5.0
+
+
+def test_frames_over_a_bright_coloured_ground_read_as_their_masks_by_the_skin_s_colour(tmp_path):
+    """docs/camera_estimator.md ("Backgrounds"): Otsu's threshold fails over an ordinary
+    background; the skin's colour from the rest frame much less (it loses a finger cut off by
+    a seam of mixed pixels, and takes in ground of the skin's colour next to the hand)."""
+    import cv2
+
+    from handsynth.eval import model_test_hands, natural_test_poses, relaxed_rest_posture
+
+    est = learned_ensemble(tmp_path, members=LEARNED_PERCEPTRONS)
+    made = model_test_hands(1, seed=33, spread=1.5)[0].make()
+    rng = np.random.default_rng(6)
+    rest = relaxed_rest_posture(rng)
+    poses = natural_test_poses(rest, 8, rng)[0]
+    skin = np.array([95, 125, 180], np.float32)
+
+    def paint(mask, k):
+        ground = cv2.resize(np.random.default_rng(k).integers(0, 256, (5, 8, 3)).astype(np.uint8),
+                            (720, 480), interpolation=cv2.INTER_CUBIC).astype(np.float32)
+        ground[mask] = skin
+        return np.clip(ground + rng.normal(0, 5, ground.shape), 0, 255).astype(np.uint8)
+
+    masks = made.masks(poses)
+    a = np.stack([est.calibrated(made.mask(rest)).estimate(m).angles for m in masks])
+    frames = [paint(m, k) for k, m in enumerate(masks)]
+    by_colour = est.calibrated(paint(made.mask(rest), 99), segment="colour")
+    b = np.stack([by_colour.estimate(f).angles for f in frames])
+    by_brightness = est.calibrated(paint(made.mask(rest), 99), segment="brightness")
+    assert est.calibrated(paint(made.mask(rest), 99)).segment == "colour"  # auto
+    c = np.stack([by_brightness.estimate(f).angles for f in frames])
+    flex = [4, 6, 7, 8, 10, 11, 12, 14, 15, 16, 18, 19]
+    mae = {k: np.abs(v[:, flex] - poses[:, flex]).mean() for k, v in (("mask", a), ("colour", b),
+                                                                        ("brightness", c))}
+    constant = np.abs(poses[:, flex]).mean()
+    assert mae["brightness"] > 0.5 * constant  # the ground taken for hand
+    assert mae["colour"] < mae["mask"] + 0.25 * (mae["brightness"] - mae["mask"])
