@@ -180,8 +180,18 @@ def _chroma_of(bgr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _reduce(frame: np.ndarray, size: tuple[int, int]) -> np.ndarray:
+    """`frame` averaged down to `size` (area averaging)."""
     import cv2
 
+    w, h = size
+    while frame.shape[1] == 4 * w and frame.shape[0] == 4 * h or \
+            frame.shape[1] == 2 * w and frame.shape[0] == 2 * h:
+        # halving by bilinear interpolation averages each 2x2 block exactly, three times
+        # faster than INTER_AREA's general case (the device's 720x480 to 180x120: twice)
+        frame = cv2.resize(frame, (frame.shape[1] // 2, frame.shape[0] // 2),
+                           interpolation=cv2.INTER_LINEAR)
+    if frame.shape[:2] == (h, w):
+        return frame
     return cv2.resize(frame, size, interpolation=cv2.INTER_AREA)
 
 
