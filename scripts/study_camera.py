@@ -694,11 +694,30 @@ def imaging(cache, segment: str = "brightness") -> None:
     print(f"largest_change_paper={change['paper']:.2f} largest_change_natural={change['natural']:.2f}")
 
 
+def _read_both(cal, made, rest, n, rng, mae: dict) -> dict:
+    """`n` paper-protocol and `n` natural frames from `rest`, read by `cal`.
+
+    Appends each set's finger flexion MAE and the constant's to `mae` (keys
+    ``kind`` and ``kind + " constant"``); returns ``{kind: (poses, estimates,
+    angles)}``.  The paper poses are drawn from `rng` first.
+    """
+    from handsynth.eval import paper_protocol_poses
+
+    out = {}
+    for kind, poses in (("paper", paper_protocol_poses(rest, n, rng)[0]),
+                        ("natural", natural_test_poses(rest, n, rng)[0])):
+        got = [cal.estimate(m) for m in made.masks(poses)]
+        angles = np.stack([g.angles for g in got])
+        mae.setdefault(kind, []).append(np.abs(angles[:, _FLEX] - poses[:, _FLEX]).mean())
+        mae.setdefault(kind + " constant", []).append(np.abs(poses[:, _FLEX]).mean())
+        out[kind] = (poses, got, angles)
+    return out
+
+
 def mounts(cache) -> None:
     from dataclasses import replace
 
     from handsynth.estimate import learned_ensemble
-    from handsynth.eval import paper_protocol_poses
     from handsynth.eval._testposes import REST_POSTURES
 
     ens = learned_ensemble(cache)
@@ -720,12 +739,7 @@ def mounts(cache) -> None:
                 rng = np.random.default_rng([41, len(group), i])
                 rest = REST_POSTURES["relaxed" if i % 2 else "open"](rng)
                 cal = ens.calibrated(made.mask(rest))
-                for kind, poses in (("paper", paper_protocol_poses(rest, 60, rng)[0]),
-                                    ("natural", natural_test_poses(rest, 60, rng)[0])):
-                    got = [cal.estimate(m) for m in made.masks(poses)]
-                    angles = np.stack([g.angles for g in got])
-                    mae.setdefault(kind, []).append(np.abs(angles[:, _FLEX] - poses[:, _FLEX]).mean())
-                    mae.setdefault(kind + " constant", []).append(np.abs(poses[:, _FLEX]).mean())
+                for _poses, got, _angles in _read_both(cal, made, rest, 60, rng, mae).values():
                     low += [g.low_confidence for g in got]
             m = {k: float(np.mean(v)) for k, v in mae.items()}
             for kind in worst:
@@ -741,7 +755,6 @@ def mounts(cache) -> None:
 
 def sizes(cache) -> None:
     from handsynth.estimate import learned_ensemble
-    from handsynth.eval import paper_protocol_poses
     from handsynth.eval._testposes import REST_POSTURES
     from handsynth.models import joint_index
     from handsynth.testhands import PROTOCOL_HANDS, MeshHandRenderer, shipped_hand_path
@@ -765,12 +778,7 @@ def sizes(cache) -> None:
                 rng = np.random.default_rng([53, r, len(name)])
                 rest = REST_POSTURES[rest_kind](rng)
                 cal = ens.calibrated(made.mask(rest))
-                for kind, poses in (("paper", paper_protocol_poses(rest, 80, rng)[0]),
-                                    ("natural", natural_test_poses(rest, 80, rng)[0])):
-                    got = [cal.estimate(m) for m in made.masks(poses)]
-                    angles = np.stack([g.angles for g in got])
-                    mae.setdefault(kind, []).append(np.abs(angles[:, _FLEX] - poses[:, _FLEX]).mean())
-                    mae.setdefault(kind + " constant", []).append(np.abs(poses[:, _FLEX]).mean())
+                for kind, (poses, got, angles) in _read_both(cal, made, rest, 80, rng, mae).items():
                     moving = np.abs(poses[:, index_pip] - rest[index_pip]) > 20
                     pip[kind] += list(np.abs(angles[moving, index_pip] - poses[moving, index_pip]))
                     low += [g.low_confidence for g in got]

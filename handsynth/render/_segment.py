@@ -184,8 +184,7 @@ def _reduce(frame: np.ndarray, size: tuple[int, int]) -> np.ndarray:
     import cv2
 
     w, h = size
-    while frame.shape[1] == 4 * w and frame.shape[0] == 4 * h or \
-            frame.shape[1] == 2 * w and frame.shape[0] == 2 * h:
+    while frame.shape[:2] in ((4 * h, 4 * w), (2 * h, 2 * w)):
         # halving by bilinear interpolation averages each 2x2 block exactly, three times
         # faster than INTER_AREA's general case (the device's 720x480 to 180x120: twice)
         frame = cv2.resize(frame, (frame.shape[1] // 2, frame.shape[0] // 2),
