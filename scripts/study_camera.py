@@ -14,6 +14,7 @@ Usage::
     python scripts/study_camera.py --cache DIR mounts
     python scripts/study_camera.py --cache DIR sizes
     python scripts/study_camera.py --cache DIR skin
+    python scripts/study_camera.py --cache DIR skin_lit
 
 ``backgrounds``
     Two held-out model hands (seed 3, 1.5 times the learning spread) and the
@@ -37,6 +38,14 @@ Usage::
     open-hand answer and the share flagged ``low_confidence``.  Last line:
     ``photo_brightness=<mae> photo_colour=<mae> dark_brightness=<mae>
     dark_colour=<mae>``.
+``skin_lit``
+    As ``skin`` on the two glTF hands rendered lit by MuJoCo
+    (:meth:`handsynth.testhands.MeshHandRenderer.render_rgb`: its own skin
+    material, light, shading and highlights), composited by their masks
+    over a dark ground and over the photographs; a relaxed rest (seed 9),
+    40 natural frames each.  Per hand, ground and method the finger flexion
+    MAE beside the constant, the share flagged ``low_confidence`` and what
+    ``auto`` chose.  Last line: ``<ground>_<method>=<mae> ...``.
 ``jitter``
     Continuous motions: 8 natural grasps from and back to a relaxed rest,
     each reached in 0.8 s with a minimum-jerk profile at 30 fps, on two
@@ -232,6 +241,42 @@ def backgrounds(cache) -> None:
           f"photo_mae={np.mean(summary['photo'][0]):.2f} dark_mae={np.mean(summary['dark'][0]):.2f}")
 
 
+def _by_method(ens, rest_frame, frames, poses) -> dict:
+    """Per way of telling the hand: per-frame flexion MAE, ``low_confidence``, the choice."""
+    out = {}
+    for method in ("brightness", "colour", "auto"):
+        cal = ens.calibrated(rest_frame, segment=method)
+        got = [cal.estimate(f) for f in frames]
+        e = np.abs(np.stack([g.angles for g in got])[:, _FLEX] - poses[:, _FLEX]).mean(1)
+        out[method] = (e, np.array([g.low_confidence for g in got]), cal.segment)
+    return out
+
+
+def skin_lit(cache) -> None:
+    from handsynth.estimate import learned_ensemble
+
+    ens = learned_ensemble(cache)
+    photos = background_photos()
+    rng = np.random.default_rng(9)
+    rows: dict = {}
+    for hand in mesh_test_hands():
+        made = hand.make()
+        rest = relaxed_rest_posture(rng)
+        poses, _ = natural_test_poses(rest, 40, rng)
+        lit = [made.render_rgb(p)[..., ::-1] for p in (rest, *poses)]  # BGR, lit by MuJoCo
+        masks = [made.mask(p) for p in (rest, *poses)]
+        for name, ground in (("dark", lambda i: np.full((480, 720, 3), 20, np.uint8)),
+                             ("photo", lambda i: photos[i % len(photos)])):
+            frames = [np.where(m[..., None], f, ground(i)) for i, (f, m) in enumerate(zip(lit, masks))]
+            for method, (e, low, segment) in _by_method(ens, frames[0], frames[1:], poses).items():
+                rows.setdefault((name, method), []).append((e.mean(), low.mean()))
+                print(f"{hand.name:15s} {name:6s} {method:10s} flexion MAE {e.mean():6.2f} (constant "
+                      f"{np.abs(poses[:, _FLEX]).mean():5.2f}); flagged {low.mean():.2f}; chose "
+                      f"{segment}", flush=True)
+    m = {k: np.mean(v, axis=0)[0] for k, v in rows.items()}
+    print(" ".join(f"{g}_{meth}={v:.2f}" for (g, meth), v in m.items()))
+
+
 def skin(cache) -> None:
     from handsynth.estimate import learned_ensemble
 
@@ -263,13 +308,10 @@ def skin(cache) -> None:
                 frames = [frame(m, i + 1) for i, m in enumerate(masks)]
                 kinds = np.array(["colour photo" if (i + 1) % len(photos) in colour else "grey photo"
                                   for i in range(len(masks))]) if name != "dark" else None
-                for method in ("brightness", "colour", "auto"):
-                    cal = ens.calibrated(frame(made.mask(rest), 0), segment=method)
+                for method, (e, low, segment) in _by_method(ens, frame(made.mask(rest), 0), frames,
+                                                             poses).items():
                     if method == "auto":
-                        chose.setdefault(name, []).append(cal.segment)
-                    got = [cal.estimate(f) for f in frames]
-                    e = np.abs(np.stack([g.angles for g in got])[:, _FLEX] - poses[:, _FLEX]).mean(1)
-                    low = np.array([g.low_confidence for g in got])
+                        chose.setdefault(name, []).append(segment)
                     groups = {name: np.ones(len(e), bool)}
                     if kinds is not None:
                         groups.update({f"{name}, {k}": kinds == k for k in ("colour photo", "grey photo")})
@@ -810,7 +852,7 @@ def main() -> None:
                     help="moved: slip along this field of MountVariation alone")
     ap.add_argument("study", choices=["backgrounds", "jitter", "holds", "observability", "bound",
                                       "bound_mcp", "rests", "moved", "imaging", "mounts", "sizes",
-                                      "skin"])
+                                      "skin", "skin_lit"])
     args = ap.parse_args()
     if args.study not in ("observability", "bound_mcp", "moved") and args.cache is None:
         ap.error(f"{args.study} needs --cache DIR")
@@ -822,7 +864,7 @@ def main() -> None:
                "moved": lambda: moved(args.axis),
                "imaging": lambda: imaging(args.cache, args.segment),
                "mounts": lambda: mounts(args.cache), "sizes": lambda: sizes(args.cache),
-               "skin": lambda: skin(args.cache)}
+               "skin": lambda: skin(args.cache), "skin_lit": lambda: skin_lit(args.cache)}
     studies[args.study]()
 
 

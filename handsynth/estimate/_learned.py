@@ -610,7 +610,10 @@ class LearnedEstimator:
             hand need not be the brightest thing in view; colour frames);
             ``"auto"`` (default) brightness unless `rest_frame` is a colour
             frame on which the two disagree (their masks' intersection over
-            union under :data:`AUTO_OVERLAP`: the background is not dark).
+            union under :data:`AUTO_OVERLAP`: the background is not dark) and
+            whose skin can be told from grey by colour
+            (:attr:`~handsynth.render.SkinColour.tells_grey`; not a pale or
+            overexposed skin).
             The choice is kept as the attribute ``segment``.
 
         Raises
@@ -633,7 +636,7 @@ class LearnedEstimator:
                 skin = fit_skin_colour(view, mount, side=side)
             except InvalidInputError:  # no lit skin where the hand always is: brightness decides
                 skin = None
-            if skin is not None and brightness_overlap(view, skin) < AUTO_OVERLAP:
+            if skin is not None and skin.tells_grey and brightness_overlap(view, skin) < AUTO_OVERLAP:
                 out._skin = skin
         out.segment = "colour" if out._skin is not None else "brightness"
         g = out.grid(rest_frame)

@@ -99,6 +99,18 @@ class SkinColour:
     side: str
     _table: np.ndarray = field(init=False, repr=False, compare=False)
 
+    @property
+    def tells_grey(self) -> bool:
+        """Whether neutral grey lies outside the skin's ellipse of step 4.
+
+        A skin close to grey in chromaticity (pale or overexposed, its
+        channels clipped) cannot be told from white, grey or black
+        surfaces by colour: their pixels would pass step 4's test.
+        """
+        grey = np.full(2, 1.0 / 3.0)
+        d2 = _distance2(grey, np.asarray(self.mean), np.asarray(self.inverse_cov))
+        return bool(d2 >= _CHI2_2_999)
+
     def __post_init__(self) -> None:
         # step 4's test for every colour quantised to 6 bits a channel (bin centres): one
         # table look-up a pixel instead of the arithmetic (skin_inside is the plain version)

@@ -130,3 +130,12 @@ def test_brightness_and_colour_agree_on_a_dark_ground_and_not_on_a_bright_one(mr
     bright = _frame(mask, np.full((480, 720, 3), (200, 230, 240), np.uint8), rng)
     assert brightness_overlap(dark, fit_skin_colour(dark)) > AUTO_OVERLAP
     assert brightness_overlap(bright, fit_skin_colour(bright)) < 0.5
+
+
+def test_a_skin_close_to_grey_says_that_colour_cannot_tell_it_from_grey(mrtk):
+    rng = np.random.default_rng(5)
+    mask = mrtk.mask(named_pose("open"))
+    ground = np.full((480, 720, 3), 128, np.uint8)
+    assert fit_skin_colour(_frame(mask, ground, rng)).tells_grey
+    pale = fit_skin_colour(_frame(mask, ground, rng, tone=np.array([216, 247, 255], np.float32)))
+    assert not pale.tells_grey  # overexposed: its channels clipped near white
