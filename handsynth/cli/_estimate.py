@@ -278,7 +278,7 @@ def _progress(stream):
                    "threshold: a dark background), or by the colour of the skin on the back "
                    "of the hand in the rest frame (an ordinary background; colour frames) "
                    "[default: auto, colour where the two disagree on the rest frame] "
-                   "(docs/camera_estimator.md, Backgrounds).")
+                   "(docs/camera_estimator.md, Telling the hand from an ordinary background).")
 @click.option("--one-euro", "one_euro", is_flag=True,
               help="With --learned: steady the angles with the One Euro filter instead (cut-off "
                    "0.5 Hz while still, rising with speed; at the source's frame rate, --fps "

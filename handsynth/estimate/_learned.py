@@ -86,7 +86,8 @@ __all__ = ["LearnedEstimator", "LearnedOptions", "fit_mlp", "learned_estimator",
 _FORMAT = 2  # 2: novelty_limit
 #: ``segment="auto"`` tells the hand by colour when Otsu's mask and the skin's colour mask
 #: of the rest frame overlap less than this (intersection over union): 0.92-0.94 on a dark
-#: background, 0.01-0.86 over photographs (docs/camera_estimator.md, "Backgrounds");
+#: background, 0.01-0.86 over photographs (docs/camera_estimator.md, "Telling the hand from
+#: an ordinary background");
 #: chosen before those were measured.
 AUTO_OVERLAP = 0.8
 

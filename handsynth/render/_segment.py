@@ -39,7 +39,9 @@ The two thresholds are fixed by the chi-square distribution and a brightness
 ratio chosen before any measurement, not fitted to test frames.  What it
 cannot do: tell the hand from a background of the same chromaticity (wood,
 another person's skin, beige walls); a grey hand in grey light is told only
-by its brightness.  Measured in docs/camera_estimator.md ("Backgrounds").
+by its brightness, and so is a skin close to grey (pale, or overexposed:
+:attr:`SkinColour.tells_grey`).  Measured in docs/camera_estimator.md
+("Telling the hand from an ordinary background").
 """
 
 from __future__ import annotations

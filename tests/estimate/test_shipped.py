@@ -211,9 +211,12 @@ def test_camera_frames_made_worse_read_as_their_masks(tmp_path):
 
 
 def test_frames_over_a_bright_coloured_ground_read_as_their_masks_by_the_skin_s_colour(tmp_path):
-    """docs/camera_estimator.md ("Backgrounds"): Otsu's threshold fails over an ordinary
-    background; the skin's colour from the rest frame much less (it loses a finger cut off by
-    a seam of mixed pixels, and takes in ground of the skin's colour next to the hand)."""
+    """Otsu's threshold fails over an ordinary background; the skin's colour much less.
+
+    docs/camera_estimator.md ("Telling the hand from an ordinary background"): the skin's
+    colour from the rest frame loses a finger cut off by a seam of mixed pixels, and takes in
+    ground of the skin's colour next to the hand.
+    """
     import cv2
 
     from handsynth.eval import model_test_hands, natural_test_poses, relaxed_rest_posture
