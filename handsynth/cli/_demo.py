@@ -29,8 +29,9 @@ def demo(out_dir: Path, tile_width: int, frames: int, learned_hands: int) -> Non
     against it, plainly and calibrated to the hand's open-hand frame; the
     mean absolute joint-angle error and the rate are printed.  Last, a
     small learned estimator and the shipped perceptrons read the MRTK glTF
-    hand beside the constant answer, and ``estimates_mrtk.png`` shows four of
-    the perceptrons' readings beside the truth.
+    hand beside the constant answer, ``estimates_mrtk.png`` shows four of
+    the perceptrons' readings beside the truth, and ``backgrounds_mrtk.png``
+    how they tell the hand over photographs, by brightness and by colour.
     """
     import time
 
@@ -91,6 +92,9 @@ def _learned_demo(out_dir: Path, hands: int, frames: int, tile_width: int) -> No
         path = out_dir / "estimates_mrtk.png"
         _estimates_picture(path, shipped, tile_width)
         click.echo(f"wrote {path}")
+        path = out_dir / "backgrounds_mrtk.png"
+        _backgrounds_picture(path, shipped, tile_width)
+        click.echo(f"wrote {path}")
 
 
 def _estimates_picture(path: Path, estimator, tile_width: int, count: int = 4) -> None:
@@ -125,6 +129,69 @@ def _estimates_picture(path: Path, estimator, tile_width: int, count: int = 4) -
             rows[1].append(label_image(mesh.render_rgb(truth, camera="side"), "true angles, side view"))
             rows[2].append(label_image(mesh.render_rgb(est, camera="side"),
                                        f"estimated: flexion error {mae:.1f} deg"))
+    sheet = np.vstack([np.hstack(r) for r in rows])
+    write_png(path, cv2.copyMakeBorder(sheet, 2, 2, 2, 2, cv2.BORDER_CONSTANT, value=(255, 255, 255)))
+
+
+def _backgrounds_picture(path: Path, estimator, tile_width: int, count: int = 4) -> None:
+    """The MRTK glTF hand over photographs, told by brightness and by the skin's colour.
+
+    Natural poses from a relaxed rest, the hand painted in a shaded skin
+    colour over photographs bundled with scikit-image (the rest frame over
+    one too); columns are frames; rows show the frame, the hand as Otsu's
+    threshold tells it and as the skin's colour tells it, each with the
+    flexion error of `estimator` calibrated that way.
+    """
+    import cv2
+    import numpy as np
+
+    from ..eval import JOINT_GROUPS, background_photos, natural_test_poses, relaxed_rest_posture
+    from ..render import (
+        CameraMount,
+        binarize,
+        fit_skin_colour,
+        label_image,
+        skin_mask,
+        write_png,
+    )
+    from ..testhands import MeshHandRenderer, shipped_hand_path
+
+    flex = list(JOINT_GROUPS["finger_flexion"])
+    mount = CameraMount.paper()
+    th = round(tile_width * mount.height_px / mount.width_px)
+    photos = background_photos()
+    rng = np.random.default_rng(11)
+    rest = relaxed_rest_posture(rng)
+    poses = natural_test_poses(rest, count, rng)[0]
+    shade = np.linspace(0.55, 1.0, mount.width_px, dtype=np.float32)[None, :, None]
+    skin = np.array([95, 125, 180], np.float32)  # BGR
+
+    def paint(mask, photo):
+        f = photo.astype(np.float32)
+        f[mask] = (skin * shade * np.ones_like(f))[mask]
+        return np.clip(f + rng.normal(0.0, 4.0, f.shape), 0, 255).astype(np.uint8)
+
+    with MeshHandRenderer(mount, path=shipped_hand_path("mrtk")) as full:
+        rest_frame = paint(full.mask(rest), photos[-1])
+        frames = [paint(m, photos[i % (len(photos) - 1)]) for i, m in enumerate(full.masks(poses))]
+    readers = {"brightness": estimator.calibrated(rest_frame, segment="brightness"),
+               "colour": estimator.calibrated(rest_frame, segment="colour")}
+    colour = fit_skin_colour(rest_frame, mount)  # as the colour reader took it
+
+    def tile(image):  # the label's strip darkened, so that white text reads on white
+        out = cv2.resize(image, (tile_width, th), interpolation=cv2.INTER_AREA)
+        out[:24] //= 3
+        return out
+
+    rows: list[list[np.ndarray]] = [[], [], []]
+    for i, (truth, frame) in enumerate(zip(poses, frames)):
+        rows[0].append(label_image(tile(frame[..., ::-1]), f"frame {i + 1} over a photograph"))
+        told = {"brightness": binarize(frame),
+                "colour": skin_mask(frame, colour)}
+        for r, (how, mask) in enumerate(told.items(), start=1):
+            mae = float(np.abs(readers[how].estimate(frame).angles[flex] - truth[flex]).mean())
+            grey = np.repeat(tile(mask.view(np.uint8) * 255)[..., None], 3, axis=2)
+            rows[r].append(label_image(grey, f"by {how}: flexion error {mae:.1f} deg"))
     sheet = np.vstack([np.hstack(r) for r in rows])
     write_png(path, cv2.copyMakeBorder(sheet, 2, 2, 2, 2, cv2.BORDER_CONSTANT, value=(255, 255, 255)))
 

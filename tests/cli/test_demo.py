@@ -19,6 +19,11 @@ def test_demo_writes_pictures_and_looks_up_frames(tmp_path):
     assert img is not None and img.shape == (3 * 64 + 4, 4 * 96 + 4, 3)
     rows = [img[2 + 64 * i:2 + 64 * (i + 1), 2:-2] for i in range(3)]
     assert all(r.std() > 10 for r in rows) and not (rows[1] == rows[2]).all()
+    # the same hand over photographs: the frame, and the hand told by brightness and by colour
+    img = cv2.imread(str(tmp_path / "backgrounds_mrtk.png"))
+    assert img is not None and img.shape == (3 * 64 + 4, 4 * 96 + 4, 3)
+    rows = [img[2 + 64 * i:2 + 64 * (i + 1), 2:-2] for i in range(3)]
+    assert all(r.std() > 10 for r in rows) and (rows[1] != rows[2]).mean() > 0.1
     db = open_database(next((tmp_path / "db").glob("*.h5")))
     assert len(db) == 3000
     assert "looked up 20 frames" in res.output and "mean absolute error" in res.output
