@@ -410,9 +410,11 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
             what = f"synthetic hand {user_shape.name} ({synthetic_motion} poses)"
         # exactly one of --camera, --video and --synthetic was given (checked above)
         assert source is not None
+        told = None
         if learned:
             lookup = _calibrate_learned(lookup, source, open_image, mount, side, info_err,
                                         segment=segment or "auto")
+            told = lookup.segment
             if one_euro:
                 from ..estimate import SmoothedEstimator
 
@@ -456,6 +458,10 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
     if show is not None:
         sys.stderr.write("\n")
     click.echo(summary.format(), err=info_err)
+    if told == "brightness" and summary.frames and summary.low_confidence > 0.25 * summary.frames:
+        click.echo(f"{summary.low_confidence} of {summary.frames} frames were unlike any learnt: "
+                   "if the background is not dark, --segment colour tells the hand by the "
+                   "colour of its skin (docs/camera_estimator.md)", err=info_err)
     if sink is not None and not to_stdout:
         click.echo(f"rows: {Path(out)} ({sink.rows} rows, {sink.format})", err=info_err)
     if video is not None:

@@ -558,3 +558,40 @@ def test_telling_the_skin_by_colour_needs_colour_frames(tmp_path):
     res = _run("--synthetic", "--learned", "--learned-kind", "perceptrons", "--learned-cache",
                str(tmp_path), "--frames", "3", "--segment", "brightness", *SMALL)
     assert res.exit_code == 0, res.output
+
+
+def test_a_video_over_photographs_is_told_by_colour_and_brightness_says_it_fails(tmp_path):
+    import cv2
+
+    from handsynth.eval import background_photos, natural_test_poses, relaxed_rest_posture
+    from handsynth.testhands import MeshHandRenderer, shipped_hand_path
+
+    photos = background_photos()
+    rng = np.random.default_rng(2)
+    rest = relaxed_rest_posture(rng)
+    poses = natural_test_poses(rest, 12, rng)[0]
+    skin = np.array([95, 125, 180], np.uint8)
+
+    def paint(mask, k):
+        f = photos[k % len(photos)].copy()
+        f[mask] = skin
+        return f
+
+    with MeshHandRenderer(path=shipped_hand_path("mrtk")) as r:
+        cv2.imwrite(str(tmp_path / "rest.png"), paint(r.mask(rest), 0))
+        video = tmp_path / "hand.avi"
+        writer = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"MJPG"), 15.0, (720, 480))
+        for k, m in enumerate(r.masks(poses)):
+            writer.write(paint(m, k))
+        writer.release()
+    args = ["--video", str(video), "--learned", "--learned-kind", "fingers", "--learned-hands", "6",
+            "--learned-cache", str(tmp_path / "cache"), "--calibrate-image",
+            str(tmp_path / "rest.png")]  # the per-digit member says what is unlike any learnt
+    res = _run(*args)
+    assert res.exit_code == 0, res.output
+    assert "the hand is told by the skin's colour" in res.output
+    res = _run(*args, "--segment", "brightness")
+    assert res.exit_code == 0, res.output
+    assert "the hand is told by brightness" in res.output
+    assert re.search(r"\d+ of 12 frames were unlike any learnt: if the background is not dark, "
+                     r"--segment colour", res.output)
