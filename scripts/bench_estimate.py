@@ -176,7 +176,7 @@ def _bench_learned(args) -> None:
     if getattr(members_cal[0], "segment", "brightness") == "colour":
         from handsynth.render import skin_mask
 
-        skin = members_cal[0]._skin
+        skin = members_cal[0].skin
         masks = [skin_mask(f, skin) for f in frames]
         told = {"skin_mask (colour) of the BGR frame": _median_ms(lambda f: skin_mask(f, skin),
                                                                    frames, n)}

@@ -149,7 +149,6 @@ def _backgrounds_picture(path: Path, estimator, tile_width: int, count: int = 4)
     from ..render import (
         CameraMount,
         binarize,
-        fit_skin_colour,
         label_image,
         skin_mask,
         write_png,
@@ -176,7 +175,7 @@ def _backgrounds_picture(path: Path, estimator, tile_width: int, count: int = 4)
         frames = [paint(m, photos[i % (len(photos) - 1)]) for i, m in enumerate(full.masks(poses))]
     readers = {"brightness": estimator.calibrated(rest_frame, segment="brightness"),
                "colour": estimator.calibrated(rest_frame, segment="colour")}
-    colour = fit_skin_colour(rest_frame, mount)  # as the colour reader took it
+    colour = readers["colour"].members[0].skin  # the skin its members tell the hand by
 
     def tile(image):  # the label's strip darkened, so that white text reads on white
         out = cv2.resize(image, (tile_width, th), interpolation=cv2.INTER_AREA)

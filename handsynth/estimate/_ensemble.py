@@ -18,7 +18,7 @@ import numpy as np
 
 from ..db import LearningSetOptions
 from ..errors import InvalidInputError
-from ..render import CameraMount
+from ..render import CameraMount, SkinColour
 from ._learned import LearnedEstimator, LearnedOptions, learned_estimator, learned_file_name
 from ._lookup import PoseEstimate
 from ._shipped import shipped_path
@@ -115,20 +115,24 @@ class EnsembleEstimator:
         self.segment = next((m.segment for m in self.members if isinstance(m, LearnedEstimator)),
                             "brightness")
 
-    def calibrated(self, rest_frame: np.ndarray, *, segment: str = "auto") -> EnsembleEstimator:
+    def calibrated(self, rest_frame: np.ndarray, *,
+                   segment: str | SkinColour = "auto") -> EnsembleEstimator:
         """A copy whose members are calibrated to `rest_frame` (those that calibrate).
 
         `segment` is passed to the learnt members
-        (:meth:`LearnedEstimator.calibrated`).
+        (:meth:`LearnedEstimator.calibrated`); the first of a
+        :attr:`~LearnedEstimator.view_key` decides it, and those after it take
+        its decision and skin.
         """
         members = []
-        checked = set()  # learnt members reading one grid check it for a moved device once
+        told: dict = {}  # learnt members reading one grid: told once, checked once for a move
         for m in self.members:
             if isinstance(m, LearnedEstimator):
-                key = (m.mount, m.side, m.cells)
-                members.append(m.calibrated(rest_frame, check_moved=key not in checked,
-                                            segment=segment))
-                checked.add(key)
+                key = m.view_key
+                first = told.get(key)
+                how = segment if first is None else (first.skin or "brightness")
+                members.append(m.calibrated(rest_frame, check_moved=first is None, segment=how))
+                told.setdefault(key, members[-1])
             else:
                 members.append(m.calibrated(rest_frame)
                                if callable(getattr(m, "calibrated", None)) else m)
@@ -144,14 +148,14 @@ class EnsembleEstimator:
             no hand); ``keypoints`` the mean of those given (NaN if none);
             ``confidence`` the weighted mean; ``entry`` -1; ``low_confidence``
             and ``moved`` when any member's is.  Learnt members
-            of the same mount, side and cells share one coverage grid of the
-            frame (:meth:`LearnedEstimator.estimate_grid`).
+            of the same :attr:`~LearnedEstimator.view_key` share one coverage
+            grid of the frame (:meth:`LearnedEstimator.estimate_grid`).
         """
-        grids: dict = {}  # learnt members of one mount, side and cells read one grid
+        grids: dict = {}  # learnt members of one view read one grid
         got = []
         for m in self.members:
             if isinstance(m, LearnedEstimator):
-                key = (m.mount, m.side, m.cells)
+                key = m.view_key
                 if key not in grids:
                     grids[key] = m.grid(frame)
                 got.append(m.estimate_grid(grids[key]))

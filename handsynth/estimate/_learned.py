@@ -565,6 +565,20 @@ class LearnedEstimator:
         self._lo = JOINT_LIMITS_DEG[:, 0]
         self._hi = JOINT_LIMITS_DEG[:, 1]
 
+    @property
+    def view_key(self) -> tuple:
+        """What makes a frame's grid: estimators of one key read the same grid of a frame.
+
+        The device and hand the arrays were learnt for, whether frames are
+        turned over first (:meth:`mirrored`), and the cells.
+        """
+        return (*self._learnt_view, self._mirror, self.cells)
+
+    @property
+    def skin(self) -> SkinColour | None:
+        """The skin's colour the frames are told by (:meth:`calibrated`), or None."""
+        return self._skin
+
     def mirrored(self) -> LearnedEstimator:
         """This estimator reading the other hand's frames.
 
@@ -590,7 +604,7 @@ class LearnedEstimator:
 
     # -- calibration -----------------------------------------------------------
     def calibrated(self, rest_frame: np.ndarray, *, check_moved: bool = True,
-                   segment: str = "auto") -> LearnedEstimator:
+                   segment: str | SkinColour = "auto") -> LearnedEstimator:
         """A copy of this estimator calibrated to a frame of the user's hand at rest.
 
         Parameters
@@ -602,7 +616,7 @@ class LearnedEstimator:
             Check each frame for a device moved since `rest_frame`
             (:class:`~handsynth.estimate.MoveCheck`; False: ``moved`` is never
             set, as for an ensemble member whose grid another member checks).
-        segment : {"auto", "brightness", "colour"}, keyword-only
+        segment : {"auto", "brightness", "colour"} or SkinColour, keyword-only
             How camera frames are told into hand and background (masks are
             read as they are): ``"brightness"`` by Otsu's threshold
             (:func:`~handsynth.render.binarize`: a hand brighter than a dark
@@ -614,8 +628,10 @@ class LearnedEstimator:
             union under :data:`AUTO_OVERLAP`: the background is not dark) and
             whose skin can be told from grey by colour
             (:attr:`~handsynth.render.SkinColour.tells_grey`; not a pale or
-            overexposed skin).
-            The choice is kept as the attribute ``segment``.
+            overexposed skin).  A :class:`~handsynth.render.SkinColour`
+            already fitted to this rest frame (another estimator's
+            :attr:`skin`) is used as it is.  The choice is kept as the
+            attribute ``segment``, the skin as :attr:`skin`.
 
         Raises
         ------
@@ -623,14 +639,16 @@ class LearnedEstimator:
             The frame shows no hand, or is not an image; ``"colour"`` with a
             rest frame that is not a colour frame; an unknown `segment`.
         """
-        if segment not in ("auto", "brightness", "colour"):
+        if not isinstance(segment, SkinColour) and segment not in ("auto", "brightness", "colour"):
             raise InvalidInputError(f"segment must be 'auto', 'brightness' or 'colour', "
                                     f"got {segment!r}")
         out = copy.copy(self)
         out._skin = None
         view = np.asarray(rest_frame)[::-1] if self._mirror else rest_frame
         mount, side = self._learnt_view
-        if segment == "colour":
+        if isinstance(segment, SkinColour):
+            out._skin = segment
+        elif segment == "colour":
             out._skin = fit_skin_colour(view, mount, side=side)
         elif segment == "auto" and _is_colour(view):
             try:
@@ -794,7 +812,7 @@ class LearnedEstimator:
         """Pose from a frame's coverage grid, as :meth:`grid` makes it.
 
         :meth:`estimate` is ``estimate_grid(grid(frame))``; estimators of the
-        same mount, side and cells read the same grid, so an
+        same :attr:`view_key` read the same grid, so an
         :class:`~handsynth.estimate.EnsembleEstimator` makes it once.
 
         Parameters

@@ -66,8 +66,9 @@ _CHI2_2_999 = 13.815510557964274
 _BRIGHTNESS_FLOOR = 0.25
 #: Chromaticity variance added to the fitted covariance (s.d. 0.01: 8-bit steps and noise).
 _CHROMA_VAR_FLOOR = 1e-4
-#: Grey levels a channel is quantised to in the look-up table (6 bits).
-_LEVELS, _STEP = 64, 4
+#: Bits a channel loses in the look-up table (8 -> 6 bits: 64 levels of 4 grey levels each).
+_SHIFT = 2
+_LEVELS, _STEP = 256 >> _SHIFT, 1 << _SHIFT
 _OPEN_KERNEL = np.ones((2, 2), np.uint8)
 
 
@@ -315,8 +316,9 @@ def skin_mask(frame: np.ndarray, skin: SkinColour) -> np.ndarray:
     now = np.median(small.reshape(-1, 3)[flat], axis=0)
     gain = np.asarray(skin.palm_bgr, np.float32) / np.maximum(now, 1.0).astype(np.float32)
     balanced: np.ndarray = cv2.transform(small, np.diag(gain))  # saturating, rounded
-    q = balanced >> 2  # 6 bits a channel
-    index = (q[..., 0].astype(np.int32) << 12) | (q[..., 1].astype(np.int32) << 6) | q[..., 2]
+    q = balanced >> _SHIFT
+    bits = 8 - _SHIFT
+    index = (q[..., 0].astype(np.int32) << 2 * bits) | (q[..., 1].astype(np.int32) << bits) | q[..., 2]
     inside = skin._table[index]
     m8 = cv2.morphologyEx(inside.view(np.uint8), cv2.MORPH_OPEN, _OPEN_KERNEL)
     _, labels = cv2.connectedComponents(m8)

@@ -485,3 +485,23 @@ def test_segment_by_colour_is_an_option_of_the_calibration_and_follows_the_mirro
     left = est.mirrored().calibrated(paint(rest_mask)[::-1], segment="colour")
     np.testing.assert_array_equal(left.estimate(paint(mask)[::-1]).angles,
                                   by_colour.estimate(paint(mask)).angles)
+
+
+def test_an_ensemble_tells_the_hand_once_for_the_members_reading_one_view(data):
+    from handsynth.estimate import EnsembleEstimator
+    from handsynth.render import fit_skin_colour
+
+    opts = LearnedOptions(kind="mlp", components=8, hidden=(8,), epochs=1)
+    a, b = train_learned(data, opts), train_learned(data, replace(opts, seed=1))
+    raster = SilhouetteRasterizer()
+    rest = np.zeros((480, 720, 3), np.uint8)
+    rest[:] = (230, 240, 200)  # a ground brighter than the hand
+    rest[raster.mask(np.full(20, 4.0))] = (120, 150, 210)
+    ens = EnsembleEstimator([a, b]).calibrated(rest)
+    assert ens.segment == "colour" and ens.members[0].skin is ens.members[1].skin
+    assert ens.members[1]._move_check is None  # the first member checks the shared grid
+    # a fitted skin is taken as it is
+    skin = fit_skin_colour(rest)
+    assert a.calibrated(rest, segment=skin).skin is skin
+    # a mirrored member reads its own grid (the frame turned over), never its neighbour's
+    assert a.mirrored().view_key != a.view_key and a.view_key == b.view_key
