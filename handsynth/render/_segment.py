@@ -26,7 +26,10 @@ Method
    so that its median over the palm region is the rest frame's (the palm
    region is always hand, so a change of white balance or exposure since
    the rest frame is undone: without it a cast of 10 % made the mask
-   useless); then a pixel is hand when its chromaticity lies
+   useless); a frame that needs two channels' gains further apart than
+   1.6 shows something else there and is read as showing no hand (a
+   ground of the skin's own hue, such as a brown table, is not caught);
+   then a pixel is hand when its chromaticity lies
    within that quantile of the skin's (Mahalanobis distance) and it is
    brighter than a quarter of the palm's median; an opening by 2x2 pixels
    removes specks, and only the regions connected to the palm region are
@@ -70,6 +73,11 @@ _CHROMA_VAR_FLOOR = 1e-4
 _SHIFT = 2
 _LEVELS, _STEP = 256 >> _SHIFT, 1 << _SHIFT
 _OPEN_KERNEL = np.ones((2, 2), np.uint8)
+#: Largest ratio of two channels' gains a frame's white balance is corrected by: casts of
+#: 20 % (gains 1.25 and 0.83, ratio 1.5) are undone; beyond, the palm region does not show
+#: the rest frame's skin (no hand, as in 8 of 9 photographs without one, ratios 1.9-11),
+#: and the frame shows no hand.  Chosen after measuring those ratios.
+_MAX_CAST = 1.6
 
 
 @dataclass(frozen=True)
@@ -315,6 +323,8 @@ def skin_mask(frame: np.ndarray, skin: SkinColour) -> np.ndarray:
     # white balance and exposure as in the rest frame: the palm region is always hand
     now = np.median(small.reshape(-1, 3)[flat], axis=0)
     gain = np.asarray(skin.palm_bgr, np.float32) / np.maximum(now, 1.0).astype(np.float32)
+    if gain.max() > _MAX_CAST * gain.min():  # the palm region is not the skin of the rest frame
+        return np.zeros((h, w), bool)
     balanced: np.ndarray = cv2.transform(small, np.diag(gain))  # saturating, rounded
     q = balanced >> _SHIFT
     bits = 8 - _SHIFT

@@ -139,3 +139,21 @@ def test_a_skin_close_to_grey_says_that_colour_cannot_tell_it_from_grey(mrtk):
     assert fit_skin_colour(_frame(mask, ground, rng)).tells_grey
     pale = fit_skin_colour(_frame(mask, ground, rng, tone=np.array([216, 247, 255], np.float32)))
     assert not pale.tells_grey  # overexposed: its channels clipped near white
+
+
+def test_a_frame_whose_palm_region_is_not_the_skin_shows_no_hand(mrtk):
+    rng = np.random.default_rng(6)
+    skin = fit_skin_colour(_frame(mrtk.mask(named_pose("open")), _photo(9), rng))
+    unlike = 0
+    for k in range(10, 16):  # the colour fields alone: the hand gone from the view
+        ground = _photo(k)
+        gain = np.asarray(skin.palm_bgr) / np.maximum(
+            np.median(cv2.resize(ground, (180, 120), interpolation=cv2.INTER_AREA)[palm_region()],
+                      axis=0), 1.0)
+        if gain.max() > 1.6 * gain.min():
+            unlike += 1
+            assert not skin_mask(ground, skin).any()
+    assert unlike >= 3
+    cast = np.clip(_frame(mrtk.mask(named_pose("fist")), _photo(16), rng)
+                   * np.array([0.8, 1.0, 1.2], np.float32), 0, 255).astype(np.uint8)
+    assert skin_mask(cast, skin).sum() > 1000  # a cast of 20 % is still undone
