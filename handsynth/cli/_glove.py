@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import json
-import warnings
-from contextlib import contextmanager
 
 import click
 
@@ -17,16 +15,6 @@ def _write_json(path: str, payload) -> None:
     from .._io import write_text
 
     write_text(path, json.dumps(payload, indent=2) + "\n", what="JSON file")
-
-
-@contextmanager
-def _warnings_to_stderr():
-    """Print the library's warnings as ``handsynth: warning: ...`` lines."""
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        yield
-    for w in caught:
-        click.echo(f"handsynth: warning: {w.message}", err=True)
 
 
 @cli.group()
@@ -133,8 +121,7 @@ def calibrate(recording, out, kind, models, t_threshold, n_points, synergy_k, sy
                                   k=synergy_k, source=str(synergy_csv))
         click.echo(f"synergies from {synergy_csv}: {synergy_k} explain "
                    f"{100 * synergies.explained.sum():.1f} % of the posture variance")
-    with _warnings_to_stderr():
-        est = fit(rec, options=opts, synergies=synergies, where=str(recording))
+    est = fit(rec, options=opts, synergies=synergies, where=str(recording))
     ref = range_readings(rec)
     save_calibration(out, est, kind=kind, range_reference=ref,
                      meta={"recording": str(recording), "n_samples": rec.n_samples})
@@ -188,19 +175,18 @@ def apply(calibration, readings, out, name, motion, range_csv, adc_max):
                                 f"{', '.join(cal['estimators'])}")
     rec = read_glove_csv(readings, kind=cal["kind"], adc_max=adc_max)
     sensors = rec.sensors
-    with _warnings_to_stderr():
-        check_sensors(sensors, adc_max=adc_max, where=str(readings))
-        if range_csv:
-            if cal["range_reference"] is None:
-                raise InvalidInputError(f"{calibration}: the calibration had no range_open/"
-                                        "range_fist holds, so --range cannot be used")
-            src = range_readings(read_glove_csv(range_csv, adc_max=adc_max))
-            if src is None:
-                raise InvalidInputError(f"{range_csv}: needs rows with motion 'range_open' "
-                                        "and rows with motion 'range_fist'")
-            tgt = cal["range_reference"]
-            sensors = RangeNormalizer(src[0], src[1], tgt[0], tgt[1]).apply(sensors)
-        angles = est.predict(sensors, motion=motion)
+    check_sensors(sensors, adc_max=adc_max, where=str(readings))
+    if range_csv:
+        if cal["range_reference"] is None:
+            raise InvalidInputError(f"{calibration}: the calibration had no range_open/"
+                                    "range_fist holds, so --range cannot be used")
+        src = range_readings(read_glove_csv(range_csv, adc_max=adc_max))
+        if src is None:
+            raise InvalidInputError(f"{range_csv}: needs rows with motion 'range_open' "
+                                    "and rows with motion 'range_fist'")
+        tgt = cal["range_reference"]
+        sensors = RangeNormalizer(src[0], src[1], tgt[0], tgt[1]).apply(sensors)
+    angles = est.predict(sensors, motion=motion)
     write_angles_csv(out, angles, time_s=rec.time_s)
     click.echo(f"{readings}: {rec.n_samples} samples -> {out} ({name}"
                + (f", motion {motion}" if motion else ", mixed over motions") + ")")
@@ -224,10 +210,9 @@ def eval_(kind, trials, test_trials, seed, seeds, json_out):
 
     kinds = ("dg5", "5dt") if kind == "both" else (kind,)
     results = {}
-    with _warnings_to_stderr():
-        for k in kinds:
-            results[k] = evaluate(EvalOptions(kind=k, trials=trials, test_trials=test_trials,
-                                              seed=seed, seeds=seeds))
+    for k in kinds:
+        results[k] = evaluate(EvalOptions(kind=k, trials=trials, test_trials=test_trials,
+                                          seed=seed, seeds=seeds))
     for k, res in results.items():
         _print_eval(k, res)
     if json_out:

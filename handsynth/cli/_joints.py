@@ -45,11 +45,6 @@ def joints() -> None:
     """Finger joint centres from two 6-DOF trackers (patent JP2010-88628)."""
 
 
-def _echo_warnings(caught) -> None:
-    for w in caught:
-        click.echo(f"handsynth: warning: {w.message}", err=True)
-
-
 @joints.command()
 @click.argument("recording", type=click.Path(dir_okay=False))
 @click.option("--method", "methods", type=click.Choice(_METHODS + ("all",)),
@@ -86,8 +81,6 @@ def _echo_warnings(caught) -> None:
 def estimate(recording, methods, frames, lateral_axis, lateral_frame, bins, units, angles,
              sensors, rate_hz, strict, json_out, plot_out) -> None:
     """Estimate the joint centre of RECORDING (.h5, PiMgr CSV or Liberty ASCII)."""
-    import warnings
-
     from .._io import check_output
     from ..errors import EstimationError, InvalidInputError
     from ..sensors.trackers import (
@@ -114,10 +107,7 @@ def estimate(recording, methods, frames, lateral_axis, lateral_frame, bins, unit
                 raise InvalidInputError(f"--sensors: expected two station numbers 'a,b', got "
                                         f"{sensors!r}")
             kwargs["sensors"] = st
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        rec = read_recording(recording, **kwargs)
-    _echo_warnings(caught)
+    rec = read_recording(recording, **kwargs)
     filt = AxisAngleFilter(bins=bins, lateral_axis=_lateral(lateral_axis),
                            lateral_frame=lateral_frame)
     names = _METHODS if "all" in methods else tuple(dict.fromkeys(methods))

@@ -3,7 +3,10 @@
 Sub-commands live in their own modules and are registered here.  Every
 expected error -- a :class:`handsynth.errors.HandsynthError` from the library
 or a bad option or argument that click rejects -- becomes one line on stderr,
-``handsynth: error: <what>``, and exit status 2, never a traceback.  A
+``handsynth: error: <what>``, and exit status 2, never a traceback.  Every
+warning the library issues while a command runs is one line on stderr as it
+comes, ``handsynth: warning: <what>``, also when the command then fails (the
+warnings are often what explains the error).  A
 sub-command module that cannot be imported is a bug of the installation and
 raises (it never silently drops its command).
 """
@@ -12,6 +15,8 @@ from __future__ import annotations
 
 import importlib
 import sys
+import warnings
+from contextlib import contextmanager
 
 import click
 
@@ -26,10 +31,24 @@ def _error_line(message: str) -> None:
     click.echo(f"handsynth: error: {message}", err=True)
 
 
+def _warning_line(message, category, filename, lineno, file=None, line=None) -> None:
+    click.echo(f"handsynth: warning: {message}", err=True)
+
+
+@contextmanager
+def _warnings_as_lines():
+    """Show every warning, each time, as one ``handsynth: warning:`` line."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")
+        warnings.showwarning = _warning_line
+        yield
+
+
 class _Group(click.Group):
     def invoke(self, ctx: click.Context):
         try:
-            return super().invoke(ctx)
+            with _warnings_as_lines():
+                return super().invoke(ctx)
         except HandsynthError as exc:
             _error_line(str(exc))
             ctx.exit(2)
