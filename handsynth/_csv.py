@@ -5,9 +5,12 @@ miss and turn a good recording into an error or, worse, into silently wrong
 columns: a byte-order mark before the first name (a spreadsheet's "CSV
 UTF-8"), ``;`` between the fields and a decimal comma (``1,5``; spreadsheets
 in locales that write numbers so), tabs or spaces, quoted cells, CRLF line ends and
-comment lines.  :func:`read_rows` reads all of these into rows of stripped
-cells and records what it found, so that the CSV readers of recordings
-agree on it and can name the line of a bad cell.
+comment lines, a spreadsheet's ``sep=;`` first line, UTF-16 text (a
+spreadsheet's "Unicode text").  :func:`read_rows` reads all of these into
+rows of stripped cells and records what it found, so that the CSV readers of
+recordings agree on it and can name the line of a bad cell;
+:func:`column_index` maps a header's names to columns and refuses a name
+given twice (the last one would win, silently).
 """
 
 from __future__ import annotations
@@ -20,9 +23,11 @@ from pathlib import Path
 
 from .errors import RecordingError
 
-__all__ = ["Rows", "read_rows", "read_text"]
+__all__ = ["Rows", "column_index", "read_rows", "read_text"]
 
 _COMMA_NUMBER = re.compile(r"[-+]?\d*,\d+(?:[eE][-+]?\d+)?")
+#: A spreadsheet's first line naming the delimiter (``sep=;``).
+_SEP_LINE = re.compile(r'\s*"?sep=(.)"?\s*', re.IGNORECASE)
 
 
 @dataclass(frozen=True)
@@ -52,8 +57,9 @@ class Rows:
 def read_text(path, *, what: str, signatures: Mapping[bytes, str] | None = None) -> str:
     """The text of the file `path`, refusing binary content.
 
-    Decoded as UTF-8 without a byte-order mark, else as Latin-1 (any byte
-    decodes, so names stay readable enough to report).
+    Decoded as UTF-16 where it starts with that byte-order mark, else as
+    UTF-8 without a byte-order mark, else as Latin-1 (any byte decodes, so
+    names stay readable enough to report).
 
     Parameters
     ----------
@@ -76,6 +82,12 @@ def read_text(path, *, what: str, signatures: Mapping[bytes, str] | None = None)
     for magic, kind in (signatures or {}).items():
         if raw.startswith(magic):
             raise RecordingError(f"{path}: {kind}; expected {what}")
+    if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
+        try:
+            return raw.decode("utf-16")
+        except UnicodeDecodeError:
+            raise RecordingError(f"{path}: starts as UTF-16 text but is not; expected "
+                                 f"{what}") from None
     if b"\x00" in raw[:65536]:
         raise RecordingError(f"{path}: binary content; expected {what}")
     try:
@@ -110,15 +122,21 @@ def read_rows(path, *, what: str = "CSV table") -> Rows:
     text = read_text(path, what=f"CSV text ({what})")
     content = [(no, ln) for no, ln in enumerate(text.splitlines(), start=1)
                if ln.strip() and not ln.lstrip().startswith("#")]
+    sep = _SEP_LINE.fullmatch(content[0][1]) if content else None
+    if sep:
+        content = content[1:]
     sample = [ln for _, ln in content[:50]]
     delimiter = ","
-    for d in (";", "\t", ","):
-        if sample and sum(d in ln for ln in sample) > len(sample) // 2:
-            delimiter = d
-            break
+    if sep:
+        delimiter = sep.group(1)
     else:
-        if sample and sum(len(ln.split()) > 1 for ln in sample) > len(sample) // 2:
-            delimiter = " "  # a logger's text columns
+        for d in (";", "\t", ","):
+            if sample and sum(d in ln for ln in sample) > len(sample) // 2:
+                delimiter = d
+                break
+        else:
+            if sample and sum(len(ln.split()) > 1 for ln in sample) > len(sample) // 2:
+                delimiter = " "  # a logger's text columns
     rows, lines = [], []
     for no, ln in content:
         if delimiter == " ":
@@ -134,3 +152,33 @@ def read_rows(path, *, what: str = "CSV table") -> Rows:
         rows = [[c.replace(",", ".") if _COMMA_NUMBER.fullmatch(c) else c for c in r]
                 for r in rows]
     return Rows(rows, lines, delimiter, decimal_comma)
+
+
+def column_index(header, *, path, line: int | None = None) -> dict[str, int]:
+    """Column of each name of `header`, refusing a name given twice.
+
+    Parameters
+    ----------
+    header : sequence of str
+        The header's names (empty names are left out).
+    path : str or os.PathLike, keyword-only
+        The file, for messages.
+    line : int, keyword-only, optional
+        The header's line in the file, for messages.
+
+    Raises
+    ------
+    RecordingError
+        A name stands in two columns (which one holds the data is unknown).
+    """
+    index: dict[str, int] = {}
+    for i, name in enumerate(header):
+        if not name:
+            continue
+        if name in index:
+            where = f"{path}, line {line}" if line is not None else f"{path}"
+            raise RecordingError(f"{where}: column {name!r} stands twice (columns "
+                                 f"{index[name] + 1} and {i + 1}); which one holds the data "
+                                 "is unknown: rename or remove one")
+        index[name] = i
+    return index

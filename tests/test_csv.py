@@ -1,6 +1,6 @@
 import pytest
 
-from handsynth._csv import read_rows
+from handsynth._csv import column_index, read_rows
 from handsynth.errors import RecordingError
 
 
@@ -41,3 +41,20 @@ def test_space_separated_columns(tmp_path):
     got = read_rows(p)
     assert got.rows == [["time", "a", "b"], ["0.0", "1.5", "-2"], ["0.1", "2.5", "-3"]]
     assert got.delimiter == " " and not got.decimal_comma
+
+
+def test_a_spreadsheets_sep_line_and_unicode_text(tmp_path):
+    p = tmp_path / "excel.csv"
+    p.write_text("sep=;\na;b\n1,5;2\n")
+    got = read_rows(p)
+    assert got.rows == [["a", "b"], ["1.5", "2"]] and got.lines == [2, 3] and got.delimiter == ";"
+    u = tmp_path / "unicode.txt"  # a spreadsheet's "Unicode text": UTF-16 with tabs
+    u.write_bytes("a\tb\r\n1,5\t2\r\n".encode("utf-16"))
+    assert read_rows(u).rows == [["a", "b"], ["1.5", "2"]]
+
+
+def test_a_column_named_twice_is_refused_by_name():
+    assert column_index(["t", "a", "", "b"], path="x.csv") == {"t": 0, "a": 1, "b": 3}
+    with pytest.raises(RecordingError, match=r"x.csv, line 4: column 'a' stands twice "
+                                             r"\(columns 2 and 4\)"):
+        column_index(["t", "a", "b", "a"], path="x.csv", line=4)

@@ -98,6 +98,9 @@ def simulate(out, kind, user_seed, donning, motions, trials, seed, range_holds, 
 def calibrate(recording, out, kind, models, t_threshold, n_points, synergy_k, synergy_csv,
               synergy_units, adc_max):
     """Fit every estimator on RECORDING (CSV with motions and reference angles)."""
+    import numpy as np
+
+    from .._io import check_output
     from ..errors import InvalidInputError
     from ..sensors.glove import (
         CalibrationOptions,
@@ -110,6 +113,7 @@ def calibrate(recording, out, kind, models, t_threshold, n_points, synergy_k, sy
     )
     from ..sensors.glove import calibrate as fit
 
+    check_output(out, what="calibration file", inputs=[recording, synergy_csv])
     rec = read_glove_csv(recording, kind=kind, adc_max=adc_max)
     opts = CalibrationOptions(models=tuple(models) or _MODELS, t_threshold=t_threshold,
                               n_points=n_points, synergy_k=synergy_k)
@@ -122,9 +126,12 @@ def calibrate(recording, out, kind, models, t_threshold, n_points, synergy_k, sy
         click.echo(f"synergies from {synergy_csv}: {synergy_k} explain "
                    f"{100 * synergies.explained.sum():.1f} % of the posture variance")
     est = fit(rec, options=opts, synergies=synergies, where=str(recording))
-    ref = range_readings(rec)
+    ref = range_readings(rec, where=str(recording))
+    valid = rec.sensors[~np.isnan(rec.sensors).any(axis=1)]
     save_calibration(out, est, kind=kind, range_reference=ref,
-                     meta={"recording": str(recording), "n_samples": rec.n_samples})
+                     meta={"recording": str(recording), "n_samples": rec.n_samples,
+                           "sensor_min": valid.min(axis=0).tolist(),
+                           "sensor_max": valid.max(axis=0).tolist()})
     click.echo(f"{recording}: {rec.n_samples} samples; estimators: {', '.join(est)}")
     click.echo("range holds (open, fist): " + ("stored" if ref is not None else
                                                "none; apply cannot take --range"))
@@ -158,9 +165,11 @@ def calibrate(recording, out, kind, models, t_threshold, n_points, synergy_k, sy
               help="Full scale of the readings, counts.")
 def apply(calibration, readings, out, name, motion, range_csv, adc_max):
     """Estimate joint angles from READINGS (CSV) with CALIBRATION (JSON)."""
+    from .._io import check_output
     from ..errors import InvalidInputError
     from ..sensors.glove import (
         RangeNormalizer,
+        check_reading_range,
         check_sensors,
         load_calibration,
         range_readings,
@@ -168,6 +177,7 @@ def apply(calibration, readings, out, name, motion, range_csv, adc_max):
         write_angles_csv,
     )
 
+    check_output(out, what="angles file", inputs=[calibration, readings, range_csv])
     cal = load_calibration(calibration)
     est = cal["estimators"].get(name)
     if est is None:
@@ -180,12 +190,15 @@ def apply(calibration, readings, out, name, motion, range_csv, adc_max):
         if cal["range_reference"] is None:
             raise InvalidInputError(f"{calibration}: the calibration had no range_open/"
                                     "range_fist holds, so --range cannot be used")
-        src = range_readings(read_glove_csv(range_csv, adc_max=adc_max))
+        src = range_readings(read_glove_csv(range_csv, adc_max=adc_max), where=range_csv)
         if src is None:
             raise InvalidInputError(f"{range_csv}: needs rows with motion 'range_open' "
                                     "and rows with motion 'range_fist'")
         tgt = cal["range_reference"]
         sensors = RangeNormalizer(src[0], src[1], tgt[0], tgt[1]).apply(sensors)
+    meta = cal["meta"]
+    if "sensor_min" in meta and "sensor_max" in meta:  # older calibration files lack them
+        check_reading_range(sensors, meta["sensor_min"], meta["sensor_max"], where=readings)
     angles = est.predict(sensors, motion=motion)
     write_angles_csv(out, angles, time_s=rec.time_s)
     click.echo(f"{readings}: {rec.n_samples} samples -> {out} ({name}"
@@ -206,8 +219,11 @@ def apply(calibration, readings, out, name, motion, range_csv, adc_max):
               help="Write every table as JSON.")
 def eval_(kind, trials, test_trials, seed, seeds, json_out):
     """The seed's tables (per finger, motion, model: MCP error, R^2) on simulated data."""
+    from .._io import check_output
     from ..sensors.glove import EvalOptions, evaluate
 
+    if json_out:
+        check_output(json_out, what="JSON file")  # before the evaluation, not after it
     kinds = ("dg5", "5dt") if kind == "both" else (kind,)
     results = {}
     for k in kinds:

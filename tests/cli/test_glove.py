@@ -1,5 +1,6 @@
 import csv
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -158,4 +159,195 @@ def test_calibrate_learns_synergies_from_a_cyberglove_export(files, tmp_path):
     assert syn["source"].endswith("cyber.csv") and len(syn["components"]) == 3
     res = _run("glove", "calibrate", files["cal_csv"], "-o", out, "--kind", "dg5",
                "--synergy-csv", export, "--synergy-units", "rad")
-    assert res.exit_code == 2 and "pass units='deg'" in res.output
+    assert res.exit_code == 2 and "--synergy-units deg" in res.output
+
+
+def _edit_csv(src, dst, edit):
+    """Copy the glove CSV `src` to `dst` with `edit(header, rows)` applied to its cells."""
+    with open(src, newline="") as f:
+        header, *rows = list(csv.reader(f))
+    header, rows = edit(header, rows)
+    with open(dst, "w", newline="") as f:
+        csv.writer(f).writerows([header, *rows])
+    return dst
+
+
+@pytest.mark.parametrize("command", ["apply-readings", "apply-calibration", "calibrate"])
+def test_an_output_never_replaces_an_input(files, tmp_path, command):
+    # both commands replaced their input with exit 0
+    import shutil
+
+    if command == "calibrate":
+        victim = shutil.copy(files["cal_csv"], tmp_path / "rec.csv")
+        args = ["calibrate", victim, "-o", victim, "--kind", "dg5"]
+    elif command == "apply-readings":
+        victim = shutil.copy(files["wear"], tmp_path / "w.csv")
+        args = ["apply", files["cal"], victim, "-o", victim]
+    else:
+        victim = shutil.copy(files["cal"], tmp_path / "c.json")
+        args = ["apply", victim, files["wear"], "-o", victim]
+    before = Path(victim).read_bytes()
+    res = _run("glove", *args)
+    assert res.exit_code == 2 and "never replaces an input" in res.output, res.output
+    assert Path(victim).read_bytes() == before
+
+
+def test_the_warnings_that_explain_a_failure_are_printed(files, tmp_path):
+    # a broken reference sensor: every row dropped for NaN; the error alone said
+    # "no samples labelled with a motion"
+    def blank(header, rows):
+        k = header.index("thumb_mcp_flex")
+        return header, [r[:k] + [""] + r[k + 1:] for r in rows]
+
+    rec = _edit_csv(files["cal_csv"], tmp_path / "blank.csv", blank)
+    res = _run("glove", "calibrate", rec, "-o", tmp_path / "c.json", "--kind", "dg5")
+    assert res.exit_code == 2, res.output
+    *warned, error = res.output.strip().splitlines()
+    assert error.startswith("handsynth: error: ")
+    assert any("NaN" in w and w.startswith("handsynth: warning: ") for w in warned), res.output
+
+
+def test_reference_angles_in_radians_are_refused(files, tmp_path):
+    def radians(header, rows):
+        cols = [header.index(j) for j in JOINT_NAMES]
+        out = []
+        for r in rows:
+            r = list(r)
+            for k in cols:
+                r[k] = str(float(np.radians(float(r[k]))))
+            out.append(r)
+        return header, out
+
+    rec = _edit_csv(files["cal_csv"], tmp_path / "rad.csv", radians)
+    res = _run("glove", "calibrate", rec, "-o", tmp_path / "c.json", "--kind", "dg5")
+    assert res.exit_code == 2 and "radians" in res.output and "rad.csv" in res.output, res.output
+
+
+def test_readings_off_the_calibrations_range_are_warned_about(files, tmp_path):
+    # a 10-bit converter's readings: the models clamp them, the answer hardly moved, no word
+    def quarter(header, rows):
+        cols = [header.index(s) for s in SENSOR_NAMES]
+        return header, [[str(float(c) / 4) if k in cols else c for k, c in enumerate(r)]
+                        for r in rows]
+
+    wear = _edit_csv(files["wear"], tmp_path / "w10.csv", quarter)
+    res = _run("glove", "apply", files["cal"], wear, "-o", tmp_path / "a.csv")
+    assert res.exit_code == 0, res.output
+    assert "off the calibration's range" in res.output and "--adc-max" in res.output
+    res = _run("glove", "apply", files["cal"], files["wear"], "-o", tmp_path / "b.csv",
+               "--range", files["wear"])
+    assert res.exit_code == 0 and "off the calibration" not in res.output, res.output
+
+
+@pytest.mark.parametrize("cell", ["nan", "1e30"])
+def test_a_bad_trial_number_is_one_line(files, tmp_path, cell):
+    def bad(header, rows):
+        k = header.index("trial")
+        rows[1][k] = cell
+        return header, rows
+
+    wear = _edit_csv(files["wear"], tmp_path / "t.csv", bad)
+    res = _run("glove", "apply", files["cal"], wear, "-o", tmp_path / "a.csv")
+    assert res.exit_code == 2 and "line 3: trial" in res.output, res.output
+    assert "Traceback" not in res.output
+
+
+@pytest.mark.parametrize("edit, words", [
+    (lambda d: d.update(estimators=[]), "field 'estimators' must map names"),
+    (lambda d: d.pop("estimators"), "field 'estimators' must map names"),
+    (lambda d: d["estimators"].update(model4=None), "must be an object, got NoneType"),
+    (lambda d: d["estimators"]["model4"].update(models={}), "field 'models' must map"),
+    (lambda d: d["estimators"]["model4"]["models"]["standard"].update(centre=[1, 2, 3]),
+     "field 'centre' must have shape (5,), got (3,)"),
+    (lambda d: d["estimators"]["model4"]["models"]["standard"].update(centre="1732"),
+     "field 'centre' must have shape (5,), got ()"),
+    (lambda d: d["estimators"]["model4"]["models"]["standard"]["centre"].__setitem__(0, None),
+     "field 'centre' holds nan"),
+    (lambda d: d["estimators"]["model4"]["models"]["standard"]["fits"].pop("thumb_mcp_flex"),
+     "missing thumb_mcp_flex"),
+    (lambda d: d["estimators"]["model4"]["models"]["standard"]["fits"]["index_pip_flex"]
+     .update(terms=[[7, 1]]), "[sensor 0-4, power 1-3]"),
+    (lambda d: d["estimators"]["model4"]["models"]["standard"]["fits"]["index_pip_flex"]
+     .update(coef=[1.0]), "field 'coef' must have shape"),
+    (lambda d: d.update(range_reference={"open": "abc"}), "field 'open' must be numbers"),
+    (lambda d: d["range_reference"].update(open=[1, 2, 3]), "field 'open' must have shape (5,)"),
+    (lambda d: d["estimators"]["constant"].update(posture=None), "field 'posture'"),
+    (lambda d: d.update(kind="cyberglove"), "field 'kind' must be one of dg5, 5dt"),
+])
+def test_a_hand_edited_calibration_is_refused_by_field(files, tmp_path, edit, words):
+    # each of these crashed apply with a traceback or gave wrong angles with exit 0
+    data = json.loads(files["cal"].read_text())
+    edit(data)
+    cal = tmp_path / "edited.json"
+    cal.write_text(json.dumps(data))
+    res = _run("glove", "apply", cal, files["wear"], "-o", tmp_path / "a.csv",
+               "--model", "constant" if "posture" in words else "model4")
+    assert res.exit_code == 2, res.output
+    assert "edited.json" in res.output and words in res.output, res.output
+    assert "Traceback" not in res.output
+
+
+def test_a_calibration_saved_with_a_byte_order_mark_is_read(files, tmp_path):
+    cal = tmp_path / "bom.json"
+    cal.write_bytes(b"\xef\xbb\xbf" + files["cal"].read_bytes())
+    res = _run("glove", "apply", cal, files["wear"], "-o", tmp_path / "a.csv")
+    assert res.exit_code == 0, res.output
+
+
+def test_a_column_named_twice_is_refused(files, tmp_path):
+    def twice(header, rows):
+        return header + ["sensor_thumb"], [r + ["0"] for r in rows]
+
+    wear = _edit_csv(files["wear"], tmp_path / "dup.csv", twice)
+    res = _run("glove", "apply", files["cal"], wear, "-o", tmp_path / "a.csv")
+    assert res.exit_code == 2 and "column 'sensor_thumb' stands twice" in res.output, res.output
+
+
+def test_range_holds_swapped_or_empty_are_named(files, tmp_path):
+    def swap(header, rows):
+        k = header.index("motion")
+        names = {"range_open": "range_fist", "range_fist": "range_open"}
+        return header, [r[:k] + [names.get(r[k], r[k])] + r[k + 1:] for r in rows]
+
+    def blank(header, rows):
+        k, m = header.index("sensor_thumb"), header.index("motion")
+        return header, [r[:k] + [""] + r[k + 1:] if r[m] == "range_open" else r for r in rows]
+
+    swapped = _edit_csv(files["wear"], tmp_path / "swapped.csv", swap)
+    res = _run("glove", "apply", files["cal"], files["wear"], "-o", tmp_path / "a.csv",
+               "--range", swapped)
+    assert res.exit_code == 2 and "the other way round" in res.output, res.output
+    empty = _edit_csv(files["wear"], tmp_path / "empty.csv", blank)
+    res = _run("glove", "apply", files["cal"], files["wear"], "-o", tmp_path / "a.csv",
+               "--range", empty)
+    assert res.exit_code == 2 and "empty.csv: sensor_thumb has no reading" in res.output, \
+        res.output
+
+
+@pytest.mark.parametrize("value", ["0", "-5", "nan"])
+def test_a_bad_full_scale_is_refused(files, tmp_path, value):
+    res = _run("glove", "apply", files["cal"], files["wear"], "-o", tmp_path / "a.csv",
+               "--adc-max", value)
+    assert res.exit_code == 2 and "--adc-max" in res.output, res.output
+
+
+def test_eval_checks_its_json_path_before_evaluating(tmp_path):
+    res = _run("glove", "eval", "--json", tmp_path / "nodir" / "x.json")
+    assert res.exit_code == 2 and "does not exist" in res.output
+    assert "==" not in res.output  # no table: nothing was evaluated
+
+
+def test_synergies_from_postures_that_do_not_vary_are_refused(files, tmp_path):
+    from handsynth.sensors.glove import CYBERGLOVE_COLUMNS
+
+    export = tmp_path / "still.csv"
+    np.savetxt(export, np.tile(np.linspace(1, 22, len(CYBERGLOVE_COLUMNS)), (50, 1)),
+               delimiter=",", fmt="%.4f")
+    res = _run("glove", "calibrate", files["cal_csv"], "-o", tmp_path / "c.json", "--kind",
+               "dg5", "--synergy-csv", export)
+    assert res.exit_code == 2 and "hardly vary" in res.output, res.output
+    wide = tmp_path / "wide.csv"  # a time stamp before the 22 angles, no header
+    np.savetxt(wide, np.random.default_rng(0).uniform(0, 40, (50, 23)), delimiter=",")
+    res = _run("glove", "calibrate", files["cal_csv"], "-o", tmp_path / "c.json", "--kind",
+               "dg5", "--synergy-csv", wide)
+    assert res.exit_code == 2 and "23 fields, expected 22" in res.output, res.output

@@ -20,7 +20,7 @@ from ._calibrate import (
     range_readings,
     save_calibration,
 )
-from ._checks import SensorCheck, check_sensors
+from ._checks import SensorCheck, check_reading_range, check_sensors
 from ._cyberglove import CYBERGLOVE_COLUMNS, read_cyberglove_csv
 from ._estimators import (
     ConstantEstimator,
@@ -113,6 +113,7 @@ __all__ = [
     "SynergyEstimator",
     "bend_angle_deg",
     "calibrate",
+    "check_reading_range",
     "check_sensors",
     "default_synergies",
     "don_glove",

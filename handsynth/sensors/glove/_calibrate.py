@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ..._io import write_text
-from ...errors import EstimationError, InvalidInputError
+from ...errors import EstimationError, InvalidInputError, RecordingError
 from ...models import natural_pose_set
 from ._checks import check_sensors
 from ._estimators import (
@@ -29,6 +29,7 @@ from ._estimators import (
     SynergyEstimator,
     estimator_from_dict,
 )
+from ._fields import array_field
 from ._mixing import fit_mixer
 from ._models import MODELS, GloveWarning, fit_motion_model
 from ._recording import GloveRecording
@@ -246,13 +247,28 @@ def _fit_synergy(cal: GloveRecording, syn: Synergies, centre, scale) -> SynergyE
                             bend_coef=coef, bend_variance=var)
 
 
-def range_readings(rec: GloveRecording) -> tuple[np.ndarray, np.ndarray] | None:
-    """Median readings (open, fist), each shape (5,), or None without both holds."""
+def range_readings(rec: GloveRecording, *, where: str = "recording"
+                   ) -> tuple[np.ndarray, np.ndarray] | None:
+    """Median readings (open, fist), each shape (5,), or None without both holds.
+
+    Raises
+    ------
+    RecordingError
+        A sensor has no reading (only NaN) in one of the holds (`where` names
+        the file).
+    """
     lab = rec.motion.astype(str)
     if not all((lab == r).any() for r in RANGE_LABELS):
         return None
-    ok = ~np.isnan(rec.sensors).any(axis=1)
-    return tuple(np.median(rec.sensors[(lab == r) & ok], axis=0) for r in RANGE_LABELS)
+    out = []
+    for r in RANGE_LABELS:
+        held = rec.sensors[lab == r]
+        empty = np.flatnonzero(np.isnan(held).all(axis=0))
+        if empty.size:
+            raise RecordingError(f"{where}: {SENSOR_NAMES[empty[0]]} has no reading in the "
+                                 f"{int((lab == r).sum())} rows labelled {r}")
+        out.append(np.nanmedian(held, axis=0))
+    return out[0], out[1]
 
 
 def save_calibration(path, estimators: dict, *, kind: str = "",
@@ -288,20 +304,45 @@ def load_calibration(path) -> dict:
     if not path.is_file():
         raise InvalidInputError(f"cannot read calibration {str(path)!r}: no such file")
     try:
-        d = json.loads(path.read_text())
+        d = json.loads(path.read_bytes().decode("utf-8-sig"))  # an editor's byte-order mark
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise InvalidInputError(f"{path}: not a calibration file (JSON error: {exc})") from None
+    except OSError as exc:
+        raise InvalidInputError(f"cannot read calibration {str(path)!r}: "
+                                f"{exc.strerror or exc}") from None
     if not isinstance(d, dict) or d.get("format") != _FORMAT:
         raise InvalidInputError(f"{path}: not a handsynth glove calibration file")
     if d.get("version") != _VERSION:
         raise InvalidInputError(f"{path}: calibration version {d.get('version')!r}, this "
-                                f"handsynth reads version {_VERSION}")
+                                f"handsynth reads version {_VERSION} (the number)")
+    kind = d.get("kind", "")
+    if kind not in ("", *GLOVE_KINDS):
+        raise InvalidInputError(f"{path}: field 'kind' must be one of "
+                                f"{', '.join(GLOVE_KINDS)} or '', got {kind!r}")
+    entries = d.get("estimators")
+    if not isinstance(entries, dict) or not entries:
+        raise InvalidInputError(f"{path}: field 'estimators' must map names to estimators, "
+                                f"got {entries!r:.40}")
+    rr = d.get("range_reference")
     try:
-        est = {k: estimator_from_dict(v) for k, v in d["estimators"].items()}
+        est = {k: estimator_from_dict(v) for k, v in entries.items()}
+        if rr is not None:
+            if not isinstance(rr, dict):
+                raise InvalidInputError("field 'range_reference' must be an object with "
+                                        f"'open' and 'fist', got {rr!r:.40}")
+            rr = (array_field(rr, "open", (5,)), array_field(rr, "fist", (5,)))
+    except KeyError as exc:
+        raise InvalidInputError(f"{path}: field 'range_reference' lacks {exc.args[0]!r}") \
+            from None
     except InvalidInputError as exc:
         raise InvalidInputError(f"{path}: {exc}") from None
-    rr = d.get("range_reference")
-    return {"kind": d.get("kind", ""), "meta": d.get("meta", {}), "estimators": est,
-            "range_reference": None if rr is None
-            else (np.asarray(rr["open"], dtype=np.float64),
-                  np.asarray(rr["fist"], dtype=np.float64))}
+    meta = d.get("meta", {})
+    meta = dict(meta) if isinstance(meta, dict) else {}
+    try:
+        for key in ("sensor_min", "sensor_max"):  # the calibration's range of readings
+            if key in meta:
+                meta[key] = array_field(meta, key, (5,))
+    except InvalidInputError as exc:
+        raise InvalidInputError(f"{path}: meta {exc}") from None
+    return {"kind": kind, "meta": meta, "estimators": est,
+            "range_reference": rr}

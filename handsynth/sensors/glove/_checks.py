@@ -1,4 +1,5 @@
-"""Checks of glove readings: NaN rows, dead sensors, saturated sensors."""
+"""Checks of glove readings: NaN rows, dead sensors, saturated sensors, readings off the
+calibration's range."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ import numpy as np
 from ._models import GloveWarning
 from ._sensors import SENSOR_NAMES
 
-__all__ = ["SensorCheck", "check_sensors"]
+__all__ = ["SensorCheck", "check_reading_range", "check_sensors"]
 
 #: A sensor that reads exactly the same value over at least this many
 #: samples is dead (a live resistive sensor always shows a count or two of
@@ -19,6 +20,9 @@ DEAD_MIN_SAMPLES = 30
 #: Share of samples at either end of the range above which a sensor is
 #: reported as saturated.
 SATURATION_SHARE = 0.01
+#: Share of readings beyond the calibration's range (widened by a quarter of its span on
+#: each side) above which readings are reported as not matching the calibration.
+OFF_RANGE_SHARE = 0.05
 
 
 @dataclass(frozen=True)
@@ -90,3 +94,41 @@ def check_sensors(sensors: np.ndarray, *, adc_max: float, where: str,
                           f"{len(s)} samples ({100 * n_sat / max(len(s), 1):.1f} %)",
                           GloveWarning, stacklevel=3)
     return check
+
+
+def check_reading_range(sensors: np.ndarray, low: np.ndarray, high: np.ndarray, *,
+                        where: str) -> tuple[int, ...]:
+    """Warn about sensors whose readings mostly lie off the calibration's range.
+
+    The models clamp readings to the range they were fitted on, so a glove
+    read with another full scale (a 10-bit converter, volts) or another
+    wearing without the range calibration gives a nearly constant answer
+    without this check.
+
+    Parameters
+    ----------
+    sensors : ndarray, shape (N, 5), counts
+    low, high : ndarray, shape (5,), counts
+        Lowest and highest reading of each sensor in the calibration.
+    where : str, keyword-only
+        Name of the data in messages.
+
+    Returns
+    -------
+    tuple of int
+        The sensors warned about (0-4, thumb to little).
+    """
+    s = np.asarray(sensors, dtype=np.float64)
+    low, high = np.asarray(low, dtype=np.float64), np.asarray(high, dtype=np.float64)
+    margin = 0.25 * (high - low)
+    with np.errstate(invalid="ignore"):
+        off = (s < low - margin) | (s > high + margin)
+    valid = max(int((~np.isnan(s).any(axis=1)).sum()), 1)
+    share = off.sum(axis=0) / valid
+    bad = tuple(int(k) for k in np.flatnonzero(share > OFF_RANGE_SHARE))
+    for k in bad:
+        warnings.warn(f"{where}: {100 * share[k]:.0f} % of the {SENSOR_NAMES[k]} readings lie "
+                      f"off the calibration's range {low[k]:g}-{high[k]:g} counts (read there "
+                      "as its end): the same glove, full scale (--adc-max) and wearing? A new "
+                      "wearing needs a range calibration (--range)", GloveWarning, stacklevel=2)
+    return bad

@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..._csv import read_rows
+from ..._csv import column_index, read_rows
 from ...errors import RecordingError
 from ...models import JOINT_LIMITS_DEG, JOINT_NAMES
 
@@ -103,13 +103,17 @@ def read_cyberglove_csv(path, *, units: str = "deg",
                              f"names of CYBERGLOVE_COLUMNS")
     if not body:
         raise RecordingError(f"{path}: no data rows")
-    col = {n: i for i, n in enumerate(names)}
+    col = column_index(names, path=path, line=None if body is rows else content.lines[0])
     scale = 180.0 / np.pi if units == "rad" else 1.0
     raw = np.empty((len(body), len(CYBERGLOVE_COLUMNS[:19])))
     for i, (r, line) in enumerate(zip(body, lines)):
-        if len(r) < len(names):
+        while len(r) > len(names) and r[-1] == "":  # a trailing delimiter
+            r = r[:-1]
+        if len(r) != len(names):
             raise RecordingError(f"{path}, line {line}: {len(r)} fields, expected "
-                                 f"{len(names)}")
+                                 f"{len(names)}" + ("" if body is not rows else
+                                                    " (no header: the columns of "
+                                                    "CYBERGLOVE_COLUMNS)"))
         for k, name in enumerate(CYBERGLOVE_COLUMNS[:19]):
             cell = r[col[name]]
             if cell == "" or cell.lower() == "nan":
@@ -148,12 +152,13 @@ def _check_units(angles: np.ndarray, path: Path, units: str) -> None:
         raise RecordingError(f"{path}: every row has an empty or NaN cell")
     if units == "deg" and len(ok) > 1 and np.abs(ok).max() <= np.pi and ok.std() > 0:
         raise RecordingError(f"{path}: every angle lies within +/-{np.pi:.4f}; is the file in "
-                             "radians? pass units='rad'")
+                             "radians? pass units='rad' (--synergy-units rad)")
     beyond = (ok < JOINT_LIMITS_DEG[:, 0] - 30) | (ok > JOINT_LIMITS_DEG[:, 1] + 30)
     share = beyond.mean(axis=0)
     worst = int(np.argmax(share))
     if share[worst] > _UNIT_SUSPECT_SHARE:
-        hint = "radians? pass units='rad'" if units == "deg" else "degrees? pass units='deg'"
+        hint = "radians? pass units='rad' (--synergy-units rad)" if units == "deg" else \
+            "degrees? pass units='deg' (--synergy-units deg)"
         raise RecordingError(
             f"{path}: {100 * share[worst]:.0f} % of {JOINT_NAMES[worst]} values lie more than "
             f"30 deg outside its limits (e.g. {ok[beyond[:, worst], worst][0]:.4g} deg); "

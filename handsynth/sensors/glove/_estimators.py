@@ -10,6 +10,7 @@ since no hand can take an angle outside them.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
@@ -17,8 +18,9 @@ import numpy as np
 
 from ...errors import EstimationError, InvalidInputError
 from ...models import JOINT_LIMITS_DEG, JOINT_NAMES
+from ._fields import array_field, number_field
 from ._mixing import MotionMixer
-from ._models import MotionModel
+from ._models import GloveWarning, MotionModel
 from ._sensors import sensor_joints
 from ._synergy import Synergies
 
@@ -282,13 +284,31 @@ class RangeNormalizer:
     target_fist: np.ndarray
 
     def __post_init__(self) -> None:
+        from ._sensors import SENSOR_NAMES
+
+        for name in ("source_open", "source_fist", "target_open", "target_fist"):
+            v = np.asarray(getattr(self, name), dtype=np.float64)
+            if v.shape != (5,) or not np.isfinite(v).all():
+                raise EstimationError(f"range calibration: {name} must be 5 finite readings, "
+                                      f"got {v.tolist()}")
         span = np.asarray(self.source_fist) - np.asarray(self.source_open)
         flat = np.flatnonzero(np.abs(span) < 1.0)
         if flat.size:
-            from ._sensors import SENSOR_NAMES
             raise EstimationError(
                 f"range calibration: {SENSOR_NAMES[flat[0]]} reads the same for the open "
                 f"hand and the fist ({self.source_open[flat[0]]:g} counts); is it dead?")
+        target = np.asarray(self.target_fist) - np.asarray(self.target_open)
+        turned = np.flatnonzero(np.sign(span) != np.sign(target))
+        if turned.size >= 3:
+            raise EstimationError(
+                f"range calibration: {turned.size} of 5 sensors go the other way from the open "
+                "hand to the fist than in the calibration: are the holds labelled "
+                "range_open and range_fist the other way round?")
+        if turned.size:
+            warnings.warn(f"range calibration: {', '.join(SENSOR_NAMES[k] for k in turned)} "
+                          "go(es) the other way from the open hand to the fist than in the "
+                          "calibration (a sensor turned over, or another glove?)", GloveWarning,
+                          stacklevel=2)
 
     def apply(self, sensors) -> np.ndarray:
         s = _as_sensors(sensors)
@@ -302,36 +322,51 @@ def estimator_from_dict(d: dict) -> GloveEstimator:
     Raises
     ------
     InvalidInputError
-        Unknown ``type`` or a missing field (named in the message).
+        Unknown ``type``, a missing field, or a field of the wrong type or
+        shape (named in the message).
     """
+    if not isinstance(d, dict):
+        raise InvalidInputError(f"an estimator entry must be an object, got {type(d).__name__}")
     try:
         t = d["type"]
         if t == "constant":
-            return ConstantEstimator(posture=np.asarray(d["posture"], dtype=np.float64),
-                                     name=d["name"])
+            return ConstantEstimator(posture=array_field(d, "posture", (len(JOINT_NAMES),)),
+                                     name=str(d["name"]))
         if t == "regression":
+            if not isinstance(d["models"], dict) or not d["models"]:
+                raise InvalidInputError(f"estimator {d['name']!r}: field 'models' must map "
+                                        f"each calibrated motion to its model, got "
+                                        f"{type(d['models']).__name__} {len(d['models'])}")
+            mixer = None if d["mixer"] is None else MotionMixer.from_dict(d["mixer"])
+            if mixer is not None and set(mixer.motions) - set(d["models"]):
+                raise InvalidInputError(f"estimator {d['name']!r}: its mixer weighs motions "
+                                        f"without a model: "
+                                        f"{', '.join(set(mixer.motions) - set(d['models']))}")
             return RegressionEstimator(
-                name=d["name"],
+                name=str(d["name"]),
                 models={m: MotionModel.from_dict(v) for m, v in d["models"].items()},
-                mixer=None if d["mixer"] is None else MotionMixer.from_dict(d["mixer"]))
+                mixer=mixer)
         if t == "gated":
             primary = estimator_from_dict(d["primary"])
             if not isinstance(primary, RegressionEstimator):
                 raise InvalidInputError(f"estimator {d['name']!r}: its primary must be a "
                                         "regression estimator")
             return GatedEstimator(primary=primary, fallback=estimator_from_dict(d["fallback"]),
-                                  name=d["name"], lo=float(d["lo"]), hi=float(d["hi"]))
+                                  name=str(d["name"]), lo=number_field(d, "lo"),
+                                  hi=number_field(d, "hi"))
         if t == "synergy":
             return SynergyEstimator(
-                synergies=Synergies.from_dict(d["synergies"]), kind=d["kind"],
-                centre=np.asarray(d["centre"], dtype=np.float64),
-                scale=np.asarray(d["scale"], dtype=np.float64),
-                bend_coef=np.asarray(d["bend_coef"], dtype=np.float64),
-                bend_variance=np.asarray(d["bend_variance"], dtype=np.float64),
-                name=d["name"])
+                synergies=Synergies.from_dict(d["synergies"]), kind=str(d["kind"]),
+                centre=array_field(d, "centre", (5,)), scale=array_field(d, "scale", (5,)),
+                bend_coef=array_field(d, "bend_coef", (5, 4)),
+                bend_variance=array_field(d, "bend_variance", (5,)),
+                name=str(d["name"]))
     except KeyError as exc:
         raise InvalidInputError(f"estimator entry lacks field {exc.args[0]!r}") from None
-    except (TypeError, ValueError) as exc:
+    except InvalidInputError as exc:
+        name = d.get("name") if isinstance(d, dict) else None
+        raise InvalidInputError(f"estimator {name!r}: {exc}") from None
+    except (TypeError, ValueError, AttributeError, IndexError) as exc:
         raise InvalidInputError(f"estimator entry {d.get('name')!r} is malformed: {exc}") \
             from None
     raise InvalidInputError(f"unknown estimator type {t!r}; expected constant, regression, "

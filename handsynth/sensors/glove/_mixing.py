@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...errors import EstimationError
+from ._fields import array_field
 
 __all__ = ["MotionMixer", "fit_mixer"]
 
@@ -73,11 +74,11 @@ class MotionMixer:
 
     @classmethod
     def from_dict(cls, d: dict) -> MotionMixer:
-        return cls(motions=tuple(d["motions"]),
-                   centre=np.asarray(d["centre"], dtype=np.float64),
-                   scale=np.asarray(d["scale"], dtype=np.float64),
-                   means=np.asarray(d["means"], dtype=np.float64),
-                   inv_covs=np.asarray(d["inv_covs"], dtype=np.float64))
+        motions = tuple(str(m) for m in d["motions"])
+        means = array_field(d, "means", (len(motions), None, 5))
+        return cls(motions=motions, centre=array_field(d, "centre", (5,)),
+                   scale=array_field(d, "scale", (5,)), means=means,
+                   inv_covs=array_field(d, "inv_covs", (len(motions), means.shape[1], 5, 5)))
 
 
 def fit_mixer(sensors: np.ndarray, motion: np.ndarray, phase: np.ndarray, *,

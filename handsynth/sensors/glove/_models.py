@@ -34,8 +34,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...errors import EstimationError
+from ...errors import EstimationError, InvalidInputError
 from ...models import JOINT_NAMES
+from ._fields import array_field, number_field
 from ._sensors import SENSOR_NAMES
 
 __all__ = [
@@ -118,11 +119,17 @@ class JointFit:
 
     @classmethod
     def from_dict(cls, d: dict) -> JointFit:
-        return cls(terms=tuple((int(s), int(p)) for s, p in d["terms"]),
-                   coef=np.asarray(d["coef"], dtype=np.float64),
-                   intercept=float(d["intercept"]), r2=float(d["r2"]),
-                   t_values=np.array([np.nan if t is None else t for t in d["t_values"]],
-                                     dtype=np.float64),
+        # no terms: an intercept alone (model 3 with every |t| < 2)
+        terms = np.zeros((0, 2)) if d["terms"] == [] else array_field(d, "terms", (None, 2))
+        if not np.all(np.isin(terms[:, 0], range(5)) & np.isin(terms[:, 1], (1, 2, 3))):
+            raise InvalidInputError(f"field 'terms' must hold [sensor 0-4, power 1-3] pairs, "
+                                    f"got {terms.astype(int).tolist()}")
+        n = len(terms)
+        t_values = dict(d, t_values=[np.nan if t is None else t for t in d["t_values"]])
+        return cls(terms=tuple((int(s), int(p)) for s, p in terms),
+                   coef=array_field(d, "coef", (n,)),
+                   intercept=number_field(d, "intercept"), r2=float(d["r2"]),
+                   t_values=array_field(t_values, "t_values", (n,), allow_nan=True),
                    n_samples=int(d["n_samples"]))
 
 
@@ -216,13 +223,24 @@ class MotionModel:
 
     @classmethod
     def from_dict(cls, d: dict) -> MotionModel:
+        fits = d["fits"]
+        derived = {JOINT_NAMES[fj["j1"]] for fj in finger_joints()}  # eq. 1
+        needed = [j for j in JOINT_NAMES if j not in derived]
+        if not isinstance(fits, dict) or sorted(fits) != sorted(needed):
+            got = sorted(fits) if isinstance(fits, dict) else type(fits).__name__
+            missing = [j for j in needed if not isinstance(fits, dict) or j not in fits]
+            raise InvalidInputError(
+                f"motion {d.get('motion')!r}: field 'fits' must hold a fit of each joint but "
+                f"the DIPs and the thumb IP; " + (f"missing {', '.join(missing)}" if missing
+                                                  else f"got {got}"))
+        scale = array_field(d, "scale", (5,))
+        if (scale <= 0).any():
+            raise InvalidInputError(f"field 'scale' must be positive, got {scale.tolist()}")
         return cls(motion=str(d["motion"]), model=str(d["model"]),
-                   centre=np.asarray(d["centre"], dtype=np.float64),
-                   scale=np.asarray(d["scale"], dtype=np.float64),
+                   centre=array_field(d, "centre", (5,)), scale=scale,
                    z_range=None if d.get("z_range") is None
-                   else np.asarray(d["z_range"], dtype=np.float64),
-                   fits={JOINT_NAMES.index(k): JointFit.from_dict(v)
-                         for k, v in d["fits"].items()})
+                   else array_field(d, "z_range", (2, 5)),
+                   fits={JOINT_NAMES.index(k): JointFit.from_dict(v) for k, v in fits.items()})
 
 
 def fit_motion_model(sensors: np.ndarray, angles: np.ndarray, *, model: str,

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..._csv import read_rows
+from ..._csv import column_index, read_rows
 from ..._io import atomic_open
 from ...errors import RecordingError
 from ...models import JOINT_NAMES
@@ -97,6 +97,7 @@ class GloveRecording:
         if self.kind not in ("", *GLOVE_KINDS):
             raise RecordingError(f"kind must be one of {', '.join(GLOVE_KINDS)} or '', "
                                  f"got {self.kind!r}")
+        _check_adc_max(self.adc_max)
 
     @property
     def n_samples(self) -> int:
@@ -219,6 +220,7 @@ def read_glove_csv(path, *, kind: str = "", adc_max: float = 4095.0) -> GloveRec
         number; the message names the file, line and column.
     """
     path = Path(path)
+    _check_adc_max(adc_max)  # before reading the file
     content = read_rows(path, what="glove CSV")
     rows = content.rows
     if not rows:
@@ -233,7 +235,7 @@ def read_glove_csv(path, *, kind: str = "", adc_max: float = 4095.0) -> GloveRec
         absent = [c for c in JOINT_NAMES if c not in header]
         raise RecordingError(f"{path}: joint columns are incomplete, missing "
                              f"{', '.join(absent)}")
-    col = {h: i for i, h in enumerate(header)}
+    col = column_index(header, path=path, line=content.lines[0])
     body = rows[1:]
     if not body:
         raise RecordingError(f"{path}: no data rows after the header")
@@ -253,20 +255,30 @@ def read_glove_csv(path, *, kind: str = "", adc_max: float = 4095.0) -> GloveRec
             for k, name in enumerate(JOINT_NAMES):
                 angles[i, k] = _num(r[col[name]], path, line, name, allow_empty=True)
         if "time_s" in col:
-            time_s[i] = _num(r[col["time_s"]], path, line, "time_s")
+            time_s[i] = _num(r[col["time_s"]], path, line, "time_s", finite=True)
         if "motion" in col:
             motion[i] = r[col["motion"]]
         if "trial" in col:
-            v = _num(r[col["trial"]], path, line, "trial")
-            if v != int(v):
+            v = _num(r[col["trial"]], path, line, "trial", finite=True)
+            if v != int(v) or abs(v) >= 2**31:
                 raise RecordingError(f"{path}, line {line}: trial must be an integer, "
                                      f"got {r[col['trial']]!r}")
             trial[i] = int(v)
+    if angles is not None:
+        _check_degrees(angles, path)
     return GloveRecording(sensors=sensors, angles=angles, motion=motion, trial=trial,
                           time_s=time_s, kind=kind, adc_max=adc_max)
 
 
-def _num(cell: str, path, line: int, name: str, *, allow_empty: bool = False) -> float:
+def _check_adc_max(adc_max) -> None:
+    if isinstance(adc_max, bool) or not isinstance(adc_max, (int, float)) \
+            or not 0 < adc_max < np.inf:
+        raise RecordingError(f"adc_max (--adc-max), the full scale of the readings, must be a "
+                             f"positive number of counts, got {adc_max!r}")
+
+
+def _num(cell: str, path, line: int, name: str, *, allow_empty: bool = False,
+         finite: bool = False) -> float:
     s = cell.strip()
     if s == "" and allow_empty:
         return float("nan")
@@ -274,6 +286,21 @@ def _num(cell: str, path, line: int, name: str, *, allow_empty: bool = False) ->
         v = float(s)
     except ValueError:
         raise RecordingError(f"{path}, line {line}: {name} is {cell!r}, not a number") from None
-    if np.isinf(v):
+    if np.isinf(v) or (finite and np.isnan(v)):
         raise RecordingError(f"{path}, line {line}: {name} is {cell!r}")
     return v
+
+
+#: Reference angles that all lie within this many degrees are read as radians: a
+#: calibration recording flexes the fingers far beyond 3.3 deg (its motions close the hand).
+_RADIANS_SPAN_DEG = 3.3
+
+
+def _check_degrees(angles: np.ndarray, path) -> None:
+    """Refuse reference angles that look like radians (the columns are degrees)."""
+    finite = angles[np.isfinite(angles)]
+    if finite.size and np.abs(finite).max() <= _RADIANS_SPAN_DEG and np.ptp(finite) > 0:
+        raise RecordingError(
+            f"{path}: every joint angle lies within +-{np.abs(finite).max():.2f}; the joint "
+            "columns are degrees and a calibration recording flexes the fingers much further: "
+            "are they in radians? (multiply by 180/pi)")

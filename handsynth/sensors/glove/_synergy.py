@@ -29,6 +29,7 @@ import numpy as np
 
 from ...errors import EstimationError
 from ...models import JOINT_NAMES
+from ._fields import array_field, number_field
 
 __all__ = ["Synergies", "fit_synergies"]
 
@@ -89,11 +90,12 @@ class Synergies:
 
     @classmethod
     def from_dict(cls, d: dict) -> Synergies:
-        return cls(mean=np.asarray(d["mean"], dtype=np.float64),
-                   components=np.asarray(d["components"], dtype=np.float64),
-                   variances=np.asarray(d["variances"], dtype=np.float64),
-                   residual_variance=float(d["residual_variance"]),
-                   explained=np.asarray(d["explained"], dtype=np.float64),
+        components = array_field(d, "components", (None, len(JOINT_NAMES)))
+        k = len(components)
+        return cls(mean=array_field(d, "mean", (len(JOINT_NAMES),)), components=components,
+                   variances=array_field(d, "variances", (k,)),
+                   residual_variance=number_field(d, "residual_variance"),
+                   explained=array_field(d, "explained", (k,)),
                    source=str(d.get("source", "")))
 
 
@@ -103,7 +105,9 @@ def fit_synergies(postures: np.ndarray, *, k: int = 2, source: str = "") -> Syne
     Raises
     ------
     EstimationError
-        Fewer than k + 2 finite postures, or k outside 1..20.
+        Fewer than k + 2 finite postures, postures that hardly vary (a
+        total variance under 1 deg^2: nothing to find synergies in), or k
+        outside 1..20.
     """
     p = np.asarray(postures, dtype=np.float64)
     if p.ndim != 2 or p.shape[1] != len(JOINT_NAMES):
@@ -119,6 +123,10 @@ def fit_synergies(postures: np.ndarray, *, k: int = 2, source: str = "") -> Syne
     var = np.clip(var_all[order], 0.0, None)
     vt = vec[:, order].T
     total = var.sum()
+    if total < 1.0:
+        raise EstimationError(f"the {len(p)} postures hardly vary (total variance "
+                              f"{total:.3g} deg^2 over the 20 joints): synergies need "
+                              "postures of many grasps")
     resid = float(var[k:].sum() / len(JOINT_NAMES))
     return Synergies(mean=mean, components=vt[:k].copy(), variances=var[:k].copy(),
                      residual_variance=max(resid, 1e-6), explained=var[:k] / total,
