@@ -94,8 +94,19 @@ def estimate(recording, methods, frames, lateral_axis, lateral_frame, bins, unit
     for path in (json_out, plot_out):  # before the work: a bad name fails now
         if path:
             check_output(path, inputs=[recording])
+    if json_out and plot_out and Path(json_out).resolve() == Path(plot_out).resolve():
+        raise InvalidInputError(f"--json and --plot name the same file {json_out!r}: one "
+                                f"would overwrite the other; give two names")
     kwargs = {}
-    if Path(recording).suffix.lower() not in (".h5", ".hdf5"):
+    if Path(recording).suffix.lower() in (".h5", ".hdf5"):
+        ctx = click.get_current_context()
+        given = [f"--{name.replace('_hz', '')}" for name in ("units", "angles", "sensors", "rate_hz")
+                 if ctx.get_parameter_source(name) is not click.core.ParameterSource.DEFAULT]
+        if given:
+            raise InvalidInputError(
+                f"{', '.join(given)} apply to text exports (PiMgr CSV, Liberty ASCII), not to "
+                f"the HDF5 recording {recording!r}, which stores units, rotations and sensors")
+    else:
         kwargs = dict(units=units, angles=None if angles == "auto" else angles,
                       rate_hz=rate_hz, on_invalid="raise" if strict else "drop")
         if sensors is not None:

@@ -199,3 +199,37 @@ def test_euler_angles_out_of_range_are_refused(tmp_path):
     res = CliRunner().invoke(cli, ["joints", "estimate", str(path)])
     assert res.exit_code == 2, res.output
     assert "line 8: Euler angle a2 is 400 deg, outside [-90, 90]" in res.output
+
+
+def test_json_and_plot_with_one_name_are_refused(tmp_path, rec_path):
+    # item 18: --json x.json --plot x.json exited 0 with the PNG in x.json
+    out = tmp_path / "x.json"
+    res = _run("estimate", rec_path, "--method", "obrien", "--json", out,
+               "--plot", tmp_path / "." / "x.json")
+    assert res.exit_code == 2, res.output
+    assert "--json and --plot name the same file" in res.output
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("args, named", [
+    (["--units", "cm"], "--units"),
+    (["--angles", "euler", "--rate", "100"], "--angles, --rate"),
+    (["--sensors", "2,1"], "--sensors"),
+])
+def test_text_export_options_with_hdf5_are_refused_by_name(rec_path, args, named):
+    # item 19: the options were ignored without notice for an .h5 recording
+    res = _run("estimate", rec_path, *args)
+    assert res.exit_code == 2, res.output
+    assert res.output.startswith(f"handsynth: error: {named} apply to text exports"), res.output
+
+
+def test_stations_named_upper_second_are_paired_in_file_order(tmp_path, sim):
+    # item 12: --sensors 2,1 warned of half frames and paired neighbouring frames
+    path = tmp_path / "lib.txt"
+    path.write_text("\n".join(_liberty(sim, counter=False)) + "\n")
+    out = tmp_path / "c.json"
+    res = _run("estimate", path, "--sensors", "2,1", "--method", "obrien", "--frames", "all",
+               "--json", out)
+    assert res.exit_code == 0, res.output
+    assert "warning" not in res.output and "half frames" not in res.output, res.output
+    assert json.loads(out.read_text())["results"][0]["n_frames_used"] == sim.n_frames

@@ -143,6 +143,8 @@ def load_recording(path: str | os.PathLike) -> Recording:
     with f:
         try:
             return _load(f, path)
+        except RecordingError:  # already says what is wrong (not "damaged")
+            raise
         except (KeyError, ValueError, TypeError, OSError) as exc:
             raise RecordingError(f"{str(path)!r} is damaged or incomplete: {exc}") from None
 

@@ -25,8 +25,9 @@ __all__ = ["MotionQuality", "motion_quality"]
 #: ``_STATIC_DEG`` lay still.
 _STATIC_MM = 2.0
 _STATIC_DEG = 2.0
-_READER_COUNTS = ("duplicates", "half_frames", "invalid_frames", "glitch_frames",
-                  "skipped_lines", "non_increasing_times", "quaternion_sign_flips")
+_READER_COUNTS = ("duplicates", "half_frames", "invalid_frames", "glitch_frames", "dropout_frames",
+                  "frozen_frames", "skipped_lines", "non_increasing_times", "rows_after_restart",
+                  "quaternion_sign_flips")
 
 
 @dataclass(frozen=True)

@@ -18,10 +18,13 @@ patent's recording software, para. 0097):
   the number of columns together with an integer counter that never
   decreases, and the layout found is recorded, never guessed silently
   (eight columns that are neither a unit quaternion nor a counter are an
-  error).  A frame is a line of the first station followed by one of the
-  second (or, with a counter, both lines of one counter value): a station
-  line without its partner -- a lost line -- drops that half frame, it is
-  never merged into a neighbour.
+  error).  A frame is two consecutive lines of the two stations, in the
+  order the file writes them (station 1 then 2, or 2 then 1, whichever
+  order forms the most frames; not the order `sensors` names them in), or,
+  with a counter, both lines of one counter value: a station line without
+  its partner -- a lost line -- drops that half frame, it is never merged
+  into a neighbour.
+  Cells may be quoted (``"Time","w1",...``).
 
 Polhemus' azimuth, elevation, roll are rotations about the transmitter's
 ``z``, then the new ``y``, then the new ``x``: intrinsic ``"ZYX"``.
@@ -34,7 +37,15 @@ para. 0094; phalanges up to about 50 mm, Buchholz et al. 1992); with
 used, and an explicit unit that puts it outside that range is warned about
 when another unit would not.  Glitches -- a sensor position more than
 `glitch_mm` from the median of its five-frame neighbourhood, which smooth
-finger motion never is -- are dropped, counted and named.
+finger motion never is -- are dropped, counted and named; so are dropouts (a
+sensor at exactly ``(0, 0, 0)``, however many frames in a row) and frozen
+stretches (one sensor's position and angles repeated bit for bit over five or
+more frames while the other sensor moves; a sensor frozen throughout is left
+to the estimators, which refuse it).  Euler angles all within +-pi are warned
+about as radians.  A time column that is constant is refused; one that
+restarts (two takes in one file) keeps the first take with a warning naming
+the line; one that advances by seconds per sample is warned about as
+milliseconds.
 """
 
 from __future__ import annotations
@@ -92,6 +103,9 @@ def _split(line: str, sep: str, decimal_comma: bool) -> list[str]:
         fields = line.split()
     else:
         fields = [f.strip() for f in line.split(sep)]
+    # quoted cells ("Time","w1",... or "0.0125"): the quotes are not part of the value
+    fields = [f[1:-1].strip() if len(f) >= 2 and f[0] == f[-1] and f[0] in "\"'" else f
+              for f in fields]
     if decimal_comma:
         fields = [f.replace(",", ".") for f in fields]
     return fields
@@ -357,20 +371,32 @@ def _pair_stations(station: np.ndarray, frame: np.ndarray | None,
         return up, lo, np.array([k for k, _ in full], dtype=np.float64), half, dups
     sel = np.flatnonzero(np.isin(station, sensors))
     st = station[sel]
-    up_l, lo_l, key = [], [], []
-    half = 0
-    i = 0
-    ordinal = 0  # frames started so far, complete or not: the frame's time slot
-    while i < sel.size:
-        if st[i] == a and i + 1 < sel.size and st[i + 1] == b:
-            up_l.append(sel[i])
-            lo_l.append(sel[i + 1])
-            key.append(float(ordinal))
-            i += 2
-        else:
-            half += 1
-            i += 1
-        ordinal += 1
+    # A frame is two consecutive lines of the two stations in the file's own order (which
+    # need not be the order `sensors` names them in): the order that forms the most complete
+    # frames, the first line's station first on a tie.  A line without its partner in that
+    # order is a half frame, never paired with a neighbouring frame's line.
+    orders = [(a, b), (b, a)] if st.size == 0 or st[0] == a else [(b, a), (a, b)]
+    best: tuple[list[int], list[int], list[float], int] | None = None
+    for first, second in orders:
+        up_l, lo_l, key = [], [], []
+        half = 0
+        i = 0
+        ordinal = 0  # frames started so far, complete or not: the frame's time slot
+        while i < sel.size:
+            if st[i] == first and i + 1 < sel.size and st[i + 1] == second:
+                u, v = (sel[i], sel[i + 1]) if first == a else (sel[i + 1], sel[i])
+                up_l.append(int(u))
+                lo_l.append(int(v))
+                key.append(float(ordinal))
+                i += 2
+            else:
+                half += 1
+                i += 1
+            ordinal += 1
+        if best is None or len(up_l) > len(best[0]):
+            best = (up_l, lo_l, key, half)
+    assert best is not None
+    up_l, lo_l, key, half = best
     return (np.array(up_l, dtype=np.int64), np.array(lo_l, dtype=np.int64),
             np.array(key, dtype=np.float64), half, 0)
 
@@ -415,6 +441,92 @@ def _glitches(positions: np.ndarray, glitch_mm: float) -> np.ndarray:
     return dev > glitch_mm
 
 
+#: Shortest run of bit-identical samples of one sensor (while the other moves) taken
+#: as a frozen sensor: a tracker at 0.1 mm and 0.01 deg resolution never repeats a moving
+#: finger's pose for this many frames.
+_FROZEN_RUN = 5
+
+
+def _frozen_runs(pos_file: np.ndarray, ang: list[np.ndarray], dropout: np.ndarray) -> np.ndarray:
+    """Frames inside a run of at least `_FROZEN_RUN` bit-identical samples of one sensor
+    while the other sensor's samples change; a run over the whole file is left to the
+    estimators (a sensor frozen throughout: nothing moved)."""
+    n = pos_file.shape[0]
+    frozen = np.zeros(n, dtype=bool)
+    if n < _FROZEN_RUN:
+        return frozen
+    samples = [np.concatenate([pos_file[:, s], ang[s]], axis=1) for s in (0, 1)]
+    for s in (0, 1):
+        mine, other = samples[s], samples[1 - s]
+        same = np.all(mine[1:] == mine[:-1], axis=1) & ~dropout[1:] & ~dropout[:-1]
+        start = 0
+        while start < n - 1:
+            if not same[start]:
+                start += 1
+                continue
+            stop = start
+            while stop < n - 1 and same[stop]:
+                stop += 1
+            # frames start..stop (inclusive) hold one sample
+            length = stop - start + 1
+            moves = np.any(other[start + 1:stop + 1] != other[start:stop])
+            if length >= _FROZEN_RUN and length < n and moves:
+                frozen[start:stop + 1] = True
+            start = stop + 1
+    return frozen
+
+
+def _check_times(
+    pos_file: np.ndarray, ang: list[np.ndarray], times: np.ndarray, line_no: np.ndarray,
+    notes: dict, path: Path,
+) -> tuple[np.ndarray, list[np.ndarray], np.ndarray, np.ndarray]:
+    """Times of a file with a time column from 0; rows whose time does not advance
+    dropped; a constant column refused; a restart (two takes pasted together) and a time
+    that looks like milliseconds warned about."""
+    fin = np.isfinite(times)
+    if fin.sum() > 1 and np.ptp(times[fin]) == 0:
+        raise RecordingError(
+            f"{path.name}: the time column is {times[fin][0]:g} on all {int(fin.sum())} rows: "
+            f"it gives no sample times (is it the time column of this export?)")
+    # a restart: the time jumps back by much more than a sample interval
+    steps = np.diff(times)
+    forward = steps[np.isfinite(steps) & (steps > 0)]
+    dt = float(np.median(forward)) if forward.size else 0.0
+    back = np.flatnonzero(np.isfinite(steps) & (steps < -10 * dt)) if dt > 0 else np.array([], int)
+    if back.size:
+        i = int(back[0]) + 1
+        warnings.warn(
+            f"{path.name} line {int(line_no[i])}: the time restarts ({times[i - 1]:g} -> "
+            f"{times[i]:g}): two takes in one file? only the rows before line "
+            f"{int(line_no[i])} are used ({len(times) - i} rows from there on dropped)",
+            stacklevel=3)
+        notes["restart_line"] = int(line_no[i])
+        notes["rows_after_restart"] = len(times) - i
+        pos_file, ang, times, line_no = pos_file[:i], [a[:i] for a in ang], times[:i], line_no[:i]
+    times = times - np.nanmin(times)
+    # rows re-written with a time that does not advance
+    ok = np.ones(times.size, dtype=bool)
+    last = -np.inf
+    for i, tt in enumerate(times):
+        if np.isfinite(tt) and tt <= last:
+            ok[i] = False
+        elif np.isfinite(tt):
+            last = tt
+    if not ok.all():
+        notes["non_increasing_times"] = int((~ok).sum())
+        pos_file, ang, times, line_no = pos_file[ok], [a[ok] for a in ang], times[ok], line_no[ok]
+    steps = np.diff(times[np.isfinite(times)])
+    if steps.size:
+        rate = 1.0 / float(np.median(steps))
+        if rate < 2.0 and 20.0 <= rate * 1e3 <= 10000.0:
+            warnings.warn(
+                f"{path.name}: the time column advances by {1 / rate:.4g} per sample, "
+                f"{rate:.3g} Hz if it is seconds: it looks like milliseconds "
+                f"({rate * 1e3:.4g} Hz); the times are read as seconds", stacklevel=3)
+            notes["time_looks_like_ms"] = True
+    return pos_file, ang, times, line_no
+
+
 #: Slack on the Euler-angle ranges, degrees (a tracker may print 180.00 or 90.004).
 _EULER_SLACK_DEG = 0.01
 
@@ -439,6 +551,24 @@ def _check_euler_range(a: np.ndarray, lines: np.ndarray, finite: np.ndarray, ord
                 "the angle format and the units right?")
 
 
+#: A recording whose Euler angles all lie within +-pi (plus this slack) looks like radians.
+_RADIAN_SLACK = 1e-3
+
+
+def _check_radians(ang: list[np.ndarray], path: Path) -> None:
+    """Warn when every Euler angle of both sensors lies within +-pi: radians, not degrees.
+
+    A finger flexed by tens of degrees never keeps all three angles of both sensors
+    within 3.14 deg for a whole recording.
+    """
+    values = np.concatenate([a[np.isfinite(a).all(axis=1)].ravel() for a in ang])
+    if values.size >= 30 and np.abs(values).max() <= np.pi + _RADIAN_SLACK:
+        warnings.warn(
+            f"{path.name}: every Euler angle is within +-pi ({np.abs(values).max():.3g} at "
+            f"most): the angles look like radians, but they are read as degrees; convert "
+            f"them to degrees", stacklevel=3)
+
+
 def read_polhemus(
     path: str | os.PathLike,
     *,
@@ -458,8 +588,10 @@ def read_polhemus(
     The layout is detected (see the module docstring) unless `columns` is
     given; what was found is in ``recording.metadata`` (``format``,
     ``layout``, ``units``, ``units_note``, counts of ``duplicates``,
-    ``half_frames``, ``glitch_frames``, ``invalid_frames``,
-    ``skipped_lines``, ``quaternion_sign_flips``, ``decimal_comma``).
+    ``half_frames``, ``glitch_frames``, ``dropout_frames``,
+    ``frozen_frames``, ``invalid_frames``, ``skipped_lines``,
+    ``quaternion_sign_flips``, ``decimal_comma``; ``rows_after_restart``
+    and ``time_looks_like_ms`` when found).
 
     Parameters
     ----------
@@ -486,7 +618,8 @@ def read_polhemus(
         times ``1 / rate_hz`` when there is a counter).
     labels, joint : see :class:`Recording`.
     on_invalid : {"drop", "raise"}
-        Frames with NaN values, half frames (lost lines) and glitches:
+        Frames with NaN values, half frames (lost lines), glitches,
+        dropouts and frozen stretches:
         drop them with a warning that counts them, or raise
         :class:`RecordingError` naming them.
     glitch_mm : float
@@ -569,6 +702,7 @@ def read_polhemus(
             for a, lines in zip(ang, ang_lines):
                 _check_euler_range(a, lines, np.isfinite(a).all(axis=1), euler_order, path,
                                    ("a1", "a2", "a3"), "")
+            _check_radians(ang, path)
         if lay.time is not None:
             times = rows[up, lay.time]
         else:  # frame counter or frame ordinal
@@ -585,6 +719,7 @@ def read_polhemus(
             for a, lines in zip(ang, ang_lines):
                 _check_euler_range(a, lines, np.isfinite(a).all(axis=1), euler_order, path,
                                    ("a1", "a2", "a3"), "")
+            _check_radians(ang, path)
         # duplicated rows: the same sample written again
         pose = np.concatenate([pos_file.reshape(len(rows), -1), *ang], axis=1)
         same = np.zeros(len(rows), dtype=bool)
@@ -604,20 +739,12 @@ def read_polhemus(
             notes["time_origin_unix_s"] = float(np.nanmin(times))
         pair = (1, 2) if sensors is None else (int(sensors[0]), int(sensors[1]))
     if lay.time is not None and times.size:
-        times = times - np.nanmin(times)
-        # rows re-written with a time that does not advance
-        ok = np.ones(times.size, dtype=bool)
-        last = -np.inf
-        for i, tt in enumerate(times):
-            if np.isfinite(tt) and tt <= last:
-                ok[i] = False
-            elif np.isfinite(tt):
-                last = tt
-        if not ok.all():
-            notes["non_increasing_times"] = int((~ok).sum())
-            pos_file, ang, times, line_no = pos_file[ok], [a[ok] for a in ang], times[ok], line_no[ok]
+        pos_file, ang, times, line_no = _check_times(pos_file, ang, times, line_no, notes, path)
 
-    unit, unit_note = _choose_units(pos_file, units, path)
+    # a tracker's dropout: a sensor reported at exactly (0, 0, 0)
+    dropout = np.any(np.all(pos_file == 0, axis=2), axis=1)
+    frozen = _frozen_runs(pos_file, ang, dropout)
+    unit, unit_note = _choose_units(pos_file[~dropout], units, path)
     positions = pos_file * _UNITS_M[unit]
     rots, flips = zip(*(_rotations(a, lay.angles, euler_order) for a in ang))
     rotations = np.stack(rots, axis=1)
@@ -635,11 +762,13 @@ def read_polhemus(
                     f"far from 1 (first: {norm[i]:.4f} at line {line_no[i]}); are these columns "
                     f"really a quaternion?")
     glitch = np.zeros(n, dtype=bool)
-    fin = ~invalid
+    fin = ~(invalid | dropout | frozen)
     if fin.sum() >= 5:
         glitch[np.flatnonzero(fin)] = _glitches(positions[fin], glitch_mm)
     notes["invalid_frames"] = int(invalid.sum())
     notes["glitch_frames"] = int(glitch.sum())
+    notes["dropout_frames"] = int(dropout.sum())
+    notes["frozen_frames"] = int(frozen.sum())
     notes["quaternion_sign_flips"] = int(sum(flips))
     problems = []
     if notes["half_frames"]:
@@ -649,6 +778,15 @@ def read_polhemus(
         w = np.flatnonzero(invalid)
         problems.append(f"{w.size} frames with NaN values or unusable angles (lines "
                         f"{line_no[w[:5]].tolist()}{' ...' if w.size > 5 else ''})")
+    if dropout.any():
+        w = np.flatnonzero(dropout)
+        problems.append(f"{w.size} dropout frames (a sensor at exactly (0, 0, 0): the tracker "
+                        f"lost it; lines {line_no[w[:5]].tolist()}{' ...' if w.size > 5 else ''})")
+    if frozen.any():
+        w = np.flatnonzero(frozen)
+        problems.append(f"{w.size} frozen frames (one sensor's position and angles repeated "
+                        f"bit for bit over {_FROZEN_RUN} or more frames while the other moves; "
+                        f"lines {line_no[w[:5]].tolist()}{' ...' if w.size > 5 else ''})")
     if glitch.any():
         w = np.flatnonzero(glitch)
         problems.append(f"{w.size} glitch frames (a position > {glitch_mm:g} mm off its "
@@ -661,7 +799,7 @@ def read_polhemus(
         warnings.warn(msg + "; dropped", stacklevel=2)
     if notes["duplicates"]:
         warnings.warn(f"{path.name}: dropped {notes['duplicates']} duplicated rows", stacklevel=2)
-    keep = ~(invalid | glitch)
+    keep = ~(invalid | glitch | dropout | frozen)
     if keep.sum() < 10:
         raise RecordingError(f"{path.name}: only {int(keep.sum())} usable frames of {n}")
     times, positions, rotations = times[keep], positions[keep], rotations[keep]

@@ -131,3 +131,15 @@ def test_hdf5_version_1_is_read_with_a_warning(tmp_path, finger_rec):
     with pytest.warns(UserWarning, match="no checksum"):
         rec = load_recording(path)
     assert rec.labels == ("index_middle", "index_distal")
+
+
+def test_hdf5_of_another_kind_is_named_not_called_damaged(tmp_path):
+    # item 19: the message was wrapped twice and said "damaged or incomplete"
+    import h5py
+
+    path = tmp_path / "h_other.h5"
+    with h5py.File(path, "w") as f:
+        f["x"] = [1.0, 2.0]
+    with pytest.raises(RecordingError) as err:
+        load_recording(path)
+    assert str(err.value) == f"{str(path)!r} is not a handsynth recording (format=None)"

@@ -1,5 +1,7 @@
 """Readers of the real export formats, on files written here by hand."""
 
+import warnings
+
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
@@ -143,3 +145,133 @@ def test_rotations_of_header_csv_with_euler(tmp_path, finger_rec):
     rec = read_polhemus(_write(tmp_path / "e.csv", lines))
     assert rec.metadata["units"] == "mm"
     _close(rec, finger_rec)
+
+
+# --- audit items 12-17 ----------------------------------------------------------------
+
+
+def _no_warnings(call):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        return call()
+
+
+@pytest.mark.parametrize("swap", [False, True])
+def test_stations_in_either_order_pair_within_a_frame(tmp_path, finger_rec, liberty_lines, swap):
+    # item 12: --sensors 2,1 (or a file writing station 2 first) paired station 2 of frame i
+    # with station 1 of frame i + 1 and reported "2 half frames"
+    lines = liberty_lines(finger_rec, scale=100.0, counter=False, quaternion=False)
+    if swap:
+        lines = [lines[i + d] for i in range(0, len(lines), 2) for d in (1, 0)]
+    path = _write(tmp_path / "lib.txt", lines)
+    rec = _no_warnings(lambda: read_polhemus(path, sensors=(2, 1)))
+    assert rec.metadata["half_frames"] == 0 and rec.n_frames == finger_rec.n_frames
+    np.testing.assert_allclose(rec.positions, finger_rec.positions[:, ::-1], atol=2e-6)
+    rec = _no_warnings(lambda: read_polhemus(path))
+    _close(rec, finger_rec)
+
+
+def test_lost_line_in_a_station_2_first_file_is_not_merged(tmp_path, finger_rec, liberty_lines):
+    lines = liberty_lines(finger_rec, scale=100.0, counter=False, quaternion=False)
+    lines = [lines[i + d] for i in range(0, len(lines), 2) for d in (1, 0)]
+    del lines[2 * 40]  # station 2 of frame 40
+    for sensors in (None, (2, 1)):
+        with pytest.warns(UserWarning, match="1 half frames"):
+            rec = read_polhemus(_write(tmp_path / "lost.txt", lines), sensors=sensors)
+        keep = np.setdiff1d(np.arange(finger_rec.n_frames), [40])
+        ref = finger_rec.take(keep)
+        got = rec.positions if sensors is None else rec.positions[:, ::-1]
+        np.testing.assert_allclose(got, ref.positions, atol=2e-6)
+        np.testing.assert_allclose(rec.times, finger_rec.times[keep], atol=1e-9)
+
+
+@pytest.mark.parametrize("frames", [[700, 701, 702], list(range(700, 750))])
+def test_dropouts_to_zero_are_dropped_and_named(tmp_path, finger_rec, liberty_lines, frames):
+    # item 13: 3 or more consecutive zeroed frames passed the glitch filter (the centre moved
+    # 1.4 mm); 50 made every method refuse with a misleading message
+    lines = liberty_lines(finger_rec, scale=100.0, counter=False, quaternion=False)
+    for f in frames:
+        lines[2 * f] = "  1 0.0000 0.0000 0.0000 0.0000 0.0000 0.0000"
+    path = _write(tmp_path / "zero.txt", lines)
+    with pytest.warns(UserWarning, match=f"{len(frames)} dropout frames .*lines \\[{2 * 700 + 1}, "):
+        rec = read_polhemus(path)
+    assert rec.metadata["dropout_frames"] == len(frames)
+    assert rec.metadata["glitch_frames"] == 0
+    _close(rec, finger_rec.take(np.setdiff1d(np.arange(finger_rec.n_frames), frames)))
+    with pytest.raises(RecordingError, match="dropout"):
+        read_polhemus(path, on_invalid="raise")
+
+
+def test_pimgr_dropout_identity_and_zero_position(tmp_path, finger_rec, pimgr_lines):
+    lines = pimgr_lines(finger_rec, scale=100.0)
+    for r in range(1001, 1051):
+        f = lines[r].split(",")
+        f[1:5] = ["1", "0", "0", "0"]
+        f[9:12] = ["0", "0", "0"]
+        lines[r] = ",".join(f)
+    with pytest.warns(UserWarning, match="50 dropout frames"):
+        rec = read_polhemus(_write(tmp_path / "zero.csv", lines))
+    _close(rec, finger_rec.take(np.setdiff1d(np.arange(finger_rec.n_frames), range(1000, 1050))))
+
+
+def test_partly_frozen_sensor_is_dropped_and_named(tmp_path, finger_rec, pimgr_lines):
+    # item 14: a sensor frozen over rows 1000-1099 passed unnoticed
+    lines = pimgr_lines(finger_rec, scale=100.0)
+    held = lines[1001].split(",")
+    for r in range(1001, 1101):
+        f = lines[r].split(",")
+        f[1:5], f[9:12] = held[1:5], held[9:12]
+        lines[r] = ",".join(f)
+    with pytest.warns(UserWarning, match="100 frozen frames.*lines \\[1002, 1003"):
+        rec = read_polhemus(_write(tmp_path / "frozen.csv", lines))
+    assert rec.metadata["frozen_frames"] == 100
+    _close(rec, finger_rec.take(np.setdiff1d(np.arange(finger_rec.n_frames), range(1000, 1100))))
+    # a few repeated samples are not a frozen sensor
+    lines = pimgr_lines(finger_rec, scale=100.0)
+    for r in range(1002, 1005):
+        f = lines[r].split(",")
+        f[1:5], f[9:12] = held[1:5], held[9:12]
+        lines[r] = ",".join(f)
+    rec = _no_warnings(lambda: read_polhemus(_write(tmp_path / "short.csv", lines)))
+    assert rec.metadata["frozen_frames"] == 0 and rec.n_frames == finger_rec.n_frames
+
+
+@pytest.mark.parametrize("every_cell", [False, True])
+def test_quoted_pimgr_csv_is_read(tmp_path, finger_rec, pimgr_lines, every_cell):
+    # item 15: a quoted header (or quoted numbers) was not recognised
+    lines = pimgr_lines(finger_rec, scale=100.0)
+    quote = [0] if not every_cell else range(len(lines))
+    for r in quote:
+        lines[r] = ",".join(f'"{c}"' for c in lines[r].split(","))
+    rec = read_polhemus(_write(tmp_path / "q.csv", lines))
+    assert rec.metadata["format"] == "pimgr-csv"
+    _close(rec, finger_rec)
+
+
+def _retime(lines, times):
+    return [lines[0]] + [f"{t:.4f}," + line.split(",", 1)[1] for t, line in zip(times, lines[1:])]
+
+
+def test_pimgr_time_column_problems_are_named(tmp_path, finger_rec, pimgr_lines):
+    # item 16: a constant time column, a restart and milliseconds were silent or misleading
+    lines = pimgr_lines(finger_rec, scale=100.0)
+    n = finger_rec.n_frames
+    with pytest.raises(RecordingError, match=f"time column is 0 on all {n} rows"):
+        read_polhemus(_write(tmp_path / "t0.csv", _retime(lines, np.zeros(n))))
+    with pytest.warns(UserWarning, match=f"line {n + 2}: the time restarts.*{n} rows"):
+        rec = read_polhemus(_write(tmp_path / "two.csv", lines + lines[1:]))
+    assert rec.n_frames == n and rec.metadata["rows_after_restart"] == n
+    with pytest.warns(UserWarning, match="looks like milliseconds"):
+        rec = read_polhemus(_write(tmp_path / "ms.csv", _retime(lines, finger_rec.times * 1e3)))
+    assert rec.metadata["time_looks_like_ms"]
+    _no_warnings(lambda: read_polhemus(_write(tmp_path / "s.csv", lines)))
+
+
+def test_euler_angles_in_radians_are_warned_about(tmp_path, finger_rec, liberty_lines):
+    # item 17: radians gave a misleading "flex the joint further" refusal
+    lines = []
+    for line in liberty_lines(finger_rec, scale=100.0, counter=False, quaternion=False):
+        f = line.split()
+        lines.append(" ".join(f[:4] + [f"{np.radians(float(v)):.6f}" for v in f[4:]]))
+    with pytest.warns(UserWarning, match="look like radians"):
+        read_polhemus(_write(tmp_path / "rad.txt", lines))
