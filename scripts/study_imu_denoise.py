@@ -15,6 +15,7 @@ Usage::
 
 from __future__ import annotations
 
+import argparse
 import dataclasses
 
 import numpy as np
@@ -29,6 +30,8 @@ Q_SIGNALS = (None, 50.0, 5.0, 0.5)
 
 
 def main() -> None:
+    argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                            formatter_class=argparse.RawDescriptionHelpFormatter).parse_args()
     gain = float("nan")
     for name, config in (("tuning", TUNING), ("held-out", HELDOUT)):
         placement = config.placement()

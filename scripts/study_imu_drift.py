@@ -28,6 +28,7 @@ Usage::
 
 from __future__ import annotations
 
+import argparse
 import dataclasses
 import json
 
@@ -80,6 +81,8 @@ def _line(label, name, s) -> str:
 
 
 def main() -> None:
+    argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                            formatter_class=argparse.RawDescriptionHelpFormatter).parse_args()
     ev.make_filter = _Named(ev.make_filter)
     out: dict = {"tuning": {}, "heldout": {}}
     tuned = ("filter4",) + tuple(f"f4t{t:g}" for t in TAUS)

@@ -7,6 +7,7 @@ the hand model: ``python scripts/write_mjcf_assets.py``.
 
 from __future__ import annotations
 
+import argparse
 from pathlib import Path
 
 from handsynth._io import write_text
@@ -15,6 +16,8 @@ from handsynth.render import standard_assets
 OUT = Path(__file__).resolve().parents[1] / "assets" / "hand_mjcf"
 
 if __name__ == "__main__":
+    argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                            formatter_class=argparse.RawDescriptionHelpFormatter).parse_args()
     OUT.mkdir(parents=True, exist_ok=True)
     for name, text in standard_assets().items():
         write_text(OUT / name, text, what="MJCF asset")

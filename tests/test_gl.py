@@ -44,3 +44,13 @@ def test_a_backend_the_user_chose_is_kept():
     res = _run_bare("import handsynth, os; print(os.environ['MUJOCO_GL'])", MUJOCO_GL="osmesa")
     assert res.returncode == 0, res.stderr[-2000:]
     assert res.stdout.strip() == "osmesa"
+
+
+@pytest.mark.parametrize("backend", ["egl", "osmesa"])
+def test_a_renderer_left_open_is_released_at_exit_without_a_traceback(backend):
+    # MuJoCo's finaliser ran at interpreter teardown, found OSMesa's functions gone and
+    # printed "Exception ignored in: Renderer.__del__" with a traceback
+    res = _run_bare(f"from handsynth import HandShape; {_RENDER}", MUJOCO_GL=backend)
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert res.stdout.split() == ["1", backend]
+    assert "Exception" not in res.stderr and "Traceback" not in res.stderr, res.stderr[-2000:]

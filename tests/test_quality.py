@@ -1,4 +1,5 @@
-"""The quality gates run by the test command: ruff clean, mypy no worse than its baseline."""
+"""The quality gates run by the test command: ruff clean, mypy no worse than its baseline,
+scripts that answer --help."""
 
 import re
 import subprocess
@@ -33,3 +34,11 @@ def test_mypy_count_does_not_grow():
     assert count <= MYPY_BASELINE, f"mypy errors grew to {count} (baseline {MYPY_BASELINE}):\n{res.stdout}"
     assert count == MYPY_BASELINE, (f"mypy errors fell to {count}: set MYPY_BASELINE = {count} here "
                                     "and in the README")
+
+
+def test_every_script_parses_its_options_so_help_does_not_run_it():
+    # `write_mjcf_assets.py --help` rewrote the committed assets and two studies started
+    # their full runs: a script without an option parser ignores --help
+    silent = [p.name for p in sorted((ROOT / "scripts").glob("*.py"))
+              if "__main__" in (text := p.read_text()) and "argparse" not in text]
+    assert not silent, f"scripts that ignore --help: {silent}"

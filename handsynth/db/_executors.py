@@ -23,13 +23,15 @@ import contextlib
 import multiprocessing
 import os
 import signal
+import sys
 import threading
 import time
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from typing import TypeVar
 
-from ..errors import InvalidInputError
+from ..errors import DatabaseError, InvalidInputError
 
 __all__ = ["EXECUTORS", "run_tasks"]
 
@@ -126,13 +128,27 @@ def _run_process(fn: Callable[[_T], _R], tasks: Sequence[_T],
                 next_task += 1
             done, _ = wait(pending, return_when=FIRST_COMPLETED)
             for fut in done:
-                yield pending.pop(fut), fut.result()
+                try:
+                    result = fut.result()
+                except BrokenProcessPool:
+                    raise DatabaseError(_broken_pool_message()) from None
+                yield pending.pop(fut), result
         finished = True
     finally:
         if finished:
             pool.shutdown(wait=True)
         else:
             _terminate(pool)
+
+
+def _broken_pool_message() -> str:
+    main = sys.modules.get("__main__")
+    script = getattr(main, "__file__", None)
+    hint = ""
+    if script and not getattr(main, "__spec__", None):  # run as `python script.py`
+        hint = (f"; the workers import {os.path.basename(script)!r}: keep its work under "
+                "`if __name__ == \"__main__\":`, or the workers run it again")
+    return "a worker process of the build died before finishing its task" + hint
 
 
 def _import_ray():

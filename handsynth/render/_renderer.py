@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import os
+import weakref
 
 import numpy as np
 
@@ -17,11 +19,26 @@ from ._scene import scene_mjcf
 __all__ = ["SilhouetteRenderer", "render_rgb"]
 
 
+#: Off-screen renderers not yet closed, closed at exit while the GL library is still there
+#: (at interpreter teardown MuJoCo's own finaliser found OSMesa's functions gone and printed
+#: a traceback for every renderer its user had not closed).
+_OPEN_RENDERERS: weakref.WeakSet = weakref.WeakSet()
+
+
+@atexit.register
+def _close_open_renderers() -> None:
+    for renderer in list(_OPEN_RENDERERS):
+        with contextlib.suppress(Exception):
+            renderer.close()
+
+
 def offscreen_renderer(model, w: int, h: int):
     import mujoco
 
     try:
-        return mujoco.Renderer(model, height=h, width=w)
+        renderer = mujoco.Renderer(model, height=h, width=w)
+        _OPEN_RENDERERS.add(renderer)
+        return renderer
     except Exception as exc:  # GL context creation failures come in many types
         raise RenderError(
             f"could not create a {w}x{h} off-screen renderer with MUJOCO_GL="

@@ -143,3 +143,24 @@ def test_ray_executor_gives_the_same_bytes(built, tmp_path):
     _, data = built
     path = build_database(tmp_path, SHAPE, workers=2, executor="ray", **SMALL)
     assert path.read_bytes() == data
+
+
+def test_a_build_from_a_script_without_the_main_guard_says_so(tmp_path):
+    # the spawned workers import the script and start the build again; the parent got a
+    # bare BrokenProcessPool traceback
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    script = tmp_path / "unguarded.py"
+    script.write_text("from handsynth.db import build_databases\n"
+                      "from handsynth.models import HandShape\n"
+                      f"build_databases({str(tmp_path / 'dbs')!r}, [HandShape()], workers=2, "
+                      "count=200, render_size=(120, 80), seed=3)\n")
+    env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[2]))
+    res = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                         timeout=300, env=env, cwd=tmp_path)
+    assert res.returncode != 0
+    last = res.stderr.strip().splitlines()[-1]
+    assert last.startswith("handsynth.errors.DatabaseError: a worker process of the build died")
+    assert "'unguarded.py'" in last and 'if __name__ == "__main__":' in last
