@@ -15,6 +15,10 @@ _CHAIN_FILTERS = ("filter4", "filter4b")  # need the link model of a calibration
 
 
 def _unit_options(f):
+    f = click.option("--gyr-range", "gyr_range_dps", type=float, default=2000.0, show_default=True,
+                     help="Gyro full-scale range, deg/s (saturation check).")(f)
+    f = click.option("--acc-range", "acc_range_g", type=float, default=16.0, show_default=True,
+                     help="Accelerometer full-scale range, g (saturation check).")(f)
     f = click.option("--rate", "rate_hz", type=float, default=None,
                      help="Sampling rate, Hz (default: from the time column).")(f)
     f = click.option("--mag-units", type=click.Choice(("uT", "mT", "G", "nT")), default="uT",
@@ -26,20 +30,50 @@ def _unit_options(f):
     return f
 
 
-def _write_table(path, header, table) -> None:
+def _write_table(path, header, table, *, inputs=()) -> None:
     import numpy as np
 
     from .._io import atomic_open
 
-    with atomic_open(path, "w", what="CSV file") as f:
+    with atomic_open(path, "w", what="CSV file", inputs=inputs) as f:
         f.write(",".join(header) + "\n")
         np.savetxt(f, table, delimiter=",", fmt="%.8g")
 
 
-def _write_json(path: str, payload) -> None:
+def _write_json(path: str, payload, *, inputs=()) -> None:
     from .._io import write_text
 
-    write_text(path, json.dumps(payload, indent=2) + "\n", what="JSON file")
+    write_text(path, json.dumps(payload, indent=2, allow_nan=False) + "\n", what="JSON file",
+               inputs=inputs)
+
+
+def _check_outputs(outputs, inputs) -> None:
+    """Refuse, before any work, an output that cannot be written, that is an input, or that
+    another output of the same run names too (`outputs`: (flag, path or None) pairs)."""
+    from .._io import check_output, same_file
+    from ..errors import OutputError
+
+    given = [(flag, path) for flag, path in outputs if path]
+    for i, (flag, path) in enumerate(given):
+        check_output(path, what=f"{flag} file", inputs=inputs)
+        for other, prev in given[:i]:
+            if same_file(path, prev):
+                raise OutputError(f"{other} and {flag} name the same file {str(path)!r}; "
+                                  "choose two names")
+
+
+def _full_scale(acc_range_g, gyr_range_dps) -> dict:
+    """check_recording's full-scale arguments from --acc-range (g) and --gyr-range (deg/s)."""
+    import math
+
+    from ..errors import InvalidInputError
+    from ..sensors.imu import GRAVITY_MPS2
+
+    for flag, v in (("--acc-range", acc_range_g), ("--gyr-range", gyr_range_dps)):
+        if not (math.isfinite(v) and v > 0):
+            raise InvalidInputError(f"{flag} must be a finite number > 0, got {v!r}")
+    return {"acc_full_scale": acc_range_g * GRAVITY_MPS2,
+            "gyr_full_scale": math.radians(gyr_range_dps)}
 
 
 def _filters(values, allowed):
@@ -74,7 +108,7 @@ def imu() -> None:
 @click.option("--no-plate-fusion", is_flag=True,
               help="Keep each forearm plate sensor's own attitude (by default the three are "
                    "fused into one after every filter).")
-@click.option("--json", "json_out", type=click.Path(dir_okay=False), required=True,
+@click.option("--json", "json_out", type=click.Path(dir_okay=False),
               help="Write the full report as JSON.")
 @click.option("--plots", "plot_dir", type=click.Path(file_okay=False),
               help="Write orientation_error.png and stick_figure.png (last trial) here.")
@@ -90,13 +124,15 @@ def eval_(config_name, filters, durations, elbows, no_grasps, no_sensor_calibrat
         plot_stick_figure,
     )
 
+    _check_outputs([("--json", json_out)], ())
     config = HELDOUT if config_name == "heldout" else TUNING
     series: dict = {}
     rep = evaluate(config, durations=durations or (15.0, 30.0), elbows=elbows or ("fixed", "moving"),
                    filters=_filters(filters, FILTERS), grasps=not no_grasps,
                    sensor_calibration=not no_sensor_calibration,
                    plate_fusion=not no_plate_fusion, series=series)
-    _write_json(json_out, rep)
+    if json_out:
+        _write_json(json_out, rep)
     if plot_dir:
         out = Path(plot_dir)
         out.mkdir(parents=True, exist_ok=True)
@@ -131,7 +167,8 @@ def eval_(config_name, filters, durations, elbows, no_grasps, no_sensor_calibrat
 @_unit_options
 @click.option("--out", "out_path", type=click.Path(dir_okay=False), required=True,
               help="Calibration JSON (link model, link frames, zero pose).")
-def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz, out_path) -> None:
+def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz, acc_range_g,
+              gyr_range_dps, out_path) -> None:
     """Sensor-to-joint vectors, link vectors and link frames from a calibration RECORDING."""
     import dataclasses
 
@@ -139,19 +176,21 @@ def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz
     from ..sensors.imu import calibrate as run_calibration
     from ..sensors.imu import check_recording, read_imu_csv, segments_from_seconds
 
+    inputs = (recording, segments_path)
+    _check_outputs([("--out", out_path)], inputs)
+    full_scale = _full_scale(acc_range_g, gyr_range_dps)
     rec = read_imu_csv(recording, acc_units=acc_units, gyr_units=gyr_units, mag_units=mag_units,
                        rate_hz=rate_hz)
     try:
         spans = json.loads(Path(segments_path).read_text())
     except (OSError, ValueError) as exc:  # JSON and text decoding errors are ValueErrors
         raise RecordingError(f"{segments_path}: cannot read the segments JSON ({exc})") from None
-    if not isinstance(spans, dict):
-        raise RecordingError(f"{segments_path}: expected an object of label: [start_s, end_s]")
-    rec = dataclasses.replace(rec, segments=segments_from_seconds(spans, rec.rate_hz, rec.n))
-    for w in check_recording(rec, source=str(recording)):
+    rec = dataclasses.replace(rec, segments=segments_from_seconds(spans, rec.rate_hz, rec.n,
+                                                                  source=str(segments_path)))
+    for w in check_recording(rec, source=str(recording), **full_scale):
         click.echo(f"handsynth: warning: {w}", err=True)
     cal = run_calibration(rec)
-    cal.save(out_path)
+    cal.save(out_path, inputs=inputs)
     lengths = ", ".join(f"{a}->{b} {1e3 * float((v @ v) ** 0.5):.0f} mm"
                         for (s, a, b), v in cal.model.links.items() if s.startswith("index"))
     click.echo(f"calibrated {len(cal.sensors)} sensors -> {out_path}; index links: {lengths}")
@@ -188,7 +227,8 @@ def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz
               help="Do not apply the calibration file's accelerometer/gyro/magnetometer "
                    "corrections (for readings already corrected).")
 def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_units, rate_hz,
-          static_s, align, out_path, angles_out, tips_out, no_sensor_calibration) -> None:
+          acc_range_g, gyr_range_dps, static_s, align, out_path, angles_out, tips_out,
+          no_sensor_calibration) -> None:
     """Orientation of every sensor of a CSV RECORDING (columns <sensor>_acc_x .. _mag_z)."""
     import dataclasses
 
@@ -214,10 +254,9 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
     if calibration_path and filter_name not in (None, *_CHAIN_FILTERS):
         raise InvalidInputError(f"with --calibration the filter is one of {', '.join(_CHAIN_FILTERS)}, "
                                 f"got {filter_name}")
-    rec = read_imu_csv(recording, acc_units=acc_units, gyr_units=gyr_units, mag_units=mag_units,
-                       rate_hz=rate_hz)
-    for w in check_recording(rec, static_s=static_s, source=str(recording)):
-        click.echo(f"handsynth: warning: {w}", err=True)
+    inputs = (recording, calibration_path)
+    _check_outputs([("--out", out_path), ("--angles-out", angles_out), ("--tips-out", tips_out)],
+                   inputs)
     a = b = None
     if align:
         try:
@@ -225,6 +264,11 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
         except ValueError:
             raise InvalidInputError(f"--align must be START,END in seconds, got {align!r}") from None
     static = StaticStart(static_s=static_s, align_start_s=a, align_end_s=b)
+    full_scale = _full_scale(acc_range_g, gyr_range_dps)
+    rec = read_imu_csv(recording, acc_units=acc_units, gyr_units=gyr_units, mag_units=mag_units,
+                       rate_hz=rate_hz)
+    for w in check_recording(rec, static_s=static_s, source=str(recording), **full_scale):
+        click.echo(f"handsynth: warning: {w}", err=True)
     t = np.arange(rec.n) / rec.rate_hz
     if calibration_path:
         cal = ImuCalibration.load(calibration_path)
@@ -237,19 +281,20 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
         if cal.plate is not None:
             name += ", forearm plate fused"
         if angles_out:
-            _write_table(angles_out, ["time_s", *JOINT_NAMES], np.column_stack([t, res["angles"]]))
+            _write_table(angles_out, ["time_s", *JOINT_NAMES], np.column_stack([t, res["angles"]]),
+                         inputs=inputs)
         if tips_out:
             tips = fingertip_positions(q, sensors, cal.model)
             fingers = [f for f in tips if not f.endswith("_joints")]
             _write_table(tips_out, ["time_s", *(f"{f}_tip_{c}_mm" for f in fingers for c in "xyz")],
-                         np.column_stack([t, *(1e3 * tips[f] for f in fingers)]))
+                         np.column_stack([t, *(1e3 * tips[f] for f in fingers)]), inputs=inputs)
     else:
         name = filter_name or "vqf"
         est = dataclasses.replace(make_filter(name), static=static)
         q, sensors = est.run(rec), rec.sensors
     cols = ["time_s"] + [f"{s}_q{c}" for s in sensors for c in "wxyz"]
     _write_table(out_path, cols, np.column_stack([t] + [q[k, :, c] for k in range(q.shape[0])
-                                                         for c in range(4)]))
+                                                         for c in range(4)]), inputs=inputs)
     click.echo(f"{len(sensors)} sensors, {rec.n} samples ({rec.duration_s:.1f} s) at "
                f"{rec.rate_hz:g} Hz -> {out_path} ({name})")
 
@@ -262,12 +307,13 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
               help="Write per-trial errors as JSON.")
 def broad(directory, filters, json_out) -> None:
     """Run the filters on the BROAD trials present in DIRECTORY (the dataset's metric)."""
-    from ..sensors.imu import BROAD_FILTERS, run_broad
+    from ..sensors.imu import BROAD_FILTERS, find_broad_trials, run_broad
 
+    _check_outputs([("--json", json_out)], find_broad_trials(directory))
     res = run_broad(directory, filters=_filters(filters, BROAD_FILTERS),
                     progress=lambda line: click.echo(line, err=True))
     if json_out:
-        _write_json(json_out, res)
+        _write_json(json_out, res, inputs=find_broad_trials(directory))
     click.echo(f"{len(res['trials'])} BROAD trial(s); mean RMSE over the movement phases, deg "
                f"({res['anchor']})")
     click.echo(f"{'filter':<10}{'total':>8}{'heading':>9}{'inclination':>13}")

@@ -109,6 +109,14 @@ def test_eval_writes_json_with_baselines(tmp_path):
     assert "rotation_method" in res.output
 
 
+def test_eval_prints_its_table_without_a_json_file():
+    # the README's `handsynth imu eval` failed: --json was required
+    res = CliRunner().invoke(cli, ["imu", "eval", "--config", "tuning", "--duration", "8",
+                                   "--elbow", "fixed", "--filter", "constant,raw", "--no-grasps"])
+    assert res.exit_code == 0, res.output
+    assert "orientation RMSE per segment" in res.output and "\nraw " in res.output
+
+
 def test_tips_out_needs_the_calibration(tmp_path, sim):
     src = tmp_path / "rec.csv"
     write_imu_csv(sim, src)
@@ -246,3 +254,159 @@ def test_calibrate_segments_file_not_text_is_one_line(tmp_path, sim):
                                    "--out", str(tmp_path / "c.json")])
     assert res.exit_code == 2 and "seg.json: cannot read the segments JSON" in res.output
     assert "Traceback" not in res.output and not (tmp_path / "c.json").exists()
+
+
+@pytest.fixture
+def base(tmp_path, sim):
+    src = tmp_path / "base.csv"
+    write_imu_csv(sim.subset(("forearm_1", "index_distal")), src)
+    return src
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--filter", "raw", "--out", "{base}"], "the --out file '{base}' is the input '{base}'"),
+    (["--calibration", "{cal}", "--out", "{cal}"], "the --out file '{cal}' is the input '{cal}'"),
+    (["--calibration", "{cal}", "--out", "{q}", "--angles-out", "{base}"],
+     "the --angles-out file '{base}' is the input"),
+    (["--calibration", "{cal}", "--out", "{q}", "--angles-out", "{q}"],
+     "--out and --angles-out name the same file '{q}'"),
+    (["--calibration", "{cal}", "--out", "{d}/nodir/q.csv", "--angles-out", "{d}/a.csv",
+      "--tips-out", "{d}/t.csv"], "folder '{d}/nodir' does not exist"),
+])
+def test_track_outputs_are_checked_before_any_work(tmp_path, base, args, message):
+    cal = tmp_path / "cal.json"
+    cal.write_text("{}")
+    keep = {p: p.read_bytes() for p in (base, cal)}
+    names = dict(base=base, cal=cal, q=tmp_path / "q.csv", d=tmp_path)
+    res = CliRunner().invoke(cli, ["imu", "track", str(base), *(a.format(**names) for a in args)])
+    assert res.exit_code == 2 and message.format(**names) in res.output, res.output
+    assert "Traceback" not in res.output
+    assert {p: p.read_bytes() for p in keep} == keep
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["base.csv", "cal.json"]
+
+
+def test_calibrate_and_broad_outputs_are_checked_first(tmp_path, base):
+    seg = tmp_path / "seg.json"
+    seg.write_text(json.dumps({"static": [0, 2]}))
+    res = CliRunner().invoke(cli, ["imu", "calibrate", str(base), "--segments", str(seg),
+                                   "--out", str(seg)])
+    assert res.exit_code == 2 and f"the --out file '{seg}' is the input" in res.output, res.output
+    assert json.loads(seg.read_text()) == {"static": [0, 2]}
+    res = CliRunner().invoke(cli, ["imu", "calibrate", str(base), "--segments", str(seg),
+                                   "--out", str(tmp_path / "nodir" / "x.json")])
+    assert res.exit_code == 2 and "nodir' does not exist" in res.output, res.output
+    d = tmp_path / "b"
+    d.mkdir()
+    savemat(d / "01_x.mat", dict(imu_acc=np.zeros((3, 3))))
+    res = CliRunner().invoke(cli, ["imu", "broad", str(d), "--json", str(tmp_path / "no" / "x.json")])
+    assert res.exit_code == 2 and "no' does not exist" in res.output, res.output
+    res = CliRunner().invoke(cli, ["imu", "broad", str(d), "--json", str(d / "01_x.mat")])
+    assert res.exit_code == 2 and "is the input" in res.output, res.output
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--rate", "0"], "rate_hz (--rate) must be a finite number > 0 Hz, got 0.0"),
+    (["--rate", "nan"], "rate_hz (--rate) must be a finite number > 0 Hz, got nan"),
+    (["--rate", "inf"], "rate_hz (--rate) must be a finite number > 0 Hz, got inf"),
+    (["--rate", "-5"], "rate_hz (--rate) must be a finite number > 0 Hz, got -5.0"),
+    (["--static", "nan"], "static_s (--static) must be a finite number of seconds > 0, got nan"),
+    (["--align", "2,2"], "(--align START,END) 2-2 s is empty"),
+])
+def test_track_bad_numbers_are_one_line(tmp_path, base, args, message):
+    res = CliRunner().invoke(cli, ["imu", "track", str(base), "--filter", "vqf",
+                                   "--out", str(tmp_path / "q.csv"), *args])
+    assert res.exit_code == 2 and message in res.output, res.output
+    assert res.output.startswith("handsynth: error:") and not (tmp_path / "q.csv").exists()
+
+
+def test_track_rate_contradicting_the_time_column_warns(tmp_path, base):
+    res = CliRunner().invoke(cli, ["imu", "track", str(base), "--filter", "raw", "--rate", "120",
+                                   "--out", str(tmp_path / "q.csv")])
+    assert res.exit_code == 0, res.output
+    assert "handsynth: warning:" in res.output and "120 Hz (--rate), contradicts" in res.output
+
+
+@pytest.mark.parametrize(("spans", "message"), [
+    ('{"static": [0, NaN]}', "must be finite"),
+    ('{"static": [0, 1e400]}', "must be finite"),
+    ('{"static": [0, "2"]}', "must be [start_s, end_s], two numbers, got [0, '2']"),
+    ('[[0, 2]]', "expected an object of label"),
+])
+def test_calibrate_bad_segment_numbers_are_refused(tmp_path, base, spans, message):
+    seg = tmp_path / "seg.json"
+    seg.write_text(spans)
+    res = CliRunner().invoke(cli, ["imu", "calibrate", str(base), "--segments", str(seg),
+                                   "--out", str(tmp_path / "c.json")])
+    assert res.exit_code == 2 and message in res.output and "seg.json" in res.output, res.output
+    assert "Traceback" not in res.output
+
+
+def test_track_ignores_text_columns_and_finds_duplicates(tmp_path, base):
+    lines = base.read_text().splitlines()
+    noted = tmp_path / "noted.csv"
+    noted.write_text("\n".join([lines[0], "note,when," + lines[1]]
+                               + [f"ok,2024-01-01T00:00:{i % 60:02d}," + ln
+                                  for i, ln in enumerate(lines[2:])]) + "\n")
+    res = CliRunner().invoke(cli, ["imu", "track", str(noted), "--filter", "raw",
+                                   "--out", str(tmp_path / "q.csv")])
+    assert res.exit_code == 0, res.output
+    dup = tmp_path / "dup.csv"
+    header = lines[1].split(",")
+    dup.write_text("\n".join([",".join(header + ["forearm_1_gyr_x"])]
+                             + [ln + ",0" for ln in lines[2:]]) + "\n")
+    res = CliRunner().invoke(cli, ["imu", "track", str(dup), "--filter", "raw",
+                                   "--out", str(tmp_path / "q2.csv")])
+    assert res.exit_code == 2 and "column 'forearm_1_gyr_x' stands twice" in res.output, res.output
+
+
+@pytest.mark.parametrize(("change", "message"), [
+    (lambda r: dict(gyr=np.degrees(r.gyr)), "times the full scale 34.91 rad/s: no sensor of that range "
+                                            "reads that; "
+                                            "deg/s given as rad/s? (gyro units 'deg/s': --gyr-units"),
+    (lambda r: dict(mag=np.concatenate([r.mag[:1], 0 * r.mag[1:]])),
+     "the magnetometer of sensor(s) 'index_distal' reads (almost) zero field"),
+])
+def test_track_content_errors_name_the_cause(tmp_path, sim, change, message):
+    import dataclasses
+
+    rec = sim.subset(("forearm_1", "index_distal"))
+    src = tmp_path / "rec.csv"
+    write_imu_csv(dataclasses.replace(rec, **change(rec)), src)
+    res = CliRunner().invoke(cli, ["imu", "track", str(src), "--out", str(tmp_path / "q.csv")])
+    assert res.exit_code == 2 and message in res.output, res.output
+    assert "saturated" not in res.output and "magnetic disturbance" not in res.output
+
+
+def test_track_start_in_motion_is_not_called_a_unit_error(tmp_path, sim):
+    src = tmp_path / "rec.csv"
+    write_imu_csv(sim.subset(("forearm_1", "index_distal")).slice(300, sim.n), src)
+    res = CliRunner().invoke(cli, ["imu", "track", str(src), "--out", str(tmp_path / "q.csv")])
+    assert res.exit_code == 2 and "is not still during the static start" in res.output, res.output
+    assert "deg/s" not in res.output and "--static" in res.output
+
+
+def test_broad_skips_a_trial_without_reference_and_writes_no_nan(tmp_path, sim):
+    d = tmp_path / "broad"
+    d.mkdir()
+    _write_broad(d / "01_a.mat", sim, "index_middle", "mat")
+    _write_broad(d / "02_b.mat", sim, "thumb_distal", "mat")
+    from scipy.io import loadmat
+
+    f = {k: v for k, v in loadmat(d / "02_b.mat").items() if not k.startswith("__")}
+    f["opt_quat"][400:] = np.nan
+    savemat(d / "02_b.mat", f)
+    out = tmp_path / "b.json"
+    res = CliRunner().invoke(cli, ["imu", "broad", str(d), "--filter", "raw", "--json", str(out)])
+    assert res.exit_code == 0, res.output
+    assert "handsynth: warning:" in res.output and "02_b.mat: the reference opt_quat is NaN" in res.output
+    data = json.loads(out.read_text())
+    assert list(data["trials"]) == ["01_a"] and "NaN" not in out.read_text()
+
+
+def test_track_full_scale_ranges(tmp_path, base):
+    out = tmp_path / "q.csv"
+    res = CliRunner().invoke(cli, ["imu", "track", str(base), "--gyr-range", "nan", "--out", str(out)])
+    assert res.exit_code == 2 and "--gyr-range must be a finite number > 0, got nan" in res.output
+    res = CliRunner().invoke(cli, ["imu", "track", str(base), "--gyr-range", "20", "--out", str(out)])
+    assert res.exit_code == 2 and "full scale 0.3491 rad/s" in res.output, res.output
+    assert "--gyr-range" in res.output and not out.exists()

@@ -32,8 +32,21 @@ class StaticStart:
     align_end_s: float | None = 4.0
 
     def __post_init__(self) -> None:
-        if not self.static_s > 0:
-            raise InvalidInputError(f"static_s must be > 0, got {self.static_s!r}")
+        try:
+            static_s = float(self.static_s)
+        except (TypeError, ValueError):
+            static_s = float("nan")
+        if not (np.isfinite(static_s) and static_s > 0):
+            raise InvalidInputError(f"static_s (--static) must be a finite number of seconds "
+                                    f"> 0, got {self.static_s!r}")
+        a, b = self.align_start_s, self.align_end_s
+        if a is not None and b is not None:
+            if not (np.isfinite(a) and np.isfinite(b) and a >= 0):
+                raise InvalidInputError(f"the common rotation (--align) must be finite seconds "
+                                        f">= 0, got {a}-{b} s")
+            if not b > a:
+                raise InvalidInputError(f"the common rotation (--align START,END) {a:g}-{b:g} s "
+                                        "is empty: END must be after START")
 
 
 def _n(rec: ImuRecording, seconds: float) -> int:

@@ -54,12 +54,39 @@ def _load(path: Path) -> dict:
 
     try:
         with h5py.File(path, "r") as f:
-            d = {k: np.asarray(f[k]) for k in _FIELDS if k in f}
+            d = {}
+            for k in _FIELDS:
+                if k not in f:
+                    continue
+                if not isinstance(f[k], h5py.Dataset):
+                    raise RecordingError(f"{path}: field {k} is an HDF5 "
+                                         f"{type(f[k]).__name__.lower()}, not a dataset (array)")
+                d[k] = np.asarray(f[k])
             if "sampling_rate" not in d and "sampling_rate" in f.attrs:
                 d["sampling_rate"] = np.asarray(f.attrs["sampling_rate"])
             return d
     except OSError as exc:
         raise RecordingError(f"{path}: not a readable HDF5 file ({exc})") from None
+
+
+def _rate(path: Path, value) -> float:
+    """The ``sampling_rate`` field as a finite float > 0 (one value, any array shape)."""
+    a = np.asarray(value)
+    if a.size != 1:
+        raise RecordingError(f"{path}: field sampling_rate must be one number (Hz), got "
+                             f"{a.size} values of shape {a.shape}")
+    v = a.reshape(-1)[0]
+    if isinstance(v, bytes):
+        v = v.decode(errors="replace")
+    if isinstance(v, str):
+        v = str(v)
+    if isinstance(v, (str, bool, np.bool_)) or a.dtype.kind not in "iuf":
+        raise RecordingError(f"{path}: field sampling_rate is {v!r}, not a number (Hz)")
+    rate = float(v)
+    if not (np.isfinite(rate) and rate > 0):
+        raise RecordingError(f"{path}: field sampling_rate is {rate!r}; expected a finite "
+                             "number > 0 (Hz)")
+    return rate
 
 
 def read_broad_trial(path) -> tuple[ImuRecording, np.ndarray, np.ndarray]:
@@ -76,7 +103,9 @@ def read_broad_trial(path) -> tuple[ImuRecording, np.ndarray, np.ndarray]:
     Raises
     ------
     RecordingError
-        A missing field, wrong shapes, NaN in the IMU data, no movement phase.
+        A missing field, a field that is not an array (an HDF5 group), wrong
+        shapes, NaN in the IMU data, no movement phase, a sampling rate that
+        is not one finite number > 0.
     """
     path = Path(path)
     if not path.is_file():
@@ -85,11 +114,20 @@ def read_broad_trial(path) -> tuple[ImuRecording, np.ndarray, np.ndarray]:
     missing = [k for k in _FIELDS if k not in d]
     if missing:
         raise RecordingError(f"{path}: missing BROAD field(s) {', '.join(missing)}")
-    arr = {k: np.asarray(d[k], dtype=float) for k in ("imu_acc", "imu_gyr", "imu_mag", "opt_quat")}
-    n = arr["imu_acc"].shape[0]
+    rate = _rate(path, d["sampling_rate"])
+    arr = {}
+    for k in ("imu_acc", "imu_gyr", "imu_mag", "opt_quat"):
+        try:
+            arr[k] = np.asarray(d[k], dtype=float)
+        except (TypeError, ValueError):
+            raise RecordingError(f"{path}: field {k} is not numeric") from None
+    a0 = arr["imu_acc"]
+    n = a0.shape[0] if a0.ndim == 2 and a0.shape[1] == 3 else max(a0.shape, default=0)
     for k, w in (("imu_acc", 3), ("imu_gyr", 3), ("imu_mag", 3), ("opt_quat", 4)):
         if arr[k].shape != (n, w):
-            raise RecordingError(f"{path}: field {k} has shape {arr[k].shape}, expected ({n}, {w})")
+            hint = (" (stored transposed?)" if arr[k].shape == (w, n) else "")
+            raise RecordingError(f"{path}: field {k} has shape {arr[k].shape}, expected "
+                                 f"(N, {w}) with N = {n} samples{hint}")
         if k != "opt_quat" and not np.all(np.isfinite(arr[k])):
             i = int(np.argwhere(~np.isfinite(arr[k]))[0, 0])
             raise RecordingError(f"{path}: field {k} is not finite at sample {i}")
@@ -98,9 +136,6 @@ def read_broad_trial(path) -> tuple[ImuRecording, np.ndarray, np.ndarray]:
         raise RecordingError(f"{path}: field movement has {movement.size} values, expected {n}")
     if not movement.any():
         raise RecordingError(f"{path}: field movement marks no sample")
-    rate = float(np.asarray(d["sampling_rate"]).reshape(-1)[0])
-    if not (np.isfinite(rate) and rate > 0):
-        raise RecordingError(f"{path}: sampling_rate is {rate!r}")
     rec = ImuRecording(rate, (path.stem,), arr["imu_acc"][None], arr["imu_gyr"][None],
                        arr["imu_mag"][None])
     return rec, arr["opt_quat"], movement
@@ -155,15 +190,36 @@ def run_broad(directory, *, filters=BROAD_FILTERS, progress=None) -> dict:
     progress : callable, keyword-only, optional
         Called with a line of text after each trial (the ahrs filters take
         seconds per trial).
+
+    Each trial gets :func:`check_recording`'s checks (raising on unusable
+    data, its warnings issued with :func:`warnings.warn` naming the file); a
+    trial whose reference is NaN over the whole movement phase, or where a
+    filter gives no finite error, is skipped with a warning, so the means
+    and the result never hold NaN.
+
+    Raises
+    ------
+    RecordingError
+        A bad trial (see :func:`read_broad_trial`, :func:`check_recording`),
+        or no usable trial at all.
     """
+    import warnings
+
     from ._eval import make_filter
+    from ._recording import check_recording
 
     out: dict = {"trials": {}, "mean": {}}
     for path in find_broad_trials(directory):
         rec, opt, movement = read_broad_trial(path)
         first = int(np.argmax(movement))
-        static = StaticStart(static_s=max(2.0 / rec.rate_hz, min(2.0, first / rec.rate_hz)),
-                             align_start_s=None, align_end_s=None)
+        static_s = max(2.0 / rec.rate_hz, min(2.0, first / rec.rate_hz))
+        for w in check_recording(rec, static_s=static_s, source=str(path)):
+            warnings.warn(f"{path}: {w}", stacklevel=2)
+        if not np.isfinite(opt[movement]).all(axis=1).any():
+            warnings.warn(f"{path}: the reference opt_quat is NaN over the whole movement phase; "
+                          "trial skipped", stacklevel=2)
+            continue
+        static = StaticStart(static_s=static_s, align_start_s=None, align_end_s=None)
         res = {}
         for name in filters:
             est = make_filter(name)
@@ -174,10 +230,17 @@ def run_broad(directory, *, filters=BROAD_FILTERS, progress=None) -> dict:
             q = est.run(rec)[0]
             q_enu = qmul(qconj(_Q_NWU_FROM_ENU), q)
             res[name] = broad_errors(q_enu, opt, movement)
+        bad = sorted({n for n, m in res.items() if not all(np.isfinite(v) for v in m.values())})
+        if bad:
+            warnings.warn(f"{path}: filter(s) {', '.join(bad)} give no finite error; trial "
+                          "skipped", stacklevel=2)
+            continue
         out["trials"][path.stem] = res
         if progress is not None:
             best = min(res, key=lambda k: res[k]["total_rmse_deg"])
             progress(f"{path.stem}: best {best} {res[best]['total_rmse_deg']:.2f} deg")
+    if not out["trials"]:
+        raise RecordingError(f"{directory}: no usable BROAD trial (every one was skipped)")
     for name in filters:
         out["mean"][name] = {m: float(np.mean([t[name][m] for t in out["trials"].values()]))
                              for m in ("total_rmse_deg", "heading_rmse_deg", "inclination_rmse_deg")}

@@ -40,18 +40,43 @@ __all__ = ["ImuCalibration", "calibrate", "segments_from_seconds"]
 _VERSION = 5
 
 
-def segments_from_seconds(spans: dict, rate_hz: float, n: int) -> tuple:
-    """``{label: [start_s, end_s]}`` -> ((label, first sample, end sample), ...), checked."""
+def segments_from_seconds(spans: dict, rate_hz: float, n: int, *, source: str | None = None) -> tuple:
+    """``{label: [start_s, end_s]}`` -> ((label, first sample, end sample), ...), checked.
+
+    Parameters
+    ----------
+    spans : dict
+        label -> [start_s, end_s], two finite numbers (not strings).
+    rate_hz : float
+    n : int
+        Samples in the recording.
+    source : str, keyword-only, optional
+        The segments file, for messages.
+
+    Raises
+    ------
+    RecordingError
+        A span that is not two finite numbers, or that lies outside the recording.
+    """
+    where = f"{source}: " if source else ""
+    if not isinstance(spans, dict):
+        raise RecordingError(f"{where}expected an object of label: [start_s, end_s], "
+                             f"got {type(spans).__name__}")
     out = []
     for label, span in spans.items():
-        try:
-            a, b = (float(x) for x in span)
-        except (TypeError, ValueError):
-            raise RecordingError(f"segment {label!r} must be [start_s, end_s], got {span!r}") from None
+        if (not isinstance(span, (list, tuple)) or len(span) != 2
+                or not all(isinstance(x, (int, float, np.integer, np.floating))
+                           and not isinstance(x, bool) for x in span)):
+            raise RecordingError(f"{where}segment {label!r} must be [start_s, end_s], two "
+                                 f"numbers, got {span!r}")
+        a, b = (float(x) for x in span)
+        if not (np.isfinite(a) and np.isfinite(b)):
+            raise RecordingError(f"{where}segment {label!r} = {span!r}: the times must be finite "
+                                 "numbers of seconds")
         i, j = round(a * rate_hz), round(b * rate_hz)
         if not (0 <= i < j <= n):
-            raise RecordingError(f"segment {label!r} = [{a}, {b}] s lies outside the recording "
-                                 f"(0-{n / rate_hz:.2f} s)")
+            raise RecordingError(f"{where}segment {label!r} = [{a}, {b}] s lies outside the "
+                                 f"recording (0-{n / rate_hz:.2f} s) or is empty")
         out.append((str(label), i, j))
     return tuple(out)
 
@@ -174,10 +199,17 @@ class ImuCalibration:
                 **({} if self.plate is None else {
                     "plate": {s: v.tolist() for s, v in self.plate.items()}})}
 
-    def save(self, path) -> Path:
-        """Write JSON atomically (never a half-written file under `path`)."""
+    def save(self, path, *, inputs=()) -> Path:
+        """Write JSON atomically (never a half-written file under `path`).
+
+        Parameters
+        ----------
+        path : path-like
+        inputs : iterable of path-like, keyword-only
+            The run's input files; `path` must be none of them.
+        """
         path = Path(path)
-        with atomic_open(path, "w", what="calibration file") as f:
+        with atomic_open(path, "w", what="calibration file", inputs=inputs) as f:
             json.dump(self.to_dict(), f, indent=1)
         return path
 
@@ -196,9 +228,19 @@ class ImuCalibration:
         if missing:
             raise RecordingError(f"{path}: missing field(s) {', '.join(missing)}")
         version = d.get("version", 1)
-        if not isinstance(version, int) or version > _VERSION:
+        if not isinstance(version, int) or isinstance(version, bool) or version < 1:
+            raise RecordingError(f"{path}: field version is {version!r}; expected a whole "
+                                 f"number from 1 to {_VERSION}")
+        if version > _VERSION:
             raise RecordingError(f"{path}: calibration file version {version!r} is newer than "
                                  f"this handsynth reads (<= {_VERSION})")
+        for key, kind in (("sensors", list), ("own_m", dict), ("links_m", list),
+                          ("frames", dict), ("zero_deg", list)):
+            if not isinstance(d[key], kind):
+                raise RecordingError(f"{path}: field {key} must be a JSON "
+                                     f"{'object' if kind is dict else 'array'}, got {d[key]!r:.60}")
+        if not d["sensors"] or not all(isinstance(x, str) for x in d["sensors"]):
+            raise RecordingError(f"{path}: field sensors must be a non-empty array of names")
         try:
             model = ChainModel({s: np.array(v, float) for s, v in d["own_m"].items()},
                                {(s, a, b): np.array(v, float) for s, a, b, v in d["links_m"]})
@@ -208,8 +250,18 @@ class ImuCalibration:
             if "thumb_cmc" in d:
                 cmc = ThumbCmcModel(np.array(d["thumb_cmc"]["axes"], float).reshape(2, 3),
                                     np.array(d["thumb_cmc"]["rest"], float).reshape(3, 3))
-        except (TypeError, ValueError, KeyError) as exc:
+        except (TypeError, ValueError, KeyError, AttributeError) as exc:
             raise RecordingError(f"{path}: malformed calibration values ({exc})") from None
+        numbers = [("own_m", s, v) for s, v in model.own.items()] + [
+            ("links_m", f"{s} {a}->{b}", v) for (s, a, b), v in model.links.items()] + [
+            ("frames", s, v) for s, v in frames.items()] + [("zero_deg", "", zero)] + (
+            [] if cmc is None else [("thumb_cmc", "axes", cmc.axes), ("thumb_cmc", "rest", cmc.rest)])
+        for key, item, v in numbers:
+            if not np.all(np.isfinite(v)):
+                i = int(np.argmax(~np.isfinite(v).reshape(-1)))
+                raise RecordingError(f"{path}: field {key}{' ' + item if item else ''} holds "
+                                     f"{float(v.reshape(-1)[i])!r} at index {i}; every value must be a "
+                                     "finite number")
         sensor_cal = None
         if "sensor_calibration" in d:
             try:

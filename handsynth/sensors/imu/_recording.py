@@ -11,12 +11,14 @@ sample, or returns the warnings it found.
 
 from __future__ import annotations
 
+import math
+import warnings as _warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from ..._csv import read_rows
+from ..._csv import column_index, read_rows
 from ..._io import atomic_open
 from ...errors import RecordingError
 from ._model import GRAVITY_MPS2
@@ -136,13 +138,29 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
                     source: str = "recording") -> list[str]:
     """Check a recording; raise on unusable data, return warnings otherwise.
 
+    Parameters
+    ----------
+    rec : ImuRecording
+    acc_full_scale, gyr_full_scale : float, keyword-only
+        The sensors' full-scale ranges (m/s^2, rad/s); the defaults are the
+        widest common ones (16 g, 2000 deg/s).
+    static_s : float, keyword-only
+        Length of the still start, s (``--static``).
+    source : str, keyword-only
+        The file, for messages.
+
     Raises
     ------
     RecordingError
         Non-finite samples; shapes that disagree; a channel pinned at full
-        scale for 5 or more consecutive samples (saturation); a static start
-        whose accelerometer magnitude is not about 1 g (wrong acceleration
-        units) or whose gyro reads more than 0.5 rad/s (deg/s given as rad/s).
+        scale, or at its own extreme value beyond 1.5 g or 2 rad/s (the flat
+        top of a sensor with a smaller range), for 5 or more consecutive
+        samples (saturation); values beyond the full scale by far (wrong
+        units); a static start whose accelerometer magnitude is not about
+        1 g (wrong acceleration units), whose gyro reads more than 0.5 rad/s
+        while the accelerometer is still (deg/s given as rad/s) or whose
+        accelerometer moves (the start is not still); a magnetometer that
+        reads zero field (dead).
 
     Returns
     -------
@@ -150,6 +168,8 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
         Warnings: a magnetometer whose field strength departs more than 15 %
         from the recording's median (a magnetic disturbance), with the time.
     """
+    rate = check_rate(rec.rate_hz, source=source)
+    static_s = check_static(static_s, source=source)
     s = len(rec.sensors)
     for name in ("acc", "gyr", "mag"):
         a = getattr(rec, name)
@@ -163,43 +183,84 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
                 f"at sample {i} ({bad.sum()} such values); fill or cut the gap first")
     if rec.n < 2:
         raise RecordingError(f"{source}: needs at least 2 samples, got {rec.n}")
-    for name, fs in (("acc", acc_full_scale), ("gyr", gyr_full_scale)):
-        a = np.abs(getattr(rec, name)) >= 0.999 * fs
-        if a.any():
-            run = _longest_run(a)
-            if run[0] >= 5:
-                k, j, i = run[1:]
-                raise RecordingError(
-                    f"{source}: sensor {rec.sensors[k]!r} {name} axis {'xyz'[j]} is saturated "
-                    f"(|value| at full scale {fs:.4g}) for {run[0]} samples from sample {i}")
-    n0 = max(2, min(rec.n, int(static_s * rec.rate_hz)))
+    for name, fs, unit, floor, hint in (
+            ("acc", acc_full_scale, "m/s^2", 1.5 * GRAVITY_MPS2,
+             "acceleration in mg or cm/s^2 read as m/s^2? (acc units 'mg': --acc-units mg)"),
+            ("gyr", gyr_full_scale, "rad/s", 2.0,
+             "deg/s given as rad/s? (gyro units 'deg/s': --gyr-units deg/s)")):
+        a = getattr(rec, name)
+        peak = np.abs(a).max(axis=1)  # (S, 3)
+        k, j = np.unravel_index(int(np.argmax(peak)), peak.shape)
+        if peak[k, j] > 1.5 * fs:
+            i = int(np.argmax(np.abs(a[k, :, j])))
+            raise RecordingError(
+                f"{source}: sensor {rec.sensors[k]!r} {name} axis {'xyz'[j]} reads "
+                f"{a[k, i, j]:.4g} {unit} at sample {i}, {peak[k, j] / fs:.3g} times the full "
+                f"scale {fs:.4g} {unit}: no sensor of that range reads that; {hint}, or a "
+                f"wider full scale (--acc-range, --gyr-range)")
+        pinned = np.abs(a) >= 0.999 * fs
+        # a flat top: the channel's own extreme value held (a sensor of a smaller range)
+        top = np.abs(a) >= np.maximum(peak[:, None, :], floor) * (1 - 1e-9)
+        run = max(_longest_run(pinned), _longest_run(top & _held(a)))
+        if run[0] >= 5:
+            k, j, i = run[1:]
+            raise RecordingError(
+                f"{source}: sensor {rec.sensors[k]!r} {name} axis {'xyz'[j]} is saturated "
+                f"(|value| {abs(a[k, i, j]):.4g} {unit} held at the full scale) for {run[0]} "
+                f"samples from sample {i}")
+    n0 = max(2, min(rec.n, int(static_s * rate)))
+    w0 = np.linalg.norm(rec.gyr[:, :n0], axis=-1).mean(axis=1)
+    acc_spread = np.linalg.norm(rec.acc[:, :n0].std(axis=1), axis=-1)
+    for k, w in enumerate(w0):
+        if w > 0.5 and acc_spread[k] > 0.5:
+            raise RecordingError(
+                f"{source}: sensor {rec.sensors[k]!r} is not still during the static start "
+                f"(first {static_s:g} s): the gyro reads {w:.3g} rad/s and the accelerometer "
+                f"varies by {acc_spread[k]:.3g} m/s^2; start the recording at rest or "
+                "shorten the static start (--static)")
     gmag = np.linalg.norm(rec.acc[:, :n0].mean(axis=1), axis=-1)
     for k, g in enumerate(gmag):
         if not (0.7 * GRAVITY_MPS2 < g < 1.3 * GRAVITY_MPS2):
-            hint = " (given in g? use acc units 'g')" if 0.7 < g < 1.3 else ""
+            hint = " (given in g? use acc units 'g', --acc-units g)" if 0.7 < g < 1.3 else ""
             raise RecordingError(
                 f"{source}: sensor {rec.sensors[k]!r} reads {g:.4g} m/s^2 over the static start, "
                 f"not about 9.81 m/s^2{hint}; check the accelerometer units or the static start")
-    w0 = np.linalg.norm(rec.gyr[:, :n0], axis=-1).mean(axis=1)
     for k, w in enumerate(w0):
         if w > 0.5:
             raise RecordingError(
                 f"{source}: sensor {rec.sensors[k]!r} gyro reads {w:.3g} rad/s during the static "
-                f"start; deg/s given as rad/s? (use gyro units 'deg/s')")
+                f"start while its accelerometer is still; deg/s given as rad/s? (use gyro units "
+                f"'deg/s', --gyr-units deg/s)")
     warnings: list[str] = []
     field_norm = np.linalg.norm(rec.mag, axis=-1)
-    med = np.median(field_norm)
-    if med <= 0:
+    per_sensor = np.median(field_norm, axis=1)
+    if np.all(per_sensor <= 0):
         raise RecordingError(f"{source}: the magnetometers read zero field")
+    dead = [rec.sensors[k] for k in range(s) if per_sensor[k] < 0.05 * per_sensor.max()]
+    if dead:
+        raise RecordingError(
+            f"{source}: the magnetometer of sensor(s) {', '.join(map(repr, dead))} reads "
+            f"(almost) zero field ({per_sensor.min():.3g} uT against {per_sensor.max():.3g} uT); "
+            "dead or unconnected: leave that sensor out of the recording")
+    med = np.median(field_norm)
     dev = np.abs(field_norm / med - 1.0) > 0.15
     for k in range(s):
         if dev[k].any():
             i = np.nonzero(dev[k])[0]
             warnings.append(
                 f"sensor {rec.sensors[k]!r}: magnetic field strength departs >15 % from "
-                f"{med:.1f} uT during {i.size / rec.rate_hz:.2f} s from t={i[0] / rec.rate_hz:.2f} s "
+                f"{med:.1f} uT during {i.size / rate:.2f} s from t={i[0] / rate:.2f} s "
                 "(magnetic disturbance)")
     return warnings
+
+
+def _held(a: np.ndarray) -> np.ndarray:
+    """True where a sample equals the one before or after it (a value held), shape of `a`."""
+    same = a[:, 1:] == a[:, :-1]
+    out = np.zeros(a.shape, bool)
+    out[:, 1:] |= same
+    out[:, :-1] |= same
+    return out
 
 
 def _longest_run(mask: np.ndarray):
@@ -220,6 +281,37 @@ def _longest_run(mask: np.ndarray):
 
 
 _AXES = "xyz"
+
+
+def check_rate(rate_hz, *, source: str = "recording") -> float:
+    """`rate_hz` as a float, refusing a rate that is not a finite number > 0.
+
+    Raises
+    ------
+    RecordingError
+        `rate_hz` is not a number, not finite, or not positive.
+    """
+    try:
+        rate = float(rate_hz)
+    except (TypeError, ValueError):
+        raise RecordingError(f"{source}: sampling rate rate_hz (--rate) is {rate_hz!r}, "
+                             "not a number") from None
+    if not (math.isfinite(rate) and rate > 0):
+        raise RecordingError(f"{source}: sampling rate rate_hz (--rate) must be a finite number "
+                             f"> 0 Hz, got {rate_hz!r}")
+    return rate
+
+
+def check_static(static_s, *, source: str = "recording") -> float:
+    """`static_s` as a float, refusing a length that is not a finite number > 0."""
+    try:
+        value = float(static_s)
+    except (TypeError, ValueError):
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise RecordingError(f"{source}: the static start static_s (--static) must be a finite "
+                             f"number of seconds > 0, got {static_s!r}")
+    return value
 
 
 def write_imu_csv(rec: ImuRecording, path) -> None:
@@ -248,11 +340,16 @@ def read_imu_csv(path, *, acc_units: str = "m/s2", gyr_units: str = "rad/s",
     """Read a CSV recording with per-sensor columns.
 
     Columns: ``time_s`` (or ``time_ms``) and, for every sensor,
-    ``<sensor>_acc_x`` .. ``<sensor>_mag_z``; lines starting with ``#`` are
+    ``<sensor>_acc_x`` .. ``<sensor>_mag_z``; other columns (a note, a
+    date) are ignored; lines starting with ``#`` are
     comments.  Sensors are taken in the order of their first column.
     Spreadsheet exports are read as they come (``;`` or tab between the
     fields, decimal commas, quoted cells, a byte-order mark;
     :func:`handsynth._csv.read_rows`).
+
+    The sampling rate is the mean over the span of the time stamps
+    ((last - first) / (N - 1)), so rounded or jittered stamps give the
+    right rate.
 
     Parameters
     ----------
@@ -260,22 +357,29 @@ def read_imu_csv(path, *, acc_units: str = "m/s2", gyr_units: str = "rad/s",
     acc_units, gyr_units, mag_units : str, keyword-only
         One of :data:`UNITS` for each channel.
     rate_hz : float, optional, keyword-only
-        Sampling rate; by default from the time column.
+        Sampling rate (``--rate``); by default from the time column.  A rate
+        that differs from the time column's by more than 2 % is warned about.
     max_gap : float, keyword-only
-        Largest allowed step between time stamps, in sample periods; a larger
-        step means missing samples and raises.
+        Largest allowed step between time stamps, in mean sample periods
+        (widened by the stamps' own jitter); a larger step means missing
+        samples and raises.
 
     Raises
     ------
     RecordingError
-        Missing file or columns, non-numeric cells, non-increasing or gapped
-        time stamps, unknown units, NaN (see :func:`check_recording` for the
-        content checks, which the caller runs).
+        Missing file or columns, a column named twice, non-numeric cells,
+        non-increasing or gapped time stamps, a time column whose rate is
+        not an IMU's (0.5 Hz - 100 kHz: milliseconds under ``time_s``?),
+        a rate that is not a finite number > 0, unknown units (see
+        :func:`check_recording` for the content checks, which the caller
+        runs).
     """
     path = Path(path)
     for ch, u in (("acc", acc_units), ("gyr", gyr_units), ("mag", mag_units)):
         if u not in UNITS[ch]:
             raise RecordingError(f"unknown {ch} units {u!r}; expected one of {', '.join(UNITS[ch])}")
+    if rate_hz is not None:
+        rate_hz = check_rate(rate_hz, source=str(path))
     if not path.is_file():
         raise RecordingError(f"{path}: no such file")
     content = read_rows(path, what="IMU recording")
@@ -283,60 +387,85 @@ def read_imu_csv(path, *, acc_units: str = "m/s2", gyr_units: str = "rad/s",
         raise RecordingError(f"{path}: needs a header and at least 2 rows, got "
                              f"{len(content.rows)} lines")
     header = content.rows[0]
+    col = column_index(header, path=path, line=content.lines[0])
     for row, line in zip(content.rows[1:], content.lines[1:]):
         if len(row) != len(header):
             raise RecordingError(f"{path}, line {line}: {len(row)} values but "
                                  f"{len(header)} columns")
-    try:
-        table = np.array(content.rows[1:], dtype=np.float64)
-    except ValueError:  # find the cell to name
-        for row, line in zip(content.rows[1:], content.lines[1:]):
-            for name, cell in zip(header, row):
-                try:
-                    float(cell)
-                except ValueError:
-                    raise RecordingError(f"{path}, line {line}: {name} is {cell!r}, "
-                                         "not a number") from None
-        raise
-    col = {h: i for i, h in enumerate(header)}
-    if "time_s" in col:
-        t = table[:, col["time_s"]]
-    elif "time_ms" in col:
-        t = table[:, col["time_ms"]] * 1e-3
-    else:
-        t = None
     sensors: list[str] = []
     for h in header:
-        for suffix in ("_acc_x",):
-            if h.endswith(suffix):
-                sensors.append(h[: -len(suffix)])
+        if h.endswith("_acc_x"):
+            sensors.append(h[: -len("_acc_x")])
     if not sensors:
         raise RecordingError(f"{path}: no '<sensor>_acc_x' column found")
     missing = [f"{s}_{c}_{a}" for s in sensors for c in ("acc", "gyr", "mag") for a in _AXES
                if f"{s}_{c}_{a}" not in col]
     if missing:
         raise RecordingError(f"{path}: missing column(s) {', '.join(missing[:6])}")
-    if t is not None:
+    time_name = "time_s" if "time_s" in col else "time_ms" if "time_ms" in col else None
+    needed = ([time_name] if time_name else []) + [
+        f"{s}_{c}_{a}" for s in sensors for c in ("acc", "gyr", "mag") for a in _AXES]
+    idx = [col[name] for name in needed]
+    pos = {name: i for i, name in enumerate(needed)}
+    try:
+        table = np.array([[row[i] for i in idx] for row in content.rows[1:]], dtype=np.float64)
+    except ValueError:  # find the cell to name
+        for row, line in zip(content.rows[1:], content.lines[1:]):
+            for name, i in zip(needed, idx):
+                try:
+                    float(row[i])
+                except ValueError:
+                    raise RecordingError(f"{path}, line {line}: {name} is {row[i]!r}, "
+                                         "not a number") from None
+        raise
+    lines = content.lines[1:]
+    if time_name is not None:
+        t = table[:, pos[time_name]] * (1.0 if time_name == "time_s" else 1e-3)
+        bad = np.nonzero(~np.isfinite(t))[0]
+        if bad.size:
+            i = int(bad[0])
+            raise RecordingError(f"{path}, line {lines[i]}: {time_name} is "
+                                 f"{content.rows[1 + i][col[time_name]]!r}, not a number")
         dt = np.diff(t)
-        if not np.all(np.isfinite(t)) or np.any(dt <= 0):
-            i = int(np.argmax(~(dt > 0))) if np.any(dt <= 0) else 0
-            raise RecordingError(f"{path}: time stamps do not increase at row {i + 2}")
-        step = np.median(dt)
-        gaps = np.nonzero(dt > max_gap * step)[0]
+        back = np.nonzero(dt <= 0)[0]
+        if back.size:
+            i = int(back[0])
+            raise RecordingError(
+                f"{path}, line {lines[i + 1]}: time stamps do not increase ({time_name} "
+                f"{content.rows[2 + i][col[time_name]]} after "
+                f"{content.rows[1 + i][col[time_name]]} on line {lines[i]})")
+        step = (t[-1] - t[0]) / (t.size - 1)
+        jitter = 1.4826 * np.median(np.abs(dt - np.median(dt)))
+        limit = max(max_gap * step, step + 6.0 * jitter)
+        gaps = np.nonzero(dt > limit)[0]
         if gaps.size:
             i = int(gaps[0])
             raise RecordingError(
-                f"{path}: {gaps.size} gap(s) in the time stamps, the first {dt[i]:.4g} s long "
-                f"after t={t[i]:.4g} s (expected {step:.4g} s): missing samples")
-        rate = 1.0 / step if rate_hz is None else rate_hz
+                f"{path}, line {lines[i + 1]}: {gaps.size} gap(s) in the time stamps, the first "
+                f"{dt[i]:.4g} s long after t={t[i]:.4g} s (expected {step:.4g} s): "
+                "missing samples")
+        file_rate = 1.0 / step
+        if not 0.5 <= file_rate <= 1e5:
+            hint = (" (milliseconds under time_s? name the column time_ms)"
+                    if time_name == "time_s" and file_rate < 0.5 else "")
+            if rate_hz is None:
+                raise RecordingError(
+                    f"{path}: the {time_name} column steps {step:.4g} s on average, "
+                    f"{file_rate:.4g} Hz: not an IMU sampling rate{hint}; fix the time column "
+                    "or give the rate (--rate)")
+        if rate_hz is not None and abs(rate_hz / file_rate - 1.0) > 0.02:
+            _warnings.warn(f"{path}: the rate given, {rate_hz:g} Hz (--rate), contradicts the "
+                           f"{time_name} column's {file_rate:.4g} Hz; using {rate_hz:g} Hz",
+                           stacklevel=2)
+        rate = file_rate if rate_hz is None else rate_hz
     elif rate_hz is None:
-        raise RecordingError(f"{path}: no time_s/time_ms column; pass rate_hz")
+        raise RecordingError(f"{path}: no time_s/time_ms column; pass rate_hz (--rate)")
     else:
         rate = rate_hz
 
     def block(ch, units):
         f = UNITS[ch][units]
-        return np.stack([np.column_stack([table[:, col[f"{s}_{ch}_{a}"]] for a in _AXES])
+        return np.stack([np.column_stack([table[:, pos[f"{s}_{ch}_{a}"]] for a in _AXES])
                          for s in sensors]) * f
 
     return ImuRecording(float(rate), tuple(sensors), block("acc", acc_units),

@@ -79,3 +79,81 @@ def test_bad_trials_are_named(tmp_path):
     (tmp_path / "empty").mkdir()
     with pytest.raises(RecordingError, match="no BROAD trial files"):
         find_broad_trials(tmp_path / "empty")
+
+
+@pytest.mark.parametrize(("rate", "message"), [
+    ("two hundred", "field sampling_rate is 'two hundred', not a number"),
+    (np.zeros((0, 0)), "field sampling_rate must be one number (Hz), got 0 values"),
+    (np.array([[0.0]]), "field sampling_rate is 0.0; expected a finite number > 0"),
+])
+def test_bad_sampling_rate_is_named(tmp_path, rate, message):
+    f = _fields()
+    f["sampling_rate"] = rate
+    savemat(tmp_path / "01_rate.mat", f)
+    with pytest.raises(RecordingError) as info:
+        read_broad_trial(tmp_path / "01_rate.mat")
+    assert "01_rate.mat: " in str(info.value) and message in str(info.value)
+
+
+def test_bad_hdf5_layouts_are_named(tmp_path):
+    fields = _fields()
+    with h5py.File(tmp_path / "01_text.hdf5", "w") as f:
+        for k, v in fields.items():
+            if k == "sampling_rate":
+                f.attrs[k] = "100 Hz"
+            else:
+                f[k] = v
+    with pytest.raises(RecordingError, match="01_text.hdf5: field sampling_rate is '100 Hz', not a"):
+        read_broad_trial(tmp_path / "01_text.hdf5")
+    with h5py.File(tmp_path / "02_group.hdf5", "w") as f:
+        for k, v in fields.items():
+            if k == "imu_acc":
+                f.create_group(k)["data"] = v
+            else:
+                f[k] = v
+    with pytest.raises(RecordingError, match="02_group.hdf5: field imu_acc is an HDF5 group, not a"):
+        read_broad_trial(tmp_path / "02_group.hdf5")
+
+
+def test_transposed_field_gives_the_expected_shape(tmp_path):
+    f = _fields()
+    f["imu_gyr"] = f["imu_gyr"].T
+    savemat(tmp_path / "01_t.mat", f)
+    with pytest.raises(RecordingError, match=r"field imu_gyr has shape \(3, 500\), expected "
+                                             r"\(N, 3\) with N = 500 samples \(stored transposed\?\)"):
+        read_broad_trial(tmp_path / "01_t.mat")
+
+
+def test_run_broad_skips_a_trial_without_reference_and_checks_content(tmp_path):
+    import json
+    import warnings
+
+    from handsynth.sensors.imu import run_broad
+
+    good = _fields()
+    good["imu_gyr"][150:] += 0.3  # some motion
+    savemat(tmp_path / "01_good.mat", good)
+    f = _fields()
+    f["opt_quat"] = f["opt_quat"].copy()
+    f["opt_quat"][100:] = np.nan
+    savemat(tmp_path / "02_noref.mat", f)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = run_broad(tmp_path, filters=("constant", "raw"))
+    assert list(res["trials"]) == ["01_good"]
+    assert any("02_noref.mat: the reference opt_quat is NaN over the whole movement phase"
+               in str(w.message) for w in caught)
+    json.dumps(res, allow_nan=False)  # no NaN anywhere
+    f = _fields()
+    f["imu_gyr"] = np.degrees(f["imu_gyr"]) + 5.0  # deg/s stored under a rad/s field
+    savemat(tmp_path / "03_deg.mat", f)
+    with pytest.raises(RecordingError, match="03_deg.mat: sensor '03_deg' gyro reads .* deg/s "
+                                             "given as rad/s"), pytest.warns(UserWarning):
+        run_broad(tmp_path, filters=("constant",))
+    (tmp_path / "03_deg.mat").unlink()
+    f = _fields()
+    f["imu_mag"][:] = 0.0
+    savemat(tmp_path / "04_nomag.mat", f)
+    with pytest.raises(RecordingError, match="04_nomag.mat: the magnetometers read zero field"), \
+            pytest.warns(UserWarning):
+        run_broad(tmp_path, filters=("constant",))

@@ -132,3 +132,32 @@ def test_bad_sensor_calibration_in_the_file_is_named(tmp_path, ideal_rec):
     p.write_text(json.dumps(d))
     with pytest.raises(RecordingError, match="version 9 is newer"):
         ImuCalibration.load(p)
+
+
+@pytest.mark.parametrize(("edit", "message"), [
+    (lambda d: d.update(frames=[]), "field frames must be a JSON object, got []"),
+    (lambda d: d["zero_deg"].__setitem__(0, float("nan")),
+     "field zero_deg holds nan at index 0; every value must be a finite number"),
+    (lambda d: d.update(version="5"), "field version is '5'; expected a whole number from 1 to 5"),
+    (lambda d: d["own_m"].update(index_distal=[0, 0, float("inf")]),
+     "field own_m index_distal holds inf at index 2"),
+])
+def test_bad_calibration_values_are_refused_at_load(tmp_path, ideal_rec, edit, message):
+    model = truth_chain_model(ideal_rec)
+    cal = ImuCalibration(model, {s: np.eye(3) for s in model.own}, np.arange(20.0),
+                         tuple(model.own))
+    d = cal.to_dict()
+    edit(d)
+    p = tmp_path / "c.json"
+    p.write_text(json.dumps(d))
+    with pytest.raises(RecordingError) as info:
+        ImuCalibration.load(p)
+    assert str(info.value).startswith(f"{p}: ") and message in str(info.value)
+
+
+def test_segments_must_be_finite_numbers():
+    for span, message in (([0, float("nan")], "must be finite"), ([0, float("inf")], "must be finite"),
+                          ([0, "2"], "two numbers"), ([True, 2], "two numbers"),
+                          ([2, 2], "is empty")):
+        with pytest.raises(RecordingError, match=message):
+            segments_from_seconds({"static": span}, 100.0, 500, source="seg.json")

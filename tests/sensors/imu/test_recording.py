@@ -111,3 +111,86 @@ def test_a_recording_is_written_whole_or_not_at_all(tmp_path, free_rec, full_dis
     with pytest.raises(OutputError, match=r"no space left"):
         write_imu_csv(free_rec, full_disk / "r.csv")
     assert sorted(p.name for p in full_disk.iterdir()) == ["filler"]
+
+
+def _rewrite_time(src, dst, times, fmt="{:.6f}", name="time_s"):
+    lines = src.read_text().splitlines()
+    body = [fmt.format(t) + ln[ln.index(","):] for t, ln in zip(times, lines[2:])]
+    dst.write_text("\n".join([lines[0], name + lines[1][lines[1].index(","):], *body]) + "\n")
+
+
+def test_rate_is_the_mean_step_of_rounded_or_jittered_stamps(tmp_path, free_rec):
+    p = tmp_path / "rec.csv"
+    rec = dataclasses.replace(free_rec.subset(("forearm_1",)), rate_hz=128.0)
+    write_imu_csv(rec, p)
+    ms = tmp_path / "ms.csv"  # integer milliseconds: steps of 7 and 8 ms
+    _rewrite_time(p, ms, np.floor(np.arange(rec.n) * 1000 / 128), "{:.0f}", "time_ms")
+    assert read_imu_csv(ms).rate_hz == pytest.approx(128.0, rel=1e-3)
+    rec100 = free_rec.subset(("forearm_1",))
+    write_imu_csv(rec100, p)
+    jit = tmp_path / "jit.csv"  # host stamps with +-4 ms of jitter at 100 Hz
+    t = np.arange(rec100.n) / 100 + np.random.default_rng(1).uniform(-0.004, 0.004, rec100.n)
+    _rewrite_time(p, jit, t)
+    assert read_imu_csv(jit).rate_hz == pytest.approx(100.0, rel=1e-3)
+
+
+def test_time_column_errors_name_the_line(tmp_path, free_rec):
+    p = tmp_path / "rec.csv"
+    write_imu_csv(free_rec.subset(("forearm_1",)).slice(0, 50), p)
+    t = np.arange(50) / 100
+    bad = tmp_path / "nan.csv"
+    _rewrite_time(p, bad, t)
+    text = bad.read_text().splitlines()
+    text[9] = "nan" + text[9][text[9].index(","):]
+    bad.write_text("\n".join(text) + "\n")
+    with pytest.raises(RecordingError, match=r"nan.csv, line 10: time_s is 'nan', not a number"):
+        read_imu_csv(bad)
+    back = tmp_path / "back.csv"
+    t2 = t.copy()
+    t2[20] = t2[19]
+    _rewrite_time(p, back, t2)
+    with pytest.raises(RecordingError, match=r"back.csv, line 23: time stamps do not increase"):
+        read_imu_csv(back)
+    slow = tmp_path / "slow.csv"  # milliseconds written under time_s
+    _rewrite_time(p, slow, t * 1000)
+    with pytest.raises(RecordingError, match=r"0.1 Hz: not an IMU sampling rate.*time_ms"):
+        read_imu_csv(slow)
+    with pytest.warns(UserWarning, match=r"100 Hz \(--rate\), contradicts the time_s column's 0.1 Hz"):
+        assert read_imu_csv(slow, rate_hz=100.0).rate_hz == 100.0
+    with pytest.raises(RecordingError, match=r"rate_hz \(--rate\) must be a finite number > 0"):
+        read_imu_csv(p, rate_hz=float("nan"))
+
+
+def test_flat_top_of_a_smaller_range_is_saturation(free_rec):
+    gyr = free_rec.gyr.copy()
+    k, j = np.unravel_index(np.argmax(np.abs(gyr).max(axis=1)), (gyr.shape[0], 3))
+    lim = 0.6 * np.abs(gyr[k, :, j]).max()  # a smaller range than the 2000 deg/s default
+    gyr[k, :, j] = np.clip(gyr[k, :, j], -lim, lim)
+    assert lim > 2.0
+    with pytest.raises(RecordingError, match=f"sensor '{free_rec.sensors[k]}' gyr axis "
+                                             f"{'xyz'[j]} is saturated"):
+        check_recording(_with(free_rec, gyr=gyr))
+
+
+def test_unit_errors_are_named_not_saturation(free_rec):
+    with pytest.raises(RecordingError, match=r"times the full scale .* deg/s given as rad/s"):
+        check_recording(_with(free_rec, gyr=np.degrees(free_rec.gyr)))
+
+
+def test_a_start_in_motion_is_not_a_unit_error(free_rec):
+    moving = free_rec.slice(int(4 * free_rec.rate_hz), free_rec.n)
+    with pytest.raises(RecordingError, match="is not still during the static start") as info:
+        check_recording(moving)
+    assert "deg/s" not in str(info.value)
+
+
+def test_a_dead_magnetometer_is_named(free_rec):
+    mag = free_rec.mag.copy()
+    mag[2] = 0.0
+    with pytest.raises(RecordingError, match=f"sensor.s. '{free_rec.sensors[2]}' reads .*zero field"):
+        check_recording(_with(free_rec, mag=mag))
+
+
+def test_static_length_is_checked(free_rec):
+    with pytest.raises(RecordingError, match=r"static_s \(--static\) must be a finite"):
+        check_recording(free_rec, static_s=float("nan"))
