@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import sys
 from pathlib import Path
 
@@ -27,18 +28,20 @@ def _parse_size(text: str, flag: str) -> tuple[int, int]:
                                 f"got {text!r}") from None
     if w < 8 or h < 8:
         raise InvalidInputError(f"{flag} must be at least 8x8 pixels, got {text!r}")
+    if w > 4096 or h > 4096:
+        raise InvalidInputError(f"{flag} must be at most 4096x4096 pixels, got {text!r}")
     return w, h
 
 
 def _check_limits(frames, seconds, max_dead, fps) -> None:
     if frames is not None and frames < 0:
         raise InvalidInputError(f"--frames must be a non-negative integer, got {frames}")
-    if seconds is not None and not seconds > 0:
-        raise InvalidInputError(f"--seconds must be a positive number, got {seconds}")
+    if seconds is not None and not 0 < seconds < math.inf:
+        raise InvalidInputError(f"--seconds must be a positive finite number, got {seconds}")
     if max_dead < 1:
         raise InvalidInputError(f"--max-dead must be a positive integer, got {max_dead}")
-    if not fps > 0:
-        raise InvalidInputError(f"--fps must be a positive number, got {fps}")
+    if not 0 < fps < math.inf:
+        raise InvalidInputError(f"--fps must be a positive finite number, got {fps}")
 
 
 def _check_db_folder(db_dir) -> None:
@@ -411,16 +414,24 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
         # exactly one of --camera, --video and --synthetic was given (checked above)
         assert source is not None
         told = None
+        try:
+            if learned:
+                lookup = _calibrate_learned(lookup, source, open_image, mount, side, info_err,
+                                            segment=segment or "auto")
+            elif calibrate:
+                lookup = _calibrate(lookup, source, open_image, db_dir, mount, side, build,
+                                    info_err)
+        except (InvalidInputError, EstimationError) as exc:
+            if calibrate_image is None:
+                raise
+            raise type(exc)(f"--calibrate-image {calibrate_image}: {exc}") from None
         if learned:
-            lookup = _calibrate_learned(lookup, source, open_image, mount, side, info_err,
-                                        segment=segment or "auto")
+            assert lookup is not None  # calibrated above
             told = lookup.segment
             if one_euro:
                 from ..estimate import SmoothedEstimator
 
                 lookup = SmoothedEstimator(lookup, rate_hz=source.fps or fps)
-        elif calibrate:
-            lookup = _calibrate(lookup, source, open_image, db_dir, mount, side, build, info_err)
         # opened above, or made from the open hand by the calibration
         assert lookup is not None
         if not learned:
@@ -428,11 +439,11 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
         if out is not None and video_out is not None and not to_stdout \
                 and Path(out).resolve() == Path(video_out).resolve():
             raise InvalidInputError(f"--out and --video-out are the same file {out!r}")
+        if video_out is not None:  # refuses a bad name before the rows file is touched
+            video = SideBySideWriter(video_out, lookup, fps=source.fps or fps, inputs=inputs)
         if out is not None:
             sink = open_row_writer(out, format=fmt, inputs=inputs,
                                    columns=live_columns(keypoints=keypoints, truth=synthetic))
-        if video_out is not None:
-            video = SideBySideWriter(video_out, lookup, fps=source.fps or fps, inputs=inputs)
         options = LiveOptions(max_frames=frames, max_seconds=seconds, max_dead_reads=max_dead,
                               keypoints=keypoints)
         if learned:
@@ -467,9 +478,15 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
     if video is not None:
         click.echo(f"video: {Path(video_out)} ({video.frames} frames, input | matched entry)",
                    err=info_err)
+    why = f" (the first refused: {summary.first_refusal})" if summary.first_refusal else ""
     if summary.stop_reason == "dead":
-        raise EstimationError(f"{what}: {summary.message}; stopped after {summary.frames} frames")
+        raise EstimationError(f"{what}: {summary.message}; stopped after {summary.frames} "
+                              f"frames{why}")
+    if summary.frames == 0 and summary.stop_reason == "ended" and not summary.invalid \
+            and not summary.dropped:
+        after = " after the rest frame" if (learned or calibrate) and open_image is None else ""
+        raise EstimationError(f"{what}: the source gave no frame{after}; no rows were written")
     if summary.frames == 0 and summary.stop_reason == "ended":
         raise EstimationError(
             f"{what}: no frame could be used ({summary.reads} reads: {summary.dropped} empty, "
-            f"{summary.invalid} refused); no rows were written")
+            f"{summary.invalid} refused){why}; no rows were written")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+from pathlib import Path
 
 import click
 
@@ -125,10 +126,17 @@ def eval_(ctx, db_folder, protocol, mesh, mesh_scale, learned_hands, hand_spread
     (per hand, per joint).
     """
     from .._io import check_output
+    from ..errors import OutputError
     from ..eval import EvalOptions, evaluate
 
-    if json_path:
-        check_output(json_path, what="JSON report")  # before the work, not after it
+    if json_path:  # before the work, not after it
+        path = check_output(json_path, what="JSON report",
+                            inputs=sorted(Path(db_folder).glob("*.h5")) if db_folder else ())
+        if db_folder and path.suffix.lower() in (".h5", ".hdf5") \
+                and path.resolve().parent == Path(db_folder).resolve():
+            raise OutputError(f"the JSON report {json_path!r} would be a database file in "
+                              f"--db {db_folder!r}, which this run reads or builds: choose "
+                              "another name")
     say = None if quiet else (lambda line: click.echo(line, err=True))
     if protocol:
         given = [f"--{n.replace('_', '-')}" for n in _EXPERIMENT_ONLY

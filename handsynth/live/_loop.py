@@ -85,6 +85,8 @@ class LiveSummary:
         Reads that gave no frame (``None`` or an empty array).
     invalid : int
         Frames the estimator refused (wrong dtype or shape, NaN...).
+    first_refusal : str or None
+        Why the estimator refused the first frame it refused.
     no_hand, low_confidence : int
         Looked-up frames with no hand / with a fallback answer.
     moved : int
@@ -144,6 +146,7 @@ class LiveSummary:
     mae_deg: float | None = None
     mae_per_joint_deg: tuple[float, ...] | None = None
     moved: int = 0
+    first_refusal: str | None = None
 
     @property
     def fps_lookup(self) -> float:
@@ -164,14 +167,20 @@ class LiveSummary:
         """A few human-readable lines."""
         lines = [
             (f"frames {self.frames} (reads {self.reads}, dropped {self.dropped}, invalid "
-             f"{self.invalid}); no hand {self.no_hand}, low confidence {self.low_confidence}"),
-            (f"lookup {self.fps_lookup:.1f} fps alone (median {self.lookup_ms_median:.2f} ms, "
-             f"p99 {self.lookup_ms_p99:.2f} ms); whole loop {self.fps_loop:.1f} fps "
-             f"({self.wall_s:.2f} s; first frame {self.first_lookup_ms:.1f} ms, not counted)"),
-            (f"per frame after the first: reading the source {self._per_frame_ms(self.read_s):.2f}"
-             f" ms, lookup {self._per_frame_ms(self.lookup_s):.2f} ms, whole loop "
-             f"{self._per_frame_ms(self.steady_wall_s):.2f} ms"),
-        ]
+             f"{self.invalid}); no hand {self.no_hand}, low confidence {self.low_confidence}")]
+        if self.frames < 2:
+            lines.append("no rates: fewer than two frames were looked up")
+        else:
+            lines += [
+                (f"lookup {self.fps_lookup:.1f} fps alone (median {self.lookup_ms_median:.2f} "
+                 f"ms, p99 {self.lookup_ms_p99:.2f} ms); whole loop {self.fps_loop:.1f} fps "
+                 f"({self.wall_s:.2f} s; first frame {self.first_lookup_ms:.1f} ms, not "
+                 "counted)"),
+                (f"per frame after the first: reading the source "
+                 f"{self._per_frame_ms(self.read_s):.2f} ms, lookup "
+                 f"{self._per_frame_ms(self.lookup_s):.2f} ms, whole loop "
+                 f"{self._per_frame_ms(self.steady_wall_s):.2f} ms"),
+            ]
         if self.moved:
             lines.append(f"device moved: {self.moved} frames were read after the device seemed to "
                          "have moved on the wrist since the rest frame; take it again")
@@ -181,6 +190,8 @@ class LiveSummary:
                 f"mean absolute error vs truth {self.mae_deg:.2f} deg over {self.truth_frames} "
                 f"frames (index PIP {j[JOINT_NAMES.index('index_pip_flex')]:.2f}, thumb CMC "
                 f"flex {j[JOINT_NAMES.index('thumb_cmc_flex')]:.2f})")
+        if self.first_refusal is not None:
+            lines.append(f"first frame refused: {self.first_refusal}")
         lines.append(f"stopped: {self.message}")
         return "\n".join(lines)
 
@@ -193,6 +204,7 @@ class _Tally:
         self.abs_err = np.zeros(len(JOINT_NAMES))
         self.first_done_s: float | None = None  # loop time when the first frame was done
         self.read_s = 0.0  # time in read() after the first frame
+        self.first_refusal: str | None = None
 
     def summary(self, wall_s: float, stop_reason: str, message: str) -> LiveSummary:
         lat = np.frombuffer(self.latencies, dtype=np.float64)
@@ -211,7 +223,7 @@ class _Tally:
             lookup_s=float(lat.sum()), wall_s=wall_s, steady_wall_s=steady, read_s=self.read_s,
             first_lookup_ms=first_ms, lookup_ms_median=med, lookup_ms_p99=p99, stop_reason=stop_reason,
             message=message, truth_frames=self.truth_frames, mae_deg=mae,
-            mae_per_joint_deg=per_joint, moved=self.moved)
+            mae_per_joint_deg=per_joint, moved=self.moved, first_refusal=self.first_refusal)
 
 
 def _usable(frame: np.ndarray | None) -> TypeGuard[np.ndarray]:
@@ -366,9 +378,11 @@ def run_live(lookup, source: FrameSource, *, sink=None, video_out=None,
                     t = clock()
                     try:
                         est = lookup.estimate(frame)
-                    except (InvalidInputError, EstimationError):
+                    except (InvalidInputError, EstimationError) as exc:
                         est = None
                         tally.invalid += 1
+                        if tally.first_refusal is None:
+                            tally.first_refusal = str(exc)
                         dead += 1
                     else:
                         tally.latencies.append(clock() - t)

@@ -175,6 +175,8 @@ class VideoSource(_Source):
         import cv2
 
         self.path = Path(path)
+        if self.path.is_dir():
+            raise InvalidInputError(f"video file {str(self.path)!r} is a folder")
         if not self.path.is_file():
             raise InvalidInputError(f"video file {str(self.path)!r} does not exist")
         with _quiet_opencv():

@@ -83,12 +83,13 @@ class _RowWriter:
         self._failed = False
         self.path: Path | None  # None when writing to a stream
         if isinstance(target, (str, os.PathLike)) and str(target) != "-":
+            # The file is created (or replaced) when the first row comes: a run that fails
+            # before it leaves a file of an earlier run as it was, and no header-only file.
             self.path = check_output(target, what="row file", inputs=inputs)
-            try:
-                self._fd = os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o666)
-            except OSError as exc:
-                raise OutputError(f"cannot write rows to {str(self.path)!r}: "
-                                  f"{os_error_reason(exc)}") from None
+            folder = self.path.parent
+            if not os.access(folder, os.W_OK | os.X_OK) or (
+                    self.path.exists() and not os.access(self.path, os.W_OK)):
+                raise OutputError(f"cannot write rows to {str(self.path)!r}: permission denied")
         else:
             self.path = None
             self._stream = sys.stdout if str(target) == "-" else target
@@ -125,6 +126,15 @@ class _RowWriter:
     def _flush(self) -> None:
         if self._failed or (not self._pending and self._fd is not None):
             return
+        if self._fd is None and self.path is not None:
+            if not self.rows:
+                return  # the header waits for the first row
+            try:
+                self._fd = os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o666)
+            except OSError as exc:
+                self._failed = True
+                raise OutputError(f"cannot write rows to {str(self.path)!r}: "
+                                  f"{os_error_reason(exc)}") from None
         data, self._pending = "".join(self._pending), []
         if self._fd is None:
             if self._stream is None:
@@ -177,8 +187,9 @@ class CsvRowWriter(_RowWriter):
     Parameters
     ----------
     target : str, os.PathLike or text stream
-        File to create (overwritten), ``"-"`` for standard output, or an
-        open text stream.
+        File to create (overwritten when the first row comes: a run that
+        writes no row leaves it as it was), ``"-"`` for standard output, or
+        an open text stream.
     columns : sequence of str, keyword-only, optional
         :func:`live_columns` by default.
     flush_every : int, keyword-only

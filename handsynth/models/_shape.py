@@ -131,11 +131,15 @@ class HandShape:
         try:
             if len(parts) != 4 or [p[:1] for p in parts] != list(keys):
                 raise ValueError
-            return cls(**{keys[p[0]]: float(p[1:]) for p in parts})
+            ratios = {keys[p[0]]: float(p[1:]) for p in parts}
         except ValueError:
             raise InvalidShapeError(
                 f"hand-shape name {name!r} is not of the form 'L1.000_W1.000_P1.000_T1.000'"
             ) from None
+        try:
+            return cls(**ratios)
+        except InvalidShapeError as exc:  # of the form, outside the supported ratios
+            raise InvalidShapeError(f"hand-shape name {name!r}: {exc}") from None
 
     def as_dict(self) -> dict[str, float]:
         """The four ratios as a plain dict (for JSON and HDF5 attributes)."""

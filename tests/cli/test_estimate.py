@@ -595,3 +595,44 @@ def test_a_video_over_photographs_is_told_by_colour_and_brightness_says_it_fails
     assert "the hand is told by brightness" in res.output
     assert re.search(r"\d+ of 12 frames were unlike any learnt: if the background is not dark, "
                      r"--segment colour", res.output)
+
+
+def test_a_failed_run_leaves_an_earlier_rows_file_as_it_was(tmp_path, db, hand_video):
+    # the rows file was opened (its header written over the earlier rows) before a bad
+    # --video-out or --seconds was refused, or before the run found no usable frame
+    out = tmp_path / "keep.csv"
+    res = _run("--video", str(hand_video), "--db", str(db), "--out", str(out), "-q")
+    assert res.exit_code == 0, res.output
+    before = out.read_bytes()
+    tiny = _write_video(tmp_path / "tiny.avi", [np.full((6, 6, 3), 200, np.uint8)] * 3)
+    for args in (["--video", str(hand_video), "--video-out", str(tmp_path / "v.csv")],
+                 ["--video", str(hand_video), "--video-out", str(tmp_path / "no" / "v.avi")],
+                 ["--video", str(hand_video), "--seconds", "inf"],
+                 ["--video", str(tiny)]):
+        res = _run(*args, "--db", str(db), "--out", str(out), "-q")
+        assert res.exit_code == 2, (args, res.output)
+        assert out.read_bytes() == before, args
+    fresh = tmp_path / "fresh.csv"
+    res = _run("--video", str(tiny), "--db", str(db), "--out", str(fresh), "-q")
+    assert res.exit_code == 2 and not fresh.exists()  # no header-only file either
+
+
+def test_refused_frames_say_why(tmp_path, db):
+    # "no frame could be used (... 5 refused)" and rates of nan, without the reason
+    tiny = _write_video(tmp_path / "tiny.avi", [np.full((6, 6, 3), 200, np.uint8)] * 5)
+    res = _run("--video", str(tiny), "--db", str(db), "-q")
+    assert res.exit_code == 2
+    assert "(the first refused: " in res.output and "nan" not in res.output, res.output
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--synthetic", "--synthetic-size", "100000x100000"], "at most 4096x4096"),
+    (["--synthetic", "--fps", "inf"], "--fps must be a positive finite number"),
+    (["--video", "{tmp}"], "is a folder"),
+    (["--synthetic", "--shape", "L9.000_W1.000_P1.000_T1.000"],
+     "HandShape.length=9.0 is outside the supported range"),
+])
+def test_out_of_range_sizes_rates_and_names_are_named(tmp_path, db, args, words):
+    args = [a.replace("{tmp}", str(tmp_path)) for a in args]
+    res = _run(*args, "--db", str(db), "-q")
+    assert res.exit_code == 2 and words in res.output, res.output

@@ -82,6 +82,20 @@ def test_a_json_report_in_a_missing_folder_is_refused_before_the_work(tmp_path):
     assert not (tmp_path / "dbs").exists()
 
 
+def test_a_json_report_never_replaces_a_database_of_the_run(tmp_path):
+    # --json naming the database in --db wrote JSON over it with exit 0
+    dbs = tmp_path / "dbs"
+    dbs.mkdir()
+    existing = dbs / "L1.000_W1.000_P1.000_T1.000.h5"
+    existing.write_bytes(b"\x89HDF\r\n\x1a\n")
+    res = _run("--db", str(dbs), "--json", str(existing), "-q", *SMALL)
+    assert res.exit_code == 2 and "never replaces an input" in res.output, res.output
+    assert existing.read_bytes() == b"\x89HDF\r\n\x1a\n"
+    res = _run("--db", str(dbs), "--json", str(dbs / "L1.100_W1.000_P1.000_T1.000.h5"), "-q",
+               *SMALL)  # one the run would build
+    assert res.exit_code == 2 and "would be a database file" in res.output, res.output
+
+
 def test_protocol_puts_the_constant_beside_every_method_and_writes_json(tmp_path):
     js = tmp_path / "protocol.json"
     res = _run("--protocol", "--db", str(tmp_path / "cache"), "--hands", "1", "--mesh", "mrtk",
