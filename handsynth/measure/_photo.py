@@ -15,7 +15,11 @@ leave the picture at the border; nothing else of the hand may touch it.  A
 scale is required: ``mm_per_px`` at the plane of the hand, or a reference
 object of known size lying beside the hand (see :func:`measure_photo`).
 Colour photos work on any background unlike skin in colour; grey photos
-need a background clearly darker or lighter than the hand.  A flatbed
+need a background much darker than the hand's shaded edges (at most a
+quarter of the hand's grey level: black cloth) or lighter than its brightest
+parts (white paper), and are refused otherwise ("a colour photo is
+needed"): on a mid-grey background the shaded rim of the hand would be
+taken for background and every breadth would come out too small.  A flatbed
 scanner gives an orthographic picture with a known scale (25.4 / dpi mm per
 pixel); a camera should be far away (perspective scales parts nearer the
 lens up, see the accuracy below).
@@ -146,6 +150,18 @@ _LIGHTNESS_WEIGHT = 0.35
 _RIM_FRACTION = 0.004   # rim band around the object, fraction of the picture's side
 _RIM_THRESHOLD = 0.7    # fraction of Otsu's threshold enough within the rim band
 _WRIST_BAND_MM = 1.0    # the wrist: middle of the sections within this of the narrowest
+# largest silhouette taken for a hand (a hand with 300 mm of forearm is about
+# 50,000 mm^2): more means a wrong scale, e.g. mm_per_px given per cm or inch
+_MAX_HAND_AREA_MM2 = 250_000.0
+# a grey photo needs a background at most this fraction of the hand's (median)
+# grey level: the shaded rim of a hand is about half as bright as its back; or,
+# for a hand darker than the background, the gap between the background and the
+# hand's brightest parts (99th percentile) at least this fraction of the gap
+# between the background and the hand's median (found on rendered hands: 0.46-0.49
+# where a large part of the hand is missed, 0.78-0.86 where nothing is)
+_GREY_DARK_BACKGROUND = 0.25
+_GREY_LIGHT_GAP = 0.65
+_LARGE_HAND_AREA_MM2 = 60_000.0  # above this a failure to find the fingers hints at the scale
 
 
 # -- segmentation -----------------------------------------------------------------
@@ -192,7 +208,52 @@ def _foreground(image: np.ndarray) -> np.ndarray:
     kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (3, 3))
     opened = cv2.morphologyEx(out, cv2.MORPH_OPEN, kernel)
     closed = cv2.morphologyEx(opened, cv2.MORPH_CLOSE, kernel)
-    return closed > 0
+    mask = closed > 0
+    grey = img if img.ndim == 2 else _grey_or_none(img)
+    if grey is not None:
+        _check_grey_contrast(grey, mask)
+    return mask
+
+
+def _grey_or_none(img: np.ndarray) -> np.ndarray | None:
+    """The grey level of a BGR picture whose three channels are equal (a grey photo), else None."""
+    b, g, r = (img[..., k].astype(np.int16) for k in range(3))
+    if int(np.abs(b - g).max()) <= 2 and int(np.abs(g - r).max()) <= 2:
+        return img[..., 1]
+    return None
+
+
+def _check_grey_contrast(grey: np.ndarray, mask: np.ndarray) -> None:
+    """Refuse a grey photo whose background is not much darker or lighter than the hand.
+
+    Without colour only the grey level separates the hand from the
+    background, and a hand's edges are shaded: seen from above the skin
+    turning away from the light is about half as bright as the back of the
+    hand.  On a background within that range the shaded rim is taken for
+    background, every breadth comes out 1-3 mm too small and the fingers
+    too long (or fingertips are lost), with nothing to show for it.
+    """
+    if not mask.any():
+        return
+    border = np.concatenate([grey[:2].ravel(), grey[-2:].ravel(),
+                             grey[:, :2].ravel(), grey[:, -2:].ravel()]).astype(np.float64)
+    background = float(np.median(border))
+    hand, brightest = (float(v) for v in np.percentile(grey[mask], [50.0, 99.0]))
+    if hand > background:
+        # the shaded rim, about half the hand's level, must stay well above the background
+        ok = background <= _GREY_DARK_BACKGROUND * hand
+        need = f"darker than grey level {_GREY_DARK_BACKGROUND * hand:.0f}"
+    else:
+        # the hand's brightest parts must stay nearer the hand's level than the background's
+        # (when they come close to it, the part of the hand found is the darker part only)
+        ok = background - brightest >= _GREY_LIGHT_GAP * (background - hand)
+        need = "much lighter than the hand's brightest parts"
+    if not ok:
+        raise InvalidInputError(
+            f"a colour photo is needed: in this grey photo the background (grey level "
+            f"{background:.0f}) is too close to the hand's (median {hand:.0f}) to tell the "
+            "hand's shaded edges from it, so its breadths would come out too small; take "
+            f"the photo in colour, or in grey on a plain background {need}")
 
 
 def _hand_and_reference(mask: np.ndarray, want_reference: bool):
@@ -846,14 +907,20 @@ def _axis_x_cross(axis: _Axis, frame: _HandFrame, x_mm: float, px_per_mm: float)
 
 
 def _find_digits(con: np.ndarray, shape_hw, px_per_mm: float, opts: MeasureOptions,
-                 touches_border: bool, warnings: list[str]):
+                 touches_border: bool, warnings: list[str], area_mm2: float = 0.0):
     """Five fingertips on the outline, in the order thumb..little, and the valleys between them."""
     tips, depth = _fingertips(con, shape_hw, px_per_mm, arc_mm=opts.tip_arc_mm,
                               max_width_mm=opts.max_finger_width_mm,
                               min_depth_mm=opts.min_tip_depth_mm)
     if len(tips) < 5:
-        hint = (" (the hand touches the picture's border, which may cut off a finger)"
-                if touches_border else "")
+        if area_mm2 > _LARGE_HAND_AREA_MM2:
+            # fingers drawn too large for a finger at this scale are no fingertips
+            hint = (f" (the hand covers {area_mm2:.0f} mm^2 at {1.0 / px_per_mm:.4g} mm/px, "
+                    "more than most hands with forearm: check the scale)")
+        elif touches_border:
+            hint = " (the hand touches the picture's border, which may cut off a finger)"
+        else:
+            hint = ""
         raise InvalidInputError(
             f"found {len(tips)} fingertip(s), expected 5{hint}: photograph one open hand, "
             "fingers spread apart, lying flat, from straight above")
@@ -1081,12 +1148,18 @@ def measure_photo(image, *, mm_per_px: float | None = None,
             f"no hand found: the largest object covers {area_mm2:.0f} mm^2 at "
             f"{mm_per_px:.4g} mm/px, less than a hand ({opts.min_hand_area_mm2:.0f} mm^2); "
             "check the scale and that the background is plain")
+    if area_mm2 > _MAX_HAND_AREA_MM2:
+        raise InvalidInputError(
+            f"no hand found: the largest object covers {area_mm2:.0f} mm^2 at "
+            f"{mm_per_px:.4g} mm/px, more than a hand with its forearm "
+            f"({_MAX_HAND_AREA_MM2:.0f} mm^2); check the scale (mm per pixel at the hand)")
     warnings: list[str] = []
     con = _outer_contour(hand)
     h, w = hand.shape
     on_border = ((con[:, 0] < 1.0) | (con[:, 1] < 1.0) | (con[:, 0] > w - 2.0)
                  | (con[:, 1] > h - 2.0))
-    seq, valleys, step = _find_digits(con, hand.shape, px, opts, on_border.any(), warnings)
+    seq, valleys, step = _find_digits(con, hand.shape, px, opts, on_border.any(), warnings,
+                                      area_mm2)
     score = hand.astype(np.float32)
     axes = _digit_axes(score, con, seq, valleys, step, opts.max_finger_width_mm * px,
                        opts.calibration)

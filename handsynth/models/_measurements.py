@@ -28,7 +28,12 @@ File format
   field must be ``"mm"``), or
 * CSV: two columns ``name,value_mm`` with one row per value, names ``L1`` ..
   ``L14``, ``W1`` .. ``W14``, ``P_width``, ``P_height``, ``T_width``,
-  ``T_height`` (a header row is optional; ``#`` starts a comment line).
+  ``T_height`` (a header row is optional, and when given must be
+  ``name,value_mm``: other units are refused; ``#`` starts a comment line).
+
+A value far off the others (a misplaced decimal point, other units) is
+refused by name (:meth:`HandMeasurements.check_consistent`), and a hand far
+from a person's size gives a warning.
 """
 
 from __future__ import annotations
@@ -37,6 +42,7 @@ import csv
 import itertools
 import json
 import math
+import warnings
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -59,6 +65,12 @@ SEGMENTS: tuple[tuple[str, str], ...] = (
 )
 _N_SEG = len(SEGMENTS)
 _SCALARS = ("P_width", "P_height", "T_width", "T_height")
+# wrist to middle fingertip of a person's hand, generously (adults: about 160-210 mm)
+_HAND_LENGTH_MM = (100.0, 300.0)
+# a value this many times what the others suggest is refused when read (the
+# corners of the supported range reach 4.2)
+_ABSURD_FACTOR = 5.0
+_RANGE_SLACK = 0.05  # check_consistent: ratios this fraction beyond [0.5, 2.0] still pass
 
 
 def _positive_vector(value, name: str) -> tuple[float, ...]:
@@ -127,13 +139,27 @@ class HandMeasurements:
         return out
 
     @classmethod
-    def from_dict(cls, values: dict) -> HandMeasurements:
+    def from_dict(cls, values: dict, *, source=None) -> HandMeasurements:
         """Build from the JSON object form (see the module docstring).
+
+        Parameters
+        ----------
+        values : dict
+            The JSON object.
+        source : str or path, keyword-only, optional
+            Where the values come from (a file), named in the errors.
 
         Raises
         ------
         InvalidShapeError
-            Unknown or missing keys, or units other than ``"mm"``.
+            Unknown or missing keys, units other than ``"mm"``, or a value so
+            far off the others that the values give no hand shape
+            (:meth:`check_consistent`, naming `source` and the value).
+
+        Warns
+        -----
+        UserWarning
+            A hand far from a person's size (values not in millimetres?).
         """
         if not isinstance(values, dict):
             raise InvalidShapeError(f"measurements must be a JSON object, got {type(values).__name__}")
@@ -149,7 +175,10 @@ class HandMeasurements:
                 f"measurements have unknown keys {unknown} and missing keys {missing}; "
                 f"expected {sorted(expected)}"
             )
-        return cls(**values)
+        measured = cls(**values)
+        measured._refuse_absurd(source)
+        measured._warn_if_not_hand_sized(source)
+        return measured
 
     @classmethod
     def from_file(cls, path) -> HandMeasurements:
@@ -159,8 +188,16 @@ class HandMeasurements:
         ------
         InvalidShapeError
             Unreadable or non-UTF-8 file, unknown suffix, a name given twice,
-            or bad values (naming file, line and field).  A UTF-8 byte-order
-            mark is allowed.
+            a CSV value column other than ``value_mm``, or bad values (naming
+            file, line and field; a value so far off the others that the values
+            give no hand shape: :meth:`check_consistent`).  A UTF-8
+            byte-order mark is allowed.
+
+        Warns
+        -----
+        UserWarning
+            A hand far from a person's size, naming the file (values not in
+            millimetres?).
         """
         path = Path(path)
         suffix = path.suffix.lower()
@@ -176,20 +213,31 @@ class HandMeasurements:
                 f"offset {exc.start}); save it as UTF-8") from None
         if suffix == ".json":
             try:
-                return cls.from_dict(json.loads(text))
+                obj = json.loads(text)
             except json.JSONDecodeError as exc:
                 raise InvalidShapeError(f"measurement file {path} is not JSON: {exc}") from None
+            return cls.from_dict(obj, source=path)
         if suffix == ".csv":
             values: dict[str, float] = {}
             seen: dict[str, int] = {}
+            first = True
             for k, row in enumerate(csv.reader(text.splitlines()), 1):
                 if not row or not row[0].strip() or row[0].lstrip().startswith("#"):
                     continue
                 if len(row) != 2:
                     raise InvalidShapeError(f"{path} line {k}: expected 'name,value_mm', got {row}")
                 name, value = row[0].strip(), row[1].strip()
-                if k == 1 and name.lower() == "name":
+                if first and name.lower() == "name":
+                    first = False
+                    if value.lower() != "value_mm":
+                        # the values are read as millimetres: another unit would be
+                        # read as mm silently (value_cm: a hand 10 times too small)
+                        raise InvalidShapeError(
+                            f"{path} line {k}: the value column is {value!r}, expected "
+                            "'value_mm': give the measurements in millimetres (header "
+                            "'name,value_mm')")
                     continue
+                first = False
                 if name in values:
                     raise InvalidShapeError(
                         f"{path} line {k}: {name} is given again (line {seen[name]} gave it "
@@ -201,12 +249,16 @@ class HandMeasurements:
                     raise InvalidShapeError(
                         f"{path} line {k}: value of {name} must be a number, got {value!r}"
                     ) from None
-            return cls.from_flat(values)
+            return cls.from_flat(values, source=path)
         raise InvalidShapeError(f"measurement file must end in .json or .csv, got {str(path)!r}")
 
     @classmethod
-    def from_flat(cls, values: dict[str, float]) -> HandMeasurements:
-        """Build from flat names ``L1..L14, W1..W14, P_width, P_height, T_width, T_height``."""
+    def from_flat(cls, values: dict[str, float], *, source=None) -> HandMeasurements:
+        """Build from flat names ``L1..L14, W1..W14, P_width, P_height, T_width, T_height``.
+
+        `source` (keyword-only, optional) names where the values come from in
+        the errors and warnings; checks and warnings as :meth:`from_dict`.
+        """
         names = [f"L{i}" for i in range(1, 15)] + [f"W{i}" for i in range(1, 15)] + list(_SCALARS)
         unknown = sorted(set(values) - set(names))
         missing = [n for n in names if n not in values]
@@ -214,11 +266,122 @@ class HandMeasurements:
             raise InvalidShapeError(
                 f"measurements have unknown names {unknown} and missing names {missing}"
             )
-        return cls(
+        measured = cls(
             L=tuple(values[f"L{i}"] for i in range(1, 15)),
             W=tuple(values[f"W{i}"] for i in range(1, 15)),
             **{n: values[n] for n in _SCALARS},
         )
+        measured._refuse_absurd(source)
+        measured._warn_if_not_hand_sized(source)
+        return measured
+
+    # -- plausibility ----------------------------------------------------------------
+    def _flat(self) -> dict[str, float]:
+        out = {f"L{i}": v for i, v in enumerate(self.L, 1)}
+        out.update({f"W{i}": v for i, v in enumerate(self.W, 1)})
+        out.update({n: getattr(self, n) for n in _SCALARS})
+        return out
+
+    @property
+    def hand_length_mm(self) -> float:
+        """Wrist to middle fingertip: ``P_height + L6 + L7 + L8``, mm."""
+        return self.P_height + sum(self.L[5:8])
+
+    def _warn_if_not_hand_sized(self, source) -> None:
+        """Warn when the hand is far from any person's size (values in other units?)."""
+        lo, hi = _HAND_LENGTH_MM
+        length = self.hand_length_mm
+        if not lo <= length <= hi:
+            where = f"{source}: " if source is not None else ""
+            warnings.warn(
+                f"{where}the hand measures {length:.4g} mm from the wrist to the middle "
+                f"fingertip (P_height + L6 + L7 + L8), far from a person's {lo:.0f}-{hi:.0f} "
+                "mm: are the values in millimetres?", stacklevel=3)
+
+    def _ratios_to_standard(self) -> tuple[dict[str, float], float]:
+        """Each value over the standard hand's, and the median of those 32 ratios."""
+        mine, theirs = self._flat(), model_measurements(HandShape())._flat()
+        ratio = {n: mine[n] / theirs[n] for n in mine}
+        return ratio, float(np.median(list(ratio.values())))
+
+    def _refuse_absurd(self, source) -> None:
+        """:meth:`check_consistent` where a value is far off the others (a reader's check).
+
+        A value more than :data:`_ABSURD_FACTOR` times (or less than its
+        inverse) what the other values suggest is beyond any hand of the
+        supported range (at most 4.2 times at its corners).
+        """
+        ratio, median = self._ratios_to_standard()
+        if any(abs(math.log(r / median)) > math.log(_ABSURD_FACTOR) for r in ratio.values()):
+            self.check_consistent(source=source)
+
+    def check_consistent(self, *, source=None) -> None:
+        """Refuse values that give no hand shape, naming the values that stand out.
+
+        Formulas (1)-(4) of SPEC.md section 1 turn the values into four ratios
+        to the standard hand (:func:`handsynth.estimate.shape_ratios`), each of
+        which must lie in [0.5, 2.0].  Where they do not with either
+        normalisation (``"palm_width"`` or ``"none"``), a value is wrong, not
+        the hand: typically one number with a misplaced decimal point or in
+        other units.  The error names the values whose ratio to the standard
+        hand's is more than twice or less than half the median ratio of all 32.
+        The readers (:meth:`from_file`, :meth:`from_dict`, :meth:`from_flat`)
+        call it where one value is more than 5 times (or less than a fifth of)
+        what the others suggest; call it before
+        :func:`~handsynth.estimate.select_shape` to get this error instead of
+        a bare ratio out of range.
+
+        Parameters
+        ----------
+        source : str or path, keyword-only, optional
+            Where the values come from (a file), named in the error.
+
+        Raises
+        ------
+        InvalidShapeError
+            The ratios are outside [0.5, 2.0] with both normalisations.
+        """
+        std = model_measurements(HandShape())
+        lo, hi = 0.5, 2.0
+        out_of_range: list[str] = []
+        for normalize in ("palm_width", "none"):
+            ratios = _formula_ratios(self, std, normalize)
+            # a little beyond the range: rounding, or a hand at its edge (shape_ratios
+            # decides those), not a wrong value
+            bad = [(n, r) for n, r in ratios.items()
+                   if not lo * (1.0 - _RANGE_SLACK) <= r <= hi * (1.0 + _RANGE_SLACK)]
+            if not bad:
+                return  # one normalisation gives a hand: the values may be right
+            n, r = bad[0]
+            how = "normalised by P_width" if normalize == "palm_width" else "as measured"
+            out_of_range.append(f"a {n} ratio of {r:.3g} ({how})")
+        mine, theirs = self._flat(), std._flat()
+        ratio, median = self._ratios_to_standard()
+        odd = sorted((n for n in ratio if not 0.5 <= ratio[n] / median <= 2.0),
+                     key=lambda n: -abs(math.log(ratio[n] / median)))
+        blamed = "; ".join(
+            f"{n} {mine[n]:.6g} mm is {ratio[n] / median:.3g} times what the other values "
+            f"suggest (about {median * theirs[n]:.3g} mm)" for n in odd[:3])
+        if len(odd) > 3:
+            blamed += f"; and {len(odd) - 3} more"
+        where = f"{source}: " if source is not None else ""
+        raise InvalidShapeError(
+            f"{where}the measurements give {' and '.join(out_of_range)}, outside "
+            f"[{lo}, {hi}]: " + (blamed + "; " if blamed else "")
+            + "check the values and that they are in millimetres")
+
+
+def _formula_ratios(user: HandMeasurements, standard: HandMeasurements,
+                    normalize: str) -> dict[str, float]:
+    """Formulas (1)-(4) (:func:`handsynth.estimate.shape_ratios`) as plain numbers."""
+    s = standard.P_width / user.P_width if normalize == "palm_width" else 1.0
+    return {
+        "length": float(np.mean(s * np.asarray(user.L) / np.asarray(standard.L))),
+        "width": float(np.mean(s * np.asarray(user.W) / np.asarray(standard.W))),
+        "palm": float((s * user.P_width / standard.P_width + s * user.T_width / standard.T_width)
+                      / (2.0 * s * user.P_height / standard.P_height)),
+        "thumb": float(s * user.T_height / standard.T_height),
+    }
 
 
 def hull_width_at(points_xy: np.ndarray, y: float) -> float:

@@ -24,6 +24,9 @@ def photos(tmp_path_factory):
     cv2.imwrite(str(folder / "hand.png"), plain.image)
     cv2.imwrite(str(folder / "hand_card.jpg"), card.image, [cv2.IMWRITE_JPEG_QUALITY, 95])
     cv2.imwrite(str(folder / "blank.png"), np.full((300, 400, 3), 120, np.uint8))
+    grey = cv2.cvtColor(plain.image, cv2.COLOR_BGR2GRAY)
+    cv2.imwrite(str(folder / "hand_grey.png"), grey)
+    cv2.imwrite(str(folder / "hand_grey.jpg"), grey)
     return folder
 
 
@@ -77,6 +80,13 @@ def test_reference_card_and_csv(tmp_path, photos):
     (["hand.png", "--mm-per-px", "0.5", "--annotate", "a.jpg"], "--annotate must end in"),
     (["hand.png", "--reference-width-mm", "85.6"], "no reference object"),
     (["hand.png", "--mm-per-px", "-2"], "mm_per_px"),
+    # a scale far too large said the hand touches the border, not to check the scale
+    (["hand.png", "--mm-per-px", "100"], "check the scale"),
+    (["hand.png", "--mm-per-px", "1.2"], "check the scale"),
+    # a grey photo on a background as grey as the hand's shaded edges: breadths ~2 mm
+    # too small with exit 0 (PNG), or lost fingertips blamed on the border (JPEG)
+    (["hand_grey.png", "--mm-per-px", "0.5"], "a colour photo is needed"),
+    (["hand_grey.jpg", "--mm-per-px", "0.5"], "a colour photo is needed"),
 ])
 def test_bad_input_is_one_line_exit_2(photos, args, words):
     args = [str(photos / args[0]), *args[1:]]

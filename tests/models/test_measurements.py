@@ -46,3 +46,100 @@ def test_a_name_given_twice_is_refused(tmp_path, measured):
     path.write_text("\n".join(lines) + "\n")
     with pytest.raises(InvalidShapeError, match=r"line 6: L2 is given again \(line 3 gave it first\)"):
         HandMeasurements.from_file(path)
+
+
+@pytest.mark.parametrize("header", ["name,value_cm", "name,value_in", "Name,Value"])
+def test_a_csv_in_other_units_is_refused(tmp_path, measured, header):
+    # defect 8: "name,value_cm" was read as millimetres (a hand ten times too small)
+    lines = _csv_lines(measured)
+    lines[0] = header
+    path = tmp_path / "m.csv"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(InvalidShapeError, match=r"m.csv line 1: the value column is .*"
+                                                r"expected 'value_mm'"):
+        HandMeasurements.from_file(path)
+
+
+def test_the_csv_header_may_follow_comments_and_differ_in_case(tmp_path, measured):
+    lines = _csv_lines(measured)
+    lines[0] = "# measured by hand\nName, Value_MM"
+    path = tmp_path / "m.csv"
+    path.write_text("\n".join(lines) + "\n")
+    np.testing.assert_allclose(HandMeasurements.from_file(path).L, measured.L, atol=1e-4)
+
+
+@pytest.mark.parametrize("suffix", ["csv", "json"])
+def test_an_absurd_value_is_blamed_by_name(tmp_path, measured, suffix):
+    # defect 7: P_width ten times too large was reported as
+    # "HandShape.length=0.1048... is outside the supported range [0.5, 2.0]"
+    import json
+
+    path = tmp_path / f"m.{suffix}"
+    if suffix == "csv":
+        lines = [f"P_width,{10 * measured.P_width:.3f}" if ln.startswith("P_width") else ln
+                 for ln in _csv_lines(measured)]
+        path.write_text("\n".join(lines) + "\n")
+    else:
+        path.write_text(json.dumps({**measured.as_dict(), "P_width": 1e9}))
+    with pytest.raises(InvalidShapeError) as info:
+        HandMeasurements.from_file(path)
+    msg = str(info.value)
+    assert msg.startswith(f"{path}: the measurements give a length ratio of "), msg
+    assert "outside [0.5, 2.0]: P_width " in msg and "times what the other values suggest" in msg
+    assert "HandShape" not in msg and "W1 " not in msg and "L1 " not in msg
+
+
+def test_consistency_names_no_file_when_none_is_known(measured):
+    values = {**measured.as_dict(), "L": [10 * v for v in measured.L]}
+    with pytest.raises(InvalidShapeError, match=r"^the measurements give .*: L\d+ .* mm is 10.5 "
+                                                r"times .*; and 11 more; check the values"):
+        HandMeasurements.from_dict(values)
+
+
+def test_extreme_but_supported_shapes_are_read(tmp_path):
+    # the check must not refuse any hand of the supported range
+    import itertools
+
+    for ratios in itertools.product((0.5, 2.0), repeat=4):
+        m = model_measurements(HandShape(*ratios))
+        with pytest.warns(UserWarning, match="from the wrist to the middle fingertip") \
+                if not 100 <= m.hand_length_mm <= 300 else _no_warning():
+            assert HandMeasurements.from_dict(m.as_dict()) == m
+
+
+def test_a_hand_in_centimetres_warns(tmp_path, measured):
+    # defect 8 (JSON): centimetre-sized numbers without a "units" key were read as mm
+    import json
+
+    d = measured.as_dict()
+    del d["units"]
+    d = {k: [x / 10 for x in v] if isinstance(v, list) else v / 10 for k, v in d.items()}
+    path = tmp_path / "m.json"
+    path.write_text(json.dumps(d))
+    with pytest.warns(UserWarning, match=r"m.json: the hand measures 19\.\d+ mm from the wrist .* "
+                                         r"are the values in millimetres\?"):
+        HandMeasurements.from_file(path)
+
+
+def _no_warning():
+    import contextlib
+    import warnings
+
+    @contextlib.contextmanager
+    def ctx():
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            yield
+
+    return ctx()
+
+
+def test_check_consistent_blames_a_value_the_reader_lets_through(measured):
+    # 4 times: no hand of the supported range is that far off, but the reader
+    # leaves such values to select_shape; the check names them on request
+    values = {**measured.as_dict(), "P_width": 4 * measured.P_width}
+    m = HandMeasurements.from_dict(values)
+    with pytest.raises(InvalidShapeError, match=r"^the measurements give .*: P_width .* is 4 "
+                                                r"times what the other values suggest"):
+        m.check_consistent()
+    measured.check_consistent()
