@@ -289,7 +289,9 @@ def _progress(stream):
                    "less for 0.02 deg more error (docs/camera_estimator.md).")
 @click.option("--frames", type=int, default=None, metavar="N",
               help=f"Stop after N frames [--synthetic default: {SYNTHETIC_FRAMES}].")
-@click.option("--seconds", type=float, default=None, metavar="S", help="Stop after S seconds.")
+@click.option("--seconds", type=float, default=None, metavar="S",
+              help="Stop after S seconds of wall-clock time (also when reading a --video; "
+                   "--frames stops after a number of frames).")
 @click.option("--out", default=None, metavar="FILE",
               help="Write one row per frame (.csv or .jsonl; '-' for standard output).")
 @click.option("--format", "fmt", type=click.Choice(["csv", "jsonl"]), default=None,

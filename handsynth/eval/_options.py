@@ -57,9 +57,21 @@ PAPER = {
 }
 
 
+#: The ``handsynth eval`` option of each field, named in messages beside the field.
+_FLAGS = {"n_hands": "--hands", "frames_per_hand": "--frames", "count": "--count",
+          "seed": "--seed", "workers": "--workers", "render_size": "--render-size",
+          "frame_size": "--frame-size", "db_folder": "--db", "pose_sets": "--pose-sets",
+          "db_pose_set": "--db-pose-set"}
+
+
+def _field(name: str) -> str:
+    flag = _FLAGS.get(name)
+    return f"EvalOptions.{name}" + (f" ({flag})" if flag else "")
+
+
 def _check_int(value, name: str, lo: int) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lo:
-        raise InvalidInputError(f"EvalOptions.{name} must be an integer >= {lo}, got {value!r}")
+        raise InvalidInputError(f"{_field(name)} must be an integer >= {lo}, got {value!r}")
     return int(value)
 
 
@@ -71,7 +83,7 @@ def _check_size(value, name: str) -> tuple[int, int]:
         ok = False
     if not ok:
         raise InvalidInputError(
-            f"EvalOptions.{name} must be (width, height) in pixels within [16, 4096], got {value!r}")
+            f"{_field(name)} must be (width, height) in pixels within [16, 4096], got {value!r}")
     return w, h
 
 
@@ -160,18 +172,18 @@ class EvalOptions:
             object.__setattr__(self, "db_folder", Path(self.db_folder))
         except TypeError:
             raise InvalidInputError(
-                f"EvalOptions.db_folder must be a folder path, got {self.db_folder!r}") from None
+                f"{_field('db_folder')} must be a folder path, got {self.db_folder!r}") from None
         for name, lo in (("n_hands", 1), ("frames_per_hand", 1), ("seed", 0), ("count", 1),
                          ("db_seed", 0), ("workers", 1)):
             object.__setattr__(self, name, _check_int(getattr(self, name), name, lo))
         sets = (self.pose_sets,) if isinstance(self.pose_sets, str) else tuple(self.pose_sets)
         if not sets or any(s not in POSE_SETS for s in sets) or len(set(sets)) != len(sets):
             raise InvalidInputError(
-                f"EvalOptions.pose_sets must be distinct names from {sorted(POSE_SETS)}, "
+                f"{_field('pose_sets')} must be distinct names from {sorted(POSE_SETS)}, "
                 f"got {self.pose_sets!r}")
         object.__setattr__(self, "pose_sets", sets)
         if self.db_pose_set not in POSE_SETS:
-            raise InvalidInputError(f"EvalOptions.db_pose_set must be one of {sorted(POSE_SETS)}, "
+            raise InvalidInputError(f"{_field('db_pose_set')} must be one of {sorted(POSE_SETS)}, "
                                     f"got {self.db_pose_set!r}")
         try:
             margin = float(self.ratio_margin)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
@@ -202,12 +203,23 @@ class VideoSource(_Source):
         except cv2.error:
             ok, frame = False, None
         if not ok or frame is None:
+            if not self.ended:
+                self._check_complete(cv2)
             self.ended = True
             return None
         self.timestamp_s = (self._count / self.fps if self.fps
                             else float(self._cap.get(cv2.CAP_PROP_POS_MSEC)) / 1e3)
         self._count += 1
         return frame if frame.size else None
+
+    def _check_complete(self, cv2) -> None:
+        """Warn when the video ends well before the frame count its header gives."""
+        assert self._cap is not None
+        declared = self._cap.get(cv2.CAP_PROP_FRAME_COUNT)
+        if declared > 0 and self._count < declared - max(2, 0.02 * declared):
+            warnings.warn(f"video file {str(self.path)!r} ended after {self._count} of the "
+                          f"{declared:.0f} frames its header gives: is it truncated?",
+                          stacklevel=3)
 
     def close(self) -> None:
         cap, self._cap = getattr(self, "_cap", None), None

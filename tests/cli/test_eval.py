@@ -82,6 +82,11 @@ def test_a_json_report_in_a_missing_folder_is_refused_before_the_work(tmp_path):
     assert not (tmp_path / "dbs").exists()
 
 
+def test_a_bad_count_names_the_option(tmp_path):
+    res = _run("--db", str(tmp_path / "dbs"), "--hands", "0", "-q")
+    assert res.exit_code == 2 and "(--hands) must be an integer >= 1, got 0" in res.output
+
+
 def test_a_json_report_never_replaces_a_database_of_the_run(tmp_path):
     # --json naming the database in --db wrote JSON over it with exit 0
     dbs = tmp_path / "dbs"

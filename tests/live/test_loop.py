@@ -260,6 +260,38 @@ def test_video_source_refuses_missing_and_undecodable_files(tmp_path):
         VideoSource(junk)
 
 
+def test_a_truncated_video_is_warned_about_and_a_folder_named(tmp_path):
+    # a cut MJPG file ended halfway with exit 0 and no word
+    import warnings
+
+    import cv2
+
+    path = tmp_path / "clip.avi"
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 15.0, (64, 48))
+    rng = np.random.default_rng(0)
+    for _ in range(40):
+        writer.write(rng.integers(0, 255, (48, 64, 3), dtype=np.uint8))
+    writer.release()
+
+    def read_all(p):
+        src = VideoSource(p)
+        with warnings.catch_warnings(record=True) as got:
+            warnings.simplefilter("always")
+            n = 0
+            while src.read() is not None:
+                n += 1
+        src.close()
+        return n, [str(w.message) for w in got]
+
+    assert read_all(path) == (40, [])
+    cut = tmp_path / "cut.avi"
+    cut.write_bytes(path.read_bytes()[: path.stat().st_size // 2])
+    n, said = read_all(cut)
+    assert 0 < n < 35 and len(said) == 1 and f"after {n} of the 40 frames" in said[0], said
+    with pytest.raises(InvalidInputError, match="is a folder"):
+        VideoSource(tmp_path)
+
+
 def test_synthetic_motion_passes_through_its_key_poses_smoothly():
     keys = SyntheticMotion(poses="named").keyframes()
     assert len(keys) == 6
