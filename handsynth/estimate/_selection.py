@@ -24,10 +24,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-import numpy as np
-
 from ..errors import InvalidShapeError
-from ..models import HandMeasurements, HandShape, model_measurements
+from ..models import HandMeasurements, HandShape, formula_ratios, model_measurements
 
 __all__ = ["Selection", "SelectionOptions", "select_shape", "shape_ratios"]
 
@@ -112,17 +110,7 @@ def shape_ratios(user: HandMeasurements, standard: HandMeasurements, *,
     """
     if normalize not in _NORMALIZE:
         raise InvalidShapeError(f"normalize must be one of {_NORMALIZE}, got {normalize!r}")
-    s = standard.P_width / user.P_width if normalize == "palm_width" else 1.0
-    L_u, L_s = s * np.asarray(user.L), np.asarray(standard.L)
-    W_u, W_s = s * np.asarray(user.W), np.asarray(standard.W)
-    r_length = float(np.mean(L_u / L_s))  # (1)
-    r_width = float(np.mean(W_u / W_s))  # (2)
-    r_palm = float(  # (3)
-        (s * user.P_width / standard.P_width + s * user.T_width / standard.T_width)
-        / (2.0 * s * user.P_height / standard.P_height)
-    )
-    r_thumb = float(s * user.T_height / standard.T_height)  # (4)
-    return HandShape(length=r_length, width=r_width, palm=r_palm, thumb=r_thumb)
+    return HandShape(**formula_ratios(user, standard, normalize=normalize))
 
 
 def select_shape(measurements: HandMeasurements, *,

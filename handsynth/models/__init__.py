@@ -16,7 +16,13 @@ from ._anthropometry import (
 )
 from ._hand import HandModel, compile_mjcf
 from ._joints import FINGERS, JOINT_LIMITS_DEG, JOINT_NAMES, joint_index
-from ._measurements import SEGMENTS, HandMeasurements, hull_width_at, model_measurements
+from ._measurements import (
+    SEGMENTS,
+    HandMeasurements,
+    formula_ratios,
+    hull_width_at,
+    model_measurements,
+)
 from ._mjcf import (
     KEYPOINT_SITES,
     SEGMENT_BODIES,
@@ -54,6 +60,7 @@ __all__ = [
     "StandardLayout",
     "as_angles",
     "compile_mjcf",
+    "formula_ratios",
     "hand_mjcf",
     "hand_spec",
     "hull_width_at",

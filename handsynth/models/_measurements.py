@@ -55,7 +55,7 @@ from ._joints import FINGERS
 from ._mjcf import hand_spec
 from ._shape import HandShape
 
-__all__ = ["SEGMENTS", "HandMeasurements", "hull_width_at", "model_measurements"]
+__all__ = ["SEGMENTS", "HandMeasurements", "formula_ratios", "hull_width_at", "model_measurements"]
 
 #: The 14 segments of ``L1..L14`` / ``W1..W14`` in order, as (finger, segment).
 SEGMENTS: tuple[tuple[str, str], ...] = (
@@ -345,7 +345,7 @@ class HandMeasurements:
         lo, hi = 0.5, 2.0
         out_of_range: list[str] = []
         for normalize in ("palm_width", "none"):
-            ratios = _formula_ratios(self, std, normalize)
+            ratios = formula_ratios(self, std, normalize=normalize)
             # a little beyond the range: rounding, or a hand at its edge (shape_ratios
             # decides those), not a wrong value
             bad = [(n, r) for n, r in ratios.items()
@@ -371,16 +371,41 @@ class HandMeasurements:
             + "check the values and that they are in millimetres")
 
 
-def _formula_ratios(user: HandMeasurements, standard: HandMeasurements,
-                    normalize: str) -> dict[str, float]:
-    """Formulas (1)-(4) (:func:`handsynth.estimate.shape_ratios`) as plain numbers."""
+def formula_ratios(user: HandMeasurements, standard: HandMeasurements, *,
+                   normalize: str = "palm_width") -> dict[str, float]:
+    """Formulas (1)-(4) of SPEC.md section 1: the user's ratios to the standard hand.
+
+    With ``s = P'_width / P_width`` (``normalize="palm_width"``) or ``s = 1``
+    (``"none"``) the normalised values are ``X'' = s X`` and
+
+    * (1) ``length = mean_i(L''_i / L'_i)``, i = 1..14
+    * (2) ``width  = mean_i(W''_i / W'_i)``
+    * (3) ``palm   = (P''_w / P'_w + T''_w / T'_w) / (2 P''_h / P'_h)``
+    * (4) ``thumb  = T''_h / T'_h``
+
+    Plain numbers, unchecked: :func:`handsynth.estimate.shape_ratios` makes
+    them a :class:`HandShape` (which refuses ratios outside [0.5, 2]), and
+    :meth:`HandMeasurements.check_consistent` names the values behind a
+    ratio out of range.
+
+    Parameters
+    ----------
+    user, standard : HandMeasurements
+        The user's hand and the standard model, mm.
+    normalize : {"palm_width", "none"}, keyword-only
+
+    Returns
+    -------
+    dict
+        ``{"length", "width", "palm", "thumb"}`` to the ratio.
+    """
     s = standard.P_width / user.P_width if normalize == "palm_width" else 1.0
     return {
-        "length": float(np.mean(s * np.asarray(user.L) / np.asarray(standard.L))),
-        "width": float(np.mean(s * np.asarray(user.W) / np.asarray(standard.W))),
+        "length": float(np.mean(s * np.asarray(user.L) / np.asarray(standard.L))),  # (1)
+        "width": float(np.mean(s * np.asarray(user.W) / np.asarray(standard.W))),  # (2)
         "palm": float((s * user.P_width / standard.P_width + s * user.T_width / standard.T_width)
-                      / (2.0 * s * user.P_height / standard.P_height)),
-        "thumb": float(s * user.T_height / standard.T_height),
+                      / (2.0 * s * user.P_height / standard.P_height)),  # (3)
+        "thumb": float(s * user.T_height / standard.T_height),  # (4)
     }
 
 
