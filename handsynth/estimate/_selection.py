@@ -140,6 +140,10 @@ def select_shape(measurements: HandMeasurements, *,
             f"measurements must be HandMeasurements, got {type(measurements).__name__}"
         )
     opts = options or SelectionOptions()
-    ratios = shape_ratios(measurements, model_measurements(opts.standard),
-                          normalize=opts.normalize)
+    try:
+        ratios = shape_ratios(measurements, model_measurements(opts.standard),
+                              normalize=opts.normalize)
+    except InvalidShapeError:
+        measurements.check_consistent()  # names the values behind a ratio out of range
+        raise
     return Selection(ratios=ratios, shape=ratios.nearest_grid())

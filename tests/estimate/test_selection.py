@@ -101,3 +101,12 @@ def test_options_are_checked():
         SelectionOptions(normalise="none")  # typo
     with pytest.raises(InvalidShapeError, match="unknown keys"):
         HandMeasurements.from_dict({**_meas().as_dict(), "Pwidth": 3})
+
+
+def test_select_shape_names_a_value_out_of_place():
+    # measurements built in code: the error was "HandShape.length=0.105 is outside ..."
+    m = model_measurements(HandShape()).as_dict()
+    m.pop("units")
+    m["P_width"] *= 10  # a misplaced decimal point
+    with pytest.raises(InvalidShapeError, match=r"P_width .* times what the other values"):
+        select_shape(HandMeasurements(**m))
