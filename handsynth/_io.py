@@ -99,18 +99,26 @@ def check_output(path, *, what: str = "output file", inputs: Iterable = (),
     Returns
     -------
     pathlib.Path
+        `path`, or the file it links to when it is a symbolic link.
 
     Raises
     ------
     HandsynthError
         (`error`) `path` is a folder, its folder does not exist or is not a
-        folder, or it names an input file.
+        folder, it is not a regular file (a device such as ``/dev/null``, a
+        pipe), or it names an input file.
     """
     path = Path(path)
     if path.name in ("", ".", ".."):
         raise error(f"cannot write the {what} {str(path)!r}: it names a folder, not a file")
     if path.is_dir():
         raise error(f"cannot write the {what} {str(path)!r}: it is a folder")
+    if path.is_symlink():  # write where the link points: renaming onto it would replace the link
+        path = Path(os.path.realpath(path))
+    if path.exists() and not path.is_file():
+        raise error(f"cannot write the {what} {str(path)!r}: it is not a regular file (a "
+                    "device, pipe or socket, which the finished file would replace); give "
+                    "a file name")
     parent = path.parent
     if not parent.is_dir():
         why = "is not a folder" if parent.exists() else "does not exist"

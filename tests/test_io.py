@@ -102,3 +102,20 @@ def test_a_pending_output_keeps_its_suffix_and_commits_or_discards(tmp_path):
     assert list(tmp_path.iterdir()) == []
     with pytest.raises(OutputError, match=r"was not written"):
         pending.commit()
+
+
+def test_a_device_or_pipe_is_refused_and_a_link_written_through(tmp_path):
+    # as root, `-o /dev/null` turned /dev/null into a regular file (the finished file was
+    # renamed onto it), and an output through a symbolic link replaced the link
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    for target in (fifo, Path("/dev/null")):
+        with pytest.raises(OutputError, match="not a regular file"):
+            write_text(target, "x")
+    assert Path("/dev/null").is_char_device()
+    real = tmp_path / "real.csv"
+    real.write_text("old")
+    link = tmp_path / "link.csv"
+    link.symlink_to(real)
+    write_text(link, "new")
+    assert link.is_symlink() and real.read_text() == "new"

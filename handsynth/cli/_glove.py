@@ -58,6 +58,9 @@ def simulate(out, kind, user_seed, donning, motions, trials, seed, range_holds, 
 
     if trials < 1:
         raise InvalidInputError(f"--trials must be >= 1, got {trials}")
+    for flag, value in (("--user", user_seed), ("--donning", donning), ("--seed", seed)):
+        if value < 0:
+            raise InvalidInputError(f"{flag} must be a seed >= 0, got {value}")
     user = make_user(user_seed)
     params = don_glove(user, kind, seed=donning)
     rec = simulate_session(user, params, motions or motions_for(kind), trials=trials, seed=seed)

@@ -127,6 +127,11 @@ def eval_(config_name, filters, durations, elbows, no_grasps, no_sensor_calibrat
     _check_outputs([("--json", json_out)], ())
     config = HELDOUT if config_name == "heldout" else TUNING
     series: dict = {}
+    from ..errors import InvalidInputError
+
+    for d in durations:
+        if not 2.0 <= d <= 600.0:  # nan fails too
+            raise InvalidInputError(f"--duration must be within [2, 600] s, got {d}")
     rep = evaluate(config, durations=durations or (15.0, 30.0), elbows=elbows or ("fixed", "moving"),
                    filters=_filters(filters, FILTERS), grasps=not no_grasps,
                    sensor_calibration=not no_sensor_calibration,

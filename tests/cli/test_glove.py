@@ -351,3 +351,26 @@ def test_synergies_from_postures_that_do_not_vary_are_refused(files, tmp_path):
     res = _run("glove", "calibrate", files["cal_csv"], "-o", tmp_path / "c.json", "--kind",
                "dg5", "--synergy-csv", wide)
     assert res.exit_code == 2 and "23 fields, expected 22" in res.output, res.output
+
+
+@pytest.mark.parametrize("args, words", [
+    (["simulate", "{tmp}/x.csv", "--seed", "-1"], "--seed must be a seed >= 0"),
+    (["simulate", "{tmp}/x.csv", "--donning", "-1"], "--donning must be a seed >= 0"),
+    (["eval", "--trials", "1000000"], "(--trials) must be an integer in [3, 100]"),
+])
+def test_seeds_and_counts_out_of_range_name_the_option(tmp_path, args, words):
+    res = _run("glove", *[a.replace("{tmp}", str(tmp_path)) for a in args])
+    assert res.exit_code == 2 and words in res.output and "Traceback" not in res.output, \
+        res.output
+
+
+def test_a_corrupt_huge_cell_is_refused_by_line(files, tmp_path):
+    # one 1e308 reference angle gave a calibration of infinities, exit 0
+    def huge(header, rows):
+        rows[5][header.index("index_mcp_flex")] = "1e308"
+        return header, rows
+
+    rec = _edit_csv(files["cal_csv"], tmp_path / "huge.csv", huge)
+    res = _run("glove", "calibrate", rec, "-o", tmp_path / "c.json", "--kind", "dg5")
+    assert res.exit_code == 2 and "line 7: index_mcp_flex is '1e308'" in res.output, res.output
+    assert not (tmp_path / "c.json").exists()

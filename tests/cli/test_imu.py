@@ -305,10 +305,11 @@ def test_calibrate_and_broad_outputs_are_checked_first(tmp_path, base):
 
 
 @pytest.mark.parametrize(("args", "message"), [
-    (["--rate", "0"], "rate_hz (--rate) must be a finite number > 0 Hz, got 0.0"),
-    (["--rate", "nan"], "rate_hz (--rate) must be a finite number > 0 Hz, got nan"),
-    (["--rate", "inf"], "rate_hz (--rate) must be a finite number > 0 Hz, got inf"),
-    (["--rate", "-5"], "rate_hz (--rate) must be a finite number > 0 Hz, got -5.0"),
+    (["--rate", "0"], "rate_hz (--rate) must be a finite number > 0 Hz and at most 100000 Hz, got 0.0"),
+    (["--rate", "nan"], "rate_hz (--rate) must be a finite number > 0 Hz and at most 100000 Hz, got nan"),
+    (["--rate", "inf"], "rate_hz (--rate) must be a finite number > 0 Hz and at most 100000 Hz, got inf"),
+    (["--rate", "-5"], "rate_hz (--rate) must be a finite number > 0 Hz and at most 100000 Hz, got -5.0"),
+    (["--rate", "1e9"], "at most 100000 Hz, got 1000000000.0"),
     (["--static", "nan"], "static_s (--static) must be a finite number of seconds > 0, got nan"),
     (["--align", "2,2"], "(--align START,END) 2-2 s is empty"),
 ])
@@ -410,3 +411,15 @@ def test_track_full_scale_ranges(tmp_path, base):
     res = CliRunner().invoke(cli, ["imu", "track", str(base), "--gyr-range", "20", "--out", str(out)])
     assert res.exit_code == 2 and "full scale 0.3491 rad/s" in res.output, res.output
     assert "--gyr-range" in res.output and not out.exists()
+
+
+def test_magnetometer_units_and_eval_durations_out_of_range_are_named(tmp_path, sim):
+    # --mag-units nT on a file in uT ran with exit 0 (joint angles off by up to 220 deg);
+    # --duration 1e9 asked for 745 GiB
+    src = tmp_path / "rec.csv"
+    write_imu_csv(sim, src)
+    res = CliRunner().invoke(cli, ["imu", "track", str(src), "--filter", "raw", "--out",
+                                   str(tmp_path / "q.csv"), "--mag-units", "nT"])
+    assert res.exit_code == 2 and "--mag-units" in res.output, res.output
+    res = CliRunner().invoke(cli, ["imu", "eval", "--duration", "1e9"])
+    assert res.exit_code == 2 and "--duration must be within [2, 600] s" in res.output

@@ -91,16 +91,13 @@ class EvalOptions:
 
     def __post_init__(self) -> None:
         motions_for(self.kind)  # validates the kind
-        if isinstance(self.trials, bool) or not isinstance(self.trials, int) or self.trials < 3:
-            raise InvalidInputError(f"EvalOptions.trials must be an integer >= 3, "
-                                    f"got {self.trials!r}")
-        if isinstance(self.seeds, bool) or not isinstance(self.seeds, int) or self.seeds < 1:
-            raise InvalidInputError(f"EvalOptions.seeds must be a positive integer, "
-                                    f"got {self.seeds!r}")
-        if isinstance(self.test_trials, bool) or not isinstance(self.test_trials, int) \
-                or self.test_trials < 1:
-            raise InvalidInputError(f"EvalOptions.test_trials must be a positive integer, "
-                                    f"got {self.test_trials!r}")
+        for name, flag, lo, hi in (("trials", "--trials", 3, 100), ("seeds", "--seeds", 1, 100),
+                                   ("test_trials", "--test-trials", 1, 100),
+                                   ("seed", "--seed", 0, 2**31 - 1)):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
+                raise InvalidInputError(f"EvalOptions.{name} ({flag}) must be an integer in "
+                                        f"[{lo}, {hi}], got {v!r}")
 
 
 def _range_holds(user, params, seed) -> GloveRecording:

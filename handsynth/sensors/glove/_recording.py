@@ -250,10 +250,12 @@ def read_glove_csv(path, *, kind: str = "", adc_max: float = 4095.0) -> GloveRec
             raise RecordingError(f"{path}, line {line}: {len(r)} fields, header has "
                                  f"{len(header)}")
         for k, name in enumerate(SENSOR_NAMES):
-            sensors[i, k] = _num(r[col[name]], path, line, name, allow_empty=True)
+            sensors[i, k] = _num(r[col[name]], path, line, name, allow_empty=True,
+                                 bound=_MAX_READING)
         if angles is not None:
             for k, name in enumerate(JOINT_NAMES):
-                angles[i, k] = _num(r[col[name]], path, line, name, allow_empty=True)
+                angles[i, k] = _num(r[col[name]], path, line, name, allow_empty=True,
+                                    bound=_MAX_ANGLE_DEG)
         if "time_s" in col:
             time_s[i] = _num(r[col["time_s"]], path, line, "time_s", finite=True)
         if "motion" in col:
@@ -277,8 +279,14 @@ def _check_adc_max(adc_max) -> None:
                              f"positive number of counts, got {adc_max!r}")
 
 
+#: Largest |reading| (counts) and |joint angle| (deg) a glove file can hold: beyond, a cell
+#: is corrupt, and the regressions would overflow into a calibration of infinities.
+_MAX_READING = 1e9
+_MAX_ANGLE_DEG = 720.0
+
+
 def _num(cell: str, path, line: int, name: str, *, allow_empty: bool = False,
-         finite: bool = False) -> float:
+         finite: bool = False, bound: float = np.inf) -> float:
     s = cell.strip()
     if s == "" and allow_empty:
         return float("nan")
@@ -288,6 +296,10 @@ def _num(cell: str, path, line: int, name: str, *, allow_empty: bool = False,
         raise RecordingError(f"{path}, line {line}: {name} is {cell!r}, not a number") from None
     if np.isinf(v) or (finite and np.isnan(v)):
         raise RecordingError(f"{path}, line {line}: {name} is {cell!r}")
+    if abs(v) > bound:
+        raise RecordingError(f"{path}, line {line}: {name} is {cell!r}, beyond any "
+                             f"{'reading' if name in SENSOR_NAMES else 'joint angle'} "
+                             f"(|value| <= {bound:g})")
     return v
 
 

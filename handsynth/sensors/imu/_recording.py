@@ -160,7 +160,8 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
         1 g (wrong acceleration units), whose gyro reads more than 0.5 rad/s
         while the accelerometer is still (deg/s given as rad/s) or whose
         accelerometer moves (the start is not still); a magnetometer that
-        reads zero field (dead).
+        reads zero field (dead); a median field strength outside 10-200 uT
+        (magnetometer units).
 
     Returns
     -------
@@ -243,6 +244,11 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
             f"(almost) zero field ({per_sensor.min():.3g} uT against {per_sensor.max():.3g} uT); "
             "dead or unconnected: leave that sensor out of the recording")
     med = np.median(field_norm)
+    if not _EARTH_FIELD_UT[0] <= med <= _EARTH_FIELD_UT[1]:
+        raise RecordingError(
+            f"{source}: the magnetometers read a median field of {med:.4g} uT; the Earth's is "
+            f"25-65 uT (indoors {_EARTH_FIELD_UT[0]:g}-{_EARTH_FIELD_UT[1]:g} taken as "
+            "possible): check the magnetometer units (--mag-units)")
     dev = np.abs(field_norm / med - 1.0) > 0.15
     for k in range(s):
         if dev[k].any():
@@ -283,6 +289,14 @@ def _longest_run(mask: np.ndarray):
 _AXES = "xyz"
 
 
+#: Median field strength a recording's magnetometers may read, uT: the Earth's field is
+#: 25-65 uT (NOAA World Magnetic Model), and indoors steel bends it by tens of percent; a
+#: median outside these is a unit error (nT, mT or gauss read as uT).
+_EARTH_FIELD_UT = (10.0, 200.0)
+#: Highest sampling rate taken for an IMU's, Hz (MEMS IMUs sample at up to a few kHz).
+_MAX_RATE_HZ = 100_000.0
+
+
 def check_rate(rate_hz, *, source: str = "recording") -> float:
     """`rate_hz` as a float, refusing a rate that is not a finite number > 0.
 
@@ -296,9 +310,9 @@ def check_rate(rate_hz, *, source: str = "recording") -> float:
     except (TypeError, ValueError):
         raise RecordingError(f"{source}: sampling rate rate_hz (--rate) is {rate_hz!r}, "
                              "not a number") from None
-    if not (math.isfinite(rate) and rate > 0):
+    if not (math.isfinite(rate) and 0 < rate <= _MAX_RATE_HZ):
         raise RecordingError(f"{source}: sampling rate rate_hz (--rate) must be a finite number "
-                             f"> 0 Hz, got {rate_hz!r}")
+                             f"> 0 Hz and at most {_MAX_RATE_HZ:g} Hz, got {rate_hz!r}")
     return rate
 
 

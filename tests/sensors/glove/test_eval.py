@@ -52,7 +52,7 @@ def test_estimates_beat_the_constant_and_range_calibration_matters(result):
 
 
 def test_options_are_checked():
-    with pytest.raises(InvalidInputError, match="trials must be an integer >= 3"):
+    with pytest.raises(InvalidInputError, match=r"trials \(--trials\) must be an integer in \[3, 100\]"):
         EvalOptions(trials=2)
     with pytest.raises(InvalidInputError, match="glove kind"):
         EvalOptions(kind="cyber")
