@@ -147,7 +147,7 @@ def test_rotations_of_header_csv_with_euler(tmp_path, finger_rec):
     _close(rec, finger_rec)
 
 
-# --- audit items 12-17 ----------------------------------------------------------------
+# --- found by trying real exports: station order, dropouts, frozen stretches, quotes, times, radians ---
 
 
 def _no_warnings(call):
