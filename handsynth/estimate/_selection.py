@@ -84,13 +84,8 @@ def shape_ratios(user: HandMeasurements, standard: HandMeasurements, *,
                  normalize: str = "palm_width") -> HandShape:
     """Formulas (1)-(4) of SPEC.md section 1: the user's ratios to the standard model.
 
-    With ``s = P'_width / P_width`` (``normalize="palm_width"``) or ``s = 1``
-    (``"none"``) the normalised values are ``X'' = s X`` and
-
-    * (1) ``r_length = mean_i(L''_i / L'_i)``, i = 1..14
-    * (2) ``r_width  = mean_i(W''_i / W'_i)``
-    * (3) ``r_palm   = (P''_w / P'_w + T''_w / T'_w) / (2 P''_h / P'_h)``
-    * (4) ``r_thumb  = T''_h / T'_h``
+    The formulas are :func:`handsynth.models.formula_ratios`; here they
+    become a :class:`HandShape`, which refuses ratios outside [0.5, 2].
 
     Parameters
     ----------
