@@ -62,6 +62,16 @@ def _check_outputs(outputs, inputs) -> None:
                                   "choose two names")
 
 
+def _unique_keys(pairs) -> dict:
+    """A JSON object's pairs as a dict, refusing a key given twice (the last would win)."""
+    out: dict = {}
+    for key, value in pairs:
+        if key in out:
+            raise ValueError(f"label {key!r} is given twice")
+        out[key] = value
+    return out
+
+
 def _full_scale(acc_range_g, gyr_range_dps) -> dict:
     """check_recording's full-scale arguments from --acc-range (g) and --gyr-range (deg/s)."""
     import math
@@ -187,7 +197,7 @@ def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz
     rec = read_imu_csv(recording, acc_units=acc_units, gyr_units=gyr_units, mag_units=mag_units,
                        rate_hz=rate_hz)
     try:
-        spans = json.loads(Path(segments_path).read_text())
+        spans = json.loads(Path(segments_path).read_text(), object_pairs_hook=_unique_keys)
     except (OSError, ValueError) as exc:  # JSON and text decoding errors are ValueErrors
         raise RecordingError(f"{segments_path}: cannot read the segments JSON ({exc})") from None
     rec = dataclasses.replace(rec, segments=segments_from_seconds(spans, rec.rate_hz, rec.n,

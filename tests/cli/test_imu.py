@@ -332,6 +332,7 @@ def test_track_rate_contradicting_the_time_column_warns(tmp_path, base):
     ('{"static": [0, 1e400]}', "must be finite"),
     ('{"static": [0, "2"]}', "must be [start_s, end_s], two numbers, got [0, '2']"),
     ('[[0, 2]]', "expected an object of label"),
+    ('{"static": [0, 2], "static": [0, 3]}', "label 'static' is given twice"),
 ])
 def test_calibrate_bad_segment_numbers_are_refused(tmp_path, base, spans, message):
     seg = tmp_path / "seg.json"

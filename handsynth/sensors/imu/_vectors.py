@@ -107,7 +107,9 @@ def _segment(rec_segments, label):
     for name, a, b in rec_segments:
         if name == label:
             return a, b
-    raise InvalidInputError(f"the calibration recording has no labelled stretch {label!r}")
+    have = ", ".join(name for name, _, _ in rec_segments) or "none"
+    raise InvalidInputError(f"the calibration recording has no labelled stretch {label!r} "
+                            f"(its labels: {have}; a label misspelled in the segments file?)")
 
 
 def _turning_points(gyr, dgyr, *, frac_w=0.25, frac_dw=0.5):

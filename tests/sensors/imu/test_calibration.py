@@ -161,3 +161,13 @@ def test_segments_must_be_finite_numbers():
                           ([2, 2], "is empty")):
         with pytest.raises(RecordingError, match=message):
             segments_from_seconds({"static": span}, 100.0, 500, source="seg.json")
+
+
+def test_a_missing_stretch_lists_the_labels_there_are():
+    # "no labelled stretch 'elbow_flex'" did not show the misspelled 'elbow_flexx'
+    from handsynth.errors import InvalidInputError
+    from handsynth.sensors.imu._vectors import _segment
+
+    with pytest.raises(InvalidInputError, match=r"'elbow_flex' \(its labels: static, "
+                                                r"elbow_flexx; a label misspelled"):
+        _segment((("static", 0, 10), ("elbow_flexx", 10, 90)), "elbow_flex")
