@@ -374,3 +374,15 @@ def test_a_corrupt_huge_cell_is_refused_by_line(files, tmp_path):
     res = _run("glove", "calibrate", rec, "-o", tmp_path / "c.json", "--kind", "dg5")
     assert res.exit_code == 2 and "line 7: index_mcp_flex is '1e308'" in res.output, res.output
     assert not (tmp_path / "c.json").exists()
+
+
+def test_motion_labels_are_read_whatever_their_case(files, tmp_path):
+    # STANDARD and RANGE_OPEN were taken for unknown motions of a few samples each
+    def upper(header, rows):
+        k = header.index("motion")
+        return header, [r[:k] + [r[k].upper()] + r[k + 1:] for r in rows]
+
+    rec = _edit_csv(files["cal_csv"], tmp_path / "upper.csv", upper)
+    res = _run("glove", "calibrate", rec, "-o", tmp_path / "c.json", "--kind", "dg5")
+    assert res.exit_code == 0, res.output
+    assert "range holds (open, fist): stored" in res.output

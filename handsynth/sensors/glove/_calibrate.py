@@ -32,7 +32,7 @@ from ._estimators import (
 from ._fields import array_field
 from ._mixing import fit_mixer
 from ._models import MODELS, GloveWarning, fit_motion_model
-from ._recording import GloveRecording
+from ._recording import RANGE_LABELS, GloveRecording
 from ._sensors import GLOVE_KINDS, SENSOR_NAMES
 from ._synergy import Synergies, fit_synergies
 
@@ -46,8 +46,6 @@ __all__ = [
     "save_calibration",
 ]
 
-#: Motion labels of the static holds of a range calibration.
-RANGE_LABELS = ("range_open", "range_fist")
 _FORMAT = "handsynth-glove-calibration"
 _VERSION = 1
 

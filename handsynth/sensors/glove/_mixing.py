@@ -124,7 +124,7 @@ def fit_mixer(sensors: np.ndarray, motion: np.ndarray, phase: np.ndarray, *,
             if len(zz) < 2:
                 raise EstimationError(
                     f"motion {m!r}: point {k} of {n_points} has {len(zz)} calibration "
-                    "samples; record more or lower n_points")
+                    "samples; record more or lower n_points (--points)")
             means[p, k] = zz.mean(axis=0)
             inv[p, k] = np.linalg.inv(np.cov(zz, rowvar=False) + ridge * np.eye(5))
     return MotionMixer(motions=motions, centre=np.asarray(centre, dtype=np.float64),

@@ -22,7 +22,14 @@ from ..._csv import column_index, read_rows
 from ..._io import atomic_open
 from ...errors import RecordingError
 from ...models import JOINT_NAMES
+from ._motions import MOTIONS
 from ._sensors import GLOVE_KINDS, SENSOR_NAMES
+
+#: Labels of the open-hand and fist holds of a range calibration (column ``motion``).
+RANGE_LABELS = ("range_open", "range_fist")
+#: Labels read whatever their case (``STANDARD`` is ``standard``): the motions and holds
+#: handsynth knows.
+_KNOWN_LABELS = {name.lower(): name for name in (*MOTIONS, *RANGE_LABELS)}
 
 __all__ = ["GloveRecording", "read_glove_csv", "write_angles_csv", "write_glove_csv"]
 
@@ -259,7 +266,8 @@ def read_glove_csv(path, *, kind: str = "", adc_max: float = 4095.0) -> GloveRec
         if "time_s" in col:
             time_s[i] = _num(r[col["time_s"]], path, line, "time_s", finite=True)
         if "motion" in col:
-            motion[i] = r[col["motion"]]
+            label = r[col["motion"]].strip()
+            motion[i] = _KNOWN_LABELS.get(label.lower(), label)
         if "trial" in col:
             v = _num(r[col["trial"]], path, line, "trial", finite=True)
             if v != int(v) or abs(v) >= 2**31:
