@@ -275,3 +275,17 @@ def test_euler_angles_in_radians_are_warned_about(tmp_path, finger_rec, liberty_
         lines.append(" ".join(f[:4] + [f"{np.radians(float(v)):.6f}" for v in f[4:]]))
     with pytest.warns(UserWarning, match="look like radians"):
         read_polhemus(_write(tmp_path / "rad.txt", lines))
+
+
+def test_the_rate_of_rounded_stamps_is_their_mean_step():
+    # 240 Hz stamps written with four decimals read as 238 Hz (the median step)
+    from handsynth.sensors.trackers import Recording
+
+    def rec(times):
+        n = len(times)
+        return Recording(times=times, positions=np.zeros((n, 2, 3)),
+                         rotations=np.broadcast_to(np.eye(3), (n, 2, 3, 3)).copy())
+
+    times = np.round(np.arange(960) / 240.0, 4)
+    assert abs(rec(times).rate_hz - 240.0) < 0.5
+    assert abs(rec(np.delete(times, np.s_[100:110])).rate_hz - 240.0) < 0.5  # frames dropped
