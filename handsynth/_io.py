@@ -131,6 +131,34 @@ def check_output(path, *, what: str = "output file", inputs: Iterable = (),
     return path
 
 
+def check_outputs(outputs: Iterable, *, inputs: Iterable = (),
+                  error: type[HandsynthError] = OutputError) -> None:
+    """:func:`check_output` for each output of a run, and no two of them one file.
+
+    Parameters
+    ----------
+    outputs : iterable of (str, path-like or None)
+        ``(option, path)`` pairs, e.g. ``("--json", "r.json")``; ``None``
+        paths (options not given) are skipped.
+    inputs, error : keyword-only
+        As in :func:`check_output`.
+
+    Raises
+    ------
+    HandsynthError
+        (`error`) as :func:`check_output`, or two outputs that name the same
+        file (one would overwrite the other).
+    """
+    given = [(flag, path) for flag, path in outputs if path]
+    inputs = tuple(inputs)
+    for i, (flag, path) in enumerate(given):
+        check_output(path, what=f"{flag} file", inputs=inputs, error=error)
+        for other, prev in given[:i]:
+            if same_file(path, prev):
+                raise error(f"{other} and {flag} name the same file {str(path)!r}; one would "
+                            "overwrite the other: choose two names")
+
+
 def _fsync(path: Path, *, directory: bool = False) -> None:
     flags = os.O_RDONLY | (getattr(os, "O_DIRECTORY", 0) if directory else 0)
     try:

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import click
 
+from .._io import check_outputs
 from ._main import cli
 
 _TRACK_FILTERS = ("raw", "filter1", "gated", "vqf", "vqf_online", "madgwick", "mahony", "ahrs_ekf",
@@ -45,21 +46,6 @@ def _write_json(path: str, payload, *, inputs=()) -> None:
 
     write_text(path, json.dumps(payload, indent=2, allow_nan=False) + "\n", what="JSON file",
                inputs=inputs)
-
-
-def _check_outputs(outputs, inputs) -> None:
-    """Refuse, before any work, an output that cannot be written, that is an input, or that
-    another output of the same run names too (`outputs`: (flag, path or None) pairs)."""
-    from .._io import check_output, same_file
-    from ..errors import OutputError
-
-    given = [(flag, path) for flag, path in outputs if path]
-    for i, (flag, path) in enumerate(given):
-        check_output(path, what=f"{flag} file", inputs=inputs)
-        for other, prev in given[:i]:
-            if same_file(path, prev):
-                raise OutputError(f"{other} and {flag} name the same file {str(path)!r}; "
-                                  "choose two names")
 
 
 def _unique_keys(pairs) -> dict:
@@ -125,6 +111,7 @@ def imu() -> None:
 def eval_(config_name, filters, durations, elbows, no_grasps, no_sensor_calibration,
           no_plate_fusion, json_out, plot_dir) -> None:
     """Reproduce the thesis' tables on simulated data, beside trivial baselines."""
+    from ..errors import InvalidInputError
     from ..sensors.imu import (
         FILTERS,
         HELDOUT,
@@ -134,14 +121,12 @@ def eval_(config_name, filters, durations, elbows, no_grasps, no_sensor_calibrat
         plot_stick_figure,
     )
 
-    _check_outputs([("--json", json_out)], ())
-    config = HELDOUT if config_name == "heldout" else TUNING
-    series: dict = {}
-    from ..errors import InvalidInputError
-
+    check_outputs([("--json", json_out)])
     for d in durations:
         if not 2.0 <= d <= 600.0:  # nan fails too
             raise InvalidInputError(f"--duration must be within [2, 600] s, got {d}")
+    config = HELDOUT if config_name == "heldout" else TUNING
+    series: dict = {}
     rep = evaluate(config, durations=durations or (15.0, 30.0), elbows=elbows or ("fixed", "moving"),
                    filters=_filters(filters, FILTERS), grasps=not no_grasps,
                    sensor_calibration=not no_sensor_calibration,
@@ -192,7 +177,7 @@ def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz
     from ..sensors.imu import check_recording, read_imu_csv, segments_from_seconds
 
     inputs = (recording, segments_path)
-    _check_outputs([("--out", out_path)], inputs)
+    check_outputs([("--out", out_path)], inputs=inputs)
     full_scale = _full_scale(acc_range_g, gyr_range_dps)
     rec = read_imu_csv(recording, acc_units=acc_units, gyr_units=gyr_units, mag_units=mag_units,
                        rate_hz=rate_hz)
@@ -270,8 +255,8 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
         raise InvalidInputError(f"with --calibration the filter is one of {', '.join(_CHAIN_FILTERS)}, "
                                 f"got {filter_name}")
     inputs = (recording, calibration_path)
-    _check_outputs([("--out", out_path), ("--angles-out", angles_out), ("--tips-out", tips_out)],
-                   inputs)
+    check_outputs([("--out", out_path), ("--angles-out", angles_out), ("--tips-out", tips_out)],
+                  inputs=inputs)
     a = b = None
     if align:
         try:
@@ -324,11 +309,12 @@ def broad(directory, filters, json_out) -> None:
     """Run the filters on the BROAD trials present in DIRECTORY (the dataset's metric)."""
     from ..sensors.imu import BROAD_FILTERS, find_broad_trials, run_broad
 
-    _check_outputs([("--json", json_out)], find_broad_trials(directory))
+    trials = find_broad_trials(directory)
+    check_outputs([("--json", json_out)], inputs=trials)
     res = run_broad(directory, filters=_filters(filters, BROAD_FILTERS),
                     progress=lambda line: click.echo(line, err=True))
     if json_out:
-        _write_json(json_out, res, inputs=find_broad_trials(directory))
+        _write_json(json_out, res, inputs=trials)
     click.echo(f"{len(res['trials'])} BROAD trial(s); mean RMSE over the movement phases, deg "
                f"({res['anchor']})")
     click.echo(f"{'filter':<10}{'total':>8}{'heading':>9}{'inclination':>13}")

@@ -81,7 +81,7 @@ def joints() -> None:
 def estimate(recording, methods, frames, lateral_axis, lateral_frame, bins, units, angles,
              sensors, rate_hz, strict, json_out, plot_out) -> None:
     """Estimate the joint centre of RECORDING (.h5, PiMgr CSV or Liberty ASCII)."""
-    from .._io import check_output
+    from .._io import check_outputs
     from ..errors import EstimationError, InvalidInputError
     from ..sensors.trackers import (
         AxisAngleFilter,
@@ -91,12 +91,8 @@ def estimate(recording, methods, frames, lateral_axis, lateral_frame, bins, unit
         read_recording,
     )
 
-    for path in (json_out, plot_out):  # before the work: a bad name fails now
-        if path:
-            check_output(path, inputs=[recording])
-    if json_out and plot_out and Path(json_out).resolve() == Path(plot_out).resolve():
-        raise InvalidInputError(f"--json and --plot name the same file {json_out!r}: one "
-                                f"would overwrite the other; give two names")
+    # before the work: a bad name fails now
+    check_outputs([("--json", json_out), ("--plot", plot_out)], inputs=[recording])
     kwargs = {}
     if Path(recording).suffix.lower() in (".h5", ".hdf5"):
         ctx = click.get_current_context()

@@ -412,13 +412,12 @@ def read_imu_csv(path, *, acc_units: str = "m/s2", gyr_units: str = "rad/s",
             sensors.append(h[: -len("_acc_x")])
     if not sensors:
         raise RecordingError(f"{path}: no '<sensor>_acc_x' column found")
-    missing = [f"{s}_{c}_{a}" for s in sensors for c in ("acc", "gyr", "mag") for a in _AXES
-               if f"{s}_{c}_{a}" not in col]
+    channels = [f"{s}_{c}_{a}" for s in sensors for c in ("acc", "gyr", "mag") for a in _AXES]
+    missing = [name for name in channels if name not in col]
     if missing:
         raise RecordingError(f"{path}: missing column(s) {', '.join(missing[:6])}")
     time_name = "time_s" if "time_s" in col else "time_ms" if "time_ms" in col else None
-    needed = ([time_name] if time_name else []) + [
-        f"{s}_{c}_{a}" for s in sensors for c in ("acc", "gyr", "mag") for a in _AXES]
+    needed = ([time_name] if time_name else []) + channels
     idx = [col[name] for name in needed]
     pos = {name: i for i, name in enumerate(needed)}
     try:
@@ -459,7 +458,7 @@ def read_imu_csv(path, *, acc_units: str = "m/s2", gyr_units: str = "rad/s",
                 f"{dt[i]:.4g} s long after t={t[i]:.4g} s (expected {step:.4g} s): "
                 "missing samples")
         file_rate = 1.0 / step
-        if not 0.5 <= file_rate <= 1e5:
+        if not 0.5 <= file_rate <= _MAX_RATE_HZ:
             hint = (" (milliseconds under time_s? name the column time_ms)"
                     if time_name == "time_s" and file_rate < 0.5 else "")
             if rate_hz is None:
