@@ -8,6 +8,7 @@ from pathlib import Path
 
 import click
 
+from .._io import check_outputs
 from ..errors import EstimationError, InvalidInputError
 from ._io import read_image
 from ._main import cli
@@ -438,9 +439,8 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
         assert lookup is not None
         if not learned:
             inputs.append(lookup.database.path)
-        if out is not None and video_out is not None and not to_stdout \
-                and Path(out).resolve() == Path(video_out).resolve():
-            raise InvalidInputError(f"--out and --video-out are the same file {out!r}")
+        check_outputs([("--out", None if to_stdout else out), ("--video-out", video_out)],
+                      inputs=inputs)
         if video_out is not None:  # refuses a bad name before the rows file is touched
             video = SideBySideWriter(video_out, lookup, fps=source.fps or fps, inputs=inputs)
         if out is not None:
