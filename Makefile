@@ -7,6 +7,8 @@ VENV ?= .venv
 APT_PKGS := python3 python3-venv python3-pip libegl1 libgl1 libegl-mesa0 libgl1-mesa-dri libosmesa6
 # Headless MuJoCo rendering through Mesa's EGL software device; MUJOCO_GL=osmesa also works.
 export MUJOCO_GL ?= egl
+# pip's wheel cache would hold a second copy of every dependency (about 1 GB): not kept
+export PIP_NO_CACHE_DIR := 1
 
 .PHONY: demo test system clean
 

@@ -8,7 +8,12 @@ in locales that write numbers so), tabs or spaces, quoted cells, CRLF line ends 
 comment lines, a spreadsheet's ``sep=;`` first line, UTF-16 text (a
 spreadsheet's "Unicode text").  :func:`read_rows` reads all of these into
 rows of stripped cells and records what it found, so that the CSV readers of
-recordings agree on it and can name the line of a bad cell;
+recordings agree on it and can name the line of a bad cell.  It also guards
+against two ways a file is read back as what it is not: a last line with no
+line end, as a recording cut off while being written leaves it (a buffered
+writer stops mid-number, ``12.3`` of ``12.345``), is left out with a warning,
+and a number written with underscores (``1_000``, which Python's ``float``
+reads but no exporter writes) is refused;
 :func:`column_index` maps a header's names to columns and refuses a name
 given twice (the last one would win, silently).
 """
@@ -17,6 +22,7 @@ from __future__ import annotations
 
 import csv
 import re
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -26,6 +32,8 @@ from .errors import RecordingError
 __all__ = ["Rows", "column_index", "read_rows", "read_text"]
 
 _COMMA_NUMBER = re.compile(r"[-+]?\d*,\d+(?:[eE][-+]?\d+)?")
+#: A number as Python's ``float`` reads it, underscores included.
+_UNDERSCORE_NUMBER = re.compile(r"[-+]?[\d_]*\.?[\d_]*(?:[eE][-+]?[\d_]+)?")
 #: A spreadsheet's first line naming the delimiter (``sep=;``).
 _SEP_LINE = re.compile(r'\s*"?sep=(.)"?\s*', re.IGNORECASE)
 
@@ -103,7 +111,9 @@ def read_rows(path, *, what: str = "CSV table") -> Rows:
     first 50 lines (in that order of preference: ``;`` and tab files often
     hold decimal commas, a ``,`` file cannot), else runs of spaces where
     most lines have several fields.  Unless it is ``,``, cells that are
-    numbers written with a decimal comma get a decimal point.
+    numbers written with a decimal comma get a decimal point.  Where the
+    file does not end with a line end and holds more than one row, its last
+    row is left out with a warning (it may have been cut off mid-number).
 
     Parameters
     ----------
@@ -114,13 +124,20 @@ def read_rows(path, *, what: str = "CSV table") -> Rows:
     Raises
     ------
     RecordingError
-        No such file, unreadable, or binary.
+        No such file, unreadable, or binary; a number written with
+        underscores (named by line and column).
+
+    Warns
+    -----
+    UserWarning
+        The last row was left out: the file ends without a line end.
     """
     path = Path(path)
     if not path.is_file():
         raise RecordingError(f"cannot read {what} {str(path)!r}: no such file")
     text = read_text(path, what=f"CSV text ({what})")
-    content = [(no, ln) for no, ln in enumerate(text.splitlines(), start=1)
+    all_lines = text.splitlines()
+    content = [(no, ln) for no, ln in enumerate(all_lines, start=1)
                if ln.strip() and not ln.lstrip().startswith("#")]
     sep = _SEP_LINE.fullmatch(content[0][1]) if content else None
     if sep:
@@ -137,12 +154,20 @@ def read_rows(path, *, what: str = "CSV table") -> Rows:
         else:
             if sample and sum(len(ln.split()) > 1 for ln in sample) > len(sample) // 2:
                 delimiter = " "  # a logger's text columns
+    if len(content) > 1 and content[-1][0] == len(all_lines) and not text.endswith(("\n", "\r")):
+        no = content.pop()[0]
+        warnings.warn(f"{path}, line {no}: the file ends without a line end, as a recording cut "
+                      f"off while being written does; line {no} was left out", stacklevel=2)
     rows, lines = [], []
     for no, ln in content:
         if delimiter == " ":
             cells = ln.split()
         else:
             cells = [c.strip() for c in next(csv.reader([ln], delimiter=delimiter))]
+        for col, cell in enumerate(cells, start=1):
+            if "_" in cell and _UNDERSCORE_NUMBER.fullmatch(cell) and any(c.isdigit() for c in cell):
+                raise RecordingError(f"{path}, line {no}, column {col}: {cell!r} is not a number as "
+                                     "recordings write them (an underscore)")
         if any(cells):  # a spreadsheet's empty row is a line of delimiters
             rows.append(cells)
             lines.append(no)

@@ -1,3 +1,5 @@
+import warnings
+
 import pytest
 
 from handsynth._csv import column_index, read_rows
@@ -58,3 +60,28 @@ def test_a_column_named_twice_is_refused_by_name():
     with pytest.raises(RecordingError, match=r"x.csv, line 4: column 'a' stands twice "
                                              r"\(columns 2 and 4\)"):
         column_index(["t", "a", "b", "a"], path="x.csv", line=4)
+
+
+def test_a_last_line_without_line_end_is_left_out_with_a_warning(tmp_path):
+    """A logger cut off while writing leaves its last number short (12.3 of 12.345)."""
+    p = tmp_path / "cut.csv"
+    p.write_text("t,a\n0,1.5\n0.01,12.3")
+    with pytest.warns(UserWarning, match=r"cut.csv, line 3: the file ends without a line end"):
+        got = read_rows(p)
+    assert got.rows == [["t", "a"], ["0", "1.5"]] and got.lines == [1, 2]
+    for whole in ("t,a\n0,1.5\n0.01,12.345\n", "t,a\r\n0,1.5\r\n", "t,a\n0,1.5\n# end"):
+        p.write_text(whole)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            assert read_rows(p).rows[1] == ["0", "1.5"]
+    p.write_text("t,a")  # one line alone is kept: the reader names what is missing
+    assert read_rows(p).rows == [["t", "a"]]
+
+
+def test_a_number_with_underscores_is_refused(tmp_path):
+    p = tmp_path / "u.csv"
+    p.write_text("t,a,note\n0,1_000,take_1\n")
+    with pytest.raises(RecordingError, match=r"u.csv, line 2, column 2: '1_000' is not a number"):
+        read_rows(p)
+    p.write_text("t,a,note\n0,1000,take_1\n")
+    assert read_rows(p).rows[1] == ["0", "1000", "take_1"]
