@@ -8,6 +8,7 @@ from pathlib import Path
 import click
 
 from .._io import check_outputs
+from ..errors import OutputError
 from ._main import cli
 
 _TRACK_FILTERS = ("raw", "filter1", "gated", "vqf", "vqf_online", "madgwick", "mahony", "ahrs_ekf",
@@ -121,10 +122,21 @@ def eval_(config_name, filters, durations, elbows, no_grasps, no_sensor_calibrat
         plot_stick_figure,
     )
 
-    check_outputs([("--json", json_out)])
+    plots = None
+    if plot_dir:  # made and checked before the evaluation's minutes, not after
+        plots = Path(plot_dir)
+        try:
+            plots.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise OutputError(f"cannot make the --plots folder {str(plots)!r}: "
+                              f"{exc.strerror or exc}") from None
+    check_outputs([("--json", json_out),
+                   *((("--plots", plots / name) for name in ("orientation_error.png",
+                                                               "stick_figure.png")) if plots else ())])
     for d in durations:
-        if not 2.0 <= d <= 600.0:  # nan fails too
-            raise InvalidInputError(f"--duration must be within [2, 600] s, got {d}")
+        if not 6.0 <= d <= 600.0:  # nan fails too
+            raise InvalidInputError(f"--duration must be within [6, 600] s (2 s still, 2 s of "
+                                    f"the aligning rotation, then the motion), got {d}")
     config = HELDOUT if config_name == "heldout" else TUNING
     series: dict = {}
     rep = evaluate(config, durations=durations or (15.0, 30.0), elbows=elbows or ("fixed", "moving"),
@@ -133,9 +145,8 @@ def eval_(config_name, filters, durations, elbows, no_grasps, no_sensor_calibrat
                    plate_fusion=not no_plate_fusion, series=series)
     if json_out:
         _write_json(json_out, rep)
-    if plot_dir:
-        out = Path(plot_dir)
-        out.mkdir(parents=True, exist_ok=True)
+    if plots:
+        out = plots
         last = rep["trials"][-1]
         what = f"{config.label}, {last['duration_s']:g} s, elbow {last['elbow']}"
         plot_orientation_error(series["t"], series["error"], out / "orientation_error.png",

@@ -131,6 +131,16 @@ def test_eval_unknown_filter_is_one_line(tmp_path):
     assert res.exit_code == 2 and "unknown filter 'kalman9'" in res.output
 
 
+def test_eval_plots_folder_is_checked_before_the_evaluation(tmp_path):
+    """Before, a --plots path under a file failed after the evaluation's minutes."""
+    (tmp_path / "afile").write_text("")
+    res = CliRunner().invoke(cli, ["imu", "eval", "--plots", str(tmp_path / "afile" / "p")])
+    assert res.exit_code == 2 and "cannot make the --plots folder" in res.output, res.output
+    (tmp_path / "p" / "stick_figure.png").mkdir(parents=True)
+    res = CliRunner().invoke(cli, ["imu", "eval", "--plots", str(tmp_path / "p")])
+    assert res.exit_code == 2 and "--plots file" in res.output and "it is a folder" in res.output
+
+
 @pytest.mark.slow
 def test_calibrate_then_track_joint_angles(tmp_path):
     from handsynth.models import JOINT_NAMES
@@ -422,5 +432,6 @@ def test_magnetometer_units_and_eval_durations_out_of_range_are_named(tmp_path, 
     res = CliRunner().invoke(cli, ["imu", "track", str(src), "--filter", "raw", "--out",
                                    str(tmp_path / "q.csv"), "--mag-units", "nT"])
     assert res.exit_code == 2 and "--mag-units" in res.output, res.output
-    res = CliRunner().invoke(cli, ["imu", "eval", "--duration", "1e9"])
-    assert res.exit_code == 2 and "--duration must be within [2, 600] s" in res.output
+    for duration in ("1e9", "5.9"):  # 5.9 s passed here and failed after a trial's work
+        res = CliRunner().invoke(cli, ["imu", "eval", "--duration", duration])
+        assert res.exit_code == 2 and "--duration must be within [6, 600] s" in res.output

@@ -276,8 +276,36 @@ def read_glove_csv(path, *, kind: str = "", adc_max: float = 4095.0) -> GloveRec
             trial[i] = int(v)
     if angles is not None:
         _check_degrees(angles, path)
+    _check_trials(time_s, motion, trial, content.lines[1:], path, has_time="time_s" in col)
     return GloveRecording(sensors=sensors, angles=angles, motion=motion, trial=trial,
                           time_s=time_s, kind=kind, adc_max=adc_max)
+
+
+def _check_trials(time_s, motion, trial, lines, path, *, has_time: bool) -> None:
+    """Refuse a trial given in two stretches or whose time goes back.
+
+    A trial is one stretch of rows (:meth:`GloveRecording.phase` places its
+    samples by their time within it).  Repeats of a motion written under one
+    trial number would be mixed into one trial of nonsense and fail later with
+    a message about something else.
+    """
+    last: dict[tuple[str, int], tuple[float, int]] = {}
+    prev_key = None
+    for t, m, k, line in zip(time_s.tolist(), motion.tolist(), trial.tolist(), lines):
+        key = (m, k)
+        seen = last.get(key)
+        if seen is not None and key != prev_key:
+            raise RecordingError(
+                f"{path}, line {line}: motion {m!r}, trial {k} starts again after other rows "
+                f"(it stopped at line {seen[1]}): two trials under one number? give each "
+                "trial its own number in the 'trial' column")
+        if seen is not None and has_time and t < seen[0]:
+            raise RecordingError(
+                f"{path}, line {line}: time_s goes back from {seen[0]:g} s (line {seen[1]}) to "
+                f"{t:g} s within motion {m!r}, trial {k}: two trials under one number? "
+                "give each trial its own number in the 'trial' column")
+        last[key] = (t, line)
+        prev_key = key
 
 
 def _check_adc_max(adc_max) -> None:

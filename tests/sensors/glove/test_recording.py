@@ -63,3 +63,25 @@ def test_angles_csv_and_shape_errors(tmp_path):
     assert text[0].split(",")[1:] == list(JOINT_NAMES) and "nan" in text[2]
     with pytest.raises(RecordingError, match=r"sensors must have shape \(N, 5\)"):
         GloveRecording(sensors=np.zeros((3, 4)))
+
+
+def test_two_trials_under_one_number_are_refused(tmp_path, cal_rec):
+    """Before, repeats all numbered 1 were mixed into one trial and the calibration
+    failed with "point 2 of 20 has 0 calibration samples"."""
+    path = write_glove_csv(tmp_path / "r.csv", cal_rec)
+    lines = path.read_text().splitlines()
+    head, body = lines[0], [ln.split(",") for ln in lines[1:]]
+    for cells in body:
+        cells[2] = "1"
+    path.write_text("\n".join([head, *(",".join(c) for c in body)]) + "\n")
+    with pytest.raises(RecordingError, match=r"r.csv, line \d+: motion '\w+', trial 1 starts again "
+                                             r"after other rows \(it stopped at line \d+\): two "
+                                             "trials under one number"):
+        read_glove_csv(path)
+    # one motion, one trial number, time starting again: the repeats lie in one stretch
+    p = tmp_path / "t.csv"
+    p.write_text("time_s,motion,trial," + ",".join(SENSOR_NAMES) + "\n0,tripod,1,1,2,3,4,5\n"
+                 "0.1,tripod,1,1,2,3,4,5\n0,tripod,1,1,2,3,4,5\n")
+    with pytest.raises(RecordingError, match=r"t.csv, line 4: time_s goes back from 0.1 s \(line 3\) "
+                                             "to 0 s within motion 'tripod', trial 1"):
+        read_glove_csv(p)
