@@ -80,6 +80,36 @@ def os_error_reason(exc: BaseException) -> str:
     return str(exc)
 
 
+def make_folder(path, *, what: str = "output folder",
+                error: type[HandsynthError] = OutputError) -> Path:
+    """Create the folder `path` (and its parents) unless it exists.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    what : str, keyword-only
+        What the folder is, for messages (``"--plots folder"``).
+    error : HandsynthError subclass, keyword-only
+        Class of the error raised.
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    HandsynthError
+        (`error`) it cannot be made: a file stands in the way, no
+        permission, a full disk (the reason in words).
+    """
+    path = Path(path)
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise error(f"cannot create the {what} {str(path)!r}: {os_error_reason(exc)}") from None
+    return path
+
+
 def check_output(path, *, what: str = "output file", inputs: Iterable = (),
                  error: type[HandsynthError] = OutputError) -> Path:
     """Check that `path` can become an output file without replacing anything it must not.

@@ -119,3 +119,16 @@ def test_a_device_or_pipe_is_refused_and_a_link_written_through(tmp_path):
     link.symlink_to(real)
     write_text(link, "new")
     assert link.is_symlink() and real.read_text() == "new"
+
+
+def test_make_folder_names_the_folder_and_why(tmp_path):
+    from handsynth._io import make_folder
+    from handsynth.errors import DatabaseError, OutputError
+
+    assert make_folder(tmp_path / "a" / "b").is_dir()
+    assert make_folder(tmp_path / "a" / "b").is_dir()  # exists already: fine
+    (tmp_path / "f").write_text("")
+    with pytest.raises(OutputError, match=r"cannot create the --plots folder '.*f/p': not a directory"):
+        make_folder(tmp_path / "f" / "p", what="--plots folder")
+    with pytest.raises(DatabaseError, match="cannot create the output folder"):
+        make_folder(tmp_path / "f", error=DatabaseError)

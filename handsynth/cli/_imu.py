@@ -7,8 +7,7 @@ from pathlib import Path
 
 import click
 
-from .._io import check_outputs
-from ..errors import OutputError
+from .._io import check_outputs, make_folder
 from ._main import cli
 
 _TRACK_FILTERS = ("raw", "filter1", "gated", "vqf", "vqf_online", "madgwick", "mahony", "ahrs_ekf",
@@ -122,14 +121,8 @@ def eval_(config_name, filters, durations, elbows, no_grasps, no_sensor_calibrat
         plot_stick_figure,
     )
 
-    plots = None
-    if plot_dir:  # made and checked before the evaluation's minutes, not after
-        plots = Path(plot_dir)
-        try:
-            plots.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise OutputError(f"cannot make the --plots folder {str(plots)!r}: "
-                              f"{exc.strerror or exc}") from None
+    # the plots' folder is made and checked before the evaluation's minutes, not after
+    plots = make_folder(plot_dir, what="--plots folder") if plot_dir else None
     check_outputs([("--json", json_out),
                    *((("--plots", plots / name) for name in ("orientation_error.png",
                                                                "stick_figure.png")) if plots else ())])

@@ -34,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._io import os_error_reason
+from .._io import make_folder, os_error_reason
 from ..errors import DatabaseError, InvalidInputError, OutputError
 from ..models import PAPER_SIZE, HandShape
 from ..models import pose_set as make_pose_set
@@ -470,11 +470,7 @@ def build_databases(out_dir, shapes: Sequence[HandShape | str], mount: CameraMou
         raise InvalidInputError(f"mount must be a CameraMount, got {type(mount).__name__}")
     shape_list = _as_shapes(shapes)
     _chunk_size(options.count, len(shape_list), workers, chunk_size)  # checked before any file
-    out = Path(out_dir)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise DatabaseError(f"cannot create output folder {out}: {os_error_reason(exc)}") from None
+    out = make_folder(out_dir, what="output folder", error=DatabaseError)
 
     what = (f"{len(shape_list)} shape(s), {options.pose_set} poses x {options.count}, "
             f"seed {options.seed}, {options.side} hand")

@@ -35,7 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._io import atomic_open, os_error_reason
+from .._io import atomic_open, make_folder
 from ..errors import DatabaseCorruptError, DatabaseError, InvalidInputError
 from ..models import GRID_LEVELS, JOINT_LIMITS_DEG, HandShape, natural_pose_set
 from ..render import (
@@ -399,11 +399,7 @@ def learning_set(folder, options: LearningSetOptions | None = None, *,
         except DatabaseCorruptError:
             pass
     out = render_learning_set(opts, mount=mount, side=side, progress=progress)
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise DatabaseError(f"cannot create the learning-set folder {folder}: "
-                            f"{os_error_reason(exc)}") from None
+    make_folder(folder, what="learning-set folder", error=DatabaseError)
     with atomic_open(path, "wb", what="learning set", error=DatabaseError) as f:
         np.savez(f, grids=out.grids, rest_grids=out.rest_grids, hand=out.hand,
                  angles=out.angles, rest_angles=out.rest_angles,

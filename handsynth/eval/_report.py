@@ -8,8 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .._io import os_error_reason, write_text
-from ..errors import InvalidInputError, OutputError
+from .._io import make_folder, write_text
+from ..errors import InvalidInputError
 from ..models import JOINT_NAMES, HandShape
 from ._options import (
     _CONDITION_TEXT,
@@ -267,12 +267,7 @@ class EvalReport:
             The folder cannot be created or a file cannot be written (each
             file appears complete or not at all).
         """
-        folder = Path(folder)
-        try:
-            folder.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise OutputError(f"cannot create the plot folder {str(folder)!r}: "
-                              f"{os_error_reason(exc)}") from None
+        folder = make_folder(folder, what="plot folder")
         return [_plot_histograms(self, folder / f"{prefix}error_hist.png"),
                 _plot_distance(self, folder / f"{prefix}error_vs_distance.png"),
                 _plot_joint_mae(self, folder / f"{prefix}joint_mae.png")]

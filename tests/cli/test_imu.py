@@ -135,7 +135,7 @@ def test_eval_plots_folder_is_checked_before_the_evaluation(tmp_path):
     """Before, a --plots path under a file failed after the evaluation's minutes."""
     (tmp_path / "afile").write_text("")
     res = CliRunner().invoke(cli, ["imu", "eval", "--plots", str(tmp_path / "afile" / "p")])
-    assert res.exit_code == 2 and "cannot make the --plots folder" in res.output, res.output
+    assert res.exit_code == 2 and "cannot create the --plots folder" in res.output, res.output
     (tmp_path / "p" / "stick_figure.png").mkdir(parents=True)
     res = CliRunner().invoke(cli, ["imu", "eval", "--plots", str(tmp_path / "p")])
     assert res.exit_code == 2 and "--plots file" in res.output and "it is a folder" in res.output
