@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import warnings
 from pathlib import Path
 
 import click
@@ -40,6 +41,20 @@ def _lateral(value: str):
     return vec
 
 
+def _check_rate(recording: str, rec, rate_hz: float) -> None:
+    """Warn when a --rate given on the command line differs by more than 1 % from the rate
+    of the export's time column, which is what the reader uses."""
+    ctx = click.get_current_context()
+    if ctx.get_parameter_source("rate_hz") is click.core.ParameterSource.DEFAULT:
+        return
+    if rec.metadata.get("times_from") != "time column":
+        return
+    if abs(rate_hz - rec.rate_hz) > 0.01 * rec.rate_hz:
+        warnings.warn(
+            f"--rate {rate_hz:g} Hz is not used: {recording} has a time column, whose times "
+            f"give {rec.rate_hz:.4g} Hz; the time column is what is used", stacklevel=2)
+
+
 @cli.group()
 def joints() -> None:
     """Finger joint centres from two 6-DOF trackers (patent JP2010-88628)."""
@@ -70,7 +85,8 @@ def joints() -> None:
               help="Station numbers of the upper and lower sensor, e.g. '1,2' (default: the "
                    "two in the file).")
 @click.option("--rate", "rate_hz", type=float, default=240.0, show_default=True,
-              help="Sampling rate of a text export without times, Hz.")
+              help="Sampling rate of a text export without times, Hz (a time column is "
+                   "used instead; a --rate that differs from it is warned about).")
 @click.option("--strict", is_flag=True,
               help="Refuse a file with lost lines, NaN frames or glitches instead of dropping "
                    "those frames.")
@@ -115,6 +131,8 @@ def estimate(recording, methods, frames, lateral_axis, lateral_frame, bins, unit
                                         f"{sensors!r}")
             kwargs["sensors"] = st
     rec = read_recording(recording, **kwargs)
+    if kwargs:
+        _check_rate(recording, rec, rate_hz)
     filt = AxisAngleFilter(bins=bins, lateral_axis=_lateral(lateral_axis),
                            lateral_frame=lateral_frame)
     names = _METHODS if "all" in methods else tuple(dict.fromkeys(methods))

@@ -101,6 +101,7 @@ MALFORMED = {
     "nan.txt": b"1 nan nan nan nan nan nan\n2 nan nan nan nan nan nan\n" * 30,
     "mixed.txt": b"1 1 2 3 4 5 6\n2 1 2 3\n1 1 2 3 4 5 6 7 8 9\n" * 20,
     "header-only.csv": b"Time,w1,x1,y1,z1,w2,x2,y2,z2,loc1_x,loc1_y,loc1_z,loc2_x,loc2_y,loc2_z\n",
+    "underscore.txt": b"1 1_0.5 2 3 4 5 6\n2 1 2 3 4 5 6\n" * 20,
 }
 
 
@@ -233,3 +234,24 @@ def test_stations_named_upper_second_are_paired_in_file_order(tmp_path, sim):
     assert res.exit_code == 0, res.output
     assert "warning" not in res.output and "half frames" not in res.output, res.output
     assert json.loads(out.read_text())["results"][0]["n_frames_used"] == sim.n_frames
+
+
+def test_rate_that_differs_from_the_time_column_is_warned_about(tmp_path, sim):
+    # --rate 120 on an export with a 240 Hz time column was ignored without notice
+    path = tmp_path / "pimgr.csv"
+    path.write_text("\n".join(_pimgr(sim)) + "\n")
+    res = _run("estimate", path, "--rate", "120", "--method", "obrien", "--frames", "all")
+    assert res.exit_code == 0, res.output
+    assert (f"handsynth: warning: --rate 120 Hz is not used: {path} has a time column, whose "
+            f"times give 240 Hz; the time column is what is used") in res.output, res.output
+    assert "at 240 Hz" in res.output
+    # within 1 % of the time column, or not given: no warning
+    for args in (["--rate", "241"], []):
+        res = _run("estimate", path, *args, "--method", "obrien", "--frames", "all")
+        assert res.exit_code == 0 and "--rate" not in res.output, res.output
+    # without a time column --rate gives the times
+    lib = tmp_path / "lib.txt"
+    lib.write_text("\n".join(_liberty(sim, counter=False)) + "\n")
+    res = _run("estimate", lib, "--rate", "120", "--method", "obrien", "--frames", "all")
+    assert res.exit_code == 0 and "warning" not in res.output, res.output
+    assert "at 120 Hz" in res.output

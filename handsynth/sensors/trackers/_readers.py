@@ -23,33 +23,41 @@ patent's recording software, para. 0097):
   order forms the most frames; not the order `sensors` names them in), or,
   with a counter, both lines of one counter value: a station line without
   its partner -- a lost line -- drops that half frame, it is never merged
-  into a neighbour.
+  into a neighbour.  A counter that restarts (two takes in one file) keeps
+  the first take with a warning naming the line, as a time column does.
   Cells may be quoted (``"Time","w1",...``).
 
 Polhemus' azimuth, elevation, roll are rotations about the transmitter's
 ``z``, then the new ``y``, then the new ``x``: intrinsic ``"ZYX"``.
 
 Decimal commas (``12,5`` with ``;`` or whitespace between fields) are read
-and recorded.  Position units are checked against a finger joint: two
-sensors on adjacent phalanges are 10-90 mm apart (receivers 9.6 mm wide,
-para. 0094; phalanges up to about 50 mm, Buchholz et al. 1992); with
-``units="auto"`` the unit that puts the median spacing nearest 28 mm is
-used, and an explicit unit that puts it outside that range is warned about
-when another unit would not.  Glitches -- a sensor position more than
-`glitch_mm` from the median of its five-frame neighbourhood, which smooth
-finger motion never is -- are dropped, counted and named; so are dropouts (a
-sensor at exactly ``(0, 0, 0)``, however many frames in a row) and frozen
-stretches (one sensor's position and angles repeated bit for bit over five or
-more frames while the other sensor moves; a sensor frozen throughout is left
-to the estimators, which refuse it).  Euler angles all within +-pi are warned
-about as radians.  A time column that is constant is refused; one that
-restarts (two takes in one file) keeps the first take with a warning naming
-the line; one that advances by seconds per sample is warned about as
-milliseconds.
+and recorded.  A number with an underscore (``1_000``, which Python's
+``float`` reads but no exporter writes) is refused, naming the line and the
+cell.  A file that ends without a line end was cut off while being written
+(the last line may stop mid-number, ``12.3`` of ``12.345``): its last line is
+left out with a warning naming it.  Position units are checked against a
+finger joint: two sensors on adjacent phalanges are 10-90 mm apart
+(receivers 9.6 mm wide, para. 0094; phalanges up to about 50 mm, Buchholz et
+al. 1992); with ``units="auto"`` the unit that puts the median spacing
+nearest 28 mm is used, and an explicit unit that puts it outside that range
+is warned about when another unit would not.  Glitches -- a sensor position
+more than `glitch_mm` from the median of its five-frame neighbourhood, which
+smooth finger motion never is -- are dropped, counted and named; so are
+dropouts (a sensor at exactly ``(0, 0, 0)``, however many frames in a row)
+and frozen stretches (one sensor's position and angles repeated bit for bit
+over five or more frames while the other sensor moves: the repeats are
+dropped, the stretch's first frame, the real sample that was repeated, is
+kept; a sensor frozen throughout is left to the estimators, which refuse
+it).  Euler angles all within +-pi are warned about as radians.  A time
+column that is constant is refused; one that restarts (two takes in one
+file) keeps the first take with a warning naming the line; one that
+advances by seconds per sample is warned about as milliseconds.  A time
+column gives the sample times; `rate_hz` gives them only without one.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import re
 import warnings
@@ -89,6 +97,7 @@ class _Table:
     header: tuple[str, ...] | None
     decimal_comma: bool
     skipped: list[int]  # unparseable line numbers
+    cut_line: int | None = None  # last line left out: the file ends without a line end
 
 
 def _read_text(path: Path) -> str:
@@ -114,13 +123,22 @@ def _split(line: str, sep: str, decimal_comma: bool) -> list[str]:
 def _tokenise(path: Path) -> _Table:
     """Numeric rows of a text export, the header names and the separator."""
     text = _read_text(path)
+    physical = text.splitlines()
     content = []
-    for no, line in enumerate(text.splitlines(), start=1):
+    for no, line in enumerate(physical, start=1):
         s = line.strip()
         if s and s[0] not in "#%":
             content.append((no, s))
     if not content:
         raise RecordingError(f"{str(path)!r} has no data lines (only blanks or comments)")
+    cut_line = None
+    if text[-1] not in "\r\n" and len(content) > 1 and content[-1][0] == len(physical):
+        # a recording cut off while being written: the last line may stop mid-number
+        # (``12.3`` of ``12.345``), which reads as a wrong value, not as an error
+        cut_line = content.pop()[0]
+        warnings.warn(
+            f"{path}, line {cut_line}: the file ends without a line end, as a recording cut "
+            f"off while being written does; line {cut_line} was left out", stacklevel=3)
     sample = [s for _, s in content[:200]]
     # separator and decimal mark
     if sum(";" in s for s in sample) > len(sample) // 2:
@@ -144,6 +162,11 @@ def _tokenise(path: Path) -> _Table:
         if not any(fields):
             skipped.append(no)
             continue
+        for j, f in enumerate(fields):
+            if "_" in f and _NUMBER.fullmatch(f.replace("_", "")):
+                cell = _split(s, sep, False)[j]  # as the file writes it
+                raise RecordingError(f"{path}, line {no}: {cell!r} is not a number as "
+                                     f"recordings write them (an underscore)")
         if all(_NUMBER.fullmatch(f) for f in fields if f) and all(fields):
             rows.append([float(f) for f in fields])
             lines.append(no)
@@ -172,7 +195,8 @@ def _tokenise(path: Path) -> _Table:
             f"{k} numeric fields most lines have (mixed field counts or text; first: "
             f"line {skipped[0]})"
         )
-    return _Table(np.asarray(rows, dtype=np.float64), np.asarray(lines), header, dec, skipped)
+    return _Table(np.asarray(rows, dtype=np.float64), np.asarray(lines), header, dec, skipped,
+                  cut_line)
 
 
 # --------------------------------------------------------------------------
@@ -203,6 +227,38 @@ def _is_counter(col: np.ndarray, station: np.ndarray) -> bool:
     return True
 
 
+def _counter_restart(col: np.ndarray, station: np.ndarray | None) -> int | None:
+    """Row where a frame counter restarts (two takes in one file), or None.
+
+    The column must be an integer counter (see `_is_counter`) up to that row,
+    and the row's value lower than the previous one of its station: a counter
+    never goes back within one take.
+    """
+    if station is None:
+        station = np.zeros(col.shape[0])
+    if not np.all(np.isfinite(col)) or not np.all(col == np.round(col)) or np.any(col < 0):
+        return None
+    first = None
+    for st in np.unique(station):
+        idx = np.flatnonzero(station == st)
+        back = np.flatnonzero(np.diff(col[idx]) < 0)
+        if back.size and (first is None or idx[back[0] + 1] < first):
+            first = int(idx[back[0] + 1])
+    if first is None or not _is_counter(col[:first], station[:first]):
+        return None
+    return first
+
+
+def _restart_warning(path: Path, column: str, line: int, before: float, after: float,
+                     dropped: int, stacklevel: int) -> None:
+    """Warn that `column` restarts at `line`: only the rows before it (the first take) are
+    used."""
+    warnings.warn(
+        f"{path.name} line {line}: the {column} restarts ({before:g} -> {after:g}): two takes "
+        f"in one file? only the rows before line {line} are used ({dropped} rows from there "
+        f"on dropped)", stacklevel=stacklevel + 1)
+
+
 def _unit_quaternions(q: np.ndarray) -> bool:
     norm = np.linalg.norm(q, axis=1)
     ok = np.isfinite(norm)
@@ -223,13 +279,16 @@ def _detect_station_layout(t: _Table, path: Path) -> _Layout:
     if k == 7:
         return _Layout("station", "Liberty ASCII: station x y z azimuth elevation roll",
                        station=0, pos=([1, 2, 3],), ang=([4, 5, 6],))
+    counter = k in (8, 9) and _is_counter(rows[:, 1], station)
+    # a counter that restarts (two takes in one file) is a counter too: the reader keeps
+    # the first take
+    restarts = k in (8, 9) and not counter and _counter_restart(rows[:, 1], station) is not None
     if k == 8:
         quat = _unit_quaternions(rows[:, 4:8])
-        counter = _is_counter(rows[:, 1], station)
         if quat and not counter:
             return _Layout("station", "Liberty ASCII: station x y z qw qx qy qz", station=0,
                            pos=([1, 2, 3],), ang=([4, 5, 6, 7],), angles="quaternion")
-        if counter and not quat:
+        if (counter or restarts) and not quat:
             return _Layout("station", "Liberty ASCII: station frame x y z azimuth elevation roll",
                            station=0, frame=1, pos=([2, 3, 4],), ang=([5, 6, 7],))
         raise RecordingError(
@@ -240,7 +299,7 @@ def _detect_station_layout(t: _Table, path: Path) -> _Layout:
             + "; give the layout with columns=(...)"
         )
     if k == 9:
-        if _unit_quaternions(rows[:, 5:9]) and _is_counter(rows[:, 1], station):
+        if _unit_quaternions(rows[:, 5:9]) and (counter or restarts):
             return _Layout("station", "Liberty ASCII: station frame x y z qw qx qy qz",
                            station=0, frame=1, pos=([2, 3, 4],), ang=([5, 6, 7, 8],),
                            angles="quaternion")
@@ -449,8 +508,10 @@ _FROZEN_RUN = 5
 
 def _frozen_runs(pos_file: np.ndarray, ang: list[np.ndarray], dropout: np.ndarray) -> np.ndarray:
     """Frames inside a run of at least `_FROZEN_RUN` bit-identical samples of one sensor
-    while the other sensor's samples change; a run over the whole file is left to the
-    estimators (a sensor frozen throughout: nothing moved)."""
+    while the other sensor's samples change, less the run's first frame: that is the
+    sample the tracker measured and then repeated, the last real one before the stretch.
+    A run over the whole file is left to the estimators (a sensor frozen throughout:
+    nothing moved)."""
     n = pos_file.shape[0]
     frozen = np.zeros(n, dtype=bool)
     if n < _FROZEN_RUN:
@@ -471,7 +532,7 @@ def _frozen_runs(pos_file: np.ndarray, ang: list[np.ndarray], dropout: np.ndarra
             length = stop - start + 1
             moves = np.any(other[start + 1:stop + 1] != other[start:stop])
             if length >= _FROZEN_RUN and length < n and moves:
-                frozen[start:stop + 1] = True
+                frozen[start + 1:stop + 1] = True  # frame `start` is the real sample
             start = stop + 1
     return frozen
 
@@ -495,11 +556,8 @@ def _check_times(
     back = np.flatnonzero(np.isfinite(steps) & (steps < -10 * dt)) if dt > 0 else np.array([], int)
     if back.size:
         i = int(back[0]) + 1
-        warnings.warn(
-            f"{path.name} line {int(line_no[i])}: the time restarts ({times[i - 1]:g} -> "
-            f"{times[i]:g}): two takes in one file? only the rows before line "
-            f"{int(line_no[i])} are used ({len(times) - i} rows from there on dropped)",
-            stacklevel=3)
+        _restart_warning(path, "time", int(line_no[i]), times[i - 1], times[i], len(times) - i,
+                         stacklevel=3)
         notes["restart_line"] = int(line_no[i])
         notes["rows_after_restart"] = len(times) - i
         pos_file, ang, times, line_no = pos_file[:i], [a[:i] for a in ang], times[:i], line_no[:i]
@@ -590,8 +648,12 @@ def read_polhemus(
     ``layout``, ``units``, ``units_note``, counts of ``duplicates``,
     ``half_frames``, ``glitch_frames``, ``dropout_frames``,
     ``frozen_frames``, ``invalid_frames``, ``skipped_lines``,
-    ``quaternion_sign_flips``, ``decimal_comma``; ``rows_after_restart``
-    and ``time_looks_like_ms`` when found).
+    ``quaternion_sign_flips``, ``decimal_comma``, ``times_from`` (``"time
+    column"``, ``"frame counter and rate_hz"`` or ``"rate_hz"``);
+    ``restart_line`` and ``rows_after_restart`` (a time column or frame
+    counter that restarts), ``cut_off_line`` (the last line, left out of a
+    file that ends without a line end) and ``time_looks_like_ms`` when
+    found).
 
     Parameters
     ----------
@@ -615,7 +677,8 @@ def read_polhemus(
         stations in the file (lowest first), or 1 and 2 when there are more.
     rate_hz : float
         Sampling rate used for times when the file has none (frame counter
-        times ``1 / rate_hz`` when there is a counter).
+        times ``1 / rate_hz`` when there is a counter); a time column is
+        used instead of it (``metadata["times_from"]`` says which).
     labels, joint : see :class:`Recording`.
     on_invalid : {"drop", "raise"}
         Frames with NaN values, half frames (lost lines), glitches,
@@ -665,8 +728,24 @@ def read_polhemus(
         raise RecordingError(
             f"{path.name}: the layout found is {lay.description!r}, whose orientation is "
             f"{lay.angles!r}, not angles={angles!r}")
-    rows = t.rows
     notes: dict = {"skipped_lines": len(t.skipped)}
+    if t.cut_line is not None:
+        notes["cut_off_line"] = t.cut_line
+    if lay.frame is not None:
+        col = t.rows[:, lay.frame]
+        stations = t.rows[:, lay.station] if lay.station is not None else None
+        i = _counter_restart(col, stations)
+        if i is not None:
+            prev = col[:i][stations[:i] == stations[i]] if stations is not None else col[:i]
+            _restart_warning(path, "frame counter", int(t.lines[i]), prev[-1], col[i],
+                             len(col) - i, stacklevel=2)
+            notes["restart_line"] = int(t.lines[i])
+            notes["rows_after_restart"] = len(col) - i
+            t = dataclasses.replace(t, rows=t.rows[:i], lines=t.lines[:i])
+    rows = t.rows
+    # where the sample times come from: `rate_hz` is used only without a time column
+    notes["times_from"] = ("time column" if lay.time is not None else
+                           "frame counter and rate_hz" if lay.frame is not None else "rate_hz")
     if t.skipped:
         warnings.warn(f"{path.name}: skipped {len(t.skipped)} unreadable lines (first: line "
                       f"{t.skipped[0]})", stacklevel=2)

@@ -75,12 +75,12 @@ def test_unparseable_and_wrong_format_files(tmp_path, finger_rec):
     with pytest.raises(RecordingError, match="no data line"):
         read_polhemus(junk)
     garbled = tmp_path / "garbled.txt"
-    garbled.write_text("\n".join(["1 1 2 3 4 5 6"] * 50 + ["1 1 2 3 x y z"] * 10))
+    garbled.write_text("\n".join(["1 1 2 3 4 5 6"] * 50 + ["1 1 2 3 x y z"] * 10) + "\n")
     with pytest.raises(RecordingError, match="10 of 60 lines cannot be read"):
         read_polhemus(garbled)
     # Euler angles read as quaternions: the norm check says so
     path = _export(finger_rec, tmp_path / "rec.txt")
-    path.write_text("\n".join(line + " 0.5" for line in path.read_text().splitlines()))
+    path.write_text("\n".join(line + " 0.5" for line in path.read_text().splitlines()) + "\n")
     with pytest.raises(RecordingError, match="8 columns that are neither"):
         read_polhemus(path, angles="quaternion")
 

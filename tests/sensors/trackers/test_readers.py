@@ -215,17 +215,18 @@ def test_pimgr_dropout_identity_and_zero_position(tmp_path, finger_rec, pimgr_li
 
 
 def test_partly_frozen_sensor_is_dropped_and_named(tmp_path, finger_rec, pimgr_lines):
-    # item 14: a sensor frozen over rows 1000-1099 passed unnoticed
+    # item 14: a sensor frozen over rows 1000-1099 passed unnoticed; frame 1000 (line 1002)
+    # is the real sample that the tracker then repeated 99 times: it is kept
     lines = pimgr_lines(finger_rec, scale=100.0)
     held = lines[1001].split(",")
     for r in range(1001, 1101):
         f = lines[r].split(",")
         f[1:5], f[9:12] = held[1:5], held[9:12]
         lines[r] = ",".join(f)
-    with pytest.warns(UserWarning, match="100 frozen frames.*lines \\[1002, 1003"):
+    with pytest.warns(UserWarning, match="99 frozen frames.*lines \\[1003, 1004"):
         rec = read_polhemus(_write(tmp_path / "frozen.csv", lines))
-    assert rec.metadata["frozen_frames"] == 100
-    _close(rec, finger_rec.take(np.setdiff1d(np.arange(finger_rec.n_frames), range(1000, 1100))))
+    assert rec.metadata["frozen_frames"] == 99
+    _close(rec, finger_rec.take(np.setdiff1d(np.arange(finger_rec.n_frames), range(1001, 1100))))
     # a few repeated samples are not a frozen sensor
     lines = pimgr_lines(finger_rec, scale=100.0)
     for r in range(1002, 1005):
@@ -289,3 +290,100 @@ def test_the_rate_of_rounded_stamps_is_their_mean_step():
     times = np.round(np.arange(960) / 240.0, 4)
     assert abs(rec(times).rate_hz - 240.0) < 0.5
     assert abs(rec(np.delete(times, np.s_[100:110])).rate_hz - 240.0) < 0.5  # frames dropped
+
+
+# --- two takes by frame counter, frozen stretches' real sample, cut-off files, underscores ---
+
+
+@pytest.mark.parametrize("quaternion", [False, True])
+def test_frame_counter_restart_keeps_the_first_take(tmp_path, finger_rec, liberty_lines,
+                                                     quaternion):
+    # the export written twice into one file: before, "8 columns that are neither a frame
+    # counter (column 2) nor a unit quaternion (columns 5-8); give the layout with
+    # columns=(...)" (9 columns: "no increasing integer counter in column 2")
+    lines = liberty_lines(finger_rec, scale=100.0, counter=True, quaternion=quaternion)
+    n = finger_rec.n_frames
+    path = _write(tmp_path / "two.txt", lines + lines)
+    with pytest.warns(UserWarning, match=f"two.txt line {2 * n + 1}: the frame counter restarts "
+                                         f"\\({999 + n} -> 1000\\): two takes in one file\\? only "
+                                         f"the rows before line {2 * n + 1} are used "
+                                         f"\\({2 * n} rows from there on dropped\\)"):
+        rec = read_polhemus(path)
+    assert rec.n_frames == n and "frame" in rec.metadata["layout"]
+    assert rec.metadata["restart_line"] == 2 * n + 1
+    assert rec.metadata["rows_after_restart"] == 2 * n
+    np.testing.assert_allclose(rec.times, finger_rec.times, atol=1e-9)
+    _close(rec, finger_rec)
+
+
+def test_frozen_stretch_keeps_the_real_sample_before_it(tmp_path, finger_rec, liberty_lines):
+    # station 1 measured frame 1000, then repeated it over frames 1001-1099: before, frame
+    # 1000 (the real sample) was dropped with the 99 repeats
+    lines = liberty_lines(finger_rec, scale=100.0, counter=False, quaternion=False)
+    for frame in range(1001, 1100):
+        lines[2 * frame] = lines[2 * 1000]
+    with pytest.warns(UserWarning, match="99 frozen frames.*lines \\[2003, 2005"):
+        rec = read_polhemus(_write(tmp_path / "frozen.txt", lines))
+    assert rec.metadata["frozen_frames"] == 99
+    assert rec.n_frames == finger_rec.n_frames - 99
+    kept = np.setdiff1d(np.arange(finger_rec.n_frames), range(1001, 1100))
+    np.testing.assert_allclose(rec.times, finger_rec.times[kept], atol=1e-9)
+    assert 1000 in np.round(rec.times * 240).astype(int)  # the real sample
+    _close(rec, finger_rec.take(kept))
+
+
+def _cut_warning(path, line):
+    return (f"{path}, line {line}: the file ends without a line end, as a recording cut off "
+            f"while being written does; line {line} was left out")
+
+
+@pytest.mark.parametrize("fmt", ["liberty", "pimgr"])
+def test_file_without_a_final_line_end_leaves_the_last_line_out(tmp_path, finger_rec,
+                                                                  liberty_lines, pimgr_lines, fmt):
+    # a recording cut off while being written ends mid-number: before, 12.3 of 12.345 was read
+    # as a complete sample
+    if fmt == "liberty":
+        lines = liberty_lines(finger_rec, scale=100.0, counter=False, quaternion=False)
+    else:
+        lines = pimgr_lines(finger_rec, scale=100.0)
+    path = tmp_path / f"cut.{'txt' if fmt == 'liberty' else 'csv'}"
+    path.write_text("\n".join(lines)[:-2])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        rec = read_polhemus(path)
+    messages = [str(w.message) for w in caught]
+    assert messages[0] == _cut_warning(path, len(lines))
+    assert rec.metadata["cut_off_line"] == len(lines)
+    assert rec.n_frames == finger_rec.n_frames - 1  # Liberty: a half frame, named as one
+    assert (fmt == "liberty") == any("1 half frames" in m for m in messages[1:])
+    _close(rec, finger_rec.take(np.arange(finger_rec.n_frames - 1)))
+    # complete files, CRLF line ends included, read without a warning
+    path.write_bytes(("\r\n".join(lines) + "\r\n").encode())
+    assert _no_warnings(lambda: read_polhemus(path)).n_frames == finger_rec.n_frames
+
+
+def test_header_only_without_a_line_end_keeps_its_error(tmp_path, pimgr_lines, finger_rec):
+    path = tmp_path / "head.csv"
+    path.write_text(pimgr_lines(finger_rec, scale=100.0)[0])
+    with pytest.raises(RecordingError, match="no data line of numbers found"):
+        _no_warnings(lambda: read_polhemus(path))
+
+
+@pytest.mark.parametrize("fmt", ["liberty", "pimgr"])
+def test_numbers_with_underscores_are_refused(tmp_path, finger_rec, liberty_lines, pimgr_lines,
+                                              fmt):
+    # float() reads 1_000 as 1000, but no exporter writes it
+    if fmt == "liberty":
+        lines = liberty_lines(finger_rec, scale=100.0, counter=False, quaternion=False)
+        cells = lines[10].split()
+        cells[1], cell = "1_000.5", "1_000.5"
+        lines[10] = " ".join(cells)
+    else:
+        lines = pimgr_lines(finger_rec, scale=100.0)
+        cell = "1_700_000_000.0042"
+        lines[10] = cell + "," + lines[10].split(",", 1)[1]
+    path = _write(tmp_path / f"u.{'txt' if fmt == 'liberty' else 'csv'}", lines)
+    with pytest.raises(RecordingError) as err:
+        read_polhemus(path)
+    assert str(err.value) == (f"{path}, line 11: {cell!r} is not a number as recordings write "
+                              "them (an underscore)")
