@@ -101,8 +101,6 @@ def simulate(out, kind, user_seed, donning, motions, trials, seed, range_holds, 
 def calibrate(recording, out, kind, models, t_threshold, n_points, synergy_k, synergy_csv,
               synergy_units, adc_max):
     """Fit every estimator on RECORDING (CSV with motions and reference angles)."""
-    import numpy as np
-
     from .._io import check_output
     from ..errors import InvalidInputError
     from ..sensors.glove import (
@@ -130,11 +128,9 @@ def calibrate(recording, out, kind, models, t_threshold, n_points, synergy_k, sy
                    f"{100 * synergies.explained.sum():.1f} % of the posture variance")
     est = fit(rec, options=opts, synergies=synergies, where=str(recording))
     ref = range_readings(rec, where=str(recording))
-    valid = rec.sensors[~np.isnan(rec.sensors).any(axis=1)]
+    # each estimator carries the range of the readings (checked by its predict)
     save_calibration(out, est, kind=kind, range_reference=ref,
-                     meta={"recording": str(recording), "n_samples": rec.n_samples,
-                           "sensor_min": valid.min(axis=0).tolist(),
-                           "sensor_max": valid.max(axis=0).tolist()})
+                     meta={"recording": str(recording), "n_samples": rec.n_samples})
     click.echo(f"{recording}: {rec.n_samples} samples; estimators: {', '.join(est)}")
     click.echo("range holds (open, fist): " + ("stored" if ref is not None else
                                                "none; apply cannot take --range"))
@@ -172,7 +168,6 @@ def apply(calibration, readings, out, name, motion, range_csv, adc_max):
     from ..errors import InvalidInputError
     from ..sensors.glove import (
         RangeNormalizer,
-        check_reading_range,
         check_sensors,
         load_calibration,
         range_readings,
@@ -199,10 +194,7 @@ def apply(calibration, readings, out, name, motion, range_csv, adc_max):
                                     "and rows with motion 'range_fist'")
         tgt = cal["range_reference"]
         sensors = RangeNormalizer(src[0], src[1], tgt[0], tgt[1]).apply(sensors)
-    meta = cal["meta"]
-    if "sensor_min" in meta and "sensor_max" in meta:  # older calibration files lack them
-        check_reading_range(sensors, meta["sensor_min"], meta["sensor_max"], where=readings)
-    angles = est.predict(sensors, motion=motion)
+    angles = est.predict(sensors, motion=motion)  # warns of readings off the calibration's range
     write_angles_csv(out, angles, time_s=rec.time_s)
     click.echo(f"{readings}: {rec.n_samples} samples -> {out} ({name}"
                + (f", motion {motion}" if motion else ", mixed over motions") + ")")

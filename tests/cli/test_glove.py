@@ -239,6 +239,40 @@ def test_readings_off_the_calibrations_range_are_warned_about(files, tmp_path):
     assert res.exit_code == 0 and "off the calibration" not in res.output, res.output
 
 
+def test_the_range_is_on_the_estimators_and_warned_about_once_per_sensor(files, tmp_path):
+    data = json.loads(files["cal"].read_text())
+    for name, entry in data["estimators"].items():
+        low, high = np.array(entry["reading_range"])
+        assert low.shape == (5,) and (low < high).all(), name
+    assert "sensor_min" not in data["meta"]
+
+    def volts(header, rows):                     # readings in volts, not counts
+        cols = [header.index(s) for s in SENSOR_NAMES]
+        return header, [[str(float(c) / 1000) if k in cols else c for k, c in enumerate(r)]
+                        for r in rows]
+
+    wear = _edit_csv(files["wear"], tmp_path / "volts.csv", volts)
+    res = _run("glove", "apply", files["cal"], wear, "-o", tmp_path / "a.csv",
+               "--model", "model4+synergy")
+    assert res.exit_code == 0, res.output
+    warned = [w for w in res.output.splitlines() if "off the calibration's range" in w]
+    assert len(warned) == 5, res.output          # once per sensor, not once per layer
+    assert all(w.startswith("handsynth: warning: model4+synergy: 100 % of the sensor_")
+               for w in warned), res.output
+
+
+def test_an_older_calibration_file_is_still_checked_from_its_meta(files, tmp_path):
+    data = json.loads(files["cal"].read_text())
+    for entry in data["estimators"].values():
+        entry.pop("reading_range", None)
+    data["meta"].update(sensor_min=[3000.0] * 5, sensor_max=[3500.0] * 5)
+    old = tmp_path / "old.json"
+    old.write_text(json.dumps(data))
+    res = _run("glove", "apply", old, files["wear"], "-o", tmp_path / "a.csv")
+    assert res.exit_code == 0, res.output
+    assert res.output.count("off the calibration's range 3000-3500 counts") == 5, res.output
+
+
 @pytest.mark.parametrize("cell", ["nan", "1e30"])
 def test_a_bad_trial_number_is_one_line(files, tmp_path, cell):
     def bad(header, rows):

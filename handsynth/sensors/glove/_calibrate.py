@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import json
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -29,7 +29,7 @@ from ._estimators import (
     SynergyEstimator,
     estimator_from_dict,
 )
-from ._fields import array_field
+from ._fields import array_field, as_number
 from ._mixing import fit_mixer
 from ._models import MODELS, GloveWarning, fit_motion_model
 from ._recording import RANGE_LABELS, GloveRecording
@@ -46,6 +46,8 @@ __all__ = [
     "save_calibration",
 ]
 
+#: The estimators that carry the calibration's range of readings.
+_RANGED = (ConstantEstimator, RegressionEstimator, SynergyEstimator, GatedEstimator)
 _FORMAT = "handsynth-glove-calibration"
 _VERSION = 1
 
@@ -66,7 +68,12 @@ class CalibrationOptions:
     pooled : bool
         Also fit model 4 on every motion at once ("pooled_model4").
     synergy_k : int
-        Synergies kept by the synergy baseline; 0 leaves it out.
+        Synergies kept by the synergy baseline (0-20); 0 leaves it out.
+
+    Raises
+    ------
+    InvalidInputError
+        A field of the wrong type or out of its range (named in the message).
     """
 
     models: tuple[str, ...] = MODELS
@@ -77,15 +84,29 @@ class CalibrationOptions:
     synergy_k: int = 2
 
     def __post_init__(self) -> None:
+        if isinstance(self.models, str) or not isinstance(self.models, (tuple, list)):
+            raise InvalidInputError(f"CalibrationOptions.models must be a tuple of model "
+                                    f"names, got {self.models!r}")
         bad = [m for m in self.models if m not in MODELS]
         if bad:
             raise InvalidInputError(f"CalibrationOptions.models: unknown {bad[0]!r}; "
                                     f"expected some of {', '.join(MODELS)}")
-        if not self.t_threshold >= 0:
+        object.__setattr__(self, "models", tuple(self.models))
+        if not as_number(self.t_threshold, "CalibrationOptions.t_threshold") >= 0:
             raise InvalidInputError(
                 f"CalibrationOptions.t_threshold must be >= 0, got {self.t_threshold!r}")
-        if not self.ridge > 0:
+        if not as_number(self.ridge, "CalibrationOptions.ridge") > 0:
             raise InvalidInputError(f"CalibrationOptions.ridge must be > 0, got {self.ridge!r}")
+        if not isinstance(self.pooled, (bool, np.bool_)):
+            raise InvalidInputError(f"CalibrationOptions.pooled must be True or False, "
+                                    f"got {self.pooled!r}")
+        for name, lo, hi in (("n_points", 1, None), ("synergy_k", 0, 20)):
+            v = getattr(self, name)
+            if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, np.integer)) \
+                    or v < lo or (hi is not None and v > hi):
+                raise InvalidInputError(
+                    f"CalibrationOptions.{name} must be an integer >= {lo}"
+                    + (f" and <= {hi}" if hi is not None else "") + f", got {v!r}")
 
 
 _SYNERGY_CACHE: dict[int, Synergies] = {}
@@ -146,7 +167,10 @@ def calibrate(rec: GloveRecording, *, options: CalibrationOptions | None = None,
     dict of str to GloveEstimator
         ``"constant"``, the chosen models (``"model1"`` ...), ``"pooled_model4"``,
         ``"synergy"`` and ``"model4+synergy"`` (:class:`GatedEstimator`) as the
-        options allow.
+        options allow.  Each carries the range of the readings it was
+        calibrated on (``reading_range``: lowest and highest reading of each
+        sensor over the samples kept, range holds included), and its
+        ``predict`` warns about readings mostly off it.
 
     Raises
     ------
@@ -160,7 +184,12 @@ def calibrate(rec: GloveRecording, *, options: CalibrationOptions | None = None,
         Rows dropped for NaN or saturation; too few samples for a regression
         (with the t-values).
     """
-    opts = options or CalibrationOptions()
+    opts = CalibrationOptions() if options is None else options
+    if not isinstance(opts, CalibrationOptions):
+        raise InvalidInputError(f"options must be CalibrationOptions, got "
+                                f"{type(opts).__name__}")
+    if not isinstance(rec, GloveRecording):
+        raise InvalidInputError(f"rec must be a GloveRecording, got {type(rec).__name__}")
     rec = _clean(rec, where)
     is_motion = ~np.isin(rec.motion.astype(str), ("", *RANGE_LABELS))
     cal = rec.select(is_motion)
@@ -169,6 +198,7 @@ def calibrate(rec: GloveRecording, *, options: CalibrationOptions | None = None,
     motions = tuple(dict.fromkeys(cal.motion.tolist()))
     if not motions:
         raise EstimationError(f"{where}: no samples labelled with a motion (column 'motion')")
+    reading_range = np.stack([rec.sensors.min(axis=0), rec.sensors.max(axis=0)])
     centre = cal.sensors.mean(axis=0)
     scale = cal.sensors.std(axis=0)
     flat = np.flatnonzero(scale == 0)
@@ -176,7 +206,7 @@ def calibrate(rec: GloveRecording, *, options: CalibrationOptions | None = None,
         raise EstimationError(f"{where}: {SENSOR_NAMES[flat[0]]} never changes during the "
                               "motions (a dead sensor)")
     out: dict[str, GloveEstimator] = {
-        "constant": ConstantEstimator(posture=angles.mean(axis=0))}
+        "constant": ConstantEstimator(posture=angles.mean(axis=0), reading_range=reading_range)}
     mixer = None
     if len(motions) > 1:
         mixer = fit_mixer(cal.sensors, cal.motion, cal.phase(), motions=motions,
@@ -190,23 +220,26 @@ def calibrate(rec: GloveRecording, *, options: CalibrationOptions | None = None,
                 fits[m] = fit_motion_model(cal.sensors[sel], angles[sel], model=model,
                                            motion=m, t_threshold=opts.t_threshold,
                                            centre=centre, scale=scale)
-            out[model] = RegressionEstimator(name=model, models=fits, mixer=mixer)
+            out[model] = RegressionEstimator(name=model, models=fits, mixer=mixer,
+                                             reading_range=reading_range)
     _reemit(caught, where)
     if opts.pooled:
         out["pooled_model4"] = RegressionEstimator(
             name="pooled_model4",
             models={"pooled": fit_motion_model(cal.sensors, angles, model="model4",
                                                motion="pooled", t_threshold=opts.t_threshold,
-                                               centre=centre, scale=scale)})
+                                               centre=centre, scale=scale)},
+            reading_range=reading_range)
     if opts.synergy_k:
         if rec.kind not in GLOVE_KINDS:
             raise EstimationError(f"{where}: the glove kind is unknown; give one of "
                                   f"{', '.join(GLOVE_KINDS)} for the synergy baseline")
         out["synergy"] = _fit_synergy(cal, synergies or default_synergies(opts.synergy_k),
-                                      centre, scale)
+                                      centre, scale, reading_range)
         primary = out.get("model4")
         if isinstance(primary, RegressionEstimator) and primary.mixer is not None:
-            out["model4+synergy"] = GatedEstimator(primary=primary, fallback=out["synergy"])
+            out["model4+synergy"] = GatedEstimator(primary=primary, fallback=out["synergy"],
+                                                   reading_range=reading_range)
     return out
 
 
@@ -229,7 +262,8 @@ def _reemit(caught, where: str) -> None:
         warnings.warn(f"{where}: {msg}", GloveWarning, stacklevel=3)
 
 
-def _fit_synergy(cal: GloveRecording, syn: Synergies, centre, scale) -> SynergyEstimator:
+def _fit_synergy(cal: GloveRecording, syn: Synergies, centre, scale,
+                 reading_range: np.ndarray) -> SynergyEstimator:
     proto = SynergyEstimator(synergies=syn, kind=cal.kind, centre=centre, scale=scale,
                              bend_coef=np.zeros((5, 4)), bend_variance=np.ones(5))
     target = cal.angles @ proto.weight_matrix().T          # nominal bend, (N, 5)
@@ -242,7 +276,7 @@ def _fit_synergy(cal: GloveRecording, syn: Synergies, centre, scale) -> SynergyE
         coef[k] = beta
         var[k] = max(float(np.mean((target[:, k] - x @ beta) ** 2)), 1e-3)
     return SynergyEstimator(synergies=syn, kind=cal.kind, centre=centre, scale=scale,
-                            bend_coef=coef, bend_variance=var)
+                            bend_coef=coef, bend_variance=var, reading_range=reading_range)
 
 
 def range_readings(rec: GloveRecording, *, where: str = "recording"
@@ -291,6 +325,9 @@ def load_calibration(path) -> dict:
     -------
     dict with ``"kind"``, ``"range_reference"`` (None or (open, fist)
     arrays), ``"meta"`` and ``"estimators"`` (dict of str to GloveEstimator).
+    An estimator written without its ``reading_range`` (an older file) takes
+    the range of ``meta`` fields ``sensor_min`` and ``sensor_max`` where the
+    file has them.
 
     Raises
     ------
@@ -342,5 +379,13 @@ def load_calibration(path) -> dict:
                 meta[key] = array_field(meta, key, (5,))
     except InvalidInputError as exc:
         raise InvalidInputError(f"{path}: meta {exc}") from None
+    if "sensor_min" in meta and "sensor_max" in meta:  # older files: the range in meta only
+        try:
+            low_high = np.stack([meta["sensor_min"], meta["sensor_max"]])
+            est = {k: replace(v, reading_range=low_high) if isinstance(v, _RANGED)
+                   and v.reading_range is None else v for k, v in est.items()}
+        except InvalidInputError as exc:
+            raise InvalidInputError(f"{path}: meta fields 'sensor_min', 'sensor_max': "
+                                    f"{exc}") from None
     return {"kind": kind, "meta": meta, "estimators": est,
             "range_reference": rr}

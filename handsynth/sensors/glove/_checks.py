@@ -97,7 +97,7 @@ def check_sensors(sensors: np.ndarray, *, adc_max: float, where: str,
 
 
 def check_reading_range(sensors: np.ndarray, low: np.ndarray, high: np.ndarray, *,
-                        where: str) -> tuple[int, ...]:
+                        where: str, stacklevel: int = 2) -> tuple[int, ...]:
     """Warn about sensors whose readings mostly lie off the calibration's range.
 
     The models clamp readings to the range they were fitted on, so a glove
@@ -112,6 +112,8 @@ def check_reading_range(sensors: np.ndarray, low: np.ndarray, high: np.ndarray, 
         Lowest and highest reading of each sensor in the calibration.
     where : str, keyword-only
         Name of the data in messages.
+    stacklevel : int, keyword-only
+        Of the warnings, as for :func:`warnings.warn` (2: the caller's line).
 
     Returns
     -------
@@ -130,5 +132,6 @@ def check_reading_range(sensors: np.ndarray, low: np.ndarray, high: np.ndarray, 
         warnings.warn(f"{where}: {100 * share[k]:.0f} % of the {SENSOR_NAMES[k]} readings lie "
                       f"off the calibration's range {low[k]:g}-{high[k]:g} counts (read there "
                       "as its end): the same glove, full scale (--adc-max) and wearing? A new "
-                      "wearing needs a range calibration (--range)", GloveWarning, stacklevel=2)
+                      "wearing needs a range calibration (--range)", GloveWarning,
+                      stacklevel=stacklevel)
     return bad

@@ -6,6 +6,12 @@ returning angles (N, 20) in degrees, and ``to_dict()`` for the calibration
 file.  Rows of `sensors` with a NaN give rows of NaN; every other output is
 clipped to the joint limits (:data:`handsynth.models.JOINT_LIMITS_DEG`),
 since no hand can take an angle outside them.
+
+The estimators of :func:`calibrate` carry the calibration's range of
+readings (``reading_range``); their ``predict`` warns, as
+:func:`check_reading_range` words it, when readings lie off it (the models
+clamp such readings to the range, so the answer would hardly move without a
+word).
 """
 
 from __future__ import annotations
@@ -18,10 +24,11 @@ import numpy as np
 
 from ...errors import EstimationError, InvalidInputError
 from ...models import JOINT_LIMITS_DEG, JOINT_NAMES
-from ._fields import array_field, number_field
+from ._checks import check_reading_range
+from ._fields import array_field, as_array, as_number, as_sensors, number_field
 from ._mixing import MotionMixer
 from ._models import GloveWarning, MotionModel
-from ._sensors import sensor_joints
+from ._sensors import SENSOR_NAMES, _check_kind, sensor_joints
 from ._synergy import Synergies
 
 __all__ = [
@@ -54,18 +61,6 @@ class GloveEstimator(Protocol):
         """JSON-serialisable form, read back by :func:`estimator_from_dict`."""
 
 
-def _as_sensors(sensors) -> np.ndarray:
-    s = np.asarray(sensors, dtype=np.float64)
-    if s.ndim == 1:
-        s = s[None]
-    if s.ndim != 2 or s.shape[1] != 5:
-        raise InvalidInputError(f"sensors must have shape (N, 5), got {np.shape(sensors)}")
-    if np.isinf(s).any():
-        row = int(np.argwhere(np.isinf(s))[0, 0])
-        raise InvalidInputError(f"sensors: row {row} has an infinite reading")
-    return s
-
-
 def _finish(s: np.ndarray, fn) -> np.ndarray:
     """Apply fn to the finite rows; NaN rows stay NaN; clip to the joint limits."""
     ok = ~np.isnan(s).any(axis=1)
@@ -75,27 +70,125 @@ def _finish(s: np.ndarray, fn) -> np.ndarray:
     return out
 
 
+def _reading_range(value, what: str) -> np.ndarray | None:
+    """A reading range (2, 5): lowest and highest reading of each sensor, or None."""
+    if value is None:
+        return None
+    r = as_array(value, what, (2, 5))
+    turned = np.flatnonzero(r[0] > r[1])
+    if turned.size:
+        k = turned[0]
+        raise InvalidInputError(f"{what}: the lowest {SENSOR_NAMES[k]} reading {r[0, k]:g} "
+                                f"lies above the highest {r[1, k]:g}")
+    return r
+
+
+class _Estimator:
+    """What the estimators below share: checks of the input, then ``_predict``."""
+
+    name: str
+    reading_range: np.ndarray | None
+
+    def _check_common(self) -> None:
+        """Check ``name`` and convert ``reading_range`` (from ``__post_init__``)."""
+        cls = type(self).__name__
+        if not isinstance(self.name, str) or not self.name:
+            raise InvalidInputError(f"{cls}.name must be a non-empty string, "
+                                    f"got {self.name!r}")
+        object.__setattr__(self, "reading_range",
+                           _reading_range(self.reading_range, f"{cls}.reading_range"))
+
+    def predict(self, sensors, *, motion: str | None = None) -> np.ndarray:
+        """Joint angles (N, 20), deg, canonical order, from readings (N, 5), counts.
+
+        Parameters
+        ----------
+        sensors : array_like, shape (N, 5) or (5,), counts
+            NaN marks a dropped sample (its row of angles is NaN).
+        motion : str, keyword-only
+            The representative motion, when known; estimators that do not
+            use motions ignore it.
+
+        Raises
+        ------
+        InvalidInputError
+            `sensors` of another shape or with an infinite reading; a
+            `motion` that was not calibrated (for an estimator with models
+            of several motions).
+
+        Warns
+        -----
+        GloveWarning
+            Readings mostly off ``reading_range`` (:func:`check_reading_range`).
+        """
+        s = as_sensors(sensors)
+        self._check_motion(motion)
+        if self.reading_range is not None:
+            check_reading_range(s, self.reading_range[0], self.reading_range[1],
+                                where=self.name, stacklevel=3)
+        return self._predict(s, motion)
+
+    def _check_motion(self, motion: str | None) -> None:
+        """Refuse a `motion` the estimator cannot use (most ignore it)."""
+
+    def _predict(self, s: np.ndarray, motion: str | None) -> np.ndarray:
+        """`predict` of checked readings (N, 5) and motion, without the check of the range."""
+        raise NotImplementedError
+
+
+def _predict_unchecked(est: GloveEstimator, s: np.ndarray, motion: str | None) -> np.ndarray:
+    """`est`'s answer to readings its caller already checked (no second range warning)."""
+    if isinstance(est, _Estimator):
+        return est._predict(s, motion)
+    return est.predict(s, motion=motion)
+
+
+def _to_dict_range(est: _Estimator) -> list | None:
+    return None if est.reading_range is None else est.reading_range.tolist()
+
+
+def _range_field(d: dict) -> np.ndarray | None:
+    """Field ``reading_range`` of an estimator entry (absent in older files: None)."""
+    return None if d.get("reading_range") is None else array_field(d, "reading_range", (2, 5))
+
+
 @dataclass(frozen=True, eq=False)
-class ConstantEstimator:
+class ConstantEstimator(_Estimator):
     """The trivial baseline: always the mean posture of the calibration.
 
     Attributes
     ----------
     posture : ndarray, shape (20,), deg
+    name : str
+    reading_range : ndarray, shape (2, 5), counts, or None
+        Lowest (row 0) and highest (row 1) reading of each sensor in the
+        calibration; None: unknown, no check.
+
+    Raises
+    ------
+    InvalidInputError
+        A field of another type or shape, or not finite (named in the message).
     """
 
     posture: np.ndarray
     name: str = "constant"
+    reading_range: np.ndarray | None = None
 
-    def predict(self, sensors, *, motion=None) -> np.ndarray:
-        return _finish(_as_sensors(sensors), lambda s: np.tile(self.posture, (len(s), 1)))
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "posture", as_array(self.posture, "ConstantEstimator.posture",
+                                                     (len(JOINT_NAMES),)))
+        self._check_common()
+
+    def _predict(self, s: np.ndarray, motion: str | None) -> np.ndarray:
+        return _finish(s, lambda x: np.tile(self.posture, (len(x), 1)))
 
     def to_dict(self) -> dict:
-        return {"type": "constant", "name": self.name, "posture": self.posture.tolist()}
+        return {"type": "constant", "name": self.name, "posture": self.posture.tolist(),
+                "reading_range": _to_dict_range(self)}
 
 
 @dataclass(frozen=True, eq=False)
-class RegressionEstimator:
+class RegressionEstimator(_Estimator):
     """Per-motion regressions of seed 004, with likelihood mixing (eqs. 4-6).
 
     Attributes
@@ -103,14 +196,36 @@ class RegressionEstimator:
     name : str
     models : dict of str to MotionModel
         One fit per representative motion (one entry "pooled" for a fit on
-        every motion at once).
+        every motion at once).  With a single model, `motion` is ignored.
     mixer : MotionMixer or None
         Needed to predict without a motion when there is more than one model.
+    reading_range : ndarray, shape (2, 5), counts, or None
+        See :class:`ConstantEstimator`.
+
+    Raises
+    ------
+    InvalidInputError
+        No models, a model that is no :class:`MotionModel`, or a mixer that
+        is no :class:`MotionMixer`.
     """
 
     name: str
     models: dict
     mixer: MotionMixer | None = None
+    reading_range: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        self._check_common()
+        if not isinstance(self.models, dict) or not self.models:
+            raise InvalidInputError(f"RegressionEstimator.models must map each calibrated "
+                                    f"motion to its MotionModel, got {self.models!r:.40}")
+        bad = [m for m, v in self.models.items() if not isinstance(v, MotionModel)]
+        if bad:
+            raise InvalidInputError(f"RegressionEstimator.models[{bad[0]!r}] must be a "
+                                    f"MotionModel, got {type(self.models[bad[0]]).__name__}")
+        if self.mixer is not None and not isinstance(self.mixer, MotionMixer):
+            raise InvalidInputError(f"RegressionEstimator.mixer must be a MotionMixer or "
+                                    f"None, got {type(self.mixer).__name__}")
 
     @property
     def motions(self) -> tuple[str, ...]:
@@ -118,27 +233,30 @@ class RegressionEstimator:
 
     def weights(self, sensors) -> np.ndarray:
         """Motion weights r_p (eq. 6), shape (N, P), in the order of `motions`."""
-        s = _as_sensors(sensors)
+        s = as_sensors(sensors)
         if len(self.models) == 1:
             return np.ones((len(s), 1))
         if self.mixer is None:
             raise EstimationError(f"{self.name}: no motion mixer; give the motion")
         return self.mixer.weights(s)
 
-    def predict(self, sensors, *, motion=None) -> np.ndarray:
-        """Angles from the named motion's model, or mixed over all (eq. 6).
+    def _check_motion(self, motion: str | None) -> None:
+        """A single model (such as the pooled one) answers whatever `motion` is.
 
         Raises
         ------
         InvalidInputError
-            `motion` is not one of the calibrated motions.
+            `motion` is not one of the calibrated motions (with several models).
         """
-        s = _as_sensors(sensors)
+        if motion is not None and len(self.models) > 1 and motion not in self.models:
+            raise InvalidInputError(f"motion {motion!r} was not calibrated; calibrated "
+                                    f"motions: {', '.join(self.models)}")
+
+    def _predict(self, s: np.ndarray, motion: str | None) -> np.ndarray:
+        """Angles from the named motion's model, or mixed over all (eq. 6)."""
+        if len(self.models) == 1:
+            return _finish(s, next(iter(self.models.values())).predict)
         if motion is not None:
-            if motion not in self.models:
-                raise InvalidInputError(
-                    f"motion {motion!r} was not calibrated; calibrated motions: "
-                    f"{', '.join(self.models)}")
             return _finish(s, self.models[motion].predict)
 
         def mixed(x):
@@ -151,11 +269,12 @@ class RegressionEstimator:
     def to_dict(self) -> dict:
         return {"type": "regression", "name": self.name,
                 "models": {m: v.to_dict() for m, v in self.models.items()},
-                "mixer": None if self.mixer is None else self.mixer.to_dict()}
+                "mixer": None if self.mixer is None else self.mixer.to_dict(),
+                "reading_range": _to_dict_range(self)}
 
 
 @dataclass(frozen=True, eq=False)
-class SynergyEstimator:
+class SynergyEstimator(_Estimator):
     """Synergy-based reconstruction (Bianchi et al. 2013), the outside baseline.
 
     Each reading is first turned into the bend angle of its sensor (a cubic
@@ -173,6 +292,15 @@ class SynergyEstimator:
     bend_coef : ndarray, shape (5, 4)
         Intercept and z, z^2, z^3 coefficients per sensor.
     bend_variance : ndarray, shape (5,), deg^2
+    name : str
+    reading_range : ndarray, shape (2, 5), counts, or None
+        See :class:`ConstantEstimator`.
+
+    Raises
+    ------
+    InvalidInputError
+        A field of another type or shape, not finite, an unknown kind, or a
+        scale or bend variance that is not positive.
     """
 
     synergies: Synergies
@@ -182,6 +310,22 @@ class SynergyEstimator:
     bend_coef: np.ndarray
     bend_variance: np.ndarray
     name: str = "synergy"
+    reading_range: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.synergies, Synergies):
+            raise InvalidInputError(f"SynergyEstimator.synergies must be Synergies, "
+                                    f"got {type(self.synergies).__name__}")
+        _check_kind(self.kind)
+        for name, shape in (("centre", (5,)), ("scale", (5,)), ("bend_coef", (5, 4)),
+                            ("bend_variance", (5,))):
+            object.__setattr__(self, name, as_array(getattr(self, name),
+                                                    f"SynergyEstimator.{name}", shape))
+        for name in ("scale", "bend_variance"):
+            if (getattr(self, name) <= 0).any():
+                raise InvalidInputError(f"SynergyEstimator.{name} must be positive, "
+                                        f"got {getattr(self, name).tolist()}")
+        self._check_common()
 
     def weight_matrix(self) -> np.ndarray:
         j = sensor_joints(self.kind)
@@ -192,23 +336,24 @@ class SynergyEstimator:
         return a
 
     def bend(self, sensors) -> np.ndarray:
-        z = (_as_sensors(sensors) - self.centre) / self.scale
+        z = (as_sensors(sensors) - self.centre) / self.scale
         c = self.bend_coef
         return c[:, 0] + c[:, 1] * z + c[:, 2] * z**2 + c[:, 3] * z**3
 
-    def predict(self, sensors, *, motion=None) -> np.ndarray:
-        return _finish(_as_sensors(sensors), lambda s: self.synergies.reconstruct(
-            self.bend(s), self.weight_matrix(), self.bend_variance))
+    def _predict(self, s: np.ndarray, motion: str | None) -> np.ndarray:
+        return _finish(s, lambda x: self.synergies.reconstruct(
+            self.bend(x), self.weight_matrix(), self.bend_variance))
 
     def to_dict(self) -> dict:
         return {"type": "synergy", "name": self.name, "kind": self.kind,
                 "synergies": self.synergies.to_dict(), "centre": self.centre.tolist(),
                 "scale": self.scale.tolist(), "bend_coef": self.bend_coef.tolist(),
-                "bend_variance": self.bend_variance.tolist()}
+                "bend_variance": self.bend_variance.tolist(),
+                "reading_range": _to_dict_range(self)}
 
 
 @dataclass(frozen=True, eq=False)
-class GatedEstimator:
+class GatedEstimator(_Estimator):
     """Mixing over the representative motions, handing over to a fallback off them.
 
     The mixing of seed 004 (eqs. 4-6) always answers with a blend of the
@@ -227,6 +372,17 @@ class GatedEstimator:
     fallback : GloveEstimator
         Typically the synergy baseline.
     name : str
+    lo, hi : float
+        d^2 where the hand-over starts and where it is complete; finite,
+        ``lo < hi``.
+    reading_range : ndarray, shape (2, 5), counts, or None
+        See :class:`ConstantEstimator`.
+
+    Raises
+    ------
+    InvalidInputError
+        A primary that is no :class:`RegressionEstimator`, a fallback that is
+        no :class:`GloveEstimator`, or `lo` and `hi` not finite with lo < hi.
     """
 
     primary: RegressionEstimator
@@ -236,28 +392,47 @@ class GatedEstimator:
     #: chi-square(5) quantiles 0.95 and 0.999 (scipy.stats.chi2.ppf)
     lo: float = 11.0705
     hi: float = 20.5150
+    reading_range: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        self._check_common()
+        if not isinstance(self.primary, RegressionEstimator):
+            raise InvalidInputError(f"GatedEstimator.primary must be a RegressionEstimator, "
+                                    f"got {type(self.primary).__name__}")
+        if not isinstance(self.fallback, GloveEstimator):
+            raise InvalidInputError(f"GatedEstimator.fallback must be a GloveEstimator, "
+                                    f"got {type(self.fallback).__name__}")
+        lo = as_number(self.lo, "GatedEstimator.lo")
+        hi = as_number(self.hi, "GatedEstimator.hi")
+        if not lo < hi:
+            raise InvalidInputError(f"GatedEstimator.lo must be below hi, got lo {lo:g} and "
+                                    f"hi {hi:g}")
+        object.__setattr__(self, "lo", lo)
+        object.__setattr__(self, "hi", hi)
 
     def fallback_weight(self, sensors) -> np.ndarray:
         """Weight of the fallback per sample, shape (N,), in [0, 1]."""
-        s = _as_sensors(sensors)
+        s = as_sensors(sensors)
         if self.primary.mixer is None:
             raise EstimationError(f"{self.name}: the primary estimator has no motion mixer")
         d2 = -2.0 * self.primary.mixer.log_likelihood(s).max(axis=1)
         return np.clip((d2 - self.lo) / (self.hi - self.lo), 0.0, 1.0)
 
-    def predict(self, sensors, *, motion=None) -> np.ndarray:
-        s = _as_sensors(sensors)
+    def _check_motion(self, motion: str | None) -> None:
+        self.primary._check_motion(motion)
 
+    def _predict(self, s: np.ndarray, motion: str | None) -> np.ndarray:
         def gated(x):
             f = self.fallback_weight(x)[:, None]
-            return (1.0 - f) * self.primary.predict(x, motion=motion) + \
-                f * self.fallback.predict(x)
+            return (1.0 - f) * _predict_unchecked(self.primary, x, motion) + \
+                f * _predict_unchecked(self.fallback, x, None)
 
         return _finish(s, gated)
 
     def to_dict(self) -> dict:
         return {"type": "gated", "name": self.name, "primary": self.primary.to_dict(),
-                "fallback": self.fallback.to_dict(), "lo": self.lo, "hi": self.hi}
+                "fallback": self.fallback.to_dict(), "lo": self.lo, "hi": self.hi,
+                "reading_range": _to_dict_range(self)}
 
 
 @dataclass(frozen=True, eq=False)
@@ -284,13 +459,15 @@ class RangeNormalizer:
     target_fist: np.ndarray
 
     def __post_init__(self) -> None:
-        from ._sensors import SENSOR_NAMES
-
         for name in ("source_open", "source_fist", "target_open", "target_fist"):
-            v = np.asarray(getattr(self, name), dtype=np.float64)
+            try:
+                v = np.asarray(getattr(self, name), dtype=np.float64)
+            except (TypeError, ValueError):
+                v = np.full(0, np.nan)
             if v.shape != (5,) or not np.isfinite(v).all():
                 raise EstimationError(f"range calibration: {name} must be 5 finite readings, "
-                                      f"got {v.tolist()}")
+                                      f"got {getattr(self, name)!r:.60}")
+            object.__setattr__(self, name, v)
         span = np.asarray(self.source_fist) - np.asarray(self.source_open)
         flat = np.flatnonzero(np.abs(span) < 1.0)
         if flat.size:
@@ -311,7 +488,7 @@ class RangeNormalizer:
                           stacklevel=2)
 
     def apply(self, sensors) -> np.ndarray:
-        s = _as_sensors(sensors)
+        s = as_sensors(sensors)
         u = (s - self.source_open) / (self.source_fist - self.source_open)
         return self.target_open + u * (self.target_fist - self.target_open)
 
@@ -331,7 +508,7 @@ def estimator_from_dict(d: dict) -> GloveEstimator:
         t = d["type"]
         if t == "constant":
             return ConstantEstimator(posture=array_field(d, "posture", (len(JOINT_NAMES),)),
-                                     name=str(d["name"]))
+                                     name=str(d["name"]), reading_range=_range_field(d))
         if t == "regression":
             if not isinstance(d["models"], dict) or not d["models"]:
                 raise InvalidInputError(f"estimator {d['name']!r}: field 'models' must map "
@@ -345,7 +522,7 @@ def estimator_from_dict(d: dict) -> GloveEstimator:
             return RegressionEstimator(
                 name=str(d["name"]),
                 models={m: MotionModel.from_dict(v) for m, v in d["models"].items()},
-                mixer=mixer)
+                mixer=mixer, reading_range=_range_field(d))
         if t == "gated":
             primary = estimator_from_dict(d["primary"])
             if not isinstance(primary, RegressionEstimator):
@@ -353,14 +530,14 @@ def estimator_from_dict(d: dict) -> GloveEstimator:
                                         "regression estimator")
             return GatedEstimator(primary=primary, fallback=estimator_from_dict(d["fallback"]),
                                   name=str(d["name"]), lo=number_field(d, "lo"),
-                                  hi=number_field(d, "hi"))
+                                  hi=number_field(d, "hi"), reading_range=_range_field(d))
         if t == "synergy":
             return SynergyEstimator(
                 synergies=Synergies.from_dict(d["synergies"]), kind=str(d["kind"]),
                 centre=array_field(d, "centre", (5,)), scale=array_field(d, "scale", (5,)),
                 bend_coef=array_field(d, "bend_coef", (5, 4)),
                 bend_variance=array_field(d, "bend_variance", (5,)),
-                name=str(d["name"]))
+                name=str(d["name"]), reading_range=_range_field(d))
     except KeyError as exc:
         raise InvalidInputError(f"estimator entry lacks field {exc.args[0]!r}") from None
     except InvalidInputError as exc:

@@ -36,7 +36,7 @@ import numpy as np
 
 from ...errors import EstimationError, InvalidInputError
 from ...models import JOINT_NAMES
-from ._fields import array_field, number_field
+from ._fields import array_field, as_array, as_number, as_sensors, number_field
 from ._sensors import SENSOR_NAMES
 
 __all__ = [
@@ -204,8 +204,16 @@ class MotionModel:
     z_range: np.ndarray | None = None
 
     def predict(self, sensors: np.ndarray) -> np.ndarray:
-        """Joint angles, shape (N, 20), deg, from readings (N, 5), counts."""
-        z = (np.asarray(sensors, dtype=np.float64) - self.centre) / self.scale
+        """Joint angles, shape (N, 20), deg, from readings (N, 5), counts.
+
+        One reading (5,) is one row; a row with a NaN reading gives NaN angles.
+
+        Raises
+        ------
+        InvalidInputError
+            `sensors` of another shape or with an infinite reading.
+        """
+        z = (as_sensors(sensors) - self.centre) / self.scale
         if self.z_range is not None:
             z = np.clip(z, self.z_range[0], self.z_range[1])
         out = np.zeros((z.shape[0], len(JOINT_NAMES)))
@@ -252,7 +260,8 @@ def fit_motion_model(sensors: np.ndarray, angles: np.ndarray, *, model: str,
     Parameters
     ----------
     sensors : ndarray, shape (N, 5), float, counts
-        Finite readings (drop NaN rows and saturated samples first).
+        Readings (drop saturated samples first); rows with a NaN here or in
+        `angles` are dropped with a warning.
     angles : ndarray, shape (N, 20), float, deg
         Reference joint angles at the same instants.
     model : {"model1", "model2", "model3", "model4"}, keyword-only
@@ -261,7 +270,8 @@ def fit_motion_model(sensors: np.ndarray, angles: np.ndarray, *, model: str,
     t_threshold : float, keyword-only
         |t| below which model 3 and 4 drop a sensor (2, eq. 11).
     centre, scale : ndarray, shape (5,), keyword-only
-        Standardisation; default the mean and s.d. of `sensors`.
+        Standardisation, finite (`scale` positive); default the mean and s.d.
+        of `sensors`.
     clamp : bool, keyword-only
         Clamp readings to the calibration's range when predicting (see
         :class:`MotionModel`).
@@ -272,6 +282,11 @@ def fit_motion_model(sensors: np.ndarray, angles: np.ndarray, *, model: str,
 
     Raises
     ------
+    InvalidInputError
+        `sensors`, `angles`, `centre` or `scale` of another shape, an
+        infinite value, `sensors` and `angles` of different lengths, a scale
+        that is not positive or a negative `t_threshold` (named in the
+        message).
     EstimationError
         Unknown model, no more samples than coefficients, or collinear
         regressors (a dead sensor).
@@ -279,15 +294,33 @@ def fit_motion_model(sensors: np.ndarray, angles: np.ndarray, *, model: str,
     Warns
     -----
     GloveWarning
-        Fewer than :data:`MIN_SAMPLES_PER_COEF` samples per coefficient; the
-        message lists the t-values.
+        Rows dropped for a NaN; fewer than :data:`MIN_SAMPLES_PER_COEF`
+        samples per coefficient (the message lists the t-values).
     """
     if model not in MODELS:
         raise EstimationError(f"model must be one of {', '.join(MODELS)}, got {model!r}")
-    s = np.asarray(sensors, dtype=np.float64)
-    a = np.asarray(angles, dtype=np.float64)
-    centre = s.mean(axis=0) if centre is None else np.asarray(centre, dtype=np.float64)
-    if scale is None:
+    label = (f"motion {motion!r}" if motion else "calibration") + f" ({model})"
+    s = as_array(sensors, "sensors", (None, 5), allow_nan=True)
+    a = as_array(angles, "angles", (None, len(JOINT_NAMES)), allow_nan=True)
+    if len(s) != len(a):
+        raise InvalidInputError(f"sensors and angles must have the same number of rows, got "
+                                f"{len(s)} and {len(a)}")
+    if as_number(t_threshold, "t_threshold") < 0:
+        raise InvalidInputError(f"t_threshold must be >= 0, got {t_threshold!r}")
+    bad = np.isnan(s).any(axis=1) | np.isnan(a).any(axis=1)
+    if bad.any():
+        rows = ", ".join(str(int(r)) for r in np.flatnonzero(bad)[:5])
+        warnings.warn(f"{label}: dropped {int(bad.sum())} of {len(s)} rows with NaN "
+                      f"(first rows {rows})", GloveWarning, stacklevel=2)
+        s, a = s[~bad], a[~bad]
+    if not len(s):
+        raise EstimationError(f"{label}: no calibration samples with every reading and angle")
+    centre = s.mean(axis=0) if centre is None else as_array(centre, "centre", (5,))
+    if scale is not None:
+        scale = as_array(scale, "scale", (5,))
+        if (scale <= 0).any():
+            raise InvalidInputError(f"scale must be positive, got {scale.tolist()}")
+    else:
         scale = s.std(axis=0)
         dead = np.flatnonzero(scale == 0)
         if dead.size:
@@ -296,7 +329,6 @@ def fit_motion_model(sensors: np.ndarray, angles: np.ndarray, *, model: str,
                 f"{s[0, dead[0]]:g} counts over {len(s)} samples (a dead sensor)")
     z = (s - centre) / scale
     fits = {}
-    label = (f"motion {motion!r}" if motion else "calibration") + f" ({model})"
     for i, fj in enumerate(finger_joints()):
         own_cubic = [(i, 1), (i, 2), (i, 3)]
         fits[fj["j2"]] = _ols(z, a[:, fj["j2"]], own_cubic,  # eq. 2

@@ -35,6 +35,7 @@ import numpy as np
 
 from ...errors import InvalidInputError
 from ...models import FINGERS, JOINT_NAMES
+from ._fields import as_array
 
 __all__ = [
     "GLOVE_KINDS",
@@ -190,14 +191,28 @@ def bend_angle_deg(angles: np.ndarray, params: SensorParams) -> np.ndarray:
     Returns
     -------
     ndarray, shape (N, 5), float64, deg
+
+    Raises
+    ------
+    InvalidInputError
+        `angles` not of shape (N, 20) or not finite, or `params`
+        not :class:`SensorParams`.
     """
+    a = _as_angles(angles)
+    if not isinstance(params, SensorParams):
+        raise InvalidInputError(f"params must be SensorParams, got {type(params).__name__}")
     j = sensor_joints(params.kind)
-    a = np.asarray(angles, dtype=np.float64)
     w_prox = j["w_proximal"] + params.crosstalk
     w_dist = j["w_distal"] * (1.0 + params.distal_weight_error)
     # the DG5 thumb sensor's "proximal" and "distal" joints are the same MCP
     prox = np.where(j["proximal"] == j["distal"], 0.0, w_prox)
     return prox * a[:, j["proximal"]] + w_dist * a[:, j["distal"]]
+
+
+def _as_angles(angles) -> np.ndarray:
+    """Joint angles as a finite float array (N, 20) (a NaN would stick in the play
+    operator's state and spoil every later reading)."""
+    return as_array(angles, "angles", (None, len(JOINT_NAMES)))
 
 
 def play_operator_reference(x: np.ndarray, width: np.ndarray) -> np.ndarray:
@@ -262,6 +277,11 @@ def simulate_sensors(angles: np.ndarray, params: SensorParams, *,
     ndarray, shape (N, 5), float64, counts
         Integer-valued readings clipped to ``[0, params.adc_max]`` (a reading
         at either end is saturated).
+
+    Raises
+    ------
+    InvalidInputError
+        As :func:`bend_angle_deg`.
     """
     b = bend_angle_deg(angles, params)
     b = play_operator(b, params.hysteresis_deg)

@@ -26,6 +26,7 @@ import numpy as np
 
 from ...errors import InvalidInputError
 from ...models import JOINT_LIMITS_DEG, JOINT_NAMES
+from ._fields import as_array, as_number
 from ._motions import MOTIONS, grasp_posture
 from ._recording import GloveRecording
 from ._sensors import SensorParams, simulate_sensors
@@ -34,6 +35,9 @@ __all__ = ["GloveUser", "don_glove", "make_user", "simulate_poses", "simulate_se
 
 _MCP = np.array([JOINT_NAMES.index(n) for n in JOINT_NAMES if n.endswith("mcp_flex")
                  or n == "thumb_cmc_flex"])
+#: Hand lengths (ratio to the standard hand) a user may have: a hand half or twice the
+#: standard's length is no hand a glove of the standard's size fits.
+HAND_LENGTH_RANGE = (0.5, 2.0)
 
 
 @dataclass(frozen=True, eq=False)
@@ -55,6 +59,12 @@ class GloveUser:
         (progress = u**lead): below 1 the joint moves early.
     dip_ratio : ndarray, shape (5,)
         Distal joint / middle joint flexion (thumb IP / MCP, DIP / PIP).
+
+    Raises
+    ------
+    InvalidInputError
+        A hand length outside :data:`HAND_LENGTH_RANGE`, or an array field of
+        another shape or not finite (named in the message).
     """
 
     name: str
@@ -64,6 +74,21 @@ class GloveUser:
     style_offset_deg: np.ndarray
     lead: np.ndarray
     dip_ratio: np.ndarray
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.name, str):
+            raise InvalidInputError(f"GloveUser.name must be a string, got {self.name!r}")
+        hand = as_number(self.hand_length, "hand_length")
+        lo, hi = HAND_LENGTH_RANGE
+        if not lo <= hand <= hi:
+            raise InvalidInputError(f"hand_length (ratio to the standard hand) must lie in "
+                                    f"[{lo:g}, {hi:g}], got {self.hand_length!r}")
+        object.__setattr__(self, "hand_length", hand)
+        for name, n in (("rest_deg", len(JOINT_NAMES)), ("style_scale", len(JOINT_NAMES)),
+                        ("style_offset_deg", len(JOINT_NAMES)), ("lead", len(JOINT_NAMES)),
+                        ("dip_ratio", 5)):
+            object.__setattr__(self, name, as_array(getattr(self, name), f"GloveUser.{name}",
+                                                    (n,)))
 
     def replace(self, **changes) -> GloveUser:
         return replace(self, **changes)
@@ -77,9 +102,17 @@ def make_user(seed: int, *, name: str | None = None,
     degrees at every joint): posture scale s.d. 0.08, offset s.d. 4 deg,
     rest posture s.d. 3 deg around 5 deg MCP flexion, MCP lead exponent
     0.6-1.0 and PIP 0.9-1.5, DIP/PIP ratio 0.55-0.80, hand length 0.92-1.08.
+
+    Raises
+    ------
+    InvalidInputError
+        A seed that is no non-negative integer, a `name` that is no string,
+        or a `hand_length` outside :data:`HAND_LENGTH_RANGE`.
     """
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise InvalidInputError(f"seed must be a non-negative integer, got {seed!r}")
+    if name is not None and not isinstance(name, str):
+        raise InvalidInputError(f"name must be a string, got {name!r}")
     rng = np.random.default_rng([int(seed), 19])
     n = len(JOINT_NAMES)
     rest = rng.normal(0.0, 3.0, n)
@@ -90,8 +123,7 @@ def make_user(seed: int, *, name: str | None = None,
     lead[other] = rng.uniform(0.9, 1.5, other.size)
     return GloveUser(
         name=name or f"user{seed}",
-        hand_length=float(hand_length if hand_length is not None
-                          else rng.uniform(0.92, 1.08)),
+        hand_length=hand_length if hand_length is not None else float(rng.uniform(0.92, 1.08)),
         rest_deg=rest,
         style_scale=rng.normal(1.0, 0.08, n),
         style_offset_deg=rng.normal(0.0, 4.0, n),

@@ -7,6 +7,7 @@ import pytest
 
 from handsynth.errors import EstimationError, InvalidInputError, OutputError
 from handsynth.sensors.glove import (
+    SENSOR_NAMES,
     CalibrationOptions,
     GloveRecording,
     GloveWarning,
@@ -106,3 +107,63 @@ def test_failed_write_leaves_no_file(tmp_path, monkeypatch, estimators):
     with pytest.raises(OutputError, match="cannot write the glove calibration .*no space left"):
         save_calibration(tmp_path / "cal.json", estimators)
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("field, value, msg", [
+    ("pooled", "no", "pooled must be True or False, got 'no'"),
+    ("pooled", 0, "pooled must be True or False, got 0"),
+    ("models", "model4", "models must be a tuple of model names"),
+    ("n_points", 2.5, r"n_points must be an integer >= 1, got 2.5"),
+    ("n_points", 0, r"n_points must be an integer >= 1, got 0"),
+    ("synergy_k", True, r"synergy_k must be an integer >= 0 and <= 20, got True"),
+    ("synergy_k", 21, r"synergy_k must be an integer >= 0 and <= 20, got 21"),
+    ("t_threshold", "2", "t_threshold must be a finite number, got '2'"),
+    ("ridge", float("nan"), "ridge must be a finite number, got nan"),
+])
+def test_option_types_and_ranges_are_checked(field, value, msg):
+    # pooled='no' (a truthy string) used to fit pooled_model4
+    with pytest.raises(InvalidInputError, match=f"CalibrationOptions.{msg}"):
+        CalibrationOptions(**{field: value})
+    assert CalibrationOptions(models=["model4"]).models == ("model4",)
+
+
+def test_calibrate_checks_its_arguments(cal_rec):
+    with pytest.raises(InvalidInputError, match="options must be CalibrationOptions, got dict"):
+        calibrate(cal_rec, options={"pooled": False})
+    with pytest.raises(InvalidInputError, match="rec must be a GloveRecording, got ndarray"):
+        calibrate(cal_rec.sensors)
+
+
+def test_the_reading_range_is_that_of_the_samples_kept(cal_rec, estimators):
+    low_high = np.stack([cal_rec.sensors.min(axis=0), cal_rec.sensors.max(axis=0)])
+    for est in estimators.values():
+        np.testing.assert_array_equal(est.reading_range, low_high)
+    sensors = cal_rec.sensors.copy()
+    sensors[5, 0] = cal_rec.adc_max          # a saturated sample is dropped, not the range's end
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", GloveWarning)
+        est = calibrate(_with(cal_rec, sensors), options=CalibrationOptions(synergy_k=0))
+    assert est["model1"].reading_range[1, 0] == low_high[1, 0]
+
+
+def test_the_range_travels_with_the_file_and_older_files_take_it_from_meta(
+        tmp_path, estimators, cal_rec):
+    path = save_calibration(tmp_path / "cal.json", estimators, kind="dg5")
+    cal = load_calibration(path)
+    for name, est in cal["estimators"].items():
+        np.testing.assert_array_equal(est.reading_range, estimators[name].reading_range)
+    d = json.loads(path.read_text())
+    for entry in d["estimators"].values():          # an older file: the range in meta only
+        entry.pop("reading_range")
+    old = tmp_path / "old.json"
+    old.write_text(json.dumps(d))
+    assert all(e.reading_range is None for e in load_calibration(old)["estimators"].values())
+    d["meta"] = {"sensor_min": [0.0] * 5, "sensor_max": [10.0] * 5}
+    old.write_text(json.dumps(d))
+    for est in load_calibration(old)["estimators"].values():
+        np.testing.assert_array_equal(est.reading_range, [[0.0] * 5, [10.0] * 5])
+    with pytest.warns(GloveWarning) as got:
+        load_calibration(old)["estimators"]["model4"].predict(cal_rec.sensors[:20])
+    assert [str(w.message).split(" (read there")[0] for w in got] == [
+        f"model4: 100 % of the {s} readings lie off the calibration's range 0-10 counts"
+        for s in SENSOR_NAMES]

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from handsynth.errors import EstimationError
+from handsynth.errors import EstimationError, InvalidInputError
 from handsynth.models import JOINT_NAMES
 from handsynth.sensors.glove import (
     DIP_PIP_RATIO,
@@ -111,3 +111,45 @@ def test_readings_beyond_the_calibration_are_clamped_not_extrapolated():
     np.testing.assert_allclose(m.predict(far[None]), m.predict(edge[None]))
     free = fit_motion_model(s, a, model="model4", clamp=False)
     assert np.abs(free.predict(far[None]) - m.predict(far[None])).max() > 100
+
+
+def test_nan_rows_are_dropped_with_a_warning_naming_them():
+    # one NaN angle used to make every joint's prediction NaN, without a word
+    s, a = _data()
+    a[7, 3] = np.nan
+    s[11, 2] = np.nan
+    with pytest.warns(GloveWarning, match=r"motion 'tripod' \(model4\): dropped 2 of 600 rows "
+                                          r"with NaN \(first rows 7, 11\)"):
+        m = fit_motion_model(s, a, model="model4", motion="tripod")
+    clean = fit_motion_model(np.delete(s, [7, 11], axis=0), np.delete(a, [7, 11], axis=0),
+                             model="model4", motion="tripod")
+    np.testing.assert_allclose(m.predict(s[:20:3]), clean.predict(s[:20:3]))
+    assert np.isfinite(m.predict(s[:6])).all()
+
+
+def test_arguments_of_the_fit_are_checked_by_name():
+    s, a = _data(n=100)
+    for kwargs, msg in (
+            ({"angles": a[:90]}, "sensors and angles must have the same number of rows, "
+                                 "got 100 and 90"),
+            ({"sensors": s.T}, r"sensors must have shape \(N, 5\), got \(5, 100\)"),
+            ({"angles": a[:, :5]}, r"angles must have shape \(N, 20\), got \(100, 5\)"),
+            ({"scale": np.zeros(5)}, r"scale must be positive, got \[0.0, "),
+            ({"scale": np.ones(3)}, r"scale must have shape \(5,\), got \(3,\)"),
+            ({"centre": np.zeros(3)}, r"centre must have shape \(5,\), got \(3,\)"),
+            ({"centre": [np.nan] * 5}, "centre holds nan"),
+            ({"t_threshold": -1.0}, "t_threshold must be >= 0, got -1.0")):
+        args = {"sensors": s, "angles": a, **kwargs}
+        with pytest.raises(InvalidInputError, match=msg):
+            fit_motion_model(args.pop("sensors"), args.pop("angles"), model="model4", **args)
+
+
+def test_motion_model_predict_checks_the_readings():
+    s, a = _data(n=100)
+    m = fit_motion_model(s, a, model="model4")
+    with pytest.raises(InvalidInputError, match=r"sensors must have shape \(N, 5\), "
+                                                r"got \(5, 100\)"):
+        m.predict(s.T)
+    with pytest.raises(InvalidInputError, match=r"sensors must have shape \(N, 5\), got \(7,\)"):
+        m.predict(np.zeros(7))
+    np.testing.assert_allclose(m.predict(s[0]), m.predict(s[:1]))

@@ -1,4 +1,5 @@
 import dataclasses
+import re
 
 import numpy as np
 import pytest
@@ -85,3 +86,23 @@ def test_params_validate_and_are_frozen():
         SensorParams().replace(gian=3.0)
     with pytest.raises(dataclasses.FrozenInstanceError):
         SensorParams().gain = 3.0
+
+
+@pytest.mark.parametrize("angles", [np.zeros((100, 29)), np.zeros((20, 300)), np.zeros(20),
+                                    np.zeros((4, 20, 1))])
+def test_angles_must_be_n_by_20(angles):
+    # any array with >= 20 columns was read, a (20,) vector failed with an IndexError
+    p = SensorParams()
+    for fn in (simulate_sensors, bend_angle_deg):
+        with pytest.raises(InvalidInputError, match=r"angles must have shape \(N, 20\), got "
+                                                    + re.escape(str(angles.shape))):
+            fn(angles, p)
+
+
+def test_angles_must_be_finite_and_params_sensor_params():
+    a = np.zeros((5, 20))
+    a[2, 4] = np.nan
+    with pytest.raises(InvalidInputError, match=r"angles holds nan at index \(2, 4\)"):
+        simulate_sensors(a, SensorParams())
+    with pytest.raises(InvalidInputError, match="params must be SensorParams, got str"):
+        bend_angle_deg(np.zeros((5, 20)), "dg5")

@@ -57,3 +57,19 @@ def test_bad_arguments():
         simulate_session(make_user(0), don_glove(make_user(0), "dg5", seed=0), ["wave"])
     with pytest.raises(InvalidInputError, match="seed"):
         make_user(-1)
+
+
+@pytest.mark.parametrize("length", [0, -1.0, 0.2, 3.0, float("nan"), "1.0"])
+def test_hand_length_is_checked(user, length):
+    with pytest.raises(InvalidInputError, match="hand_length"):
+        make_user(1, hand_length=length)
+    with pytest.raises(InvalidInputError, match="hand_length"):
+        user.replace(hand_length=length)
+    assert make_user(1, hand_length=0.9).hand_length == 0.9
+
+
+def test_user_fields_are_checked(user):
+    with pytest.raises(InvalidInputError, match=r"GloveUser.dip_ratio must have shape \(5,\)"):
+        user.replace(dip_ratio=np.ones(20))
+    with pytest.raises(InvalidInputError, match="name must be a string"):
+        make_user(1, name=7)
