@@ -34,6 +34,7 @@ from scipy.spatial.transform import Rotation
 
 from ...errors import EstimationError, InvalidInputError
 from ..common import matrix_to_rotvec
+from ._checks import check_integer, check_interval, check_real, check_vector3
 from ._recording import Recording
 
 __all__ = ["AxisAngleFilter", "AxisFilterResult", "relative_rotation_vectors"]
@@ -144,13 +145,9 @@ class AxisAngleFilter:
     min_angle_deg: float = 0.0
 
     def __post_init__(self) -> None:
-        if not (isinstance(self.bins, (int, np.integer)) and self.bins >= 1):
-            raise InvalidInputError(f"bins must be an integer >= 1, got {self.bins!r}")
-        lo, hi = self.value_range
-        if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
-            raise InvalidInputError(
-                f"value_range must be (low, high) with low < high, got {self.value_range!r}"
-            )
+        set_ = object.__setattr__  # frozen: store the checked values
+        set_(self, "bins", check_integer(self.bins, "bins", minimum=1))
+        set_(self, "value_range", check_interval(self.value_range, "value_range"))
         if isinstance(self.lateral_axis, str):
             if self.lateral_axis not in ("auto", "recording"):
                 raise InvalidInputError(
@@ -158,20 +155,15 @@ class AxisAngleFilter:
                     f"{self.lateral_axis!r}"
                 )
         else:
-            a = np.asarray(self.lateral_axis, dtype=np.float64)
-            if a.shape != (3,) or not np.isfinite(a).all() or np.linalg.norm(a) == 0:
-                raise InvalidInputError(
-                    f"lateral_axis must be a non-zero 3-vector, got {self.lateral_axis!r}"
-                )
+            a = check_vector3(self.lateral_axis, "lateral_axis", nonzero=True)
+            set_(self, "lateral_axis", tuple(float(v) for v in a))
         if self.lateral_frame not in ("transmitter", "upper"):
             raise InvalidInputError(
                 f"lateral_frame must be 'transmitter' or 'upper', got {self.lateral_frame!r}"
             )
-        if not (self.reference_s >= 0 and self.min_angle_deg >= 0):
-            raise InvalidInputError(
-                f"reference_s and min_angle_deg must be >= 0, got "
-                f"{self.reference_s!r}, {self.min_angle_deg!r}"
-            )
+        set_(self, "reference_s", check_real(self.reference_s, "reference_s", minimum=0.0))
+        set_(self, "min_angle_deg",
+             check_real(self.min_angle_deg, "min_angle_deg", minimum=0.0, below=180.0))
 
     def _lateral_axis(self, recording: Recording, rv: np.ndarray) -> np.ndarray:
         """Width direction in the upper sensor frame, unit."""

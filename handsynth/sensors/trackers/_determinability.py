@@ -44,6 +44,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ...errors import InvalidInputError
+from ._checks import check_array, check_integer
+
 __all__ = ["Determinability", "assess_determinability", "linear_centre"]
 
 
@@ -130,6 +133,17 @@ def _sensor_midpoint(q: np.ndarray, d: np.ndarray) -> np.ndarray:
     return 0.5 * np.concatenate([d.mean(axis=0), lower_in_lower])
 
 
+def _check_relative(q: object, d: object) -> tuple[np.ndarray, np.ndarray]:
+    """`q` and `d` as finite ``(n, 3, 3)`` and ``(n, 3)`` arrays of one length."""
+    q = check_array(q, "q", (None, 3, 3), rows="frames")
+    d = check_array(d, "d", (None, 3), rows="frames")
+    if d.shape[0] != q.shape[0]:
+        raise InvalidInputError(
+            f"d: expected one row per frame of q, shape ({q.shape[0]}, 3), got {d.shape}"
+        )
+    return q, d
+
+
 def linear_centre(
     q: np.ndarray, d: np.ndarray, *, free_directions: int = 0
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -142,15 +156,30 @@ def linear_centre(
     d : (n, 3) ndarray of float64
         Lower sensor origin in the upper frame, metres.
     free_directions : int
-        How many of the weakest directions (0 or 1) the data do not
-        determine; along them the centre is put at the point nearest the
-        midpoint of the two sensors.
+        How many of the weakest directions (0 to 3; the estimators use 0, or
+        1 for a single-axis motion) the data do not determine; along them
+        the centre is put at the point nearest the midpoint of the two
+        sensors.
 
     Returns
     -------
     centre_upper, centre_lower : (3,) ndarray of float64
         Metres.
+
+    Raises
+    ------
+    InvalidInputError
+        If `q` or `d` has the wrong shape or holds NaN or inf, or
+        `free_directions` is not an integer from 0 to 3.
     """
+    q, d = _check_relative(q, d)
+    free = check_integer(free_directions, "free_directions", minimum=0, maximum=3)
+    return _linear_centre(q, d, free)
+
+
+def _linear_centre(q: np.ndarray, d: np.ndarray, free_directions: int) -> tuple[
+        np.ndarray, np.ndarray]:
+    """:func:`linear_centre` of checked arrays."""
     u, s, vt, b = _normal_system(q, d)
     x = np.zeros(6)
     m = _sensor_midpoint(q, d)
@@ -163,6 +192,13 @@ def linear_centre(
         else:
             x += (minus @ b) / max(1.0 - s[k], 1e-300) * minus
     return x[:3], x[3:]
+
+
+def _fit_residual(q: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """Residual vectors ``c_U - Q c_L - d`` (m) of the linear centre with the
+    weakest direction fixed, ``(n, 3)``."""
+    cu, cl = _linear_centre(q, d, 1)
+    return cu - np.einsum("nij,j->ni", q, cl) - d
 
 
 def assess_determinability(q: np.ndarray, d: np.ndarray) -> Determinability:
@@ -178,13 +214,18 @@ def assess_determinability(q: np.ndarray, d: np.ndarray) -> Determinability:
     Returns
     -------
     Determinability
+
+    Raises
+    ------
+    InvalidInputError
+        If `q` or `d` has the wrong shape or holds NaN or inf.
     """
+    q, d = _check_relative(q, d)
     u, s, vt, _ = _normal_system(q, d)
     lam = np.clip(1.0 - s, 0.0, None)
     # residual of the fit with the weakest direction fixed: its scale does
     # not depend on how badly that direction is determined
-    cu, cl = linear_centre(q, d, free_directions=1)
-    res = cu - np.einsum("nij,j->ni", q, cl) - d
+    res = _fit_residual(q, d)
     sigma = float(np.sqrt((res**2).mean()))
     n_eff = q.shape[0] / _autocorrelation_time(res)
     with np.errstate(divide="ignore"):

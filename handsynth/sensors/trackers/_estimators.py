@@ -32,14 +32,16 @@ from ._axis_filter import (
     _reference_frames,
     principal_axis,
 )
+from ._checks import check_integer, check_real
 from ._determinability import (
     Determinability,
+    _fit_residual,
     _sensor_midpoint,
     assess_determinability,
     linear_centre,
 )
 from ._plane import foot_of_perpendicular, plane_coordinates, plane_point
-from ._recording import Recording
+from ._recording import Recording, relative_pose
 from ._result import JointCentreResult, centre_distance_mm
 
 __all__ = [
@@ -79,6 +81,7 @@ class _Frames:
     filter_result: AxisFilterResult | None
     det: Determinability
     single_axis: bool
+    transposed: str  # why the rotations look transposed, or ""
 
 
 def _check_frozen(recording: Recording) -> None:
@@ -91,6 +94,35 @@ def _check_frozen(recording: Recording) -> None:
                 f"same pose in all {recording.n_frames} frames: it is frozen or "
                 f"disconnected"
             )
+
+
+# Rotations given the other way round (transmitter to sensor) are proper
+# rotations too and pass every check of a Recording; the centre found from
+# them is some 20-40 mm off.  They are told apart by the fit of a point fixed
+# in both sensors: taking the transposes back, the fit becomes markedly
+# better.  On simulated recordings of every configuration of
+# handsynth.sensors.evaluate (10-75 deg range of motion, all error models) the
+# transposed fit of correct rotations was never better than 0.96 times the
+# fit as given, while on transposed rotations it is 2-180 times better when
+# the motion is large enough -- but only 1.0-1.4 times for a pure hinge at
+# Liberty accuracy noise, which this test therefore misses (docs/trackers.md).
+_TRANSPOSED_FIT_RATIO = 0.5
+
+
+def _transposed_rotations(recording: Recording, residual_mm: float) -> str:
+    """A note when the transposed rotations fit markedly better, else ""."""
+    if not residual_mm > 0:
+        return ""
+    q, d = relative_pose(np.swapaxes(recording.rotations, -1, -2), recording.positions)
+    alt = float(np.sqrt((_fit_residual(q, d) ** 2).mean()) * 1e3)
+    if not alt < _TRANSPOSED_FIT_RATIO * residual_mm:
+        return ""
+    return (
+        f"rotations transposed? The point fixed in both sensors fits with "
+        f"{residual_mm:.3g} mm RMS per coordinate as given but {alt:.3g} mm with every "
+        f"rotation transposed: the rotations must map sensor-frame vectors to the "
+        f"transmitter frame (sensor -> transmitter), not the reverse"
+    )
 
 
 def _range_of_motion(q: np.ndarray) -> float:
@@ -158,20 +190,20 @@ class _Estimator:
             raise InvalidInputError(
                 f"axis_filter: expected an AxisAngleFilter, got {self.axis_filter!r}"
             )
-        if not (np.isfinite(self.min_rom_deg) and self.min_rom_deg >= 0):
-            raise InvalidInputError(f"min_rom_deg must be >= 0, got {self.min_rom_deg!r}")
-        if not (isinstance(self.min_frames, (int, np.integer)) and self.min_frames >= 3):
-            raise InvalidInputError(f"min_frames must be an integer >= 3, got {self.min_frames!r}")
+        self._set("min_rom_deg", check_real(self.min_rom_deg, "min_rom_deg", minimum=0.0))
+        self._set("min_frames", check_integer(self.min_frames, "min_frames", minimum=3))
         for n in ("refuse_error_mm", "warn_error_mm", "axis_error_mm", "max_distance_mm",
                   "max_residual_mm"):
-            v = getattr(self, n)
-            if not (isinstance(v, (int, float)) and np.isfinite(v) and v > 0):
-                raise InvalidInputError(f"{n} must be > 0, got {v!r}")
+            self._set(n, check_real(getattr(self, n), n, above=0.0))
         if self.warn_error_mm > self.refuse_error_mm:
             raise InvalidInputError(
                 f"warn_error_mm ({self.warn_error_mm!r}) must not exceed refuse_error_mm "
                 f"({self.refuse_error_mm!r})"
             )
+
+    def _set(self, name: str, value: object) -> None:
+        """Store a checked option (a plain ``float`` or ``int``) in the frozen instance."""
+        object.__setattr__(self, name, value)
 
     def _select(self, recording: Recording) -> _Frames:
         if not isinstance(recording, Recording):
@@ -204,12 +236,14 @@ class _Estimator:
                 f"be fixed; flex the joint further"
             )
         det = assess_determinability(q, d)
+        transposed = _transposed_rotations(sub, det.residual_mm)
         if det.residual_mm > self.max_residual_mm:
             raise EstimationError(
                 f"no point is fixed in both sensors {where}: the best one moves by "
                 f"{det.residual_mm:.1f} mm RMS per coordinate (> max_residual_mm="
-                f"{self.max_residual_mm:g}); are both sensors on the two sides of one "
-                f"joint, and the file read with the right columns and units?"
+                f"{self.max_residual_mm:g}); "
+                + (transposed or "are both sensors on the two sides of one joint, and "
+                   "the file read with the right columns and units?")
             )
         across = float(det.expected_error_mm[1])
         if not across <= self.refuse_error_mm:
@@ -219,7 +253,7 @@ class _Estimator:
                 f"(the directions across the joint axis turn by only {det.spread_deg[1]:.2f} "
                 f"and {det.spread_deg[2]:.2f} deg RMS, range of motion {rom:.1f} deg, "
                 f"residual {det.residual_mm:.2f} mm); "
-                f"flex the joint further or record longer"
+                + (transposed or "flex the joint further or record longer")
             )
         single_axis = not float(det.expected_error_mm[0]) <= self.axis_error_mm
         q_all, _ = recording.relative()
@@ -230,13 +264,13 @@ class _Estimator:
         else:
             rv = matrix_to_rotvec(q_all @ q0.T)
             lateral = self.axis_filter._lateral_axis(recording, rv)
-        return _Frames(sub, index, q, d, lateral, q0, rom, filt, det, single_axis)
+        return _Frames(sub, index, q, d, lateral, q0, rom, filt, det, single_axis, transposed)
 
     def _finish(self, f: _Frames, cu: np.ndarray, cl: np.ndarray) -> tuple[
             np.ndarray, np.ndarray, list[str]]:
         """Single-axis convention, bounds and warnings shared by every method."""
         det = f.det
-        notes = []
+        notes = [f.transposed] if f.transposed else []
         if f.single_axis:
             # slide rigidly along the axis to the point nearest both sensors
             e = np.concatenate([det.axis_upper, det.axis_lower]) / np.sqrt(2)
@@ -327,10 +361,23 @@ class _Estimator:
             A frozen sensor, too few frames, a motion that does not
             determine the centre, no point fixed in both sensors, or a
             centre farther than ``max_distance_mm`` from a sensor.
+
+        Notes
+        -----
+        When the rotations fit markedly better transposed (given
+        transmitter -> sensor instead of sensor -> transmitter), the result's
+        first warning, or the refusal, says so ("rotations transposed?").
+        The test misses transposed rotations of small or hinge-like motions
+        at Liberty accuracy noise; see docs/trackers.md.
         """
         f = self._select(recording)
-        cu, cl, residual = self._solve(f)
-        cu, cl, notes = self._finish(f, np.asarray(cu, float), np.asarray(cl, float))
+        try:
+            cu, cl, residual = self._solve(f)
+            cu, cl, notes = self._finish(f, np.asarray(cu, float), np.asarray(cl, float))
+        except EstimationError as exc:
+            if not f.transposed:
+                raise
+            raise EstimationError(f"{exc}; {f.transposed}") from None
         res = self._result(f, cu, cl, residual, notes)
         object.__setattr__(res, "n_frames_total", recording.n_frames)
         return res
@@ -404,11 +451,8 @@ class _VarianceSearch(_Estimator):
     def __post_init__(self) -> None:
         super().__post_init__()
         for n in ("xatol_mm", "fatol_mm2"):
-            v = getattr(self, n)
-            if not (np.isfinite(v) and v > 0):
-                raise InvalidInputError(f"{n} must be > 0, got {v!r}")
-        if not (isinstance(self.maxiter, (int, np.integer)) and self.maxiter > 0):
-            raise InvalidInputError(f"maxiter must be a positive integer, got {self.maxiter!r}")
+            self._set(n, check_real(getattr(self, n), n, above=0.0))
+        self._set("maxiter", check_integer(self.maxiter, "maxiter", minimum=1))
 
     def _search(self, points: np.ndarray, axis: np.ndarray,
                 linear: np.ndarray) -> tuple[np.ndarray, float]:
@@ -479,8 +523,7 @@ class PlaneVarianceEstimator(_VarianceSearch):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        if not (np.isfinite(self.plane_size_mm) and self.plane_size_mm > 0):
-            raise InvalidInputError(f"plane_size_mm must be > 0, got {self.plane_size_mm!r}")
+        self._set("plane_size_mm", check_real(self.plane_size_mm, "plane_size_mm", above=0.0))
 
     def _plane(self, points: np.ndarray, axis: np.ndarray):
         """``P1, P2, P3`` (mm): plane through the receivers' midpoint, normal `axis`."""

@@ -46,6 +46,9 @@ __all__ = ["load_recording", "save_recording"]
 _FORMAT = "handsynth.recording"
 _VERSION = 2
 _READABLE = (1, 2)
+#: Suffixes of recording files (what :func:`~handsynth.sensors.read_recording`
+#: sends to :func:`load_recording`).
+SUFFIXES = (".h5", ".hdf5")
 
 
 def _checksum(joint: str, labels: str, meta: str, arrays: list[np.ndarray]) -> str:
@@ -83,19 +86,32 @@ def save_recording(path: str | os.PathLike, recording: Recording, *, inputs=()) 
     Parameters
     ----------
     path : path-like
-        Target file; its directory must exist.
+        Target file, ending in ``.h5`` or ``.hdf5`` (any case); its
+        directory must exist.
     recording : Recording
 
     Returns
     -------
     pathlib.Path
         The path written.
+
+    Raises
+    ------
+    InvalidInputError
+        `recording` is not a Recording, its metadata are not
+        JSON-serialisable, or `path` has another suffix (the file would not
+        be read back as HDF5 by :func:`~handsynth.sensors.read_recording`).
     """
     if not isinstance(recording, Recording):
         raise InvalidInputError(
             f"recording: expected a Recording, got {type(recording).__name__}"
         )
     path = Path(path)
+    if path.suffix.lower() not in SUFFIXES:
+        raise InvalidInputError(
+            f"path: a recording is written as HDF5 and needs the suffix "
+            f"{' or '.join(SUFFIXES)}, got {path.suffix or 'none'!r} in {str(path)!r}"
+        )
     try:
         meta = json.dumps(dict(recording.metadata))
     except TypeError as exc:

@@ -29,13 +29,50 @@ from collections.abc import Iterable, Mapping
 import numpy as np
 
 from ...errors import InvalidInputError
-from ...models import SEGMENTS
+from ...models import SEGMENT_COEFFICIENTS, SEGMENTS
+from ._checks import check_vector3
 from ._result import JointCentreResult
 
 __all__ = ["SEGMENT_NAMES", "segment_length_mm", "segment_lengths_mm"]
 
 #: Segment names of L1..L14, in order (``<finger>_<segment>`` of :data:`handsynth.models.SEGMENTS`).
 SEGMENT_NAMES: tuple[str, ...] = tuple(f"{f}_{seg}" for f, seg in SEGMENTS)
+#: Names that may carry the upper sensor of an MCP joint besides the segments.
+_UPPER_ONLY = ("palm", "thumb_metacarpal")
+
+# No phalanx is longer than this, nor is a fingertip farther from a sensor on
+# the distal phalanx: the longest phalanx coefficient of Buchholz, Armstrong
+# & Goldstein (1992) Table 1 (middle proximal, 0.277 of hand length) times
+# 300 mm, the largest hand length handsynth.models accepts (adults are about
+# 160-210 mm; Gordon et al. 1989 give means of 193.8 mm for men and 180.4 mm
+# for women).  About 83 mm.
+_MAX_SEGMENT_MM = 300.0 * max(max(c[1:]) for c in SEGMENT_COEFFICIENTS.values())
+
+
+def _check_length(length_mm: float, what: str) -> float:
+    """Refuse a length (mm) that no finger has, with a hint at the unit."""
+    if not length_mm <= _MAX_SEGMENT_MM:
+        raise InvalidInputError(
+            f"{what} is {length_mm:.4g} mm, longer than any phalanx "
+            f"({_MAX_SEGMENT_MM:.0f} mm at most); are the positions in metres?"
+        )
+    return length_mm
+
+
+def _check_labels(r: JointCentreResult, i: int) -> None:
+    """Refuse an estimate whose labels are not segment names."""
+    known_upper = SEGMENT_NAMES + _UPPER_ONLY
+    bad = []
+    if r.labels[0] not in known_upper:
+        bad.append(f"upper {r.labels[0]!r}")
+    if r.labels[1] not in SEGMENT_NAMES:
+        bad.append(f"lower {r.labels[1]!r}")
+    if bad:
+        raise InvalidInputError(
+            f"results[{i}] (joint {r.joint!r}): labels {' and '.join(bad)} are not "
+            f"segment names, so its centre cannot be placed on a segment; give the "
+            f"Recording labels=(upper, lower) from {', '.join(known_upper)}"
+        )
 
 
 def segment_length_mm(proximal: JointCentreResult, distal: JointCentreResult) -> float:
@@ -53,15 +90,20 @@ def segment_length_mm(proximal: JointCentreResult, distal: JointCentreResult) ->
     Raises
     ------
     InvalidInputError
-        If the two estimates do not share a segment.
+        If the two estimates do not share a segment, or the length is longer
+        than any phalanx (about 83 mm: centres not in metres).
     """
+    for name, r in (("proximal", proximal), ("distal", distal)):
+        if not isinstance(r, JointCentreResult):
+            raise InvalidInputError(f"{name}: expected JointCentreResult, got {type(r).__name__}")
     seg = proximal.labels[1]
     if distal.labels[0] != seg:
         raise InvalidInputError(
             f"proximal estimate's lower segment {seg!r} is not the distal estimate's "
             f"upper segment {distal.labels[0]!r}"
         )
-    return float(np.linalg.norm(proximal.centre_lower - distal.centre_upper) * 1e3)
+    length = float(np.linalg.norm(proximal.centre_lower - distal.centre_upper) * 1e3)
+    return _check_length(length, f"segment {seg!r} between the estimated centres")
 
 
 def segment_lengths_mm(
@@ -85,18 +127,35 @@ def segment_lengths_mm(
     -------
     (14,) ndarray of float64
         Millimetres; NaN where the estimates do not determine a segment.
+
+    Raises
+    ------
+    InvalidInputError
+        An estimate whose ``labels`` are not segment names (such as a
+        recording's default ``("upper", "lower")``), a tip keyed by an
+        unknown segment or not 3 finite numbers, or a tip or length farther
+        than any phalanx is long (about 83 mm, see ``_MAX_SEGMENT_MM``):
+        positions in millimetres instead of metres.
     """
     by_lower: dict[str, JointCentreResult] = {}
     by_upper: dict[str, JointCentreResult] = {}
-    for r in results:
+    for i, r in enumerate(results):
         if not isinstance(r, JointCentreResult):
             raise InvalidInputError(f"results: expected JointCentreResult, got {type(r).__name__}")
+        _check_labels(r, i)
         by_upper[r.labels[0]] = r
         by_lower[r.labels[1]] = r
     tips = dict(tips or {})
     unknown = sorted(set(tips) - set(SEGMENT_NAMES))
     if unknown:
-        raise InvalidInputError(f"tips: unknown segments {unknown}")
+        raise InvalidInputError(
+            f"tips: unknown segments {unknown}; known are {', '.join(SEGMENT_NAMES)}"
+        )
+    tip_at: dict[str, np.ndarray] = {}
+    for seg, value in tips.items():
+        tip = check_vector3(value, f"tips[{seg!r}]")
+        _check_length(float(np.linalg.norm(tip) * 1e3), f"tips[{seg!r}] from its sensor")
+        tip_at[seg] = tip
     out = np.full(len(SEGMENT_NAMES), np.nan)
     for i, seg in enumerate(SEGMENT_NAMES):
         prox = by_lower.get(seg)
@@ -104,9 +163,7 @@ def segment_lengths_mm(
             continue
         if seg in by_upper:
             out[i] = segment_length_mm(prox, by_upper[seg])
-        elif seg in tips:
-            tip = np.asarray(tips[seg], dtype=np.float64)
-            if tip.shape != (3,) or not np.isfinite(tip).all():
-                raise InvalidInputError(f"tips[{seg!r}]: expected 3 finite numbers, got {tips[seg]!r}")
-            out[i] = float(np.linalg.norm(prox.centre_lower - tip) * 1e3)
+        elif seg in tip_at:
+            length = float(np.linalg.norm(prox.centre_lower - tip_at[seg]) * 1e3)
+            out[i] = _check_length(length, f"segment {seg!r} to tips[{seg!r}]")
     return out

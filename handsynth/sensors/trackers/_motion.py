@@ -14,6 +14,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from ...errors import InvalidInputError
+from ._checks import check_interval, check_real
 
 __all__ = ["MAX_SAMPLES", "FlexionMotion", "MotionSamples"]
 
@@ -80,18 +81,11 @@ class FlexionMotion:
 
     def __post_init__(self) -> None:
         d = asdict(self)
-        lo, hi = d.pop("flexion_range_deg")
-        if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
-            raise InvalidInputError(
-                f"flexion_range_deg must be (low, high) with low < high, got "
-                f"{self.flexion_range_deg!r}"
-            )
+        check_interval(d.pop("flexion_range_deg"), "flexion_range_deg")
         for name, v in d.items():
-            if not np.isfinite(v):
-                raise InvalidInputError(f"{name} must be finite, got {v!r}")
+            check_real(v, name)
         for name in ("duration_s", "rate_hz", "cycle_s"):
-            if getattr(self, name) <= 0:
-                raise InvalidInputError(f"{name} must be > 0, got {getattr(self, name)!r}")
+            check_real(getattr(self, name), name, above=0.0)
         if not 0 <= self.hold_s < self.duration_s:
             raise InvalidInputError(
                 f"duration_s ({self.duration_s!r} s) must be longer than hold_s "

@@ -24,8 +24,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...errors import InvalidInputError
 from ..common import rotvec_to_matrix
+from ._checks import check_integer, check_real
 
 __all__ = ["DISTORTED_FIELD", "LIBERTY", "LIBERTY_RESOLUTION", "NO_NOISE", "FieldDistortion", "SensorNoise"]
 
@@ -52,9 +52,7 @@ class SensorNoise:
 
     def __post_init__(self) -> None:
         for name in ("position_sd_mm", "orientation_sd_deg", "correlation_time_s"):
-            v = getattr(self, name)
-            if not (np.isfinite(v) and v >= 0):
-                raise InvalidInputError(f"{name} must be finite and >= 0, got {v!r}")
+            check_real(getattr(self, name), name, minimum=0.0)
 
     def _process(self, rng: np.random.Generator, times: np.ndarray, shape) -> np.ndarray:
         """Unit-variance white or Gauss-Markov samples, ``(n,) + shape``."""
@@ -149,13 +147,9 @@ class FieldDistortion:
     def __post_init__(self) -> None:
         for name in ("position_rms_mm", "orientation_rms_deg", "drift_mm", "drift_deg",
                      "white_mm", "white_deg"):
-            v = getattr(self, name)
-            if not (np.isfinite(v) and v >= 0):
-                raise InvalidInputError(f"{name} must be finite and >= 0, got {v!r}")
-        if not (np.isfinite(self.wavelength_mm) and self.wavelength_mm > 0):
-            raise InvalidInputError(f"wavelength_mm must be > 0, got {self.wavelength_mm!r}")
-        if not (isinstance(self.n_waves, (int, np.integer)) and self.n_waves >= 1):
-            raise InvalidInputError(f"n_waves must be an integer >= 1, got {self.n_waves!r}")
+            check_real(getattr(self, name), name, minimum=0.0)
+        check_real(self.wavelength_mm, "wavelength_mm", above=0.0)
+        check_integer(self.n_waves, "n_waves", minimum=1)
 
     def _field(self, rng: np.random.Generator, rms: float):
         """A random smooth vector field ``f(p)`` of per-component RMS `rms`."""

@@ -18,16 +18,28 @@ from __future__ import annotations
 import numpy as np
 
 from ...errors import InvalidInputError
+from ._checks import check_vector3
 
 __all__ = ["foot_of_perpendicular", "plane_coordinates", "plane_normal", "plane_point"]
 
 
 def _points(p1, p2, p3) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    p1, p2, p3 = (np.asarray(p, dtype=np.float64) for p in (p1, p2, p3))
-    for name, p in (("p1", p1), ("p2", p2), ("p3", p3)):
-        if p.shape != (3,) or not np.isfinite(p).all():
-            raise InvalidInputError(f"{name}: expected 3 finite numbers, got {p!r}")
-    return p1, p2, p3
+    return check_vector3(p1, "p1"), check_vector3(p2, "p2"), check_vector3(p3, "p3")
+
+
+def _plane(p1, p2, p3) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
+    """Checked points, unit normal and offset; collinear points refused."""
+    p1, p2, p3 = _points(p1, p2, p3)
+    abc = np.cross(p2 - p1, p3 - p1)  # eq. 5
+    norm = np.linalg.norm(abc)
+    scale = max(np.linalg.norm(p2 - p1) * np.linalg.norm(p3 - p1), np.finfo(float).tiny)
+    if norm <= 1e-9 * scale:
+        raise InvalidInputError(
+            f"p1, p2, p3 are collinear and do not define a plane, got "
+            f"{p1.tolist()}, {p2.tolist()}, {p3.tolist()}"
+        )
+    n = abc / norm
+    return p1, p2, p3, n, float(-n @ p1)  # eq. 6
 
 
 def plane_normal(p1, p2, p3) -> tuple[np.ndarray, float]:
@@ -47,16 +59,11 @@ def plane_normal(p1, p2, p3) -> tuple[np.ndarray, float]:
     Raises
     ------
     InvalidInputError
-        If the three points are (nearly) collinear.
+        If a point is not 3 finite numbers, or the three are (nearly)
+        collinear.
     """
-    p1, p2, p3 = _points(p1, p2, p3)
-    abc = np.cross(p2 - p1, p3 - p1)  # eq. 5
-    norm = np.linalg.norm(abc)
-    scale = max(np.linalg.norm(p2 - p1) * np.linalg.norm(p3 - p1), np.finfo(float).tiny)
-    if norm <= 1e-9 * scale:
-        raise InvalidInputError("p1, p2, p3 are collinear and do not define a plane")
-    n = abc / norm
-    return n, float(-n @ p1)  # eq. 6
+    *_, n, d = _plane(p1, p2, p3)
+    return n, d
 
 
 def foot_of_perpendicular(p1, p2, p3, v) -> np.ndarray:
@@ -68,9 +75,14 @@ def foot_of_perpendicular(p1, p2, p3, v) -> np.ndarray:
     Returns
     -------
     (3,) ndarray of float64
+
+    Raises
+    ------
+    InvalidInputError
+        As :func:`plane_normal`, or if `v` is not 3 finite numbers.
     """
     n, d = plane_normal(p1, p2, p3)
-    v = np.asarray(v, dtype=np.float64)
+    v = check_vector3(v, "v")
     l = -(n @ v + d)  # eq. 7 with the unit normal
     return v + l * n  # eqs. 8-9
 
@@ -84,8 +96,17 @@ def plane_point(p1, p2, p3, s, t) -> np.ndarray:
 
 
 def plane_coordinates(p1, p2, p3, point) -> tuple[float, float]:
-    """Parameters ``(s, t)`` of a point of the plane (inverse of eq. 4)."""
-    p1, p2, p3 = _points(p1, p2, p3)
+    """Parameters ``(s, t)`` of a point of the plane (inverse of eq. 4).
+
+    A point off the plane gets the parameters of its foot of perpendicular.
+
+    Raises
+    ------
+    InvalidInputError
+        As :func:`plane_normal`, or if `point` is not 3 finite numbers.
+    """
+    p1, p2, p3, _n, _d = _plane(p1, p2, p3)
+    point = check_vector3(point, "point")
     basis = np.column_stack([p2 - p1, p3 - p1])
-    (s, t), *_ = np.linalg.lstsq(basis, np.asarray(point, dtype=np.float64) - p1, rcond=None)
+    (s, t), *_ = np.linalg.lstsq(basis, point - p1, rcond=None)
     return float(s), float(t)

@@ -70,6 +70,7 @@ from scipy.spatial.transform import Rotation
 
 from ..._csv import read_text
 from ...errors import InvalidInputError, RecordingError
+from ._checks import check_real
 from ._recording import Recording
 
 __all__ = ["DEFAULT_COLUMNS", "read_polhemus", "read_recording"]
@@ -709,10 +710,8 @@ def read_polhemus(
         raise InvalidInputError(f"angles: expected 'euler' or 'quaternion', got {angles!r}")
     if on_invalid not in ("raise", "drop"):
         raise InvalidInputError(f"on_invalid: expected 'drop' or 'raise', got {on_invalid!r}")
-    if not (np.isfinite(rate_hz) and rate_hz > 0):
-        raise InvalidInputError(f"rate_hz must be > 0, got {rate_hz!r}")
-    if not (np.isfinite(glitch_mm) and glitch_mm > 0):
-        raise InvalidInputError(f"glitch_mm must be > 0, got {glitch_mm!r}")
+    check_real(rate_hz, "rate_hz", above=0.0)
+    check_real(glitch_mm, "glitch_mm", above=0.0)
     if sensors is not None and (len(sensors) != 2 or sensors[0] == sensors[1]):
         raise InvalidInputError(f"sensors: expected two different station numbers, got {sensors!r}")
 
@@ -911,9 +910,9 @@ def read_recording(path: str | os.PathLike, **kwargs) -> Recording:
     ``.h5`` / ``.hdf5`` files go to :func:`~handsynth.sensors.load_recording`
     (no options), anything else to :func:`read_polhemus` with `kwargs`.
     """
-    from ._hdf5 import load_recording
+    from ._hdf5 import SUFFIXES, load_recording
 
-    if Path(path).suffix.lower() in (".h5", ".hdf5"):
+    if Path(path).suffix.lower() in SUFFIXES:
         if kwargs:
             raise InvalidInputError(
                 f"options {sorted(kwargs)} apply to text exports, not HDF5 {str(path)!r}"

@@ -7,7 +7,10 @@ Sensor 0 is the *upper* (proximal) sensor, sensor 1 the *lower* (distal)
 one, as in the patent JP2010-88628 (upper receiver 1a, lower receiver 1b).
 
 Arrays are validated on construction and made read-only, so a recording that
-exists is usable: finite, strictly increasing times, proper rotations.
+exists is usable: finite, strictly increasing times, proper rotations.  Both
+classes pickle and deep-copy by constructing anew from their fields, so a
+copy (sent to another process, say) is checked and read-only like the
+original, and compare equal when their fields are (arrays by value).
 """
 
 from __future__ import annotations
@@ -30,6 +33,30 @@ def _frozen(a: np.ndarray) -> np.ndarray:
     a = np.array(a, dtype=np.float64, copy=True)
     a.setflags(write=False)
     return a
+
+
+def relative_pose(rotations: np.ndarray, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(q, d)`` of :meth:`Recording.relative` from ``(n, 2, 3, 3)`` rotations
+    and ``(n, 2, 3)`` positions."""
+    ru, rl = rotations[:, 0], rotations[:, 1]
+    q = np.einsum("nji,njk->nik", ru, rl)
+    d = np.einsum("nji,nj->ni", ru, positions[:, 1] - positions[:, 0])
+    return q, d
+
+
+def _rebuild(cls: type, fields: dict[str, Any]) -> Any:
+    """Construct `cls` from `fields` (used by pickle and copy)."""
+    return cls(**fields)
+
+
+def _equal_fields(a: Any, b: Any) -> bool:
+    """Field-wise equality of two dataclasses of one class; arrays by value."""
+    for f in dataclasses.fields(a):
+        x, y = getattr(a, f.name), getattr(b, f.name)
+        same = np.array_equal(x, y) if isinstance(x, np.ndarray) else bool(x == y)
+        if not same:
+            return False
+    return True
 
 
 def _check_shape(name: str, a: np.ndarray, shape: tuple[int | None, ...]) -> None:
@@ -74,6 +101,16 @@ class GroundTruth:
         _check_shape("centre_sensor", self.centre_sensor, (n, 2, 3))
         _check_shape("reference_centre", self.reference_centre, (2, 3))
 
+    def __eq__(self, other: object) -> bool:
+        """Same class and equal fields (arrays compared by value)."""
+        if other.__class__ is not self.__class__:
+            return NotImplemented
+        return _equal_fields(self, other)
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        fields = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        return (_rebuild, (type(self), fields))
+
     def take(self, index: np.ndarray) -> GroundTruth:
         """Ground truth restricted to the frames `index`."""
         return dataclasses.replace(
@@ -97,7 +134,9 @@ class Recording:
     rotations : (n, 2, 3, 3) array_like of float
         Sensor orientations, mapping sensor-frame vectors to the transmitter
         frame.  Each must be a proper rotation (see
-        :data:`~handsynth.sensors.common.ROTATION_TOLERANCE`).
+        :data:`~handsynth.sensors.common.ROTATION_TOLERANCE`).  Transposed
+        rotations (transmitter -> sensor) are proper rotations too and cannot
+        be refused here; the estimators warn when they look transposed.
     labels : tuple of str, optional
         Names of the segments carrying the upper and lower sensor, e.g.
         ``("index_middle", "index_distal")``; used to chain joints into
@@ -105,7 +144,8 @@ class Recording:
     joint : str, optional
         Name of the joint between them, e.g. ``"index_dip"``.
     metadata : mapping, optional
-        Free-form, JSON-serialisable provenance (source file, units, noise).
+        Free-form, JSON-serialisable provenance (source file, units, noise);
+        kept as a read-only copy.
     truth : GroundTruth, optional
         Present for simulated recordings.
 
@@ -160,6 +200,18 @@ class Recording:
                 f"truth has {self.truth.centre_world.shape[0]} frames, recording {n}"
             )
 
+    def __eq__(self, other: object) -> bool:
+        """Same class and equal fields (arrays compared by value)."""
+        if other.__class__ is not self.__class__:
+            return NotImplemented
+        return _equal_fields(self, other)
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        # the read-only metadata view does not pickle: hand over a plain copy
+        fields = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        fields["metadata"] = dict(self.metadata)
+        return (_rebuild, (type(self), fields))
+
     # -- convenience -----------------------------------------------------
     @property
     def n_frames(self) -> int:
@@ -194,10 +246,7 @@ class Recording:
         d : (n, 3) ndarray of float64
             ``R_U^T (t_L - t_U)``: lower-sensor origin in the upper frame, m.
         """
-        ru, rl = self.rotations[:, 0], self.rotations[:, 1]
-        q = np.einsum("nji,njk->nik", ru, rl)
-        d = np.einsum("nji,nj->ni", ru, self.positions[:, 1] - self.positions[:, 0])
-        return q, d
+        return relative_pose(self.rotations, self.positions)
 
     def take(self, index: np.ndarray) -> Recording:
         """A new recording with only the frames `index` (sorted, unique)."""

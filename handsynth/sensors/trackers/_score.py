@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...errors import InvalidInputError
+from ._checks import check_real
 from ._estimators import _Estimator, _Frames
 
 __all__ = ["ScoreEstimator"]
@@ -49,8 +49,8 @@ class ScoreEstimator(_Estimator):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        if self.rcond is not None and not (np.isfinite(self.rcond) and 0 <= self.rcond < 1):
-            raise InvalidInputError(f"rcond must be None or in [0, 1), got {self.rcond!r}")
+        if self.rcond is not None:
+            self._set("rcond", check_real(self.rcond, "rcond", minimum=0.0, below=1.0))
 
     def _solve(self, f: _Frames):
         rec = f.recording

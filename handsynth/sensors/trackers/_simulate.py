@@ -16,6 +16,7 @@ from scipy.spatial.transform import Rotation
 
 from ...errors import InvalidInputError
 from ..common import axis_angle_matrix
+from ._checks import check_real
 from ._geometry import joint_geometry
 from ._joint_models import ArcJoint, FingerJoint, HingeJoint
 from ._motion import FlexionMotion
@@ -53,8 +54,7 @@ class SensorMount:
 
     def __post_init__(self) -> None:
         for name, v in asdict(self).items():
-            if not np.isfinite(v):
-                raise InvalidInputError(f"{name} must be finite, got {v!r}")
+            check_real(v, name)
 
     def frame(self, length: float) -> tuple[np.ndarray, np.ndarray]:
         """Receiver pose in the segment frame: position (3,) m, rotation (3, 3)."""

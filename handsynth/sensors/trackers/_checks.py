@@ -1,0 +1,214 @@
+"""Checks of the arguments of the tracker API: numbers, 3-vectors and arrays.
+
+Each check names the argument and repeats the value received in its
+:class:`~handsynth.errors.InvalidInputError`, so that a wrong option fails
+where it is given and not later inside numpy or scipy.  Numbers are real
+numbers of any kind (``int``, ``float``, numpy scalars, 0-d numpy arrays)
+but never ``bool``: ``True`` is a flag, not the number 1.
+"""
+
+from __future__ import annotations
+
+import numbers
+from typing import Any
+
+import numpy as np
+
+from ...errors import InvalidInputError
+
+__all__ = ["check_array", "check_integer", "check_interval", "check_real", "check_vector3"]
+
+
+def _real_kind(value: Any) -> str | None:
+    """``"int"`` or ``"float"`` for a real number, else None (bool included)."""
+    if isinstance(value, (bool, np.bool_)):
+        return None
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        kind = value.dtype.kind
+        return "int" if kind in "iu" else "float" if kind == "f" else None
+    if isinstance(value, numbers.Integral):
+        return "int"
+    if isinstance(value, numbers.Real):
+        return "float"
+    return None
+
+
+def _bounds_text(minimum, maximum, above, below) -> str:
+    parts = []
+    if minimum is not None:
+        parts.append(f">= {minimum:g}")
+    if above is not None:
+        parts.append(f"> {above:g}")
+    if maximum is not None:
+        parts.append(f"<= {maximum:g}")
+    if below is not None:
+        parts.append(f"< {below:g}")
+    return " and ".join(parts)
+
+
+def _check_bounds(v: float, value: Any, name: str, what: str, minimum, maximum,
+                  above, below) -> None:
+    ok = ((minimum is None or v >= minimum) and (maximum is None or v <= maximum)
+          and (above is None or v > above) and (below is None or v < below))
+    if not ok:
+        raise InvalidInputError(
+            f"{name} must be {what} {_bounds_text(minimum, maximum, above, below)}, "
+            f"got {value!r}"
+        )
+
+
+def check_real(
+    value: Any,
+    name: str,
+    *,
+    minimum: float | None = None,
+    maximum: float | None = None,
+    above: float | None = None,
+    below: float | None = None,
+) -> float:
+    """A finite real number within bounds, as ``float``.
+
+    Parameters
+    ----------
+    value : object
+        What was given.
+    name : str
+        Name of the argument, for the message.
+    minimum, maximum : float, optional
+        Inclusive bounds.
+    above, below : float, optional
+        Exclusive bounds.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    InvalidInputError
+        If `value` is not a real number (a string, None, a bool, an array),
+        is NaN or infinite, or is out of bounds.
+    """
+    if _real_kind(value) is None:
+        raise InvalidInputError(
+            f"{name} must be a real number, got {value!r} ({type(value).__name__})"
+        )
+    v = float(value)
+    if not np.isfinite(v):
+        raise InvalidInputError(f"{name} must be finite, got {value!r}")
+    _check_bounds(v, value, name, "a number", minimum, maximum, above, below)
+    return v
+
+
+def check_integer(
+    value: Any,
+    name: str,
+    *,
+    minimum: int | None = None,
+    maximum: int | None = None,
+) -> int:
+    """An integer (Python or numpy, not bool) within inclusive bounds, as ``int``.
+
+    Raises
+    ------
+    InvalidInputError
+        If `value` is not an integer or is out of bounds.
+    """
+    if _real_kind(value) != "int":
+        raise InvalidInputError(
+            f"{name} must be an integer, got {value!r} ({type(value).__name__})"
+        )
+    v = int(value)
+    _check_bounds(v, value, name, "an integer", minimum, maximum, None, None)
+    return v
+
+
+def check_interval(value: Any, name: str) -> tuple[float, float]:
+    """Two finite real numbers ``(low, high)`` with ``low < high``.
+
+    Raises
+    ------
+    InvalidInputError
+        If `value` is not a pair of finite real numbers in increasing order.
+    """
+    try:
+        pair: tuple[Any, ...] = tuple(value)
+    except TypeError:
+        pair = ()
+    if len(pair) != 2 or any(_real_kind(v) is None for v in pair):
+        raise InvalidInputError(f"{name} must be (low, high), two numbers, got {value!r}")
+    lo, hi = (check_real(v, f"{name}[{i}]") for i, v in enumerate(pair))
+    if not lo < hi:
+        raise InvalidInputError(f"{name} must be (low, high) with low < high, got {value!r}")
+    return lo, hi
+
+
+def check_vector3(value: Any, name: str, *, nonzero: bool = False) -> np.ndarray:
+    """Three finite numbers as a ``(3,)`` float64 array (a new one).
+
+    Parameters
+    ----------
+    value : array_like
+    name : str
+        Name of the argument, for the message.
+    nonzero : bool
+        Also refuse the zero vector (a direction).
+
+    Raises
+    ------
+    InvalidInputError
+        If `value` is not 3 finite numbers (or is zero when `nonzero`).
+    """
+    want = "a non-zero 3-vector" if nonzero else "3 finite numbers"
+    if isinstance(value, (str, bytes)):
+        raise InvalidInputError(f"{name}: expected {want}, got {value!r}")
+    try:
+        a = np.array(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"{name}: expected {want}, got {value!r}") from None
+    if a.shape != (3,) or not np.isfinite(a).all() or (nonzero and not np.linalg.norm(a) > 0):
+        raise InvalidInputError(f"{name}: expected {want}, got {value!r}")
+    return a
+
+
+def check_array(value: Any, name: str, shape: tuple[int | None, ...], *,
+                min_rows: int = 1, rows: str = "rows") -> np.ndarray:
+    """A finite float64 array of `shape` (``None``: any length along that axis).
+
+    Parameters
+    ----------
+    value : array_like
+    name : str
+        Name of the argument, for the message.
+    shape : tuple of int or None
+        Expected shape (at least one axis); ``None`` for any length.
+    min_rows : int
+        Fewest rows (length of the first axis) accepted.
+    rows : str
+        What a row is, for the message (``"frames"``).
+
+    Raises
+    ------
+    InvalidInputError
+        If `value` is not numeric, has another shape or fewer rows, or holds
+        NaN or inf (naming the first rows that do).
+    """
+    want = "(" + ", ".join("n" if s is None else str(s) for s in shape) + ")"
+    try:
+        a = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InvalidInputError(
+            f"{name}: expected a numeric array of shape {want}, got {type(value).__name__}"
+        ) from None
+    if a.ndim != len(shape) or any(s is not None and s != d for s, d in zip(shape, a.shape)):
+        raise InvalidInputError(f"{name}: expected shape {want}, got {a.shape}")
+    if a.shape[0] < min_rows:
+        raise InvalidInputError(f"{name}: expected at least {min_rows} {rows}, got {a.shape[0]}")
+    bad = ~np.isfinite(a).all(axis=tuple(range(1, a.ndim)))
+    if bad.any():
+        where = np.flatnonzero(bad)
+        raise InvalidInputError(
+            f"{name}: {where.size} of {a.shape[0]} {rows} contain NaN or inf "
+            f"(first {rows} {where[:5].tolist()})"
+        )
+    return a
