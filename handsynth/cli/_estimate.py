@@ -10,7 +10,7 @@ import click
 
 from .._io import check_outputs
 from ..errors import EstimationError, InvalidInputError
-from ._io import read_image
+from ..render import read_image
 from ._main import cli
 
 #: Off-grid hand rendered by ``--synthetic`` unless ``--synthetic-shape`` says otherwise.

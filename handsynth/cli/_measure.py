@@ -7,7 +7,7 @@ from pathlib import Path
 import click
 
 from ..errors import InvalidInputError
-from ._io import read_image
+from ..render import read_image
 from ._main import cli
 
 

@@ -126,6 +126,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -1098,11 +1099,14 @@ def measure_photo(image, *, mm_per_px: float | None = None,
 
     Parameters
     ----------
-    image : ndarray, shape (H, W) or (H, W, 3)
+    image : ndarray, shape (H, W) or (H, W, 3), or str or os.PathLike
         uint8 grey or BGR photo of one open hand, fingers spread, lying flat
         on a plain background, seen from straight above; or a bool
-        silhouette.  A forearm may leave the picture at the border; nothing
-        else of the hand may touch it.
+        silhouette; or the path of such a photo's image file (read with
+        OpenCV as :func:`handsynth.render.read_image` reads it: 16-bit pixels
+        keep their top 8 bits, an alpha channel is dropped).  A forearm may
+        leave the picture at the border; nothing else of the hand may touch
+        it.
     mm_per_px : float, keyword-only
         Scale at the plane of the hand, mm per pixel.
     reference_width_mm : float, keyword-only
@@ -1120,7 +1124,8 @@ def measure_photo(image, *, mm_per_px: float | None = None,
     ------
     InvalidInputError
         No scale or two scales; an image that is not a uint8 grey/BGR image
-        or bool mask; no hand; two hand-sized objects; a missing or
+        or bool mask, or a path that is not a readable image file (named);
+        no hand; two hand-sized objects; a missing or
         ambiguous reference object; a hand touching the border; fewer than
         five separated fingers.  The message names the problem.
     """
@@ -1132,6 +1137,10 @@ def measure_photo(image, *, mm_per_px: float | None = None,
             "give the photo's scale: exactly one of mm_per_px (mm per pixel at the hand) or "
             f"reference_width_mm (a reference object's width); got mm_per_px={mm_per_px!r}, "
             f"reference_width_mm={reference_width_mm!r}")
+    if isinstance(image, (str, os.PathLike)):
+        from ..render import read_image
+
+        image = read_image(image, what="photo")
     hand, ref = _hand_and_reference(_foreground(image), reference_width_mm is not None)
     reference_px = None
     if ref is not None:

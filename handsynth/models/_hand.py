@@ -55,7 +55,11 @@ class HandModel:
         import mujoco
 
         self._mj = mujoco
-        self.shape = shape or HandShape()
+        self.shape = HandShape() if shape is None else shape
+        if not isinstance(self.shape, HandShape):
+            from ..errors import InvalidShapeError
+
+            raise InvalidShapeError(f"shape must be a HandShape, got {type(shape).__name__}")
         self.side = side
         self.model = compile_mjcf(xml or hand_mjcf(self.shape, side=side, forearm=forearm))
         self.data = mujoco.MjData(self.model)

@@ -244,7 +244,7 @@ def hand_mjcf(shape: HandShape | None = None, *, side: str = "right",
     str
         A complete ``<mujoco>`` document, lengths in metres, angles in degrees.
     """
-    spec = hand_spec(shape or HandShape(), side=side)
+    spec = hand_spec(HandShape() if shape is None else shape, side=side)
     lim = {n: JOINT_LIMITS_DEG[i] for i, n in enumerate(JOINT_NAMES)}
     meshes: list[str] = []
     lines: list[str] = []

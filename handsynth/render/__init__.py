@@ -15,7 +15,7 @@ from an ordinary background by the colour of the user's skin) and
 from .._gl import backend, ensure_backend
 from ._camera import CameraMount
 from ._coverage import DEFAULT_CELLS, coverage
-from ._io import write_png
+from ._io import read_image, write_png
 from ._masks import MaskMaker
 from ._preprocess import (
     binarize,
@@ -72,6 +72,7 @@ __all__ = [
     "palm_region",
     "preprocess",
     "preprocess_reference",
+    "read_image",
     "render_rgb",
     "scene_include_mjcf",
     "scene_mjcf",

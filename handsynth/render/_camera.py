@@ -10,7 +10,7 @@ import numpy as np
 from ..errors import InvalidCameraError
 from ..models import DORSUM_Z_MM
 
-__all__ = ["MAX_WRIST_CUT_MM", "CameraMount"]
+__all__ = ["MAX_WRIST_CUT_MM", "CameraMount", "as_mount"]
 
 
 #: Largest wrist cut, mm from the wrist joint centre along the hand.
@@ -209,6 +209,22 @@ class CameraMount:
         pc = (np.asarray(points_m, float) - pose[:3, 3]) @ pose[:3, :3]
         uvw = pc @ self.intrinsics(width_px, height_px).T
         return uvw[:, :2] / uvw[:, 2:3]
+
+
+def as_mount(mount, name: str = "mount", *, optional: bool = True) -> CameraMount:
+    """`mount` checked to be a :class:`CameraMount`; the paper's device for ``None``
+    when `optional`.
+
+    Raises
+    ------
+    InvalidCameraError
+        Anything else, naming the argument `name` and the type received.
+    """
+    if mount is None and optional:
+        return CameraMount()
+    if not isinstance(mount, CameraMount):
+        raise InvalidCameraError(f"{name} must be a CameraMount, got {type(mount).__name__}")
+    return mount
 
 
 def _axis_rot(axis: np.ndarray, angle: float) -> np.ndarray:

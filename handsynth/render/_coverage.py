@@ -18,7 +18,7 @@ import cv2
 import numpy as np
 
 from ..errors import InvalidInputError
-from ._camera import CameraMount
+from ._camera import CameraMount, as_mount
 from ._preprocess import binarize, wrist_cut_keep
 
 __all__ = ["DEFAULT_CELLS", "coverage"]
@@ -64,12 +64,14 @@ def coverage(frame: np.ndarray, mount: CameraMount | None = None, *, side: str =
     ------
     InvalidInputError
         A frame that is not an image (:func:`~handsynth.render.check_frame`),
-        or a bad `cells`.
+        a bad `cells` or `threshold`, or a `mount` that is not a
+        :class:`~handsynth.render.CameraMount`
+        (:class:`~handsynth.errors.InvalidCameraError`).
     """
     rows, cols = _check_cells(cells)
     mask = binarize(frame, threshold=threshold)
     h, w = mask.shape
-    keep = _keep_u8(mount or CameraMount(), side, w, h)
+    keep = _keep_u8(as_mount(mount), side, w, h)
     m8 = mask.view(np.uint8)
     if keep is not None:
         m8 = m8 & keep

@@ -26,11 +26,11 @@ class MaskMaker:
         """Set ``shape, mount, side, width_px, height_px`` and ``hand``: the model hand
         in its silhouette scene (flat white, device camera at the mask size)."""
         from ..models import HandModel, HandShape
-        from ._camera import CameraMount
+        from ._camera import as_mount
         from ._scene import scene_mjcf
 
-        self.shape = shape or HandShape()
-        self.mount = mount or CameraMount()
+        self.shape = HandShape() if shape is None else shape
+        self.mount = as_mount(mount)
         self.side = side
         self.width_px, self.height_px = self.mount.size(width_px, height_px)
         xml = scene_mjcf(self.shape, self.mount, side=side, forearm=forearm, silhouette=True,
@@ -74,10 +74,18 @@ class MaskMaker:
         angles : array_like, shape (N, 20)
             Degrees, canonical order; all validated before drawing starts.
         out : ndarray, shape (N, height_px, width_px), bool, optional
+            Written in place and returned.
 
         Returns
         -------
         ndarray, shape (N, height_px, width_px), bool
+
+        Raises
+        ------
+        InvalidPoseError
+            Unknown joints, NaN, or angles outside the joint limits.
+        InvalidInputError
+            An `out` that is not a bool numpy array of that shape.
         """
         a = as_angles(angles)
         if a.ndim != 2:
@@ -85,6 +93,9 @@ class MaskMaker:
         shape = (len(a), self.height_px, self.width_px)
         if out is None:
             out = np.zeros(shape, dtype=bool)
+        elif not isinstance(out, np.ndarray):
+            raise InvalidInputError(f"out must be a bool numpy array of shape {shape}, "
+                                    f"got {type(out).__name__}")
         elif out.shape != shape or out.dtype != bool:
             raise InvalidInputError(f"out must be a bool array of shape {shape}, "
                                     f"got {out.dtype} {out.shape}")

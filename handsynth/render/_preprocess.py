@@ -60,10 +60,11 @@ import numpy as np
 
 from ..errors import InvalidInputError
 from ..models import DORSUM_Z_MM
-from ._camera import CameraMount
+from ._camera import CameraMount, as_mount
 from ._runs import (
     OTSU_STEP,
     _frame_threshold,
+    _threshold,
     binarize_frame,
     silhouette_from_frame,
     silhouette_from_mask,
@@ -98,8 +99,16 @@ def binarize(frame: np.ndarray, *, threshold: int | None = None) -> np.ndarray:
     Returns
     -------
     ndarray, shape (H, W), bool
+
+    Raises
+    ------
+    InvalidInputError
+        A frame that is not an image (:func:`check_frame`), or a `threshold`
+        that is not a finite number.
     """
     frame = check_frame(frame)
+    if threshold is not None:
+        _threshold(threshold)  # checked for masks too
     if frame.dtype == bool:
         return frame
     return binarize_frame(frame, threshold=threshold)
@@ -172,13 +181,32 @@ def _keep_cached(mount: CameraMount, side: str, w: int, h: int) -> np.ndarray:
     assert cut_mm is not None  # callers skip mounts without a wrist cut
     y_cut = cut_mm * 1e-3
     z = DORSUM_Z_MM * 1e-3
-    p = mount.project(np.array([[-0.2, y_cut, z], [0.2, y_cut, z], [0.0, y_cut - 0.05, z]]),
-                      side=side, width_px=w, height_px=h)
-    (u0, v0), (u1, v1), (uf, vf) = p
+    # two points of the cut line and one of the forearm, in homogeneous pixel
+    # coordinates (u w, v w, w), w the depth along the optical axis (as
+    # CameraMount.project computes them, before its division by w)
+    pose = mount.pose_in_hand(side=side)
+    pc = (np.array([[-0.2, y_cut, z], [0.2, y_cut, z], [0.0, y_cut - 0.05, z]])
+          - pose[:3, 3]) @ pose[:3, :3]
+    uvw = pc @ mount.intrinsics(w, h).T
     vv, uu = np.mgrid[0:h, 0:w]
-    def side_of(u, v):
-        return (u1 - u0) * (v - v0) - (v1 - v0) * (u - u0)
-    forearm_sign = np.sign(side_of(uf, vf))
+    # The cut line has one depth along its length (the optical axis has no x
+    # component), so its two points are both in front of the camera or both
+    # at or behind it.  Pixels are kept on the side of the plane through the
+    # camera centre and the cut line that does not hold the forearm point.
+    # That point's side is taken from its homogeneous coordinates: behind
+    # the camera (a tilted or low mount) it projects mirrored through the
+    # centre, and its projection lies on the other side of the line.
+    if uvw[0, 2] > 0:
+        # line in front of the camera: through its two projected points
+        (u0, v0), (u1, v1) = uvw[:2, :2] / uvw[:2, 2:3]
+        def side_of(u, v, w_=1.0):
+            return (u1 - u0) * (v - v0 * w_) - (v1 - v0) * (u - u0 * w_)
+    else:
+        # line at or behind the camera: its homogeneous image line (no division)
+        line = np.cross(uvw[0], uvw[1])
+        def side_of(u, v, w_=1.0):
+            return line[0] * u + line[1] * v + line[2] * w_
+    forearm_sign = np.sign(side_of(*uvw[2]))
     keep = np.sign(side_of(uu, vv)) != forearm_sign
     keep.setflags(write=False)
     return keep
@@ -189,12 +217,24 @@ def wrist_cut_keep(mount: CameraMount, *, side: str = "right",
     """Pixels kept by the wrist cut of `mount`, or ``None`` when the mount has no cut.
 
     The cut line is the image of the line ``y = mount.wrist_cut_mm`` across
-    the hand at dorsum height; the side where the forearm projects is cleared.
+    the hand at dorsum height: the pixels whose rays leave the camera on the
+    forearm's side of the plane through the camera centre and that line are
+    cleared.  This holds for every mount :class:`CameraMount` accepts: where
+    a tilted or low camera has the forearm (or the cut line itself) behind
+    it, the cleared side is still the forearm's, and a camera that sees no
+    part of the dorsum behind the cut loses no pixel.
 
     Returns
     -------
     ndarray, shape (height_px, width_px), bool, read-only, or None
+
+    Raises
+    ------
+    InvalidCameraError
+        A `mount` that is not a :class:`CameraMount`, a bad `side` or image
+        size, naming it.
     """
+    mount = as_mount(mount, optional=False)
     if mount.wrist_cut_mm is None:
         return None
     w, h = mount.size(width_px, height_px)
@@ -319,9 +359,21 @@ def preprocess(frame: np.ndarray, mount: CameraMount | None = None, *, side: str
     -------
     ndarray, shape (size, size), bool
         The silhouette; all False when the frame shows no hand.
+
+    Raises
+    ------
+    InvalidInputError
+        A frame that is not an image (:func:`check_frame`), a `size` under
+        8, a `threshold` that is not a finite number, or a `mount` that is
+        not a :class:`CameraMount` (:class:`~handsynth.errors.InvalidCameraError`);
+        the message names the argument.
     """
     size = _check_size(size)
     frame = check_frame(frame)
+    if mount is not None and not isinstance(mount, CameraMount):
+        as_mount(mount)  # refused, naming it
+    if threshold is not None:
+        _threshold(threshold)  # checked for masks too
     lo, hi = _rows_kept(mount, side, frame.shape[1], frame.shape[0])
     if frame.dtype == bool:
         return silhouette_from_mask(frame, lo, hi, size)
@@ -334,7 +386,7 @@ def preprocess_reference(frame: np.ndarray, mount: CameraMount | None = None, *,
     """:func:`preprocess` as the plain chain of its steps (slow; the specification)."""
     size = _check_size(size)
     mask = binarize(frame, threshold=threshold)
-    keep = wrist_cut_keep(mount or CameraMount(), side=side,
+    keep = wrist_cut_keep(as_mount(mount), side=side,
                           width_px=mask.shape[1], height_px=mask.shape[0])
     if keep is not None:
         mask = mask & keep

@@ -12,9 +12,9 @@ import numpy as np
 from .._gl import ensure_backend
 from ..errors import InvalidCameraError, RenderError
 from ..models import HandModel, HandShape
-from ._camera import CameraMount
+from ._camera import CameraMount, as_mount
 from ._masks import MaskMaker
-from ._scene import scene_mjcf
+from ._scene import check_samples, scene_mjcf
 
 __all__ = ["SilhouetteRenderer", "render_rgb"]
 
@@ -90,8 +90,20 @@ class SilhouetteRenderer(GLContextOwner, MaskMaker):
     forearm : bool, keyword-only
         Render the forearm stub behind the wrist, as the real camera sees it.
     samples : int, keyword-only
-        Multisample anti-aliasing (0, 2 or 4 on Mesa's llvmpipe); a pixel is
-        hand when at least half of its samples are (a high-quality reference).
+        Multisample anti-aliasing: 0 (none), 2, 4, 8 or 16 (Mesa's llvmpipe
+        gives the same masks for every count above 0); a pixel is hand when
+        at least half of its samples are (a high-quality reference).
+
+    Raises
+    ------
+    InvalidInputError
+        An argument of the wrong type or value, naming it: a `mount` that
+        is not a :class:`CameraMount` (:class:`~handsynth.errors.InvalidCameraError`),
+        a `shape` that is not a :class:`~handsynth.models.HandShape`
+        (:class:`~handsynth.errors.InvalidShapeError`), `samples` not one of
+        those counts, a bad `side` or image size.
+    RenderError
+        No off-screen renderer could be created (no GL library).
 
     Examples
     --------
@@ -103,6 +115,7 @@ class SilhouetteRenderer(GLContextOwner, MaskMaker):
     def __init__(self, shape: HandShape | None = None, mount: CameraMount | None = None, *,
                  side: str = "right", width_px: int | None = None, height_px: int | None = None,
                  forearm: bool = True, samples: int = 0) -> None:
+        check_samples(samples)  # before the GL context, whose failure would be blamed on GL
         ensure_backend()
         import mujoco
 
@@ -144,8 +157,8 @@ def render_rgb(angles, shape: HandShape | None = None, mount: CameraMount | None
     """
     if camera not in ("device", "side", "top"):
         raise InvalidCameraError(f"camera must be 'device', 'side' or 'top', got {camera!r}")
+    mount = as_mount(mount)
     ensure_backend()
-    mount = mount or CameraMount()
     w, h = mount.size(width_px, height_px)
     xml = scene_mjcf(shape, mount, side=side, forearm=forearm, width_px=w, height_px=h)
     hand = HandModel(shape, side=side, xml=xml)

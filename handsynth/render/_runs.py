@@ -45,6 +45,8 @@ from numba import njit, types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
+from ..errors import InvalidInputError
+
 __all__ = ["OTSU_STEP", "binarize_frame", "silhouette_from_frame", "silhouette_from_mask"]
 
 
@@ -669,7 +671,19 @@ def _frame_kernel(frame, lo, hi, t, size):
 
 
 def _threshold(threshold) -> int:
-    """A fixed threshold as the level `t` of ``grey > t``, clipped to [-1, 255]."""
+    """A fixed threshold as the level `t` of ``grey > t``, clipped to [-1, 255].
+
+    Raises
+    ------
+    InvalidInputError
+        `threshold` is not a finite real number (a bool, a string, NaN or
+        inf), naming it and the value received.
+    """
+    if isinstance(threshold, bool) or not isinstance(threshold, (int, float, np.integer,
+                                                                 np.floating)) \
+            or not math.isfinite(threshold):
+        raise InvalidInputError(
+            f"threshold must be a finite number (a grey level, 0-255), got {threshold!r}")
     return min(max(int(threshold), -1), 255)
 
 

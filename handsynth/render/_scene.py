@@ -4,10 +4,31 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import InvalidInputError
 from ..models import HandShape, hand_mjcf
-from ._camera import CameraMount
+from ._camera import CameraMount, as_mount
 
 __all__ = ["mujoco_camera_xyaxes", "scene_include_mjcf", "scene_mjcf", "scene_parts", "standard_assets"]
+
+#: Multisample counts of the off-screen buffer that OpenGL drivers offer (0: none).
+MSAA_SAMPLES = (0, 2, 4, 8, 16)
+
+
+def check_samples(samples) -> int:
+    """`samples` checked to be one of :data:`MSAA_SAMPLES`.
+
+    Raises
+    ------
+    InvalidInputError
+        Anything else (a negative, odd or fractional count, a bool), naming
+        the argument and the value received.
+    """
+    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) \
+            or samples not in MSAA_SAMPLES:
+        raise InvalidInputError(
+            f"samples must be one of {', '.join(map(str, MSAA_SAMPLES))} (multisample "
+            f"anti-aliasing; 0: none), got {samples!r}")
+    return int(samples)
 
 
 def mujoco_camera_xyaxes(pose_cv: np.ndarray) -> np.ndarray:
@@ -22,8 +43,16 @@ def mujoco_camera_xyaxes(pose_cv: np.ndarray) -> np.ndarray:
 def scene_parts(mount: CameraMount | None, side: str, silhouette: bool,
                  width_px: int | None, height_px: int | None,
                  samples: int = 0) -> tuple[str, str]:
-    """The ``<visual>`` element and the worldbody lights and cameras of a scene."""
-    mount = mount or CameraMount()
+    """The ``<visual>`` element and the worldbody lights and cameras of a scene.
+
+    Raises
+    ------
+    InvalidInputError
+        A `mount` that is not a :class:`CameraMount`, or `samples` not one of
+        :data:`MSAA_SAMPLES`, naming it.
+    """
+    mount = as_mount(mount)
+    samples = check_samples(samples)
     w, h = mount.size(width_px, height_px)
     pose = mount.pose_in_hand(side=side)
     xy = mujoco_camera_xyaxes(pose)
@@ -42,7 +71,7 @@ def scene_parts(mount: CameraMount | None, side: str, silhouette: bool,
     )
     visual = (
         f'  <visual>\n    <global offwidth="{w}" offheight="{h}"/>\n'
-        f'    <quality offsamples="{int(samples)}" shadowsize="0"/>\n    {head}\n'
+        f'    <quality offsamples="{samples}" shadowsize="0"/>\n    {head}\n'
         '    <rgba haze="0 0 0 1"/>\n    <map znear="0.01" zfar="50"/>\n  </visual>\n'
     )
     return visual, light + cameras
@@ -66,7 +95,8 @@ def scene_mjcf(shape: HandShape | None = None, mount: CameraMount | None = None,
     width_px, height_px : int, keyword-only
         Off-screen buffer size (the render size; the mount's frame size by default).
     samples : int, keyword-only
-        Multisample anti-aliasing samples of the off-screen buffer (0: none).
+        Multisample anti-aliasing samples of the off-screen buffer: 0 (none),
+        2, 4, 8 or 16.
 
     Returns
     -------

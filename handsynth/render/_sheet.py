@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import InvalidInputError
 from ..models import HandShape, named_pose
 from ._camera import CameraMount
 from ._renderer import render_rgb
@@ -43,9 +44,36 @@ def contact_sheet(shapes: dict[str, HandShape], poses: tuple[str, ...] = ("open"
 
 
 def label_image(img: np.ndarray, text: str) -> np.ndarray:
+    """A copy of `img` with `text` written in its top left corner and a grey frame.
+
+    Parameters
+    ----------
+    img : ndarray, shape (H, W, 3) or (H, W), uint8
+        A picture; it is not modified.
+    text : str
+
+    Returns
+    -------
+    ndarray, same shape and dtype as `img`
+        A new array.
+
+    Raises
+    ------
+    InvalidInputError
+        `img` is not a uint8 image of one of those shapes (the message names
+        it, its dtype and shape), or `text` is not a string.
+    """
     import cv2
 
-    img = np.ascontiguousarray(img)
+    if not isinstance(img, np.ndarray) or img.dtype != np.uint8 or not (
+            img.ndim == 2 or (img.ndim == 3 and img.shape[2] == 3)) or 0 in img.shape:
+        raise InvalidInputError(
+            "img must be a non-empty uint8 numpy array of shape (H, W, 3) or (H, W), got "
+            + (f"dtype {img.dtype} shape {img.shape}" if isinstance(img, np.ndarray)
+               else type(img).__name__))
+    if not isinstance(text, str):
+        raise InvalidInputError(f"text must be a str, got {type(text).__name__}")
+    img = np.array(img, order="C")  # a copy: the caller's picture is left as it is
     cv2.putText(img, text, (6, 18), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (255, 255, 255), 1, cv2.LINE_AA)
     cv2.rectangle(img, (0, 0), (img.shape[1] - 1, img.shape[0] - 1), (90, 90, 90), 1)
     return img

@@ -335,3 +335,29 @@ def test_fit_shape_correction_fits_what_it_measures():
     assert abs(m[3, 2] - MODEL_SHAPE_CORRECTION.coefficients[3][2]) < 0.25, m
     with pytest.raises(InvalidInputError, match="at least 10"):
         fit_shape_correction(shapes[:9])
+
+
+def test_a_photo_can_be_given_as_the_path_of_its_image_file(tmp_path, standard, standard_result):
+    import cv2
+
+    png = tmp_path / "hand.png"
+    assert cv2.imwrite(str(png), standard.image)  # BGR, lossless
+    bgra = tmp_path / "hand_alpha.png"
+    assert cv2.imwrite(str(bgra), cv2.cvtColor(standard.image, cv2.COLOR_BGR2BGRA))
+    for path in (str(png), png, bgra):
+        got = measure_photo(path, mm_per_px=MM)
+        assert got.shape == standard_result.shape
+        assert got.selection.ratios == standard_result.selection.ratios
+        assert got.measurements == standard_result.measurements
+
+
+def test_a_path_that_is_not_a_readable_image_is_named(tmp_path):
+    missing = tmp_path / "no_such_hand.jpg"
+    with pytest.raises(InvalidInputError, match=r"photo .*no_such_hand\.jpg.*no such file"):
+        measure_photo(str(missing), mm_per_px=MM)
+    text = tmp_path / "notes.png"
+    text.write_text("not a picture")
+    with pytest.raises(InvalidInputError, match=r"photo .*notes\.png"):
+        measure_photo(text, mm_per_px=MM)
+    with pytest.raises(InvalidInputError, match=r"photo .*"):
+        measure_photo(tmp_path, mm_per_px=MM)  # a folder
