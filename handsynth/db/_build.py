@@ -1,8 +1,13 @@
 """The database build job: many hand shapes, many poses, in parallel, resumable.
 
-One HDF5 file per hand shape, ``<out_dir>/<shape.name>.h5``
+One HDF5 file per hand shape and side, ``<out_dir>/<shape.name>.h5`` for
+the right hand and ``<out_dir>/<shape.name>_left.h5`` for the left hand
 (:func:`database_path`), written by :func:`write_database` (atomic,
-deterministic, checksummed).
+deterministic, checksummed).  The name gives the ratios to 0.001, so a
+build refuses a shape with finer ratios (round it with
+``HandShape.from_name(shape.name)``), and an existing file that holds
+another shape or side than its name promises is refused
+(:class:`DatabaseMismatchError`), never overwritten.
 
 How a build runs
 ----------------
@@ -35,13 +40,19 @@ from pathlib import Path
 import numpy as np
 
 from .._io import make_folder, os_error_reason
-from ..errors import DatabaseError, InvalidInputError, OutputError
+from ..errors import (
+    DatabaseError,
+    DatabaseMismatchError,
+    InvalidInputError,
+    InvalidShapeError,
+    OutputError,
+)
 from ..models import PAPER_SIZE, HandShape
 from ..models import pose_set as make_pose_set
 from ..render import CameraMount
 from ._entries import DEFAULT_RENDER_SIZE, database_meta, render_entries
 from ._executors import EXECUTORS, run_tasks
-from ._store import verify, write_database
+from ._store import LEFT_SUFFIX, verify, write_database
 
 __all__ = [
     "DEFAULT_DATABASE",
@@ -52,6 +63,7 @@ __all__ = [
     "build_database",
     "build_databases",
     "build_default_database",
+    "check_database_hand",
     "database_path",
     "find_database",
 ]
@@ -222,36 +234,133 @@ class BuildSummary:
 DEFAULT_DATABASE: dict = {"shape": HandShape(), "pose_set": "paper", "count": 3000, "seed": 0}
 
 
-def database_path(out_dir, shape: HandShape) -> Path:
-    """File of `shape`'s database in `out_dir`: ``<out_dir>/<shape.name>.h5``."""
-    return Path(out_dir) / f"{shape.name}.h5"
+_SIDES = ("right", "left")
 
 
-def find_database(folder, shape: HandShape) -> Path:
+def _as_shape(shape, name: str = "shape") -> HandShape:
+    """`shape` as a HandShape: a HandShape or its :attr:`HandShape.name`."""
+    if isinstance(shape, str):
+        return HandShape.from_name(shape)
+    if not isinstance(shape, HandShape):
+        raise InvalidInputError(
+            f"{name} must be a HandShape or a shape name such as {HandShape().name!r}, "
+            f"got {type(shape).__name__}")
+    return shape
+
+
+def _as_side(side) -> str:
+    if side not in _SIDES:
+        raise InvalidInputError(f"side must be 'right' or 'left', got {side!r}")
+    return side
+
+
+def _check_named_resolution(shape: HandShape, name: str) -> None:
+    """Refuse a shape that its file name (ratios to 0.001) would not tell apart."""
+    named = HandShape.from_name(shape.name)
+    off = [f"{k}={getattr(shape, k)!r}" for k, v in named.as_dict().items()
+           if abs(getattr(shape, k) - v) > 1e-9]
+    if off:
+        raise InvalidShapeError(
+            f"{name} has ratios finer than its database file name {shape.name} tells apart "
+            f"(0.001): {', '.join(off)}; round it with HandShape.from_name(shape.name)")
+
+
+def database_path(out_dir, shape: HandShape | str, side: str = "right") -> Path:
+    """File of `shape`'s database in `out_dir`.
+
+    Parameters
+    ----------
+    out_dir : str or os.PathLike
+    shape : HandShape or str
+        A shape or its :attr:`HandShape.name`.
+    side : {"right", "left"}
+        Hand side.
+
+    Returns
+    -------
+    pathlib.Path
+        ``<out_dir>/<shape.name>.h5`` for the right hand,
+        ``<out_dir>/<shape.name>_left.h5`` for the left hand.
+
+    Raises
+    ------
+    InvalidInputError
+        `shape` is neither a HandShape nor a shape name, or `side` is not
+        ``"right"`` or ``"left"``.
+    """
+    shape = _as_shape(shape)
+    suffix = LEFT_SUFFIX if _as_side(side) == "left" else ""
+    return Path(out_dir) / f"{shape.name}{suffix}.h5"
+
+
+def check_database_hand(meta, shape: HandShape, side: str, path) -> None:
+    """Refuse a database whose metadata holds another hand than `shape`'s `side` hand.
+
+    Parameters
+    ----------
+    meta : dict
+        The database's metadata (:func:`database_meta`); a missing
+        ``shape`` is not checked, a missing ``side`` means the right hand.
+    shape : HandShape
+        The shape asked for; its ratios must equal the stored ones exactly.
+    side : {"right", "left"}
+        The side asked for.
+    path : path-like
+        The file, for the message.
+
+    Raises
+    ------
+    DatabaseMismatchError
+        Naming the file, the stored hand and the hand asked for.
+    """
+    stored_side = meta.get("side", "right")
+    stored_shape = meta.get("shape")
+    same_shape = not isinstance(stored_shape, dict) or stored_shape == shape.as_dict()
+    if stored_side == side and same_shape:
+        return
+    if isinstance(stored_shape, dict):
+        ratios = ", ".join(f"{k}={v!r}" for k, v in sorted(stored_shape.items()))
+    else:
+        ratios = "unknown shape"
+    asked = ", ".join(f"{k}={v!r}" for k, v in sorted(shape.as_dict().items()))
+    raise DatabaseMismatchError(
+        f"database {path} holds the {stored_side} hand ({ratios}) but the {side} hand "
+        f"({asked}) was asked for; it is not overwritten: move or delete it, or build "
+        "into another folder")
+
+
+def find_database(folder, shape: HandShape | str, side: str = "right") -> Path:
     """The existing database file of `shape` in `folder`, or an error that says what is there.
 
     Parameters
     ----------
     folder : str or os.PathLike
-    shape : HandShape
+    shape : HandShape or str
+        A shape or its :attr:`HandShape.name`.
+    side : {"right", "left"}
+        Hand side (see :func:`database_path`).
 
     Returns
     -------
     pathlib.Path
-        ``<folder>/<shape.name>.h5``, a file (not yet checked: see :func:`open_database`).
+        :func:`database_path` of `shape` and `side`, a file (not yet
+        checked: see :func:`open_database`).
 
     Raises
     ------
+    InvalidInputError
+        `shape` is neither a HandShape nor a shape name, or `side` is not
+        ``"right"`` or ``"left"``.
     DatabaseError
         `folder` is missing or a file; the name is a folder or a link to
         nothing; or there is no such file (the message lists the database
         files that are there).
     """
+    path = database_path(folder, shape, side)
     folder = Path(folder)
     if not folder.is_dir():
         why = "is a file, not a folder" if folder.exists() else "does not exist"
         raise DatabaseError(f"database folder {str(folder)!r} {why}")
-    path = database_path(folder, shape)
     if path.is_dir():
         raise DatabaseError(f"database {path} is a folder, not a file")
     if path.is_symlink() and not path.exists():
@@ -259,8 +368,8 @@ def find_database(folder, shape: HandShape) -> Path:
                             "not exist")
     if not path.is_file():
         have = sorted(p.stem for p in folder.glob("*.h5") if p.is_file())
-        raise DatabaseError(f"no database for shape {shape.name} in {folder} (database files "
-                            f"there: {', '.join(have) or 'none'})")
+        raise DatabaseError(f"no database for the {side} hand of shape {path.stem} in {folder} "
+                            f"(database files there: {', '.join(have) or 'none'})")
     return path
 
 
@@ -347,12 +456,27 @@ class _FolderLock:
             self._fd = None
 
 
-def _check_existing(path: Path, meta: dict) -> tuple[bool, str | None]:
-    """(keep, reason it is refused) for an existing file."""
+def _check_existing(path: Path, meta: dict, shape: HandShape,
+                    side: str) -> tuple[bool, str | None]:
+    """(keep, reason it is refused) for an existing file.
+
+    Raises
+    ------
+    DatabaseMismatchError
+        The file is sound but holds another hand (shape or side): it is not
+        overwritten.
+    """
     if not path.exists():
         return False, None
     try:
         verify(path, expect=meta)
+    except DatabaseMismatchError as exc:
+        try:
+            stored = verify(path)
+        except DatabaseError:
+            return False, str(exc)  # damaged or misnamed: rebuilt
+        check_database_hand(stored, shape, side, path)
+        return False, str(exc)
     except DatabaseError as exc:
         return False, str(exc)
     return True, None
@@ -374,12 +498,13 @@ def _as_shapes(shapes) -> list[HandShape]:
     if isinstance(shapes, HandShape):
         shapes = [shapes]
     out = []
-    for s in shapes:
+    for i, s in enumerate(shapes):
         if isinstance(s, str):
             s = HandShape.from_name(s)
         if not isinstance(s, HandShape):
             raise InvalidInputError(
                 f"shapes must hold HandShape objects or shape names, got {type(s).__name__}")
+        _check_named_resolution(s, f"shapes[{i}]")
         out.append(s)
     if not out:
         raise InvalidInputError("shapes must name at least one hand shape, got none")
@@ -406,7 +531,8 @@ def build_databases(out_dir, shapes: Sequence[HandShape | str], mount: CameraMou
     out_dir : str or os.PathLike
         Output folder, created if missing.
     shapes : sequence of HandShape or str
-        Shapes (or their :attr:`HandShape.name`), e.g. ``HandShape.grid()``.
+        Shapes (or their :attr:`HandShape.name`), e.g. ``HandShape.grid()``;
+        ratios to 0.001, as in the file name (:func:`database_path`).
     mount : CameraMount, optional
         The paper's device by default.
     options : BuildOptions, keyword-only, optional
@@ -424,7 +550,8 @@ def build_databases(out_dir, shapes: Sequence[HandShape | str], mount: CameraMou
         Poses per task; chosen from the work and `workers` by default.  It
         does not change the result.
     force : bool, keyword-only
-        Rebuild even the files that verify.
+        Rebuild even the files that verify (never a file that holds another
+        shape or side: that is refused as without `force`).
     progress : callable, keyword-only, optional
         Called with a :class:`BuildProgress` after each finished chunk and
         once at the end.
@@ -437,7 +564,12 @@ def build_databases(out_dir, shapes: Sequence[HandShape | str], mount: CameraMou
     Raises
     ------
     InvalidInputError
-        Bad shapes, options, workers or executor (the message names it).
+        Bad shapes, options, workers or executor (the message names it); an
+        :class:`~handsynth.errors.InvalidShapeError` for a shape with ratios
+        finer than 0.001, which its file name would not tell apart.
+    DatabaseMismatchError
+        An existing file under a shape's name holds another shape or the
+        other side (:func:`check_database_hand`); it is left as it is.
     OutputError
         Another build holds the folder's lock (:data:`LOCK_NAME`): one build
         per folder at a time.
@@ -487,11 +619,13 @@ def _build_locked(out: Path, shape_list, mount, options, workers, executor, chun
     t0 = time.perf_counter()
     paths, todo, skipped, rebuilt = [], [], [], {}
     for shape in shape_list:
-        path = database_path(out, shape)
+        path = database_path(out, shape, options.side)
         paths.append(path)
         _remove_stale_tmp(path)
         meta = options.meta(shape, mount)
-        keep, reason = (False, None) if force else _check_existing(path, meta)
+        keep, reason = _check_existing(path, meta, shape, options.side)
+        if force:
+            keep = False
         if keep:
             skipped.append(shape.name)
             continue
@@ -550,7 +684,7 @@ def build_database(out_dir, shape: HandShape | str | None = None,
     ----------
     out_dir : str or os.PathLike
         Output folder, created if missing; the file is
-        ``<out_dir>/<shape.name>.h5``.
+        :func:`database_path` of the shape and side.
     shape : HandShape or str, optional
         The standard hand by default.
     mount : CameraMount, optional

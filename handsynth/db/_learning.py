@@ -30,7 +30,7 @@ from __future__ import annotations
 import hashlib
 import json
 import zipfile
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 
 import numpy as np
@@ -132,17 +132,42 @@ class LearningSetOptions:
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
                 raise InvalidInputError(f"LearningSetOptions.{name} must be a positive integer, "
                                         f"got {v!r}")
-        mix = tuple(float(m) for m in self.mix)
+        try:
+            mix = tuple(float(m) for m in self.mix)
+        except (TypeError, ValueError):
+            mix = ()
         if len(mix) != 3 or min(mix) < 0 or not np.isclose(sum(mix), 1.0):
             raise InvalidInputError(f"LearningSetOptions.mix must be 3 shares summing to 1, "
                                     f"got {self.mix!r}")
         object.__setattr__(self, "mix", mix)
-        if not 0 <= self.edge_px <= 20:
-            raise InvalidInputError(f"LearningSetOptions.edge_px must be in [0, 20], "
-                                    f"got {self.edge_px!r}")
+        for name, lo, hi in (("edge_px", 0, 20), ("seed", 0, None)):
+            v = getattr(self, name)
+            if (isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < lo
+                    or (hi is not None and v > hi)):
+                where = f"in [{lo}, {hi}]" if hi is not None else f">= {lo}"
+                raise InvalidInputError(f"LearningSetOptions.{name} must be an integer {where}, "
+                                        f"got {v!r}")
+            object.__setattr__(self, name, int(v))
+        spread = self.hand_spread
+        if (isinstance(spread, bool) or not isinstance(spread, (int, float, np.number))
+                or not np.isfinite(spread) or spread < 0):
+            raise InvalidInputError(f"LearningSetOptions.hand_spread must be a finite number "
+                                    f">= 0, got {spread!r}")
         if not isinstance(self.mount_variation, MountVariation):
             raise InvalidInputError("LearningSetOptions.mount_variation must be a MountVariation")
-        object.__setattr__(self, "cells", tuple(int(c) for c in self.cells))
+        for f in fields(self.mount_variation):
+            sd = getattr(self.mount_variation, f.name)
+            if (isinstance(sd, bool) or not isinstance(sd, (int, float, np.number))
+                    or not np.isfinite(sd) or sd < 0):
+                raise InvalidInputError(f"LearningSetOptions.mount_variation.{f.name} must be a "
+                                        f"finite s.d. >= 0, got {sd!r}")
+        cells = self.cells
+        if (not isinstance(cells, (tuple, list)) or len(cells) != 2
+                or any(isinstance(c, bool) or not isinstance(c, (int, np.integer)) or c < 1
+                       for c in cells)):
+            raise InvalidInputError(f"LearningSetOptions.cells must be (rows, cols), two positive "
+                                    f"integers, got {cells!r}")
+        object.__setattr__(self, "cells", tuple(int(c) for c in cells))
         for name, top in (("segment_width_sd", 1), ("flesh_offset_sd_mm", 10)):
             sd = getattr(self, name)
             if isinstance(sd, bool) or not isinstance(sd, (int, float)) or not 0 <= sd <= top:

@@ -51,7 +51,8 @@ Reading is one exception boundary: whatever a damaged or hand-edited file
 makes h5py or numpy raise becomes a :class:`DatabaseCorruptError` naming the
 file and the field being read, and the attributes must have their exact
 types (``format_version`` an integer, not ``1.5`` or ``"1"``).  A file named
-like a hand shape (``<HandShape.name>.h5``) must hold that shape.
+like a hand shape (``<HandShape.name>.h5``) must hold that shape, and one
+named ``<HandShape.name>_left.h5`` that shape's left hand.
 """
 
 from __future__ import annotations
@@ -74,7 +75,7 @@ from ..errors import (
     DatabaseMismatchError,
     InvalidInputError,
 )
-from ..models import JOINT_NAMES
+from ..models import JOINT_LIMITS_DEG, JOINT_NAMES
 from ._validation import IMAGE_SIZE
 from .features import HLAC_SIZE
 
@@ -82,6 +83,7 @@ __all__ = [
     "FORMAT_VERSION",
     "KEYPOINT_SCALE_M",
     "Database",
+    "check_rows",
     "open_database",
     "verify",
     "write_database",
@@ -100,6 +102,9 @@ _CHUNK_BYTES = 1 << 20
 _GZIP_LEVEL = 4
 _MAX_META_BYTES = 60_000  # HDF5 compact attribute storage holds < 64 KiB
 _KEYPOINT_LIMIT = np.iinfo(np.int16).max
+#: Suffix of a left hand's database file name (a right hand's has none).
+LEFT_SUFFIX = "_left"
+_LIMIT_TOL_DEG = 1e-3  # angles beyond a joint limit by more are refused
 
 # name, per-entry shape, on-disk dtype, units/description attribute
 _DATASETS: tuple[tuple[str, tuple[int, ...], str, str], ...] = (
@@ -279,6 +284,22 @@ def _check_int_range(arr: np.ndarray, name: str, lo: int, hi: int) -> None:
         raise InvalidInputError(f"{name} must lie in [{lo}, {hi}], got {bad.item()}")
 
 
+def _check_joint_limits(ang: np.ndarray) -> None:
+    """Refuse finite angles outside their joints' limits (as :func:`as_angles` does).
+
+    The tolerance, :data:`_LIMIT_TOL_DEG`, covers float32 rounding of an
+    angle clipped to its limit.
+    """
+    lo, hi = JOINT_LIMITS_DEG[:, 0], JOINT_LIMITS_DEG[:, 1]
+    values = np.asarray(ang, dtype=np.float64)
+    out = (values < lo - _LIMIT_TOL_DEG) | (values > hi + _LIMIT_TOL_DEG)
+    if out.any():
+        i, j = (int(v) for v in np.argwhere(out)[0])
+        raise InvalidInputError(
+            f"angles row {i}: {JOINT_NAMES[j]}={values[i, j]:g} deg is outside its limits "
+            f"[{lo[j]:g}, {hi[j]:g}]")
+
+
 def _prepare(angles, hlac, sil_bits, ridge_bits, ridge_area, keypoints) -> dict[str, np.ndarray]:
     """Validate the arrays and convert them to their on-disk dtypes."""
     ang = _as_rows(angles, "angles", None, (len(JOINT_NAMES),))
@@ -292,6 +313,7 @@ def _prepare(angles, hlac, sil_bits, ridge_bits, ridge_area, keypoints) -> dict[
         raise InvalidInputError(
             f"angles must be finite, got {ang[i, j].item()} at index ({i}, {j})"
         )
+    _check_joint_limits(ang)
     hl = _as_rows(hlac, "hlac", n, (HLAC_SIZE,))
     _check_int_range(hl, "hlac", 0, 255)
     bits = {}
@@ -334,6 +356,43 @@ def _prepare(angles, hlac, sil_bits, ridge_bits, ridge_area, keypoints) -> dict[
     }
 
 
+def check_rows(rows: Mapping, name: str = "rows") -> dict[str, np.ndarray]:
+    """Check database rows as :func:`write_database` does; return them in their stored dtypes.
+
+    Parameters
+    ----------
+    rows : mapping
+        ``angles``, ``hlac``, ``sil_bits``, ``ridge_bits``, ``ridge_area``
+        and ``keypoints`` as :func:`write_database` takes them (e.g. the
+        output of :func:`handsynth.db.render_entries`); other keys are
+        ignored.
+    name : str
+        Name of `rows` in error messages.
+
+    Returns
+    -------
+    dict of str to ndarray
+        The six arrays in their on-disk dtypes (``keypoints`` as int16
+        multiples of :data:`KEYPOINT_SCALE_M`), C-contiguous.
+
+    Raises
+    ------
+    InvalidInputError
+        `rows` is not a mapping or lacks a key, or an array has the wrong
+        shape, dtype or range (angles outside their joint limits, keypoints
+        beyond +/-0.32767 m...); the message names the array, and the row
+        and joint of a bad angle.
+    """
+    if not isinstance(rows, Mapping):
+        raise InvalidInputError(f"{name} must be a mapping of arrays, got {type(rows).__name__}")
+    missing = [k for k, _, _, _ in _DATASETS if k not in rows]
+    if missing:
+        raise InvalidInputError(
+            f"{name} must have the keys {', '.join(k for k, _, _, _ in _DATASETS)}; "
+            f"missing {', '.join(missing)}")
+    return _prepare(**{k: rows[k] for k, _, _, _ in _DATASETS})
+
+
 def write_database(
     path, *, angles, hlac, sil_bits, ridge_bits, ridge_area, keypoints, meta: Mapping,
     inputs=(),
@@ -346,7 +405,9 @@ def write_database(
         Final file name (conventionally ``*.h5``); its folder must exist.
         Must not contain ``.tmp-``.
     angles : array_like of float, shape (N, 20)
-        Joint angles in degrees, canonical ``JOINT_NAMES`` order; stored float32.
+        Joint angles in degrees, canonical ``JOINT_NAMES`` order, finite and
+        within :data:`~handsynth.models.JOINT_LIMITS_DEG` (to 0.001 deg);
+        stored float32.
     hlac : array_like of int, shape (N, 1600)
         Block HLAC vectors, values 0..255; stored uint8.
     sil_bits, ridge_bits : ndarray of uint64, shape (N, 64)
@@ -372,7 +433,9 @@ def write_database(
     Raises
     ------
     InvalidInputError
-        An array with the wrong shape, dtype or range, or `meta` not JSON-able.
+        An array with the wrong shape, dtype or range (an angle outside its
+        joint's limits names the row and the joint), or `meta` not JSON-able
+        (the checks of :func:`check_rows`).
     DatabaseError
         The file could not be written: its folder is missing or read-only,
         the disk is full, or `path` is a folder or one of `inputs` (the
@@ -478,20 +541,29 @@ def _scalar(attrs, name: str, kind: str, path: Path):
 
 
 def _check_file_name(path: Path, meta) -> None:
-    """A file named ``<HandShape.name>.h5`` must hold that shape's database."""
+    """A file named ``<HandShape.name>.h5`` must hold that shape's database, and one
+    named ``<HandShape.name>_left.h5`` that shape's left hand."""
     from ..models import HandShape
 
-    stored = meta.get("shape_name") if isinstance(meta, dict) else None
-    if not isinstance(stored, str):
+    if not isinstance(meta, dict):
         return
+    stem, left = path.stem, path.stem.endswith(LEFT_SUFFIX)
+    if left:
+        stem = stem[:-len(LEFT_SUFFIX)]
     try:
-        named = HandShape.from_name(path.stem).name
+        named = HandShape.from_name(stem).name
     except InvalidInputError:
         return  # not named after a shape
-    if named != stored:
+    stored = meta.get("shape_name")
+    if isinstance(stored, str) and named != stored:
         raise DatabaseMismatchError(
             f"database {path} is named for shape {named} but holds the database of shape "
             f"{stored}: it was copied or renamed; rebuild it (handsynth build-db)")
+    if left and meta.get("side", "right") != "left":
+        raise DatabaseMismatchError(
+            f"database {path} is named for the left hand but holds the "
+            f"{meta.get('side', 'right')} hand: it was copied or renamed; rebuild it "
+            "(handsynth build-db)")
 
 
 def _read(path, expect: Mapping | None, *, keep: bool):
@@ -500,7 +572,11 @@ def _read(path, expect: Mapping | None, *, keep: bool):
     Every failure is a :class:`DatabaseError` (the exception boundary of the
     reader): the expected ones are raised with their own message, anything a
     damaged file makes h5py or numpy raise is reported with the field read.
+    A `path` that is not a file name is an :class:`InvalidInputError`.
     """
+    if not isinstance(path, (str, os.PathLike)):
+        raise InvalidInputError(
+            f"path must be a file name (str or os.PathLike), got {type(path).__name__}")
     path = Path(path)
     if is_tmp_name(path):
         raise DatabaseCorruptError(
@@ -672,6 +748,9 @@ def open_database(path, *, expect: Mapping | None = None) -> Database:
         the key, both values and the file), or another format version.
     DatabaseError
         The file does not exist.
+    InvalidInputError
+        `path` is not a file name (``None``, a number...), or `expect` is
+        not a mapping.
     """
     meta, arrays = _read(path, expect, keep=True)
     return Database(

@@ -87,6 +87,8 @@ import copy
 import hashlib
 import json
 import math
+import zipfile
+import zlib
 from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 from typing import NamedTuple
@@ -704,8 +706,9 @@ class ApproximateIndex:
                     return None
                 wanted = ("projection", "centroids", "order", "offsets", "codes", "step")
                 arrays = {k: z[k] for k in wanted if k in z.files}
-        except (OSError, ValueError, KeyError, EOFError, UnicodeDecodeError):
-            return None
+        except (OSError, ValueError, KeyError, EOFError, AttributeError, TypeError,
+                zipfile.BadZipFile, zlib.error):
+            return None  # a damaged file (bad CRC, cut short, not a zip): built again
         n, nlist, dims = len(tables), options.nlist, options.dims
         assert nlist is not None  # the options went through _resolve
         shapes = {"projection": (dims, HLAC_SIZE), "centroids": (nlist, dims), "order": (n,),

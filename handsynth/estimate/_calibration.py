@@ -238,10 +238,18 @@ def select_shape_from_frame(open_frame, *, mount: CameraMount | None = None,
     ------
     InvalidInputError
         The frame is not an image or shows no hand; `shapes` is empty or
-        holds something else than HandShape objects.
+        holds something else than HandShape objects; `mount` is not a
+        CameraMount or `side` not ``"right"`` or ``"left"``.
     """
     mount = mount or CameraMount()
-    cands = HandShape.grid() if shapes is None else list(shapes)
+    if not isinstance(mount, CameraMount):
+        raise InvalidInputError(f"mount must be a CameraMount, got {mount!r}")
+    if side not in ("right", "left"):
+        raise InvalidInputError(f"side must be 'right' or 'left', got {side!r}")
+    try:
+        cands = HandShape.grid() if shapes is None else list(shapes)
+    except TypeError:
+        cands = []
     if not cands or not all(isinstance(s, HandShape) for s in cands):
         raise InvalidInputError(f"shapes must be a non-empty sequence of HandShape, got {shapes!r}")
     user = preprocess(open_frame, mount, side=side)

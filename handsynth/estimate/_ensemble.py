@@ -138,6 +138,20 @@ class EnsembleEstimator:
                                if callable(getattr(m, "calibrated", None)) else m)
         return EnsembleEstimator(members, weights=self.weights)
 
+    def check_ready(self) -> None:
+        """Raise if a member cannot read any frame as it is (its own ``check_ready()``).
+
+        Raises
+        ------
+        EstimationError
+            A member is not set up, e.g. a learnt member that reads the rest
+            frame and was not :meth:`calibrated`.
+        """
+        for m in self.members:
+            ready = getattr(m, "check_ready", None)
+            if callable(ready):
+                ready()
+
     def estimate(self, frame: np.ndarray) -> PoseEstimate:
         """Every member's estimate of `frame`, averaged.
 

@@ -59,6 +59,7 @@ import hashlib
 import itertools
 import json
 import zipfile
+import zlib
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -66,7 +67,13 @@ import numpy as np
 
 from .._io import atomic_open, os_error_reason
 from ..db import LearningSet, LearningSetOptions, learning_set
-from ..errors import DatabaseCorruptError, DatabaseError, DatabaseMismatchError, InvalidInputError
+from ..errors import (
+    DatabaseCorruptError,
+    DatabaseError,
+    DatabaseMismatchError,
+    EstimationError,
+    InvalidInputError,
+)
 from ..models import JOINT_LIMITS_DEG
 from ..render import (
     CameraMount,
@@ -202,7 +209,7 @@ class LearnedOptions:
         if self.kind not in ("mlp", "knn", "fingers"):
             raise InvalidInputError(f"LearnedOptions.kind must be 'mlp', 'knn' or 'fingers', "
                                     f"got {self.kind!r}")
-        for name in ("lists", "probes"):
+        for name in ("lists", "probes", "seed"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 0:
                 raise InvalidInputError(f"LearnedOptions.{name} must be an integer >= 0, got {v!r}")
@@ -510,6 +517,9 @@ def _search_index(codes: np.ndarray, options: LearnedOptions, *, stored: np.ndar
 # ---------------------------------------------------------------------------
 # the estimator
 # ---------------------------------------------------------------------------
+_NOT_CALIBRATED = "this estimator reads the user's rest frame: call calibrated(rest_frame) first"
+
+
 class LearnedEstimator:
     """Hand pose from one frame of the whole camera view (module docstring).
 
@@ -518,8 +528,13 @@ class LearnedEstimator:
     user's hand at rest before :meth:`estimate`.
 
     Implements :class:`~handsynth.estimate.PoseEstimator`.  :meth:`estimate`
-    keeps no state between frames unless ``smoothing`` is set, so one
-    instance may serve several threads only without smoothing.
+    keeps state between frames: a calibrated estimator's move check
+    (:class:`~handsynth.estimate.MoveCheck`) remembers the grids of the last
+    frames, and ``smoothing`` the previous answer.  So use one instance per
+    camera stream (frames of two streams through one instance mix their
+    ``moved`` flags), and do not share one between threads.  Each call of
+    :meth:`calibrated` returns a new instance with its own state that
+    shares the learnt arrays (no copy of them): calibrate once per stream.
 
     Attributes
     ----------
@@ -601,6 +616,22 @@ class LearnedEstimator:
         out.side = "left" if self.side == "right" else "right"
         out.mount = self.mount.mirrored()
         return out
+
+    def check_ready(self) -> None:
+        """Raise if this estimator cannot read any frame as it is.
+
+        A frame it refuses says something about that frame; this says the
+        estimator is not set up, so that a live run stops at once
+        (:func:`handsynth.live.run_live`) instead of refusing every frame.
+
+        Raises
+        ------
+        EstimationError
+            It reads the user's rest frame (``options.use_rest``) and was not
+            :meth:`calibrated`.
+        """
+        if self.options.use_rest and self._rest is None:
+            raise EstimationError(_NOT_CALIBRATED)
 
     # -- calibration -----------------------------------------------------------
     def calibrated(self, rest_frame: np.ndarray, *, check_moved: bool = True,
@@ -777,8 +808,7 @@ class LearnedEstimator:
         """The principal-component code (k,) of a frame (after calibration if used)."""
         g = self.grid(frame).reshape(1, -1)
         if self.options.use_rest and self._rest is None:
-            raise InvalidInputError("this estimator reads the user's rest frame: call "
-                                    "calibrated(rest_frame) first")
+            raise InvalidInputError(_NOT_CALIBRATED)
         z = _inputs(g, self._rest[None] if self._rest is not None and self.options.use_rest
                     else None)
         return ((z - self._a["mean"]) @ self._a["components"])[0]
@@ -829,8 +859,7 @@ class LearnedEstimator:
                                 np.float32), confidence=0.0, entry=-1, error=float("inf"),
                                 low_confidence=True, no_hand=True)
         if self.options.use_rest and self._rest is None:
-            raise InvalidInputError("this estimator reads the user's rest frame: call "
-                                    "calibrated(rest_frame) first")
+            raise InvalidInputError(_NOT_CALIBRATED)
         z = _inputs(g, self._rest[None] if self._rest is not None and self.options.use_rest
                     else None)
         low = False
@@ -892,30 +921,105 @@ class LearnedEstimator:
 
         Raises
         ------
+        DatabaseError
+            The file does not exist, or is a folder.
         DatabaseCorruptError
-            The file is unreadable, incomplete or of another format.
+            The file is unreadable, incomplete (a meta key or an array its
+            options need is missing, naming it) or of another format.
         DatabaseMismatchError
             `options` differ from the file's in what is learnt.
         """
+        path = Path(path)
+        if not path.exists():
+            raise DatabaseError(f"learnt estimator {path} does not exist")
+        if path.is_dir():
+            raise DatabaseError(f"learnt estimator {path} is a folder, not a file")
         try:
             with np.load(path) as z:
                 meta = json.loads(str(z["meta"]))
                 arrays = {k: z[k] for k in z.files if k != "meta"}
-        except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
+        except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
             raise DatabaseCorruptError(f"learnt estimator {path} is unreadable: {exc}") from None
-        if meta.get("format") != _FORMAT:
-            raise DatabaseCorruptError(f"learnt estimator {path} has format {meta.get('format')}, "
+        if not isinstance(meta, dict) or meta.get("format") != _FORMAT:
+            got = meta.get("format") if isinstance(meta, dict) else type(meta).__name__
+            raise DatabaseCorruptError(f"learnt estimator {path} has format {got}, "
                                        f"expected {_FORMAT}")
-        o = dict(meta["options"])
-        o["hidden"] = tuple(o["hidden"])
-        stored = LearnedOptions(**o)
+        stored, mount, side, cells = _stored_description(path, meta)
+        _check_stored_arrays(path, arrays, stored)
         if options is not None and options.digest() != stored.digest():
             differ = [k for k, v in asdict(options).items()
                       if k not in _READING_OPTIONS and v != getattr(stored, k)]
             raise DatabaseMismatchError(f"learnt estimator {path} was learnt with other options "
                                         f"({', '.join(f'{k}={getattr(stored, k)!r}' for k in differ)})")
-        return cls(arrays, options=options or stored, mount=CameraMount(**meta["mount"]),
-                   side=meta["side"], cells=tuple(meta["cells"]))
+        return cls(arrays, options=options or stored, mount=mount, side=side, cells=cells)
+
+
+def _stored_description(path: Path, meta: dict):
+    """The options, mount, side and cells in a stored estimator's `meta`.
+
+    Raises
+    ------
+    DatabaseCorruptError
+        A key is missing or holds an unusable value (naming the key and the file).
+    """
+    for key in ("options", "mount", "side", "cells"):
+        if key not in meta:
+            raise DatabaseCorruptError(f"learnt estimator {path}: its meta has no {key!r}")
+    key = "options"
+    try:
+        o = dict(meta["options"])
+        o["hidden"] = tuple(o["hidden"])
+        stored = LearnedOptions(**o)
+        key = "mount"
+        mount = CameraMount(**meta["mount"])
+        key = "side"
+        side = meta["side"]
+        if side not in ("right", "left"):
+            raise ValueError(f"side {side!r}")
+        key = "cells"
+        cells = tuple(int(c) for c in meta["cells"])
+        if len(cells) != 2 or min(cells) < 1:
+            raise ValueError(f"cells {meta['cells']!r}")
+    except (TypeError, ValueError, KeyError) as exc:  # InvalidInputError is a ValueError
+        raise DatabaseCorruptError(
+            f"learnt estimator {path}: meta {key!r} is unusable ({exc})") from None
+    return stored, mount, side, cells
+
+
+def _check_stored_arrays(path: Path, arrays: dict, options: LearnedOptions) -> None:
+    """Refuse a stored estimator that lacks an array its options need.
+
+    Raises
+    ------
+    DatabaseCorruptError
+        Naming the first missing array and the file.
+    """
+    if options.kind == "fingers":
+        need = [f"d{d}_{k}" for d in range(5)
+                for k in ("cols", "w", "mean", "components", "codes", "angles")]
+    else:
+        prefixes = ["", "abs_"] if options.use_rest and options.target == "delta" else [""]
+        need = []
+        for p in prefixes:
+            need += [p + "mean", p + "components", p + "scale"]
+            if options.kind == "knn":
+                need += [p + "codes", p + "angles"]
+                continue
+            need += [p + "y_mean", p + "y_sd", p + "layers"]
+            layers = arrays.get(p + "layers")
+            if layers is not None:
+                try:
+                    n_layers = int(layers)
+                except (TypeError, ValueError):
+                    raise DatabaseCorruptError(
+                        f"learnt estimator {path}: array {p + 'layers'!r} is not a number of "
+                        f"layers, got shape {np.shape(layers)}") from None
+                need += [f"{p}{w}{i}" for i in range(n_layers) for w in ("w", "b")]
+    missing = [k for k in need if k not in arrays]
+    if missing:
+        raise DatabaseCorruptError(
+            f"learnt estimator {path} is incomplete: it has no array {missing[0]!r}"
+            + (f" (and {len(missing) - 1} more)" if len(missing) > 1 else ""))
 
 
 def train_learned(data: LearningSet, options: LearnedOptions | None = None, *,

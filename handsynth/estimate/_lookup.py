@@ -21,6 +21,8 @@ from ..db import (
     BuildOptions,
     Database,
     build_databases,
+    check_database_hand,
+    check_rows,
     extract_features,
     find_database,
     open_database,
@@ -304,21 +306,26 @@ class PoseLookup:
                                 f"True or None, got {type(approximate).__name__}")
 
     @classmethod
-    def open(cls, folder, *, shape: HandShape | None = None,
+    def open(cls, folder, *, shape: HandShape | str | None = None,
              measurements: HandMeasurements | None = None,
-             selection: SelectionOptions | None = None, **kwargs) -> PoseLookup:
+             selection: SelectionOptions | None = None, side: str = "right",
+             **kwargs) -> PoseLookup:
         """Open the database of a hand from a folder of ``<HandShape.name>.h5`` files.
 
         Parameters
         ----------
         folder : str or os.PathLike
-        shape : HandShape, keyword-only, optional
-            Use the database of the grid shape nearest to `shape`.
+        shape : HandShape or str, keyword-only, optional
+            Use the database of the grid shape nearest to `shape` (or to the
+            shape of this :attr:`HandShape.name`).
         measurements : HandMeasurements, keyword-only, optional
             Choose the shape by formulas (1)-(4) (:func:`select_shape`).
             Give `shape` or `measurements`; the standard hand if neither.
         selection : SelectionOptions, keyword-only, optional
             Options of the selection from `measurements`.
+        side : {"right", "left"}, keyword-only
+            Hand side: the left hand's file is ``<HandShape.name>_left.h5``
+            (:func:`handsynth.db.database_path`).
         **kwargs
             Passed to :class:`PoseLookup` (``options``, ``temporal``, ``ties``,
             ``approximate``).
@@ -327,16 +334,25 @@ class PoseLookup:
         ------
         DatabaseError
             The folder or the chosen database file does not exist.
+        DatabaseMismatchError
+            The file holds another shape or side than the one asked for
+            (:func:`handsynth.db.check_database_hand`).
         """
         if shape is not None and measurements is not None:
             raise InvalidInputError("give shape or measurements, not both")
         if measurements is not None:
             grid = select_shape(measurements, options=selection).shape
         else:
+            if isinstance(shape, str):
+                shape = HandShape.from_name(shape)
             if shape is not None and not isinstance(shape, HandShape):
-                raise InvalidInputError(f"shape must be a HandShape, got {type(shape).__name__}")
+                raise InvalidInputError(
+                    f"shape must be a HandShape or a shape name, got {type(shape).__name__}")
             grid = (shape or HandShape()).nearest_grid()
-        return cls(open_database(find_database(folder, grid)), **kwargs)
+        path = find_database(folder, grid, side)
+        database = open_database(path)
+        check_database_hand(database.meta, grid, side, path)
+        return cls(database, **kwargs)
 
     @classmethod
     def personal(cls, folder, *, shape: HandShape | None = None,
@@ -350,9 +366,10 @@ class PoseLookup:
         database took hours.  Here one of 20,448 entries takes about 5 s on
         two cores, so a hand can have its own: on off-grid model hands this
         halves the error of the selected grid database (docs/lookup.md, "The
-        paper's experiment").  The file is ``<folder>/<shape.name>.h5``; a
-        verified existing one is reused, one built with other options is
-        rebuilt.
+        paper's experiment").  The file is ``<folder>/<shape.name>.h5``
+        (``<shape.name>_left.h5`` for the left hand); a verified existing one
+        is reused, one built with other options is rebuilt, one holding
+        another shape or side is refused.
 
         Parameters
         ----------
@@ -399,7 +416,9 @@ class PoseLookup:
         shape = HandShape.from_name(shape.name)
         summary = build_databases(folder, [shape], mount or CameraMount.paper(), options=build,
                                   workers=workers, progress=progress)
-        return cls(open_database(summary.paths[0]), **kwargs)
+        database = open_database(summary.paths[0])
+        check_database_hand(database.meta, shape, build.side, summary.paths[0])
+        return cls(database, **kwargs)
 
     @classmethod
     def from_open_frame(cls, folder, open_frame, *, mount: CameraMount | None = None,
@@ -430,7 +449,9 @@ class PoseLookup:
         workers, progress : keyword-only, optional
             As for :func:`handsynth.db.build_databases`.
         shapes : sequence of HandShape, keyword-only, optional
-            Candidate shapes; the 81 grid shapes by default.
+            Candidate shapes; the 81 grid shapes by default.  The chosen
+            one's database is built with its ratios rounded to the 0.001 of
+            :attr:`HandShape.name`.
         dilation_px, temperature_px : keyword-only
             As for :meth:`calibrated`.
         **kwargs
@@ -454,9 +475,12 @@ class PoseLookup:
         mount = mount or CameraMount.paper()
         chosen = select_shape_from_frame(open_frame, mount=mount, side=build.side,
                                          shapes=shapes).shape
+        chosen = HandShape.from_name(chosen.name)  # the ratios its file name gives
         summary = build_databases(folder, [chosen], mount, options=build, workers=workers,
                                   progress=progress)
-        lookup = cls(open_database(summary.paths[0]), **kwargs)
+        database = open_database(summary.paths[0])
+        check_database_hand(database.meta, chosen, build.side, summary.paths[0])
+        lookup = cls(database, **kwargs)
         return lookup.calibrated(open_frame, dilation_px=dilation_px,
                                  temperature_px=temperature_px)
 
@@ -466,19 +490,43 @@ class PoseLookup:
         """An in-memory lookup from rows of :func:`handsynth.db.render_entries`.
 
         The rows must have been made with `mount` (the paper's by default).
+
+        Parameters
+        ----------
+        rows : mapping
+            ``angles``, ``hlac``, ``sil_bits``, ``ridge_bits``,
+            ``ridge_area`` and ``keypoints`` (metres), checked as
+            :func:`handsynth.db.write_database` checks them
+            (:func:`handsynth.db.check_rows`).
+        mount : CameraMount, keyword-only, optional
+        shape : HandShape, keyword-only, optional
+            The standard hand by default.
+        side : {"right", "left"}, keyword-only
+        **kwargs
+            Passed to :class:`PoseLookup`.
+
+        Raises
+        ------
+        InvalidInputError
+            A missing key, an array of the wrong shape, dtype or range (NaN
+            or out-of-limit angles, keypoints beyond +/-0.32767 m, rows of
+            different lengths), or `mount`, `shape` or `side` of the wrong
+            type or value; the message names it.
         """
         mount = mount or CameraMount()
+        if not isinstance(mount, CameraMount):
+            raise InvalidInputError(f"mount must be a CameraMount, got {type(mount).__name__}")
+        if shape is not None and not isinstance(shape, HandShape):
+            raise InvalidInputError(f"shape must be a HandShape, got {type(shape).__name__}")
+        if side not in ("right", "left"):
+            raise InvalidInputError(f"side must be 'right' or 'left', got {side!r}")
+        arrays = check_rows(rows)
         meta = {"mount": mount.as_dict(), "side": side,
                 "shape": (shape or HandShape()).as_dict(), "features": {"image_size": 64}}
         db = Database(
-            path=Path("<memory>"), meta=meta,
-            angles=np.asarray(rows["angles"], np.float32),
-            hlac=np.asarray(rows["hlac"], np.uint8),
-            sil_bits=np.asarray(rows["sil_bits"], np.uint64),
-            ridge_bits=np.asarray(rows["ridge_bits"], np.uint64),
-            ridge_area=np.asarray(rows["ridge_area"], np.uint16),
-            keypoints_raw=np.rint(np.asarray(rows["keypoints"]) / 1e-5).astype(np.int16),
-        )
+            path=Path("<memory>"), meta=meta, angles=arrays["angles"], hlac=arrays["hlac"],
+            sil_bits=arrays["sil_bits"], ridge_bits=arrays["ridge_bits"],
+            ridge_area=arrays["ridge_area"], keypoints_raw=arrays["keypoints"])
         return cls(db, **kwargs)
 
     def __len__(self) -> int:

@@ -164,6 +164,35 @@ class SearchResult:
     tied: np.ndarray | None = field(default=None, compare=False, repr=False)
 
 
+def _table(value, name: str, row_shape: tuple, top: int | None, n: int | None = None, *,
+           whole_floats: bool = False) -> np.ndarray:
+    """`value` as an array of shape (N,) + `row_shape` of integers in [0, `top`].
+
+    `top` None: any non-negative integer of the dtype.  `whole_floats`:
+    floats that are whole numbers are accepted too.
+    """
+    arr = np.asarray(value)
+    ok = arr.ndim == 1 + len(row_shape) and arr.shape[1:] == row_shape and arr.shape[0] >= 1
+    if not ok or (n is not None and arr.shape[0] != n):
+        rows = "N" if n is None else str(n)
+        raise InvalidInputError(f"{name} must have shape ({', '.join([rows, *map(str, row_shape)])}"
+                                f"{',' if not row_shape else ''}), got {arr.shape}")
+    if arr.dtype.kind == "f" and whole_floats:
+        bad = ~np.isfinite(arr) | (arr != np.round(arr))
+        if bad.any():
+            i = tuple(int(v) for v in np.argwhere(bad)[0])
+            raise InvalidInputError(f"{name} must hold whole numbers, got {arr[i].item()!r} at "
+                                    f"index {i}")
+    elif arr.dtype.kind not in "iu":
+        raise InvalidInputError(f"{name} must be an integer array, got dtype {arr.dtype}")
+    bad = arr < 0 if top is None else (arr < 0) | (arr > top)
+    if bad.any():
+        i = tuple(int(v) for v in np.argwhere(bad)[0])
+        span = ">= 0" if top is None else f"in [0, {top}]"
+        raise InvalidInputError(f"{name} must lie {span}, got {arr[i].item()!r} at index {i}")
+    return arr
+
+
 @dataclass(frozen=True, eq=False)
 class SearchTables:
     """The database columns the search reads; read-only, shared between threads.
@@ -192,18 +221,34 @@ class SearchTables:
 
     @classmethod
     def from_arrays(cls, *, hlac, sil_bits, ridge_bits, ridge_area) -> SearchTables:
-        """Validate and convert (C-contiguous, native dtypes, read-only)."""
-        h = np.ascontiguousarray(hlac, dtype=np.uint8)
-        n = h.shape[0] if h.ndim == 2 else -1
-        if h.ndim != 2 or n < 1 or h.shape[1] != HLAC_SIZE:
-            raise InvalidInputError(f"hlac must have shape (N, 1600), got {np.shape(hlac)}")
-        s = np.ascontiguousarray(sil_bits, dtype=np.uint64)
-        r = np.ascontiguousarray(ridge_bits, dtype=np.uint64)
-        a = np.ascontiguousarray(ridge_area, dtype=np.float64)
-        for name, arr, shape in (("sil_bits", s, (n, 64)), ("ridge_bits", r, (n, 64)),
-                                 ("ridge_area", a, (n,))):
-            if arr.shape != shape:
-                raise InvalidInputError(f"{name} must have shape {shape}, got {arr.shape}")
+        """Validate and convert (C-contiguous, native dtypes, read-only).
+
+        Parameters
+        ----------
+        hlac : array_like of int, shape (N, 1600)
+            Integers in [0, 255].
+        sil_bits, ridge_bits : array_like of int, shape (N, 64)
+            Packed masks: non-negative integers (uint64).
+        ridge_area : array_like, shape (N,)
+            Whole numbers of pixels in [0, 4096] (integers, or floats that
+            are whole).
+
+        Raises
+        ------
+        InvalidInputError
+            A wrong shape, dtype or value (a value that would wrap or be
+            truncated in conversion, NaN, a negative area); the message names
+            the array, the first bad index and its value.
+        """
+        h = _table(hlac, "hlac", (HLAC_SIZE,), 255)
+        n = h.shape[0]
+        s = _table(sil_bits, "sil_bits", (64,), None, n)
+        r = _table(ridge_bits, "ridge_bits", (64,), None, n)
+        a = _table(ridge_area, "ridge_area", (), 64 * 64, n, whole_floats=True)
+        h = np.ascontiguousarray(h, dtype=np.uint8)
+        s = np.ascontiguousarray(s, dtype=np.uint64)
+        r = np.ascontiguousarray(r, dtype=np.uint64)
+        a = np.ascontiguousarray(a, dtype=np.float64)
         for table in (h, s, r, a):
             table.setflags(write=False)
         return cls(hlac=h, sil_bits=s, ridge_bits=r, ridge_area=a)
@@ -770,10 +815,32 @@ def _search_kernel(query, q_area, index, constants, seed, scratch):
 
 
 def _query(features) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    missing = [k for k in ("hlac", "sil_bits", "ridge_bits", "ridge_area")
+               if not hasattr(features, k)]
+    if missing:
+        raise InvalidInputError(
+            "features must be the Features of a silhouette (handsynth.db.extract_features), "
+            f"got {type(features).__name__} without {', '.join(missing)}")
     h = np.ascontiguousarray(features.hlac, dtype=np.uint8)
     s = np.ascontiguousarray(features.sil_bits, dtype=np.uint64)
     r = np.ascontiguousarray(features.ridge_bits, dtype=np.uint64)
+    for name, arr, shape in (("hlac", h, (HLAC_SIZE,)), ("sil_bits", s, (64,)),
+                             ("ridge_bits", r, (64,))):
+        if arr.shape != shape:
+            raise InvalidInputError(f"features.{name} must have shape {shape}, got {arr.shape}")
     return h, s, r, float(features.ridge_area)
+
+
+def _check_search_arguments(tables, options):
+    """`options` (None: the paper's), after checking it and `tables`."""
+    if not isinstance(tables, SearchTables):
+        raise InvalidInputError(f"tables must be SearchTables (SearchTables.from_arrays), got "
+                                f"{type(tables).__name__}")
+    if options is None:
+        return SearchOptions()
+    if not isinstance(options, SearchOptions):
+        raise InvalidInputError(f"options must be SearchOptions or None, got {options!r}")
+    return options
 
 
 def search(features, tables: SearchTables, *, options: SearchOptions | None = None,
@@ -800,9 +867,10 @@ def search(features, tables: SearchTables, *, options: SearchOptions | None = No
     Raises
     ------
     InvalidInputError
-        `seed` outside ``[0, N)``.
+        `seed` outside ``[0, N)``; `features`, `tables` or `options` of the
+        wrong type (naming it).
     """
-    opts = options or SearchOptions()
+    opts = _check_search_arguments(tables, options)
     n = len(tables)
     s = -1 if seed is None else int(seed)
     if not -1 <= s < n:
@@ -825,7 +893,7 @@ def search_reference(features, tables: SearchTables, *,
     Parameters and result as :func:`search` (no `seed`).
     ``survivors`` counts the entries left after both stages.
     """
-    opts = options or SearchOptions()
+    opts = _check_search_arguments(tables, options)
     h, sb, rb, area = _query(features)
     p1 = np.bitwise_count(rb[None, :] & ~tables.sil_bits).sum(axis=1)
     p2 = np.bitwise_count(tables.ridge_bits & ~sb[None, :]).sum(axis=1)

@@ -255,12 +255,22 @@ def first_hand_frame(source: FrameSource, *, mount: CameraMount | None = None,
 
     Raises
     ------
+    InvalidInputError
+        `mount`, `side`, `source`, `max_reads` or `retry_delay_s` is
+        unusable (checked before the first read; only a frame that is not
+        an image is skipped).
     EstimationError
         No frame of the first `max_reads` shows a hand, or the source ended.
     """
     from ..render import preprocess
 
     mount = mount or CameraMount()
+    if not isinstance(mount, CameraMount):
+        raise InvalidInputError(f"mount must be a CameraMount, got {mount!r}")
+    if side not in ("right", "left"):
+        raise InvalidInputError(f"side must be 'right' or 'left', got {side!r}")
+    if not callable(getattr(source, "read", None)):
+        raise InvalidInputError(f"source must have a read() method, got {type(source).__name__}")
     max_reads = _check_int(max_reads, "max_reads", minimum=1)
     delay = _check_float(retry_delay_s, "retry_delay_s", positive=False)
     for _ in range(max_reads):
@@ -274,7 +284,7 @@ def first_hand_frame(source: FrameSource, *, mount: CameraMount | None = None,
         try:
             if preprocess(frame, mount, side=side).any():
                 return frame
-        except InvalidInputError:
+        except InvalidInputError:  # this frame is not an image: the arguments were checked above
             continue
     raise EstimationError(f"no frame showed a hand to calibrate with in {max_reads} reads")
 
@@ -318,6 +328,11 @@ def run_live(lookup, source: FrameSource, *, sink=None, video_out=None,
     ------
     InvalidInputError
         Bad `options`, `source` or `video_out`.
+    EstimationError
+        Before any read, when the estimator cannot read any frame as it is:
+        its ``check_ready()`` method, if it has one, refuses (e.g. a
+        :class:`~handsynth.estimate.LearnedEstimator` that reads the rest
+        frame and was not calibrated).
 
     Notes
     -----
@@ -335,6 +350,9 @@ def run_live(lookup, source: FrameSource, *, sink=None, video_out=None,
     if not callable(getattr(lookup, "estimate", None)):
         raise InvalidInputError(
             f"lookup must have an estimate(frame) method, got {type(lookup).__name__}")
+    ready = getattr(lookup, "check_ready", None)
+    if callable(ready):
+        ready()  # an estimator that cannot read any frame: its reason, before a read
     video: SideBySideWriter | None = None
     own_video: SideBySideWriter | None = None  # opened here, so closed here
     if isinstance(video_out, SideBySideWriter):

@@ -16,7 +16,7 @@ from handsynth.db import (
     render_entries,
     verify,
 )
-from handsynth.errors import DatabaseCorruptError, InvalidInputError
+from handsynth.errors import DatabaseCorruptError, DatabaseError, InvalidInputError
 from handsynth.models import HandShape, pose_set
 from handsynth.render import CameraMount
 
@@ -164,3 +164,66 @@ def test_a_build_from_a_script_without_the_main_guard_says_so(tmp_path):
     last = res.stderr.strip().splitlines()[-1]
     assert last.startswith("handsynth.errors.DatabaseError: a worker process of the build died")
     assert "'unguarded.py'" in last and 'if __name__ == "__main__":' in last
+
+
+TINY = {"count": 30, "render_size": (64, 48), "seed": 3}
+
+
+def test_left_and_right_hands_have_their_own_files(tmp_path):
+    from handsynth.db import find_database
+
+    right = build_databases(tmp_path, [SHAPE], workers=1, **TINY).paths[0]
+    left = build_databases(tmp_path, [SHAPE], workers=1, side="left", **TINY)
+    assert right.name == f"{SHAPE.name}.h5"  # the right hand's name is unchanged
+    assert left.paths[0].name == f"{SHAPE.name}_left.h5" and left.built == (SHAPE.name,)
+    assert not left.rebuilt  # the right hand's file was not touched
+    assert verify(right)["side"] == "right" and verify(left.paths[0])["side"] == "left"
+    # each verifies and is kept on the next run
+    assert build_databases(tmp_path, [SHAPE], workers=1, **TINY).skipped == (SHAPE.name,)
+    assert build_databases(tmp_path, [SHAPE], workers=1, side="left",
+                           **TINY).skipped == (SHAPE.name,)
+    assert find_database(tmp_path, SHAPE, "left") == left.paths[0]
+    assert database_path(tmp_path, SHAPE.name, side="left") == left.paths[0]
+
+
+def test_a_file_of_another_hand_is_refused_not_overwritten(tmp_path):
+    from handsynth.errors import DatabaseMismatchError, InvalidShapeError
+
+    # a left hand's file under the right hand's name (as builds before the _left name made)
+    left = build_databases(tmp_path / "l", [SHAPE], workers=1, side="left", **TINY).paths[0]
+    old = database_path(tmp_path, SHAPE)
+    old.write_bytes(left.read_bytes())
+    for force in (False, True):
+        with pytest.raises(DatabaseMismatchError, match=r"holds the left hand .* but the right "
+                                                        r"hand .* was asked for"):
+            build_databases(tmp_path, [SHAPE], workers=1, force=force, **TINY)
+    assert old.read_bytes() == left.read_bytes()
+    # a shape that differs below the name's 0.001 is refused before anything is built
+    with pytest.raises(InvalidShapeError, match=r"shapes\[0\] has ratios finer than its database "
+                                                r"file name L1.000_W1.000_P1.000_T1.000 .*"
+                                                r"length=1.0004"):
+        build_databases(tmp_path / "n", [HandShape(length=1.0004)], workers=1, **TINY)
+    assert not (tmp_path / "n").exists()
+    # a file named for the left hand that holds the right hand
+    right = build_databases(tmp_path / "r", [SHAPE], workers=1, **TINY).paths[0]
+    fake = database_path(tmp_path / "r", SHAPE, "left")
+    fake.write_bytes(right.read_bytes())
+    with pytest.raises(DatabaseMismatchError, match=r"named for the left hand but holds the "
+                                                    r"right hand"):
+        open_database(fake)
+
+
+def test_shape_names_and_bad_arguments_of_path_functions(tmp_path):
+    from handsynth.db import find_database
+
+    assert database_path(tmp_path, SHAPE.name) == database_path(tmp_path, SHAPE)
+    with pytest.raises(InvalidInputError, match=r"shape must be a HandShape or a shape name .*"
+                                                r"got int"):
+        database_path(tmp_path, 3)
+    with pytest.raises(InvalidInputError, match=r"side must be 'right' or 'left', got 'Left'"):
+        find_database(tmp_path, SHAPE, "Left")
+    with pytest.raises(InvalidInputError, match=r"not-a-shape"):
+        find_database(tmp_path, "not-a-shape")
+    with pytest.raises(DatabaseError, match=r"no database for the right hand of shape "
+                                            r"L1.000_W1.000_P1.000_T1.000 in"):
+        find_database(tmp_path, SHAPE.name)

@@ -85,6 +85,30 @@ def test_bad_options_are_refused_by_name():
         LearningSetOptions(flesh_offset_sd_mm=11)
 
 
+@pytest.mark.parametrize("kwargs, words", [
+    ({"hand_spread": -1}, r"hand_spread must be a finite number >= 0, got -1"),
+    ({"hand_spread": float("nan")}, r"hand_spread must be a finite number >= 0, got nan"),
+    ({"seed": -1}, r"seed must be an integer >= 0, got -1"),
+    ({"seed": 1.5}, r"seed must be an integer >= 0, got 1.5"),
+    ({"cells": (10,)}, r"cells must be \(rows, cols\), two positive integers, got \(10,\)"),
+    ({"cells": (10, 2.5)}, r"cells must be .* got \(10, 2.5\)"),
+    ({"edge_px": 2.5}, r"edge_px must be an integer in \[0, 20\], got 2.5"),
+    ({"mix": ("a", 0, 1)}, r"mix must be 3 shares summing to 1"),
+])
+def test_options_that_would_fail_later_are_refused_by_name(kwargs, words):
+    with pytest.raises(InvalidInputError, match=r"LearningSetOptions\." + words):
+        LearningSetOptions(**kwargs)
+
+
+def test_a_negative_device_variation_is_refused_by_name():
+    from handsynth.render import MountVariation
+
+    with pytest.raises(InvalidInputError, match=r"LearningSetOptions.mount_variation.height_mm "
+                                                r"must be a finite s.d. >= 0, got -5"):
+        LearningSetOptions(mount_variation=MountVariation(height_mm=-5))
+    assert LearningSetOptions(seed=np.int64(3), cells=[30, 45]).cells == (30, 45)
+
+
 def test_segment_widths_vary_the_learning_hands_and_name_their_own_set():
     opts = dict(hands=3, poses_per_hand=2, seed=2)
     same = render_learning_set(LearningSetOptions(**opts))

@@ -1,4 +1,5 @@
 import os
+import re
 import shutil
 
 import h5py
@@ -19,6 +20,7 @@ from handsynth.errors import (
     DatabaseMismatchError,
     InvalidInputError,
 )
+from handsynth.models import JOINT_LIMITS_DEG
 
 META = {
     "shape": {"r_length": 1.05, "r_width": 0.9, "r_palm": 1.0, "r_thumb": 1.1},
@@ -37,7 +39,9 @@ def arrays(shapes):
     feats = extract_features_batch(sils)
     rng = np.random.default_rng(0)
     return {
-        "angles": rng.uniform(-20, 90, (n, 20)).astype(np.float32),
+        # within the joint limits, 1 degree clear of them
+        "angles": rng.uniform(JOINT_LIMITS_DEG[:, 0] + 1, JOINT_LIMITS_DEG[:, 1] - 1,
+                              (n, 20)).astype(np.float32),
         "hlac": feats["hlac"],
         "sil_bits": feats["sil_bits"],
         "ridge_bits": feats["ridge_bits"],
@@ -100,7 +104,7 @@ def test_writes_are_byte_identical(tmp_path, arrays):
     a = write_database(tmp_path / "a.h5", meta=META, **arrays)
     b = write_database(tmp_path / "b.h5", meta=dict(reversed(list(META.items()))), **arrays)
     assert a.read_bytes() == b.read_bytes()
-    changed = dict(arrays, angles=arrays["angles"] + np.float32(1))
+    changed = dict(arrays, angles=arrays["angles"] + np.float32(0.5))
     c = write_database(tmp_path / "c.h5", meta=META, **changed)
     assert c.read_bytes() != a.read_bytes()
 
@@ -232,6 +236,12 @@ def test_write_validates_inputs(tmp_path, arrays):
         InvalidInputError, match=r"angles must be finite, got nan at index \(2, 5\)"
     ):
         write_database(tmp_path / "m.h5", meta=META, **dict(arrays, angles=angles))
+    for value, joint in ((1e39, 5), (5000.0, 0), (-25.0, 9)):
+        angles = arrays["angles"].astype(np.float64)
+        angles[3, joint] = value
+        shown = re.escape(f"{value:g}")
+        with pytest.raises(InvalidInputError, match=rf"angles row 3: \w+={shown} deg is outside"):
+            write_database(tmp_path / "m.h5", meta=META, **dict(arrays, angles=angles))
     with pytest.raises(InvalidInputError, match=r"keypoints must lie within .* got 0\.50000 m"):
         write_database(
             tmp_path / "m.h5", meta=META, **dict(arrays, keypoints=arrays["keypoints"] * 2)
@@ -362,3 +372,10 @@ def test_a_read_only_folder_gives_the_real_reason(read_only_folder, arrays):
     with pytest.raises(DatabaseError, match=r"read-only") as err:
         write_database(read_only_folder / "x.h5", meta=META, **arrays)
     assert "could not be removed" not in str(err.value)
+
+
+def test_a_path_that_is_no_file_name_is_named():
+    for fn in (open_database, verify):
+        with pytest.raises(InvalidInputError, match=r"path must be a file name \(str or "
+                                                    r"os.PathLike\), got NoneType"):
+            fn(None)

@@ -186,6 +186,33 @@ def test_index_is_saved_loaded_and_rebuilt_when_stale(tmp_path, small_rows, quer
     assert ApproximateIndex.open(None, t_small, options=opts, seed=2, path=path).key == first.key
 
 
+@pytest.mark.parametrize("damage", ["flip", "cut", "meta"])
+def test_damaged_index_file_is_rebuilt_not_raised(tmp_path, small_rows, queries, damage):
+    path = tmp_path / "db.h5.ann.npz"
+    t_small = _tables(small_rows)
+    opts = ApproximateOptions(nlist=8, nprobe=2)
+    first = ApproximateIndex.open(None, t_small, options=opts, seed=2, path=path)
+    data = bytearray(path.read_bytes())
+    if damage == "flip":  # inside a stored array: a bad CRC-32 when read
+        data[len(data) // 3] ^= 0xFF
+    elif damage == "cut":
+        data = data[:len(data) // 2]
+    else:  # a readable zip whose meta is not a JSON object
+        import io
+        import json
+
+        buf = io.BytesIO()
+        np.savez(buf, meta=np.frombuffer(json.dumps([1, 2]).encode(), np.uint8))
+        data = bytearray(buf.getvalue())
+    path.write_bytes(bytes(data))
+    again = ApproximateIndex.open(None, t_small, options=opts, seed=2, path=path)
+    assert again.key == first.key
+    assert [again.search(f) for f in queries] == [first.search(f) for f in queries]
+    # and the rebuilt file replaced the damaged one
+    assert ApproximateIndex._load(path, t_small, key=first.key, options=again.options,
+                                  seed=2) is not None
+
+
 
 def test_index_next_to_a_database_file_follows_its_checksum(tmp_path, db_folder, small_rows,
                                                            monkeypatch):

@@ -309,3 +309,13 @@ def test_a_frame_without_an_open_hand_is_refused():
     assert Calibration.from_silhouettes(wide, ref).open_iou > 0.6  # a real, other hand passes
     with pytest.raises(InvalidInputError, match=r"min_open_iou"):
         Calibration.from_silhouettes(wide, ref, min_open_iou=1.5)
+
+
+def test_select_shape_from_frame_names_a_bad_mount_or_side():
+    from handsynth.estimate import select_shape_from_frame
+
+    frame = _open_frame(HandShape())
+    with pytest.raises(InvalidInputError, match=r"mount must be a CameraMount, got 'paper'"):
+        select_shape_from_frame(frame, mount="paper", shapes=[HandShape()])
+    with pytest.raises(InvalidInputError, match=r"side must be 'right' or 'left', got 'Right'"):
+        select_shape_from_frame(frame, side="Right", shapes=[HandShape()])

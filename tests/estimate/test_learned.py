@@ -1,3 +1,4 @@
+import json
 from dataclasses import replace
 
 import numpy as np
@@ -193,6 +194,45 @@ def test_bad_options_are_refused_by_name():
         LearnedOptions(ridge=-1.0)
     with pytest.raises(InvalidInputError, match="loss must be 'squared' or 'absolute', got 'l2'"):
         LearnedOptions(loss="l2")
+    for seed in (-1, 1.5, True):
+        with pytest.raises(InvalidInputError, match=rf"LearnedOptions.seed must be an integer "
+                                                    rf">= 0, got {seed!r}"):
+            LearnedOptions(seed=seed)
+
+
+def test_a_stored_estimator_missing_a_part_is_refused_on_load(data, tmp_path):
+    from handsynth.errors import DatabaseCorruptError, DatabaseError
+
+    with pytest.raises(DatabaseError, match=r"learnt estimator .*nowhere.npz does not exist"):
+        LearnedEstimator.load(tmp_path / "nowhere.npz")
+    est = train_learned(data, LearnedOptions(kind="mlp", components=8, hidden=(8,), epochs=1))
+    est.save(tmp_path / "m.npz")
+    with np.load(tmp_path / "m.npz") as z:
+        parts = {k: z[k] for k in z.files}
+    meta = json.loads(str(parts["meta"]))
+
+    def damaged(name, **changed):
+        path = tmp_path / name
+        np.savez(path, **{**parts, **changed})
+        return path
+
+    no_b0 = damaged("no_b0.npz")
+    np.savez(no_b0, **{k: v for k, v in parts.items() if k != "b0"})
+    with pytest.raises(DatabaseCorruptError, match=r"no_b0.npz is incomplete: it has no array "
+                                                   r"'b0'"):
+        LearnedEstimator.load(no_b0)
+    no_options = damaged("no_options.npz", meta=np.array(json.dumps(
+        {k: v for k, v in meta.items() if k != "options"})))
+    with pytest.raises(DatabaseCorruptError, match=r"no_options.npz: its meta has no 'options'"):
+        LearnedEstimator.load(no_options)
+    bad_side = damaged("bad_side.npz", meta=np.array(json.dumps(dict(meta, side="up"))))
+    with pytest.raises(DatabaseCorruptError, match=r"bad_side.npz: meta 'side' is unusable"):
+        LearnedEstimator.load(bad_side)
+    back = LearnedEstimator.load(damaged("whole.npz"))  # the parts as saved: read as before
+    frame = _frames(data, [3])[0]
+    rest = _frames(data, [0])[0]
+    assert np.array_equal(back.calibrated(rest).estimate(frame).angles,
+                          est.calibrated(rest).estimate(frame).angles)
 
 
 def test_a_grid_of_other_cells_is_refused_with_its_shape(data):
@@ -505,3 +545,42 @@ def test_an_ensemble_tells_the_hand_once_for_the_members_reading_one_view(data):
     assert a.calibrated(rest, segment=skin).skin is skin
     # a mirrored member reads its own grid (the frame turned over), never its neighbour's
     assert a.mirrored().view_key != a.view_key and a.view_key == b.view_key
+
+
+def test_an_uncalibrated_estimator_stops_a_live_run_with_its_reason(data):
+    from handsynth.errors import EstimationError
+    from handsynth.estimate import EnsembleEstimator
+    from handsynth.live import run_live
+
+    est = train_learned(data, LearnedOptions(kind="knn", k=5, lists=0))
+    frames = _frames(data, [3, 4, 5])
+
+    class Source:
+        reads = 0
+
+        def read(self):
+            self.reads += 1
+            return frames[(self.reads - 1) % 3]
+
+    for uncalibrated in (est, EnsembleEstimator([est, est])):
+        src = Source()
+        with pytest.raises(EstimationError, match=r"call calibrated\(rest_frame\) first"):
+            run_live(uncalibrated, src)
+        assert src.reads == 0
+    rest = _frames(data, [0])[0]
+    ready = est.calibrated(rest)
+    ready.check_ready()
+    EnsembleEstimator([ready]).check_ready()
+    assert LearnedEstimator.check_ready(train_learned(
+        data, LearnedOptions(kind="knn", k=5, lists=0, use_rest=False))) is None
+
+
+def test_each_calibration_is_a_stream_of_its_own(data):
+    # the move check remembers frames: one instance per camera stream
+    est = train_learned(data, LearnedOptions(kind="knn", k=5, lists=0))
+    rest = _frames(data, [0])[0]
+    a, b = est.calibrated(rest), est.calibrated(rest)
+    assert a._move_check is not None and a._move_check is not b._move_check
+    assert a._a is b._a  # the learnt arrays are shared, not copied
+    assert "one instance per\n    camera stream" in LearnedEstimator.__doc__
+    assert "keeps no state" not in LearnedEstimator.__doc__

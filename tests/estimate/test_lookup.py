@@ -110,7 +110,7 @@ def test_equally_good_entries_report_their_mean_pose(small_rows):
     index = np.concatenate([np.arange(len(small_rows["angles"])), [9, 9]])
     rows = {k: np.asarray(v)[index] for k, v in small_rows.items()}
     rows["angles"] = rows["angles"].copy()
-    rows["angles"][-2:] += np.float32([[10.0], [-4.0]])
+    rows["angles"][-2:] = small_rows["angles"][[20, 30]]  # other poses, within joint limits
     r = SilhouetteRenderer(width_px=RENDER_SIZE[0], height_px=RENDER_SIZE[1])
     mask = r.mask(small_rows["angles"][9])
     mean = PoseLookup.from_rows(rows).estimate(mask)
@@ -236,3 +236,60 @@ def test_mode_arguments_are_checked(small_rows):
         PoseLookup.from_rows(small_rows, temporal="yes")
     with pytest.raises(InvalidInputError, match=r"ties must be 'mean', 'first' or None"):
         PoseLookup.from_rows(small_rows, ties="last")
+
+
+def test_from_rows_checks_the_rows_as_write_database_does(small_rows):
+    rows = {k: small_rows[k] for k in ("angles", "hlac", "sil_bits", "ridge_bits", "ridge_area",
+                                       "keypoints")}
+    mm = dict(rows, keypoints=rows["keypoints"] * 1000)  # millimetres: would overflow int16
+    with pytest.raises(InvalidInputError, match=r"keypoints must lie within \+/-0\.32767 m"):
+        PoseLookup.from_rows(mm)
+    angles = rows["angles"].copy()
+    angles[4, 7] = np.nan
+    with pytest.raises(InvalidInputError, match=r"angles must be finite, got nan at index \(4, 7\)"):
+        PoseLookup.from_rows(dict(rows, angles=angles))
+    with pytest.raises(InvalidInputError, match=r"hlac must have shape \(10, 1600\), got .*\(240, "):
+        PoseLookup.from_rows(dict(rows, angles=rows["angles"][:10]))
+    with pytest.raises(InvalidInputError, match=r"rows must have the keys .*; missing hlac"):
+        PoseLookup.from_rows({k: v for k, v in rows.items() if k != "hlac"})
+    with pytest.raises(InvalidInputError, match=r"rows must be a mapping of arrays, got list"):
+        PoseLookup.from_rows([rows])
+    with pytest.raises(InvalidInputError, match=r"side must be 'right' or 'left', got 'Right'"):
+        PoseLookup.from_rows(rows, side="Right")
+    # valid rows: the same arrays as before the check
+    lk = PoseLookup.from_rows(rows)
+    assert np.array_equal(lk.database.keypoints_raw,
+                          np.rint(rows["keypoints"] / 1e-5).astype(np.int16))
+    assert np.array_equal(lk.database.angles, rows["angles"].astype(np.float32))
+
+
+def test_open_checks_the_stored_hand_against_the_one_asked_for(tmp_path, db_folder, small_rows):
+    from handsynth.db import database_meta, open_database, write_database
+    from handsynth.errors import DatabaseMismatchError
+
+    stored = ("angles", "hlac", "sil_bits", "ridge_bits", "ridge_area", "keypoints")
+    rows = {k: small_rows[k] for k in stored}
+
+    def write(name, shape, side):
+        meta = database_meta(shape, CameraMount(), side=side, pose_set="paper", count=240,
+                             seed=1, render_size=RENDER_SIZE)
+        write_database(tmp_path / name, meta=meta, **rows)
+
+    # a shape 0.0004 off under the standard hand's name (made before builds refused it)
+    write(f"{HandShape().name}.h5", HandShape(length=1.0004), "right")
+    with pytest.raises(DatabaseMismatchError, match=r"holds the right hand \(length=1.0004.*\) "
+                                                    r"but the right hand \(length=1.0.*\) was"):
+        PoseLookup.open(tmp_path, shape=HandShape())
+    # a left hand's file under the right hand's name
+    write(f"{HandShape().name}.h5", HandShape(), "left")
+    with pytest.raises(DatabaseMismatchError, match=r"holds the left hand .* but the right hand"):
+        PoseLookup.open(tmp_path, shape=HandShape())
+    # the left hand's own file
+    (tmp_path / f"{HandShape().name}.h5").rename(tmp_path / f"{HandShape().name}_left.h5")
+    left = PoseLookup.open(tmp_path, shape=HandShape().name, side="left")
+    assert left.side == "left" and left.shape == HandShape()
+    with pytest.raises(DatabaseError, match=r"no database for the right hand"):
+        PoseLookup.open(tmp_path, shape=HandShape())
+    # the right hand's file of the shared fixture opens as before
+    assert PoseLookup.open(db_folder, shape=HandShape()).shape == HandShape()
+    assert open_database(tmp_path / f"{HandShape().name}_left.h5").meta["side"] == "left"

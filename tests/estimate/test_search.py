@@ -232,3 +232,39 @@ def test_hlac_lower_bound_never_exceeds_the_distance(small_rows, kind):
         assert np.all(key == 0.0) and np.all(lb <= d)
         if kind == "rendered":  # and it is tight enough to prune: most rows above half
             assert np.mean(lb >= 0.5 * d) > 0.5
+
+
+def test_from_arrays_refuses_what_it_would_wrap_or_truncate(small_rows):
+    rows = {k: small_rows[k] for k in ("hlac", "sil_bits", "ridge_bits", "ridge_area")}
+    hl = rows["hlac"].astype(np.int32)
+    hl[5, 7] = 300
+    with pytest.raises(InvalidInputError, match=r"hlac must lie in \[0, 255\], got 300 at index "
+                                                r"\(5, 7\)"):
+        SearchTables.from_arrays(**dict(rows, hlac=hl))
+    with pytest.raises(InvalidInputError, match=r"hlac must be an integer array, got dtype "
+                                                r"float64"):
+        SearchTables.from_arrays(**dict(rows, hlac=rows["hlac"] + 0.5))
+    for value, words in ((np.nan, r"whole numbers, got nan at index \(3,\)"),
+                         (-5, r"ridge_area must lie in \[0, 4096\], got -5.0 at index \(3,\)")):
+        area = rows["ridge_area"].astype(np.float64)
+        area[3] = value
+        with pytest.raises(InvalidInputError, match=words):
+            SearchTables.from_arrays(**dict(rows, ridge_area=area))
+    with pytest.raises(InvalidInputError, match=r"sil_bits must have shape \(240, 64\)"):
+        SearchTables.from_arrays(**dict(rows, sil_bits=rows["sil_bits"][:10]))
+    t = SearchTables.from_arrays(**rows)
+    assert t.hlac.dtype == np.uint8 and np.array_equal(t.ridge_area, rows["ridge_area"])
+
+
+def test_search_names_an_argument_of_the_wrong_type(small_rows):
+    t = _tables(small_rows)
+    f = extract_features(small_rows["silhouette"][0])
+    with pytest.raises(InvalidInputError, match=r"features must be the Features of a silhouette "
+                                                r".*got ndarray"):
+        search(small_rows["silhouette"][0], t)
+    with pytest.raises(InvalidInputError, match=r"options must be SearchOptions or None, got "
+                                                r"\{'c': 0.2\}"):
+        search(f, t, options={"c": 0.2})
+    with pytest.raises(InvalidInputError, match=r"tables must be SearchTables"):
+        search(f, small_rows)
+    assert search(f, t).index == search_reference(f, t).index

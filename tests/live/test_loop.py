@@ -381,6 +381,41 @@ def test_first_hand_frame_skips_drops_garbage_and_empty_frames(lookup):
         first_hand_frame(_Frames([hand]), max_reads=0)
 
 
+def test_first_hand_frame_names_a_bad_argument_before_reading(lookup):
+    hand = _synthetic(lookup, frames=3).open_frame()
+    for kwargs, words in (({"side": "Right"}, r"side must be 'right' or 'left', got 'Right'"),
+                          ({"mount": "paper"}, r"mount must be a CameraMount, got 'paper'")):
+        src = _Frames([hand] * 5)
+        with pytest.raises(InvalidInputError, match=words):
+            first_hand_frame(src, max_reads=5, **kwargs)
+        assert src.reads == 0
+    with pytest.raises(InvalidInputError, match=r"source must have a read\(\) method, got object"):
+        first_hand_frame(object())
+
+
+class _NotSetUp:
+    """An estimator that cannot read any frame until it is set up."""
+
+    def __init__(self):
+        self.calls = 0
+
+    def check_ready(self):
+        raise EstimationError("this estimator reads the user's rest frame: call "
+                              "calibrated(rest_frame) first")
+
+    def estimate(self, frame):
+        self.calls += 1
+        raise InvalidInputError("not calibrated")
+
+
+def test_an_estimator_that_cannot_work_stops_the_run_before_a_read(lookup):
+    src = _synthetic(lookup, frames=5)
+    est = _NotSetUp()
+    with pytest.raises(EstimationError, match=r"call calibrated\(rest_frame\) first"):
+        run_live(est, src)
+    assert est.calls == 0 and src.read() is not None  # nothing was read
+
+
 def test_frames_read_after_the_device_moved_are_flagged_in_rows_and_counted(tmp_path):
     class Moves:  # an estimator that finds the device moved from the third frame on
         def __init__(self):
