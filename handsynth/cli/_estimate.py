@@ -55,7 +55,8 @@ def _check_db_folder(db_dir) -> None:
                             "<shape>.h5 databases (e.g. --db dbs)")
 
 
-def _open_lookup(db_dir, shape_name, measurements, temporal, err, personal=False, build=None):
+def _open_lookup(db_dir, shape_name, measurements, temporal, err, personal=False, build=None,
+                 side="right"):
     import time
 
     from ..estimate import PoseLookup
@@ -83,11 +84,11 @@ def _open_lookup(db_dir, shape_name, measurements, temporal, err, personal=False
 
         db_dir = default_database_dir()
         t = time.perf_counter()
-        path = build_default_database(db_dir)
+        path = build_default_database(db_dir, side=side)
         click.echo(f"default database {path} ready in {time.perf_counter() - t:.1f} s", err=err)
     else:
         _check_db_folder(db_dir)  # names the option; the library names the file
-    return PoseLookup.open(db_dir, shape=shape, measurements=meas, temporal=temporal)
+    return PoseLookup.open(db_dir, shape=shape, measurements=meas, temporal=temporal, side=side)
 
 
 def _calibration_frame(source, image, mount, side, err, *, synthetic: str, prompt: str):
@@ -193,12 +194,15 @@ def _calibrate_learned(est, source, rest_image, mount, side, err, *, segment: st
     return est
 
 
-def _build_options(count: int):
+def _build_options(count: int | None, side: str):
+    """The options of a database the run builds: --build-count and --side."""
     from ..db import BuildOptions
 
+    if count is None:
+        return BuildOptions(side=side)
     if count < 1:
         raise InvalidInputError(f"--build-count must be a positive integer, got {count}")
-    return BuildOptions(count=count)
+    return BuildOptions(count=count, side=side)
 
 
 def _progress(stream):
@@ -269,9 +273,10 @@ def _progress(stream):
                    "the ensemble's relaxed-rest perceptron is then its seed-0 perceptron "
                    "again).")
 @click.option("--side", type=click.Choice(["right", "left"]), default=None,
-              help="With --learned: the hand wearing the device [default: right]; a left "
+              help="The hand wearing the device [default: right]. With --learned a left "
                    "hand is read by the right hand's estimator mirrored, nothing learnt "
-                   "again (the lookups take the side from the database).")
+                   "again; the lookups open (or build) the left hand's databases, "
+                   "<shape>_left.h5.")
 @click.option("--smoothing", type=float, default=None, metavar="A",
               help="With --learned: report A * previous + (1 - A) * new angles (0 <= A < 1) "
                    "[default: 0, none]. At 30 fps, 0.3 cut the frame-to-frame jitter by a "
@@ -366,11 +371,11 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
         _check_learned_options(db_dir, shape_name, measurements, personal, build_count,
                                calibrate, video_out, no_temporal, keypoints)
     elif learned_cache is not None or learned_hands is not None or smoothing is not None or \
-            side is not None or one_euro or learned_rest is not None or segment is not None or \
+            one_euro or learned_rest is not None or segment is not None or \
             click.get_current_context().get_parameter_source("learned_kind") \
             == click.core.ParameterSource.COMMANDLINE:
         raise InvalidInputError("--learned-kind, --learned-cache, --learned-hands, "
-                                "--learned-rest, --side, --smoothing, --segment and --one-euro "
+                                "--learned-rest, --smoothing, --segment and --one-euro "
                                 "apply with --learned only")
     if one_euro and smoothing is not None:
         raise InvalidInputError("--one-euro and --smoothing are two ways to steady the angles; "
@@ -385,7 +390,8 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
     if build_count is not None and not (personal or (calibrate and not chosen_db)):
         raise InvalidInputError("--build-count applies to a database built for --personal or "
                                 "--calibrate only")
-    build = None if build_count is None else _build_options(build_count)
+    build = None if build_count is None and side is None else \
+        _build_options(build_count, side or "right")
     open_image = read_image(calibrate_image, what="calibration image") \
         if calibrate_image is not None else None
 
@@ -404,7 +410,7 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
         elif not calibrate or chosen_db:
             lookup = _open_lookup(db_dir, shape_name, measurements,
                                   False if no_temporal else None, info_err,
-                                  personal=personal, build=build)
+                                  personal=personal, build=build, side=side or "right")
         mount = getattr(lookup, "mount", None) or CameraMount.paper()
         side = getattr(lookup, "side", None) or side or "right"
         if synthetic:

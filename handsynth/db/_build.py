@@ -710,12 +710,13 @@ def build_database(out_dir, shape: HandShape | str | None = None,
 
 
 def build_default_database(out_dir, *, workers: int | None = None,
-                           progress: Callable[[BuildProgress], None] | None = None) -> Path:
+                           progress: Callable[[BuildProgress], None] | None = None,
+                           side: str = "right") -> Path:
     """Build the small embedded default database (:data:`DEFAULT_DATABASE`).
 
     The standard hand shape, 3000 paper poses, seed 0, the paper's device,
-    right hand: a few seconds on a laptop.  Reused when it already exists and
-    verifies.
+    right hand (or `side`): a few seconds on a laptop.  Reused when it already
+    exists and verifies.
 
     Parameters
     ----------
@@ -723,6 +724,7 @@ def build_default_database(out_dir, *, workers: int | None = None,
     workers : int, keyword-only, optional
         All cores by default.
     progress : callable, keyword-only, optional
+    side : {"right", "left"}, keyword-only
 
     Returns
     -------
@@ -731,4 +733,4 @@ def build_default_database(out_dir, *, workers: int | None = None,
     d = DEFAULT_DATABASE
     return build_database(out_dir, d["shape"], CameraMount.paper(), workers=workers or
                           (os.cpu_count() or 1), progress=progress, pose_set=d["pose_set"],
-                          count=d["count"], seed=d["seed"])
+                          count=d["count"], seed=d["seed"], side=side)

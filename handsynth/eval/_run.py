@@ -136,7 +136,8 @@ def evaluate(options: EvalOptions, *,
     timing["build"] = time.perf_counter() - t
     say(f"databases: {len(summary.built)} built, {len(summary.skipped)} verified and kept "
         f"({timing['build']:.1f} s)")
-    lookups = _Lookups({n: database_path(options.db_folder, s) for n, s in needed.items()},
+    lookups = _Lookups({n: database_path(options.db_folder, s, side=options.side)
+                        for n, s in needed.items()},
                        ties=options.ties)
 
     conds = options.conditions

@@ -512,7 +512,6 @@ def test_learned_estimator_for_the_left_hand(tmp_path):
     (["--learned-hands", "5"], "apply with --learned only"),
     (["--learned-kind", "ensemble"], "apply with --learned only"),
     (["--smoothing", "0.3"], "apply with --learned only"),
-    (["--side", "left"], "apply with --learned only"),
     (["--learned-rest", "relaxed"], "apply with --learned only"),
     (["--one-euro"], "--segment and --one-euro apply with --learned only"),
     (["--segment", "colour"], "--segment and --one-euro apply with --learned only"),
@@ -528,6 +527,23 @@ def test_learned_options_that_do_not_apply_are_refused_by_name(tmp_path, extra, 
     assert res.exit_code == 2, res.output
     assert message in res.output
     assert "Traceback" not in res.output
+
+
+def test_a_left_hands_lookup_opens_its_own_database(tmp_path):
+    """A left hand's database is <shape>_left.h5; --side chooses it (the right's is refused)."""
+    shape, mount = HandShape(), CameraMount()
+    rows = render_entries(paper_pose_set(60, seed=1), shape, mount, side="left", render_size=(W, H))
+    write_database(database_path(tmp_path, shape, side="left"),
+                   **{k: rows[k] for k in ("angles", "hlac", "sil_bits", "ridge_bits",
+                                           "ridge_area", "keypoints")},
+                   meta=database_meta(shape, mount, side="left", pose_set="paper", count=60,
+                                      seed=1, render_size=(W, H)))
+    res = _run("--synthetic", "--side", "left", "--db", str(tmp_path), "--frames", "3", *SMALL)
+    assert res.exit_code == 0 and "reached 3 frames" in res.output, res.output
+    res = CliRunner().invoke(cli, ["estimate", "--synthetic", "--db", str(tmp_path), "--frames", "3",
+                                   *SMALL])
+    assert res.exit_code == 2 and "no database for the right hand" in res.output, res.output
+    assert "_left" in res.output
 
 
 def test_the_progress_line_says_when_the_device_has_moved():
