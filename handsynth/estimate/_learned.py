@@ -615,6 +615,8 @@ class LearnedEstimator:
         out._mirror = not self._mirror
         out.side = "left" if self.side == "right" else "right"
         out.mount = self.mount.mirrored()
+        if self._move_check is not None:  # its own frames, not the original's
+            out._move_check = self._move_check.fresh()
         return out
 
     def check_ready(self) -> None:

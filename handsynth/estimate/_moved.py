@@ -16,6 +16,7 @@ the last frames exceeds a limit.
 
 from __future__ import annotations
 
+import copy
 from collections import deque
 from dataclasses import dataclass, field
 
@@ -107,6 +108,12 @@ class MoveCheck:
         self._rest = [rest[h].astype(np.float32) for h in self._halves]
         self._area = [float(r.sum()) for r in self._rest]
         self.available = len(self._halves) == 2
+
+    def fresh(self) -> MoveCheck:
+        """This check with no frame seen yet (the rest frame's arrays shared, read only)."""
+        out = copy.copy(self)
+        out.state = MoveCheckState(deque(maxlen=self.options.window))
+        return out
 
     def change(self, grid: np.ndarray) -> float:
         """Covered share of the band changed from the rest frame (NaN if not :attr:`available`).

@@ -22,7 +22,7 @@ from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
-from ..errors import InvalidShapeError
+from ..errors import InvalidInputError, InvalidShapeError
 from ..models import FINGERS, HandShape
 from ._camera import CameraMount
 from ._raster import SilhouetteRasterizer
@@ -201,6 +201,14 @@ class MountVariation:
     along_mm: float = 8.0
     tilt_deg: float = 4.0
     roll_deg: float = 4.0
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            sd = getattr(self, f.name)
+            if (isinstance(sd, bool) or not isinstance(sd, (int, float, np.number))
+                    or not np.isfinite(sd) or sd < 0):
+                raise InvalidInputError(f"MountVariation.{f.name} must be a finite s.d. >= 0, "
+                                        f"got {sd!r}")
 
     def scaled(self, factor: float) -> MountVariation:
         """These s.d.s times `factor`."""

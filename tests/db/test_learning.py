@@ -103,9 +103,12 @@ def test_options_that_would_fail_later_are_refused_by_name(kwargs, words):
 def test_a_negative_device_variation_is_refused_by_name():
     from handsynth.render import MountVariation
 
-    with pytest.raises(InvalidInputError, match=r"LearningSetOptions.mount_variation.height_mm "
-                                                r"must be a finite s.d. >= 0, got -5"):
-        LearningSetOptions(mount_variation=MountVariation(height_mm=-5))
+    for bad in (-5, float("nan"), "4"):
+        with pytest.raises(InvalidInputError, match=r"MountVariation.height_mm must be a finite "
+                                                    r"s.d. >= 0, got "):
+            MountVariation(height_mm=bad)
+    with pytest.raises(InvalidInputError, match="mount_variation must be a MountVariation"):
+        LearningSetOptions(mount_variation={"height_mm": 5})
     assert LearningSetOptions(seed=np.int64(3), cells=[30, 45]).cells == (30, 45)
 
 

@@ -41,6 +41,19 @@ def test_a_slipped_device_is_called_moved_once_a_window_of_frames_says_so(hand):
     assert check.change(_grid(h.make(slipped).mask(poses[0]))) > 3 * check.options.limit
 
 
+def test_a_fresh_check_starts_with_no_frames_and_leaves_the_original_alone(hand):
+    """What a mirrored estimator's copy gets: its own window of frames."""
+    h, rest, poses = hand
+    slipped = PAPER.replace(thumb_offset_mm=PAPER.thumb_offset_mm + 5, tilt_deg=3.0)
+    check = MoveCheck(rest, PAPER, options=MoveCheckOptions(window=3))
+    for m in h.make(slipped).masks(poses[:3]):
+        check.update(_grid(m))
+    other = check.fresh()
+    assert check.moved and not other.moved and len(other.state.changes) == 0
+    other.update(_grid(h.make().mask(poses[0])))
+    assert len(check.state.changes) == 3 and len(other.state.changes) == 1
+
+
 def test_without_a_wrist_cut_there_is_nothing_to_check(hand):
     rest = hand[1]
     check = MoveCheck(rest, PAPER.replace(wrist_cut_mm=None), options=MoveCheckOptions(window=1))
