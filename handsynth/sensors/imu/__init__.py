@@ -9,6 +9,7 @@ baselines); sensor-to-joint vectors; the forearm plate's three sensors fused
 into one attitude; joint angles and fingertip positions.
 """
 
+from ._allan import KalmanDenoiser, NoiseCoefficients, allan_deviation, noise_coefficients
 from ._attitude import StaticStart, azimuth_correction, gyro_bias, initial_attitude
 from ._broad import BROAD_FILTERS, broad_errors, find_broad_trials, read_broad_trial, run_broad
 from ._calibration import ImuCalibration, calibrate, segments_from_seconds
@@ -138,11 +139,13 @@ __all__ = [
     "ImuPlacement",
     "ImuRecording",
     "ImuTruth",
+    "KalmanDenoiser",
     "MadgwickEstimator",
     "MagDisturbance",
     "MagNoise",
     "MahonyEstimator",
     "Motion",
+    "NoiseCoefficients",
     "OrientationEstimator",
     "RawIntegration",
     "SensorCalibration",
@@ -152,6 +155,7 @@ __all__ = [
     "ThumbCmcModel",
     "VQFEstimator",
     "VectorEstimate",
+    "allan_deviation",
     "apply_axis_noise",
     "azimuth_correction",
     "broad_errors",
@@ -179,6 +183,7 @@ __all__ = [
     "link_frames",
     "link_vectors",
     "make_filter",
+    "noise_coefficients",
     "plate_rotations",
     "plot_orientation_error",
     "plot_stick_figure",

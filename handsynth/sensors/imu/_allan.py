@@ -42,8 +42,16 @@ __all__ = [
 ]
 
 
+def _check_rate(rate_hz) -> float:
+    if not (isinstance(rate_hz, (int, float, np.integer, np.floating))
+            and not isinstance(rate_hz, bool) and np.isfinite(rate_hz) and rate_hz > 0):
+        raise InvalidInputError(f"rate_hz must be a finite number > 0, got {rate_hz!r}")
+    return float(rate_hz)
+
+
 def log_taus(n: int, rate_hz: float, *, per_decade: int = 8) -> np.ndarray:
     """Log-spaced averaging times from one sample to N/4 samples, seconds."""
+    rate_hz = _check_rate(rate_hz)
     m_max = max(1, n // 4)
     m = np.unique(np.round(np.logspace(0, np.log10(m_max), int(per_decade * np.log10(m_max)) + 2)))
     return m.astype(int) / rate_hz
@@ -58,28 +66,52 @@ def allan_deviation(x, rate_hz: float, taus=None) -> tuple[np.ndarray, np.ndarra
         Rate samples (e.g. rad/s), C channels.
     rate_hz : float
     taus : array_like of float, optional
-        Averaging times, s (rounded to whole samples, m < N/2); log-spaced by default.
+        Averaging times, s, finite and > 0, each rounded to a whole number m
+        of samples with 1 <= m < N/2 (times that round to the same m give
+        one value); log-spaced by default.
 
     Returns
     -------
     taus : ndarray, shape (T,)
     adev : ndarray, shape (T,) or (T, C)
         Same units as `x`.
+
+    Raises
+    ------
+    InvalidInputError
+        `x` not (N,) or (N, C) finite numbers with N >= 4, `rate_hz` not a
+        finite number > 0, a tau that is not finite, not > 0, shorter than
+        half a sample or not under N/2 samples.
     """
     x = np.asarray(x, dtype=float)
     if x.ndim not in (1, 2) or x.shape[0] < 4:
         raise InvalidInputError(f"x must have shape (N,) or (N, C) with N >= 4, got {x.shape}")
     if not np.all(np.isfinite(x)):
         raise InvalidInputError("x contains NaN or infinite values")
-    if not (np.isfinite(rate_hz) and rate_hz > 0):
-        raise InvalidInputError(f"rate_hz must be positive, got {rate_hz!r}")
+    rate_hz = _check_rate(rate_hz)
     n = x.shape[0]
     dt = 1.0 / rate_hz
-    taus = log_taus(n, rate_hz) if taus is None else np.asarray(taus, dtype=float)
-    m = np.unique(np.round(taus * rate_hz).astype(int))
-    m = m[(m >= 1) & (m < n / 2)]
-    if m.size == 0:
-        raise InvalidInputError(f"no averaging time fits {n} samples")
+    if taus is None:
+        taus = log_taus(n, rate_hz)
+    else:
+        try:
+            taus = np.asarray(taus, dtype=float).ravel()
+        except (TypeError, ValueError):
+            raise InvalidInputError(f"taus must be numbers (seconds), got {taus!r}") from None
+        if taus.size == 0:
+            raise InvalidInputError("taus is empty")
+        bad = taus[~(np.isfinite(taus) & (taus > 0))]
+        if bad.size:
+            raise InvalidInputError(f"taus must be finite and > 0 s, got {bad[0]!r} "
+                                    f"({bad.size} such)")
+    m_all = np.round(taus * rate_hz)
+    out_of_range = taus[(m_all < 1) | (m_all >= n / 2)]
+    if out_of_range.size:
+        raise InvalidInputError(
+            f"taus must lie between one sample and half the recording "
+            f"({1 / rate_hz:.4g}-{(np.ceil(n / 2) - 1) / rate_hz:.4g} s for {n} samples at "
+            f"{rate_hz:g} Hz), got {out_of_range[0]:.4g} s ({out_of_range.size} such)")
+    m = np.unique(m_all.astype(int))
     theta = np.concatenate([np.zeros((1,) + x.shape[1:]), np.cumsum(x, axis=0) * dt])
     out = np.empty((m.size,) + x.shape[1:])
     for i, mi in enumerate(m):
@@ -120,12 +152,26 @@ def noise_coefficients(taus, adev) -> NoiseCoefficients:
     Returns
     -------
     NoiseCoefficients
+
+    Raises
+    ------
+    InvalidInputError
+        `taus` and `adev` not 1-D numbers of equal length >= 3, or a value
+        of either that is not finite and > 0.
     """
-    taus = np.asarray(taus, dtype=float)
-    adev = np.asarray(adev, dtype=float)
-    if adev.shape != taus.shape or taus.size < 3:
+    try:
+        taus = np.asarray(taus, dtype=float)
+        adev = np.asarray(adev, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidInputError("taus and adev must be arrays of numbers") from None
+    if adev.shape != taus.shape or taus.ndim != 1 or taus.size < 3:
         raise InvalidInputError(f"taus and adev must be 1-D of equal length >= 3, got "
                                 f"{taus.shape} and {adev.shape}")
+    for name, v in (("taus", taus), ("adev", adev)):
+        bad = np.flatnonzero(~(np.isfinite(v) & (v > 0)))
+        if bad.size:
+            raise InvalidInputError(f"{name} must be finite and > 0, got {v[bad[0]]!r} at index "
+                                    f"{bad[0]} ({bad.size} such)")
     var = adev**2
     a = np.column_stack([1.0 / taus, np.full_like(taus, 2 * np.log(2) / np.pi), taus / 3.0])
     coef, _ = nnls(a / var[:, None], np.ones_like(var))
@@ -160,8 +206,10 @@ class KalmanDenoiser:
     def __post_init__(self) -> None:
         for k in ("random_walk", "rate_random_walk", "q_signal", "rate_hz"):
             v = getattr(self, k)
-            if not (np.isfinite(v) and v > 0):
-                raise InvalidInputError(f"{k} must be positive and finite, got {v!r}")
+            if not (isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
+                    and np.isfinite(v) and v > 0):
+                raise InvalidInputError(f"KalmanDenoiser.{k} must be a finite number > 0, "
+                                        f"got {v!r}")
 
     def steady_state_gain(self) -> np.ndarray:
         """K_inf of the static filter, shape (2,) (eqs. 4.11-4.14, 4.6-4.8)."""
@@ -196,8 +244,20 @@ class KalmanDenoiser:
         """Denoise samples along axis 0, shape (N, ...) -> same shape.
 
         The state starts at X_0 = [z_0, 0] (signal at the first sample, no bias).
+
+        Raises
+        ------
+        InvalidInputError
+            No samples, or values that are not finite numbers.
         """
-        z = np.asarray(z, dtype=float)
+        try:
+            z = np.asarray(z, dtype=float)
+        except (TypeError, ValueError):
+            raise InvalidInputError(f"z must be an array of numbers, got {type(z).__name__}") from None
+        if z.ndim == 0 or z.shape[0] == 0:
+            raise InvalidInputError(f"z needs at least one sample along axis 0, got shape {z.shape}")
+        if not np.all(np.isfinite(z)):
+            raise InvalidInputError("z contains NaN or infinite values")
         a, b = self.transition()
         x0 = z[0].copy()
         x1 = np.zeros_like(x0)

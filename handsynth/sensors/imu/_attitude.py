@@ -12,20 +12,36 @@ is added to each compass heading (eq. 4.22).
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
-from ...errors import EstimationError, InvalidInputError
+from ...errors import EstimationError, InvalidInputError, RecordingError
 from ._quat import quat_from_acc_mag
-from ._recording import ImuRecording
+from ._recording import ImuRecording, _reported, check_recording
 
-__all__ = ["StaticStart", "azimuth_correction", "gyro_bias", "initial_attitude"]
+__all__ = ["StaticStart", "azimuth_correction", "check_run_input", "gyro_bias", "initial_attitude"]
+
+
+#: Default common rotation (azimuth alignment), s.
+_ALIGN = (2.0, 4.0)
 
 
 @dataclass(frozen=True)
 class StaticStart:
-    """Where the static start and the common rotation are (seconds)."""
+    """Where the static start and the common rotation are (seconds).
+
+    Parameters
+    ----------
+    static_s : float
+        Length of the still start, s (finite, > 0).
+    align_start_s, align_end_s : float or None
+        The common rotation for the azimuth alignment, s (finite, start >= 0,
+        end after start).  None for either turns the alignment off (the other
+        then None too, or left at its default); half a window, one bound None
+        and the other set to another value, is refused.
+    """
 
     static_s: float = 2.0
     align_start_s: float | None = 2.0
@@ -40,13 +56,73 @@ class StaticStart:
             raise InvalidInputError(f"static_s (--static) must be a finite number of seconds "
                                     f"> 0, got {self.static_s!r}")
         a, b = self.align_start_s, self.align_end_s
+        if (a is None) != (b is None):
+            # one bound None turns the alignment off; the other left at its default says
+            # nothing more, one set to another value is half a window
+            if (a, b) not in ((None, _ALIGN[1]), (_ALIGN[0], None)):
+                raise InvalidInputError(
+                    f"the common rotation needs both align_start_s and align_end_s, or None "
+                    f"(no azimuth alignment), got align_start_s={a!r}, align_end_s={b!r}")
+            object.__setattr__(self, "align_start_s", None)
+            object.__setattr__(self, "align_end_s", None)
+            a = b = None
         if a is not None and b is not None:
+            if not all(isinstance(v, (int, float, np.integer, np.floating))
+                       and not isinstance(v, bool) for v in (a, b)):
+                raise InvalidInputError(f"align_start_s and align_end_s must be numbers of "
+                                        f"seconds, got {a!r} and {b!r}")
             if not (np.isfinite(a) and np.isfinite(b) and a >= 0):
                 raise InvalidInputError(f"the common rotation (--align) must be finite seconds "
                                         f">= 0, got {a}-{b} s")
             if not b > a:
                 raise InvalidInputError(f"the common rotation (--align START,END) {a:g}-{b:g} s "
                                         "is empty: END must be after START")
+
+
+def check_run_input(rec, static) -> ImuRecording:
+    """Refuse a recording an estimator cannot use; warn about a suspicious one.
+
+    The one check of every estimator's ``run``: what :func:`check_recording`
+    checks (its errors raised, its warnings issued with :func:`warnings.warn`
+    unless it already returned them for this recording), and that the static
+    start lies inside the recording.  Shapes, dtype and the rate are checked
+    when the :class:`ImuRecording` is made; a common rotation cut by the
+    recording's end is used as far as it goes, one wholly outside is refused
+    by :func:`azimuth_correction`.
+
+    Parameters
+    ----------
+    rec : ImuRecording
+    static : StaticStart
+
+    Returns
+    -------
+    ImuRecording
+        `rec`.
+
+    Raises
+    ------
+    RecordingError
+        See :func:`check_recording`; a static start longer than the
+        recording.
+    InvalidInputError
+        `rec` or `static` of the wrong type.
+    """
+    if not isinstance(rec, ImuRecording):
+        raise InvalidInputError(f"rec must be an ImuRecording, got {type(rec).__name__}")
+    if not isinstance(static, StaticStart):
+        raise InvalidInputError(f"static must be a StaticStart, got {type(static).__name__}")
+    # half a sample's tolerance: 2.0 s of a recording of 200 samples at 100 Hz fit
+    end = (rec.n + 0.5) / rec.rate_hz
+    if static.static_s > end:
+        raise RecordingError(f"the static start static_s={static.static_s:g} s is longer than "
+                             f"the recording ({rec.n} samples, {rec.n / rec.rate_hz:.4g} s); "
+                             "shorten the static start")
+    before = _reported(rec)
+    for w in check_recording(rec, static_s=static.static_s):
+        if w not in before:
+            warnings.warn(w, UserWarning, stacklevel=3)
+    return rec
 
 
 def _n(rec: ImuRecording, seconds: float) -> int:

@@ -28,7 +28,7 @@ from ._kinematics import (
     zero_offsets,
 )
 from ._plate import PLATE_SENSORS, fuse_plate, plate_rotations
-from ._recording import ImuRecording
+from ._recording import ImuRecording, check_recording
 from ._sensorcal import POSE_PREFIX, SensorCalibration, fit_sensor_calibration
 from ._vectors import ChainModel, chain_model
 
@@ -176,6 +176,10 @@ class ImuCalibration:
             whether a sensor calibration was applied.
         """
         sub = self.correct(rec, sensor_calibration=sensor_calibration)
+        if hasattr(rec, "_reported"):
+            # the caller has had check_recording's warnings of `rec`: the filter's run
+            # does not repeat them for the corrected copy
+            check_recording(sub, static_s=(static or StaticStart()).static_s)
         applied = sensor_calibration and self.sensor_calibration is not None
         est = ChainEKF(self.model, options=options or ChainEKFOptions(),
                        static=static or StaticStart())

@@ -41,7 +41,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...errors import InvalidInputError
-from ._attitude import StaticStart, azimuth_correction, gyro_bias, initial_attitude
+from ._attitude import (
+    StaticStart,
+    azimuth_correction,
+    check_run_input,
+    gyro_bias,
+    initial_attitude,
+)
 from ._layout import LINKS
 from ._model import GRAVITY_MPS2
 from ._quat import qexp, qmul, qnormalize, quat_to_mat
@@ -100,12 +106,23 @@ class ChainEKFOptions:
     bias_tau_s: float | None = None
 
     def __post_init__(self) -> None:
+        if not isinstance(self.use_h2, (bool, np.bool_)):
+            raise InvalidInputError(f"ChainEKFOptions.use_h2 must be True or False, got "
+                                    f"{self.use_h2!r}")
         for k in ("gyro_noise", "elbow_acc_sd", "acc_sd", "demoted", "mag_sd", "mag_gate"):
             v = getattr(self, k)
-            if not (np.isfinite(v) and v > 0):
-                raise InvalidInputError(f"{k} must be positive, got {v!r}")
-        if self.bias_tau_s is not None and not (np.isfinite(self.bias_tau_s) and self.bias_tau_s > 0):
-            raise InvalidInputError(f"bias_tau_s must be positive or None, got {self.bias_tau_s!r}")
+            if not (_is_number(v) and np.isfinite(v) and v > 0):
+                raise InvalidInputError(f"ChainEKFOptions.{k} must be a finite number > 0, "
+                                        f"got {v!r}")
+        for k in ("switch_dps", "bias_tau_s"):
+            v = getattr(self, k)
+            if v is not None and not (_is_number(v) and np.isfinite(v) and v > 0):
+                raise InvalidInputError(f"ChainEKFOptions.{k} must be a finite number > 0 or "
+                                        f"None, got {v!r}")
+
+
+def _is_number(v) -> bool:
+    return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
 
 
 #: ``filter4b``: Filter 4 that also learns each gyro's bias from its own
@@ -293,9 +310,20 @@ class ChainEKF:
     name: str = "filter4"
     fast: bool = True
 
+    def __post_init__(self) -> None:
+        if not isinstance(self.model, ChainModel):
+            raise InvalidInputError(f"ChainEKF.model must be a ChainModel, got "
+                                    f"{type(self.model).__name__}")
+        if not isinstance(self.options, ChainEKFOptions):
+            raise InvalidInputError(f"ChainEKF.options must be a ChainEKFOptions, got "
+                                    f"{type(self.options).__name__}")
+        if not isinstance(self.fast, (bool, np.bool_)):
+            raise InvalidInputError(f"ChainEKF.fast must be True or False, got {self.fast!r}")
+
     def run(self, rec: ImuRecording) -> np.ndarray:
         from threadpoolctl import threadpool_limits
 
+        check_run_input(rec, self.static)
         # the matrices are small (3S + 3 square): BLAS threads only contend
         with threadpool_limits(limits=1):
             return self._run(rec)

@@ -53,7 +53,7 @@ from ._model import SENSOR_NAMES, ImuHand, ImuPlacement
 from ._motion import GRASP_POSES, calibration_motion, free_motion, grasp_motion, static_motion
 from ._noise import EVAL_NOISE, MPU9250_DATASHEET, ImuNoise
 from ._quat import angle_deg, heading_inclination_deg
-from ._recording import ImuRecording, ImuTruth
+from ._recording import ImuRecording, ImuTruth, check_recording
 from ._sensorcal import SensorCalibration
 from ._simulate import SkinMotion, simulate_imu
 from ._vectors import seel_joint_positions, truth_chain_model
@@ -219,6 +219,7 @@ def _trial(rec, filters, calib: ImuCalibration, series: dict | None = None, *,
                  "joint_rmse_deg": {}, "fingertip_rmse_mm": {}, "fingertip_from_wrist_rmse_mm": {}}
     kp = truth.keypoints
     true_angles = truth.angles[:, 9:]
+    check_recording(rec)  # the configuration's magnet is on purpose: no filter warns of it
     for name in filters:
         q = calib.fuse(make_filter(name, calib.model).run(rec), rec.sensors,
                        plate_fusion=plate_fusion)
@@ -269,6 +270,7 @@ def _grasp_report(config, placement, filters, calib: ImuCalibration,
     truth = _truth(rec)
     holds = [(s.split(":", 1)[1], a, b) for s, a, b in truth.segments if s.startswith("grasp:")]
     out: dict = {"classes": list(classes), "accuracy": {}}
+    check_recording(rec)  # the configuration's magnet is on purpose: no filter warns of it
     for name in filters:
         q = calib.fuse(make_filter(name, calib.model).run(rec), rec.sensors,
                        plate_fusion=plate_fusion)

@@ -22,13 +22,14 @@ The multi-sensor EKF of the thesis ("Filter 4") is in :mod:`._ekf`.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Protocol, runtime_checkable
 
 import numpy as np
 
 from ...errors import EstimationError, InvalidInputError
-from ._attitude import StaticStart, gyro_bias, initial_attitude
+from ._attitude import StaticStart, check_run_input, gyro_bias, initial_attitude
 from ._quat import qexp, qmul, qnormalize, quat_from_acc_mag
 from ._recording import ImuRecording
 
@@ -78,15 +79,33 @@ def integrate_gyro(q0: np.ndarray, gyr: np.ndarray, rate_hz: float) -> np.ndarra
     -------
     ndarray, shape (S, N, 4)
         q[:, 0] = q0; q[:, i] uses gyr[:, i] (mean of samples i-1 and i).
+
+    Raises
+    ------
+    InvalidInputError
+        `rate_hz` not a finite number > 0; `gyr` not (S, N, 3) or `q0` not
+        (S, 4) unit quaternions; non-finite values.
     """
+    dt = 1.0 / _check_rate(rate_hz)
+    gyr = _float_array(gyr, "gyr")
+    if gyr.ndim != 3 or gyr.shape[2] != 3:
+        raise InvalidInputError(f"gyr must have shape (S, N, 3), got {gyr.shape}")
     s, n, _ = gyr.shape
-    dt = 1.0 / rate_hz
+    q0 = _float_array(q0, "q0")
+    if q0.shape != (s, 4):
+        raise InvalidInputError(f"q0 must have shape (S, 4) with S = {s} (gyr's), got {q0.shape}")
+    if not (np.all(np.isfinite(gyr)) and np.all(np.isfinite(q0))):
+        raise InvalidInputError("gyr and q0 must be finite (NaN or infinite values given)")
+    norm = np.linalg.norm(q0, axis=-1)
+    if np.any(np.abs(norm - 1.0) > 0.01):
+        raise InvalidInputError(f"q0 must be unit quaternions, got norms {norm.min():.4g} "
+                                f"to {norm.max():.4g}")
     w = np.empty_like(gyr)
     w[:, 0] = 0.0
     w[:, 1:] = 0.5 * (gyr[:, 1:] + gyr[:, :-1])
     dq = qexp(w * dt)
     out = np.empty((s, n, 4))
-    q = np.asarray(q0, float).copy()
+    q = q0 / norm[:, None]
     for i in range(n):
         if i:
             q = qmul(q, dq[:, i])
@@ -102,6 +121,7 @@ class ConstantEstimator:
     name: str = "constant"
 
     def run(self, rec: ImuRecording) -> np.ndarray:
+        check_run_input(rec, self.static)
         q0 = initial_attitude(rec, self.static)
         return np.repeat(q0[:, None], rec.n, axis=1)
 
@@ -114,6 +134,7 @@ class RawIntegration:
     name: str = "raw"
 
     def run(self, rec: ImuRecording) -> np.ndarray:
+        check_run_input(rec, self.static)
         q0 = initial_attitude(rec, self.static)
         return integrate_gyro(q0, rec.gyr - gyro_bias(rec, self.static)[:, None], rec.rate_hz)
 
@@ -133,6 +154,10 @@ class Filter1Options:
 
     gyro_noise: float = 0.01
     obs_noise: float = 0.05
+
+    def __post_init__(self) -> None:
+        for name in ("gyro_noise", "obs_noise"):
+            _check_positive(f"Filter1Options.{name}", getattr(self, name))
 
 
 @dataclass(frozen=True)
@@ -154,6 +179,7 @@ class Filter1:
     def run(self, rec: ImuRecording) -> np.ndarray:
         from ._attitude import azimuth_correction
 
+        check_run_input(rec, self.static)
         o = self.options
         s, n = len(rec.sensors), rec.n
         dt = 1.0 / rec.rate_hz
@@ -217,9 +243,15 @@ class VQFEstimator:
     name: str = "vqf"
     online: bool = False
 
+    def __post_init__(self) -> None:
+        if not isinstance(self.online, (bool, np.bool_)):
+            raise InvalidInputError(f"VQFEstimator.online must be True or False, got "
+                                    f"{self.online!r}")
+
     def run(self, rec: ImuRecording) -> np.ndarray:
         from vqf import VQF, offlineVQF
 
+        check_run_input(rec, self.static)
         gyr = _prepared(rec, self.static)
         out = np.empty((len(rec.sensors), rec.n, 4))
         ts = 1.0 / rec.rate_hz
@@ -240,6 +272,7 @@ class _AhrsBase:
         raise NotImplementedError
 
     def run(self, rec: ImuRecording) -> np.ndarray:
+        check_run_input(rec, self.static)
         gyr = _prepared(rec, self.static)
         q0 = initial_attitude(rec, self.static, align=False)
         out = np.empty((len(rec.sensors), rec.n, 4))
@@ -257,6 +290,9 @@ class MadgwickEstimator(_AhrsBase):
 
     gain: float = 0.041
     name: str = "madgwick"
+
+    def __post_init__(self) -> None:
+        _check_positive("MadgwickEstimator.gain", self.gain)
 
     def _filter(self, gyr, acc, mag, rate, q0):
         from ahrs.filters import Madgwick
@@ -307,6 +343,23 @@ class AhrsEKFEstimator(_AhrsBase):
 _Q_X180 = np.array([0.0, 1.0, 0.0, 0.0])
 
 
-def _check_rate(rate_hz):
-    if not (np.isfinite(rate_hz) and rate_hz > 0):
-        raise InvalidInputError(f"rate_hz must be positive, got {rate_hz!r}")
+def _check_rate(rate_hz) -> float:
+    """`rate_hz` as a float; InvalidInputError naming it unless a finite number > 0."""
+    _check_positive("rate_hz", rate_hz)
+    return float(rate_hz)
+
+
+def _check_positive(name: str, value) -> None:
+    """Refuse `value` unless it is a finite real number > 0 (not a bool), naming `name`."""
+    if not (isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+            and math.isfinite(value) and value > 0):
+        raise InvalidInputError(f"{name} must be a finite number > 0, got {value!r}")
+
+
+def _float_array(value, name: str) -> np.ndarray:
+    """`value` as a float64 array in C order; InvalidInputError naming `name` if not numbers."""
+    try:
+        return np.ascontiguousarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"{name} must be an array of numbers, got "
+                                f"{type(value).__name__}") from None

@@ -69,7 +69,7 @@ import numpy as np
 from numba import njit
 
 from ...errors import InvalidInputError
-from ._attitude import StaticStart, _n, gyro_bias, initial_attitude
+from ._attitude import StaticStart, _n, check_run_input, gyro_bias, initial_attitude
 from ._model import GRAVITY_MPS2
 from ._quat_numba import _qexp, _qmat, _qmul
 from ._recording import ImuRecording
@@ -278,6 +278,9 @@ def gated_orientation(rec: ImuRecording, options: GatedOptions | None = None, *,
     """
     o = options or GatedOptions()
     static = static or StaticStart()
+    if not isinstance(o, GatedOptions):
+        raise InvalidInputError(f"options must be a GatedOptions, got {type(o).__name__}")
+    check_run_input(rec, static)
     dt = 1.0 / rec.rate_hz
     q0 = initial_attitude(rec, static)
     b0 = gyro_bias(rec, static)

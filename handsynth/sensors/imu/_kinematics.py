@@ -36,7 +36,7 @@ from scipy.spatial.transform import Rotation
 from ...errors import EstimationError, InvalidInputError
 from ...models import JOINT_NAMES
 from ._layout import CHAINS, FLEX_JOINT
-from ._quat import quat_to_mat
+from ._quat import check_quats, quat_to_mat
 from ._recording import ImuRecording
 from ._vectors import ChainModel, _segment
 
@@ -236,8 +236,31 @@ def joint_angles(quats, sensors, frames: dict, *, side: str = "right",
         Canonical :data:`JOINT_NAMES`.
     extra : dict
         ``"thumb_cmc_euler"``: (N, 3) phi, theta, psi in degrees.
+
+    Raises
+    ------
+    InvalidInputError
+        `quats` not unit quaternions of shape (S, N, 4) (see
+        :func:`check_quats`); a sensor of :data:`JOINT_LINKS` missing from
+        `sensors` or `frames`; `side` not "right" or "left"; `zero` not of
+        shape (20,).
     """
     sensors = tuple(sensors)
+    quats = check_quats(quats, sensors)
+    _check_side(side)
+    if zero is not None:
+        zero = np.asarray(zero, dtype=float)
+        if zero.shape != (len(JOINT_NAMES),):
+            raise InvalidInputError(f"zero must have shape ({len(JOINT_NAMES)},) (one angle per "
+                                    f"joint of JOINT_NAMES), got {zero.shape}")
+    for joint, pair in JOINT_LINKS.items():
+        for s in pair:
+            if s not in sensors:
+                raise InvalidInputError(f"joint angles need sensor {s!r} (joint {joint}) in "
+                                        f"sensors; given {', '.join(sensors)}")
+            if s not in frames:
+                raise InvalidInputError(f"frames has no link frame of sensor {s!r} (joint "
+                                        f"{joint}); see link_frames")
     n = quats.shape[1]
     out = np.full((n, len(JOINT_NAMES)), np.nan)
     sign = 1.0 if side == "right" else -1.0
@@ -274,6 +297,7 @@ def zero_offsets(cal: ImuRecording, frames: dict, *, side: str = "right",
     from ._attitude import initial_attitude
     from ._vectors import _calibration_static
 
+    _check_side(side)
     q0 = initial_attitude(cal, static or _calibration_static(cal))
     a, _ = joint_angles(q0[:, None], cal.sensors, frames, side=side)
     return np.nan_to_num(a[0])
@@ -287,8 +311,15 @@ def fingertip_positions(quats, sensors, model: ChainModel) -> dict:
     dict
         finger -> (N, 3) metres, world frame, relative to the elbow centre;
         also ``"<finger>_joints"`` -> (N, L, 3) the chain's joint positions.
+
+    Raises
+    ------
+    InvalidInputError
+        `quats` not unit quaternions of shape (S, N, 4) (see
+        :func:`check_quats`); a chain's sensor missing from `sensors`.
     """
     sensors = tuple(sensors)
+    quats = check_quats(quats, sensors)
     out = {}
     for f, chain in CHAINS.items():
         pos = np.zeros((quats.shape[1], 3))
@@ -302,6 +333,11 @@ def fingertip_positions(quats, sensors, model: ChainModel) -> dict:
         out[f] = pos
         out[f"{f}_joints"] = np.stack(joints, axis=1)
     return out
+
+
+def _check_side(side) -> None:
+    if side not in ("right", "left"):
+        raise InvalidInputError(f"side must be 'right' or 'left', got {side!r}")
 
 
 def classify_grasp(angles, grasps: dict) -> list[str]:

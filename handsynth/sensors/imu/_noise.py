@@ -44,7 +44,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ...errors import InvalidInputError
-from ._model import GRAVITY_MPS2
+from ._model import GRAVITY_MPS2, SENSOR_NAMES, TIP_SENSORS
 
 __all__ = [
     "EVAL_NOISE",
@@ -58,6 +58,17 @@ __all__ = [
 ]
 
 _DEG = np.pi / 180.0
+
+
+def _is_number(v) -> bool:
+    return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
+
+
+def _check_figure(name: str, value, *, positive: bool = False) -> None:
+    """Refuse a noise figure that is not a finite number >= 0 (> 0 with `positive`)."""
+    if not (_is_number(value) and np.isfinite(value) and (value > 0 if positive else value >= 0)):
+        raise InvalidInputError(f"{name} must be a finite number {'>' if positive else '>='} 0, "
+                                f"got {value!r}")
 
 
 @dataclass(frozen=True)
@@ -149,6 +160,9 @@ class MagNoise:
         the same physical sensor (an assumption: the AK8963 datasheet gives
         no figure).
     full_scale_ut, lsb_ut : float
+        Saturation (> 0) and quantisation step (0 for none).
+
+    Every figure is a finite number >= 0 (InvalidInputError naming it).
     """
 
     white_ut: float = 0.3
@@ -158,6 +172,12 @@ class MagNoise:
     hard_iron_repeatability_ut: float = 0.2
     full_scale_ut: float = 4800.0
     lsb_ut: float = 0.15
+
+    def __post_init__(self) -> None:
+        for k in ("white_ut", "hard_iron_ut", "soft_iron", "azimuth_sd_deg",
+                  "hard_iron_repeatability_ut", "lsb_ut"):
+            _check_figure(f"MagNoise.{k}", getattr(self, k))
+        _check_figure("MagNoise.full_scale_ut", self.full_scale_ut, positive=True)
 
 
 @dataclass(frozen=True)
@@ -171,13 +191,47 @@ class MagDisturbance:
     field_ut : (3,) float
         Extra world-frame field at full strength, microtesla.
     sensors : tuple of str
-        Affected sensors (empty: all).
+        Affected sensors (empty: all), names of :data:`SENSOR_NAMES` or
+        :data:`TIP_SENSORS`; :func:`simulate_imu` refuses a name its hand
+        lacks.
+
+    Raises
+    ------
+    InvalidInputError
+        Times that are not finite or an end not after the start, a field
+        that is not three finite numbers, unknown sensor names.
     """
 
     start_s: float
     end_s: float
     field_ut: tuple = (15.0, 10.0, -5.0)
     sensors: tuple = ()
+
+    def __post_init__(self) -> None:
+        for k in ("start_s", "end_s"):
+            v = getattr(self, k)
+            if not (_is_number(v) and np.isfinite(v)):
+                raise InvalidInputError(f"MagDisturbance.{k} must be a finite number of seconds, "
+                                        f"got {v!r}")
+        if not self.end_s > self.start_s:
+            raise InvalidInputError(f"MagDisturbance is empty: end_s ({self.end_s!r}) must be after "
+                                    f"start_s ({self.start_s!r})")
+        try:
+            f = np.asarray(self.field_ut, dtype=float)
+        except (TypeError, ValueError):
+            f = np.full(1, np.nan)
+        if f.shape != (3,) or not np.all(np.isfinite(f)):
+            raise InvalidInputError(f"MagDisturbance.field_ut must be three finite numbers (uT), "
+                                    f"got {self.field_ut!r}")
+        if isinstance(self.sensors, str) or not all(isinstance(x, str) for x in self.sensors):
+            raise InvalidInputError(f"MagDisturbance.sensors must be a tuple of sensor names, "
+                                    f"got {self.sensors!r}")
+        object.__setattr__(self, "sensors", tuple(self.sensors))
+        unknown = [x for x in self.sensors if x not in SENSOR_NAMES + TIP_SENSORS]
+        if unknown:
+            raise InvalidInputError(f"MagDisturbance.sensors: unknown sensor(s) "
+                                    f"{', '.join(map(repr, unknown))}; expected names of "
+                                    f"{', '.join(SENSOR_NAMES)}")
 
 
 @dataclass(frozen=True)
@@ -189,6 +243,18 @@ class ImuNoise:
     mag: MagNoise = field(default_factory=MagNoise)
     disturbances: tuple = ()
     label: str = ""
+
+    def __post_init__(self) -> None:
+        for k, kind in (("gyro", AxisNoise), ("accel", AxisNoise), ("mag", MagNoise)):
+            v = getattr(self, k)
+            if not isinstance(v, kind):
+                raise InvalidInputError(f"ImuNoise.{k} must be a {kind.__name__}, got "
+                                        f"{type(v).__name__}")
+        if isinstance(self.disturbances, MagDisturbance) or not all(
+                isinstance(d, MagDisturbance) for d in self.disturbances):
+            raise InvalidInputError(f"ImuNoise.disturbances must be a tuple of MagDisturbance, "
+                                    f"got {self.disturbances!r}")
+        object.__setattr__(self, "disturbances", tuple(self.disturbances))
 
 
 _G = GRAVITY_MPS2

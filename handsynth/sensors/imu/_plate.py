@@ -35,7 +35,7 @@ import numpy as np
 
 from ...errors import InvalidInputError
 from ._attitude import StaticStart, initial_attitude
-from ._quat import angle_deg, mat_to_quat, qconj, qmul, quat_to_mat
+from ._quat import angle_deg, check_quats, mat_to_quat, qconj, qmul, quat_to_mat
 from ._recording import ImuRecording
 
 __all__ = ["PLATE_SENSORS", "fuse_plate", "plate_rotations"]
@@ -113,12 +113,23 @@ def fuse_plate(quats, sensors, rotations: dict, *, disagree_deg: float = 10.0) -
         averaged plate attitude turned into its own frame; other sensors
         unchanged.  With fewer than two plate sensors present, an unchanged
         copy.
+
+    Raises
+    ------
+    InvalidInputError
+        `quats` not unit quaternions of shape (S, N, 4) (see
+        :func:`check_quats`), a rotation that is not one, `disagree_deg` not
+        a finite number > 0.
     """
-    quats = np.asarray(quats, dtype=float)
     sensors = tuple(sensors)
-    if quats.ndim != 3 or quats.shape[0] != len(sensors) or quats.shape[2] != 4:
-        raise InvalidInputError(f"quats must have shape ({len(sensors)}, N, 4), "
-                                f"got {quats.shape}")
+    quats = check_quats(quats, sensors)
+    if not (isinstance(disagree_deg, (int, float, np.integer, np.floating))
+            and not isinstance(disagree_deg, bool) and np.isfinite(disagree_deg)
+            and disagree_deg > 0):
+        raise InvalidInputError(f"disagree_deg must be a finite number > 0, got {disagree_deg!r}")
+    if not isinstance(rotations, dict):
+        raise InvalidInputError(f"rotations must be a dict (from plate_rotations), got "
+                                f"{type(rotations).__name__}")
     out = quats.copy()
     present = [s for s in rotations if s in sensors]
     if len(present) < 2:

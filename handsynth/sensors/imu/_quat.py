@@ -7,10 +7,15 @@ world frame is z up, x magnetic north (eq. 2.8's g = [0, 0, g]).
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
+
+from ...errors import InvalidInputError
 
 __all__ = [
     "angle_deg",
+    "check_quats",
     "euler_zyx_to_quat",
     "heading_inclination_deg",
     "mat_to_quat",
@@ -32,6 +37,62 @@ def qmul(a, b):
     return np.stack([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
                      w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2],
                     axis=-1)
+
+
+def check_quats(quats, sensors, *, name: str = "quats") -> np.ndarray:
+    """Sensor attitudes of `sensors` as unit quaternions, float64, shape (S, N, 4).
+
+    Norms within 0.1 % of 1 (rounding, a float32 copy) are normalised
+    silently, within 1 % with a warning; NaN samples (a gap) pass through.
+    The result may be `quats` itself (unit float64 quaternions): copy it
+    before changing it.
+
+    Parameters
+    ----------
+    quats : array_like, shape (S, N, 4)
+    sensors : sequence of str, length S
+        The sensor of each row, each named once.
+    name : str, keyword-only
+        The argument's name, for messages.
+
+    Raises
+    ------
+    InvalidInputError
+        Another shape (an (N, S, 4) array named as such), repeated sensor
+        names, infinite values, or a quaternion whose norm departs from 1 by
+        more than 1 %.
+    """
+    sensors = tuple(sensors)
+    twice = sorted({x for x in sensors if sensors.count(x) > 1})
+    if twice:
+        raise InvalidInputError(f"sensor name(s) {', '.join(map(repr, twice))} given more "
+                                "than once")
+    try:
+        q = np.asarray(quats, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"{name} must be an array of quaternions, got "
+                                f"{type(quats).__name__}") from None
+    s = len(sensors)
+    if q.ndim != 3 or q.shape[0] != s or q.shape[2] != 4:
+        hint = (" ((N, S, 4) given? use quats.transpose(1, 0, 2))"
+                if q.ndim == 3 and q.shape[1] == s and q.shape[2] == 4 else "")
+        raise InvalidInputError(f"{name} must have shape (S, N, 4) with S = len(sensors) = {s}, "
+                                f"got {q.shape}{hint}")
+    norm = np.sqrt(np.einsum("sni,sni->sn", q, q))
+    dev = np.abs(norm - 1.0)
+    off = dev > 1e-3                                                     # NaN compares False
+    if off.any():
+        k, i = np.unravel_index(int(np.argmax(np.where(off, dev, 0.0))), dev.shape)
+        if not dev[k, i] <= 0.01:
+            raise InvalidInputError(
+                f"{name} must be unit quaternions: sensor {sensors[k]!r} sample {i} has norm "
+                f"{norm[k, i]:.6g} ({int(np.count_nonzero(dev > 0.01))} quaternion(s) more "
+                "than 1 % from 1)")
+        warnings.warn(f"{name}: {int(off.sum())} quaternion(s) of norm 0.1-1 % from 1 "
+                      "normalised", UserWarning, stacklevel=3)
+    if np.any(dev > 1e-12):                     # unit quaternions are returned as given
+        q = np.where((dev > 1e-12)[..., None], q / norm[..., None], q)
+    return q
 
 
 def qconj(q):

@@ -100,6 +100,52 @@ class ImuRecording:
     truth: ImuTruth | None = None
     segments: tuple = ()
 
+    def __post_init__(self) -> None:
+        """Check what is cheap to check and store the arrays as float64, C order.
+
+        Raises
+        ------
+        RecordingError
+            A rate that is not a finite number > 0 (up to 100 kHz); sensor
+            names that are not strings or that repeat; `acc`, `gyr` or `mag`
+            that are not numbers of shape (S, N, 3) with S = len(sensors),
+            or whose N differ.  The content (NaN, units, saturation, the
+            static start) is checked by :func:`check_recording`, which every
+            estimator's ``run`` applies.
+        """
+        object.__setattr__(self, "rate_hz", check_rate(self.rate_hz))
+        sensors = self.sensors
+        if isinstance(sensors, str) or not all(isinstance(x, str) for x in sensors):
+            raise RecordingError(f"sensors must be a sequence of sensor names (str), got "
+                                 f"{sensors!r}")
+        sensors = tuple(sensors)
+        object.__setattr__(self, "sensors", sensors)
+        twice = sorted({x for x in sensors if sensors.count(x) > 1})
+        if twice:
+            raise RecordingError(f"sensor name(s) {', '.join(map(repr, twice))} given more "
+                                 "than once; every sensor needs its own name")
+        s = len(sensors)
+        for name in ("acc", "gyr", "mag"):
+            value = getattr(self, name)
+            try:
+                a = np.ascontiguousarray(value, dtype=np.float64)
+            except (TypeError, ValueError):
+                raise RecordingError(f"{name} must be an array of numbers of shape (S, N, 3) "
+                                     f"with S = len(sensors) = {s}, got "
+                                     f"{type(value).__name__}") from None
+            if a.ndim != 3 or a.shape[0] != s or a.shape[2] != 3:
+                hint = ""
+                if a.ndim == 2 and a.shape[-1] == 3:
+                    hint = " (one sensor's (N, 3) samples? give them as a[None])"
+                elif a.ndim == 3 and a.shape[0] == s and a.shape[1] == 3:
+                    hint = " (axes last: (S, 3, N) given? use a.transpose(0, 2, 1))"
+                raise RecordingError(f"{name} has shape {a.shape}, expected (S, N, 3) with "
+                                     f"S = len(sensors) = {s}{hint}")
+            object.__setattr__(self, name, a)
+        if not self.acc.shape[1] == self.gyr.shape[1] == self.mag.shape[1]:
+            raise RecordingError(f"acc, gyr and mag must have as many samples, got shapes "
+                                 f"{self.acc.shape}, {self.gyr.shape} and {self.mag.shape}")
+
     def labelled(self) -> tuple:
         """The labelled stretches: `segments`, else the truth's, else ()."""
         if self.segments:
@@ -152,7 +198,9 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
     Raises
     ------
     RecordingError
-        Non-finite samples; shapes that disagree; a channel pinned at full
+        `acc_full_scale` or `gyr_full_scale` not a finite number > 0, a
+        `static_s` or rate that is not one; non-finite samples; shapes that
+        disagree; fewer than 2 samples; a channel pinned at full
         scale, or at its own extreme value beyond 1.5 g or 2 rad/s (the flat
         top of a sensor with a smaller range), for 5 or more consecutive
         samples (saturation); values beyond the full scale by far (wrong
@@ -169,13 +217,24 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
         Warnings: a magnetometer whose field strength departs more than 15 %
         from the recording's median (a magnetic disturbance), with the time.
     """
+    if not isinstance(rec, ImuRecording):
+        raise RecordingError(f"{source}: rec must be an ImuRecording, got {type(rec).__name__}")
     rate = check_rate(rec.rate_hz, source=source)
     static_s = check_static(static_s, source=source)
+    for arg, value in (("acc_full_scale", acc_full_scale), ("gyr_full_scale", gyr_full_scale)):
+        if not (isinstance(value, (int, float, np.integer, np.floating))
+                and not isinstance(value, bool) and math.isfinite(value) and value > 0):
+            raise RecordingError(f"{arg} must be a finite number > 0 (the sensors' full scale), "
+                                 f"got {value!r}")
+    if len(set(rec.sensors)) != len(rec.sensors):
+        raise RecordingError(f"{source}: sensor names repeat: {rec.sensors!r}")
     s = len(rec.sensors)
     for name in ("acc", "gyr", "mag"):
         a = getattr(rec, name)
         if a.ndim != 3 or a.shape[0] != s or a.shape[2] != 3 or a.shape[1] != rec.acc.shape[1]:
             raise RecordingError(f"{source}: {name} has shape {a.shape}, expected ({s}, N, 3)")
+        if math.isfinite(float(np.sum(a))):  # the quick test; a finite sum needs finite values
+            continue
         bad = ~np.isfinite(a)
         if bad.any():
             k, i, j = np.argwhere(bad)[0]
@@ -190,7 +249,8 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
             ("gyr", gyr_full_scale, "rad/s", 2.0,
              "deg/s given as rad/s? (gyro units 'deg/s': --gyr-units deg/s)")):
         a = getattr(rec, name)
-        peak = np.abs(a).max(axis=1)  # (S, 3)
+        absa = np.abs(a)
+        peak = _per_axis(np.max, absa)  # (S, 3)
         k, j = np.unravel_index(int(np.argmax(peak)), peak.shape)
         if peak[k, j] > 1.5 * fs:
             i = int(np.argmax(np.abs(a[k, :, j])))
@@ -199,10 +259,13 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
                 f"{a[k, i, j]:.4g} {unit} at sample {i}, {peak[k, j] / fs:.3g} times the full "
                 f"scale {fs:.4g} {unit}: no sensor of that range reads that; {hint}, or a "
                 f"wider full scale (--acc-range, --gyr-range)")
-        pinned = np.abs(a) >= 0.999 * fs
-        # a flat top: the channel's own extreme value held (a sensor of a smaller range)
-        top = np.abs(a) >= np.maximum(peak[:, None, :], floor) * (1 - 1e-9)
-        run = max(_longest_run(pinned), _longest_run(top & _held(a)))
+        pinned = absa >= 0.999 * fs
+        # a flat top: the channel's own extreme value held (a sensor of a smaller range);
+        # only a channel at its top in 5 or more samples can hold it for 5
+        top = absa >= np.maximum(peak[:, None, :], floor) * (1 - 1e-9)
+        run = _longest_run(pinned)
+        if (_per_axis(np.count_nonzero, top) >= 5).any():
+            run = max(run, _longest_run(top & _held(a)))
         if run[0] >= 5:
             k, j, i = run[1:]
             raise RecordingError(
@@ -233,7 +296,7 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
                 f"start while its accelerometer is still; deg/s given as rad/s? (use gyro units "
                 f"'deg/s', --gyr-units deg/s)")
     warnings: list[str] = []
-    field_norm = np.linalg.norm(rec.mag, axis=-1)
+    field_norm = np.sqrt(np.einsum("snk,snk->sn", rec.mag, rec.mag))
     per_sensor = np.median(field_norm, axis=1)
     if np.all(per_sensor <= 0):
         raise RecordingError(f"{source}: the magnetometers read zero field")
@@ -257,7 +320,19 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
                 f"sensor {rec.sensors[k]!r}: magnetic field strength departs >15 % from "
                 f"{med:.1f} uT during {i.size / rate:.2f} s from t={i[0] / rate:.2f} s "
                 "(magnetic disturbance)")
+    # what was reported for this object, so that an estimator's run does not repeat it
+    object.__setattr__(rec, "_reported", _reported(rec) | set(warnings))
     return warnings
+
+
+def _reported(rec: ImuRecording) -> set:
+    """The warnings :func:`check_recording` has returned for `rec` so far."""
+    return set(getattr(rec, "_reported", ()))
+
+
+def _per_axis(reduce, a: np.ndarray) -> np.ndarray:
+    """`reduce` over the samples of (S, N, 3) `a`, one axis at a time (faster than axis=1)."""
+    return np.stack([reduce(a[:, :, j], axis=1) for j in range(3)], axis=-1)
 
 
 def _held(a: np.ndarray) -> np.ndarray:
@@ -271,6 +346,8 @@ def _held(a: np.ndarray) -> np.ndarray:
 
 def _longest_run(mask: np.ndarray):
     best = (0, 0, 0, 0)
+    if not mask.any():
+        return best
     s, _, _ = mask.shape
     for k in range(s):
         for j in range(3):
@@ -287,6 +364,9 @@ def _longest_run(mask: np.ndarray):
 
 
 _AXES = "xyz"
+#: Characters a sensor name may not hold in a CSV file (field separators the reader
+#: recognises, quotes, line breaks).
+_NOT_IN_NAMES = ",;\t\"'\n\r"
 
 
 #: Median field strength a recording's magnetometers may read, uT: the Earth's field is
@@ -333,7 +413,24 @@ def write_imu_csv(rec: ImuRecording, path) -> None:
 
     The file is written to a temporary name and renamed, so a crash never
     leaves a half-written file under `path`.
+
+    Raises
+    ------
+    RecordingError
+        `rec` is not an :class:`ImuRecording`, or a sensor name that
+        :func:`read_imu_csv` could not read back (empty, with a field
+        separator, quote, line break or surrounding space).  Names that
+        repeat and rates that are not finite numbers > 0 are refused when
+        the recording is made.
     """
+    if not isinstance(rec, ImuRecording):
+        raise RecordingError(f"rec must be an ImuRecording, got {type(rec).__name__}")
+    for s in rec.sensors:
+        if not s or s != s.strip() or any(c in s for c in _NOT_IN_NAMES):
+            raise RecordingError(
+                f"sensor name {s!r} cannot be written as a CSV column: a name must be "
+                "non-empty, without surrounding space and without ',', ';', tab, quotes or "
+                "line breaks")
     path = Path(path)
     cols = ["time_s"] + [f"{s}_{c}_{a}" for s in rec.sensors for c in ("acc", "gyr", "mag")
                          for a in _AXES]

@@ -34,6 +34,13 @@ class SkinMotion:
     slide_mm: float = 2.0
     tilt_deg: float = 4.0
 
+    def __post_init__(self) -> None:
+        for k in ("slide_mm", "tilt_deg"):
+            v = getattr(self, k)
+            if not (isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
+                    and np.isfinite(v) and v >= 0):
+                raise InvalidInputError(f"SkinMotion.{k} must be a finite number >= 0, got {v!r}")
+
 
 def _quat_mul(a, b):
     w1, x1, y1, z1 = np.moveaxis(a, -1, 0)
@@ -79,7 +86,16 @@ def simulate_imu(motion: Motion, *, shape: HandShape | None = None, side: str = 
     """
     if not isinstance(motion, Motion):
         raise InvalidInputError(f"motion must be a Motion, got {type(motion).__name__}")
+    if skin is not None and not isinstance(skin, SkinMotion):
+        raise InvalidInputError(f"skin must be a SkinMotion or None, got {type(skin).__name__}")
+    if noise is not None and not isinstance(noise, ImuNoise):
+        raise InvalidInputError(f"noise must be an ImuNoise or None, got {type(noise).__name__}")
     hand = hand or ImuHand(shape, side=side, placement=placement)
+    for dist in noise.disturbances if noise is not None else ():
+        lacking = [x for x in dist.sensors if x not in hand.sensors]
+        if lacking:
+            raise InvalidInputError(f"MagDisturbance.sensors names {', '.join(map(repr, lacking))}, "
+                                    "not on this hand (tip sensors need ImuHand(tip_sensors=True))")
     m, d = hand.model, hand.data
     import mujoco
 

@@ -16,6 +16,9 @@ from handsynth.sensors.imu import (
 )
 from handsynth.sensors.imu._quat import angle_deg, heading_inclination_deg, qexp, qrotinv
 
+# several tests put a field on a sensor on purpose; the estimators' run warns about it
+pytestmark = pytest.mark.filterwarnings("ignore:.*magnetic disturbance:UserWarning")
+
 
 def test_the_compiled_loop_matches_the_plain_reference(free_rec):
     sub = free_rec.subset(("hand_radial", "index_distal"))
