@@ -208,7 +208,7 @@ def test_killed_run_leaves_complete_lines(tmp_path, db):
     (["--synthetic", "--synthetic-shape", "L1.0_bogus"], "L1.0_bogus"),
     (["--synthetic", "--synthetic-size", "180"], "--synthetic-size"),
     (["--synthetic", "--video-out", "{tmp}/side.gif"], "side.gif"),
-    (["--synthetic", "--shape", "L0.950_W0.900_P0.950_T0.900"], "no database for shape"),
+    (["--synthetic", "--shape", "L0.950_W0.900_P0.950_T0.900"], "no database for the right hand of shape"),
     (["--synthetic", "--measurements", "{tmp}/hand.json"], "hand.json"),
     (["--synthetic", "--shape", "standard", "--measurements", "{tmp}/m.json"], "not both"),
 ])
