@@ -49,14 +49,34 @@ def _rebuild(cls: type, fields: dict[str, Any]) -> Any:
     return cls(**fields)
 
 
-def _equal_fields(a: Any, b: Any) -> bool:
-    """Field-wise equality of two dataclasses of one class; arrays by value."""
-    for f in dataclasses.fields(a):
-        x, y = getattr(a, f.name), getattr(b, f.name)
-        same = np.array_equal(x, y) if isinstance(x, np.ndarray) else bool(x == y)
-        if not same:
-            return False
-    return True
+def _field_values(record: Any) -> dict[str, Any]:
+    """Field name to value of the dataclass instance `record`."""
+    return {f.name: getattr(record, f.name) for f in dataclasses.fields(record)}
+
+
+class _ByValue:
+    """Equality by field values (arrays compared by value), and pickling and copying
+    by building anew from the fields, so that a copy is checked as the original was.
+
+    Subclasses are dataclasses declared with ``eq=False`` (the decorator would
+    otherwise replace this ``__eq__``).
+    """
+
+    def __eq__(self, other: object) -> bool:
+        if other.__class__ is not self.__class__:
+            return NotImplemented
+        theirs = _field_values(other)
+        for name, x in _field_values(self).items():
+            y = theirs[name]
+            if not (np.array_equal(x, y) if isinstance(x, np.ndarray) else bool(x == y)):
+                return False
+        return True
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        # a read-only mapping view does not pickle: hand over a plain copy
+        fields = {k: dict(v) if isinstance(v, MappingProxyType) else v
+                  for k, v in _field_values(self).items()}
+        return (_rebuild, (type(self), fields))
 
 
 def _check_shape(name: str, a: np.ndarray, shape: tuple[int | None, ...]) -> None:
@@ -68,8 +88,8 @@ def _check_shape(name: str, a: np.ndarray, shape: tuple[int | None, ...]) -> Non
         raise RecordingError(f"{name}: expected shape {want}, got {a.shape}")
 
 
-@dataclass(frozen=True)
-class GroundTruth:
+@dataclass(frozen=True, eq=False)
+class GroundTruth(_ByValue):
     """Known joint centre of a simulated recording.
 
     Attributes
@@ -101,16 +121,6 @@ class GroundTruth:
         _check_shape("centre_sensor", self.centre_sensor, (n, 2, 3))
         _check_shape("reference_centre", self.reference_centre, (2, 3))
 
-    def __eq__(self, other: object) -> bool:
-        """Same class and equal fields (arrays compared by value)."""
-        if other.__class__ is not self.__class__:
-            return NotImplemented
-        return _equal_fields(self, other)
-
-    def __reduce__(self) -> tuple[Any, ...]:
-        fields = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
-        return (_rebuild, (type(self), fields))
-
     def take(self, index: np.ndarray) -> GroundTruth:
         """Ground truth restricted to the frames `index`."""
         return dataclasses.replace(
@@ -120,8 +130,8 @@ class GroundTruth:
         )
 
 
-@dataclass(frozen=True)
-class Recording:
+@dataclass(frozen=True, eq=False)
+class Recording(_ByValue):
     """Poses of two 6-DOF sensors across one joint.
 
     Parameters
@@ -199,18 +209,6 @@ class Recording:
             raise RecordingError(
                 f"truth has {self.truth.centre_world.shape[0]} frames, recording {n}"
             )
-
-    def __eq__(self, other: object) -> bool:
-        """Same class and equal fields (arrays compared by value)."""
-        if other.__class__ is not self.__class__:
-            return NotImplemented
-        return _equal_fields(self, other)
-
-    def __reduce__(self) -> tuple[Any, ...]:
-        # the read-only metadata view does not pickle: hand over a plain copy
-        fields = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
-        fields["metadata"] = dict(self.metadata)
-        return (_rebuild, (type(self), fields))
 
     # -- convenience -----------------------------------------------------
     @property
