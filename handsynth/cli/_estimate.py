@@ -59,7 +59,7 @@ def _open_lookup(db_dir, shape_name, measurements, temporal, err, personal=False
                  side="right"):
     import time
 
-    from ..estimate import PoseLookup
+    from ..estimate import PoseLookup, SelectionOptions
     from ..live import default_database_dir
     from ..models import HandMeasurements, HandShape
 
@@ -88,7 +88,11 @@ def _open_lookup(db_dir, shape_name, measurements, temporal, err, personal=False
         click.echo(f"default database {path} ready in {time.perf_counter() - t:.1f} s", err=err)
     else:
         _check_db_folder(db_dir)  # names the option; the library names the file
-    return PoseLookup.open(db_dir, shape=shape, measurements=meas, temporal=temporal, side=side)
+    # a measurement file is in millimetres: chosen as `measure` and --personal choose, on
+    # the ratios as measured (the paper's palm-width scaling is for photos without a scale)
+    selection = SelectionOptions(normalize="none") if meas is not None else None
+    return PoseLookup.open(db_dir, shape=shape, measurements=meas, temporal=temporal, side=side,
+                           selection=selection)
 
 
 def _calibration_frame(source, image, mount, side, err, *, synthetic: str, prompt: str):

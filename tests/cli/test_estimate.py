@@ -546,6 +546,25 @@ def test_a_left_hands_lookup_opens_its_own_database(tmp_path):
     assert "_left" in res.output
 
 
+def test_a_measurement_file_chooses_the_database_measure_printed(tmp_path):
+    """Measured millimetres, no palm-width scaling: as `measure` and --personal choose.
+    Before, the lookup scaled by palm width and chose another shape (W1.000, T1.000)."""
+    import json
+
+    from handsynth.estimate import SelectionOptions, select_shape
+    from handsynth.models import model_measurements
+
+    meas = model_measurements(HandShape(length=0.97, width=1.06, palm=1.03, thumb=1.07))
+    (tmp_path / "m.json").write_text(json.dumps(meas.as_dict()))
+    want = select_shape(meas, options=SelectionOptions(normalize="none")).name
+    (tmp_path / "dbs").mkdir()
+    res = CliRunner().invoke(cli, ["estimate", "--synthetic", "--db", str(tmp_path / "dbs"),
+                                   "--measurements", str(tmp_path / "m.json"), "--frames", "1",
+                                   *SMALL])
+    assert res.exit_code == 2 and f"no database for the right hand of shape {want}" in res.output, \
+        res.output
+
+
 def test_the_progress_line_says_when_the_device_has_moved():
     import io
 
