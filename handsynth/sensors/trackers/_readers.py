@@ -628,6 +628,17 @@ def _check_radians(ang: list[np.ndarray], path: Path) -> None:
             f"them to degrees", stacklevel=3)
 
 
+def _wide_order(sensors, path: Path) -> tuple[int, int]:
+    """Which of a one-line-per-sample file's sensors (columns suffixed 1 and 2) is upper, lower."""
+    if sensors is None:
+        return (0, 1)
+    pair = (int(sensors[0]), int(sensors[1]))
+    if sorted(pair) != [1, 2]:
+        raise InvalidInputError(f"{path.name}: holds sensors 1 and 2 (columns suffixed 1 and 2), "
+                                f"not {pair[0]} and {pair[1]}: give sensors (1, 2) or (2, 1)")
+    return (pair[0] - 1, pair[1] - 1)
+
+
 def read_polhemus(
     path: str | os.PathLike,
     *,
@@ -676,6 +687,8 @@ def read_polhemus(
     sensors : (int, int), optional
         Station numbers of the upper and lower sensor; default: the two
         stations in the file (lowest first), or 1 and 2 when there are more.
+        A file with both sensors on one line (PiMgr) takes (1, 2) or (2, 1):
+        its columns suffixed 1 and 2.
     rate_hz : float
         Sampling rate used for times when the file has none (frame counter
         times ``1 / rate_hz`` when there is a counter); a time column is
@@ -789,8 +802,9 @@ def read_polhemus(
         notes["half_frames"] = half
         notes["duplicates"] = dups
     else:
-        pos_file = np.stack([rows[:, p] for p in lay.pos], axis=1)
-        ang = [rows[:, a] for a in lay.ang]
+        order = _wide_order(sensors, path)
+        pos_file = np.stack([rows[:, lay.pos[k]] for k in order], axis=1)
+        ang = [rows[:, lay.ang[k]] for k in order]
         line_no = t.lines
         ang_lines = [t.lines, t.lines]
         if lay.angles == "euler":  # before any frame is dropped: the line numbers are the file's
@@ -815,7 +829,7 @@ def read_polhemus(
         notes["half_frames"] = 0
         if lay.time is not None and times.size and np.nanmin(times) > 1e8:
             notes["time_origin_unix_s"] = float(np.nanmin(times))
-        pair = (1, 2) if sensors is None else (int(sensors[0]), int(sensors[1]))
+        pair = (order[0] + 1, order[1] + 1)
     if lay.time is not None and times.size:
         pos_file, ang, times, line_no = _check_times(pos_file, ang, times, line_no, notes, path)
 

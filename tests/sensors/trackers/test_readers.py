@@ -387,3 +387,17 @@ def test_numbers_with_underscores_are_refused(tmp_path, finger_rec, liberty_line
         read_polhemus(path)
     assert str(err.value) == (f"{path}, line 11: {cell!r} is not a number as recordings write "
                               "them (an underscore)")
+
+
+def test_pimgr_sensors_option_chooses_the_upper_sensor(tmp_path, finger_rec, pimgr_lines):
+    """Before, sensors=(2, 1) was ignored on a file with both sensors on one line."""
+    from handsynth.errors import InvalidInputError
+
+    path = _write(tmp_path / "pimgr.csv", pimgr_lines(finger_rec, scale=100.0))
+    plain = read_polhemus(path)
+    swapped = read_polhemus(path, sensors=(2, 1))
+    np.testing.assert_array_equal(swapped.positions, plain.positions[:, ::-1])
+    np.testing.assert_array_equal(swapped.rotations, plain.rotations[:, ::-1])
+    assert swapped.metadata["sensors"] == [2, 1] and plain.metadata["sensors"] == [1, 2]
+    with pytest.raises(InvalidInputError, match=r"holds sensors 1 and 2 .* not 1 and 3"):
+        read_polhemus(path, sensors=(1, 3))
