@@ -11,6 +11,7 @@ and the same features (:func:`handsynth.db.extract_features`).
 from __future__ import annotations
 
 import copy
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Protocol, runtime_checkable
@@ -143,6 +144,13 @@ class PoseEstimator(Protocol):
         """Pose of the hand in one frame (BGR uint8 image or bool mask)."""
         ...
 
+
+
+def _warn_rebuilt(summary) -> None:
+    """Say which existing database a build replaced, and why (a database built with other
+    options, e.g. ``build-db --default``'s 3,000 entries, is replaced by one of these)."""
+    for reason in summary.rebuilt.values():
+        warnings.warn(f"built again, replacing an existing file: {reason}", stacklevel=3)
 
 class PoseLookup:
     """Hand pose from one camera frame by database lookup (SPEC.md section 1).
@@ -416,6 +424,7 @@ class PoseLookup:
         shape = HandShape.from_name(shape.name)
         summary = build_databases(folder, [shape], mount or CameraMount.paper(), options=build,
                                   workers=workers, progress=progress)
+        _warn_rebuilt(summary)
         database = open_database(summary.paths[0])
         check_database_hand(database.meta, shape, build.side, summary.paths[0])
         return cls(database, **kwargs)
@@ -478,6 +487,7 @@ class PoseLookup:
         chosen = HandShape.from_name(chosen.name)  # the ratios its file name gives
         summary = build_databases(folder, [chosen], mount, options=build, workers=workers,
                                   progress=progress)
+        _warn_rebuilt(summary)
         database = open_database(summary.paths[0])
         check_database_hand(database.meta, chosen, build.side, summary.paths[0])
         lookup = cls(database, **kwargs)

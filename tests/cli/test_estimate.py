@@ -236,6 +236,13 @@ def test_personal_database_for_a_shape(tmp_path):
     assert f"personal database {tmp_path / (shape + '.h5')} ready" in res.output
     db = open_database(tmp_path / f"{shape}.h5")
     assert len(db) == 40 and HandShape(**db.meta["shape"]).name == shape
+    # another count replaces the file, and says so (before: silently)
+    res = _run("--synthetic", "--frames", "3", "--db", str(tmp_path), "--shape", shape,
+               "--personal", "--personal-count", "30", *SMALL)
+    assert res.exit_code == 0, res.output
+    assert "warning: built again, replacing an existing file" in res.output
+    assert "'pose_set.count' is 40 in the file but 30 is expected" in res.output
+    assert len(open_database(tmp_path / f"{shape}.h5")) == 30
 
 
 @pytest.mark.parametrize("args, words", [
