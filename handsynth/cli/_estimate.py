@@ -303,7 +303,7 @@ def _progress(stream):
               help="Stop after S seconds of wall-clock time (also when reading a --video; "
                    "--frames stops after a number of frames).")
 @click.option("--out", default=None, metavar="FILE",
-              help="Write one row per frame (.csv or .jsonl; '-' for standard output).")
+              help="Write one row per frame (.csv or .jsonl; '-' for standard output, with --format).")
 @click.option("--format", "fmt", type=click.Choice(["csv", "jsonl"]), default=None,
               help="Row format [default: from the --out suffix].")
 @click.option("--keypoints", is_flag=True, help="Add the 21 keypoints (metres) to the rows.")

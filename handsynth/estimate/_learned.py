@@ -1215,7 +1215,7 @@ def learned_estimator(folder, options: LearnedOptions | None = None, *,
         except DatabaseCorruptError:
             pass
         else:
-            say(f"{opts.kind}: shipped with handsynth")
+            say(f"{opts.kind} ({path.name}): shipped with handsynth")
             return est
     say(f"learning set: {data.hands} hands x {data.poses_per_hand} frames")
     ls = learning_set(folder, data, mount=mount, side=side)

@@ -102,8 +102,8 @@ def test_a_shipped_perceptron_is_read_instead_of_learnt(tmp_path, monkeypatch):
     for opts, data in PERCEPTRONS:  # the relaxed-rest set's too (--learned-rest relaxed)
         said = []
         est = learned_estimator(tmp_path, opts, data=data, progress=said.append)
-        assert said == ["mlp: shipped with handsynth"]
         name = learned_file_name(opts, data, CameraMount.paper(), "right")
+        assert said == [f"mlp ({name}): shipped with handsynth"]  # which of them, by its file
         assert _same_arrays(est, LearnedEstimator.load(SHIPPED_FOLDER / name))
     opts, data = PERCEPTRONS[0]
     with pytest.raises(AssertionError, match="rendered a learning set"):
