@@ -39,6 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._checks import check_side
 from .._io import make_folder, os_error_reason
 from ..errors import (
     DatabaseError,
@@ -108,8 +109,7 @@ class BuildOptions:
     render_size: tuple[int, int] = DEFAULT_RENDER_SIZE
 
     def __post_init__(self) -> None:
-        if self.side not in ("right", "left"):
-            raise InvalidInputError(f"side must be 'right' or 'left', got {self.side!r}")
+        check_side(self.side)
         from ..models import POSE_SETS
 
         if self.pose_set not in POSE_SETS:
@@ -234,9 +234,6 @@ class BuildSummary:
 DEFAULT_DATABASE: dict = {"shape": HandShape(), "pose_set": "paper", "count": 3000, "seed": 0}
 
 
-_SIDES = ("right", "left")
-
-
 def _as_shape(shape, name: str = "shape") -> HandShape:
     """`shape` as a HandShape: a HandShape or its :attr:`HandShape.name`."""
     if isinstance(shape, str):
@@ -246,12 +243,6 @@ def _as_shape(shape, name: str = "shape") -> HandShape:
             f"{name} must be a HandShape or a shape name such as {HandShape().name!r}, "
             f"got {type(shape).__name__}")
     return shape
-
-
-def _as_side(side) -> str:
-    if side not in _SIDES:
-        raise InvalidInputError(f"side must be 'right' or 'left', got {side!r}")
-    return side
 
 
 def _check_named_resolution(shape: HandShape, name: str) -> None:
@@ -289,7 +280,7 @@ def database_path(out_dir, shape: HandShape | str, side: str = "right") -> Path:
         ``"right"`` or ``"left"``.
     """
     shape = _as_shape(shape)
-    suffix = LEFT_SUFFIX if _as_side(side) == "left" else ""
+    suffix = LEFT_SUFFIX if check_side(side) == "left" else ""
     return Path(out_dir) / f"{shape.name}{suffix}.h5"
 
 

@@ -44,6 +44,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from .._checks import check_side
 from ..db import pack_mask, unpack_mask
 from ..errors import EstimationError, InvalidInputError
 from ..models import HandShape
@@ -244,8 +245,7 @@ def select_shape_from_frame(open_frame, *, mount: CameraMount | None = None,
     mount = mount or CameraMount()
     if not isinstance(mount, CameraMount):
         raise InvalidInputError(f"mount must be a CameraMount, got {mount!r}")
-    if side not in ("right", "left"):
-        raise InvalidInputError(f"side must be 'right' or 'left', got {side!r}")
+    check_side(side)
     try:
         cands = HandShape.grid() if shapes is None else list(shapes)
     except TypeError:

@@ -65,6 +65,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._checks import check_side
 from .._io import atomic_open, os_error_reason
 from ..db import LearningSet, LearningSetOptions, learning_set
 from ..errors import (
@@ -1196,8 +1197,7 @@ def learned_estimator(folder, options: LearnedOptions | None = None, *,
     opts = options or LearnedOptions()
     data = data or LearningSetOptions()
     mount = mount or CameraMount.paper()
-    if side not in ("right", "left"):
-        raise InvalidInputError(f"side must be 'right' or 'left', got {side!r}")
+    check_side(side)
     if side == "left":
         return learned_estimator(folder, opts, data=data, mount=mount.mirrored(), side="right",
                                  progress=progress, shipped=shipped).mirrored()

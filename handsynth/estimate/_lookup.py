@@ -18,6 +18,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from .._checks import check_side
 from ..db import (
     BuildOptions,
     Database,
@@ -528,8 +529,7 @@ class PoseLookup:
             raise InvalidInputError(f"mount must be a CameraMount, got {type(mount).__name__}")
         if shape is not None and not isinstance(shape, HandShape):
             raise InvalidInputError(f"shape must be a HandShape, got {type(shape).__name__}")
-        if side not in ("right", "left"):
-            raise InvalidInputError(f"side must be 'right' or 'left', got {side!r}")
+        check_side(side)
         arrays = check_rows(rows)
         meta = {"mount": mount.as_dict(), "side": side,
                 "shape": (shape or HandShape()).as_dict(), "features": {"image_size": 64}}

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._checks import check_side
 from ..errors import InvalidInputError
 from ..models import PAPER_SIZE, HandShape
 from ..render import CameraMount
@@ -217,8 +218,7 @@ class EvalOptions:
         if self.mount not in _MOUNTS:
             raise InvalidInputError(
                 f"EvalOptions.mount must be one of {tuple(_MOUNTS)}, got {self.mount!r}")
-        if self.side not in ("right", "left"):
-            raise InvalidInputError(f"EvalOptions.side must be 'right' or 'left', got {self.side!r}")
+        check_side(self.side, name="EvalOptions.side")
         if self.ties not in ("mean", "first"):
             raise InvalidInputError(f"EvalOptions.ties must be 'mean' or 'first', got {self.ties!r}")
         try:

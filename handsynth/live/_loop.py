@@ -12,6 +12,7 @@ from typing import TypeGuard
 import numpy as np
 from threadpoolctl import threadpool_limits
 
+from .._checks import check_side
 from ..errors import EstimationError, InvalidInputError
 from ..models import JOINT_NAMES
 from ..render import CameraMount
@@ -267,8 +268,7 @@ def first_hand_frame(source: FrameSource, *, mount: CameraMount | None = None,
     mount = mount or CameraMount()
     if not isinstance(mount, CameraMount):
         raise InvalidInputError(f"mount must be a CameraMount, got {mount!r}")
-    if side not in ("right", "left"):
-        raise InvalidInputError(f"side must be 'right' or 'left', got {side!r}")
+    check_side(side)
     if not callable(getattr(source, "read", None)):
         raise InvalidInputError(f"source must have a read() method, got {type(source).__name__}")
     max_reads = _check_int(max_reads, "max_reads", minimum=1)

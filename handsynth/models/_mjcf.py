@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._checks import check_side
 from ._anthropometry import (
     DEPTH_TO_BREADTH,
     FINGER_BREADTH_MM,
@@ -112,8 +113,7 @@ def hand_spec(shape: HandShape, *, side: str = "right") -> HandSpec:
 
     if not isinstance(shape, HandShape):
         raise InvalidShapeError(f"shape must be a HandShape, got {type(shape).__name__}")
-    if side not in ("right", "left"):
-        raise InvalidShapeError(f"side must be 'right' or 'left', got {side!r}")
+    check_side(side, error=InvalidShapeError)
     lay = standard_layout_mm()
     hl = HAND_LENGTH_MM
     flex_axis = np.array([-1.0, 0.0, 0.0])  # +angle turns +y toward -z (palm)

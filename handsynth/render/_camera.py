@@ -7,6 +7,7 @@ from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
+from .._checks import check_side
 from ..errors import InvalidCameraError
 from ..models import DORSUM_Z_MM
 
@@ -158,8 +159,7 @@ class CameraMount:
             the columns of ``R`` the camera's x (image right), y (image down)
             and z (optical axis) axes in the hand frame.
         """
-        if side not in ("right", "left"):
-            raise InvalidCameraError(f"side must be 'right' or 'left', got {side!r}")
+        check_side(side, error=InvalidCameraError)
         thumb_sign = -1.0 if side == "right" else 1.0
         t = np.array([thumb_sign * self.thumb_offset_mm, self.along_mm,
                       DORSUM_Z_MM + self.height_mm]) * 1e-3

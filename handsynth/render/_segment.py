@@ -54,6 +54,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._checks import check_side
 from ..errors import InvalidInputError
 from ._camera import CameraMount
 from ._preprocess import check_frame
@@ -185,8 +186,7 @@ def palm_region(mount: CameraMount | None = None, *, side: str = "right",
         A `side` other than right or left, or a region no model hand covers.
     """
     mount = mount or CameraMount.paper()
-    if side not in ("right", "left"):
-        raise InvalidInputError(f"side must be 'right' or 'left', got {side!r}")
+    check_side(side)
     h = height_px or round(width_px * mount.height_px / mount.width_px)
     out = _palm_region_cached(mount, side, int(width_px), int(h))[0]
     if not out.any():

@@ -89,6 +89,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._checks import check_side
 from ..errors import (
     InvalidCameraError,
     InvalidInputError,
@@ -937,8 +938,7 @@ class MeshHandRenderer(GLContextOwner, MaskMaker):
     def __init__(self, mount: CameraMount | None = None, *, side: str = "right",
                  width_px: int | None = None, height_px: int | None = None,
                  path: str | os.PathLike | None = None, scale: float = 1.0) -> None:
-        if side not in ("right", "left"):
-            raise InvalidCameraError(f"side must be 'right' or 'left', got {side!r}")
+        check_side(side, error=InvalidCameraError)
         if mount is not None and not isinstance(mount, CameraMount):
             raise InvalidCameraError(f"mount must be a CameraMount, got {type(mount).__name__}")
         ensure_backend()

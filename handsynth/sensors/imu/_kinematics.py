@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from ..._checks import check_side
 from ...errors import EstimationError, InvalidInputError
 from ...models import JOINT_NAMES
 from ._layout import CHAINS, FLEX_JOINT
@@ -247,7 +248,7 @@ def joint_angles(quats, sensors, frames: dict, *, side: str = "right",
     """
     sensors = tuple(sensors)
     quats = check_quats(quats, sensors)
-    _check_side(side)
+    check_side(side)
     if zero is not None:
         zero = np.asarray(zero, dtype=float)
         if zero.shape != (len(JOINT_NAMES),):
@@ -297,7 +298,7 @@ def zero_offsets(cal: ImuRecording, frames: dict, *, side: str = "right",
     from ._attitude import initial_attitude
     from ._vectors import _calibration_static
 
-    _check_side(side)
+    check_side(side)
     q0 = initial_attitude(cal, static or _calibration_static(cal))
     a, _ = joint_angles(q0[:, None], cal.sensors, frames, side=side)
     return np.nan_to_num(a[0])
@@ -333,11 +334,6 @@ def fingertip_positions(quats, sensors, model: ChainModel) -> dict:
         out[f] = pos
         out[f"{f}_joints"] = np.stack(joints, axis=1)
     return out
-
-
-def _check_side(side) -> None:
-    if side not in ("right", "left"):
-        raise InvalidInputError(f"side must be 'right' or 'left', got {side!r}")
 
 
 def classify_grasp(angles, grasps: dict) -> list[str]:
