@@ -19,7 +19,7 @@ import numpy as np
 
 from ...errors import EstimationError, InvalidInputError, RecordingError
 from ._quat import quat_from_acc_mag
-from ._recording import ImuRecording, _reported, check_recording
+from ._recording import ImuRecording, _reported, check_recording, check_static
 
 __all__ = ["StaticStart", "azimuth_correction", "check_run_input", "gyro_bias", "initial_attitude"]
 
@@ -44,17 +44,11 @@ class StaticStart:
     """
 
     static_s: float = 2.0
-    align_start_s: float | None = 2.0
-    align_end_s: float | None = 4.0
+    align_start_s: float | None = _ALIGN[0]
+    align_end_s: float | None = _ALIGN[1]
 
     def __post_init__(self) -> None:
-        try:
-            static_s = float(self.static_s)
-        except (TypeError, ValueError):
-            static_s = float("nan")
-        if not (np.isfinite(static_s) and static_s > 0):
-            raise InvalidInputError(f"static_s (--static) must be a finite number of seconds "
-                                    f"> 0, got {self.static_s!r}")
+        check_static(self.static_s, source="StaticStart")
         a, b = self.align_start_s, self.align_end_s
         if (a is None) != (b is None):
             # one bound None turns the alignment off; the other left at its default says

@@ -12,6 +12,7 @@ import warnings
 import numpy as np
 
 from ...errors import InvalidInputError
+from ._recording import check_unique_names
 
 __all__ = [
     "angle_deg",
@@ -63,10 +64,7 @@ def check_quats(quats, sensors, *, name: str = "quats") -> np.ndarray:
         more than 1 %.
     """
     sensors = tuple(sensors)
-    twice = sorted({x for x in sensors if sensors.count(x) > 1})
-    if twice:
-        raise InvalidInputError(f"sensor name(s) {', '.join(map(repr, twice))} given more "
-                                "than once")
+    check_unique_names(sensors, error=InvalidInputError)
     try:
         q = np.asarray(quats, dtype=np.float64)
     except (TypeError, ValueError):

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..._csv import column_index, read_rows
 from ..._io import atomic_open
-from ...errors import RecordingError
+from ...errors import InvalidInputError, RecordingError
 from ._model import GRAVITY_MPS2
 
 __all__ = [
@@ -120,10 +120,7 @@ class ImuRecording:
                                  f"{sensors!r}")
         sensors = tuple(sensors)
         object.__setattr__(self, "sensors", sensors)
-        twice = sorted({x for x in sensors if sensors.count(x) > 1})
-        if twice:
-            raise RecordingError(f"sensor name(s) {', '.join(map(repr, twice))} given more "
-                                 "than once; every sensor needs its own name")
+        check_unique_names(sensors)
         s = len(sensors)
         for name in ("acc", "gyr", "mag"):
             value = getattr(self, name)
@@ -226,13 +223,9 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
                 and not isinstance(value, bool) and math.isfinite(value) and value > 0):
             raise RecordingError(f"{arg} must be a finite number > 0 (the sensors' full scale), "
                                  f"got {value!r}")
-    if len(set(rec.sensors)) != len(rec.sensors):
-        raise RecordingError(f"{source}: sensor names repeat: {rec.sensors!r}")
     s = len(rec.sensors)
-    for name in ("acc", "gyr", "mag"):
+    for name in ("acc", "gyr", "mag"):  # shapes and names were checked when `rec` was made
         a = getattr(rec, name)
-        if a.ndim != 3 or a.shape[0] != s or a.shape[2] != 3 or a.shape[1] != rec.acc.shape[1]:
-            raise RecordingError(f"{source}: {name} has shape {a.shape}, expected ({s}, N, 3)")
         if math.isfinite(float(np.sum(a))):  # the quick test; a finite sum needs finite values
             continue
         bad = ~np.isfinite(a)
@@ -375,6 +368,21 @@ _NOT_IN_NAMES = ",;\t\"'\n\r"
 _EARTH_FIELD_UT = (10.0, 200.0)
 #: Highest sampling rate taken for an IMU's, Hz (MEMS IMUs sample at up to a few kHz).
 _MAX_RATE_HZ = 100_000.0
+
+
+def check_unique_names(sensors, *, error: type[InvalidInputError] = RecordingError) -> None:
+    """Refuse sensor names given more than once (whose data would be which?).
+
+    Raises
+    ------
+    InvalidInputError
+        (`error`) naming the names that repeat.
+    """
+    names = tuple(sensors)
+    twice = sorted({x for x in names if names.count(x) > 1})
+    if twice:
+        raise error(f"sensor name(s) {', '.join(map(repr, twice))} given more than once; every "
+                    "sensor needs its own name")
 
 
 def check_rate(rate_hz, *, source: str = "recording") -> float:
