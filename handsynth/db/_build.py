@@ -489,12 +489,8 @@ def _as_shapes(shapes) -> list[HandShape]:
     if isinstance(shapes, HandShape):
         shapes = [shapes]
     out = []
-    for i, s in enumerate(shapes):
-        if isinstance(s, str):
-            s = HandShape.from_name(s)
-        if not isinstance(s, HandShape):
-            raise InvalidInputError(
-                f"shapes must hold HandShape objects or shape names, got {type(s).__name__}")
+    for i, given in enumerate(shapes):
+        s = _as_shape(given, f"shapes[{i}]")
         _check_named_resolution(s, f"shapes[{i}]")
         out.append(s)
     if not out:
