@@ -50,7 +50,7 @@ from ..errors import (
 )
 from ..models import PAPER_SIZE, HandShape
 from ..models import pose_set as make_pose_set
-from ..render import CameraMount
+from ..render import CameraMount, as_mount
 from ._entries import DEFAULT_RENDER_SIZE, database_meta, render_entries
 from ._executors import EXECUTORS, run_tasks
 from ._store import LEFT_SUFFIX, verify, write_database
@@ -584,9 +584,7 @@ def build_databases(out_dir, shapes: Sequence[HandShape | str], mount: CameraMou
     if executor not in EXECUTORS:
         raise InvalidInputError(
             f"executor must be one of {', '.join(EXECUTORS)}, got {executor!r}")
-    mount = mount or CameraMount()
-    if not isinstance(mount, CameraMount):
-        raise InvalidInputError(f"mount must be a CameraMount, got {type(mount).__name__}")
+    mount = as_mount(mount)
     shape_list = _as_shapes(shapes)
     _chunk_size(options.count, len(shape_list), workers, chunk_size)  # checked before any file
     out = make_folder(out_dir, what="output folder", error=DatabaseError)

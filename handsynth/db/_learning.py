@@ -44,6 +44,7 @@ from ..render import (
     HandVariation,
     MountVariation,
     VariedRasterizer,
+    as_mount,
     coverage,
 )
 
@@ -343,7 +344,7 @@ def render_learning_set(options: LearningSetOptions | None = None, *,
     LearningSet
     """
     opts = options or LearningSetOptions()
-    mount = mount or CameraMount.paper()
+    mount = as_mount(mount)
     rng = np.random.default_rng(opts.seed)
     n, per = opts.hands, opts.poses_per_hand
     d = opts.cells[0] * opts.cells[1]
@@ -407,7 +408,7 @@ def learning_set(folder, options: LearningSetOptions | None = None, *,
         The folder cannot be created or written.
     """
     opts = options or LearningSetOptions()
-    mount = mount or CameraMount.paper()
+    mount = as_mount(mount)
     folder = Path(folder)
     key = hashlib.sha256(json.dumps([opts.digest(), mount.as_dict(), side],
                                     sort_keys=True).encode()).hexdigest()[:16]

@@ -48,7 +48,7 @@ from .._checks import check_side
 from ..db import pack_mask, unpack_mask
 from ..errors import EstimationError, InvalidInputError
 from ..models import HandShape
-from ..render import CameraMount, preprocess
+from ..render import CameraMount, as_mount, preprocess
 
 __all__ = ["MIN_OPEN_IOU", "Calibration", "FrameSelection", "reference_silhouette",
            "select_shape_from_frame"]
@@ -242,9 +242,7 @@ def select_shape_from_frame(open_frame, *, mount: CameraMount | None = None,
         holds something else than HandShape objects; `mount` is not a
         CameraMount or `side` not ``"right"`` or ``"left"``.
     """
-    mount = mount or CameraMount()
-    if not isinstance(mount, CameraMount):
-        raise InvalidInputError(f"mount must be a CameraMount, got {mount!r}")
+    mount = as_mount(mount)
     check_side(side)
     try:
         cands = HandShape.grid() if shapes is None else list(shapes)

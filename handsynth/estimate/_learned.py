@@ -79,6 +79,7 @@ from ..models import JOINT_LIMITS_DEG
 from ..render import (
     CameraMount,
     SkinColour,
+    as_mount,
     brightness_overlap,
     coverage,
     fit_skin_colour,
@@ -1196,7 +1197,7 @@ def learned_estimator(folder, options: LearnedOptions | None = None, *,
     """
     opts = options or LearnedOptions()
     data = data or LearningSetOptions()
-    mount = mount or CameraMount.paper()
+    mount = as_mount(mount)
     check_side(side)
     if side == "left":
         return learned_estimator(folder, opts, data=data, mount=mount.mirrored(), side="right",

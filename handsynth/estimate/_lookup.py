@@ -31,7 +31,7 @@ from ..db import (
 )
 from ..errors import DatabaseError, InvalidInputError
 from ..models import JOINT_NAMES, HandMeasurements, HandShape
-from ..render import CameraMount, preprocess
+from ..render import CameraMount, as_mount, preprocess
 from ._calibration import Calibration, reference_silhouette, select_shape_from_frame
 from ._masked import masked_band_areas, masked_search
 from ._search import SearchOptions, SearchTables, search
@@ -423,7 +423,7 @@ class PoseLookup:
             raise InvalidInputError(f"shape must be a HandShape, got {type(shape).__name__}")
         build = _build_options(build)
         shape = HandShape.from_name(shape.name)
-        summary = build_databases(folder, [shape], mount or CameraMount.paper(), options=build,
+        summary = build_databases(folder, [shape], as_mount(mount), options=build,
                                   workers=workers, progress=progress)
         _warn_rebuilt(summary)
         database = open_database(summary.paths[0])
@@ -482,7 +482,7 @@ class PoseLookup:
                                 temporal=kwargs.get("temporal"),
                                 approximate=kwargs.get("approximate"))
         build = _build_options(build)
-        mount = mount or CameraMount.paper()
+        mount = as_mount(mount)
         chosen = select_shape_from_frame(open_frame, mount=mount, side=build.side,
                                          shapes=shapes).shape
         chosen = HandShape.from_name(chosen.name)  # the ratios its file name gives
@@ -524,9 +524,7 @@ class PoseLookup:
             different lengths), or `mount`, `shape` or `side` of the wrong
             type or value; the message names it.
         """
-        mount = mount or CameraMount()
-        if not isinstance(mount, CameraMount):
-            raise InvalidInputError(f"mount must be a CameraMount, got {type(mount).__name__}")
+        mount = as_mount(mount)
         if shape is not None and not isinstance(shape, HandShape):
             raise InvalidInputError(f"shape must be a HandShape, got {type(shape).__name__}")
         check_side(side)

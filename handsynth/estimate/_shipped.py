@@ -36,7 +36,7 @@ import numpy as np
 from .._io import atomic_open
 from ..db import LearningSetOptions, render_learning_set
 from ..errors import DatabaseError
-from ..render import CameraMount
+from ..render import CameraMount, as_mount
 
 #: Where the shipped files and their manifest live.
 SHIPPED_FOLDER = Path(__file__).parent / "shipped"
@@ -132,7 +132,7 @@ def ship(sources: dict[str, tuple[Path, LearningSetOptions]], *, mount: CameraMo
     dict
         The manifest written.  Files of `folder` it no longer names are removed.
     """
-    mount = mount or CameraMount.paper()
+    mount = as_mount(mount)
     folder.mkdir(parents=True, exist_ok=True)
     files: dict[str, dict] = {}
     prints: set[str] = set()  # fingerprint files written

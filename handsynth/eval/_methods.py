@@ -28,7 +28,7 @@ from ..estimate import (
     select_shape,
 )
 from ..models import HandShape
-from ..render import CameraMount
+from ..render import CameraMount, as_mount
 
 __all__ = ["LEARNED_METHODS", "PROTOCOL_METHODS", "describe_methods", "format_headline",
            "protocol_headline", "protocol_methods"]
@@ -91,7 +91,7 @@ def protocol_methods(names, folder, *, data: LearningSetOptions | None = None,
     if bad or not names or len(set(names)) != len(names):
         raise InvalidInputError(f"methods must be distinct names from "
                                 f"{', '.join(PROTOCOL_METHODS)}, got {', '.join(names) or 'none'}")
-    mount = mount or CameraMount.paper()
+    mount = as_mount(mount)
     say = progress or (lambda _line: None)
     folder = Path(folder)
     dbs = folder / "dbs"

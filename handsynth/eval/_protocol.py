@@ -43,7 +43,13 @@ import numpy as np
 
 from ..errors import InvalidInputError
 from ..models import JOINT_NAMES, HandShape
-from ..render import CameraMount, HandVariation, MountVariation, VariedRasterizer
+from ..render import (
+    CameraMount,
+    HandVariation,
+    MountVariation,
+    VariedRasterizer,
+    as_mount,
+)
 from ._testposes import REST_POSTURES, natural_test_poses, paper_protocol_poses
 
 __all__ = [
@@ -159,7 +165,7 @@ def model_test_hands(n: int, *, seed: int = 0, mount: CameraMount | None = None,
     """
     from ..models import GRID_LEVELS
 
-    mount = mount or CameraMount.paper()
+    mount = as_mount(mount)
     rng = np.random.default_rng(np.random.SeedSequence([seed, 0x7E57]))
     surface_rng = np.random.default_rng(np.random.SeedSequence([seed, 0x7E57, 0x5E6]))
     out = []
@@ -217,7 +223,7 @@ def mesh_test_hands(names=None, *, mount: CameraMount | None = None,
         shipped_hand_path,
     )
 
-    mount = mount or CameraMount.paper()
+    mount = as_mount(mount)
     out: list[TestHand] = []
     for entry in (names or PROTOCOL_HANDS):
         if str(entry) in TEST_HANDS:

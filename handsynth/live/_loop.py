@@ -15,7 +15,7 @@ from threadpoolctl import threadpool_limits
 from .._checks import check_side
 from ..errors import EstimationError, InvalidInputError
 from ..models import JOINT_NAMES
-from ..render import CameraMount
+from ..render import CameraMount, as_mount
 from ._checks import _check_float, _check_int
 from ._sources import FrameSource
 from ._video import SideBySideWriter
@@ -265,9 +265,7 @@ def first_hand_frame(source: FrameSource, *, mount: CameraMount | None = None,
     """
     from ..render import preprocess
 
-    mount = mount or CameraMount()
-    if not isinstance(mount, CameraMount):
-        raise InvalidInputError(f"mount must be a CameraMount, got {mount!r}")
+    mount = as_mount(mount)
     check_side(side)
     if not callable(getattr(source, "read", None)):
         raise InvalidInputError(f"source must have a read() method, got {type(source).__name__}")

@@ -13,7 +13,7 @@ import numpy as np
 from ..errors import InvalidInputError
 from ..models import JOINT_LIMITS_DEG, JOINT_NAMES, HandShape, as_angles
 from ..models import pose_set as make_pose_set
-from ..render import CameraMount
+from ..render import CameraMount, as_mount
 from ._checks import _check_float, _check_int, _quiet_opencv
 
 if TYPE_CHECKING:
@@ -353,8 +353,7 @@ class SyntheticSource(_Source):
 
         if shape is not None and not isinstance(shape, HandShape):
             raise InvalidInputError(f"shape must be a HandShape, got {type(shape).__name__}")
-        if mount is not None and not isinstance(mount, CameraMount):
-            raise InvalidInputError(f"mount must be a CameraMount, got {type(mount).__name__}")
+        as_mount(mount)  # None is the paper's device
         self.fps = _check_float(fps, "fps")
         self.frames = _check_int(frames, "frames", minimum=0, allow_none=True)
         if motion is None or isinstance(motion, SyntheticMotion):

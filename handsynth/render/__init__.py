@@ -13,7 +13,7 @@ from an ordinary background by the colour of the user's skin) and
 """
 
 from .._gl import backend, ensure_backend
-from ._camera import CameraMount
+from ._camera import CameraMount, as_mount
 from ._coverage import DEFAULT_CELLS, coverage
 from ._io import read_image, write_png
 from ._masks import MaskMaker
@@ -57,6 +57,7 @@ __all__ = [
     "SilhouetteRenderer",
     "SkinColour",
     "VariedRasterizer",
+    "as_mount",
     "backend",
     "binarize",
     "brightness_overlap",

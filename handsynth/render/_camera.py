@@ -218,12 +218,16 @@ def as_mount(mount, name: str = "mount", *, optional: bool = True) -> CameraMoun
     Raises
     ------
     InvalidCameraError
-        Anything else, naming the argument `name` and the type received.
+        Anything else (a falsy value too: ``mount=0`` is not the default),
+        naming the argument `name`, the type received and its value.
     """
     if mount is None and optional:
         return CameraMount()
     if not isinstance(mount, CameraMount):
-        raise InvalidCameraError(f"{name} must be a CameraMount, got {type(mount).__name__}")
+        value = repr(mount)
+        value = value if len(value) <= 60 else value[:57] + "..."
+        raise InvalidCameraError(
+            f"{name} must be a CameraMount, got {type(mount).__name__} {value}")
     return mount
 
 

@@ -56,7 +56,7 @@ import numpy as np
 
 from .._checks import check_side
 from ..errors import InvalidInputError
-from ._camera import CameraMount
+from ._camera import CameraMount, as_mount
 from ._preprocess import check_frame
 
 __all__ = ["WORK_WIDTH_PX", "SkinColour", "brightness_overlap", "fit_skin_colour", "palm_region",
@@ -185,7 +185,7 @@ def palm_region(mount: CameraMount | None = None, *, side: str = "right",
     InvalidInputError
         A `side` other than right or left, or a region no model hand covers.
     """
-    mount = mount or CameraMount.paper()
+    mount = as_mount(mount)
     check_side(side)
     h = height_px or round(width_px * mount.height_px / mount.width_px)
     out = _palm_region_cached(mount, side, int(width_px), int(h))[0]
@@ -264,7 +264,7 @@ def fit_skin_colour(rest_frame: np.ndarray, mount: CameraMount | None = None, *,
         Not a colour frame, or a palm region too dark to hold a hand.
     """
     frame = _bgr(rest_frame, "rest_frame")
-    mount = mount or CameraMount.paper()
+    mount = as_mount(mount)
     size = _work_size(frame.shape)
     palm = palm_region(mount, side=side, width_px=size[0], height_px=size[1])
     small = _reduce(frame, size)

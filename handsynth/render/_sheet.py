@@ -6,7 +6,7 @@ import numpy as np
 
 from ..errors import InvalidInputError
 from ..models import HandShape, named_pose
-from ._camera import CameraMount
+from ._camera import CameraMount, as_mount
 from ._renderer import render_rgb
 
 __all__ = ["contact_sheet"]
@@ -26,7 +26,7 @@ def contact_sheet(shapes: dict[str, HandShape], poses: tuple[str, ...] = ("open"
     """
     import cv2
 
-    mount = mount or CameraMount()
+    mount = as_mount(mount)
     tw = tile_width_px
     th = round(tw * mount.height_px / mount.width_px)
     rows = []

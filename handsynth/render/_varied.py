@@ -24,7 +24,7 @@ import numpy as np
 
 from ..errors import InvalidInputError, InvalidShapeError
 from ..models import FINGERS, HandShape
-from ._camera import CameraMount
+from ._camera import CameraMount, as_mount
 from ._raster import SilhouetteRasterizer
 
 __all__ = ["HandVariation", "MountVariation", "VariedRasterizer"]
@@ -255,8 +255,7 @@ class VariedRasterizer(SilhouetteRasterizer):
 
     def set_mount(self, mount: CameraMount) -> None:
         """Draw the following masks through `mount` (same frame size)."""
-        if not isinstance(mount, CameraMount):
-            raise InvalidShapeError(f"mount must be a CameraMount, got {type(mount).__name__}")
+        as_mount(mount, optional=False)
         pose = mount.pose_in_hand(side=self.side)
         self._cam_rot = np.ascontiguousarray(pose[:3, :3])
         self._cam_pos = np.ascontiguousarray(pose[:3, 3])

@@ -97,7 +97,7 @@ from ..errors import (
     RenderError,
 )
 from ..models import FINGERS, JOINT_NAMES, as_angles, standard_layout_mm
-from ..render import CameraMount, GLContextOwner, MaskMaker, ensure_backend
+from ..render import CameraMount, GLContextOwner, MaskMaker, as_mount, ensure_backend
 
 __all__ = [
     "PROTOCOL_HANDS",
@@ -939,15 +939,14 @@ class MeshHandRenderer(GLContextOwner, MaskMaker):
                  width_px: int | None = None, height_px: int | None = None,
                  path: str | os.PathLike | None = None, scale: float = 1.0) -> None:
         check_side(side, error=InvalidCameraError)
-        if mount is not None and not isinstance(mount, CameraMount):
-            raise InvalidCameraError(f"mount must be a CameraMount, got {type(mount).__name__}")
+        mount = as_mount(mount)
         ensure_backend()
         import mujoco
 
         from ..render import offscreen_renderer
 
         self._mj = mujoco
-        self.mount = mount or CameraMount()
+        self.mount = mount
         self.side = side
         self.width_px, self.height_px = self.mount.size(width_px, height_px)
         self.rig = load_mesh_rig(path)
@@ -1178,7 +1177,7 @@ def mesh_hand_sheet(poses=("open", "spread", "fist", "point", "pinch", "grasp"),
     from ..models import named_pose
     from ..render import SilhouetteRenderer, label_image, preprocess, render_rgb
 
-    mount = mount or CameraMount()
+    mount = as_mount(mount)
     tw = tile_width_px
     th = round(tw * mount.height_px / mount.width_px)
     angles = np.stack([named_pose(p) for p in poses])

@@ -315,7 +315,7 @@ def test_select_shape_from_frame_names_a_bad_mount_or_side():
     from handsynth.estimate import select_shape_from_frame
 
     frame = _open_frame(HandShape())
-    with pytest.raises(InvalidInputError, match=r"mount must be a CameraMount, got 'paper'"):
+    with pytest.raises(InvalidInputError, match=r"mount must be a CameraMount, got str 'paper'"):
         select_shape_from_frame(frame, mount="paper", shapes=[HandShape()])
     with pytest.raises(InvalidInputError, match=r"side must be 'right' or 'left', got 'Right'"):
         select_shape_from_frame(frame, side="Right", shapes=[HandShape()])

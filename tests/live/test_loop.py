@@ -384,7 +384,7 @@ def test_first_hand_frame_skips_drops_garbage_and_empty_frames(lookup):
 def test_first_hand_frame_names_a_bad_argument_before_reading(lookup):
     hand = _synthetic(lookup, frames=3).open_frame()
     for kwargs, words in (({"side": "Right"}, r"side must be 'right' or 'left', got 'Right'"),
-                          ({"mount": "paper"}, r"mount must be a CameraMount, got 'paper'")):
+                          ({"mount": "paper"}, r"mount must be a CameraMount, got str 'paper'")):
         src = _Frames([hand] * 5)
         with pytest.raises(InvalidInputError, match=words):
             first_hand_frame(src, max_reads=5, **kwargs)
