@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from .errors import HandsynthError, InvalidInputError
 
-__all__ = ["SIDES", "check_side"]
+__all__ = ["SIDES", "check_options", "check_side"]
 
 #: The hands a device or a model can be on.
 SIDES = ("right", "left")
@@ -39,3 +39,41 @@ def check_side(side, *, name: str = "side", error: type[HandsynthError] = Invali
     if side not in SIDES:
         raise error(f"{name} must be 'right' or 'left', got {side!r}")
     return side
+
+
+def check_options(options, cls: type, *, name: str = "options",
+                  error: type[HandsynthError] = InvalidInputError):
+    """`options` checked to be an instance of the dataclass `cls`; ``cls()`` for None.
+
+    Parameters
+    ----------
+    options : object
+        What was given.
+    cls : type
+        The options class (``SearchOptions``); made with its defaults for None.
+    name : str, keyword-only
+        The argument's name, for the message.
+    error : HandsynthError subclass, keyword-only
+        Class of the error raised.
+
+    Returns
+    -------
+    cls instance
+
+    Raises
+    ------
+    HandsynthError
+        (`error`) anything else, named with its type and value: a dict of
+        fields (``{}`` is not the defaults), the fields' values alone, or
+        options of another class.
+    """
+    if options is None:
+        return cls()
+    if not isinstance(options, cls):
+        value = repr(options)
+        value = value if len(value) <= 60 else value[:57] + "..."
+        hint = f" (make one: {cls.__name__}(**fields))" if isinstance(options, dict) else ""
+        article = "an" if cls.__name__[:1] in "AEIOU" else "a"
+        raise error(f"{name} must be {article} {cls.__name__}, got {type(options).__name__} "
+                    f"{value}{hint}")
+    return options

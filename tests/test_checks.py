@@ -38,3 +38,47 @@ def test_every_layer_refuses_a_mount_that_is_not_a_camera_mount_falsy_ones_too(m
                                                      rf"{type(mount).__name__} "):
             call()
         assert not any(tmp_path.iterdir()), where  # refused before anything was written
+
+
+def test_options_are_checked_to_be_the_options_class_and_none_is_the_defaults():
+    from dataclasses import dataclass
+
+    from handsynth._checks import check_options
+
+    @dataclass(frozen=True)
+    class Options:
+        k: int = 3
+
+    assert check_options(None, Options) == Options()
+    given = Options(k=5)
+    assert check_options(given, Options) is given
+    with pytest.raises(InvalidInputError, match=r"^options must be an Options, got dict \{\} "
+                                                r"\(make one: Options\(\*\*fields\)\)$"):
+        check_options({}, Options)  # not the defaults: a dict of fields is not options
+    with pytest.raises(InvalidCameraError, match=r"^selection must be an Options, got str "):
+        check_options("x" * 100, Options, name="selection", error=InvalidCameraError)
+
+
+@pytest.mark.parametrize("bad", [{}, {"k": 3}, "fast", 0])
+def test_every_options_argument_refuses_what_is_not_its_class(bad):
+    # `options or XOptions()` once read {} or 0 as the defaults, and a dict of fields
+    # failed later with an AttributeError
+    import numpy as np
+
+    from handsynth.estimate import OneEuroFilter, one_euro, select_shape
+    from handsynth.eval import run_protocol
+    from handsynth.models import model_measurements
+    from handsynth.sensors.glove import evaluate
+
+    calls = {
+        "OneEuroFilter": lambda: OneEuroFilter(30.0, options=bad),
+        "one_euro": lambda: one_euro(np.zeros((3, 2)), rate_hz=30.0, options=bad),
+        "select_shape": lambda: select_shape(model_measurements(), options=bad),
+        "run_protocol": lambda: run_protocol([object()], [], options=bad),
+        "glove evaluate": lambda: evaluate(options=bad),
+    }
+    for where, call in calls.items():
+        with pytest.raises(InvalidInputError, match=rf"^options must be an? \w+Options, got "
+                                                    rf"{type(bad).__name__} "):
+            call()
+            pytest.fail(f"{where} took options={bad!r}")

@@ -39,7 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._checks import check_side
+from .._checks import check_options, check_side
 from .._io import make_folder, os_error_reason
 from ..errors import (
     DatabaseError,
@@ -569,8 +569,7 @@ def build_databases(out_dir, shapes: Sequence[HandShape | str], mount: CameraMou
     elif option_fields:
         raise InvalidInputError(
             f"give either options or option keywords, got both (keywords {sorted(option_fields)})")
-    if not isinstance(options, BuildOptions):
-        raise InvalidInputError(f"options must be a BuildOptions, got {type(options).__name__}")
+    options = check_options(options, BuildOptions)
     if workers is None:
         workers = os.cpu_count() or 1
     if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1:

@@ -35,6 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._checks import check_options
 from .._io import atomic_open, make_folder
 from ..errors import DatabaseCorruptError, DatabaseError, InvalidInputError
 from ..models import GRID_LEVELS, JOINT_LIMITS_DEG, HandShape, natural_pose_set
@@ -343,7 +344,7 @@ def render_learning_set(options: LearningSetOptions | None = None, *,
     -------
     LearningSet
     """
-    opts = options or LearningSetOptions()
+    opts = check_options(options, LearningSetOptions)
     mount = as_mount(mount)
     rng = np.random.default_rng(opts.seed)
     n, per = opts.hands, opts.poses_per_hand
@@ -407,7 +408,7 @@ def learning_set(folder, options: LearningSetOptions | None = None, *,
     DatabaseError
         The folder cannot be created or written.
     """
-    opts = options or LearningSetOptions()
+    opts = check_options(options, LearningSetOptions)
     mount = as_mount(mount)
     folder = Path(folder)
     key = hashlib.sha256(json.dumps([opts.digest(), mount.as_dict(), side],

@@ -96,6 +96,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from .._checks import check_options
 from .._io import atomic_open
 from ..db import HLAC_SIZE
 from ..errors import DatabaseError, InvalidInputError
@@ -864,12 +865,7 @@ class ApproximateIndex:
 
 
 def _check_options(options) -> ApproximateOptions:
-    if options is None:
-        return ApproximateOptions()
-    if not isinstance(options, ApproximateOptions):
-        raise InvalidInputError(
-            f"options must be ApproximateOptions, got {type(options).__name__}")
-    return options
+    return check_options(options, ApproximateOptions)
 
 
 def _check_tables(tables) -> None:

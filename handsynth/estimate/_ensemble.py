@@ -16,6 +16,7 @@ from types import MappingProxyType
 
 import numpy as np
 
+from .._checks import check_options
 from ..db import LearningSetOptions
 from ..errors import InvalidInputError
 from ..render import CameraMount, SkinColour
@@ -313,7 +314,7 @@ def learned_ensemble(folder, *, members=LEARNED_ENSEMBLE, data=None, mount=None,
         A member that is not options and a weight (and changes), or changes
         naming no field of the learning set's options.
     """
-    data = data or LearningSetOptions()
+    data = check_options(data, LearningSetOptions, name="data")
     have = {e.options: e for e in learnt}
     ests, weights = [], []
     for member in members:

@@ -65,7 +65,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._checks import check_side
+from .._checks import check_options, check_side
 from .._io import atomic_open, os_error_reason
 from ..db import LearningSet, LearningSetOptions, learning_set
 from ..errors import (
@@ -1041,7 +1041,7 @@ def train_learned(data: LearningSet, options: LearnedOptions | None = None, *,
     -------
     LearnedEstimator
     """
-    opts = options or LearnedOptions()
+    opts = check_options(options, LearnedOptions)
     if not isinstance(data, LearningSet):
         raise InvalidInputError(f"data must be a LearningSet, got {type(data).__name__}")
     rng = np.random.default_rng(opts.seed)
@@ -1195,8 +1195,8 @@ def learned_estimator(folder, options: LearnedOptions | None = None, *,
         Read a shipped estimator of these options when there is one (default)
         instead of learning it.
     """
-    opts = options or LearnedOptions()
-    data = data or LearningSetOptions()
+    opts = check_options(options, LearnedOptions)
+    data = check_options(data, LearningSetOptions, name="data")
     mount = as_mount(mount)
     check_side(side)
     if side == "left":

@@ -18,7 +18,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from .._checks import check_side
+from .._checks import check_options, check_side
 from ..db import (
     BuildOptions,
     Database,
@@ -74,11 +74,7 @@ def _refuse_for_calibration(*, options, temporal, approximate) -> None:
 
 
 def _build_options(build) -> BuildOptions:
-    if build is None:
-        return BuildOptions()
-    if not isinstance(build, BuildOptions):
-        raise InvalidInputError(f"build must be BuildOptions, got {type(build).__name__}")
-    return build
+    return check_options(build, BuildOptions, name="build")
 
 
 @dataclass(frozen=True, eq=False)
@@ -229,7 +225,7 @@ class PoseLookup:
                 "ties='mean' cannot be honoured by the approximate index (it tracks no ties); "
                 "pass ties='first' or leave ties unset")
         self.database = database
-        self.options = options or SearchOptions()
+        self.options = check_options(options, SearchOptions)
         self.temporal = True if temporal is None else bool(temporal)
         self.ties = ties or ("first" if approximate_used else "mean")
         # what the caller chose, for the combinations that calibrated() cannot honour
@@ -417,7 +413,8 @@ class PoseLookup:
         if (shape is None) == (measurements is None):
             raise InvalidInputError("give exactly one of shape or measurements")
         if measurements is not None:
-            opts = selection or SelectionOptions(normalize="none")
+            opts = (SelectionOptions(normalize="none") if selection is None
+                    else check_options(selection, SelectionOptions, name="selection"))
             shape = select_shape(measurements, options=opts).ratios
         elif not isinstance(shape, HandShape):
             raise InvalidInputError(f"shape must be a HandShape, got {type(shape).__name__}")

@@ -24,6 +24,7 @@ import cv2
 import numpy as np
 from scipy import ndimage
 
+from .._checks import check_options
 from ..errors import InvalidInputError
 from ..render import CameraMount, wrist_cut_keep
 
@@ -96,7 +97,7 @@ class MoveCheck:
 
     def __init__(self, rest_grid: np.ndarray, mount: CameraMount, *, side: str = "right",
                  options: MoveCheckOptions | None = None) -> None:
-        self.options = options or MoveCheckOptions()
+        self.options = check_options(options, MoveCheckOptions)
         self.state = MoveCheckState(deque(maxlen=self.options.window))
         rest = np.asarray(rest_grid)
         if rest.ndim != 2 or rest.dtype != np.uint8:

@@ -66,6 +66,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from .._checks import check_options
 from ..db import HLAC_SIZE, popcount64
 from ..errors import InvalidInputError
 from ._score import SURVIVOR, SURVIVOR_ABOVE_BEST, Constants, Query, Rows, score
@@ -836,11 +837,7 @@ def _check_search_arguments(tables, options):
     if not isinstance(tables, SearchTables):
         raise InvalidInputError(f"tables must be SearchTables (SearchTables.from_arrays), got "
                                 f"{type(tables).__name__}")
-    if options is None:
-        return SearchOptions()
-    if not isinstance(options, SearchOptions):
-        raise InvalidInputError(f"options must be SearchOptions or None, got {options!r}")
-    return options
+    return check_options(options, SearchOptions)
 
 
 def search(features, tables: SearchTables, *, options: SearchOptions | None = None,

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from .._checks import check_options
 from ..errors import InvalidShapeError
 from ..models import HandMeasurements, HandShape, formula_ratios, model_measurements
 
@@ -134,7 +135,7 @@ def select_shape(measurements: HandMeasurements, *,
         raise InvalidShapeError(
             f"measurements must be HandMeasurements, got {type(measurements).__name__}"
         )
-    opts = options or SelectionOptions()
+    opts = check_options(options, SelectionOptions)
     try:
         ratios = shape_ratios(measurements, model_measurements(opts.standard),
                               normalize=opts.normalize)

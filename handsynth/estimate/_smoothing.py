@@ -29,6 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._checks import check_options
 from ..errors import InvalidInputError
 from ._lookup import PoseEstimate
 
@@ -115,7 +116,7 @@ class OneEuroFilter:
 
     def __init__(self, rate_hz: float, *, options: OneEuroOptions | None = None) -> None:
         self.rate_hz = _check_rate(rate_hz)
-        self.options = options or OneEuroOptions()
+        self.options = check_options(options, OneEuroOptions)
         self.state = OneEuroState()
 
     def reset(self) -> None:
@@ -161,7 +162,7 @@ def one_euro(x, *, rate_hz: float, options: OneEuroOptions | None = None) -> np.
     x = np.asarray(x, dtype=np.float64)
     if x.ndim != 2 or not np.all(np.isfinite(x)):
         raise InvalidInputError(f"x must be a finite (N, J) array, got shape {x.shape}")
-    o = options or OneEuroOptions()
+    o = check_options(options, OneEuroOptions)
     dt = 1.0 / _check_rate(rate_hz)
     out = x.copy()
     if len(x) == 0:

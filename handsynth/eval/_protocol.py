@@ -41,6 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._checks import check_options
 from ..errors import InvalidInputError
 from ..models import JOINT_NAMES, HandShape
 from ..render import (
@@ -343,7 +344,7 @@ def run_protocol(methods: dict, hands: list[TestHand], options: ProtocolOptions 
     InvalidInputError
         No methods, or two test hands of one name (the result is keyed by it).
     """
-    opts = options or ProtocolOptions()
+    opts = check_options(options, ProtocolOptions)
     if not methods:
         raise InvalidInputError("run_protocol needs at least one method")
     names = [h.name for h in hands]

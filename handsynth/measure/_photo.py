@@ -132,6 +132,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._checks import check_options
 from .._io import write_text
 from ..errors import InvalidInputError
 from ..estimate import Selection, SelectionOptions, select_shape, shape_ratios
@@ -1129,9 +1130,7 @@ def measure_photo(image, *, mm_per_px: float | None = None,
         ambiguous reference object; a hand touching the border; fewer than
         five separated fingers.  The message names the problem.
     """
-    opts = options or MeasureOptions()
-    if not isinstance(opts, MeasureOptions):
-        raise InvalidInputError(f"options must be MeasureOptions, got {type(opts).__name__}")
+    opts = check_options(options, MeasureOptions)
     if (mm_per_px is None) == (reference_width_mm is None):
         raise InvalidInputError(
             "give the photo's scale: exactly one of mm_per_px (mm per pixel at the hand) or "

@@ -270,7 +270,7 @@ def test_lookup_from_an_open_frame_builds_and_calibrates_the_best_fitting_shape(
     with pytest.raises(InvalidInputError, match="no hand"):
         PoseLookup.from_open_frame(tmp_path, np.zeros((120, 180), bool), shapes=shapes,
                                    build=build)
-    with pytest.raises(InvalidInputError, match="build must be BuildOptions"):
+    with pytest.raises(InvalidInputError, match="build must be a BuildOptions"):
         PoseLookup.from_open_frame(tmp_path, _open_frame(user), build={"count": 5})
 
 

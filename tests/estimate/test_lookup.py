@@ -166,7 +166,7 @@ def test_personal_database_is_built_once_for_the_hands_own_shape(tmp_path):
                           ({"shape": own, "measurements": model_measurements(own)}, "exactly one"),
                           ({"shape": "L1.000_W1.000_P1.000_T1.000"}, "shape must be a HandShape"),
                           ({"measurements": {"L": 1}}, "measurements must be HandMeasurements"),
-                          ({"shape": own, "build": {"count": 5}}, "build must be BuildOptions")):
+                          ({"shape": own, "build": {"count": 5}}, "build must be a BuildOptions")):
         with pytest.raises(InvalidInputError, match=words):
             PoseLookup.personal(tmp_path, **kwargs)
 

@@ -262,8 +262,8 @@ def test_search_names_an_argument_of_the_wrong_type(small_rows):
     with pytest.raises(InvalidInputError, match=r"features must be the Features of a silhouette "
                                                 r".*got ndarray"):
         search(small_rows["silhouette"][0], t)
-    with pytest.raises(InvalidInputError, match=r"options must be SearchOptions or None, got "
-                                                r"\{'c': 0.2\}"):
+    with pytest.raises(InvalidInputError, match=r"options must be a SearchOptions, got dict "
+                                                r"\{'c': 0.2\} \(make one: SearchOptions"):
         search(f, t, options={"c": 0.2})
     with pytest.raises(InvalidInputError, match=r"tables must be SearchTables"):
         search(f, small_rows)

@@ -35,6 +35,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..._checks import check_options
 from ...errors import InvalidInputError
 from ...models import FINGERS, NAMED_POSES
 from ._calibrate import RANGE_LABELS, CalibrationOptions, calibrate, range_readings
@@ -233,7 +234,7 @@ def evaluate(options: EvalOptions | None = None) -> dict:
         the mean over the seeds, and each summary entry adds
         ``mcp_error_deg_per_seed``.
     """
-    o = options or EvalOptions()
+    o = check_options(options, EvalOptions)
     runs = [_evaluate_one(o, s) for s in range(o.seed, o.seed + o.seeds)]
     out = _mean_tree(runs)
     for cond, sets in out["conditions"].items():
@@ -376,7 +377,7 @@ def eval_setup(options: EvalOptions | None = None, seed: int | None = None) -> E
     -------
     EvalSetup
     """
-    o = options or EvalOptions()
+    o = check_options(options, EvalOptions)
     seed = o.seed if seed is None else int(seed)
     user_a = make_user(seed, name="calibration user", hand_length=1.04)
     user_b = make_user(seed + 1000, name="second user", hand_length=0.94)
