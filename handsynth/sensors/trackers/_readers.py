@@ -42,7 +42,9 @@ al. 1992); with ``units="auto"`` the unit that puts the median spacing
 nearest 28 mm is used, and an explicit unit that puts it outside that range
 is warned about when another unit would not.  Glitches -- a sensor position
 more than `glitch_mm` from the median of its five-frame neighbourhood, which
-smooth finger motion never is -- are dropped, counted and named; so are
+smooth finger motion never is -- are dropped, counted and named (a file where
+half the frames or more would be glitches is refused instead: glitches are
+isolated, and so many point to positions read in the wrong unit); so are
 dropouts (a sensor at exactly ``(0, 0, 0)``, however many frames in a row)
 and frozen stretches (one sensor's position and angles repeated bit for bit
 over five or more frames while the other sensor moves: the repeats are
@@ -492,6 +494,15 @@ def _choose_units(positions_file: np.ndarray, units: str, path: Path) -> tuple[s
     return units, f"given: sensor spacing {in_mm[units]:.1f} mm"
 
 
+#: Largest fraction of frames taken as glitches.  A five-frame median finds
+#: isolated jumps; when half the frames or more are off their neighbours, the
+#: positions scatter more than a finger moves (a file in millimetres read as
+#: centimetres: Liberty-level noise of 0.76 mm becomes 7.6 mm per axis, and 77 %
+#: of the frames exceed 10 mm), and dropping them would leave a fraction of the
+#: recording, still in the wrong unit.
+_MAX_GLITCH_FRACTION = 0.5
+
+
 def _glitches(positions: np.ndarray, glitch_mm: float) -> np.ndarray:
     """Frames where a sensor is farther than `glitch_mm` from its 5-frame median."""
     if positions.shape[0] < 5:
@@ -700,7 +711,9 @@ def read_polhemus(
         drop them with a warning that counts them, or raise
         :class:`RecordingError` naming them.
     glitch_mm : float
-        Glitch threshold (see module docstring), millimetres.
+        Glitch threshold (see module docstring), millimetres.  When half the
+        frames or more would be glitches the file is refused: the positions
+        are not in the unit used (or `glitch_mm` is far too small).
 
     Returns
     -------
@@ -710,8 +723,9 @@ def read_polhemus(
     ------
     RecordingError
         Unreadable, empty, binary or unparseable file, unknown layout,
-        missing sensors, invalid frames with ``on_invalid="raise"``,
-        matrices that are not rotations.
+        missing sensors, invalid frames with ``on_invalid="raise"``, fewer
+        than 10 usable frames (the message says what was dropped), half the
+        frames or more glitches, matrices that are not rotations.
     InvalidInputError
         Bad arguments.
     """
@@ -857,6 +871,12 @@ def read_polhemus(
     fin = ~(invalid | dropout | frozen)
     if fin.sum() >= 5:
         glitch[np.flatnonzero(fin)] = _glitches(positions[fin], glitch_mm)
+    if fin.sum() >= 5 and glitch.sum() >= _MAX_GLITCH_FRACTION * fin.sum():
+        raise RecordingError(
+            f"{path.name}: {int(glitch.sum())} of {int(fin.sum())} frames have a position > "
+            f"{glitch_mm:g} mm off its neighbours, too many to be glitches (isolated jumps): "
+            f"the positions scatter more than a finger moves; are the units right "
+            f"(units={unit!r}, {unit_note})? If they are, pass a larger glitch_mm")
     notes["invalid_frames"] = int(invalid.sum())
     notes["glitch_frames"] = int(glitch.sum())
     notes["dropout_frames"] = int(dropout.sum())
@@ -884,16 +904,17 @@ def read_polhemus(
         problems.append(f"{w.size} glitch frames (a position > {glitch_mm:g} mm off its "
                         f"neighbours; lines {line_no[w[:5]].tolist()}"
                         f"{' ...' if w.size > 5 else ''})")
+    keep = ~(invalid | glitch | dropout | frozen)
+    msg = f"{path.name}: " + "; ".join(problems)
+    if problems and on_invalid == "raise":
+        raise RecordingError(msg + " (on_invalid='drop' drops them)")
+    if keep.sum() < 10:  # the reasons go with the refusal, not in a warning before it
+        raise RecordingError(f"{path.name}: only {int(keep.sum())} usable frames of {n}"
+                             + (f" ({'; '.join(problems)})" if problems else ""))
     if problems:
-        msg = f"{path.name}: " + "; ".join(problems)
-        if on_invalid == "raise":
-            raise RecordingError(msg + " (on_invalid='drop' drops them)")
         warnings.warn(msg + "; dropped", stacklevel=2)
     if notes["duplicates"]:
         warnings.warn(f"{path.name}: dropped {notes['duplicates']} duplicated rows", stacklevel=2)
-    keep = ~(invalid | glitch | dropout | frozen)
-    if keep.sum() < 10:
-        raise RecordingError(f"{path.name}: only {int(keep.sum())} usable frames of {n}")
     times, positions, rotations = times[keep], positions[keep], rotations[keep]
     return Recording(
         times=times,

@@ -1,5 +1,6 @@
 """Readers of the real export formats, on files written here by hand."""
 
+import re
 import warnings
 
 import numpy as np
@@ -96,9 +97,29 @@ def test_units_auto_and_warned(tmp_path, finger_rec, liberty_lines, unit, scale)
     rec = read_polhemus(path)
     assert rec.metadata["units"] == unit
     _close(rec, finger_rec, atol_m=1e-4 if unit == "m" else 2e-6)
-    if unit != "in":  # cm and in overlap for some spacings; mm and m do not
-        with pytest.warns(UserWarning, match="implausible.*look like"):
+    if unit == "m":  # cm and in overlap for some spacings; mm and m do not
+        with pytest.warns(UserWarning, match="implausible.*look like 'm'") as caught:
             read_polhemus(path, units="cm")
+        assert len(caught) == 1  # positions 100 times too small: no glitches either
+    elif unit == "mm":
+        # ten times too large: the 0.76 mm noise becomes 7.6 mm, and most frames
+        # would pass for 10 mm glitches; the file is refused, not cut to a quarter
+        with pytest.warns(UserWarning, match="implausible.*look like 'mm'") as caught, \
+                pytest.raises(RecordingError, match=r"too many to be glitches.*units='cm'"):
+            read_polhemus(path, units="cm")
+        assert len(caught) == 1
+
+
+def test_most_frames_off_their_neighbours_are_not_glitches(tmp_path, finger_rec, liberty_lines):
+    path = _write(tmp_path / "g.txt", liberty_lines(finger_rec, scale=100.0, counter=False,
+                                                    quaternion=True))
+    # a threshold below the 0.76 mm noise: nearly every frame would be dropped
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(RecordingError, match=r"of 2880 frames have a position > 0.5 mm "
+                           r"off its neighbours, too many to be glitches .*units='cm'"):
+            read_polhemus(path, glitch_mm=0.5)
+    assert _no_warnings(lambda: read_polhemus(path)).metadata["glitch_frames"] == 0
 
 
 def test_glitches_are_counted_and_dropped(tmp_path, finger_rec, liberty_lines):
@@ -130,9 +151,28 @@ MALFORMED = {
 def test_malformed_files_raise_recording_error(tmp_path, name):
     path = tmp_path / name
     path.write_bytes(MALFORMED[name])
-    with pytest.raises(RecordingError) as err:
-        read_polhemus(path)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a refusal, with no warning before it
+        with pytest.raises(RecordingError) as err:
+            read_polhemus(path)
     assert name in str(err.value) and "\n" not in str(err.value)
+    if name == "nan.txt":  # the refusal says why no frame is usable
+        assert re.search(r"only 0 usable frames of 30 \(30 frames with NaN values", str(err.value))
+
+
+def test_too_few_usable_frames_refused_with_the_reasons(tmp_path, finger_rec, liberty_lines):
+    lines = liberty_lines(finger_rec, scale=100.0, counter=False, quaternion=False)[:40]
+    for i in range(0, 36, 2):
+        lines[i] = lines[i].split()[0] + " nan" * 6
+    path = _write(tmp_path / "mostly_nan.txt", lines)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(RecordingError, match=r"only 2 usable frames of 20 \(18 frames with NaN"):
+            read_polhemus(path)
+    lines = liberty_lines(finger_rec, scale=100.0, counter=False, quaternion=False)[:60]
+    lines[0] = lines[0].split()[0] + " nan" * 6
+    with pytest.warns(UserWarning, match=r"1 frames with NaN values .*; dropped"):
+        assert read_polhemus(_write(tmp_path / "one_nan.txt", lines)).n_frames == 29
 
 
 def test_rotations_of_header_csv_with_euler(tmp_path, finger_rec):
