@@ -6,9 +6,15 @@ with the same message, naming the argument and the value received.
 
 from __future__ import annotations
 
+import math
+import numbers
+from typing import Any
+
+import numpy as np
+
 from .errors import HandsynthError, InvalidInputError
 
-__all__ = ["SIDES", "check_options", "check_side"]
+__all__ = ["SIDES", "check_integer", "check_number", "check_options", "check_side"]
 
 #: The hands a device or a model can be on.
 SIDES = ("right", "left")
@@ -77,3 +83,125 @@ def check_options(options, cls: type, *, name: str = "options",
         raise error(f"{name} must be {article} {cls.__name__}, got {type(options).__name__} "
                     f"{value}{hint}")
     return options
+
+
+def _number_kind(value: Any) -> str | None:
+    """``"int"`` or ``"float"`` for a real number, else None (bool included).
+
+    Numbers of any kind count (``int``, ``float``, numpy scalars, 0-d numpy
+    arrays), but never ``bool``: ``True`` is a flag, not the number 1, and
+    never a string that reads as a number.
+    """
+    if isinstance(value, (bool, np.bool_)):
+        return None
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        kind = value.dtype.kind
+        return "int" if kind in "iu" else "float" if kind == "f" else None
+    if isinstance(value, numbers.Integral):
+        return "int"
+    if isinstance(value, numbers.Real):
+        return "float"
+    return None
+
+
+def _bounds_text(minimum, maximum, above, below) -> str:
+    parts = []
+    if minimum is not None:
+        parts.append(f">= {minimum:g}")
+    if above is not None:
+        parts.append(f"> {above:g}")
+    if maximum is not None:
+        parts.append(f"<= {maximum:g}")
+    if below is not None:
+        parts.append(f"< {below:g}")
+    return " " + " and ".join(parts) if parts else ""
+
+
+def _refuse(what: str, name: str, value: Any, bounds: str, error: type[HandsynthError],
+            kind_ok: bool) -> None:
+    typed = "" if kind_ok else f" ({type(value).__name__})"
+    raise error(f"{name} must be {what}{bounds}, got {value!r}{typed}")
+
+
+def check_number(value: Any, name: str, *, minimum: float | None = None,
+                 maximum: float | None = None, above: float | None = None,
+                 below: float | None = None, allow_none: bool = False,
+                 error: type[HandsynthError] = InvalidInputError) -> Any:
+    """`value` as a finite ``float`` within bounds.
+
+    Parameters
+    ----------
+    value : object
+        What was given.
+    name : str
+        The argument's name, for the message (``"fps"``, ``"field 'gain'"``).
+    minimum, maximum : float, keyword-only, optional
+        Inclusive bounds.
+    above, below : float, keyword-only, optional
+        Exclusive bounds.
+    allow_none : bool, keyword-only
+        Pass None through (an option left unset).
+    error : HandsynthError subclass, keyword-only
+        Class of the error raised.
+
+    Returns
+    -------
+    float, or None when `value` is None and `allow_none`
+
+    Raises
+    ------
+    HandsynthError
+        (`error`) not a real number (a string, a bool, an array; the type is
+        named), NaN or infinite, or out of bounds: ``"fps must be a finite
+        number > 0, got -1"``.
+    """
+    if value is None and allow_none:
+        return None
+    bounds = _bounds_text(minimum, maximum, above, below)
+    kind_ok = _number_kind(value) is not None
+    v = float(value) if kind_ok else math.nan
+    ok = (math.isfinite(v) and (minimum is None or v >= minimum)
+          and (maximum is None or v <= maximum) and (above is None or v > above)
+          and (below is None or v < below))
+    if not ok:
+        _refuse("a finite number", name, value, bounds, error, kind_ok)
+    return v
+
+
+def check_integer(value: Any, name: str, *, minimum: int | None = None,
+                  maximum: int | None = None, allow_none: bool = False,
+                  error: type[HandsynthError] = InvalidInputError) -> Any:
+    """`value` as an ``int`` within inclusive bounds (Python or numpy integers, not bool).
+
+    Parameters
+    ----------
+    value : object
+        What was given; ``2.0`` is refused (a count is not a measurement).
+    name : str
+        The argument's name, for the message.
+    minimum, maximum : int, keyword-only, optional
+        Inclusive bounds.
+    allow_none : bool, keyword-only
+        Pass None through.
+    error : HandsynthError subclass, keyword-only
+        Class of the error raised.
+
+    Returns
+    -------
+    int, or None when `value` is None and `allow_none`
+
+    Raises
+    ------
+    HandsynthError
+        (`error`) not an integer, or out of bounds: ``"count must be an
+        integer >= 2, got 1"``.
+    """
+    if value is None and allow_none:
+        return None
+    bounds = _bounds_text(minimum, maximum, None, None)
+    kind_ok = _number_kind(value) == "int"
+    v = int(value) if kind_ok else None
+    if v is None or (minimum is not None and v < minimum) or (maximum is not None
+                                                               and v > maximum):
+        _refuse("an integer", name, value, bounds, error, _number_kind(value) is not None)
+    return v

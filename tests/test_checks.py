@@ -82,3 +82,28 @@ def test_every_options_argument_refuses_what_is_not_its_class(bad):
                                                     rf"{type(bad).__name__} "):
             call()
             pytest.fail(f"{where} took options={bad!r}")
+
+
+def test_numbers_are_finite_real_numbers_within_bounds_and_named_otherwise():
+    import numpy as np
+
+    from handsynth._checks import check_integer, check_number
+
+    for v in (2, 2.5, np.float32(2.5), np.int64(2), np.array(2.5)):
+        assert check_number(v, "x", above=0) == float(v)
+        assert type(check_number(v, "x")) is float
+    assert check_number(None, "x", allow_none=True) is None
+    for v, words in ((True, r"got True \(bool\)"), ("2", r"got '2' \(str\)"),
+                     (None, r"got None \(NoneType\)"), ([2], r"got \[2\] \(list\)"),
+                     (float("nan"), "got nan$"), (np.inf, "got inf$"), (0, "got 0$")):
+        with pytest.raises(InvalidInputError, match=rf"^fps must be a finite number > 0, {words}"):
+            check_number(v, "fps", above=0)
+    with pytest.raises(InvalidInputError, match=r"^x must be a finite number >= 0 and < 1, got 1$"):
+        check_number(1, "x", minimum=0, below=1)
+    assert check_integer(np.int32(3), "n", minimum=1) == 3
+    assert type(check_integer(np.int32(3), "n")) is int
+    for v in (2.0, True, "3", None):  # a count is not a measurement
+        with pytest.raises(InvalidInputError, match=r"^n must be an integer >= 1 and <= 5, got "):
+            check_integer(v, "n", minimum=1, maximum=5)
+    with pytest.raises(InvalidCameraError, match=r"^n must be an integer >= 1, got 0$"):
+        check_integer(0, "n", minimum=1, error=InvalidCameraError)

@@ -6,9 +6,7 @@ import os
 from dataclasses import dataclass, fields
 from pathlib import Path
 
-import numpy as np
-
-from .._checks import check_side
+from .._checks import check_integer, check_side
 from ..errors import InvalidInputError
 from ..models import PAPER_SIZE, HandShape
 from ..render import CameraMount
@@ -71,9 +69,7 @@ def _field(name: str) -> str:
 
 
 def _check_int(value, name: str, lo: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lo:
-        raise InvalidInputError(f"{_field(name)} must be an integer >= {lo}, got {value!r}")
-    return int(value)
+    return check_integer(value, _field(name), minimum=lo)
 
 
 def _check_size(value, name: str) -> tuple[int, int]:

@@ -12,11 +12,10 @@ from typing import TypeGuard
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from .._checks import check_side
+from .._checks import check_integer, check_number, check_side
 from ..errors import EstimationError, InvalidInputError
 from ..models import JOINT_NAMES
 from ..render import CameraMount, as_mount
-from ._checks import _check_float, _check_int
 from ._sources import FrameSource
 from ._video import SideBySideWriter
 from ._writers import TRUTH_COLUMNS, _make_row
@@ -63,13 +62,13 @@ class LiveOptions:
     progress_interval_s: float = 1.0
 
     def __post_init__(self) -> None:
-        _check_int(self.max_frames, "max_frames", minimum=0, allow_none=True)
-        _check_float(self.max_seconds, "max_seconds", allow_none=True)
-        _check_int(self.max_dead_reads, "max_dead_reads", minimum=1)
-        _check_float(self.retry_delay_s, "retry_delay_s", positive=False)
+        check_integer(self.max_frames, "max_frames", minimum=0, allow_none=True)
+        check_number(self.max_seconds, "max_seconds", above=0, allow_none=True)
+        check_integer(self.max_dead_reads, "max_dead_reads", minimum=1)
+        check_number(self.retry_delay_s, "retry_delay_s", minimum=0)
         if not isinstance(self.keypoints, bool):
             raise InvalidInputError(f"keypoints must be True or False, got {self.keypoints!r}")
-        _check_float(self.progress_interval_s, "progress_interval_s")
+        check_number(self.progress_interval_s, "progress_interval_s", above=0)
 
 
 @dataclass(frozen=True)
@@ -269,8 +268,8 @@ def first_hand_frame(source: FrameSource, *, mount: CameraMount | None = None,
     check_side(side)
     if not callable(getattr(source, "read", None)):
         raise InvalidInputError(f"source must have a read() method, got {type(source).__name__}")
-    max_reads = _check_int(max_reads, "max_reads", minimum=1)
-    delay = _check_float(retry_delay_s, "retry_delay_s", positive=False)
+    max_reads = check_integer(max_reads, "max_reads", minimum=1)
+    delay = check_number(retry_delay_s, "retry_delay_s", minimum=0)
     for _ in range(max_reads):
         frame = source.read()
         if not _usable(frame):

@@ -10,11 +10,12 @@ from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
 
+from .._checks import check_integer, check_number
 from ..errors import InvalidInputError
 from ..models import JOINT_LIMITS_DEG, JOINT_NAMES, HandShape, as_angles
 from ..models import pose_set as make_pose_set
 from ..render import CameraMount, as_mount
-from ._checks import _check_float, _check_int, _quiet_opencv
+from ._checks import _quiet_opencv
 
 if TYPE_CHECKING:
     import cv2
@@ -112,9 +113,9 @@ class CameraSource(_Source):
                  height_px: int | None = None) -> None:
         import cv2
 
-        self.index = _check_int(index, "camera index", minimum=0)
-        width_px = _check_int(width_px, "width_px", minimum=8, allow_none=True)
-        height_px = _check_int(height_px, "height_px", minimum=8, allow_none=True)
+        self.index = check_integer(index, "camera index", minimum=0)
+        width_px = check_integer(width_px, "width_px", minimum=8, allow_none=True)
+        height_px = check_integer(height_px, "height_px", minimum=8, allow_none=True)
         with _quiet_opencv():
             cap = cv2.VideoCapture(self.index)
             opened = cap.isOpened()
@@ -269,9 +270,9 @@ class SyntheticMotion:
         if self.poses not in ("natural", "paper", "named"):
             raise InvalidInputError(
                 f"poses must be 'natural', 'paper' or 'named', got {self.poses!r}")
-        _check_float(self.seconds_per_pose, "seconds_per_pose")
-        _check_int(self.count, "count", minimum=2)
-        _check_int(self.seed, "seed", minimum=0)
+        check_number(self.seconds_per_pose, "seconds_per_pose", above=0)
+        check_integer(self.count, "count", minimum=2)
+        check_integer(self.seed, "seed", minimum=0)
 
     def keyframes(self) -> np.ndarray:
         """Key poses, shape (K, 20), degrees, canonical order."""
@@ -354,8 +355,8 @@ class SyntheticSource(_Source):
         if shape is not None and not isinstance(shape, HandShape):
             raise InvalidInputError(f"shape must be a HandShape, got {type(shape).__name__}")
         as_mount(mount)  # None is the paper's device
-        self.fps = _check_float(fps, "fps")
-        self.frames = _check_int(frames, "frames", minimum=0, allow_none=True)
+        self.fps = check_number(fps, "fps", above=0)
+        self.frames = check_integer(frames, "frames", minimum=0, allow_none=True)
         if motion is None or isinstance(motion, SyntheticMotion):
             self.motion = motion or SyntheticMotion()
             self._keys = self.motion.keyframes()

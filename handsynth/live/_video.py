@@ -7,10 +7,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .._checks import check_number
 from .._io import PendingOutput
 from ..errors import InvalidInputError, OutputError
 from ..models import JOINT_LIMITS_DEG
-from ._checks import _check_float, _quiet_opencv
+from ._checks import _quiet_opencv
 
 if TYPE_CHECKING:
     import cv2
@@ -91,7 +92,7 @@ class SideBySideWriter:
                     f"lookup must be a PoseLookup (renders of its entries), got "
                     f"{type(lookup).__name__}")
         self.lookup = lookup
-        self.fps = _check_float(fps, "fps")
+        self.fps = check_number(fps, "fps", above=0)
         self.codec = codec
         self.labels = bool(labels)
         self.frames = 0

@@ -19,10 +19,10 @@ from pathlib import Path
 
 import numpy as np
 
+from .._checks import check_integer
 from .._io import check_output, os_error_reason
 from ..errors import InvalidInputError, OutputError
 from ..models import JOINT_NAMES, KEYPOINT_SITES
-from ._checks import _check_int
 
 __all__ = ["CsvRowWriter", "JsonlRowWriter", "live_columns", "open_row_writer"]
 
@@ -74,7 +74,7 @@ class _RowWriter:
     format = ""
 
     def __init__(self, target, *, columns=None, flush_every: int = 1, inputs=()) -> None:
-        self.flush_every = _check_int(flush_every, "flush_every", minimum=1)
+        self.flush_every = check_integer(flush_every, "flush_every", minimum=1)
         self.columns = tuple(columns) if columns is not None else live_columns()
         self._fd: int | None = None
         self._stream = None

@@ -12,10 +12,9 @@ public function its arrays through :func:`as_array`, :func:`as_number` and
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
+from ..._checks import check_number
 from ...errors import InvalidInputError
 
 __all__ = ["array_field", "as_array", "as_number", "as_sensors", "number_field"]
@@ -76,10 +75,7 @@ def as_number(value, what: str) -> float:
     InvalidInputError
         Anything else; the message names `what` and the value.
     """
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) \
-            or not math.isfinite(value):
-        raise InvalidInputError(f"{what} must be a finite number, got {_short(value)}")
-    return float(value)
+    return check_number(value, what)
 
 
 def number_field(d: dict, key: str) -> float:

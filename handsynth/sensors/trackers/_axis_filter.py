@@ -34,7 +34,7 @@ from scipy.spatial.transform import Rotation
 
 from ...errors import EstimationError, InvalidInputError
 from ..common import matrix_to_rotvec
-from ._checks import check_integer, check_interval, check_real, check_vector3
+from ._checks import check_integer, check_interval, check_number, check_vector3
 from ._recording import Recording
 
 __all__ = ["AxisAngleFilter", "AxisFilterResult", "relative_rotation_vectors"]
@@ -161,9 +161,9 @@ class AxisAngleFilter:
             raise InvalidInputError(
                 f"lateral_frame must be 'transmitter' or 'upper', got {self.lateral_frame!r}"
             )
-        set_(self, "reference_s", check_real(self.reference_s, "reference_s", minimum=0.0))
+        set_(self, "reference_s", check_number(self.reference_s, "reference_s", minimum=0.0))
         set_(self, "min_angle_deg",
-             check_real(self.min_angle_deg, "min_angle_deg", minimum=0.0, below=180.0))
+             check_number(self.min_angle_deg, "min_angle_deg", minimum=0.0, below=180.0))
 
     def _lateral_axis(self, recording: Recording, rv: np.ndarray) -> np.ndarray:
         """Width direction in the upper sensor frame, unit."""

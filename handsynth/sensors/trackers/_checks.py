@@ -1,6 +1,8 @@
 """Checks of the arguments of the tracker API: numbers, 3-vectors and arrays.
 
-Each check names the argument and repeats the value received in its
+The number checks are the package's own (:func:`handsynth._checks.check_number`,
+:func:`~handsynth._checks.check_integer`), re-exported here beside the
+tracker-only ones.  Each check names the argument and repeats the value received in its
 :class:`~handsynth.errors.InvalidInputError`, so that a wrong option fails
 where it is given and not later inside numpy or scipy.  Numbers are real
 numbers of any kind (``int``, ``float``, numpy scalars, 0-d numpy arrays)
@@ -9,118 +11,14 @@ but never ``bool``: ``True`` is a flag, not the number 1.
 
 from __future__ import annotations
 
-import numbers
 from typing import Any
 
 import numpy as np
 
+from ..._checks import check_integer, check_number
 from ...errors import InvalidInputError
 
-__all__ = ["check_array", "check_integer", "check_interval", "check_real", "check_vector3"]
-
-
-def _real_kind(value: Any) -> str | None:
-    """``"int"`` or ``"float"`` for a real number, else None (bool included)."""
-    if isinstance(value, (bool, np.bool_)):
-        return None
-    if isinstance(value, np.ndarray) and value.ndim == 0:
-        kind = value.dtype.kind
-        return "int" if kind in "iu" else "float" if kind == "f" else None
-    if isinstance(value, numbers.Integral):
-        return "int"
-    if isinstance(value, numbers.Real):
-        return "float"
-    return None
-
-
-def _bounds_text(minimum, maximum, above, below) -> str:
-    parts = []
-    if minimum is not None:
-        parts.append(f">= {minimum:g}")
-    if above is not None:
-        parts.append(f"> {above:g}")
-    if maximum is not None:
-        parts.append(f"<= {maximum:g}")
-    if below is not None:
-        parts.append(f"< {below:g}")
-    return " and ".join(parts)
-
-
-def _check_bounds(v: float, value: Any, name: str, what: str, minimum, maximum,
-                  above, below) -> None:
-    ok = ((minimum is None or v >= minimum) and (maximum is None or v <= maximum)
-          and (above is None or v > above) and (below is None or v < below))
-    if not ok:
-        raise InvalidInputError(
-            f"{name} must be {what} {_bounds_text(minimum, maximum, above, below)}, "
-            f"got {value!r}"
-        )
-
-
-def check_real(
-    value: Any,
-    name: str,
-    *,
-    minimum: float | None = None,
-    maximum: float | None = None,
-    above: float | None = None,
-    below: float | None = None,
-) -> float:
-    """A finite real number within bounds, as ``float``.
-
-    Parameters
-    ----------
-    value : object
-        What was given.
-    name : str
-        Name of the argument, for the message.
-    minimum, maximum : float, optional
-        Inclusive bounds.
-    above, below : float, optional
-        Exclusive bounds.
-
-    Returns
-    -------
-    float
-
-    Raises
-    ------
-    InvalidInputError
-        If `value` is not a real number (a string, None, a bool, an array),
-        is NaN or infinite, or is out of bounds.
-    """
-    if _real_kind(value) is None:
-        raise InvalidInputError(
-            f"{name} must be a real number, got {value!r} ({type(value).__name__})"
-        )
-    v = float(value)
-    if not np.isfinite(v):
-        raise InvalidInputError(f"{name} must be finite, got {value!r}")
-    _check_bounds(v, value, name, "a number", minimum, maximum, above, below)
-    return v
-
-
-def check_integer(
-    value: Any,
-    name: str,
-    *,
-    minimum: int | None = None,
-    maximum: int | None = None,
-) -> int:
-    """An integer (Python or numpy, not bool) within inclusive bounds, as ``int``.
-
-    Raises
-    ------
-    InvalidInputError
-        If `value` is not an integer or is out of bounds.
-    """
-    if _real_kind(value) != "int":
-        raise InvalidInputError(
-            f"{name} must be an integer, got {value!r} ({type(value).__name__})"
-        )
-    v = int(value)
-    _check_bounds(v, value, name, "an integer", minimum, maximum, None, None)
-    return v
+__all__ = ["check_array", "check_integer", "check_interval", "check_number", "check_vector3"]
 
 
 def check_interval(value: Any, name: str) -> tuple[float, float]:
@@ -135,9 +33,13 @@ def check_interval(value: Any, name: str) -> tuple[float, float]:
         pair: tuple[Any, ...] = tuple(value)
     except TypeError:
         pair = ()
-    if len(pair) != 2 or any(_real_kind(v) is None for v in pair):
+    if len(pair) != 2:
         raise InvalidInputError(f"{name} must be (low, high), two numbers, got {value!r}")
-    lo, hi = (check_real(v, f"{name}[{i}]") for i, v in enumerate(pair))
+    try:
+        lo, hi = (check_number(v, f"{name}[{i}]") for i, v in enumerate(pair))
+    except InvalidInputError:
+        raise InvalidInputError(f"{name} must be (low, high), two finite numbers, got "
+                                f"{value!r}") from None
     if not lo < hi:
         raise InvalidInputError(f"{name} must be (low, high) with low < high, got {value!r}")
     return lo, hi

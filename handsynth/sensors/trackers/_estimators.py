@@ -32,7 +32,7 @@ from ._axis_filter import (
     _reference_frames,
     principal_axis,
 )
-from ._checks import check_integer, check_real
+from ._checks import check_integer, check_number
 from ._determinability import (
     Determinability,
     _fit_residual,
@@ -190,11 +190,11 @@ class _Estimator:
             raise InvalidInputError(
                 f"axis_filter: expected an AxisAngleFilter, got {self.axis_filter!r}"
             )
-        self._set("min_rom_deg", check_real(self.min_rom_deg, "min_rom_deg", minimum=0.0))
+        self._set("min_rom_deg", check_number(self.min_rom_deg, "min_rom_deg", minimum=0.0))
         self._set("min_frames", check_integer(self.min_frames, "min_frames", minimum=3))
         for n in ("refuse_error_mm", "warn_error_mm", "axis_error_mm", "max_distance_mm",
                   "max_residual_mm"):
-            self._set(n, check_real(getattr(self, n), n, above=0.0))
+            self._set(n, check_number(getattr(self, n), n, above=0.0))
         if self.warn_error_mm > self.refuse_error_mm:
             raise InvalidInputError(
                 f"warn_error_mm ({self.warn_error_mm!r}) must not exceed refuse_error_mm "
@@ -451,7 +451,7 @@ class _VarianceSearch(_Estimator):
     def __post_init__(self) -> None:
         super().__post_init__()
         for n in ("xatol_mm", "fatol_mm2"):
-            self._set(n, check_real(getattr(self, n), n, above=0.0))
+            self._set(n, check_number(getattr(self, n), n, above=0.0))
         self._set("maxiter", check_integer(self.maxiter, "maxiter", minimum=1))
 
     def _search(self, points: np.ndarray, axis: np.ndarray,
@@ -523,7 +523,7 @@ class PlaneVarianceEstimator(_VarianceSearch):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        self._set("plane_size_mm", check_real(self.plane_size_mm, "plane_size_mm", above=0.0))
+        self._set("plane_size_mm", check_number(self.plane_size_mm, "plane_size_mm", above=0.0))
 
     def _plane(self, points: np.ndarray, axis: np.ndarray):
         """``P1, P2, P3`` (mm): plane through the receivers' midpoint, normal `axis`."""

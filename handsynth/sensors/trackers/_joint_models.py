@@ -35,7 +35,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from ..common import axis_angle_matrix
-from ._checks import check_real
+from ._checks import check_number
 
 __all__ = ["ArcJoint", "FingerJoint", "HingeJoint"]
 
@@ -47,8 +47,8 @@ _Z = np.array([0.0, 0.0, 1.0])
 def _check_sliding_joint(joint) -> None:
     """Raise InvalidInputError unless every field of `joint` is finite and its slide >= 0."""
     for name, v in asdict(joint).items():
-        check_real(v, name)
-    check_real(joint.slide_mm, "slide_mm", minimum=0.0)
+        check_number(v, name)
+    check_number(joint.slide_mm, "slide_mm", minimum=0.0)
 
 
 def _relative_rotation(axis: np.ndarray, theta: np.ndarray, psi: np.ndarray) -> np.ndarray:
@@ -161,7 +161,7 @@ class ArcJoint:
 
     def __post_init__(self) -> None:
         _check_sliding_joint(self)
-        check_real(self.arc_radius_mm, "arc_radius_mm", above=0.0)
+        check_number(self.arc_radius_mm, "arc_radius_mm", above=0.0)
 
     def pose(self, theta: np.ndarray, psi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Lower segment in the upper segment frame; see :meth:`HingeJoint.pose`."""

@@ -14,7 +14,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from ...errors import InvalidInputError
-from ._checks import check_interval, check_real
+from ._checks import check_interval, check_number
 
 __all__ = ["MAX_SAMPLES", "FlexionMotion", "MotionSamples"]
 
@@ -83,9 +83,9 @@ class FlexionMotion:
         d = asdict(self)
         check_interval(d.pop("flexion_range_deg"), "flexion_range_deg")
         for name, v in d.items():
-            check_real(v, name)
+            check_number(v, name)
         for name in ("duration_s", "rate_hz", "cycle_s"):
-            check_real(getattr(self, name), name, above=0.0)
+            check_number(getattr(self, name), name, above=0.0)
         if not 0 <= self.hold_s < self.duration_s:
             raise InvalidInputError(
                 f"duration_s ({self.duration_s!r} s) must be longer than hold_s "

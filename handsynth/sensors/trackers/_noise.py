@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..common import rotvec_to_matrix
-from ._checks import check_integer, check_real
+from ._checks import check_integer, check_number
 
 __all__ = ["DISTORTED_FIELD", "LIBERTY", "LIBERTY_RESOLUTION", "NO_NOISE", "FieldDistortion", "SensorNoise"]
 
@@ -52,7 +52,7 @@ class SensorNoise:
 
     def __post_init__(self) -> None:
         for name in ("position_sd_mm", "orientation_sd_deg", "correlation_time_s"):
-            check_real(getattr(self, name), name, minimum=0.0)
+            check_number(getattr(self, name), name, minimum=0.0)
 
     def _process(self, rng: np.random.Generator, times: np.ndarray, shape) -> np.ndarray:
         """Unit-variance white or Gauss-Markov samples, ``(n,) + shape``."""
@@ -147,8 +147,8 @@ class FieldDistortion:
     def __post_init__(self) -> None:
         for name in ("position_rms_mm", "orientation_rms_deg", "drift_mm", "drift_deg",
                      "white_mm", "white_deg"):
-            check_real(getattr(self, name), name, minimum=0.0)
-        check_real(self.wavelength_mm, "wavelength_mm", above=0.0)
+            check_number(getattr(self, name), name, minimum=0.0)
+        check_number(self.wavelength_mm, "wavelength_mm", above=0.0)
         check_integer(self.n_waves, "n_waves", minimum=1)
 
     def _field(self, rng: np.random.Generator, rms: float):

@@ -72,7 +72,7 @@ from scipy.spatial.transform import Rotation
 
 from ..._csv import read_text
 from ...errors import InvalidInputError, RecordingError
-from ._checks import check_real
+from ._checks import check_number
 from ._recording import Recording
 
 __all__ = ["DEFAULT_COLUMNS", "read_polhemus", "read_recording"]
@@ -737,8 +737,8 @@ def read_polhemus(
         raise InvalidInputError(f"angles: expected 'euler' or 'quaternion', got {angles!r}")
     if on_invalid not in ("raise", "drop"):
         raise InvalidInputError(f"on_invalid: expected 'drop' or 'raise', got {on_invalid!r}")
-    check_real(rate_hz, "rate_hz", above=0.0)
-    check_real(glitch_mm, "glitch_mm", above=0.0)
+    check_number(rate_hz, "rate_hz", above=0.0)
+    check_number(glitch_mm, "glitch_mm", above=0.0)
     if sensors is not None and (len(sensors) != 2 or sensors[0] == sensors[1]):
         raise InvalidInputError(f"sensors: expected two different station numbers, got {sensors!r}")
 

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._checks import check_real
+from ._checks import check_number
 from ._estimators import _Estimator, _Frames
 
 __all__ = ["ScoreEstimator"]
@@ -50,7 +50,7 @@ class ScoreEstimator(_Estimator):
     def __post_init__(self) -> None:
         super().__post_init__()
         if self.rcond is not None:
-            self._set("rcond", check_real(self.rcond, "rcond", minimum=0.0, below=1.0))
+            self._set("rcond", check_number(self.rcond, "rcond", minimum=0.0, below=1.0))
 
     def _solve(self, f: _Frames):
         rec = f.recording

@@ -16,7 +16,7 @@ from scipy.spatial.transform import Rotation
 
 from ...errors import InvalidInputError
 from ..common import axis_angle_matrix
-from ._checks import check_real
+from ._checks import check_number
 from ._geometry import joint_geometry
 from ._joint_models import ArcJoint, FingerJoint, HingeJoint
 from ._motion import FlexionMotion
@@ -54,7 +54,7 @@ class SensorMount:
 
     def __post_init__(self) -> None:
         for name, v in asdict(self).items():
-            check_real(v, name)
+            check_number(v, name)
 
     def frame(self, length: float) -> tuple[np.ndarray, np.ndarray]:
         """Receiver pose in the segment frame: position (3,) m, rotation (3, 3)."""
