@@ -212,9 +212,7 @@ class PoseLookup:
         if not isinstance(database, Database):
             raise InvalidInputError(
                 f"database must be a handsynth.db.Database, got {type(database).__name__}")
-        if options is not None and not isinstance(options, SearchOptions):
-            raise InvalidInputError(
-                f"options must be SearchOptions, got {type(options).__name__}")
+        search_options = check_options(options, SearchOptions)
         if temporal is not None and not isinstance(temporal, (bool, np.bool_)):
             raise InvalidInputError(f"temporal must be True, False or None, got {temporal!r}")
         if ties not in (None, "mean", "first"):
@@ -225,7 +223,7 @@ class PoseLookup:
                 "ties='mean' cannot be honoured by the approximate index (it tracks no ties); "
                 "pass ties='first' or leave ties unset")
         self.database = database
-        self.options = check_options(options, SearchOptions)
+        self.options = search_options
         self.temporal = True if temporal is None else bool(temporal)
         self.ties = ties or ("first" if approximate_used else "mean")
         # what the caller chose, for the combinations that calibrated() cannot honour
