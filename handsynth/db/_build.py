@@ -39,7 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._checks import check_options, check_side
+from .._checks import check_integer, check_options, check_side
 from .._io import make_folder, os_error_reason
 from ..errors import (
     DatabaseError,
@@ -116,11 +116,8 @@ class BuildOptions:
             raise InvalidInputError(
                 f"pose_set must be one of {', '.join(POSE_SETS)}, got {self.pose_set!r}")
         for name in ("count", "seed"):
-            v = getattr(self, name)
-            lo = 1 if name == "count" else 0
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < lo:
-                raise InvalidInputError(f"{name} must be an integer >= {lo}, got {v!r}")
-            object.__setattr__(self, name, int(v))
+            v = check_integer(getattr(self, name), name, minimum=1 if name == "count" else 0)
+            object.__setattr__(self, name, v)
         if self.count > MAX_COUNT:
             raise InvalidInputError(
                 f"count must be at most {MAX_COUNT:,} poses per shape (a database is held in "

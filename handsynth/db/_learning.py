@@ -35,7 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._checks import check_options
+from .._checks import check_number, check_options
 from .._io import atomic_open, make_folder
 from ..errors import DatabaseCorruptError, DatabaseError, InvalidInputError
 from ..models import GRID_LEVELS, JOINT_LIMITS_DEG, HandShape, natural_pose_set
@@ -151,10 +151,7 @@ class LearningSetOptions:
                                         f"got {v!r}")
             object.__setattr__(self, name, int(v))
         spread = self.hand_spread
-        if (isinstance(spread, bool) or not isinstance(spread, (int, float, np.number))
-                or not np.isfinite(spread) or spread < 0):
-            raise InvalidInputError(f"LearningSetOptions.hand_spread must be a finite number "
-                                    f">= 0, got {spread!r}")
+        check_number(spread, "LearningSetOptions.hand_spread", minimum=0)
         if not isinstance(self.mount_variation, MountVariation):  # which checks its s.d.s
             raise InvalidInputError("LearningSetOptions.mount_variation must be a MountVariation")
         cells = self.cells

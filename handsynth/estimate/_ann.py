@@ -96,7 +96,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from .._checks import check_options
+from .._checks import check_integer, check_options
 from .._io import atomic_open
 from ..db import HLAC_SIZE
 from ..errors import DatabaseError, InvalidInputError
@@ -827,12 +827,9 @@ class ApproximateIndex:
             `options` not :class:`SearchOptions`, `nprobe` not an integer
             >= 1, `seed` outside ``[0, N)``.
         """
-        opts = SearchOptions() if options is None else options
-        if not isinstance(opts, SearchOptions):
-            raise InvalidInputError(f"options must be SearchOptions, got {type(options).__name__}")
-        probe = self.options.nprobe if nprobe is None else nprobe
-        if isinstance(probe, bool) or not isinstance(probe, (int, np.integer)) or probe < 1:
-            raise InvalidInputError(f"nprobe must be an integer >= 1, got {nprobe!r}")
+        opts = check_options(options, SearchOptions)
+        probe = check_integer(self.options.nprobe if nprobe is None else nprobe, "nprobe",
+                              minimum=1)
         n, nlist = len(self.tables), self.nlist
         s = -1 if seed is None else seed
         if isinstance(s, bool) or not isinstance(s, (int, np.integer)) or not -1 <= s < n:
@@ -874,6 +871,4 @@ def _check_tables(tables) -> None:
 
 
 def _check_seed(seed) -> int:
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise InvalidInputError(f"seed must be an integer >= 0, got {seed!r}")
-    return int(seed)
+    return check_integer(seed, "seed", minimum=0)

@@ -65,7 +65,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._checks import check_options, check_side
+from .._checks import check_integer, check_options, check_side
 from .._io import atomic_open, os_error_reason
 from ..db import LearningSet, LearningSetOptions, learning_set
 from ..errors import (
@@ -212,14 +212,9 @@ class LearnedOptions:
             raise InvalidInputError(f"LearnedOptions.kind must be 'mlp', 'knn' or 'fingers', "
                                     f"got {self.kind!r}")
         for name in ("lists", "probes", "seed"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 0:
-                raise InvalidInputError(f"LearnedOptions.{name} must be an integer >= 0, got {v!r}")
+            check_integer(getattr(self, name), f"LearnedOptions.{name}", minimum=0)
         for name in ("components", "epochs", "batch", "k"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
-                raise InvalidInputError(f"LearnedOptions.{name} must be a positive integer, "
-                                        f"got {v!r}")
+            check_integer(getattr(self, name), f"LearnedOptions.{name}", minimum=1)
         object.__setattr__(self, "hidden", tuple(int(h) for h in self.hidden))
         if not self.hidden or min(self.hidden) < 1:
             raise InvalidInputError(f"LearnedOptions.hidden must be positive widths, "

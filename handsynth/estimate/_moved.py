@@ -24,7 +24,7 @@ import cv2
 import numpy as np
 from scipy import ndimage
 
-from .._checks import check_options
+from .._checks import check_integer, check_options
 from ..errors import InvalidInputError
 from ..render import CameraMount, wrist_cut_keep
 
@@ -59,10 +59,7 @@ class MoveCheckOptions:
 
     def __post_init__(self) -> None:
         for name, lo in (("band_cells", 1), ("window", 1)):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < lo:
-                raise InvalidInputError(f"MoveCheckOptions.{name} must be an integer >= {lo}, "
-                                        f"got {v!r}")
+            check_integer(getattr(self, name), f"MoveCheckOptions.{name}", minimum=lo)
         lim = self.limit
         if isinstance(lim, bool) or not isinstance(lim, (int, float)) or not 0 < lim < 1:
             raise InvalidInputError(f"MoveCheckOptions.limit must be in (0, 1), got {lim!r}")

@@ -66,7 +66,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from .._checks import check_options
+from .._checks import check_number, check_options
 from ..db import HLAC_SIZE, popcount64
 from ..errors import InvalidInputError
 from ._score import SURVIVOR, SURVIVOR_ABOVE_BEST, Constants, Query, Rows, score
@@ -116,11 +116,8 @@ class SearchOptions:
                 if not isinstance(v, bool):
                     raise InvalidInputError(f"SearchOptions.prune must be a bool, got {v!r}")
                 continue
-            if isinstance(v, bool) or not isinstance(v, (int, float, np.number)) \
-                    or not math.isfinite(v) or v < 0:
-                raise InvalidInputError(
-                    f"SearchOptions.{f.name} must be a finite number >= 0, got {v!r}")
-            object.__setattr__(self, f.name, float(v))
+            object.__setattr__(self, f.name,
+                               check_number(v, f"SearchOptions.{f.name}", minimum=0))
 
 
 @dataclass(frozen=True)

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._checks import check_options
+from .._checks import check_number, check_options
 from ..errors import InvalidInputError
 from ._lookup import PoseEstimate
 
@@ -94,10 +94,7 @@ def _alpha(cutoff_hz, dt_s: float):
 
 
 def _check_rate(rate_hz) -> float:
-    if isinstance(rate_hz, bool) or not isinstance(rate_hz, (int, float, np.number)) \
-            or not np.isfinite(rate_hz) or rate_hz <= 0:
-        raise InvalidInputError(f"rate_hz must be a positive number, got {rate_hz!r}")
-    return float(rate_hz)
+    return check_number(rate_hz, "rate_hz", above=0)
 
 
 class OneEuroFilter:

@@ -41,7 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._checks import check_options
+from .._checks import check_integer, check_options
 from ..errors import InvalidInputError
 from ..models import JOINT_NAMES, HandShape
 from ..render import (
@@ -106,10 +106,7 @@ class ProtocolOptions:
     slip: float = 0.0
 
     def __post_init__(self) -> None:
-        if isinstance(self.frames, bool) or not isinstance(self.frames, (int, np.integer)) \
-                or self.frames < 2:
-            raise InvalidInputError(f"ProtocolOptions.frames must be an integer >= 2, "
-                                    f"got {self.frames!r}")
+        check_integer(self.frames, "ProtocolOptions.frames", minimum=2)
         bad = [p for p in self.pose_sets if p not in ("paper", "natural")]
         if bad or not self.pose_sets:
             raise InvalidInputError(f"ProtocolOptions.pose_sets must name 'paper' and/or "

@@ -7,7 +7,7 @@ from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
-from .._checks import check_side
+from .._checks import check_number, check_side
 from ..errors import InvalidCameraError
 from ..models import DORSUM_Z_MM
 
@@ -89,9 +89,7 @@ class CameraMount:
             v = getattr(self, f.name)
             if f.name == "wrist_cut_mm" and v is None:
                 continue
-            if isinstance(v, bool) or not isinstance(v, (int, float, np.number)) \
-                    or not math.isfinite(v):
-                raise InvalidCameraError(f"CameraMount.{f.name} must be a finite number, got {v!r}")
+            check_number(v, f"CameraMount.{f.name}", error=InvalidCameraError)
         if self.height_mm <= 0:
             raise InvalidCameraError(f"CameraMount.height_mm must be > 0, got {self.height_mm!r}")
         if not 1.0 <= self.fov_deg <= 170.0:

@@ -65,7 +65,7 @@ def test_bad_options_are_named(kwargs, message):
 
 
 def test_bad_rates_and_arrays_are_named():
-    with pytest.raises(InvalidInputError, match="rate_hz must be a positive number, got 0"):
+    with pytest.raises(InvalidInputError, match="rate_hz must be a finite number > 0, got 0"):
         OneEuroFilter(0)
     with pytest.raises(InvalidInputError, match="finite \\(N, J\\) array"):
         one_euro(np.zeros(5), rate_hz=30)

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..._checks import check_integer
 from ..._io import write_text
 from ...errors import EstimationError, InvalidInputError, RecordingError
 from ...models import natural_pose_set
@@ -101,12 +102,8 @@ class CalibrationOptions:
             raise InvalidInputError(f"CalibrationOptions.pooled must be True or False, "
                                     f"got {self.pooled!r}")
         for name, lo, hi in (("n_points", 1, None), ("synergy_k", 0, 20)):
-            v = getattr(self, name)
-            if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, np.integer)) \
-                    or v < lo or (hi is not None and v > hi):
-                raise InvalidInputError(
-                    f"CalibrationOptions.{name} must be an integer >= {lo}"
-                    + (f" and <= {hi}" if hi is not None else "") + f", got {v!r}")
+            check_integer(getattr(self, name), f"CalibrationOptions.{name}", minimum=lo,
+                          maximum=hi)
 
 
 _SYNERGY_CACHE: dict[int, Synergies] = {}
