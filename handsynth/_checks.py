@@ -159,7 +159,10 @@ def check_number(value: Any, name: str, *, minimum: float | None = None,
         return None
     bounds = _bounds_text(minimum, maximum, above, below)
     kind_ok = _number_kind(value) is not None
-    v = float(value) if kind_ok else math.nan
+    try:
+        v = float(value) if kind_ok else math.nan
+    except OverflowError:  # an int too large for a float
+        v = math.inf
     ok = (math.isfinite(v) and (minimum is None or v >= minimum)
           and (maximum is None or v <= maximum) and (above is None or v > above)
           and (below is None or v < below))

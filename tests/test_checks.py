@@ -107,3 +107,10 @@ def test_numbers_are_finite_real_numbers_within_bounds_and_named_otherwise():
             check_integer(v, "n", minimum=1, maximum=5)
     with pytest.raises(InvalidCameraError, match=r"^n must be an integer >= 1, got 0$"):
         check_integer(0, "n", minimum=1, error=InvalidCameraError)
+
+
+def test_an_integer_too_large_for_a_float_is_not_finite():
+    from handsynth._checks import check_number
+
+    with pytest.raises(InvalidInputError, match=r"^x must be a finite number, got 1000"):
+        check_number(10 ** 400, "x")

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..._csv import column_index, read_rows
+from ..._csv import _SEP_LINE, _UNDERSCORE_NUMBER, column_index, read_rows, read_text
 from ..._io import atomic_open
 from ...errors import InvalidInputError, RecordingError
 from ._model import GRAVITY_MPS2
@@ -388,16 +388,22 @@ def check_unique_names(sensors, *, error: type[InvalidInputError] = RecordingErr
 def check_rate(rate_hz, *, source: str = "recording") -> float:
     """`rate_hz` as a float, refusing a rate that is not a finite number > 0.
 
+    Ints, floats and NumPy integer or floating scalars are numbers; a bool or
+    a text (``"100"``) is not, although ``float()`` would take it.
+
     Raises
     ------
     RecordingError
         `rate_hz` is not a number, not finite, or not positive.
     """
+    if isinstance(rate_hz, (bool, np.bool_)) or not isinstance(
+            rate_hz, (int, float, np.integer, np.floating)):
+        raise RecordingError(f"{source}: sampling rate rate_hz (--rate) is {rate_hz!r}, "
+                             "not a number")
     try:
         rate = float(rate_hz)
-    except (TypeError, ValueError):
-        raise RecordingError(f"{source}: sampling rate rate_hz (--rate) is {rate_hz!r}, "
-                             "not a number") from None
+    except OverflowError:  # an int too large for a float
+        rate = math.inf
     if not (math.isfinite(rate) and 0 < rate <= _MAX_RATE_HZ):
         raise RecordingError(f"{source}: sampling rate rate_hz (--rate) must be a finite number "
                              f"> 0 Hz and at most {_MAX_RATE_HZ:g} Hz, got {rate_hz!r}")
@@ -405,11 +411,16 @@ def check_rate(rate_hz, *, source: str = "recording") -> float:
 
 
 def check_static(static_s, *, source: str = "recording") -> float:
-    """`static_s` as a float, refusing a length that is not a finite number > 0."""
+    """`static_s` as a float, refusing a length that is not a finite number > 0.
+
+    A bool or a text (``"2"``) is not a number, although ``float()`` would take it.
+    """
+    is_number = not isinstance(static_s, (bool, np.bool_)) and isinstance(
+        static_s, (int, float, np.integer, np.floating))
     try:
-        value = float(static_s)
-    except (TypeError, ValueError):
-        value = math.nan
+        value = float(static_s) if is_number else math.nan
+    except OverflowError:  # an int too large for a float
+        value = math.inf
     if not (math.isfinite(value) and value > 0):
         raise RecordingError(f"{source}: the static start static_s (--static) must be a finite "
                              f"number of seconds > 0, got {static_s!r}")
@@ -451,6 +462,123 @@ def write_imu_csv(rec: ImuRecording, path) -> None:
         f.write(f"# handsynth imu recording; acc m/s2, gyr rad/s, mag uT; rate_hz={rec.rate_hz:g}\n")
         f.write(",".join(cols) + "\n")
         np.savetxt(f, table, delimiter=",", fmt="%.9g")
+
+
+def _columns(header, col, path) -> tuple[list[str], str | None, list[str]]:
+    """The sensors, the time column (or None) and the columns to read, by name."""
+    sensors = [h[: -len("_acc_x")] for h in header if h.endswith("_acc_x")]
+    if not sensors:
+        raise RecordingError(f"{path}: no '<sensor>_acc_x' column found")
+    channels = [f"{s}_{c}_{a}" for s in sensors for c in ("acc", "gyr", "mag") for a in _AXES]
+    missing = [name for name in channels if name not in col]
+    if missing:
+        raise RecordingError(f"{path}: missing column(s) {', '.join(missing[:6])}")
+    time_name = "time_s" if "time_s" in col else "time_ms" if "time_ms" in col else None
+    return sensors, time_name, ([time_name] if time_name else []) + channels
+
+
+def _read_any_csv(path: Path) -> tuple:
+    """Any delimited text a spreadsheet or logger writes (:func:`read_rows`), checked.
+
+    Returns
+    -------
+    col : dict
+        Column of each name of the header.
+    sensors : list of str
+    time_name : str or None
+    needed : list of str
+        The columns read, in the order of `table`'s.
+    lines : list of int
+        Line of each row of `table` in the file.
+    table : ndarray, shape (N, len(needed)), float64
+    cell : callable
+        ``cell(i, j)``: the text of row `i`, column `j`, for messages.
+    """
+    content = read_rows(path, what="IMU recording")
+    if len(content.rows) < 3:
+        raise RecordingError(f"{path}: needs a header and at least 2 rows, got "
+                             f"{len(content.rows)} lines")
+    header = content.rows[0]
+    col = column_index(header, path=path, line=content.lines[0])
+    for row, line in zip(content.rows[1:], content.lines[1:]):
+        if len(row) != len(header):
+            raise RecordingError(f"{path}, line {line}: {len(row)} values but "
+                                 f"{len(header)} columns")
+    sensors, time_name, needed = _columns(header, col, path)
+    idx = [col[name] for name in needed]
+    try:
+        table = np.array([[row[i] for i in idx] for row in content.rows[1:]], dtype=np.float64)
+    except ValueError:  # find the cell to name
+        for row, line in zip(content.rows[1:], content.lines[1:]):
+            for name, i in zip(needed, idx):
+                try:
+                    float(row[i])
+                except ValueError:
+                    raise RecordingError(f"{path}, line {line}: {name} is {row[i]!r}, "
+                                         "not a number") from None
+        raise
+    rows = content.rows
+    return col, sensors, time_name, needed, content.lines[1:], table, \
+        lambda i, j: rows[1 + i][j]
+
+
+def _read_plain_csv(path: Path) -> tuple | None:
+    """A plain comma-separated file parsed straight into floats, else None.
+
+    Plain: ``,`` between the fields (as :func:`read_rows` would find it), no
+    quotes, NUL bytes or ``sep=`` line, no underscore in a data row, no row
+    of empty cells, as many fields on every row as in the header, a line end
+    after the last row, and every cell read a number by
+    :func:`numpy.loadtxt`.  Any other file, and every file in which
+    :func:`_read_any_csv` would find an error (but one in the header's
+    columns, refused here with its message) or warn, is left to it (None);
+    where this reads a file, both give the same table.  Its peak memory is
+    about twice the file's size, against about ten times for rows of strings.
+
+    Returns
+    -------
+    tuple or None
+        As :func:`_read_any_csv`.
+    """
+    text = read_text(path, what="CSV text (IMU recording)")
+    ends_open = not text.endswith(("\n", "\r"))
+    all_lines = text.splitlines()
+    del text
+    nos = [no for no, ln in enumerate(all_lines, start=1)
+           if ln.strip() and not ln.lstrip().startswith("#")]
+    if len(nos) < 3 or _SEP_LINE.fullmatch(all_lines[nos[0] - 1]) \
+            or (ends_open and nos[-1] == len(all_lines)):
+        return None
+    sample = [all_lines[no - 1] for no in nos[:50]]
+    votes = {d: sum(d in ln for ln in sample) for d in (";", "\t", ",")}
+    if votes[";"] > len(sample) // 2 or votes["\t"] > len(sample) // 2 \
+            or votes[","] <= len(sample) // 2:
+        return None  # read_rows would take another delimiter
+    if any('"' in all_lines[no - 1] or "\x00" in all_lines[no - 1] for no in nos):
+        return None  # csv.reader's business: quoted cells, NUL bytes
+    header = [c.strip() for c in all_lines[nos[0] - 1].split(",")]
+    if not any(header) or any("_" in c and _UNDERSCORE_NUMBER.fullmatch(c)
+                              and any(ch.isdigit() for ch in c) for c in header):
+        return None
+    commas = len(header) - 1
+    data = [all_lines[no - 1] for no in nos[1:]]
+    for ln in data:
+        if ln.count(",") != commas or "_" in ln or not ln.replace(",", "").strip():
+            return None
+    col = column_index(header, path=path, line=nos[0])
+    sensors, time_name, needed = _columns(header, col, path)
+    try:
+        table = np.loadtxt(data, dtype=np.float64, delimiter=",", comments=None,
+                           quotechar=None, usecols=[col[name] for name in needed], ndmin=2)
+    except ValueError:  # a cell that is not a number: read_rows names it
+        return None
+    del data, all_lines
+
+    def cell(i, j):
+        ln = read_text(path, what="CSV text (IMU recording)").splitlines()[nos[1 + i] - 1]
+        return ln.split(",")[j].strip()
+
+    return col, sensors, time_name, needed, nos[1:], table, cell
 
 
 def read_imu_csv(path, *, acc_units: str = "m/s2", gyr_units: str = "rad/s",
@@ -501,57 +629,29 @@ def read_imu_csv(path, *, acc_units: str = "m/s2", gyr_units: str = "rad/s",
         rate_hz = check_rate(rate_hz, source=str(path))
     if not path.is_file():
         raise RecordingError(f"{path}: no such file")
-    content = read_rows(path, what="IMU recording")
-    if len(content.rows) < 3:
-        raise RecordingError(f"{path}: needs a header and at least 2 rows, got "
-                             f"{len(content.rows)} lines")
-    header = content.rows[0]
-    col = column_index(header, path=path, line=content.lines[0])
-    for row, line in zip(content.rows[1:], content.lines[1:]):
-        if len(row) != len(header):
-            raise RecordingError(f"{path}, line {line}: {len(row)} values but "
-                                 f"{len(header)} columns")
-    sensors: list[str] = []
-    for h in header:
-        if h.endswith("_acc_x"):
-            sensors.append(h[: -len("_acc_x")])
-    if not sensors:
-        raise RecordingError(f"{path}: no '<sensor>_acc_x' column found")
-    channels = [f"{s}_{c}_{a}" for s in sensors for c in ("acc", "gyr", "mag") for a in _AXES]
-    missing = [name for name in channels if name not in col]
-    if missing:
-        raise RecordingError(f"{path}: missing column(s) {', '.join(missing[:6])}")
-    time_name = "time_s" if "time_s" in col else "time_ms" if "time_ms" in col else None
-    needed = ([time_name] if time_name else []) + channels
-    idx = [col[name] for name in needed]
+    # a plain comma-separated file (what write_imu_csv and most loggers write) is parsed
+    # straight into floats; anything else, and every file with an error in it, goes through
+    # read_rows, which names the error (a recording's rows as strings take ~10x its size)
+    parsed = _read_plain_csv(path)
+    if parsed is None:
+        parsed = _read_any_csv(path)
+    col, sensors, time_name, needed, lines, table, cell = parsed
     pos = {name: i for i, name in enumerate(needed)}
-    try:
-        table = np.array([[row[i] for i in idx] for row in content.rows[1:]], dtype=np.float64)
-    except ValueError:  # find the cell to name
-        for row, line in zip(content.rows[1:], content.lines[1:]):
-            for name, i in zip(needed, idx):
-                try:
-                    float(row[i])
-                except ValueError:
-                    raise RecordingError(f"{path}, line {line}: {name} is {row[i]!r}, "
-                                         "not a number") from None
-        raise
-    lines = content.lines[1:]
     if time_name is not None:
         t = table[:, pos[time_name]] * (1.0 if time_name == "time_s" else 1e-3)
         bad = np.nonzero(~np.isfinite(t))[0]
         if bad.size:
             i = int(bad[0])
             raise RecordingError(f"{path}, line {lines[i]}: {time_name} is "
-                                 f"{content.rows[1 + i][col[time_name]]!r}, not a number")
+                                 f"{cell(i, col[time_name])!r}, not a number")
         dt = np.diff(t)
         back = np.nonzero(dt <= 0)[0]
         if back.size:
             i = int(back[0])
             raise RecordingError(
                 f"{path}, line {lines[i + 1]}: time stamps do not increase ({time_name} "
-                f"{content.rows[2 + i][col[time_name]]} after "
-                f"{content.rows[1 + i][col[time_name]]} on line {lines[i]})")
+                f"{cell(i + 1, col[time_name])} after "
+                f"{cell(i, col[time_name])} on line {lines[i]})")
         step = (t[-1] - t[0]) / (t.size - 1)
         jitter = 1.4826 * np.median(np.abs(dt - np.median(dt)))
         limit = max(max_gap * step, step + 6.0 * jitter)

@@ -3,9 +3,10 @@ import dataclasses
 import numpy as np
 import pytest
 
-from handsynth.errors import RecordingError
+from handsynth.errors import InvalidInputError, RecordingError
 from handsynth.sensors.imu import (
     EVAL_NOISE,
+    ImuRecording,
     check_recording,
     free_motion,
     read_imu_csv,
@@ -194,3 +195,105 @@ def test_a_dead_magnetometer_is_named(free_rec):
 def test_static_length_is_checked(free_rec):
     with pytest.raises(RecordingError, match=r"static_s \(--static\) must be a finite"):
         check_recording(free_rec, static_s=float("nan"))
+
+
+@pytest.mark.parametrize("bad", ["100", True, False, None, b"100", [100.0], np.bool_(True)])
+def test_a_rate_that_is_not_a_number_is_refused(bad):
+    z = np.zeros((1, 3, 3))
+    with pytest.raises(InvalidInputError, match=r"rate_hz .*is .*not a number") as info:
+        ImuRecording(rate_hz=bad, sensors=("forearm_1",), acc=z, gyr=z, mag=z)
+    assert repr(bad) in str(info.value)
+
+
+@pytest.mark.parametrize("good", [100, 100.0, np.float32(100.0), np.float64(100.0), np.int64(100),
+                                  np.uint16(100)])
+def test_a_rate_of_any_numeric_type_is_a_float(good):
+    z = np.zeros((1, 3, 3))
+    rec = ImuRecording(rate_hz=good, sensors=("forearm_1",), acc=z, gyr=z, mag=z)
+    assert type(rec.rate_hz) is float and rec.rate_hz == 100.0
+
+
+def test_a_rate_too_large_for_a_float_is_refused():
+    z = np.zeros((1, 3, 3))
+    with pytest.raises(InvalidInputError, match=r"rate_hz \(--rate\) must be a finite number"):
+        ImuRecording(rate_hz=10 ** 400, sensors=("forearm_1",), acc=z, gyr=z, mag=z)
+
+
+def _spy_read_rows(monkeypatch):
+    import handsynth.sensors.imu._recording as mod
+
+    calls = []
+
+    def spy(*args, **kwargs):
+        calls.append(args[0])
+        return read_rows(*args, **kwargs)
+
+    from handsynth._csv import read_rows
+    monkeypatch.setattr(mod, "read_rows", spy)
+    return calls
+
+
+def test_a_plain_csv_is_read_as_numbers_and_others_as_rows_alike(tmp_path, free_rec, monkeypatch):
+    calls = _spy_read_rows(monkeypatch)
+    rec = free_rec.subset(("forearm_1", "index_distal")).slice(0, 200)
+    p = tmp_path / "rec.csv"
+    write_imu_csv(rec, p)
+    plain = read_imu_csv(p, gyr_units="deg/s")
+    assert calls == []  # parsed without rows of strings
+    lines = p.read_text().splitlines()
+    noted = tmp_path / "noted.csv"  # a quoted note column: read_rows' business
+    noted.write_text("\n".join([lines[0], lines[1] + ",note"]
+                               + [ln + ',"a, b"' for ln in lines[2:]]) + "\n")
+    general = read_imu_csv(noted, gyr_units="deg/s")
+    assert calls == [noted]
+    assert general.sensors == plain.sensors and general.rate_hz == plain.rate_hz
+    for ch in ("acc", "gyr", "mag"):
+        assert np.array_equal(getattr(general, ch), getattr(plain, ch))
+    assert np.allclose(plain.gyr * 180 / np.pi, rec.gyr, atol=1e-6)
+
+
+def test_a_plain_csv_with_an_error_is_named_as_before(tmp_path, free_rec, monkeypatch):
+    calls = _spy_read_rows(monkeypatch)
+    p = tmp_path / "rec.csv"
+    write_imu_csv(free_rec.subset(("forearm_1",)).slice(0, 50), p)
+    lines = p.read_text().splitlines()
+    short = tmp_path / "short.csv"
+    short.write_text("\n".join(lines[:7] + [lines[7].rsplit(",", 1)[0]] + lines[8:]) + "\n")
+    with pytest.raises(RecordingError, match=r"short.csv, line 8: 9 values but 10 columns"):
+        read_imu_csv(short)
+    empty = tmp_path / "empty.csv"
+    empty.write_text("\n".join(lines[:7] + [lines[7].split(",", 1)[0] + "," * 9] + lines[8:])
+                     + "\n")
+    with pytest.raises(RecordingError, match=r"empty.csv, line 8: forearm_1_acc_x is '', not a"):
+        read_imu_csv(empty)
+    cut = tmp_path / "cut.csv"  # cut off mid-line: the last row is left out with a warning
+    cut.write_text("\n".join(lines) + "\n" + lines[-1][:12])
+    with pytest.warns(UserWarning, match=r"cut.csv, line 53: the file ends without a line end"):
+        assert read_imu_csv(cut).n == 50
+    assert calls == [short, empty, cut]
+
+
+def test_reading_a_plain_csv_takes_about_twice_its_size(tmp_path, free_rec):
+    import tracemalloc
+
+    p = tmp_path / "rec.csv"
+    write_imu_csv(free_rec, p)  # 20 sensors, 1,200 samples: about 2 MB
+    size = p.stat().st_size
+    tracemalloc.start()
+    try:
+        rec = read_imu_csv(p)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert rec.n == free_rec.n
+    assert peak < 3.5 * size, f"peak {peak / size:.1f} times the file's size"
+
+
+@pytest.mark.parametrize("bad", ["2", True, b"2", [2.0], 10 ** 400])
+def test_a_static_start_that_is_not_a_number_is_refused(bad):
+    from handsynth.sensors.imu._recording import check_static
+
+    with pytest.raises(RecordingError, match=r"static_s \(--static\) must be a finite number of "
+                                             r"seconds > 0, got "):
+        check_static(bad)
+    assert check_static(np.float32(2.0)) == 2.0
