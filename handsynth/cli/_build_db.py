@@ -78,7 +78,7 @@ def _printer(stream):
 @click.option("--mount", type=click.Choice(["paper", "whole-hand"]), default="paper",
               show_default=True, help="Camera mount.")
 @click.option("--render-size", default=None,
-              help="WIDTHxHEIGHT of the masks before preprocessing [default: 240x160].")
+              help="WIDTHxHEIGHT of the masks before preprocessing [default: 720x480].")
 @click.option("--workers", type=int, default=None,
               help="Worker processes [default: all cores].")
 @click.option("--executor", type=click.Choice(["process", "ray"]), default="process",

@@ -239,3 +239,12 @@ def test_a_second_build_of_the_same_folder_is_refused(tmp_path):
     finally:
         first.kill()
         first.communicate()
+
+
+def test_help_states_the_default_render_size():
+    from handsynth.db import DEFAULT_RENDER_SIZE
+
+    res = CliRunner().invoke(cli, ["build-db", "--help"])
+    assert res.exit_code == 0
+    w, h = DEFAULT_RENDER_SIZE
+    assert f"[default: {w}x{h}]" in " ".join(res.output.split())

@@ -122,6 +122,9 @@ def test_eval_json_has_the_seed_table_layout(tmp_path):
     data = json.loads(out.read_text())
     r = data["results"]["5dt"]
     assert r["config"]["seeds"] == [0, 1]
+    # what was asked, not averaged over the seeds (the mean of seeds 0 and 1 was 0.5)
+    assert r["config"]["seed"] == 0 and r["config"]["trials"] == 3
+    assert type(r["config"]["trials"]) is int and r["config"]["rate_hz"] == 60.0
     assert r["config"]["representative_motions"] == ["standard", "lateral_contact", "tripod",
                                                     "parallel_extension"]
     loto = r["conditions"]["loto"]["representative"]

@@ -237,6 +237,7 @@ def evaluate(options: EvalOptions | None = None) -> dict:
     o = check_options(options, EvalOptions)
     runs = [_evaluate_one(o, s) for s in range(o.seed, o.seed + o.seeds)]
     out = _mean_tree(runs)
+    out["config"] = dict(runs[0]["config"])  # what was asked, not a mean of it (seed 2.0)
     for cond, sets in out["conditions"].items():
         for set_name, res in sets.items():
             for variant, summ in res["summary"].items():
