@@ -31,6 +31,7 @@ import numpy as np
 from scipy.linalg import expm
 from scipy.optimize import nnls
 
+from ..._checks import check_number
 from ...errors import InvalidInputError
 
 __all__ = [
@@ -43,10 +44,7 @@ __all__ = [
 
 
 def _check_rate(rate_hz) -> float:
-    if not (isinstance(rate_hz, (int, float, np.integer, np.floating))
-            and not isinstance(rate_hz, bool) and np.isfinite(rate_hz) and rate_hz > 0):
-        raise InvalidInputError(f"rate_hz must be a finite number > 0, got {rate_hz!r}")
-    return float(rate_hz)
+    return check_number(rate_hz, "rate_hz", above=0)
 
 
 def log_taus(n: int, rate_hz: float, *, per_decade: int = 8) -> np.ndarray:
@@ -205,11 +203,7 @@ class KalmanDenoiser:
 
     def __post_init__(self) -> None:
         for k in ("random_walk", "rate_random_walk", "q_signal", "rate_hz"):
-            v = getattr(self, k)
-            if not (isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
-                    and np.isfinite(v) and v > 0):
-                raise InvalidInputError(f"KalmanDenoiser.{k} must be a finite number > 0, "
-                                        f"got {v!r}")
+            check_number(getattr(self, k), f"KalmanDenoiser.{k}", above=0)
 
     def steady_state_gain(self) -> np.ndarray:
         """K_inf of the static filter, shape (2,) (eqs. 4.11-4.14, 4.6-4.8)."""

@@ -40,6 +40,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..._checks import check_number
 from ...errors import InvalidInputError
 from ._attitude import (
     StaticStart,
@@ -110,10 +111,7 @@ class ChainEKFOptions:
             raise InvalidInputError(f"ChainEKFOptions.use_h2 must be True or False, got "
                                     f"{self.use_h2!r}")
         for k in ("gyro_noise", "elbow_acc_sd", "acc_sd", "demoted", "mag_sd", "mag_gate"):
-            v = getattr(self, k)
-            if not (_is_number(v) and np.isfinite(v) and v > 0):
-                raise InvalidInputError(f"ChainEKFOptions.{k} must be a finite number > 0, "
-                                        f"got {v!r}")
+            check_number(getattr(self, k), f"ChainEKFOptions.{k}", above=0)
         for k in ("switch_dps", "bias_tau_s"):
             v = getattr(self, k)
             if v is not None and not (_is_number(v) and np.isfinite(v) and v > 0):

@@ -22,12 +22,12 @@ The multi-sensor EKF of the thesis ("Filter 4") is in :mod:`._ekf`.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from ..._checks import check_number
 from ...errors import EstimationError, InvalidInputError
 from ._attitude import StaticStart, check_run_input, gyro_bias, initial_attitude
 from ._quat import qexp, qmul, qnormalize, quat_from_acc_mag
@@ -351,9 +351,7 @@ def _check_rate(rate_hz) -> float:
 
 def _check_positive(name: str, value) -> None:
     """Refuse `value` unless it is a finite real number > 0 (not a bool), naming `name`."""
-    if not (isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
-            and math.isfinite(value) and value > 0):
-        raise InvalidInputError(f"{name} must be a finite number > 0, got {value!r}")
+    check_number(value, name, above=0)
 
 
 def _float_array(value, name: str) -> np.ndarray:

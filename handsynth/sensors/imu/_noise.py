@@ -43,6 +43,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from ..._checks import check_number
 from ...errors import InvalidInputError
 from ._model import GRAVITY_MPS2, SENSOR_NAMES, TIP_SENSORS
 
@@ -66,9 +67,10 @@ def _is_number(v) -> bool:
 
 def _check_figure(name: str, value, *, positive: bool = False) -> None:
     """Refuse a noise figure that is not a finite number >= 0 (> 0 with `positive`)."""
-    if not (_is_number(value) and np.isfinite(value) and (value > 0 if positive else value >= 0)):
-        raise InvalidInputError(f"{name} must be a finite number {'>' if positive else '>='} 0, "
-                                f"got {value!r}")
+    if positive:
+        check_number(value, name, above=0)
+    else:
+        check_number(value, name, minimum=0)
 
 
 @dataclass(frozen=True)

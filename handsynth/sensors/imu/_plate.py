@@ -33,6 +33,7 @@ import warnings
 
 import numpy as np
 
+from ..._checks import check_number
 from ...errors import InvalidInputError
 from ._attitude import StaticStart, initial_attitude
 from ._quat import angle_deg, check_quats, mat_to_quat, qconj, qmul, quat_to_mat
@@ -123,10 +124,7 @@ def fuse_plate(quats, sensors, rotations: dict, *, disagree_deg: float = 10.0) -
     """
     sensors = tuple(sensors)
     quats = check_quats(quats, sensors)
-    if not (isinstance(disagree_deg, (int, float, np.integer, np.floating))
-            and not isinstance(disagree_deg, bool) and np.isfinite(disagree_deg)
-            and disagree_deg > 0):
-        raise InvalidInputError(f"disagree_deg must be a finite number > 0, got {disagree_deg!r}")
+    check_number(disagree_deg, "disagree_deg", above=0)
     if not isinstance(rotations, dict):
         raise InvalidInputError(f"rotations must be a dict (from plate_rotations), got "
                                 f"{type(rotations).__name__}")

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..._checks import check_number
 from ...errors import InvalidInputError
 from ...models import HandShape
 from ._layout import FLEX_JOINT, POINTS
@@ -36,10 +37,7 @@ class SkinMotion:
 
     def __post_init__(self) -> None:
         for k in ("slide_mm", "tilt_deg"):
-            v = getattr(self, k)
-            if not (isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
-                    and np.isfinite(v) and v >= 0):
-                raise InvalidInputError(f"SkinMotion.{k} must be a finite number >= 0, got {v!r}")
+            check_number(getattr(self, k), f"SkinMotion.{k}", minimum=0)
 
 
 def _quat_mul(a, b):
