@@ -46,8 +46,12 @@ __all__ = [
     "standard_layout_mm",
 ]
 
+#: Hand length and breadth, mm: about the pooled mean of men and women in
+#: Gordon et al. (1989), 1988 US Army survey (module docstring, "Sources").
 HAND_LENGTH_MM: float = 187.0
 HAND_BREADTH_MM: float = 84.0
+#: Palm thickness at the metacarpal heads, mm: Greiner (1991), "hand thickness
+#: at metacarpale III" (module docstring, "Sources").
 PALM_THICKNESS_MM: float = 28.0
 
 #: Buchholz et al. (1992) Table 1: segment length / hand length.
@@ -71,6 +75,8 @@ FINGER_BREADTH_MM: dict[str, tuple[float, float]] = {
     "little": (17.5, 16.0),
 }
 
+#: Finger depth (dorsal-palmar) / finger breadth at the joints: Greiner (1991)
+#: (module docstring, "Sources").
 DEPTH_TO_BREADTH: float = 0.85
 
 

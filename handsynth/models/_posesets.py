@@ -26,8 +26,11 @@ from ._pose import NAMED_POSES
 
 __all__ = ["POSE_SETS", "natural_pose_set", "paper_pose_set", "pose_set"]
 
+#: Entries of one shape's database in the paper's experiment (seed 001 section 3.1,
+#: 20448 entries; SPEC.md section 1, "Paper's experiment").
 PAPER_SIZE = 20_448
-#: DIP flexion follows PIP flexion by this factor in coupled poses (seed 004).
+#: DIP flexion follows PIP flexion by this factor in coupled poses (seed 004 eq. 1;
+#: SPEC.md section 4, "DIP = (2/3) PIP").
 DIP_PIP_RATIO = 2.0 / 3.0
 # share of the paper set given to each motion family
 _PAPER_SHARES = {"flex": 0.40, "abd": 0.15, "thumb": 0.45}

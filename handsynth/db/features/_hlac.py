@@ -69,7 +69,8 @@ HLAC_PATTERNS: tuple[tuple[tuple[int, int], ...], ...] = (
     ((-1, -1), (-1, 1)),
 )
 
-#: Side of one HLAC block in pixels.
+#: Side of one HLAC block in pixels (SPEC.md section 1, "HLAC": 8x8 blocks of
+#: 8x8 pixels of the 64x64 contour).
 HLAC_BLOCK: int = 8
 #: Number of blocks along each image axis.
 HLAC_N_BLOCKS: int = IMAGE_SIZE // HLAC_BLOCK

@@ -389,7 +389,8 @@ class GatedEstimator(_Estimator):
     fallback: GloveEstimator
     name: str = "model4+synergy"
 
-    #: chi-square(5) quantiles 0.95 and 0.999 (scipy.stats.chi2.ppf)
+    #: chi-square(5) quantiles 0.95 and 0.999 (scipy.stats.chi2.ppf); chosen here: fixed by
+    #: the distribution, not fitted to any data (docs/glove.md, the `model4+synergy` gate)
     lo: float = 11.0705
     hi: float = 20.5150
     reading_range: np.ndarray | None = None

@@ -37,7 +37,7 @@ __all__ = [
 
 
 def _pose(thumb, index, middle, ring, little) -> np.ndarray:
-    """(cmc_flex, cmc_abd, mcp, ip) and (mcp, abd, pip) per finger; DIP = 2/3 PIP."""
+    """(cmc_flex, cmc_abd, mcp, ip) and (mcp, abd, pip) per finger; DIP = 2/3 PIP (seed 004 eq. 1)."""
     out = list(thumb)
     for mcp, abd, pip in (index, middle, ring, little):
         out += [mcp, abd, pip, 2.0 / 3.0 * pip]

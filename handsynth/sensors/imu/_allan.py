@@ -194,6 +194,8 @@ class KalmanDenoiser:
         by comparison with motion capture (section 4.2.4); their units are not
         stated, so the default here is 0.5 (rad/s)^2/s.
     rate_hz : float
+        Sampling rate, Hz; default 100 Hz, the thesis' IMU rate (SPEC.md
+        section 3, "20 MPU-9250 IMUs ..., 100 Hz").
     """
 
     random_walk: float

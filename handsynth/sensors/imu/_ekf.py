@@ -72,7 +72,8 @@ class ChainEKFOptions:
     use_h2 : bool
         Include the joint-agreement observation H2 (Filters 3 and 4).
     switch_dps : float or None
-        Angular speed at which H2 takes priority over H1 (Filter 4: 400);
+        Angular speed at which H2 takes priority over H1 (Filter 4: 400,
+        seed 003 section 4.3.2, Table 4.3; SPEC.md section 3, "|w| >= 400 deg/s");
         None keeps both at their base weights (Filters 2, 3).
     gyro_noise : float
         Process noise, rad/s.

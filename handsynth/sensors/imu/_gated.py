@@ -22,7 +22,7 @@ errors) and a slowly varying correction ``q_cor`` (that frame to the world):
    world, the vector is pulled toward the vertical by a first-order
    correction of ``q_cor`` with time constant ``acc_tau_s`` -- only while its
    length is within ``acc_tol_mps2`` of gravity and the angular speed below
-   ``rate_gate_dps`` (the thesis' switch, seed 003 section 4.3.4, at 400
+   ``rate_gate_dps`` (the thesis' switch, seed 003 section 4.3.2, at 400
    deg/s for its per-sample observation; after the low-pass a centripetal
    acceleration averages out as well, so by default the gate stands only at
    the gyro's full scale).
@@ -105,7 +105,7 @@ class GatedOptions:
         sensor may rest, m/s^2.
     rate_gate_dps : float
         Angular speed above which the accelerometer is not trusted, deg/s
-        (seed 003 section 4.3.4: 400 for the per-sample observation; by
+        (seed 003 section 4.3.2, Table 4.3: 400 for the per-sample observation; by
         default 2000, the MPU-9250's full scale: on the hand configuration
         the gate changed nothing, on the free sensor it cost 0.3 deg).
     mag_tol : float

@@ -87,6 +87,7 @@ def _frame_vector(model: ChainModel, sensor: str) -> np.ndarray:
 
 
 def _frame(x, v) -> np.ndarray:
+    """Link frame rows (x, y, z) from the flexion axis x and link vector v (eq. 5.2)."""
     z = np.cross(x, v)
     nz = np.linalg.norm(z)
     if nz < 1e-9:
@@ -207,6 +208,7 @@ def _euler_zyx(r):
 
 
 def _relative(quats, sensors, frames, prox, dist):
+    """Rotation Lj_R_L(j+1) from the proximal to the distal link frame (eq. 5.4)."""
     rp = quat_to_mat(quats[sensors.index(prox)]) @ frames[prox].T           # G_R_Lj
     rd = quat_to_mat(quats[sensors.index(dist)]) @ frames[dist].T
     return np.einsum("nji,njk->nik", rp, rd)                                 # Lj_R_L(j+1), eq. 5.4

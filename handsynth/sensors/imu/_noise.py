@@ -278,6 +278,9 @@ MPU9250_DATASHEET = ImuNoise(
 #: larger calibration residuals, a bias that changes between recordings
 #: (run-to-run repeatability 0.1 deg/s and 5 mg: the datasheet gives no
 #: figure, these are assumptions) and a magnet near the hand from 14 to 19 s.
+#: Chosen here: figures other than the tuning configuration's, on which the
+#: filters' options were chosen (docs/imu.md, "Figures": "Two simulator
+#: configurations").
 #: Sensor misalignment and skin motion are set in the simulation call.
 EVAL_NOISE = ImuNoise(
     gyro=AxisNoise(white=0.015 * _DEG, rate_random_walk=6e-4 * _DEG,

@@ -135,7 +135,7 @@ def qrotinv(q, v):
 
 
 def qexp(rotvec):
-    """Quaternion of rotation vectors (rad), shape (..., 4)."""
+    """Quaternion of rotation vectors (rad), shape (..., 4): cos(b/2) + n sin(b/2) (eq. 5.7)."""
     rv = np.asarray(rotvec, dtype=float)
     ang = np.linalg.norm(rv, axis=-1, keepdims=True)
     half = 0.5 * ang

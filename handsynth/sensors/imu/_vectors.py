@@ -123,7 +123,7 @@ def _turning_points(gyr, dgyr, *, frac_w=0.25, frac_dw=0.5):
 
 
 def _rotation_data(rec: ImuRecording, k: int, a: int, b: int, hold: int):
-    """gyro, angular acceleration and rotational acceleration of sensor k on a:b."""
+    """gyro, angular acceleration and rotational acceleration (eq. 3.7) of sensor k on a:b."""
     dt = 1.0 / rec.rate_hz
     gyr = rec.gyr[k, a:b] - rec.gyr[k, a:a + hold].mean(axis=0)
     gyr_s = savgol_filter(gyr, 7, 2, axis=0)

@@ -43,6 +43,9 @@ __all__ = ["AxisAngleFilter", "AxisFilterResult", "relative_rotation_vectors"]
 def relative_rotation_vectors(recording: Recording, *, reference_s: float = 0.25) -> np.ndarray:
     """Rotation vectors of ``dR(i) = Q(i) Q0^T`` in the upper sensor frame.
 
+    ``dR(i)`` is the patent's ``R_ULS(i)`` of eqs. 10-12 expressed in the
+    upper sensor's frame (module docstring).
+
     Parameters
     ----------
     recording : Recording
@@ -115,7 +118,8 @@ class AxisAngleFilter:
     Parameters
     ----------
     bins : int
-        Number of equal bins of the lateral component (patent: 100).
+        Number of equal bins of the lateral component (patent: 100; SPEC.md
+        section 2, "split the y component of the axis into 100 equal bins").
     value_range : (float, float)
         Range binned; ``(0, 1)`` covers every flipped unit axis, giving the
         patent's 0.01-wide bins such as 0.97-0.98 (para. 0110).

@@ -47,9 +47,11 @@ class FlexionMotion:
     Parameters
     ----------
     duration_s : float
-        Length of the trial including the hold, seconds.
+        Length of the trial including the hold, seconds; the default 20 s lies
+        in the patent's 15-30 s of flexion/extension (SPEC.md section 2).
     rate_hz : float
-        Sampling rate; the Liberty runs at 240 Hz or 120 Hz.
+        Sampling rate; the Liberty runs at 240 Hz or 120 Hz (default 240 Hz:
+        the patent's Polhemus Liberty, SPEC.md section 2).
     hold_s : float
         Static hold in extension at the start (the standard state), seconds.
     flexion_range_deg : (float, float)
