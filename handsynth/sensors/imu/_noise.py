@@ -30,6 +30,11 @@ such.  Magnetometer white noise 0.3 uT (two LSB) and the residual hard and
 soft iron after calibration are assumptions too; the between-sensor azimuth
 spread of 4.5 deg s.d. is the thesis' measured figure (Table 4.2).
 
+How the tolerances become s.d.s: the sensitivity tolerance of +/-3 % is
+taken as 3 sigma (``scale_error`` 0.01); the cross-axis terms' 0.005 and the
+accelerometer's turn-on bias of 10 mg are assumptions below their tolerances
+taken as 3 sigma (0.0067 and 27 mg), stated as such.
+
 Scale/cross-axis matrices and turn-on biases belong to the physical sensor
 (:func:`draw_fixed_errors`; ``device_seed`` of :func:`simulate_imu` keeps them
 across recordings, so that a calibration can be carried to later
