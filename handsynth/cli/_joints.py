@@ -90,12 +90,15 @@ def joints() -> None:
 @click.option("--strict", is_flag=True,
               help="Refuse a file with lost lines, NaN frames or glitches instead of dropping "
                    "those frames.")
+@click.option("--take", type=int, default=1, show_default=True,
+              help="Which take of a text export whose time or frame counter restarts (takes "
+                   "written into one file): 1 the first.")
 @click.option("--json", "json_out", type=click.Path(dir_okay=False),
               help="Write the report and results as JSON.")
 @click.option("--plot", "plot_out", type=click.Path(dir_okay=False),
               help="Write the axis-angle histogram (PNG).")
 def estimate(recording, methods, frames, lateral_axis, lateral_frame, bins, units, angles,
-             sensors, rate_hz, strict, json_out, plot_out) -> None:
+             sensors, rate_hz, strict, take, json_out, plot_out) -> None:
     """Estimate the joint centre of RECORDING (.h5, PiMgr CSV or Liberty ASCII)."""
     from .._io import check_outputs
     from ..errors import EstimationError, InvalidInputError
@@ -112,7 +115,8 @@ def estimate(recording, methods, frames, lateral_axis, lateral_frame, bins, unit
     kwargs = {}
     if Path(recording).suffix.lower() in (".h5", ".hdf5"):
         ctx = click.get_current_context()
-        given = [f"--{name.replace('_hz', '')}" for name in ("units", "angles", "sensors", "rate_hz")
+        given = [f"--{name.replace('_hz', '')}" for name in ("units", "angles", "sensors", "rate_hz",
+                                                              "take")
                  if ctx.get_parameter_source(name) is not click.core.ParameterSource.DEFAULT]
         if given:
             raise InvalidInputError(
@@ -120,7 +124,7 @@ def estimate(recording, methods, frames, lateral_axis, lateral_frame, bins, unit
                 f"the HDF5 recording {recording!r}, which stores units, rotations and sensors")
     else:
         kwargs = dict(units=units, angles=None if angles == "auto" else angles,
-                      rate_hz=rate_hz, on_invalid="raise" if strict else "drop")
+                      rate_hz=rate_hz, on_invalid="raise" if strict else "drop", take=take)
         if sensors is not None:
             try:
                 st = tuple(int(v) for v in sensors.split(","))

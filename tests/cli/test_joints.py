@@ -216,6 +216,7 @@ def test_json_and_plot_with_one_name_are_refused(tmp_path, rec_path):
     (["--units", "cm"], "--units"),
     (["--angles", "euler", "--rate", "100"], "--angles, --rate"),
     (["--sensors", "2,1"], "--sensors"),
+    (["--take", "2"], "--take"),
 ])
 def test_text_export_options_with_hdf5_are_refused_by_name(rec_path, args, named):
     # item 19: the options were ignored without notice for an .h5 recording
@@ -255,3 +256,21 @@ def test_rate_that_differs_from_the_time_column_is_warned_about(tmp_path, sim):
     res = _run("estimate", lib, "--rate", "120", "--method", "obrien", "--frames", "all")
     assert res.exit_code == 0 and "warning" not in res.output, res.output
     assert "at 120 Hz" in res.output
+
+
+def test_take_reads_a_later_take_of_a_file_of_several(tmp_path, sim):
+    # before, the second take of a file whose time restarts could not be read at all
+    lines = _pimgr(sim)
+    path = tmp_path / "two.csv"
+    path.write_text("\n".join(lines + lines[1:]) + "\n")
+    out = tmp_path / "c.json"
+    res = _run("estimate", path, "--take", "2", "--method", "obrien", "--frames", "all",
+               "--json", out)
+    assert res.exit_code == 0, res.output
+    assert "two takes in one file? take 2 is used" in res.output, res.output
+    assert json.loads(out.read_text())["results"][0]["n_frames_used"] > 0
+    res = _run("estimate", path, "--take", "3", "--method", "obrien")
+    assert res.exit_code == 2, res.output
+    assert "take=3, but the time restarts 1 time(s)" in res.output, res.output
+    assert "Traceback" not in res.output
+

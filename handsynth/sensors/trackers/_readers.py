@@ -23,8 +23,9 @@ patent's recording software, para. 0097):
   order forms the most frames; not the order `sensors` names them in), or,
   with a counter, both lines of one counter value: a station line without
   its partner -- a lost line -- drops that half frame, it is never merged
-  into a neighbour.  A counter that restarts (two takes in one file) keeps
-  the first take with a warning naming the line, as a time column does.
+  into a neighbour.  A counter that restarts (takes written into one file)
+  keeps one take (``take``, the first by default) with a warning naming the
+  line, as a time column does.
   Cells may be quoted (``"Time","w1",...``).
 
 Polhemus' azimuth, elevation, roll are rotations about the transmitter's
@@ -51,8 +52,9 @@ over five or more frames while the other sensor moves: the repeats are
 dropped, the stretch's first frame, the real sample that was repeated, is
 kept; a sensor frozen throughout is left to the estimators, which refuse
 it).  Euler angles all within +-pi are warned about as radians.  A time
-column that is constant is refused; one that restarts (two takes in one
-file) keeps the first take with a warning naming the line; one that
+column that is constant is refused; one that restarts (takes written into
+one file) keeps one take (``take``, the first by default) with a warning naming
+the line; one that
 advances by seconds per sample is warned about as milliseconds.  A time
 column gives the sample times; `rate_hz` gives them only without one.
 """
@@ -72,7 +74,7 @@ from scipy.spatial.transform import Rotation
 
 from ..._csv import read_text
 from ...errors import InvalidInputError, RecordingError
-from ._checks import check_number
+from ._checks import check_integer, check_number
 from ._recording import Recording
 
 __all__ = ["DEFAULT_COLUMNS", "read_polhemus", "read_recording"]
@@ -252,14 +254,48 @@ def _counter_restart(col: np.ndarray, station: np.ndarray | None) -> int | None:
     return first
 
 
-def _restart_warning(path: Path, column: str, line: int, before: float, after: float,
-                     dropped: int, stacklevel: int) -> None:
-    """Warn that `column` restarts at `line`: only the rows before it (the first take) are
-    used."""
+def _counter_restarts(col: np.ndarray, station: np.ndarray | None) -> list[int]:
+    """Every row where a frame counter restarts (:func:`_counter_restart`, take after take)."""
+    starts: list[int] = []
+    while True:
+        off = starts[-1] if starts else 0
+        i = _counter_restart(col[off:], None if station is None else station[off:])
+        if i is None or i == 0:
+            return starts
+        starts.append(off + i)
+
+
+def _select_take(path: Path, column: str, starts: list[int], lines: np.ndarray,
+                 values: np.ndarray, take: int, notes: dict, stacklevel: int) -> slice:
+    """The rows of take `take` (1 = the first) of a file whose `column` restarts at the rows
+    `starts`, with a warning that says which take is used and how many rows are dropped.
+
+    Raises
+    ------
+    RecordingError
+        The file holds fewer takes than `take`.
+    """
+    n = len(lines)
+    bounds = [0, *starts, n]
+    takes = len(bounds) - 1
+    if take > takes:
+        raise RecordingError(
+            f"{path.name}: take={take}, but the {column} restarts {takes - 1} time(s) (at line(s) "
+            f"{[int(lines[i]) for i in starts][:5]}): the file holds {takes} takes")
+    rows = slice(bounds[take - 1], bounds[take])
+    i = starts[0]
+    first = (f"only the rows before line {int(lines[i])} are used" if take == 1 else
+             f"take {take} is used (lines {int(lines[rows.start])}-{int(lines[rows.stop - 1])})")
     warnings.warn(
-        f"{path.name} line {line}: the {column} restarts ({before:g} -> {after:g}): two takes "
-        f"in one file? only the rows before line {line} are used ({dropped} rows from there "
-        f"on dropped)", stacklevel=stacklevel + 1)
+        f"{path.name} line {int(lines[i])}: the {column} restarts ({values[i - 1]:g} -> "
+        f"{values[i]:g}): {'two' if takes == 2 else takes} takes in one file? {first} "
+        f"({n - (rows.stop - rows.start)} rows of the other take{'s' if takes > 2 else ''} "
+        f"dropped; take=N, --take N, reads another)", stacklevel=stacklevel + 1)
+    notes["restart_line"] = int(lines[i])
+    notes["rows_after_restart"] = n - i
+    notes["takes"] = takes
+    notes["take"] = take
+    return rows
 
 
 def _unit_quaternions(q: np.ndarray) -> bool:
@@ -551,7 +587,7 @@ def _frozen_runs(pos_file: np.ndarray, ang: list[np.ndarray], dropout: np.ndarra
 
 def _check_times(
     pos_file: np.ndarray, ang: list[np.ndarray], times: np.ndarray, line_no: np.ndarray,
-    notes: dict, path: Path,
+    notes: dict, path: Path, take: int,
 ) -> tuple[np.ndarray, list[np.ndarray], np.ndarray, np.ndarray]:
     """Times of a file with a time column from 0; rows whose time does not advance
     dropped; a constant column refused; a restart (two takes pasted together) and a time
@@ -567,12 +603,9 @@ def _check_times(
     dt = float(np.median(forward)) if forward.size else 0.0
     back = np.flatnonzero(np.isfinite(steps) & (steps < -10 * dt)) if dt > 0 else np.array([], int)
     if back.size:
-        i = int(back[0]) + 1
-        _restart_warning(path, "time", int(line_no[i]), times[i - 1], times[i], len(times) - i,
+        k = _select_take(path, "time", [int(b) + 1 for b in back], line_no, times, take, notes,
                          stacklevel=3)
-        notes["restart_line"] = int(line_no[i])
-        notes["rows_after_restart"] = len(times) - i
-        pos_file, ang, times, line_no = pos_file[:i], [a[:i] for a in ang], times[:i], line_no[:i]
+        pos_file, ang, times, line_no = pos_file[k], [a[k] for a in ang], times[k], line_no[k]
     times = times - np.nanmin(times)
     # rows re-written with a time that does not advance
     ok = np.ones(times.size, dtype=bool)
@@ -663,6 +696,7 @@ def read_polhemus(
     joint: str = "joint",
     on_invalid: str = "drop",
     glitch_mm: float = 10.0,
+    take: int = 1,
 ) -> Recording:
     """Read a PiMgr CSV or Liberty ASCII export of two sensors.
 
@@ -673,8 +707,8 @@ def read_polhemus(
     ``frozen_frames``, ``invalid_frames``, ``skipped_lines``,
     ``quaternion_sign_flips``, ``decimal_comma``, ``times_from`` (``"time
     column"``, ``"frame counter and rate_hz"`` or ``"rate_hz"``);
-    ``restart_line`` and ``rows_after_restart`` (a time column or frame
-    counter that restarts), ``cut_off_line`` (the last line, left out of a
+    ``restart_line``, ``rows_after_restart``, ``takes`` and ``take`` (a time
+    column or frame counter that restarts), ``cut_off_line`` (the last line, left out of a
     file that ends without a line end) and ``time_looks_like_ms`` when
     found).
 
@@ -714,6 +748,10 @@ def read_polhemus(
         Glitch threshold (see module docstring), millimetres.  When half the
         frames or more would be glitches the file is refused: the positions
         are not in the unit used (or `glitch_mm` is far too small).
+    take : int
+        Which take to read, 1 (the first, default) or later, of a file whose
+        time column or frame counter restarts (several takes written into one
+        file); the others are dropped with a warning that says so.
 
     Returns
     -------
@@ -725,7 +763,8 @@ def read_polhemus(
         Unreadable, empty, binary or unparseable file, unknown layout,
         missing sensors, invalid frames with ``on_invalid="raise"``, fewer
         than 10 usable frames (the message says what was dropped), half the
-        frames or more glitches, matrices that are not rotations.
+        frames or more glitches, matrices that are not rotations, fewer takes
+        than `take`.
     InvalidInputError
         Bad arguments.
     """
@@ -739,6 +778,7 @@ def read_polhemus(
         raise InvalidInputError(f"on_invalid: expected 'drop' or 'raise', got {on_invalid!r}")
     check_number(rate_hz, "rate_hz", above=0.0)
     check_number(glitch_mm, "glitch_mm", above=0.0)
+    take = check_integer(take, "take", minimum=1)
     if sensors is not None and (len(sensors) != 2 or sensors[0] == sensors[1]):
         raise InvalidInputError(f"sensors: expected two different station numbers, got {sensors!r}")
 
@@ -760,14 +800,16 @@ def read_polhemus(
     if lay.frame is not None:
         col = t.rows[:, lay.frame]
         stations = t.rows[:, lay.station] if lay.station is not None else None
-        i = _counter_restart(col, stations)
-        if i is not None:
+        starts = _counter_restarts(col, stations)
+        if starts:
+            i = starts[0]
+            # the value before the restart is the last one of the restarting row's station
             prev = col[:i][stations[:i] == stations[i]] if stations is not None else col[:i]
-            _restart_warning(path, "frame counter", int(t.lines[i]), prev[-1], col[i],
-                             len(col) - i, stacklevel=2)
-            notes["restart_line"] = int(t.lines[i])
-            notes["rows_after_restart"] = len(col) - i
-            t = dataclasses.replace(t, rows=t.rows[:i], lines=t.lines[:i])
+            shown = col.copy()
+            shown[i - 1] = prev[-1]
+            k = _select_take(path, "frame counter", starts, t.lines, shown, take, notes,
+                             stacklevel=2)
+            t = dataclasses.replace(t, rows=t.rows[k], lines=t.lines[k])
     rows = t.rows
     # where the sample times come from: `rate_hz` is used only without a time column
     notes["times_from"] = ("time column" if lay.time is not None else
@@ -845,7 +887,11 @@ def read_polhemus(
             notes["time_origin_unix_s"] = float(np.nanmin(times))
         pair = (order[0] + 1, order[1] + 1)
     if lay.time is not None and times.size:
-        pos_file, ang, times, line_no = _check_times(pos_file, ang, times, line_no, notes, path)
+        pos_file, ang, times, line_no = _check_times(pos_file, ang, times, line_no, notes, path,
+                                                     1 if "takes" in notes else take)
+    if take > 1 and "takes" not in notes:
+        raise RecordingError(f"{path.name}: take={take}, but the file holds one take (neither "
+                             f"a time column nor a frame counter restarts)")
 
     # a tracker's dropout: a sensor reported at exactly (0, 0, 0)
     dropout = np.any(np.all(pos_file == 0, axis=2), axis=1)

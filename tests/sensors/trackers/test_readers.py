@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from handsynth.errors import RecordingError
+from handsynth.errors import InvalidInputError, RecordingError
 from handsynth.sensors.trackers import read_polhemus
 
 
@@ -347,13 +347,58 @@ def test_frame_counter_restart_keeps_the_first_take(tmp_path, finger_rec, libert
     with pytest.warns(UserWarning, match=f"two.txt line {2 * n + 1}: the frame counter restarts "
                                          f"\\({999 + n} -> 1000\\): two takes in one file\\? only "
                                          f"the rows before line {2 * n + 1} are used "
-                                         f"\\({2 * n} rows from there on dropped\\)"):
+                                         f"\\({2 * n} rows of the other take dropped; "
+                                         f"take=N, --take N, reads another\\)"):
         rec = read_polhemus(path)
     assert rec.n_frames == n and "frame" in rec.metadata["layout"]
     assert rec.metadata["restart_line"] == 2 * n + 1
     assert rec.metadata["rows_after_restart"] == 2 * n
     np.testing.assert_allclose(rec.times, finger_rec.times, atol=1e-9)
     _close(rec, finger_rec)
+
+
+@pytest.mark.parametrize("counter", [True, False])
+def test_a_later_take_is_read_when_asked(tmp_path, finger_rec, liberty_lines, pimgr_lines,
+                                         counter):
+    # before, only the first take of a file with several could be read: the others were
+    # dropped with a warning, and the user had to cut the file by hand
+    import dataclasses
+
+    n = finger_rec.n_frames
+    # the second take another recording: the hand 3 cm farther from the transmitter
+    moved = dataclasses.replace(finger_rec, positions=finger_rec.positions + [0.03, 0.0, 0.0])
+    if counter:  # Liberty ASCII: the frame counter restarts
+        lines = liberty_lines(finger_rec, scale=100.0, counter=True, quaternion=False)
+        other = liberty_lines(moved, scale=100.0, counter=True, quaternion=False)
+        path = _write(tmp_path / "three.txt", lines + other + lines)
+        per_take, column, first_line = 2 * n, "frame counter", 1
+    else:  # PiMgr CSV: the time column restarts (its header on line 1)
+        lines = pimgr_lines(finger_rec, scale=100.0)
+        other = pimgr_lines(moved, scale=100.0)
+        path = _write(tmp_path / "three.csv", lines + other[1:] + lines[1:])
+        per_take, column, first_line = n, "time", 2
+    with pytest.warns(UserWarning, match=rf"the {column} restarts .*: 3 takes in one file\? "
+                                         rf"take 2 is used \(lines {first_line + per_take}-"
+                                         rf"{first_line + 2 * per_take - 1}\) "
+                                         rf"\({2 * per_take} rows of the other takes dropped"):
+        rec = read_polhemus(path, take=2)
+    assert rec.n_frames == n and rec.metadata["takes"] == 3 and rec.metadata["take"] == 2
+    np.testing.assert_allclose(rec.times, finger_rec.times, atol=1e-3)
+    _close(rec, moved)
+    with pytest.warns(UserWarning, match=r"take 3 is used"):
+        _close(read_polhemus(path, take=3), finger_rec)
+    with pytest.raises(RecordingError, match=rf"take=4, but the {column} restarts 2 time\(s\) "
+                                             rf".*the file holds 3 takes"):
+        read_polhemus(path, take=4)
+
+
+def test_a_later_take_of_a_file_of_one_take_is_refused(tmp_path, finger_rec, pimgr_lines):
+    path = _write(tmp_path / "one.csv", pimgr_lines(finger_rec, scale=100.0))
+    with pytest.raises(RecordingError, match=r"take=2, but the file holds one take"):
+        read_polhemus(path, take=2)
+    for bad in (0, 1.0, "2", True):
+        with pytest.raises(InvalidInputError, match=r"take must be an integer >= 1"):
+            read_polhemus(path, take=bad)
 
 
 def test_frozen_stretch_keeps_the_real_sample_before_it(tmp_path, finger_rec, liberty_lines):
