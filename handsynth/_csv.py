@@ -27,9 +27,11 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from .errors import RecordingError
 
-__all__ = ["Rows", "column_index", "read_rows", "read_text"]
+__all__ = ["NumberTable", "Rows", "column_index", "read_number_table", "read_rows", "read_text"]
 
 _COMMA_NUMBER = re.compile(r"[-+]?\d*,\d+(?:[eE][-+]?\d+)?")
 #: A number as Python's ``float`` reads it, underscores included.
@@ -104,6 +106,22 @@ def read_text(path, *, what: str, signatures: Mapping[bytes, str] | None = None)
         return raw.decode("latin-1")
 
 
+def _delimiter(sample: list[str]) -> str:
+    """The delimiter of the lines `sample` (:func:`read_rows`' rule, no ``sep=`` line)."""
+    for d in (";", "\t", ","):
+        if sample and sum(d in ln for ln in sample) > len(sample) // 2:
+            return d
+    if sample and sum(len(ln.split()) > 1 for ln in sample) > len(sample) // 2:
+        return " "  # a logger's text columns
+    return ","
+
+
+def _underscore_number(cell: str) -> bool:
+    """`cell` is a number written with underscores (``1_000``), which Python reads."""
+    return "_" in cell and bool(_UNDERSCORE_NUMBER.fullmatch(cell)) \
+        and any(c.isdigit() for c in cell)
+
+
 def read_rows(path, *, what: str = "CSV table") -> Rows:
     """Rows of the delimited text file `path` (module docstring).
 
@@ -142,18 +160,7 @@ def read_rows(path, *, what: str = "CSV table") -> Rows:
     sep = _SEP_LINE.fullmatch(content[0][1]) if content else None
     if sep:
         content = content[1:]
-    sample = [ln for _, ln in content[:50]]
-    delimiter = ","
-    if sep:
-        delimiter = sep.group(1)
-    else:
-        for d in (";", "\t", ","):
-            if sample and sum(d in ln for ln in sample) > len(sample) // 2:
-                delimiter = d
-                break
-        else:
-            if sample and sum(len(ln.split()) > 1 for ln in sample) > len(sample) // 2:
-                delimiter = " "  # a logger's text columns
+    delimiter = sep.group(1) if sep else _delimiter([ln for _, ln in content[:50]])
     if len(content) > 1 and content[-1][0] == len(all_lines) and not text.endswith(("\n", "\r")):
         no = content.pop()[0]
         warnings.warn(f"{path}, line {no}: the file ends without a line end, as a recording cut "
@@ -165,7 +172,7 @@ def read_rows(path, *, what: str = "CSV table") -> Rows:
         else:
             cells = [c.strip() for c in next(csv.reader([ln], delimiter=delimiter))]
         for col, cell in enumerate(cells, start=1):
-            if "_" in cell and _UNDERSCORE_NUMBER.fullmatch(cell) and any(c.isdigit() for c in cell):
+            if _underscore_number(cell):
                 raise RecordingError(f"{path}, line {no}, column {col}: {cell!r} is not a number as "
                                      "recordings write them (an underscore)")
         if any(cells):  # a spreadsheet's empty row is a line of delimiters
@@ -207,3 +214,81 @@ def column_index(header, *, path, line: int | None = None) -> dict[str, int]:
                                  "is unknown: rename or remove one")
         index[name] = i
     return index
+
+
+@dataclass(frozen=True)
+class NumberTable:
+    """A plain comma-separated file read straight into numbers (:func:`read_number_table`).
+
+    Attributes
+    ----------
+    header : list of str
+        The first row's names, stripped.
+    lines : list of int
+        Line of each data row in the file (1 = the first line).
+    table : ndarray, shape (N, len(usecols)), float64
+        The columns asked for, in the order asked.
+    """
+
+    header: list[str]
+    lines: list[int]
+    table: np.ndarray
+
+
+def read_number_table(path, *, what: str, usecols) -> NumberTable | None:
+    """A header and rows of numbers, parsed straight into floats; None when not plain.
+
+    :func:`read_rows` holds every cell as a string (about ten times the file's
+    size in memory); a long recording written plainly needs none of that.
+    Plain: ``,`` between the fields (as :func:`read_rows` would find it), no
+    ``sep=`` line, quote or NUL byte, no number written with underscores, no
+    row of empty cells, as many fields on every row as in the header, a line
+    end after the last row, and every cell asked for a number.  Any other
+    file is left to :func:`read_rows` (None), which reads it, or names what
+    is wrong with it, as it always has; where this reads a file, both give
+    the same numbers.  Peak memory is about twice the file's size.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        An existing file.
+    what : str, keyword-only
+        What the file is, for messages.
+    usecols : callable, keyword-only
+        ``usecols(header, line) -> list of int``: the columns to read, from
+        the header's names and its line in the file.  It may raise (a
+        missing column, named): the error is the file's either way.
+
+    Returns
+    -------
+    NumberTable or None
+    """
+    text = read_text(path, what=f"CSV text ({what})")
+    ends_open = not text.endswith(("\n", "\r"))
+    all_lines = text.splitlines()
+    del text
+    nos = [no for no, ln in enumerate(all_lines, start=1)
+           if ln.strip() and not ln.lstrip().startswith("#")]
+    if len(nos) < 2 or _SEP_LINE.fullmatch(all_lines[nos[0] - 1]) \
+            or (ends_open and nos[-1] == len(all_lines)):
+        return None
+    if _delimiter([all_lines[no - 1] for no in nos[:50]]) != ",":
+        return None
+    if any('"' in all_lines[no - 1] or "\x00" in all_lines[no - 1] for no in nos):
+        return None  # quoted cells and NUL bytes are csv.reader's business
+    header = [c.strip() for c in all_lines[nos[0] - 1].split(",")]
+    if not any(header) or any(_underscore_number(c) for c in header):
+        return None
+    commas = len(header) - 1
+    data = [all_lines[no - 1] for no in nos[1:]]
+    del all_lines
+    for ln in data:
+        if ln.count(",") != commas or "_" in ln or not ln.replace(",", "").strip():
+            return None
+    cols = list(usecols(header, nos[0]))
+    try:
+        table = np.loadtxt(data, dtype=np.float64, delimiter=",", comments=None,
+                           quotechar=None, usecols=cols, ndmin=2)
+    except ValueError:  # a cell that is not a number: read_rows names it
+        return None
+    return NumberTable(header, nos[1:], table)

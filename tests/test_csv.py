@@ -85,3 +85,27 @@ def test_a_number_with_underscores_is_refused(tmp_path):
         read_rows(p)
     p.write_text("t,a,note\n0,1000,take_1\n")
     assert read_rows(p).rows[1] == ["0", "1000", "take_1"]
+
+
+def test_a_plain_number_table_reads_as_read_rows_reads_it_and_other_files_are_left_to_it(
+        tmp_path):
+    import numpy as np
+
+    from handsynth._csv import read_number_table, read_rows
+
+    plain = "t,a,b,note\n# a comment\n0,1.5,-2e-3,7\n\n0.01,2.5,3,8\n"
+    path = tmp_path / "plain.csv"
+    path.write_text(plain)
+    got = read_number_table(path, what="test", usecols=lambda header, line: [2, 0])
+    assert got is not None and got.header == ["t", "a", "b", "note"] and got.lines == [3, 5]
+    rows = read_rows(path, what="test")
+    want = np.array([[float(r[2]), float(r[0])] for r in rows.rows[1:]])
+    np.testing.assert_array_equal(got.table, want)
+    # what only read_rows reads (or refuses, naming it) is not read here
+    for name, text in (("semicolon", "t;a\n0;1,5\n1;2,5\n"), ("quoted", 't,a\n"0",1\n1,2\n'),
+                       ("sep", "sep=,\nt,a\n0,1\n1,2\n"), ("underscore", "t,a\n0,1_000\n1,2\n"),
+                       ("ragged", "t,a\n0,1\n1,2,3\n"), ("open end", "t,a\n0,1\n1,2"),
+                       ("empty row", "t,a\n0,1\n,\n1,2\n"), ("text", "t,a\n0,x\n1,2\n")):
+        path = tmp_path / f"{name}.csv"
+        path.write_text(text)
+        assert read_number_table(path, what="test", usecols=lambda h, line: [0, 1]) is None, name

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..._csv import _SEP_LINE, _UNDERSCORE_NUMBER, column_index, read_rows, read_text
+from ..._csv import column_index, read_number_table, read_rows, read_text
 from ..._io import atomic_open
 from ...errors import InvalidInputError, RecordingError
 from ._model import GRAVITY_MPS2
@@ -523,62 +523,33 @@ def _read_any_csv(path: Path) -> tuple:
 
 
 def _read_plain_csv(path: Path) -> tuple | None:
-    """A plain comma-separated file parsed straight into floats, else None.
-
-    Plain: ``,`` between the fields (as :func:`read_rows` would find it), no
-    quotes, NUL bytes or ``sep=`` line, no underscore in a data row, no row
-    of empty cells, as many fields on every row as in the header, a line end
-    after the last row, and every cell read a number by
-    :func:`numpy.loadtxt`.  Any other file, and every file in which
-    :func:`_read_any_csv` would find an error (but one in the header's
-    columns, refused here with its message) or warn, is left to it (None);
-    where this reads a file, both give the same table.  Its peak memory is
-    about twice the file's size, against about ten times for rows of strings.
+    """A plain comma-separated file read straight into floats
+    (:func:`handsynth._csv.read_number_table`), else None: :func:`_read_any_csv`
+    reads every other file, and names what is wrong with one.
 
     Returns
     -------
     tuple or None
         As :func:`_read_any_csv`.
     """
-    text = read_text(path, what="CSV text (IMU recording)")
-    ends_open = not text.endswith(("\n", "\r"))
-    all_lines = text.splitlines()
-    del text
-    nos = [no for no, ln in enumerate(all_lines, start=1)
-           if ln.strip() and not ln.lstrip().startswith("#")]
-    if len(nos) < 3 or _SEP_LINE.fullmatch(all_lines[nos[0] - 1]) \
-            or (ends_open and nos[-1] == len(all_lines)):
+    picked: dict = {}
+
+    def usecols(header, line):
+        col = column_index(header, path=path, line=line)
+        sensors, time_name, needed = _columns(header, col, path)
+        picked.update(col=col, sensors=sensors, time_name=time_name, needed=needed)
+        return [col[name] for name in needed]
+
+    got = read_number_table(path, what="IMU recording", usecols=usecols)
+    if got is None or len(got.lines) < 2:
         return None
-    sample = [all_lines[no - 1] for no in nos[:50]]
-    votes = {d: sum(d in ln for ln in sample) for d in (";", "\t", ",")}
-    if votes[";"] > len(sample) // 2 or votes["\t"] > len(sample) // 2 \
-            or votes[","] <= len(sample) // 2:
-        return None  # read_rows would take another delimiter
-    if any('"' in all_lines[no - 1] or "\x00" in all_lines[no - 1] for no in nos):
-        return None  # csv.reader's business: quoted cells, NUL bytes
-    header = [c.strip() for c in all_lines[nos[0] - 1].split(",")]
-    if not any(header) or any("_" in c and _UNDERSCORE_NUMBER.fullmatch(c)
-                              and any(ch.isdigit() for ch in c) for c in header):
-        return None
-    commas = len(header) - 1
-    data = [all_lines[no - 1] for no in nos[1:]]
-    for ln in data:
-        if ln.count(",") != commas or "_" in ln or not ln.replace(",", "").strip():
-            return None
-    col = column_index(header, path=path, line=nos[0])
-    sensors, time_name, needed = _columns(header, col, path)
-    try:
-        table = np.loadtxt(data, dtype=np.float64, delimiter=",", comments=None,
-                           quotechar=None, usecols=[col[name] for name in needed], ndmin=2)
-    except ValueError:  # a cell that is not a number: read_rows names it
-        return None
-    del data, all_lines
 
     def cell(i, j):
-        ln = read_text(path, what="CSV text (IMU recording)").splitlines()[nos[1 + i] - 1]
-        return ln.split(",")[j].strip()
+        line = read_text(path, what="CSV text (IMU recording)").splitlines()[got.lines[i] - 1]
+        return line.split(",")[j].strip()
 
-    return col, sensors, time_name, needed, nos[1:], table, cell
+    return (picked["col"], picked["sensors"], picked["time_name"], picked["needed"], got.lines,
+            got.table, cell)
 
 
 def read_imu_csv(path, *, acc_units: str = "m/s2", gyr_units: str = "rad/s",
