@@ -12,6 +12,7 @@ sample, or returns the warnings it found.
 from __future__ import annotations
 
 import math
+import re
 import warnings as _warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -464,17 +465,66 @@ def write_imu_csv(rec: ImuRecording, path) -> None:
         np.savetxt(f, table, delimiter=",", fmt="%.9g")
 
 
-def _columns(header, col, path) -> tuple[list[str], str | None, list[str]]:
-    """The sensors, the time column (or None) and the columns to read, by name."""
-    sensors = [h[: -len("_acc_x")] for h in header if h.endswith("_acc_x")]
+#: A channel column as loggers and spreadsheets name it: a sensor, a channel and an axis
+#: (``Hand1 AccX``, ``hand1.gyro.y``, ``S3_Magnetometer_Z``), read when no column has the
+#: names :func:`write_imu_csv` writes.
+_LOOSE_CHANNEL = re.compile(
+    r"(?P<sensor>.*?[^ ._-])[ ._-]*(?P<channel>accelerometer|accel|acc|gyroscope|gyro|gyr|"
+    r"magnetometer|magn|mag)[ ._-]*(?P<axis>[xyz])", re.IGNORECASE)
+_LOOSE_TIME = re.compile(r"(?:time|timestamp)[ ._-]*[(\[]?(?P<unit>s|ms)[)\]]?", re.IGNORECASE)
+_CHANNEL = {"accelerometer": "acc", "accel": "acc", "acc": "acc", "gyroscope": "gyr",
+            "gyro": "gyr", "gyr": "gyr", "magnetometer": "mag", "magn": "mag", "mag": "mag"}
+
+
+def _loose_names(header, col, path) -> tuple[dict[str, int], list[tuple[str, str]]]:
+    """`col` with the canonical name of every column that means one, and what was renamed.
+
+    Raises
+    ------
+    RecordingError
+        Two columns that mean the same channel (``Hand1 AccX`` and ``hand1_accel_x``).
+    """
+    out = dict(col)
+    renamed: list[tuple[str, str]] = []
+    for name, i in col.items():
+        m = _LOOSE_CHANNEL.fullmatch(name)
+        t = _LOOSE_TIME.fullmatch(name)
+        if m:
+            sensor = re.sub(r"[ .-]+", "_", m["sensor"])
+            canon = f"{sensor}_{_CHANNEL[m['channel'].lower()]}_{m['axis'].lower()}"
+        elif t:
+            canon = f"time_{t['unit'].lower()}"
+        else:
+            continue
+        if canon == name:
+            continue
+        if canon in out and out[canon] != i:
+            other = next(h for h, j in col.items() if j == out[canon])
+            raise RecordingError(f"{path}: columns {other!r} and {name!r} both read as "
+                                 f"{canon}: which one holds the data is unknown")
+        out[canon] = i
+        renamed.append((name, canon))
+    return out, renamed
+
+
+def _columns(header, col, path) -> tuple[dict[str, int], list[str], str | None, list[str],
+                                         list[tuple[str, str]]]:
+    """The columns by name, the sensors, the time column (or None), the columns to read,
+    by name, and the columns read by their meaning (:data:`_LOOSE_CHANNEL`)."""
+    renamed: list[tuple[str, str]] = []
+    if not any(h.endswith("_acc_x") for h in header):
+        col, renamed = _loose_names(header, col, path)
+        header = sorted(col, key=col.__getitem__)
+    sensors = list(dict.fromkeys(h[: -len("_acc_x")] for h in header if h.endswith("_acc_x")))
     if not sensors:
-        raise RecordingError(f"{path}: no '<sensor>_acc_x' column found")
+        raise RecordingError(f"{path}: no '<sensor>_acc_x' column found (nor a column named "
+                             f"like 'hand1 AccX' or 'hand1.accel.x')")
     channels = [f"{s}_{c}_{a}" for s in sensors for c in ("acc", "gyr", "mag") for a in _AXES]
     missing = [name for name in channels if name not in col]
     if missing:
         raise RecordingError(f"{path}: missing column(s) {', '.join(missing[:6])}")
     time_name = "time_s" if "time_s" in col else "time_ms" if "time_ms" in col else None
-    return sensors, time_name, ([time_name] if time_name else []) + channels
+    return col, sensors, time_name, ([time_name] if time_name else []) + channels, renamed
 
 
 def _read_any_csv(path: Path) -> tuple:
@@ -493,6 +543,8 @@ def _read_any_csv(path: Path) -> tuple:
     table : ndarray, shape (N, len(needed)), float64
     cell : callable
         ``cell(i, j)``: the text of row `i`, column `j`, for messages.
+    renamed : list of (str, str)
+        Columns read by their meaning: (name in the file, name read as).
     """
     content = read_rows(path, what="IMU recording")
     if len(content.rows) < 3:
@@ -504,7 +556,7 @@ def _read_any_csv(path: Path) -> tuple:
         if len(row) != len(header):
             raise RecordingError(f"{path}, line {line}: {len(row)} values but "
                                  f"{len(header)} columns")
-    sensors, time_name, needed = _columns(header, col, path)
+    col, sensors, time_name, needed, renamed = _columns(header, col, path)
     idx = [col[name] for name in needed]
     try:
         table = np.array([[row[i] for i in idx] for row in content.rows[1:]], dtype=np.float64)
@@ -519,7 +571,7 @@ def _read_any_csv(path: Path) -> tuple:
         raise
     rows = content.rows
     return col, sensors, time_name, needed, content.lines[1:], table, \
-        lambda i, j: rows[1 + i][j]
+        lambda i, j: rows[1 + i][j], renamed
 
 
 def _read_plain_csv(path: Path) -> tuple | None:
@@ -536,8 +588,9 @@ def _read_plain_csv(path: Path) -> tuple | None:
 
     def usecols(header, line):
         col = column_index(header, path=path, line=line)
-        sensors, time_name, needed = _columns(header, col, path)
-        picked.update(col=col, sensors=sensors, time_name=time_name, needed=needed)
+        col, sensors, time_name, needed, renamed = _columns(header, col, path)
+        picked.update(col=col, sensors=sensors, time_name=time_name, needed=needed,
+                      renamed=renamed)
         return [col[name] for name in needed]
 
     got = read_number_table(path, what="IMU recording", usecols=usecols)
@@ -549,7 +602,7 @@ def _read_plain_csv(path: Path) -> tuple | None:
         return line.split(",")[j].strip()
 
     return (picked["col"], picked["sensors"], picked["time_name"], picked["needed"], got.lines,
-            got.table, cell)
+            got.table, cell, picked["renamed"])
 
 
 def read_imu_csv(path, *, acc_units: str = "m/s2", gyr_units: str = "rad/s",
@@ -560,7 +613,14 @@ def read_imu_csv(path, *, acc_units: str = "m/s2", gyr_units: str = "rad/s",
     Columns: ``time_s`` (or ``time_ms``) and, for every sensor,
     ``<sensor>_acc_x`` .. ``<sensor>_mag_z``; other columns (a note, a
     date) are ignored; lines starting with ``#`` are
-    comments.  Sensors are taken in the order of their first column.
+    comments.  A file with none of these names is read by what its names
+    mean, with a warning listing them: a sensor, a channel (``acc``,
+    ``accel``, ``accelerometer``, ``gyr``, ``gyro``, ``gyroscope``, ``mag``,
+    ``magn``, ``magnetometer``, any case) and an axis, with or without
+    spaces, dots, dashes or underscores between them (``Hand1 AccX``,
+    ``hand1.gyro.y`` read as ``Hand1_acc_x``, ``hand1_gyr_y``), and
+    ``Time (s)``, ``timestamp_ms`` and the like as the time column.
+    Sensors are taken in the order of their first column.
     Spreadsheet exports are read as they come (``;`` or tab between the
     fields, decimal commas, quoted cells, a byte-order mark;
     :func:`handsynth._csv.read_rows`).
@@ -606,7 +666,12 @@ def read_imu_csv(path, *, acc_units: str = "m/s2", gyr_units: str = "rad/s",
     parsed = _read_plain_csv(path)
     if parsed is None:
         parsed = _read_any_csv(path)
-    col, sensors, time_name, needed, lines, table, cell = parsed
+    col, sensors, time_name, needed, lines, table, cell, renamed = parsed
+    if renamed:
+        shown = ", ".join(f"{name!r} as {canon}" for name, canon in renamed[:4])
+        _warnings.warn(f"{path}: {len(renamed)} columns read by their meaning ({shown}"
+                       f"{', ...' if len(renamed) > 4 else ''}); check the sensors' names and "
+                       f"order: {', '.join(sensors)}", stacklevel=2)
     pos = {name: i for i, name in enumerate(needed)}
     if time_name is not None:
         t = table[:, pos[time_name]] * (1.0 if time_name == "time_s" else 1e-3)

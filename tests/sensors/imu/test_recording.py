@@ -1,4 +1,5 @@
 import dataclasses
+import re
 
 import numpy as np
 import pytest
@@ -297,3 +298,52 @@ def test_a_static_start_that_is_not_a_number_is_refused(bad):
                                              r"seconds > 0, got "):
         check_static(bad)
     assert check_static(np.float32(2.0)) == 2.0
+
+
+@pytest.mark.parametrize("style", ["spaces", "dots", "words"])
+def test_columns_named_by_their_meaning_are_read_with_a_warning(tmp_path, style):
+    # a logger's names ('Hand1 AccX', 'hand1.gyro.y', 'S1_Magnetometer_Z') were refused:
+    # "no '<sensor>_acc_x' column found"
+    rng = np.random.default_rng(3)
+    n, sensors = 50, ("hand1", "index2")
+    acc, gyr, mag = (rng.normal(size=(2, n, 3)) for _ in range(3))
+    acc[..., 2] += 9.81
+    mag *= 20.0
+    rec = ImuRecording(rate_hz=100.0, sensors=sensors, acc=acc, gyr=gyr, mag=mag)
+    path = tmp_path / "canon.csv"
+    write_imu_csv(rec, path)
+    lines = [ln for ln in path.read_text().splitlines() if not ln.startswith("#")]
+    words = {"spaces": {"acc": "Acc", "gyr": "Gyr", "mag": "Mag"},
+             "dots": {"acc": "accel", "gyr": "gyro", "mag": "mag"},
+             "words": {"acc": "Accelerometer", "gyr": "Gyroscope", "mag": "Magnetometer"}}[style]
+
+    def spell(sensor, channel, axis):
+        if style == "spaces":
+            return f"{sensor.capitalize()} {words[channel]}{axis.upper()}"
+        if style == "dots":
+            return f"{sensor}.{words[channel]}.{axis}"
+        return f"{sensor}_{words[channel]}_{axis.upper()}"
+
+    names = []
+    for h in lines[0].split(","):
+        if h == "time_s":
+            names.append("Time (s)")
+        else:
+            s, c, a = h.rsplit("_", 2)
+            names.append(spell(s, c, a))
+    loose = tmp_path / "loose.csv"
+    loose.write_text("\n".join([",".join(names), *lines[1:]]) + "\n")
+    with pytest.warns(UserWarning, match=r"columns read by their meaning"):
+        got = read_imu_csv(loose)
+    want = ("Hand1", "Index2") if style == "spaces" else sensors
+    assert got.sensors == want and got.rate_hz == pytest.approx(100.0)
+    np.testing.assert_allclose(got.acc, rec.acc, atol=1e-6)
+    np.testing.assert_allclose(got.mag, rec.mag, atol=1e-6)
+    # two columns that mean one channel are refused, naming both
+    twice = tmp_path / "twice.csv"
+    again = names[1].replace(" ", "-").replace(".", " ").replace("_", "-")  # the same meaning
+    twice.write_text("\n".join([",".join(names + [again]),
+                                *(ln + ",0" for ln in lines[1:])]) + "\n")
+    with pytest.raises(RecordingError, match=rf"columns '{re.escape(names[1])}' and "
+                                             rf"'{re.escape(again)}' both read as"):
+        read_imu_csv(twice)
