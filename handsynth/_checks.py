@@ -14,7 +14,7 @@ import numpy as np
 
 from .errors import HandsynthError, InvalidInputError
 
-__all__ = ["SIDES", "check_integer", "check_number", "check_options", "check_side"]
+__all__ = ["SIDES", "check_integer", "check_number", "check_options", "check_side", "short_repr"]
 
 #: The hands a device or a model can be on.
 SIDES = ("right", "left")
@@ -47,6 +47,12 @@ def check_side(side, *, name: str = "side", error: type[HandsynthError] = Invali
     return side
 
 
+def short_repr(value, limit: int = 60) -> str:
+    """``repr(value)`` cut to `limit` characters (``...`` at the end), for messages."""
+    text = repr(value)
+    return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
 def check_options(options, cls: type, *, name: str = "options",
                   error: type[HandsynthError] = InvalidInputError):
     """`options` checked to be an instance of the dataclass `cls`; ``cls()`` for None.
@@ -76,12 +82,10 @@ def check_options(options, cls: type, *, name: str = "options",
     if options is None:
         return cls()
     if not isinstance(options, cls):
-        value = repr(options)
-        value = value if len(value) <= 60 else value[:57] + "..."
         hint = f" (make one: {cls.__name__}(**fields))" if isinstance(options, dict) else ""
         article = "an" if cls.__name__[:1] in "AEIOU" else "a"
         raise error(f"{name} must be {article} {cls.__name__}, got {type(options).__name__} "
-                    f"{value}{hint}")
+                    f"{short_repr(options)}{hint}")
     return options
 
 

@@ -114,3 +114,10 @@ def test_an_integer_too_large_for_a_float_is_not_finite():
 
     with pytest.raises(InvalidInputError, match=r"^x must be a finite number, got 1000"):
         check_number(10 ** 400, "x")
+
+
+def test_a_long_value_is_cut_in_messages():
+    from handsynth._checks import short_repr
+
+    assert short_repr("ab") == "'ab'"
+    assert short_repr("x" * 100, 10) == "'xxxxxx..." and len(short_repr("x" * 100)) == 60

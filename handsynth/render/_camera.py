@@ -7,7 +7,7 @@ from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
-from .._checks import check_number, check_side
+from .._checks import check_number, check_side, short_repr
 from ..errors import InvalidCameraError
 from ..models import DORSUM_Z_MM
 
@@ -222,10 +222,8 @@ def as_mount(mount, name: str = "mount", *, optional: bool = True) -> CameraMoun
     if mount is None and optional:
         return CameraMount()
     if not isinstance(mount, CameraMount):
-        value = repr(mount)
-        value = value if len(value) <= 60 else value[:57] + "..."
         raise InvalidCameraError(
-            f"{name} must be a CameraMount, got {type(mount).__name__} {value}")
+            f"{name} must be a CameraMount, got {type(mount).__name__} {short_repr(mount)}")
     return mount
 
 

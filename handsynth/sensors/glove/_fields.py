@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..._checks import check_number
+from ..._checks import check_number, short_repr
 from ...errors import InvalidInputError
 
 __all__ = ["array_field", "as_array", "as_number", "as_sensors", "number_field"]
@@ -41,7 +41,7 @@ def as_array(value, what: str, shape: tuple[int | None, ...], *,
     try:
         a = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError):
-        raise InvalidInputError(f"{what} must be numbers, got {_short(value)}") from None
+        raise InvalidInputError(f"{what} must be numbers, got {short_repr(value, 40)}") from None
     if a.ndim != len(shape) or any(n is not None and n != m for n, m in zip(shape, a.shape)):
         want = "(" + ", ".join("N" if n is None else str(n) for n in shape) + \
             ("," if len(shape) == 1 else "") + ")"
@@ -96,7 +96,7 @@ def as_sensors(sensors, what: str = "sensors") -> np.ndarray:
     try:
         s = np.asarray(sensors, dtype=np.float64)
     except (TypeError, ValueError):
-        raise InvalidInputError(f"{what} must be numbers, got {_short(sensors)}") from None
+        raise InvalidInputError(f"{what} must be numbers, got {short_repr(sensors, 40)}") from None
     if s.ndim == 1:
         s = s[None]
     if s.ndim != 2 or s.shape[1] != 5:
@@ -105,8 +105,3 @@ def as_sensors(sensors, what: str = "sensors") -> np.ndarray:
         row = int(np.argwhere(np.isinf(s))[0, 0])
         raise InvalidInputError(f"{what}: row {row} has an infinite reading")
     return s
-
-
-def _short(value) -> str:
-    text = repr(value)
-    return text if len(text) <= 40 else text[:37] + "..."
