@@ -266,9 +266,10 @@ def _counter_restarts(col: np.ndarray, station: np.ndarray | None) -> list[int]:
 
 
 def _select_take(path: Path, column: str, starts: list[int], lines: np.ndarray,
-                 values: np.ndarray, take: int, notes: dict, stacklevel: int) -> slice:
+                 jump: tuple[float, float], take: int, notes: dict, stacklevel: int) -> slice:
     """The rows of take `take` (1 = the first) of a file whose `column` restarts at the rows
-    `starts`, with a warning that says which take is used and how many rows are dropped.
+    `starts` (first from ``jump[0]`` to ``jump[1]``), with a warning that says which take is
+    used and how many rows are dropped.
 
     Raises
     ------
@@ -287,8 +288,8 @@ def _select_take(path: Path, column: str, starts: list[int], lines: np.ndarray,
     first = (f"only the rows before line {int(lines[i])} are used" if take == 1 else
              f"take {take} is used (lines {int(lines[rows.start])}-{int(lines[rows.stop - 1])})")
     warnings.warn(
-        f"{path.name} line {int(lines[i])}: the {column} restarts ({values[i - 1]:g} -> "
-        f"{values[i]:g}): {'two' if takes == 2 else takes} takes in one file? {first} "
+        f"{path.name} line {int(lines[i])}: the {column} restarts ({jump[0]:g} -> "
+        f"{jump[1]:g}): {'two' if takes == 2 else takes} takes in one file? {first} "
         f"({n - (rows.stop - rows.start)} rows of the other take{'s' if takes > 2 else ''} "
         f"dropped; take=N, --take N, reads another)", stacklevel=stacklevel + 1)
     notes["restart_line"] = int(lines[i])
@@ -603,8 +604,9 @@ def _check_times(
     dt = float(np.median(forward)) if forward.size else 0.0
     back = np.flatnonzero(np.isfinite(steps) & (steps < -10 * dt)) if dt > 0 else np.array([], int)
     if back.size:
-        k = _select_take(path, "time", [int(b) + 1 for b in back], line_no, times, take, notes,
-                         stacklevel=3)
+        i = int(back[0]) + 1
+        k = _select_take(path, "time", [int(b) + 1 for b in back], line_no,
+                         (times[i - 1], times[i]), take, notes, stacklevel=3)
         pos_file, ang, times, line_no = pos_file[k], [a[k] for a in ang], times[k], line_no[k]
     times = times - np.nanmin(times)
     # rows re-written with a time that does not advance
@@ -805,10 +807,8 @@ def read_polhemus(
             i = starts[0]
             # the value before the restart is the last one of the restarting row's station
             prev = col[:i][stations[:i] == stations[i]] if stations is not None else col[:i]
-            shown = col.copy()
-            shown[i - 1] = prev[-1]
-            k = _select_take(path, "frame counter", starts, t.lines, shown, take, notes,
-                             stacklevel=2)
+            k = _select_take(path, "frame counter", starts, t.lines, (prev[-1], col[i]), take,
+                             notes, stacklevel=2)
             t = dataclasses.replace(t, rows=t.rows[k], lines=t.lines[k])
     rows = t.rows
     # where the sample times come from: `rate_hz` is used only without a time column
