@@ -14,7 +14,8 @@ import numpy as np
 
 from .errors import HandsynthError, InvalidInputError
 
-__all__ = ["SIDES", "check_integer", "check_number", "check_options", "check_side", "short_repr"]
+__all__ = ["SIDES", "check_integer", "check_number", "check_options", "check_side", "is_number",
+           "short_repr"]
 
 #: The hands a device or a model can be on.
 SIDES = ("right", "left")
@@ -106,6 +107,12 @@ def _number_kind(value: Any) -> str | None:
     if isinstance(value, numbers.Real):
         return "float"
     return None
+
+
+def is_number(value: Any) -> bool:
+    """`value` is a real number: ``int``, ``float``, a numpy scalar or 0-d array; not a
+    bool, not a text that reads as a number."""
+    return _number_kind(value) is not None
 
 
 def _bounds_text(minimum, maximum, above, below) -> str:

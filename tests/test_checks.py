@@ -121,3 +121,12 @@ def test_a_long_value_is_cut_in_messages():
 
     assert short_repr("ab") == "'ab'"
     assert short_repr("x" * 100, 10) == "'xxxxxx..." and len(short_repr("x" * 100)) == 60
+
+
+def test_what_is_a_number():
+    import numpy as np
+
+    from handsynth._checks import is_number
+
+    assert all(is_number(v) for v in (1, 2.5, np.float32(1), np.int8(3), np.array(2.0), np.nan))
+    assert not any(is_number(v) for v in (True, np.bool_(False), "1", b"1", None, [1], np.ones(2)))

@@ -44,7 +44,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from .._checks import check_side
+from .._checks import check_side, is_number
 from ..db import pack_mask, unpack_mask
 from ..errors import EstimationError, InvalidInputError
 from ..models import HandShape
@@ -143,14 +143,11 @@ class Calibration:
                 or not 0 <= dilation_px <= _MAX_DILATION_PX:
             raise InvalidInputError(
                 f"dilation_px must be an int in [0, {_MAX_DILATION_PX}], got {dilation_px!r}")
-        if isinstance(temperature_px, bool) \
-                or not isinstance(temperature_px, (int, float, np.integer, np.floating)) \
-                or not 0.0 <= temperature_px <= _MAX_TEMPERATURE_PX:
+        if not is_number(temperature_px) or not 0.0 <= temperature_px <= _MAX_TEMPERATURE_PX:
             raise InvalidInputError(f"temperature_px must be a number in [0, "
                                     f"{_MAX_TEMPERATURE_PX:g}], got {temperature_px!r}")
         floor = MIN_OPEN_IOU if min_open_iou is None else min_open_iou
-        if isinstance(floor, bool) or not isinstance(floor, (int, float, np.integer, np.floating)) \
-                or not 0.0 <= floor <= 1.0:
+        if not is_number(floor) or not 0.0 <= floor <= 1.0:
             raise InvalidInputError(f"min_open_iou must be a number in [0, 1], got {floor!r}")
         iou = float((u & o).sum() / (u | o).sum())
         if iou < floor:

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..._checks import is_number
 from ...errors import EstimationError, InvalidInputError, RecordingError
 from ._quat import quat_from_acc_mag
 from ._recording import ImuRecording, _reported, check_recording, check_static
@@ -61,8 +62,7 @@ class StaticStart:
             object.__setattr__(self, "align_end_s", None)
             a = b = None
         if a is not None and b is not None:
-            if not all(isinstance(v, (int, float, np.integer, np.floating))
-                       and not isinstance(v, bool) for v in (a, b)):
+            if not all(is_number(v) for v in (a, b)):
                 raise InvalidInputError(f"align_start_s and align_end_s must be numbers of "
                                         f"seconds, got {a!r} and {b!r}")
             if not (np.isfinite(a) and np.isfinite(b) and a >= 0):

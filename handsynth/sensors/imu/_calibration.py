@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..._checks import is_number
 from ..._io import atomic_open
 from ...errors import InvalidInputError, RecordingError
 from ._attitude import StaticStart
@@ -65,8 +66,7 @@ def segments_from_seconds(spans: dict, rate_hz: float, n: int, *, source: str | 
     out = []
     for label, span in spans.items():
         if (not isinstance(span, (list, tuple)) or len(span) != 2
-                or not all(isinstance(x, (int, float, np.integer, np.floating))
-                           and not isinstance(x, bool) for x in span)):
+                or not all(is_number(x) for x in span)):
             raise RecordingError(f"{where}segment {label!r} must be [start_s, end_s], two "
                                  f"numbers, got {span!r}")
         a, b = (float(x) for x in span)

@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..._checks import check_number
+from ..._checks import check_number, is_number
 from ...errors import InvalidInputError
 from ._attitude import (
     StaticStart,
@@ -115,13 +115,9 @@ class ChainEKFOptions:
             check_number(getattr(self, k), f"ChainEKFOptions.{k}", above=0)
         for k in ("switch_dps", "bias_tau_s"):
             v = getattr(self, k)
-            if v is not None and not (_is_number(v) and np.isfinite(v) and v > 0):
+            if v is not None and not (is_number(v) and np.isfinite(v) and v > 0):
                 raise InvalidInputError(f"ChainEKFOptions.{k} must be a finite number > 0 or "
                                         f"None, got {v!r}")
-
-
-def _is_number(v) -> bool:
-    return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
 
 
 #: ``filter4b``: Filter 4 that also learns each gyro's bias from its own

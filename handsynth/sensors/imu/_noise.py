@@ -48,7 +48,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..._checks import check_number
+from ..._checks import check_number, is_number
 from ...errors import InvalidInputError
 from ._model import GRAVITY_MPS2, SENSOR_NAMES, TIP_SENSORS
 
@@ -64,10 +64,6 @@ __all__ = [
 ]
 
 _DEG = np.pi / 180.0
-
-
-def _is_number(v) -> bool:
-    return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
 
 
 def _check_figure(name: str, value, *, positive: bool = False) -> None:
@@ -217,7 +213,7 @@ class MagDisturbance:
     def __post_init__(self) -> None:
         for k in ("start_s", "end_s"):
             v = getattr(self, k)
-            if not (_is_number(v) and np.isfinite(v)):
+            if not (is_number(v) and np.isfinite(v)):
                 raise InvalidInputError(f"MagDisturbance.{k} must be a finite number of seconds, "
                                         f"got {v!r}")
         if not self.end_s > self.start_s:

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..._checks import is_number
 from ..._csv import column_index, read_number_table, read_rows, read_text
 from ..._io import atomic_open
 from ...errors import InvalidInputError, RecordingError
@@ -220,8 +221,7 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
     rate = check_rate(rec.rate_hz, source=source)
     static_s = check_static(static_s, source=source)
     for arg, value in (("acc_full_scale", acc_full_scale), ("gyr_full_scale", gyr_full_scale)):
-        if not (isinstance(value, (int, float, np.integer, np.floating))
-                and not isinstance(value, bool) and math.isfinite(value) and value > 0):
+        if not (is_number(value) and math.isfinite(value) and value > 0):
             raise RecordingError(f"{arg} must be a finite number > 0 (the sensors' full scale), "
                                  f"got {value!r}")
     s = len(rec.sensors)
@@ -397,8 +397,7 @@ def check_rate(rate_hz, *, source: str = "recording") -> float:
     RecordingError
         `rate_hz` is not a number, not finite, or not positive.
     """
-    if isinstance(rate_hz, (bool, np.bool_)) or not isinstance(
-            rate_hz, (int, float, np.integer, np.floating)):
+    if not is_number(rate_hz):
         raise RecordingError(f"{source}: sampling rate rate_hz (--rate) is {rate_hz!r}, "
                              "not a number")
     try:
@@ -416,10 +415,8 @@ def check_static(static_s, *, source: str = "recording") -> float:
 
     A bool or a text (``"2"``) is not a number, although ``float()`` would take it.
     """
-    is_number = not isinstance(static_s, (bool, np.bool_)) and isinstance(
-        static_s, (int, float, np.integer, np.floating))
     try:
-        value = float(static_s) if is_number else math.nan
+        value = float(static_s) if is_number(static_s) else math.nan
     except OverflowError:  # an int too large for a float
         value = math.inf
     if not (math.isfinite(value) and value > 0):
