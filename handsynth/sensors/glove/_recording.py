@@ -13,6 +13,8 @@ are read as NaN (a dropped sample), and the estimators flag them.
 from __future__ import annotations
 
 import csv
+import re
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -22,6 +24,7 @@ from ..._csv import column_index, read_rows
 from ..._io import atomic_open
 from ...errors import RecordingError
 from ...models import JOINT_NAMES
+from ._models import GloveWarning
 from ._motions import MOTIONS
 from ._sensors import GLOVE_KINDS, SENSOR_NAMES
 
@@ -32,6 +35,48 @@ RANGE_LABELS = ("range_open", "range_fist")
 _KNOWN_LABELS = {name.lower(): name for name in (*MOTIONS, *RANGE_LABELS)}
 
 __all__ = ["GloveRecording", "read_glove_csv", "write_angles_csv", "write_glove_csv"]
+
+#: A glove's own name for a finger's sensor, any case, spaces, dots or dashes for ``_``:
+#: ``Thumb``, ``index sensor``, ``Bend_Middle``, ``pinky``.
+_LOOSE_SENSOR = re.compile(r"(?:(?:sensor|bend|flex)_)?(?P<finger>thumb|index|middle|ring|little|"
+                           r"pinky|pinkie)(?:_(?:sensor|bend|flex))?")
+
+
+#: A time column in seconds as loggers name it: ``Time (s)``, ``time [s]``, ``Time_S``.
+_LOOSE_TIME_S = re.compile(r"(?:time|timestamp)(?:_[(\[]?|[(\[])s[)\]]?")
+
+
+def _loose_sensor_columns(header, path) -> tuple[list[str], list[tuple[str, str]]]:
+    """`header` with each column that names one finger's sensor renamed to its canonical name
+    (:data:`SENSOR_NAMES`), a time column in seconds to ``time_s``, and what was renamed.
+
+    Raises
+    ------
+    RecordingError
+        Two columns that name one finger's sensor.
+    """
+    out = list(header)
+    renamed: list[tuple[str, str]] = []
+    seen: dict[str, str] = {}
+    for i, name in enumerate(header):
+        loose = re.sub(r"[ .-]+", "_", name.strip().lower())
+        if _LOOSE_TIME_S.fullmatch(loose) and "time_s" not in header and name != "time_s":
+            out[i] = "time_s"
+            renamed.append((name, "time_s"))
+            continue
+        m = _LOOSE_SENSOR.fullmatch(loose)
+        if not m:
+            continue
+        finger = {"pinky": "little", "pinkie": "little"}.get(m["finger"], m["finger"])
+        canon = f"sensor_{finger}"
+        if canon in seen:
+            raise RecordingError(f"{path}: columns {seen[canon]!r} and {name!r} both read as "
+                                 f"{canon}: which one holds the readings is unknown")
+        seen[canon] = name
+        if canon != name:
+            out[i] = canon
+            renamed.append((name, canon))
+    return out, renamed
 
 
 @dataclass(frozen=True, eq=False)
@@ -209,6 +254,11 @@ def read_glove_csv(path, *, kind: str = "", adc_max: float = 4095.0) -> GloveRec
     Parameters
     ----------
     path : str or Path
+        Sensor columns ``sensor_thumb`` .. ``sensor_little``; a file with none
+        of them is read by what its names mean, with a warning listing them:
+        a finger's name, any case, alone or with ``sensor``, ``bend`` or
+        ``flex`` (``Thumb``, ``index sensor``, ``Bend-Middle``; ``pinky``
+        for the little finger), and ``Time (s)`` or the like as ``time_s``.
     kind : str, keyword-only
         Glove design to record in the result ("" if unknown).
     adc_max : float, keyword-only
@@ -222,7 +272,8 @@ def read_glove_csv(path, *, kind: str = "", adc_max: float = 4095.0) -> GloveRec
     Raises
     ------
     RecordingError
-        No such file, no header, a missing sensor column, some but not all
+        No such file, no header, a missing sensor column, two columns that
+        name one finger's sensor, some but not all
         joint columns, a row of the wrong length, or a cell that is not a
         number; the message names the file, line and column.
     """
@@ -233,6 +284,12 @@ def read_glove_csv(path, *, kind: str = "", adc_max: float = 4095.0) -> GloveRec
     if not rows:
         raise RecordingError(f"{path}: empty file, expected a header line")
     header = rows[0]
+    if not any(c in header for c in SENSOR_NAMES):  # a glove's own names, read by meaning
+        header, renamed = _loose_sensor_columns(header, path)
+        if renamed:
+            shown = ", ".join(f"{name!r} as {canon}" for name, canon in renamed)
+            warnings.warn(f"{path}: {len(renamed)} columns read by their meaning "
+                          f"({shown})", GloveWarning, stacklevel=2)
     missing = [c for c in SENSOR_NAMES if c not in header]
     if missing:
         raise RecordingError(f"{path}: missing sensor column(s) {', '.join(missing)}; "

@@ -468,7 +468,8 @@ def write_imu_csv(rec: ImuRecording, path) -> None:
 _LOOSE_CHANNEL = re.compile(
     r"(?P<sensor>.*?[^ ._-])[ ._-]*(?P<channel>accelerometer|accel|acc|gyroscope|gyro|gyr|"
     r"magnetometer|magn|mag)[ ._-]*(?P<axis>[xyz])", re.IGNORECASE)
-_LOOSE_TIME = re.compile(r"(?:time|timestamp)[ ._-]*[(\[]?(?P<unit>s|ms)[)\]]?", re.IGNORECASE)
+_LOOSE_TIME = re.compile(r"(?:time|timestamp)(?:[ ._-]+[(\[]?|[(\[])(?P<unit>s|ms)[)\]]?",
+                         re.IGNORECASE)
 _CHANNEL = {"accelerometer": "acc", "accel": "acc", "acc": "acc", "gyroscope": "gyr",
             "gyro": "gyr", "gyr": "gyr", "magnetometer": "mag", "magn": "mag", "mag": "mag"}
 

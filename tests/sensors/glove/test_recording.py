@@ -33,6 +33,33 @@ def test_sensors_only_and_nan_cells(tmp_path):
     assert np.isnan(rec.sensors[1, [1, 3]]).all()
 
 
+@pytest.mark.parametrize("names", [["Thumb", "Index", "Middle", "Ring", "Pinky"],
+                                   ["thumb sensor", "index sensor", "middle sensor",
+                                    "ring sensor", "little sensor"],
+                                   ["Bend-Little", "Bend-Ring", "Bend-Middle", "Bend-Index",
+                                    "Bend-Thumb"]])
+def test_a_gloves_own_sensor_names_are_read_by_their_meaning(tmp_path, names):
+    # before: "missing sensor column(s) sensor_thumb, ..." for a glove's own export
+    from handsynth.sensors.glove import GloveWarning
+
+    p = tmp_path / "own.csv"
+    p.write_text("Time (s)," + ",".join(names) + "\n0,1,2,3,4,5\n0.1,6,7,8,9,10\n")
+    with pytest.warns(GloveWarning, match=r"6 columns read by their meaning "
+                                           r"\('Time \(s\)' as time_s, "):
+        rec = read_glove_csv(p)
+    np.testing.assert_array_equal(rec.time_s, [0.0, 0.1])
+    fingers = [n.lower().replace("bend-", "").replace(" sensor", "").replace("pinky", "little")
+               for n in names]
+    order = [fingers.index(f) for f in ("thumb", "index", "middle", "ring", "little")]
+    np.testing.assert_array_equal(rec.sensors, np.array([[1, 2, 3, 4, 5],
+                                                         [6, 7, 8, 9, 10]])[:, order])
+    twice = tmp_path / "twice.csv"
+    twice.write_text(",".join(names + ["sensor-" + fingers[0]]) + "\n" + "1,2,3,4,5,6\n")
+    with pytest.raises(RecordingError, match=rf"columns '{names[0]}' and 'sensor-{fingers[0]}' "
+                                             rf"both read as sensor_{fingers[0]}"):
+        read_glove_csv(twice)
+
+
 def test_a_byte_order_mark_does_not_hide_the_first_column(tmp_path):
     """A spreadsheet's "CSV UTF-8" starts with a byte-order mark; the first
     column (here time_s) must still be found by name."""
