@@ -31,7 +31,8 @@ import numpy as np
 
 from .errors import RecordingError
 
-__all__ = ["NumberTable", "Rows", "column_index", "read_number_table", "read_rows", "read_text"]
+__all__ = ["NumberTable", "Rows", "column_index", "names_by_meaning", "read_number_table",
+           "read_rows", "read_text"]
 
 _COMMA_NUMBER = re.compile(r"[-+]?\d*,\d+(?:[eE][-+]?\d+)?")
 #: A number as Python's ``float`` reads it, underscores included.
@@ -214,6 +215,43 @@ def column_index(header, *, path, line: int | None = None) -> dict[str, int]:
                                  "is unknown: rename or remove one")
         index[name] = i
     return index
+
+
+def names_by_meaning(header, meaning, *, path) -> tuple[list[str], list[tuple[str, str]]]:
+    """`header` with each name replaced by the canonical name it means, and what was renamed.
+
+    For the exports whose software names the columns its own way (``Hand1 AccX`` for
+    ``Hand1_acc_x``); the reader warns with the renamed list.
+
+    Parameters
+    ----------
+    header : sequence of str
+    meaning : callable
+        ``meaning(name) -> str or None``: the canonical name `name` means (itself
+        for a canonical name), None for a column it does not know.
+    path : str or os.PathLike, keyword-only
+        The file, for messages.
+
+    Raises
+    ------
+    RecordingError
+        Two columns that mean one canonical name (which one holds the data is unknown).
+    """
+    out = list(header)
+    renamed: list[tuple[str, str]] = []
+    seen: dict[str, str] = {}
+    for i, name in enumerate(header):
+        canon = meaning(name)
+        if canon is None:
+            continue
+        if canon in seen:
+            raise RecordingError(f"{path}: columns {seen[canon]!r} and {name!r} both read as "
+                                 f"{canon}: which one holds the data is unknown")
+        seen[canon] = name
+        if canon != name:
+            out[i] = canon
+            renamed.append((name, canon))
+    return out, renamed
 
 
 @dataclass(frozen=True)

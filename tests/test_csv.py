@@ -109,3 +109,15 @@ def test_a_plain_number_table_reads_as_read_rows_reads_it_and_other_files_are_le
         path = tmp_path / f"{name}.csv"
         path.write_text(text)
         assert read_number_table(path, what="test", usecols=lambda h, line: [0, 1]) is None, name
+
+
+def test_names_are_replaced_by_what_they_mean_and_two_of_one_meaning_refused():
+    from handsynth._csv import names_by_meaning
+
+    meaning = {"Acc X": "acc_x", "acc_x": "acc_x", "accel-x": "acc_x"}.get
+    header, renamed = names_by_meaning(["t", "Acc X", "note"], meaning, path="f.csv")
+    assert header == ["t", "acc_x", "note"] and renamed == [("Acc X", "acc_x")]
+    assert names_by_meaning(["acc_x"], meaning, path="f.csv") == (["acc_x"], [])
+    with pytest.raises(RecordingError, match=r"^f.csv: columns 'acc_x' and 'accel-x' both read "
+                                             r"as acc_x: which one holds the data is unknown$"):
+        names_by_meaning(["acc_x", "accel-x"], meaning, path="f.csv")

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..._csv import column_index, read_rows
+from ..._csv import column_index, names_by_meaning, read_rows
 from ..._io import atomic_open
 from ...errors import RecordingError
 from ...models import JOINT_NAMES
@@ -46,37 +46,17 @@ _LOOSE_SENSOR = re.compile(r"(?:(?:sensor|bend|flex)_)?(?P<finger>thumb|index|mi
 _LOOSE_TIME_S = re.compile(r"(?:time|timestamp)(?:_[(\[]?|[(\[])s[)\]]?")
 
 
-def _loose_sensor_columns(header, path) -> tuple[list[str], list[tuple[str, str]]]:
-    """`header` with each column that names one finger's sensor renamed to its canonical name
-    (:data:`SENSOR_NAMES`), a time column in seconds to ``time_s``, and what was renamed.
-
-    Raises
-    ------
-    RecordingError
-        Two columns that name one finger's sensor.
-    """
-    out = list(header)
-    renamed: list[tuple[str, str]] = []
-    seen: dict[str, str] = {}
-    for i, name in enumerate(header):
-        loose = re.sub(r"[ .-]+", "_", name.strip().lower())
-        if _LOOSE_TIME_S.fullmatch(loose) and "time_s" not in header and name != "time_s":
-            out[i] = "time_s"
-            renamed.append((name, "time_s"))
-            continue
-        m = _LOOSE_SENSOR.fullmatch(loose)
-        if not m:
-            continue
-        finger = {"pinky": "little", "pinkie": "little"}.get(m["finger"], m["finger"])
-        canon = f"sensor_{finger}"
-        if canon in seen:
-            raise RecordingError(f"{path}: columns {seen[canon]!r} and {name!r} both read as "
-                                 f"{canon}: which one holds the readings is unknown")
-        seen[canon] = name
-        if canon != name:
-            out[i] = canon
-            renamed.append((name, canon))
-    return out, renamed
+def _meaning(name: str, *, time_given: bool) -> str | None:
+    """The canonical name a glove export's column name means: a finger's sensor
+    (:data:`SENSOR_NAMES`), or ``time_s`` when the file has no ``time_s`` column."""
+    loose = re.sub(r"[ .-]+", "_", name.strip().lower())
+    if _LOOSE_TIME_S.fullmatch(loose):
+        return None if time_given else "time_s"
+    m = _LOOSE_SENSOR.fullmatch(loose)
+    if not m:
+        return None
+    finger = "little" if m["finger"] in ("pinky", "pinkie") else m["finger"]
+    return f"sensor_{finger}"
 
 
 @dataclass(frozen=True, eq=False)
@@ -285,7 +265,9 @@ def read_glove_csv(path, *, kind: str = "", adc_max: float = 4095.0) -> GloveRec
         raise RecordingError(f"{path}: empty file, expected a header line")
     header = rows[0]
     if not any(c in header for c in SENSOR_NAMES):  # a glove's own names, read by meaning
-        header, renamed = _loose_sensor_columns(header, path)
+        given = "time_s" in header
+        header, renamed = names_by_meaning(header, lambda h: _meaning(h, time_given=given),
+                                           path=path)
         if renamed:
             shown = ", ".join(f"{name!r} as {canon}" for name, canon in renamed)
             warnings.warn(f"{path}: {len(renamed)} columns read by their meaning "

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from ..._checks import is_number
-from ..._csv import column_index, read_number_table, read_rows, read_text
+from ..._csv import column_index, names_by_meaning, read_number_table, read_rows, read_text
 from ..._io import atomic_open
 from ...errors import InvalidInputError, RecordingError
 from ._model import GRAVITY_MPS2
@@ -474,35 +474,14 @@ _CHANNEL = {"accelerometer": "acc", "accel": "acc", "acc": "acc", "gyroscope": "
             "gyro": "gyr", "gyr": "gyr", "magnetometer": "mag", "magn": "mag", "mag": "mag"}
 
 
-def _loose_names(header, col, path) -> tuple[dict[str, int], list[tuple[str, str]]]:
-    """`col` with the canonical name of every column that means one, and what was renamed.
-
-    Raises
-    ------
-    RecordingError
-        Two columns that mean the same channel (``Hand1 AccX`` and ``hand1_accel_x``).
-    """
-    out = dict(col)
-    renamed: list[tuple[str, str]] = []
-    for name, i in col.items():
-        m = _LOOSE_CHANNEL.fullmatch(name)
-        t = _LOOSE_TIME.fullmatch(name)
-        if m:
-            sensor = re.sub(r"[ .-]+", "_", m["sensor"])
-            canon = f"{sensor}_{_CHANNEL[m['channel'].lower()]}_{m['axis'].lower()}"
-        elif t:
-            canon = f"time_{t['unit'].lower()}"
-        else:
-            continue
-        if canon == name:
-            continue
-        if canon in out and out[canon] != i:
-            other = next(h for h, j in col.items() if j == out[canon])
-            raise RecordingError(f"{path}: columns {other!r} and {name!r} both read as "
-                                 f"{canon}: which one holds the data is unknown")
-        out[canon] = i
-        renamed.append((name, canon))
-    return out, renamed
+def _meaning(name: str) -> str | None:
+    """The canonical name a column name means (:data:`_LOOSE_CHANNEL`, :data:`_LOOSE_TIME`)."""
+    m = _LOOSE_CHANNEL.fullmatch(name)
+    if m:
+        sensor = re.sub(r"[ .-]+", "_", m["sensor"])
+        return f"{sensor}_{_CHANNEL[m['channel'].lower()]}_{m['axis'].lower()}"
+    t = _LOOSE_TIME.fullmatch(name)
+    return f"time_{t['unit'].lower()}" if t else None
 
 
 def _columns(header, col, path) -> tuple[dict[str, int], list[str], str | None, list[str],
@@ -511,8 +490,8 @@ def _columns(header, col, path) -> tuple[dict[str, int], list[str], str | None, 
     by name, and the columns read by their meaning (:data:`_LOOSE_CHANNEL`)."""
     renamed: list[tuple[str, str]] = []
     if not any(h.endswith("_acc_x") for h in header):
-        col, renamed = _loose_names(header, col, path)
-        header = sorted(col, key=col.__getitem__)
+        header, renamed = names_by_meaning(header, _meaning, path=path)
+        col = column_index(header, path=path)
     sensors = list(dict.fromkeys(h[: -len("_acc_x")] for h in header if h.endswith("_acc_x")))
     if not sensors:
         raise RecordingError(f"{path}: no '<sensor>_acc_x' column found (nor a column named "
