@@ -587,7 +587,7 @@ class ApproximateIndex:
             :class:`ApproximateOptions`, ``options.nlist`` exceeds the number
             of entries, or `seed` is not an integer >= 0.
         """
-        opts = _check_options(options)
+        opts = check_options(options, ApproximateOptions)
         _check_tables(tables)
         seed = _check_seed(seed)
         n = len(tables)
@@ -655,7 +655,7 @@ class ApproximateIndex:
         DatabaseError
             The index file cannot be written.
         """
-        opts = _check_options(options)
+        opts = check_options(options, ApproximateOptions)
         seed = _check_seed(seed)
         if tables is None:
             tables = SearchTables.from_arrays(hlac=database.hlac, sil_bits=database.sil_bits,
@@ -859,10 +859,6 @@ class ApproximateIndex:
             # no survivor (or only empty cells): widen, up to every cell
             limit = nlist if probe >= limit else limit
             probe = min(2 * probe, limit)
-
-
-def _check_options(options) -> ApproximateOptions:
-    return check_options(options, ApproximateOptions)
 
 
 def _check_tables(tables) -> None:

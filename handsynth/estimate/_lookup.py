@@ -73,10 +73,6 @@ def _refuse_for_calibration(*, options, temporal, approximate) -> None:
             "search takes no seed); pass temporal=False or leave temporal unset")
 
 
-def _build_options(build) -> BuildOptions:
-    return check_options(build, BuildOptions, name="build")
-
-
 @dataclass(frozen=True, eq=False)
 class PoseEstimate:
     """The pose found for one frame.
@@ -416,7 +412,7 @@ class PoseLookup:
             shape = select_shape(measurements, options=opts).ratios
         elif not isinstance(shape, HandShape):
             raise InvalidInputError(f"shape must be a HandShape, got {type(shape).__name__}")
-        build = _build_options(build)
+        build = check_options(build, BuildOptions, name="build")
         shape = HandShape.from_name(shape.name)
         summary = build_databases(folder, [shape], as_mount(mount), options=build,
                                   workers=workers, progress=progress)
@@ -476,7 +472,7 @@ class PoseLookup:
         _refuse_for_calibration(options=kwargs.get("options"),
                                 temporal=kwargs.get("temporal"),
                                 approximate=kwargs.get("approximate"))
-        build = _build_options(build)
+        build = check_options(build, BuildOptions, name="build")
         mount = as_mount(mount)
         chosen = select_shape_from_frame(open_frame, mount=mount, side=build.side,
                                          shapes=shapes).shape
