@@ -31,6 +31,7 @@ from ..._checks import check_number
 from ...errors import EstimationError, InvalidInputError
 from ._attitude import StaticStart, check_run_input, gyro_bias, initial_attitude
 from ._quat import qexp, qmul, qnormalize, quat_from_acc_mag
+from ._quat_numba import _chain
 from ._recording import ImuRecording
 
 __all__ = [
@@ -90,7 +91,7 @@ def integrate_gyro(q0: np.ndarray, gyr: np.ndarray, rate_hz: float) -> np.ndarra
     gyr = _float_array(gyr, "gyr")
     if gyr.ndim != 3 or gyr.shape[2] != 3:
         raise InvalidInputError(f"gyr must have shape (S, N, 3), got {gyr.shape}")
-    s, n, _ = gyr.shape
+    s = gyr.shape[0]
     q0 = _float_array(q0, "q0")
     if q0.shape != (s, 4):
         raise InvalidInputError(f"q0 must have shape (S, 4) with S = {s} (gyr's), got {q0.shape}")
@@ -104,13 +105,18 @@ def integrate_gyro(q0: np.ndarray, gyr: np.ndarray, rate_hz: float) -> np.ndarra
     w[:, 0] = 0.0
     w[:, 1:] = 0.5 * (gyr[:, 1:] + gyr[:, :-1])
     dq = qexp(w * dt)
-    out = np.empty((s, n, 4))
-    q = q0 / norm[:, None]
-    for i in range(n):
+    return qnormalize(_chain(q0 / norm[:, None], dq))
+
+
+def _chain_reference(q0: np.ndarray, dq: np.ndarray) -> np.ndarray:
+    """Plain version of the compiled ``_chain``: q[:, i] = q[:, i-1] * dq[:, i]."""
+    out = np.empty(dq.shape)
+    q = q0
+    for i in range(dq.shape[1]):
         if i:
             q = qmul(q, dq[:, i])
         out[:, i] = q
-    return qnormalize(out)
+    return out
 
 
 @dataclass(frozen=True)

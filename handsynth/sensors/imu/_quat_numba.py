@@ -35,3 +35,23 @@ def _qmat(q):
     return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
                      [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
                      [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+@njit(cache=True, nogil=True)
+def _chain(q0, dq):
+    """q[:, 0] = q0, q[:, i] = q[:, i-1] * dq[:, i] (eq. 5.9); shapes (S, 4), (S, N, 4)."""
+    s, n = dq.shape[0], dq.shape[1]
+    out = np.empty((s, n, 4))
+    if n == 0:
+        return out
+    for k in range(s):
+        a0, a1, a2, a3 = q0[k, 0], q0[k, 1], q0[k, 2], q0[k, 3]
+        out[k, 0, 0], out[k, 0, 1], out[k, 0, 2], out[k, 0, 3] = a0, a1, a2, a3
+        for i in range(1, n):
+            b0, b1, b2, b3 = dq[k, i, 0], dq[k, i, 1], dq[k, i, 2], dq[k, i, 3]
+            a0, a1, a2, a3 = (a0 * b0 - a1 * b1 - a2 * b2 - a3 * b3,
+                              a0 * b1 + a1 * b0 + a2 * b3 - a3 * b2,
+                              a0 * b2 - a1 * b3 + a2 * b0 + a3 * b1,
+                              a0 * b3 + a1 * b2 - a2 * b1 + a3 * b0)
+            out[k, i, 0], out[k, i, 1], out[k, i, 2], out[k, i, 3] = a0, a1, a2, a3
+    return out

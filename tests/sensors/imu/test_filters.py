@@ -85,3 +85,19 @@ def test_online_vqf_is_causal_and_the_offline_one_is_not(free_rec):
     np.testing.assert_allclose(online.run(half), online.run(free_rec)[:, :half.n], atol=1e-12)
     offline = VQFEstimator()
     assert angle_deg(offline.run(half), offline.run(free_rec)[:, :half.n]).max() > 1e-3
+
+
+@pytest.mark.parametrize("n", [0, 1, 2, 500])
+def test_compiled_gyro_chain_equals_the_plain_one(n):
+    from handsynth.sensors.imu._filters import _chain_reference
+    from handsynth.sensors.imu._quat import qexp, qnormalize
+    from handsynth.sensors.imu._quat_numba import _chain
+
+    rng = np.random.default_rng(n)
+    q0 = qnormalize(rng.normal(size=(3, 4)))
+    dq = qexp(rng.normal(scale=0.05, size=(3, n, 3)))
+    fast, plain = _chain(q0, dq), _chain_reference(q0, dq)
+    assert fast.shape == plain.shape == (3, n, 4)
+    np.testing.assert_allclose(fast, plain, rtol=0, atol=1e-14)
+    if n:
+        np.testing.assert_array_equal(fast[:, 0], q0)
