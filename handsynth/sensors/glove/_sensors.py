@@ -23,7 +23,17 @@ A reading is built in this order (vectorised over the five sensors)::
 Numbers that are assumptions (no datasheet gives them) are marked as such
 in :class:`SensorParams`; resistive flex sensors are known to be nonlinear
 and to show hysteresis (Saggio et al., "Resistive flex sensors: a survey",
-Smart Mater. Struct. 25:013001, 2016), which is why both are modelled.
+Smart Mater. Struct. 25:013001, 2016), which is why both are modelled.  A
+stock resistive flex sensor's datasheet (Spectra Symbol, *Flex Sensor
+FS*, v.2014 Rev A, "Electrical specifications") gives only a flat
+resistance of 10 kOhm +/-30 % and a bend resistance at least twice the flat
+one at a 180 deg pinch bend: no hysteresis, noise or linearity figure.  The
+5DT manual describes its sensors as fibre-optic ("proprietary fiber optic
+based flexor technology", Appendix A); the same reading model, with the
+same assumed figures, is used for both designs.
+
+Which figures are sourced and which are assumptions is listed in
+docs/glove.md, "The simulation (what the figures rest on)".
 """
 
 from __future__ import annotations
@@ -116,28 +126,43 @@ class SensorParams:
     kind : {"dg5", "5dt"}
         Glove design (see :func:`sensor_joints`).
     gain : float or (5,), counts/deg
-        Slope of the reading.  Default 4.0 counts/deg: a 100 deg PIP bend
-        spans 400 of 4096 counts, above the 5DT manual's minimum dynamic
-        range of 8 bits (256 counts).
+        Slope of the reading.  Default 4.0 counts/deg: an assumption, bounded
+        below by a source: a 100 deg PIP bend spans 400 of 4096 counts, above
+        the 5DT manual's minimum dynamic range of 8 bits (256 counts;
+        Appendix A).  No datasheet gives counts per degree, which depend on
+        the glove's circuit.
     offset : float or (5,), counts
-        Reading of the straight sensor.  Default 1500 (assumption).
+        Reading of the straight sensor.  Default 1500: an assumption (a
+        straight sensor reads inside the 12-bit range, clear of either end).
+        A straight reading that differs from sensor to sensor is in line
+        with the flex-sensor datasheet's flat-resistance tolerance of +/-30 %
+        (Spectra Symbol, v.2014 Rev A), which does not give the spread in
+        counts: that is an assumption
+        (:func:`~handsynth.sensors.glove.don_glove`).
     nonlinearity : float or (5,), 1/deg * 100
         Coefficient of the quadratic term; 0.1 makes a 100 deg bend read 10 %
-        high (assumption: Saggio et al. 2016 report nonlinear resistive
-        sensors without a figure this model could take).
+        high.  Default 0.1: an assumption (Saggio et al. 2016 report
+        nonlinear resistive sensors without a figure this model could take).
     hysteresis_deg : float or (5,), deg
-        Width of the play (backlash) band.  Default 3 deg (assumption).
+        Width of the play (backlash) band.  Default 3 deg: an assumption
+        (Saggio et al. 2016 document hysteresis without a figure this model
+        could take; the flex-sensor datasheet gives none).
     noise_counts : float or (5,), counts
-        White-noise s.d. before quantisation.  Default 2 counts (assumption:
-        about 0.5 deg at the default gain).
+        White-noise s.d. before quantisation.  Default 2 counts: an
+        assumption (about 0.5 deg at the default gain; neither the 5DT
+        manual's specifications nor the flex-sensor datasheet gives a noise
+        figure).
     crosstalk : float or (5,)
         Extra weight of the proximal joint (MCP; thumb CMC for DG5 is not
         modelled) from the sensor slipping toward the knuckle; 0 for a sensor
-        exactly on its joint.
+        exactly on its joint.  Default 0; the spread a donning draws is an
+        assumption (:func:`~handsynth.sensors.glove.don_glove`).
     distal_weight_error : float or (5,)
-        Relative error of the distal joint's weight (placement).
+        Relative error of the distal joint's weight (placement).  Default 0;
+        the spread a donning draws is an assumption.
     adc_max : int
-        Full scale: 4095 for a 12-bit converter (5DT manual).
+        Full scale: 4095 for a 12-bit converter (5DT manual, Appendix A:
+        "12 bit A/D for each sensor").
 
     Raises
     ------

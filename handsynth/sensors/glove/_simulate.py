@@ -99,9 +99,15 @@ def make_user(seed: int, *, name: str | None = None,
     """A random wearer drawn from `seed`.
 
     Style spreads (assumptions, chosen so two users differ by several
-    degrees at every joint): posture scale s.d. 0.08, offset s.d. 4 deg,
-    rest posture s.d. 3 deg around 5 deg MCP flexion, MCP lead exponent
-    0.6-1.0 and PIP 0.9-1.5, DIP/PIP ratio 0.55-0.80, hand length 0.92-1.08.
+    degrees at every joint; not taken from a source): posture scale s.d.
+    0.08, offset s.d. 4 deg, rest posture s.d. 3 deg around 5 deg MCP
+    flexion, MCP lead exponent 0.6-1.0 and PIP 0.9-1.5, DIP/PIP ratio
+    0.55-0.80 (around the 2/3 of seed 004 eq. 1 that the estimators
+    assume).  Hand length 0.92-1.08 of the standard hand: an assumption
+    that spans the mean hand lengths of men and women in the 1988 US Army
+    survey (Gordon et al. 1989: 193.8 and 180.4 mm, 1.04 and 0.96 of the
+    standard hand's 187 mm; :mod:`handsynth.models`), not the survey's
+    spread.
 
     Raises
     ------
@@ -143,7 +149,12 @@ def don_glove(user: GloveUser, kind: str, *, seed: int, glove_seed: int = 0) -> 
     knuckle (extra MCP weight 0.02-0.10 plus 0.8 per unit of hand length
     below 1: a glove of one size sits farther down a short finger) and a
     placement error of the distal joint weight of s.d. 5 %.  All spreads are
-    assumptions; no datasheet gives them.
+    assumptions; no datasheet gives them (the flex-sensor datasheet's flat
+    resistance tolerance of +/-30 %, Spectra Symbol v.2014 Rev A, is in line
+    with an offset drawn per sensor and donning but does not give its spread
+    in counts; see :class:`SensorParams` for what is sourced).  Calibration
+    and test data come from the same ranges (other draws, not other
+    figures; docs/glove.md, "The simulation").
     """
     g = np.random.default_rng([int(glove_seed), 23])
     rng = np.random.default_rng([int(seed), 37])
@@ -217,9 +228,13 @@ def simulate_session(user: GloveUser, sensors: SensorParams, motions, *, trials:
         Nominal closing time (each trial draws 0.8-1.25 times it) and hold
         at the grasp, s.
     jitter_deg : float, keyword-only
-        Trial-to-trial s.d. of the grasp posture, deg.
+        Trial-to-trial s.d. of the grasp posture, deg (default 4: an
+        assumption, as are the closing-time spread 0.8-1.25 and the
+        per-finger onset delays of up to 0.15 of it).
     reference_noise_deg : float, keyword-only
-        S.d. of the reference glove's error added to ``angles``.
+        S.d. of the reference glove's error added to ``angles`` (default
+        1.5 deg: inside the 0.99-2.38 deg RMSE of the SenGlove, David et
+        al., Bioengineering 10:324, 2023; module notes).
 
     Returns
     -------
@@ -259,7 +274,8 @@ def simulate_poses(user: GloveUser, sensors: SensorParams, postures: np.ndarray,
 
     Used for a short range calibration (open hand and fist) of a new
     wearer.  The user's style is not applied: the postures are what the
-    user is asked to hold, plus 3 deg s.d. of not holding them exactly.
+    user is asked to hold, plus 3 deg s.d. of not holding them exactly (an
+    assumption).
     """
     rng = np.random.default_rng([int(seed), 31])
     postures = np.atleast_2d(np.asarray(postures, dtype=np.float64))

@@ -119,8 +119,15 @@ class ImuPlacement:
     along : float
         Position along each phalanx as a fraction of its length.
     forearm_length_mm : float
-        Elbow to wrist joint centre; the thesis' subjects averaged 270 mm
-        (seed 003 section 2.4.2); 250 mm here.
+        Elbow to wrist joint centre.  Default 250 mm: an assumption, not a
+        measured figure.  The thesis' subjects averaged 270 mm (seed 003
+        section 2.4.2, the discussion of Fig. 2.14); 250 mm is the forearm
+        of a somewhat smaller adult: the segment proportions of Winter,
+        *Biomechanics and Motor Control of Human Movement*, Fig. 4.1 (after
+        Drillis & Contini 1966), give the forearm as 0.146 of stature, i.e.
+        250 mm at a stature of 1.71 m.  Both simulator configurations
+        (docs/imu.md, "Figures") use it; the held-out one changes the hand,
+        not the forearm.
     offsets_mm : mapping of str to (3,) float
         Extra displacement of named sensors in their body frame, mm.
     tilts_deg : mapping of str to (3,) float

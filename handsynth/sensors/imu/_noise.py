@@ -18,7 +18,10 @@ InvenSense, *MPU-9250 Product Specification*, PS-MPU-9250A-01 rev. 1.1 (2016):
 - accelerometer noise power spectral density 300 ug/sqrt(Hz); full scale
   +/-16 g (0.49 mg per LSB); zero-g initial tolerance +/-80 mg, sensitivity
   +/-3 %, cross-axis +/-2 %;
-- magnetometer (AK8963 die) full scale +/-4800 uT, 0.15 uT per LSB.
+- magnetometer (AK8963 die) full scale +/-4800 uT (section 2.3,
+  "Magnetometer features"), 0.15 uT per LSB in 16-bit output (Asahi Kasei
+  Microdevices, *AK8963 3-axis Electronic Compass*, MS1356-E-02, 2013/10,
+  section 1 "Features": 0.15 uT/LSB typ.).
 
 The datasheet gives no rate random walk and no bias instability.  Rate random
 walk comes from the thesis' own Allan analysis of 20 MPU-9250s (seed 003
@@ -26,9 +29,16 @@ Table 4.1: gyro RRW 1.4-6.2e-4 deg/s^1.5, mean 2.3e-4; accelerometer RRW
 1.1-8.7e-6 G/s^0.5, mean 4.6e-6).  Its Allan plots (Figs. 4.3-4.4) show only
 the -1/2 and +1/2 slopes, so the bias instability is set below their
 crossing (gyro 5e-4 deg/s, accelerometer 1e-5 G): an assumption, stated as
-such.  Magnetometer white noise 0.3 uT (two LSB) and the residual hard and
-soft iron after calibration are assumptions too; the between-sensor azimuth
-spread of 4.5 deg s.d. is the thesis' measured figure (Table 4.2).
+such; so is the correlation time of that bias instability (``bias_corr_s``,
+100 s; see :class:`AxisNoise`).  The magnetometer's white noise 0.3 uT (two
+LSB), its residual hard iron 1.0 uT and soft iron 0.02 after a calibration
+and the hard iron's change between recordings 0.2 uT are assumptions, not
+datasheet figures (see :class:`MagNoise`, field by field); the
+between-sensor azimuth spread of 4.5 deg s.d. is the thesis' measured figure
+(Table 4.2).  The held-out configuration (:data:`EVAL_NOISE`) sets other
+values for every one of these assumed figures (larger noise and residuals,
+40 s for the correlation time), so that no assumed figure the filters were
+tuned with is the one they are scored with (docs/imu.md, "Figures").
 
 How the tolerances become s.d.s: the sensitivity tolerance of +/-3 % is
 taken as 3 sigma (``scale_error`` 0.01); the cross-axis terms' 0.005 and the
@@ -88,7 +98,16 @@ class AxisNoise:
     bias_instability : float
         B (flat part of the Allan deviation, at 0.664 B): units.
     bias_corr_s : float
-        Correlation time of the Gauss-Markov process that models B.
+        Correlation time T_c (s) of the first-order Gauss-Markov process that
+        models B.  Default 100 s: an assumption; neither the MPU-9250
+        datasheet nor the thesis' Allan analysis (seed 003 Figs. 4.3-4.4,
+        which show no flat part) gives a correlation time.  With it the
+        term's Allan deviation peaks at tau = 1.89 T_c, about 190 s (IEEE Std
+        952-1997, annex C; see :func:`apply_axis_noise`), which is of the
+        order of the averaging time at which the default white noise and
+        rate random walk cross, N sqrt(3) / K: about 75 s for the gyro and
+        110 s for the accelerometer, where a bias instability would show.
+        The held-out configuration (:data:`EVAL_NOISE`) uses 40 s.
     turn_on_bias : float
         s.d. of the constant bias per axis (units): a property of the
         physical sensor (see ``device_seed`` of :func:`simulate_imu`).
@@ -147,23 +166,41 @@ class AxisNoise:
 class MagNoise:
     """Magnetometer noise and calibration residuals, microtesla.
 
+    The defaults of ``white_ut``, ``hard_iron_ut``, ``soft_iron`` and
+    ``hard_iron_repeatability_ut`` are assumptions, not figures of the
+    MPU-9250 product specification or the AK8963 datasheet.  They stand for
+    a calibrated magnetometer: residuals small against the 47 uT field of
+    ``EARTH_FIELD_UT``.  The held-out configuration (:data:`EVAL_NOISE`)
+    scores the filters with other figures (0.5 uT, 2.0 uT, 0.04, 0.5 uT;
+    docs/imu.md, "Figures").
+
     Parameters
     ----------
     white_ut : float
-        White noise s.d. per sample.
+        White noise s.d. per sample.  Default 0.3 uT: an assumption, two
+        quantisation steps of the AK8963 (0.15 uT/LSB, AK8963 datasheet
+        MS1356-E-02, section 1).
     hard_iron_ut : float
-        s.d. of the constant offset per axis.
+        s.d. of the constant offset per axis.  Default 1.0 uT: an
+        assumption for the residual after a calibration (about 2 % of the
+        47 uT field).
     soft_iron : float
         s.d. of the symmetric soft-iron matrix entries around identity.
+        Default 0.02: an assumption for the residual after a calibration
+        (a 2 % scale or cross-axis error).
     azimuth_sd_deg : float
         s.d. of a per-sensor rotation of the magnetometer axes about the
-        sensor z axis (the between-sensor azimuth spread, seed 003 Table 4.2).
+        sensor z axis.  Default 4.5 deg: the thesis' measured between-sensor
+        azimuth spread (seed 003 Table 4.2).
     hard_iron_repeatability_ut : float
         s.d. of the hard iron's change per axis between two recordings of
-        the same physical sensor (an assumption: the AK8963 datasheet gives
-        no figure).
+        the same physical sensor.  Default 0.2 uT: an assumption (no
+        datasheet figure), a fifth of ``hard_iron_ut``.
     full_scale_ut, lsb_ut : float
-        Saturation (> 0) and quantisation step (0 for none).
+        Saturation (> 0) and quantisation step (0 for none).  Defaults
+        4800 uT (MPU-9250 product specification PS-MPU-9250A-01, section
+        2.3) and 0.15 uT (AK8963 datasheet MS1356-E-02, section 1, 16-bit
+        output).
 
     Every figure is a finite number >= 0 (InvalidInputError naming it).
     """
