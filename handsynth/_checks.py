@@ -14,8 +14,8 @@ import numpy as np
 
 from .errors import HandsynthError, InvalidInputError
 
-__all__ = ["SIDES", "check_integer", "check_number", "check_options", "check_side", "is_number",
-           "short_repr"]
+__all__ = ["SIDES", "check_instance", "check_integer", "check_number", "check_options", "check_side",
+           "is_number", "short_repr"]
 
 #: The hands a device or a model can be on.
 SIDES = ("right", "left")
@@ -82,12 +82,43 @@ def check_options(options, cls: type, *, name: str = "options",
     """
     if options is None:
         return cls()
-    if not isinstance(options, cls):
-        hint = f" (make one: {cls.__name__}(**fields))" if isinstance(options, dict) else ""
+    hint = f" (make one: {cls.__name__}(**fields))" if isinstance(options, dict) else ""
+    return check_instance(options, cls, name=name, error=error, hint=hint)
+
+
+def check_instance(value, cls: type, *, name: str,
+                   error: type[HandsynthError] = InvalidInputError, hint: str = ""):
+    """`value`, refused unless it is an instance of `cls`.
+
+    Parameters
+    ----------
+    value : object
+        What was given.
+    cls : type
+        The class required (``HandShape``).
+    name : str, keyword-only
+        The argument's name, for the message (``"ChainEKF.model"``).
+    error : HandsynthError subclass, keyword-only
+        Class of the error raised.
+    hint : str, keyword-only
+        Appended to the message.
+
+    Returns
+    -------
+    cls instance
+        `value` itself.
+
+    Raises
+    ------
+    HandsynthError
+        (`error`) anything else, named with its type and value:
+        ``shape must be a HandShape, got str 'L1.0'``.
+    """
+    if not isinstance(value, cls):
         article = "an" if cls.__name__[:1] in "AEIOU" else "a"
-        raise error(f"{name} must be {article} {cls.__name__}, got {type(options).__name__} "
-                    f"{short_repr(options)}{hint}")
-    return options
+        raise error(f"{name} must be {article} {cls.__name__}, got {type(value).__name__} "
+                    f"{short_repr(value)}{hint}")
+    return value
 
 
 def _number_kind(value: Any) -> str | None:

@@ -68,14 +68,16 @@ def test_every_options_argument_refuses_what_is_not_its_class(bad):
     from handsynth.estimate import OneEuroFilter, one_euro, select_shape
     from handsynth.eval import run_protocol
     from handsynth.models import model_measurements
-    from handsynth.sensors.glove import evaluate
+    from handsynth.sensors import glove, imu
 
     calls = {
         "OneEuroFilter": lambda: OneEuroFilter(30.0, options=bad),
         "one_euro": lambda: one_euro(np.zeros((3, 2)), rate_hz=30.0, options=bad),
         "select_shape": lambda: select_shape(model_measurements(), options=bad),
         "run_protocol": lambda: run_protocol([object()], [], options=bad),
-        "glove evaluate": lambda: evaluate(options=bad),
+        "glove evaluate": lambda: glove.evaluate(options=bad),
+        "glove calibrate": lambda: glove.calibrate(object(), options=bad),
+        "gated_orientation": lambda: imu.gated_orientation(object(), bad),
     }
     for where, call in calls.items():
         with pytest.raises(InvalidInputError, match=rf"^options must be an? \w+Options, got "
@@ -130,3 +132,20 @@ def test_what_is_a_number():
 
     assert all(is_number(v) for v in (1, 2.5, np.float32(1), np.int8(3), np.array(2.0), np.nan))
     assert not any(is_number(v) for v in (True, np.bool_(False), "1", b"1", None, [1], np.ones(2)))
+
+
+def test_an_instance_of_the_wrong_class_is_named_with_its_value():
+    from handsynth._checks import check_instance
+    from handsynth.errors import InvalidShapeError
+    from handsynth.models import HandModel, HandShape
+    from handsynth.sensors.imu import ChainEKF
+
+    shape = HandShape()
+    assert check_instance(shape, HandShape, name="shape") is shape
+    with pytest.raises(InvalidInputError, match=r"^data must be an? HandShape, got dict \{\}$"):
+        check_instance({}, HandShape, name="data")
+    with pytest.raises(InvalidShapeError, match=r"^shape must be a HandShape, got str 'L1\.0'$"):
+        HandModel("L1.0")
+    with pytest.raises(InvalidInputError, match=r"^ChainEKF\.model must be a ChainModel, got "
+                                                r"NoneType None$"):
+        ChainEKF(model=None)

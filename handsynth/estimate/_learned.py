@@ -65,7 +65,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._checks import check_integer, check_options, check_side
+from .._checks import check_instance, check_integer, check_options, check_side
 from .._io import atomic_open, os_error_reason
 from ..db import LearningSet, LearningSetOptions, learning_set
 from ..errors import (
@@ -1037,8 +1037,7 @@ def train_learned(data: LearningSet, options: LearnedOptions | None = None, *,
     LearnedEstimator
     """
     opts = check_options(options, LearnedOptions)
-    if not isinstance(data, LearningSet):
-        raise InvalidInputError(f"data must be a LearningSet, got {type(data).__name__}")
+    check_instance(data, LearningSet, name="data")
     rng = np.random.default_rng(opts.seed)
     y = data.angles.astype(np.float32)
     rows = _Rows(data.grids, data.rest_grids, data.hand) if opts.use_rest else _Rows(data.grids)

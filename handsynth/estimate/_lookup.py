@@ -18,7 +18,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from .._checks import check_options, check_side
+from .._checks import check_instance, check_options, check_side
 from ..db import (
     BuildOptions,
     Database,
@@ -410,8 +410,8 @@ class PoseLookup:
             opts = (SelectionOptions(normalize="none") if selection is None
                     else check_options(selection, SelectionOptions, name="selection"))
             shape = select_shape(measurements, options=opts).ratios
-        elif not isinstance(shape, HandShape):
-            raise InvalidInputError(f"shape must be a HandShape, got {type(shape).__name__}")
+        else:
+            check_instance(shape, HandShape, name="shape")
         build = check_options(build, BuildOptions, name="build")
         shape = HandShape.from_name(shape.name)
         summary = build_databases(folder, [shape], as_mount(mount), options=build,
@@ -516,8 +516,8 @@ class PoseLookup:
             type or value; the message names it.
         """
         mount = as_mount(mount)
-        if shape is not None and not isinstance(shape, HandShape):
-            raise InvalidInputError(f"shape must be a HandShape, got {type(shape).__name__}")
+        if shape is not None:
+            check_instance(shape, HandShape, name="shape")
         check_side(side)
         arrays = check_rows(rows)
         meta = {"mount": mount.as_dict(), "side": side,

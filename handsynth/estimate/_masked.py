@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from .._checks import check_instance
 from ..db import pack_mask, popcount64
 from ..errors import InvalidInputError
 from ._calibration import Calibration
@@ -116,9 +117,7 @@ def _masked_kernel(q, keep, sil_bits, bands, q_bands, window, near, near_err):
 
 
 def _check_query(silhouette, calibration, sil_bits) -> np.ndarray:
-    if not isinstance(calibration, Calibration):
-        raise InvalidInputError(
-            f"calibration must be a Calibration, got {type(calibration).__name__}")
+    check_instance(calibration, Calibration, name="calibration")
     s = np.asarray(silhouette)
     if s.dtype != bool or s.shape != calibration.ignore.shape:
         raise InvalidInputError(f"silhouette must be bool of shape {calibration.ignore.shape}, "

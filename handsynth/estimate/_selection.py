@@ -24,7 +24,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from .._checks import check_options
+from .._checks import check_instance, check_options
 from ..errors import InvalidShapeError
 from ..models import HandMeasurements, HandShape, formula_ratios, model_measurements
 
@@ -54,10 +54,8 @@ class SelectionOptions:
             raise InvalidShapeError(
                 f"SelectionOptions.normalize must be one of {_NORMALIZE}, got {self.normalize!r}"
             )
-        if not isinstance(self.standard, HandShape):
-            raise InvalidShapeError(
-                f"SelectionOptions.standard must be a HandShape, got {type(self.standard).__name__}"
-            )
+        check_instance(self.standard, HandShape, name="SelectionOptions.standard",
+                       error=InvalidShapeError)
 
 
 @dataclass(frozen=True)

@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
 
-from .._checks import check_integer, check_number
+from .._checks import check_instance, check_integer, check_number
 from ..errors import InvalidInputError
 from ..models import JOINT_LIMITS_DEG, JOINT_NAMES, HandShape, as_angles
 from ..models import pose_set as make_pose_set
@@ -352,8 +352,8 @@ class SyntheticSource(_Source):
                  height_px: int | None = None) -> None:
         from ..render import SilhouetteRenderer
 
-        if shape is not None and not isinstance(shape, HandShape):
-            raise InvalidInputError(f"shape must be a HandShape, got {type(shape).__name__}")
+        if shape is not None:
+            check_instance(shape, HandShape, name="shape")
         as_mount(mount)  # None is the paper's device
         self.fps = check_number(fps, "fps", above=0)
         self.frames = check_integer(frames, "frames", minimum=0, allow_none=True)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._checks import check_instance
 from ._joints import JOINT_NAMES
 from ._mjcf import KEYPOINT_SITES, hand_mjcf
 from ._pose import as_angles
@@ -55,11 +56,10 @@ class HandModel:
         import mujoco
 
         self._mj = mujoco
-        self.shape = HandShape() if shape is None else shape
-        if not isinstance(self.shape, HandShape):
-            from ..errors import InvalidShapeError
+        from ..errors import InvalidShapeError
 
-            raise InvalidShapeError(f"shape must be a HandShape, got {type(shape).__name__}")
+        self.shape = HandShape() if shape is None else check_instance(
+            shape, HandShape, name="shape", error=InvalidShapeError)
         self.side = side
         self.model = compile_mjcf(xml or hand_mjcf(self.shape, side=side, forearm=forearm))
         self.data = mujoco.MjData(self.model)

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._checks import check_side
+from .._checks import check_instance, check_side
 from ._anthropometry import (
     DEPTH_TO_BREADTH,
     FINGER_BREADTH_MM,
@@ -111,8 +111,7 @@ def hand_spec(shape: HandShape, *, side: str = "right") -> HandSpec:
     """Build the segment tree of a hand of `shape` (see :class:`HandShape`)."""
     from ..errors import InvalidShapeError
 
-    if not isinstance(shape, HandShape):
-        raise InvalidShapeError(f"shape must be a HandShape, got {type(shape).__name__}")
+    check_instance(shape, HandShape, name="shape", error=InvalidShapeError)
     check_side(side, error=InvalidShapeError)
     lay = standard_layout_mm()
     hl = HAND_LENGTH_MM

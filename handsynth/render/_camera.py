@@ -7,7 +7,7 @@ from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
-from .._checks import check_number, check_side, short_repr
+from .._checks import check_instance, check_number, check_side
 from ..errors import InvalidCameraError
 from ..models import DORSUM_Z_MM
 
@@ -221,10 +221,7 @@ def as_mount(mount, name: str = "mount", *, optional: bool = True) -> CameraMoun
     """
     if mount is None and optional:
         return CameraMount()
-    if not isinstance(mount, CameraMount):
-        raise InvalidCameraError(
-            f"{name} must be a CameraMount, got {type(mount).__name__} {short_repr(mount)}")
-    return mount
+    return check_instance(mount, CameraMount, name=name, error=InvalidCameraError)
 
 
 def _axis_rot(axis: np.ndarray, angle: float) -> np.ndarray:

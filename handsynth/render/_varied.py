@@ -22,6 +22,7 @@ from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
+from .._checks import check_instance
 from ..errors import InvalidInputError, InvalidShapeError
 from ..models import FINGERS, HandShape
 from ._camera import CameraMount, as_mount
@@ -265,8 +266,7 @@ class VariedRasterizer(SilhouetteRasterizer):
 
     def vary(self, variation: HandVariation) -> None:
         """Give the hand `variation` (relative to the built hand, not cumulative)."""
-        if not isinstance(variation, HandVariation):
-            raise InvalidShapeError(f"variation must be a HandVariation, got {type(variation).__name__}")
+        check_instance(variation, HandVariation, name="variation", error=InvalidShapeError)
         m, v = self.hand.model, variation
         sign = -1.0 if self.side == "left" else 1.0
         m.body_pos[:] = self._body_pos0

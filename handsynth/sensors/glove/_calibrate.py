@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..._checks import check_integer
+from ..._checks import check_instance, check_integer, check_options
 from ..._io import write_text
 from ...errors import EstimationError, InvalidInputError, RecordingError
 from ...models import natural_pose_set
@@ -181,12 +181,8 @@ def calibrate(rec: GloveRecording, *, options: CalibrationOptions | None = None,
         Rows dropped for NaN or saturation; too few samples for a regression
         (with the t-values).
     """
-    opts = CalibrationOptions() if options is None else options
-    if not isinstance(opts, CalibrationOptions):
-        raise InvalidInputError(f"options must be CalibrationOptions, got "
-                                f"{type(opts).__name__}")
-    if not isinstance(rec, GloveRecording):
-        raise InvalidInputError(f"rec must be a GloveRecording, got {type(rec).__name__}")
+    opts = check_options(options, CalibrationOptions)
+    check_instance(rec, GloveRecording, name="rec")
     rec = _clean(rec, where)
     is_motion = ~np.isin(rec.motion.astype(str), ("", *RANGE_LABELS))
     cal = rec.select(is_motion)

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..._checks import is_number
+from ..._checks import check_instance, is_number
 from ...errors import EstimationError, InvalidInputError, RecordingError
 from ._quat import quat_from_acc_mag
 from ._recording import ImuRecording, _reported, check_recording, check_static
@@ -102,10 +102,8 @@ def check_run_input(rec, static) -> ImuRecording:
     InvalidInputError
         `rec` or `static` of the wrong type.
     """
-    if not isinstance(rec, ImuRecording):
-        raise InvalidInputError(f"rec must be an ImuRecording, got {type(rec).__name__}")
-    if not isinstance(static, StaticStart):
-        raise InvalidInputError(f"static must be a StaticStart, got {type(static).__name__}")
+    check_instance(rec, ImuRecording, name="rec")
+    check_instance(static, StaticStart, name="static")
     # half a sample's tolerance: 2.0 s of a recording of 200 samples at 100 Hz fit
     end = (rec.n + 0.5) / rec.rate_hz
     if static.static_s > end:

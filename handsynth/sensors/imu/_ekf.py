@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..._checks import check_number, is_number
+from ..._checks import check_instance, check_number, is_number
 from ...errors import InvalidInputError
 from ._attitude import (
     StaticStart,
@@ -320,12 +320,8 @@ class ChainEKF:
     fast: bool = True
 
     def __post_init__(self) -> None:
-        if not isinstance(self.model, ChainModel):
-            raise InvalidInputError(f"ChainEKF.model must be a ChainModel, got "
-                                    f"{type(self.model).__name__}")
-        if not isinstance(self.options, ChainEKFOptions):
-            raise InvalidInputError(f"ChainEKF.options must be a ChainEKFOptions, got "
-                                    f"{type(self.options).__name__}")
+        check_instance(self.model, ChainModel, name="ChainEKF.model")
+        check_instance(self.options, ChainEKFOptions, name="ChainEKF.options")
         if not isinstance(self.fast, (bool, np.bool_)):
             raise InvalidInputError(f"ChainEKF.fast must be True or False, got {self.fast!r}")
 

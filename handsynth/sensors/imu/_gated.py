@@ -68,6 +68,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
+from ..._checks import check_options
 from ...errors import InvalidInputError
 from ._attitude import StaticStart, _n, check_run_input, gyro_bias, initial_attitude
 from ._model import GRAVITY_MPS2
@@ -276,10 +277,8 @@ def gated_orientation(rec: ImuRecording, options: GatedOptions | None = None, *,
     ndarray, shape (S, N, 4)
         Sensor-to-world quaternions (w, x, y, z).
     """
-    o = options or GatedOptions()
-    static = static or StaticStart()
-    if not isinstance(o, GatedOptions):
-        raise InvalidInputError(f"options must be a GatedOptions, got {type(o).__name__}")
+    o = check_options(options, GatedOptions)
+    static = check_options(static, StaticStart, name="static")
     check_run_input(rec, static)
     dt = 1.0 / rec.rate_hz
     q0 = initial_attitude(rec, static)

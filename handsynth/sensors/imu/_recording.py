@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..._checks import is_number
+from ..._checks import check_instance, is_number
 from ..._csv import column_index, names_by_meaning, read_number_table, read_rows, read_text
 from ..._io import atomic_open
 from ...errors import InvalidInputError, RecordingError
@@ -216,8 +216,7 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
         Warnings: a magnetometer whose field strength departs more than 15 %
         from the recording's median (a magnetic disturbance), with the time.
     """
-    if not isinstance(rec, ImuRecording):
-        raise RecordingError(f"{source}: rec must be an ImuRecording, got {type(rec).__name__}")
+    check_instance(rec, ImuRecording, name=f"{source}: rec", error=RecordingError)
     rate = check_rate(rec.rate_hz, source=source)
     static_s = check_static(static_s, source=source)
     for arg, value in (("acc_full_scale", acc_full_scale), ("gyr_full_scale", gyr_full_scale)):
@@ -440,8 +439,7 @@ def write_imu_csv(rec: ImuRecording, path) -> None:
         repeat and rates that are not finite numbers > 0 are refused when
         the recording is made.
     """
-    if not isinstance(rec, ImuRecording):
-        raise RecordingError(f"rec must be an ImuRecording, got {type(rec).__name__}")
+    check_instance(rec, ImuRecording, name="rec", error=RecordingError)
     for s in rec.sensors:
         if not s or s != s.strip() or any(c in s for c in _NOT_IN_NAMES):
             raise RecordingError(

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..._checks import check_number
+from ..._checks import check_instance, check_number
 from ...errors import InvalidInputError
 from ...models import HandShape
 from ._layout import FLEX_JOINT, POINTS
@@ -82,12 +82,11 @@ def simulate_imu(motion: Motion, *, shape: HandShape | None = None, side: str = 
     ImuRecording
         With :class:`ImuTruth`.
     """
-    if not isinstance(motion, Motion):
-        raise InvalidInputError(f"motion must be a Motion, got {type(motion).__name__}")
-    if skin is not None and not isinstance(skin, SkinMotion):
-        raise InvalidInputError(f"skin must be a SkinMotion or None, got {type(skin).__name__}")
-    if noise is not None and not isinstance(noise, ImuNoise):
-        raise InvalidInputError(f"noise must be an ImuNoise or None, got {type(noise).__name__}")
+    check_instance(motion, Motion, name="motion")
+    if skin is not None:
+        check_instance(skin, SkinMotion, name="skin")
+    if noise is not None:
+        check_instance(noise, ImuNoise, name="noise")
     hand = hand or ImuHand(shape, side=side, placement=placement)
     for dist in noise.disturbances if noise is not None else ():
         lacking = [x for x in dist.sensors if x not in hand.sensors]

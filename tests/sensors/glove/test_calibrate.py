@@ -128,7 +128,7 @@ def test_option_types_and_ranges_are_checked(field, value, msg):
 
 
 def test_calibrate_checks_its_arguments(cal_rec):
-    with pytest.raises(InvalidInputError, match="options must be CalibrationOptions, got dict"):
+    with pytest.raises(InvalidInputError, match="options must be a CalibrationOptions, got dict"):
         calibrate(cal_rec, options={"pooled": False})
     with pytest.raises(InvalidInputError, match="rec must be a GloveRecording, got ndarray"):
         calibrate(cal_rec.sensors)
