@@ -33,7 +33,7 @@ demo: $(VENV)/.runtime
 	$(VENV)/bin/handsynth demo --out demo_out
 
 test: $(VENV)/.test
-	$(VENV)/bin/python -m pytest -q
+	$(VENV)/bin/python -m pytest -q -n auto --maxprocesses 4
 
 clean:
 	rm -rf $(VENV) demo_out
