@@ -58,12 +58,15 @@ def check_options(options, cls: type, *, name: str = "options",
                   error: type[HandsynthError] = InvalidInputError):
     """`options` checked to be an instance of the dataclass `cls`; ``cls()`` for None.
 
+    For any argument whose default is a configuration dataclass made with its
+    defaults (options, ``shape`` as ``HandShape()``, an IMU ``placement``).
+
     Parameters
     ----------
     options : object
         What was given.
     cls : type
-        The options class (``SearchOptions``); made with its defaults for None.
+        The dataclass (``SearchOptions``); made with its defaults for None.
     name : str, keyword-only
         The argument's name, for the message.
     error : HandsynthError subclass, keyword-only

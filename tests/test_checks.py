@@ -149,3 +149,21 @@ def test_an_instance_of_the_wrong_class_is_named_with_its_value():
     with pytest.raises(InvalidInputError, match=r"^ChainEKF\.model must be a ChainModel, got "
                                                 r"NoneType None$"):
         ChainEKF(model=None)
+
+
+@pytest.mark.parametrize("bad", [0, "", {}])
+def test_a_falsy_shape_or_placement_is_refused_not_read_as_the_default(bad):
+    # `shape or HandShape()` once read 0, "" or {} as the standard hand
+    from handsynth.measure import render_measurement_photo
+    from handsynth.sensors.imu import ImuHand
+
+    calls = {
+        "ImuHand shape": (lambda: ImuHand(bad), "shape must be a HandShape"),
+        "ImuHand placement": (lambda: ImuHand(placement=bad), "placement must be an ImuPlacement"),
+        "render_measurement_photo": (lambda: render_measurement_photo(bad),
+                                     "shape must be a HandShape"),
+    }
+    for where, (call, message) in calls.items():
+        with pytest.raises(InvalidInputError, match=rf"^{message}, got {type(bad).__name__} "):
+            call()
+            pytest.fail(f"{where} took {bad!r}")

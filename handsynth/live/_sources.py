@@ -358,7 +358,7 @@ class SyntheticSource(_Source):
         self.fps = check_number(fps, "fps", above=0)
         self.frames = check_integer(frames, "frames", minimum=0, allow_none=True)
         if motion is None or isinstance(motion, SyntheticMotion):
-            self.motion = motion or SyntheticMotion()
+            self.motion = SyntheticMotion() if motion is None else motion
             self._keys = self.motion.keyframes()
             self._period_s = self.motion.seconds_per_pose
         else:
@@ -367,7 +367,7 @@ class SyntheticSource(_Source):
                 raise InvalidInputError(
                     f"motion key poses must have shape (K, 20) with K >= 2, got {keys.shape}")
             self.motion, self._keys, self._period_s = None, keys, 1.0
-        self.shape = shape or HandShape()
+        self.shape = HandShape() if shape is None else shape
         self._renderer = SilhouetteRenderer(self.shape, mount, side=side, width_px=width_px,
                                             height_px=height_px)
         self.mount = self._renderer.mount

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._checks import check_options
 from ..errors import InvalidInputError
 from ..models import HandShape
 from ._options import _positive
@@ -90,7 +91,7 @@ def render_measurement_photo(shape=None, angles=None, *, mm_per_px: float = 0.4,
     from ..render import ensure_backend, offscreen_renderer, scene_mjcf
 
     ensure_backend()
-    shape = shape or HandShape()
+    shape = check_options(shape, HandShape, name="shape")
     mm_per_px = _positive(mm_per_px, "mm_per_px")
     size_mm = _positive(size_mm, "size_mm")
     n_px = round(size_mm / mm_per_px)

@@ -29,6 +29,7 @@ from types import MappingProxyType
 
 import numpy as np
 
+from ..._checks import check_options
 from ...errors import InvalidInputError
 from ...models import (
     FINGERS,
@@ -211,7 +212,7 @@ def imu_hand_mjcf(shape: HandShape | None = None, *, side: str = "right",
     str
         MJCF document; sensors are named ``<sensor>_acc``, ``_gyr``, ``_mag``.
     """
-    placement = placement or ImuPlacement()
+    placement = check_options(placement, ImuPlacement, name="placement")
     root = ET.fromstring(hand_mjcf(shape, side=side, forearm=True))
     sgn = 1.0 if side == "right" else -1.0
     la = placement.forearm_length_mm * 1e-3
@@ -324,9 +325,9 @@ class ImuHand:
         import mujoco
 
         self._mj = mujoco
-        self.shape = shape or HandShape()
+        self.shape = check_options(shape, HandShape, name="shape")
         self.side = side
-        self.placement = placement or ImuPlacement()
+        self.placement = check_options(placement, ImuPlacement, name="placement")
         self.field_ut = np.asarray(field_ut, dtype=float)
         self.model = compile_mjcf(imu_hand_mjcf(self.shape, side=side, placement=self.placement,
                                                 field_ut=field_ut, elbow_pos_m=elbow_pos_m,

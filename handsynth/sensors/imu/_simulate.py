@@ -87,7 +87,8 @@ def simulate_imu(motion: Motion, *, shape: HandShape | None = None, side: str = 
         check_instance(skin, SkinMotion, name="skin")
     if noise is not None:
         check_instance(noise, ImuNoise, name="noise")
-    hand = hand or ImuHand(shape, side=side, placement=placement)
+    hand = (ImuHand(shape, side=side, placement=placement) if hand is None
+            else check_instance(hand, ImuHand, name="hand"))
     for dist in noise.disturbances if noise is not None else ():
         lacking = [x for x in dist.sensors if x not in hand.sensors]
         if lacking:
