@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 import numbers
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -16,6 +16,8 @@ from .errors import HandsynthError, InvalidInputError
 
 __all__ = ["SIDES", "check_instance", "check_integer", "check_number", "check_options", "check_side",
            "is_number", "short_repr"]
+
+_T = TypeVar("_T")
 
 #: The hands a device or a model can be on.
 SIDES = ("right", "left")
@@ -54,8 +56,8 @@ def short_repr(value, limit: int = 60) -> str:
     return text if len(text) <= limit else text[:limit - 3] + "..."
 
 
-def check_options(options, cls: type, *, name: str = "options",
-                  error: type[HandsynthError] = InvalidInputError):
+def check_options(options: object, cls: type[_T], *, name: str = "options",
+                  error: type[HandsynthError] = InvalidInputError) -> _T:
     """`options` checked to be an instance of the dataclass `cls`; ``cls()`` for None.
 
     For any argument whose default is a configuration dataclass made with its
@@ -89,8 +91,8 @@ def check_options(options, cls: type, *, name: str = "options",
     return check_instance(options, cls, name=name, error=error, hint=hint)
 
 
-def check_instance(value, cls: type, *, name: str,
-                   error: type[HandsynthError] = InvalidInputError, hint: str = ""):
+def check_instance(value: object, cls: type[_T], *, name: str,
+                   error: type[HandsynthError] = InvalidInputError, hint: str = "") -> _T:
     """`value`, refused unless it is an instance of `cls`.
 
     Parameters

@@ -411,7 +411,7 @@ class PoseLookup:
                     else check_options(selection, SelectionOptions, name="selection"))
             shape = select_shape(measurements, options=opts).ratios
         else:
-            check_instance(shape, HandShape, name="shape")
+            shape = check_instance(shape, HandShape, name="shape")
         build = check_options(build, BuildOptions, name="build")
         shape = HandShape.from_name(shape.name)
         summary = build_databases(folder, [shape], as_mount(mount), options=build,

@@ -102,7 +102,7 @@ def _check_frozen(recording: Recording) -> None:
 # in both sensors: taking the transposes back, the fit becomes markedly
 # better.  On simulated recordings of every configuration of
 # handsynth.sensors.evaluate (10-75 deg range of motion, all error models) the
-# transposed fit of correct rotations was never better than 0.96 times the
+# transposed fit of correct rotations was never better than 0.95 times the
 # fit as given, while on transposed rotations it is 2-180 times better when
 # the motion is large enough -- but only 1.0-1.4 times for a pure hinge at
 # Liberty accuracy noise, which this test therefore misses (docs/trackers.md).

@@ -12,7 +12,8 @@ The filter uses the finger's true width direction
 calibration provides (para. 0084).
 
 Measured (index DIP of the standard MuJoCo hand, 30 s at 240 Hz, 3 trials;
-error = mean of the P_U and P_L errors):
+error = mean of the P_U and P_L errors; ``handsynth joints eval`` prints the
+current table, docs/trackers.md gives it):
 
 * mock: O'Brien 0.05 mm and the patent's method 0.2 mm; |P_U - P_L| = 1.7 mm
   for every sound method, which is the Liberty accuracy noise itself (two
@@ -20,8 +21,8 @@ error = mean of the P_U and P_L errors):
   patent's "about 2 mm" for its mock is the same noise floor.  The 3-D
   variance search drifts 10-15 mm along the hinge axis (para. 0044); SCoRE,
   which assumes a ball joint, 1-2 mm.
-* finger-like joint: the patent's method is best (0.85 mm, |P_U - P_L|
-  1.8 mm, all frames); SCoRE 1.3 mm, O'Brien 1.9 mm.
+* finger-like joint: the patent's method is best (0.86 mm, |P_U - P_L|
+  1.8 mm, all frames); SCoRE and O'Brien 1.3 mm.
 * the filter (fullest bin 0.99-1.00, ~40 % of the frames) changes the
   patent method's error by < 0.1 mm at accuracy-level noise and lowers it
   from 0.83 to 0.66 mm at resolution-level noise, where the joint model and

@@ -11,12 +11,15 @@ Segment frame (both segments): origin at the segment's proximal joint centre,
 ``+y`` along the bone toward the fingertip, ``+z`` out of the back of the
 finger, ``+x = y x z``.  Positive flexion is a rotation about ``-x``.
 
-Table values: segment lengths as fractions of a 190 mm hand length from
-Buchholz, Armstrong & Goldstein, "Anthropometric data for describing the
-kinematics of the human hand", *Ergonomics* 35(3):261-273 (1992), Table 2;
-MCP positions are rough placements in the hand frame (origin at the wrist,
-``+y`` to the middle-finger MCP, ``+z`` dorsal) and matter only for where the
-sensors sit relative to the transmitter.
+Table values: phalanx lengths are the hand model's own constants,
+:data:`handsynth.models.SEGMENT_COEFFICIENTS` (Buchholz, Armstrong & Goldstein,
+"Anthropometric data for describing the kinematics of the human hand",
+*Ergonomics* 35(3):261-273 (1992), Table 1: segment length / hand length)
+times :data:`handsynth.models.HAND_LENGTH_MM` (187 mm, about the pooled mean
+of Gordon et al. 1989), so that the table and the standard hand share one
+source.  MCP positions are rough placements in the hand frame (origin at the
+wrist, ``+y`` to the middle-finger MCP, ``+z`` dorsal) and matter only for
+where the sensors sit relative to the transmitter.
 """
 
 from __future__ import annotations
@@ -26,18 +29,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...errors import InvalidInputError
+from ...models import HAND_LENGTH_MM, SEGMENT_COEFFICIENTS
 
 __all__ = ["SUPPORTED_JOINTS", "JointGeometry", "joint_geometry"]
 
 _FINGERS = ("index", "middle", "ring", "little")
-_HAND_LENGTH_M = 0.190
-#: Buchholz et al. (1992): proximal, middle, distal phalanx / hand length.
-_BUCHHOLZ = {
-    "thumb": (0.196, 0.158),  # proximal, distal (metacarpal handled as palm)
-    "index": (0.245, 0.143, 0.097),
-    "middle": (0.266, 0.170, 0.108),
-    "ring": (0.244, 0.165, 0.107),
-    "little": (0.204, 0.117, 0.093),
+_HAND_LENGTH_M = HAND_LENGTH_MM / 1000.0
+#: Buchholz et al. (1992) Table 1, as :data:`handsynth.models.SEGMENT_COEFFICIENTS`
+#: holds it, without the metacarpals (handled as the palm): phalanx length /
+#: hand length, proximal, middle, distal (thumb: proximal, distal).
+_BUCHHOLZ: dict[str, tuple[float, ...]] = {
+    finger: tuple(coefficients[1:]) for finger, coefficients in SEGMENT_COEFFICIENTS.items()
 }
 _MCP_X_M = {"index": 0.022, "middle": 0.0, "ring": -0.019, "little": -0.036}
 _MCP_Y_M = {"index": 0.092, "middle": 0.095, "ring": 0.088, "little": 0.078}
@@ -163,7 +165,8 @@ def joint_geometry(joint: str, *, source: str = "auto", hand=None) -> JointGeome
         One of :data:`SUPPORTED_JOINTS`, e.g. ``"index_dip"``.
     source : {"auto", "model", "table"}
         ``"model"`` uses :class:`handsynth.models.HandModel` (standard shape
-        unless `hand` is given); ``"table"`` uses Buchholz et al. (1992);
+        unless `hand` is given); ``"table"`` uses Buchholz et al. (1992) Table 1
+        as the model holds it (see the module docstring);
         ``"auto"`` uses the model when it can be imported, else the table.
         The choice made is recorded in :attr:`JointGeometry.source`.
     hand : handsynth.models.HandModel, optional

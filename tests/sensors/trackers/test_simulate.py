@@ -111,3 +111,22 @@ def test_geometry_from_mujoco_hand_matches_its_keypoints():
     rec = simulate_recording("index_dip", hand=hand, noise=NO_NOISE,
                              motion=FlexionMotion(duration_s=2.0), seed=0)
     np.testing.assert_allclose(rec.truth.centre_world[0], kp[7], atol=1e-9)
+
+
+@pytest.mark.parametrize("joint", ["index_pip", "index_dip", "middle_pip", "ring_dip",
+                                   "little_pip", "thumb_ip"])
+def test_table_geometry_is_the_hand_models_buchholz_table_1(joint):
+    # one source: the table's phalanges are the model's coefficients times its hand length
+    from handsynth.models import HAND_LENGTH_MM, SEGMENT_COEFFICIENTS
+    from handsynth.sensors.trackers import joint_geometry
+
+    finger, j = joint.split("_")
+    i_up = {"pip": 1, "dip": 2, "ip": 1}[j]  # index into (metacarpal, proximal, ...)
+    coeff = SEGMENT_COEFFICIENTS[finger]
+    g = joint_geometry(joint, source="table")
+    assert g.source == "table"
+    assert g.upper_length == pytest.approx(coeff[i_up] * HAND_LENGTH_MM / 1e3, abs=1e-12)
+    assert g.lower_length == pytest.approx(coeff[i_up + 1] * HAND_LENGTH_MM / 1e3, abs=1e-12)
+    if j == "dip":  # the upper segment starts one proximal phalanx beyond the MCP
+        mcp = joint_geometry(f"{finger}_pip", source="table").upper_origin
+        assert g.upper_origin[1] - mcp[1] == pytest.approx(coeff[1] * HAND_LENGTH_MM / 1e3, abs=1e-12)
