@@ -154,10 +154,15 @@ def test_an_instance_of_the_wrong_class_is_named_with_its_value():
 @pytest.mark.parametrize("bad", [0, "", {}])
 def test_a_falsy_shape_or_placement_is_refused_not_read_as_the_default(bad):
     # `shape or HandShape()` once read 0, "" or {} as the standard hand
+    from handsynth.db import build_database
     from handsynth.measure import render_measurement_photo
+    from handsynth.models import model_measurements
     from handsynth.sensors.imu import ImuHand
 
     calls = {
+        "model_measurements": (lambda: model_measurements(bad), "shape must be a HandShape"),
+        "build_database": (lambda: build_database("/nonexistent/never-made", bad),
+                           "shape must be a HandShape"),
         "ImuHand shape": (lambda: ImuHand(bad), "shape must be a HandShape"),
         "ImuHand placement": (lambda: ImuHand(placement=bad), "placement must be an ImuPlacement"),
         "render_measurement_photo": (lambda: render_measurement_photo(bad),

@@ -112,6 +112,6 @@ def build_db(out_dir, default, shapes, pose_set, count, seed, side, mount, rende
                            else DEFAULT_RENDER_SIZE)
     cam = CameraMount.paper() if mount == "paper" else CameraMount.whole_hand()
     summary = build_databases(out_dir, _parse_shapes(shapes), cam, options=options,
-                              workers=workers or os.cpu_count() or 1, executor=executor,
-                              force=force, progress=show)
+                              workers=(os.cpu_count() or 1) if workers is None else workers,
+                              executor=executor, force=force, progress=show)
     click.echo(summary.format())

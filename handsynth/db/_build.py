@@ -684,7 +684,8 @@ def build_database(out_dir, shape: HandShape | str | None = None,
     pathlib.Path
         The database file.
     """
-    summary = build_databases(out_dir, [shape or HandShape()], mount, workers=workers,
+    summary = build_databases(out_dir, [check_options(shape, HandShape, name="shape")], mount,
+                              workers=workers,
                               executor=executor, force=force, progress=progress,
                               **option_fields)
     return summary.paths[0]
@@ -712,6 +713,7 @@ def build_default_database(out_dir, *, workers: int | None = None,
     pathlib.Path
     """
     d = DEFAULT_DATABASE
-    return build_database(out_dir, d["shape"], CameraMount.paper(), workers=workers or
-                          (os.cpu_count() or 1), progress=progress, pose_set=d["pose_set"],
+    workers = (os.cpu_count() or 1) if workers is None else workers
+    return build_database(out_dir, d["shape"], CameraMount.paper(), workers=workers,
+                          progress=progress, pose_set=d["pose_set"],
                           count=d["count"], seed=d["seed"], side=side)

@@ -347,7 +347,7 @@ class PoseLookup:
             if shape is not None and not isinstance(shape, HandShape):
                 raise InvalidInputError(
                     f"shape must be a HandShape or a shape name, got {type(shape).__name__}")
-            grid = (shape or HandShape()).nearest_grid()
+            grid = (HandShape() if shape is None else shape).nearest_grid()
         path = find_database(folder, grid, side)
         database = open_database(path)
         check_database_hand(database.meta, grid, side, path)
@@ -521,7 +521,8 @@ class PoseLookup:
         check_side(side)
         arrays = check_rows(rows)
         meta = {"mount": mount.as_dict(), "side": side,
-                "shape": (shape or HandShape()).as_dict(), "features": {"image_size": 64}}
+                "shape": (HandShape() if shape is None else shape).as_dict(),
+                "features": {"image_size": 64}}
         db = Database(
             path=Path("<memory>"), meta=meta, angles=arrays["angles"], hlac=arrays["hlac"],
             sil_bits=arrays["sil_bits"], ridge_bits=arrays["ridge_bits"],

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._checks import check_options
 from ..db import BuildOptions, LearningSetOptions, build_databases
 from ..errors import InvalidInputError
 from ..estimate import (
@@ -178,7 +179,7 @@ def describe_methods(names, *, data: LearningSetOptions | None = None) -> dict:
             raise InvalidInputError(f"methods must be names from {', '.join(PROTOCOL_METHODS)}, "
                                     f"got {name!r}")
     if any("lookup" not in v for v in out.values()):
-        out["learning_set"] = asdict(data or LearningSetOptions())
+        out["learning_set"] = asdict(check_options(data, LearningSetOptions, name="data"))
     return out
 
 

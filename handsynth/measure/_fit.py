@@ -6,6 +6,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from .._checks import check_options
 from ..errors import InvalidInputError
 from ..models import HandShape, model_measurements
 from ._options import (
@@ -108,7 +109,7 @@ def fit_shape_correction(shapes, *, mm_per_px=(0.15, 0.25, 0.4), seed: int = 0,
     if len(shapes) < 10 or not all(isinstance(s, HandShape) for s in shapes):
         raise InvalidInputError(
             f"shapes must be at least 10 HandShape objects, got {len(shapes)} items")
-    opts = replace(options or MeasureOptions(), shape_correction=NO_SHAPE_CORRECTION)
+    opts = replace(check_options(options, MeasureOptions), shape_correction=NO_SHAPE_CORRECTION)
     scales = [_positive(v, "mm_per_px") for v in np.atleast_1d(np.asarray(mm_per_px, float))]
     rng = np.random.default_rng(seed)
     x, y = [], []

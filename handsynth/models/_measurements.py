@@ -49,6 +49,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._checks import check_options
 from ..errors import InvalidShapeError
 from ._hand import HandModel
 from ._joints import FINGERS
@@ -444,7 +445,8 @@ def model_measurements(shape: HandShape | None = None) -> HandMeasurements:
     HandMeasurements
         In millimetres.
     """
-    return _model_measurements(shape or HandShape())
+    return _model_measurements(check_options(shape, HandShape, name="shape",
+                                             error=InvalidShapeError))
 
 
 @lru_cache(maxsize=128)

@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 import warnings
 from dataclasses import dataclass, replace
+from functools import cache
 from pathlib import Path
 
 import numpy as np
@@ -106,15 +107,21 @@ class CalibrationOptions:
                           maximum=hi)
 
 
-_SYNERGY_CACHE: dict[int, Synergies] = {}
-
-
 def default_synergies(k: int = 2) -> Synergies:
-    """Synergies of the hand model's natural pose set (4,096 poses, seed 0)."""
-    if k not in _SYNERGY_CACHE:
-        _SYNERGY_CACHE[k] = fit_synergies(natural_pose_set(4096, seed=0), k=k,
-                                          source="handsynth natural pose set (4096, seed 0)")
-    return _SYNERGY_CACHE[k]
+    """Synergies of the hand model's natural pose set (4,096 poses, seed 0).
+
+    Fitted once per `k` and shared by every caller: the arrays are read-only.
+    """
+    return _default_synergies(check_integer(k, "k", minimum=1, maximum=20))
+
+
+@cache
+def _default_synergies(k: int) -> Synergies:
+    syn = fit_synergies(natural_pose_set(4096, seed=0), k=k,
+                        source="handsynth natural pose set (4096, seed 0)")
+    for a in (syn.mean, syn.components, syn.variances, syn.explained):
+        a.setflags(write=False)
+    return syn
 
 
 def _clean(rec: GloveRecording, where: str) -> GloveRecording:

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..._checks import check_integer
 from ...errors import EstimationError
 from ._fields import array_field
 
@@ -104,12 +105,12 @@ def fit_mixer(sensors: np.ndarray, motion: np.ndarray, phase: np.ndarray, *,
 
     Raises
     ------
+    InvalidInputError
+        `n_points` not an integer >= 1.
     EstimationError
         A motion without samples, or a bin with fewer than 2 samples.
     """
-    if isinstance(n_points, bool) or not isinstance(n_points, (int, np.integer)) \
-            or n_points < 1:
-        raise EstimationError(f"n_points must be a positive integer, got {n_points!r}")
+    check_integer(n_points, "n_points", minimum=1)
     z = (np.asarray(sensors, dtype=np.float64) - centre) / scale
     motions = tuple(motions)
     means = np.empty((len(motions), n_points, 5))

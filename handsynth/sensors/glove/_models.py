@@ -285,10 +285,10 @@ def fit_motion_model(sensors: np.ndarray, angles: np.ndarray, *, model: str,
     InvalidInputError
         `sensors`, `angles`, `centre` or `scale` of another shape, an
         infinite value, `sensors` and `angles` of different lengths, a scale
-        that is not positive or a negative `t_threshold` (named in the
-        message).
+        that is not positive, a negative `t_threshold` or an unknown `model`
+        (named in the message).
     EstimationError
-        Unknown model, no more samples than coefficients, or collinear
+        No more samples than coefficients, or collinear
         regressors (a dead sensor).
 
     Warns
@@ -298,7 +298,7 @@ def fit_motion_model(sensors: np.ndarray, angles: np.ndarray, *, model: str,
         samples per coefficient (the message lists the t-values).
     """
     if model not in MODELS:
-        raise EstimationError(f"model must be one of {', '.join(MODELS)}, got {model!r}")
+        raise InvalidInputError(f"model must be one of {', '.join(MODELS)}, got {model!r}")
     label = (f"motion {motion!r}" if motion else "calibration") + f" ({model})"
     s = as_array(sensors, "sensors", (None, 5), allow_nan=True)
     a = as_array(angles, "angles", (None, len(JOINT_NAMES)), allow_nan=True)

@@ -22,7 +22,7 @@ import numpy as np
 
 from ..._csv import column_index, names_by_meaning, read_rows
 from ..._io import atomic_open
-from ...errors import RecordingError
+from ...errors import InvalidInputError, RecordingError
 from ...models import JOINT_NAMES
 from ._models import GloveWarning
 from ._motions import MOTIONS
@@ -210,16 +210,48 @@ def write_glove_csv(path, rec: GloveRecording, *, with_angles: bool = True) -> P
 
 
 def write_angles_csv(path, angles: np.ndarray, *, time_s: np.ndarray | None = None) -> Path:
-    """Write estimated joint angles (N, 20) in degrees with canonical column names."""
-    angles = np.asarray(angles, dtype=np.float64)
+    """Write estimated joint angles in degrees with canonical column names.
+
+    Parameters
+    ----------
+    path : str or Path
+        Written whole or not at all.
+    angles : array_like, shape (N, 20), deg
+        NaN where a row could not be estimated (written ``nan``).
+    time_s : array_like, shape (N,), s, keyword-only, optional
+        The first column, ``time_s``; without it the first column is
+        ``sample``, the row's index (not a time).
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    InvalidInputError
+        `angles` not (N, 20) numbers or with an infinite value; `time_s` not
+        N finite numbers.
+    """
+    try:
+        angles = np.asarray(angles, dtype=np.float64)
+        t = None if time_s is None else np.asarray(time_s, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InvalidInputError("angles and time_s must be arrays of numbers") from None
+    if angles.ndim != 2 or angles.shape[1] != len(JOINT_NAMES):
+        raise InvalidInputError(f"angles must have shape (N, {len(JOINT_NAMES)}), got {angles.shape}")
+    if np.isinf(angles).any():
+        raise InvalidInputError("angles must not hold infinite values (NaN marks a row not estimated)")
     n = angles.shape[0]
-    t = np.arange(n, dtype=np.float64) if time_s is None else np.asarray(time_s)
+    if t is not None and (t.shape != (n,) or not np.isfinite(t).all()):
+        raise InvalidInputError(f"time_s must be {n} finite numbers (one per row of angles), got "
+                                f"shape {t.shape}" + ("" if t.shape != (n,) else " with NaN or inf"))
 
     def write(f):
         w = csv.writer(f)
-        w.writerow(["time_s", *JOINT_NAMES])
+        w.writerow(["time_s" if t is not None else "sample", *JOINT_NAMES])
         for i in range(n):
-            w.writerow([f"{t[i]:.6f}", *(_fmt(v) for v in angles[i])])
+            first = f"{t[i]:.6f}" if t is not None else str(i)
+            w.writerow([first, *(_fmt(v) for v in angles[i])])
 
     return _atomic_write(path, write)
 

@@ -27,7 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...errors import EstimationError
+from ..._checks import check_integer
+from ...errors import EstimationError, InvalidInputError
 from ...models import JOINT_NAMES
 from ._fields import array_field, number_field
 
@@ -104,17 +105,17 @@ def fit_synergies(postures: np.ndarray, *, k: int = 2, source: str = "") -> Syne
 
     Raises
     ------
+    InvalidInputError
+        `postures` not of shape (N, 20), or `k` not an integer in 1..20.
     EstimationError
-        Fewer than k + 2 finite postures, postures that hardly vary (a
-        total variance under 1 deg^2: nothing to find synergies in), or k
-        outside 1..20.
+        Fewer than k + 2 finite postures, or postures that hardly vary (a
+        total variance under 1 deg^2: nothing to find synergies in).
     """
     p = np.asarray(postures, dtype=np.float64)
     if p.ndim != 2 or p.shape[1] != len(JOINT_NAMES):
-        raise EstimationError(f"postures must have shape (N, 20), got {p.shape}")
+        raise InvalidInputError(f"postures must have shape (N, 20), got {p.shape}")
     p = p[np.isfinite(p).all(axis=1)]
-    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 1 <= k <= 20:
-        raise EstimationError(f"k must be an integer in 1..20, got {k!r}")
+    check_integer(k, "k", minimum=1, maximum=20)
     if len(p) < k + 2:
         raise EstimationError(f"{len(p)} finite postures cannot give {k} synergies")
     mean = p.mean(axis=0)

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..._checks import is_number
+from ..._checks import check_options, is_number
 from ..._io import atomic_open
 from ...errors import InvalidInputError, RecordingError
 from ._attitude import StaticStart
@@ -175,14 +175,15 @@ class ImuCalibration:
             finger -> (N, 3) metres from the elbow, ``sensor_calibration``
             whether a sensor calibration was applied.
         """
+        static = check_options(static, StaticStart, name="static")
+        options = check_options(options, ChainEKFOptions)
         sub = self.correct(rec, sensor_calibration=sensor_calibration)
         if hasattr(rec, "_reported"):
             # the caller has had check_recording's warnings of `rec`: the filter's run
             # does not repeat them for the corrected copy
-            check_recording(sub, static_s=(static or StaticStart()).static_s)
+            check_recording(sub, static_s=static.static_s)
         applied = sensor_calibration and self.sensor_calibration is not None
-        est = ChainEKF(self.model, options=options or ChainEKFOptions(),
-                       static=static or StaticStart())
+        est = ChainEKF(self.model, options=options, static=static)
         q = self.fuse(est.run(sub), sub.sensors, plate_fusion=plate_fusion)
         angles, _ = joint_angles(q, sub.sensors, self.frames, zero=self.zero, cmc=self.cmc)
         tips = {f: v for f, v in fingertip_positions(q, sub.sensors, self.model).items()

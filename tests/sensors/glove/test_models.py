@@ -99,7 +99,7 @@ def test_dead_sensor_and_unknown_model_raise():
     s[:, 3] = 1234.0
     with pytest.raises(EstimationError, match="sensor_ring reads a constant 1234"):
         fit_motion_model(s, a, model="model2", motion="standard")
-    with pytest.raises(EstimationError, match="model5"):
+    with pytest.raises(InvalidInputError, match="model must be one of .*, got 'model5'"):
         fit_motion_model(s, a, model="model5")
 
 

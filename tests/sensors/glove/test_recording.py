@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from handsynth.errors import RecordingError
+from handsynth.errors import InvalidInputError, RecordingError
 from handsynth.models import JOINT_NAMES
 from handsynth.sensors.glove import (
     SENSOR_NAMES,
@@ -87,7 +87,16 @@ def test_angles_csv_and_shape_errors(tmp_path):
     a = np.zeros((3, 20))
     a[1] = np.nan
     text = write_angles_csv(tmp_path / "a.csv", a).read_text().splitlines()
-    assert text[0].split(",")[1:] == list(JOINT_NAMES) and "nan" in text[2]
+    assert text[0].split(",") == ["sample", *JOINT_NAMES] and "nan" in text[2]
+    text = write_angles_csv(tmp_path / "t.csv", a, time_s=[0.0, 0.5, 1.0]).read_text().splitlines()
+    assert text[0].startswith("time_s,") and text[2].startswith("0.500000,")
+    # before, (3, 5) angles went out under a 20-joint header and a short time_s was an IndexError
+    for kw, msg in ((dict(angles=np.zeros((3, 5))), r"angles must have shape \(N, 20\), got \(3, 5\)"),
+                    (dict(angles=a, time_s=[0.0, 1.0]), r"time_s must be 3 finite numbers"),
+                    (dict(angles=np.full((3, 20), np.inf)), "infinite")):
+        with pytest.raises(InvalidInputError, match=msg):
+            write_angles_csv(tmp_path / "x.csv", **kw)
+    assert not (tmp_path / "x.csv").exists()
     with pytest.raises(RecordingError, match=r"sensors must have shape \(N, 5\)"):
         GloveRecording(sensors=np.zeros((3, 4)))
 

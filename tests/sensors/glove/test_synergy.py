@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from handsynth.errors import EstimationError
+from handsynth.errors import InvalidInputError
 from handsynth.sensors.glove import default_synergies, fit_synergies
 
 
@@ -32,7 +32,18 @@ def test_reconstruction_honours_exact_observations():
 
 
 def test_bad_input():
-    with pytest.raises(EstimationError, match="k must be"):
+    # arguments are input errors; what valid input cannot give is an EstimationError
+    with pytest.raises(InvalidInputError, match=r"^k must be an integer >= 1 and <= 20, got 0$"):
         fit_synergies(np.zeros((10, 20)), k=0)
-    with pytest.raises(EstimationError, match="shape"):
+    with pytest.raises(InvalidInputError, match="shape"):
         fit_synergies(np.zeros((10, 19)))
+
+
+def test_the_shared_default_synergies_cannot_be_changed_by_a_caller():
+    # before, default_synergies(2).mean[:] = 99 changed what every later call returned
+    syn = default_synergies(2)
+    assert default_synergies(2) is syn
+    with pytest.raises(ValueError, match="read-only"):
+        syn.mean[:] = 99.0
+    with pytest.raises(InvalidInputError, match=r"^k must be an integer >= 1 and <= 20, got 2.0"):
+        default_synergies(2.0)
