@@ -121,9 +121,17 @@ def _n(rec: ImuRecording, seconds: float) -> int:
     return max(1, min(rec.n, round(seconds * rec.rate_hz)))
 
 
+def _static_samples(rec: ImuRecording, static: StaticStart) -> int:
+    """Samples of the static start, after checking the two arguments' types."""
+    check_instance(rec, ImuRecording, name="rec")
+    check_instance(static, StaticStart, name="static")
+    return _n(rec, static.static_s)
+
+
 def gyro_bias(rec: ImuRecording, static: StaticStart = StaticStart()) -> np.ndarray:
     """Mean gyro over the static start, rad/s, shape (S, 3) (seed 003 section 4.2.4)."""
-    return rec.gyr[:, : _n(rec, static.static_s)].mean(axis=1)
+    n0 = _static_samples(rec, static)
+    return rec.gyr[:, :n0].mean(axis=1)
 
 
 def azimuth_correction(rec: ImuRecording, static: StaticStart = StaticStart()) -> np.ndarray:
@@ -135,9 +143,9 @@ def azimuth_correction(rec: ImuRecording, static: StaticStart = StaticStart()) -
         If the common rotation is too slow (< 0.5 rad/s) or about the vertical
         (then g x w_max vanishes and fixes no heading).
     """
+    n0 = _static_samples(rec, static)
     if static.align_start_s is None or static.align_end_s is None:
         return np.zeros(len(rec.sensors))
-    n0 = _n(rec, static.static_s)
     a, b = _n(rec, static.align_start_s), _n(rec, static.align_end_s)
     if b - a < 2:
         raise InvalidInputError(f"the common rotation {static.align_start_s}-{static.align_end_s} s "
@@ -170,7 +178,7 @@ def azimuth_correction(rec: ImuRecording, static: StaticStart = StaticStart()) -
 def initial_attitude(rec: ImuRecording, static: StaticStart = StaticStart(), *,
                      align: bool = True) -> np.ndarray:
     """Initial sensor-to-world quaternions, shape (S, 4) (eqs. 2.9-2.11, 4.22)."""
-    n0 = _n(rec, static.static_s)
+    n0 = _static_samples(rec, static)
     g = rec.acc[:, :n0].mean(axis=1)
     mag = rec.mag[:, :n0].mean(axis=1)
     cor = azimuth_correction(rec, static) if align else 0.0

@@ -356,6 +356,12 @@ class ChainModel:
 def chain_model(rec: ImuRecording, vectors: dict | None = None, **kw) -> ChainModel:
     """The link model from a calibration recording (eqs. 3.2-3.11)."""
     vectors = vectors if vectors is not None else calibrate_vectors(rec)
+    missing = [f"{s1}->{j1}" for s1, j1, _ in LINKS if (s1, j1) not in vectors]
+    if missing:
+        raise InvalidInputError(f"vectors lacks {len(missing)} of the {len(LINKS)} sensor-to-joint "
+                                f"vectors the link model needs: {', '.join(missing[:4])}"
+                                + (", ..." if len(missing) > 4 else "")
+                                + " (keys are (sensor, joint) pairs, as calibrate_vectors returns)")
     own = {}
     for s1, j1, _ in LINKS:
         v = vectors[(s1, j1)]

@@ -35,7 +35,7 @@ current table, docs/trackers.md gives it):
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
@@ -64,9 +64,14 @@ def make_estimator(name: str, **options):
     """Instantiate estimator `name` (a key of :data:`ESTIMATORS`) with `options`."""
     if name not in ESTIMATORS:
         raise InvalidInputError(
-            f"method: expected one of {', '.join(ESTIMATORS)}, got {name!r}"
+            f"name: expected one of {', '.join(ESTIMATORS)}, got {name!r}"
         )
-    return ESTIMATORS[name](**options)
+    cls = ESTIMATORS[name]
+    unknown = sorted(set(options) - {f.name for f in fields(cls)})
+    if unknown:
+        raise InvalidInputError(f"{name} has no option {', '.join(map(repr, unknown))}; its options: "
+                                f"{', '.join(f.name for f in fields(cls))}")
+    return cls(**options)
 
 
 @dataclass(frozen=True)

@@ -369,3 +369,17 @@ def test_check_recording_refuses_bad_full_scales(one, kw):
 def test_the_sensor_names_are_the_model_s():
     # MagDisturbance takes every sensor of the hand, tip sensors included
     MagDisturbance(0.0, 1.0, sensors=SENSOR_NAMES[:2] + ("index_tip",))
+
+
+def test_helpers_name_an_argument_of_the_wrong_kind(one):
+    # before: AttributeError ('float' object has no attribute 'static_s') and KeyError
+    from handsynth.sensors.imu import azimuth_correction, chain_model, gyro_bias, initial_attitude
+
+    for fn in (gyro_bias, azimuth_correction, initial_attitude):
+        with pytest.raises(InvalidInputError, match=r"^static must be a StaticStart, got float 2\.0$"):
+            fn(one, 2.0)
+    with pytest.raises(InvalidInputError, match=r"^rec must be an ImuRecording, got"):
+        gyro_bias(np.zeros((3, 10, 3)))
+    with pytest.raises(InvalidInputError,
+                       match=r"^vectors lacks (\d+) of the \1 sensor-to-joint vectors .*forearm_3->elbow"):
+        chain_model(one, {})

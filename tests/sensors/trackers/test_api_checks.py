@@ -245,3 +245,12 @@ def test_transposed_rotations_named_in_a_refusal(finger_rec):
         OBrienEstimator(max_distance_mm=20.0).estimate(_transposed(finger_rec))
     with pytest.raises(EstimationError, match=r"max_residual_mm.*rotations transposed\?"):
         OBrienEstimator(max_residual_mm=2.0).estimate(_transposed(finger_rec))
+
+
+def test_an_estimator_option_misspelt_is_named_with_the_options_there_are():
+    from handsynth.sensors.trackers import make_estimator
+
+    with pytest.raises(InvalidInputError, match=r"^patent has no option 'windw'; its options: .*frames"):
+        make_estimator("patent", windw=3)
+    with pytest.raises(InvalidInputError, match=r"^name: expected one of patent, "):
+        make_estimator("kalman")

@@ -34,7 +34,7 @@ def test_options_are_checked():
         PlaneVarianceEstimator(plane_size=5.0)  # typo
     with pytest.raises(InvalidInputError, match="frames"):
         OBrienEstimator(frames="some")
-    with pytest.raises(InvalidInputError, match="method"):
+    with pytest.raises(InvalidInputError, match="^name: expected one of"):
         make_estimator("sphere")
     with pytest.raises(InvalidInputError, match="bins"):
         AxisAngleFilter(bins=0)
