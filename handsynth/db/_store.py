@@ -606,9 +606,10 @@ def _read(path, expect: Mapping | None, *, keep: bool):
             f"database {path}: {field.name} claims more data than fits in memory "
             "(damaged file)") from None
     except Exception as exc:  # the boundary: a damaged file can make h5py raise anything
+        # chained, so that a fault of handsynth's own behind it keeps its traceback
         raise DatabaseCorruptError(
             f"database {path} is damaged: {field.name} cannot be read "
-            f"({type(exc).__name__}: {exc})") from None
+            f"({type(exc).__name__}: {exc})") from exc
     _check_file_name(path, meta)
     if expect is not None:
         diff = _first_difference(meta, expect, "")
