@@ -213,6 +213,20 @@ def as_mount(mount, name: str = "mount", *, optional: bool = True) -> CameraMoun
     """`mount` checked to be a :class:`CameraMount`; the paper's device for ``None``
     when `optional`.
 
+    Parameters
+    ----------
+    mount : object
+        What was given.
+    name : str
+        The argument's name, for the message.
+    optional : bool, keyword-only
+        Read ``None`` as the paper's device (``CameraMount()``); refuse it
+        when False.
+
+    Returns
+    -------
+    CameraMount
+
     Raises
     ------
     InvalidCameraError

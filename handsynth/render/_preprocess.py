@@ -141,6 +141,17 @@ MIN_FRAME_SIDE = 8
 def check_frame(frame) -> np.ndarray:
     """Validate a camera frame or mask and return it unchanged.
 
+    Parameters
+    ----------
+    frame : ndarray, shape (H, W) or (H, W, 3), bool or uint8
+        A mask, a grey frame or a BGR frame, at least
+        :data:`MIN_FRAME_SIDE` pixels on each side.
+
+    Returns
+    -------
+    ndarray
+        `frame` itself.
+
     Raises
     ------
     InvalidInputError
@@ -224,6 +235,15 @@ def wrist_cut_keep(mount: CameraMount, *, side: str = "right",
     it, the cleared side is still the forearm's, and a camera that sees no
     part of the dorsum behind the cut loses no pixel.
 
+    Parameters
+    ----------
+    mount : CameraMount
+        The device; its ``wrist_cut_mm`` places the cut (None: no cut).
+    side : {"right", "left"}, keyword-only
+        The hand wearing the device.
+    width_px, height_px : int, keyword-only, optional
+        Size of the frame in pixels; the mount's own image size by default.
+
     Returns
     -------
     ndarray, shape (height_px, width_px), bool, read-only, or None
@@ -284,6 +304,14 @@ def largest_component(mask: np.ndarray) -> np.ndarray:
 
     Ties (components of equal pixel count) go to the component whose first
     pixel comes first in raster order.
+
+    Parameters
+    ----------
+    mask : ndarray, shape (H, W), bool
+
+    Returns
+    -------
+    ndarray, shape (H, W), bool
     """
     import cv2
 
@@ -316,7 +344,16 @@ def crop_resize(mask: np.ndarray, *, size: int = 64) -> np.ndarray:
     it (exact area resampling with dense weight matrices; the plain
     statement of what :func:`preprocess` computes in compiled form).
 
-    Returns an all-False image when `mask` is empty.
+    Parameters
+    ----------
+    mask : ndarray, shape (H, W), bool
+    size : int, keyword-only
+        Side of the result in pixels (64 in the paper).
+
+    Returns
+    -------
+    ndarray, shape (size, size), bool
+        All False when `mask` is empty.
     """
     out = np.zeros((size, size), dtype=bool)
     rows = np.flatnonzero(mask.any(axis=1))
@@ -383,7 +420,11 @@ def preprocess(frame: np.ndarray, mount: CameraMount | None = None, *, side: str
 def preprocess_reference(frame: np.ndarray, mount: CameraMount | None = None, *,
                          side: str = "right", size: int = 64,
                          threshold: int | None = None) -> np.ndarray:
-    """:func:`preprocess` as the plain chain of its steps (slow; the specification)."""
+    """:func:`preprocess` as the plain chain of its steps (slow; the specification).
+
+    Parameters, result and errors as :func:`preprocess`, which tests compare
+    with it.
+    """
     size = _check_size(size)
     mask = binarize(frame, threshold=threshold)
     keep = wrist_cut_keep(as_mount(mount), side=side,
