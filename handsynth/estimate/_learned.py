@@ -65,7 +65,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._checks import check_instance, check_integer, check_options, check_side
+from .._checks import check_instance, check_integer, check_number, check_options, check_side
 from .._io import atomic_open, os_error_reason
 from ..db import LearningSet, LearningSetOptions, learning_set
 from ..errors import (
@@ -541,7 +541,8 @@ class LearnedEstimator:
     cells : (int, int)
     smoothing : float
         Exponential smoothing of successive answers: 0 (default) none;
-        ``a`` reports ``a * previous + (1 - a) * new``.
+        ``a`` reports ``a * previous + (1 - a) * new``.  Settable, checked
+        (:attr:`smoothing`).
     """
 
     def __init__(self, arrays: dict, *, options: LearnedOptions, mount: CameraMount, side: str,
@@ -564,7 +565,7 @@ class LearnedEstimator:
         self._skin: SkinColour | None = None
         self.segment = "brightness"
         self._move_check: MoveCheck | None = None
-        self.smoothing = 0.0
+        self._smoothing = 0.0
         self._previous: np.ndarray | None = None
         self._index: dict = {}
         if options.kind in ("knn", "fingers"):
@@ -576,6 +577,25 @@ class LearnedEstimator:
         self._rest_angles: np.ndarray | None = None
         self._lo = JOINT_LIMITS_DEG[:, 0]
         self._hi = JOINT_LIMITS_DEG[:, 1]
+
+    @property
+    def smoothing(self) -> float:
+        """Exponential smoothing of successive answers, in [0, 1).
+
+        0 (default): none; ``a`` reports ``a * previous + (1 - a) * new``
+        (1 would never move from the first answer).
+
+        Raises
+        ------
+        InvalidInputError
+            On setting anything but a finite number in [0, 1) (a string, a
+            bool, NaN, 1, a negative number), named with the value received.
+        """
+        return self._smoothing
+
+    @smoothing.setter
+    def smoothing(self, value: float) -> None:
+        self._smoothing = check_number(value, "smoothing", minimum=0, below=1)
 
     @property
     def view_key(self) -> tuple:

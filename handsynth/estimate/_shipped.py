@@ -38,11 +38,14 @@ from ..db import LearningSetOptions, render_learning_set
 from ..errors import DatabaseError
 from ..render import CameraMount, as_mount
 
+__all__ = ["SHIPPED_FOLDER", "fingerprint", "fingerprint_differs", "read_manifest", "ship",
+           "shipped_path"]
+
 #: Where the shipped files and their manifest live.
 SHIPPED_FOLDER = Path(__file__).parent / "shipped"
 
-#: Hands of a learning set kept as its fingerprint.
-FINGERPRINT_HANDS = 2
+# Hands of a learning set kept as its fingerprint.
+_FINGERPRINT_HANDS = 2
 
 _MANIFEST = "manifest.json"
 _FINGERPRINT_ARRAYS = ("grids", "rest_grids", "angles", "rest_angles")
@@ -78,7 +81,7 @@ def shipped_path(name: str, *, folder: Path = SHIPPED_FOLDER) -> Path | None:
 
 
 def fingerprint(data: LearningSetOptions, mount: CameraMount, side: str) -> dict[str, np.ndarray]:
-    """The first :data:`FINGERPRINT_HANDS` hands of the learning set `data`, rendered.
+    """The first two hands of the learning set `data`, rendered.
 
     The hands of a set are drawn one after the other from one generator, so
     its first hands do not depend on how many it holds.
@@ -90,7 +93,7 @@ def fingerprint(data: LearningSetOptions, mount: CameraMount, side: str) -> dict
         cells) uint8, ``angles`` (hands * poses, 20) float32 deg,
         ``rest_angles`` (hands, 20) float32 deg.
     """
-    ls = render_learning_set(replace(data, hands=FINGERPRINT_HANDS), mount=mount, side=side)
+    ls = render_learning_set(replace(data, hands=_FINGERPRINT_HANDS), mount=mount, side=side)
     return {name: getattr(ls, name) for name in _FINGERPRINT_ARRAYS}
 
 

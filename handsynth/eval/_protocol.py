@@ -41,7 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._checks import check_integer, check_options
+from .._checks import check_integer, check_number, check_options
 from ..errors import InvalidInputError
 from ..models import JOINT_NAMES, HandShape
 from ..render import (
@@ -160,9 +160,39 @@ def model_test_hands(n: int, *, seed: int = 0, mount: CameraMount | None = None,
     joints when `flesh_offset_sd_mm` is not 0 (the hands are otherwise those
     of the same seed without them).  Seeds are mixed with a constant of this
     module, so they never repeat a learning set's hands.
+
+    Parameters
+    ----------
+    n : int
+        How many hands; 0 gives none (a run of glTF hands only).
+    seed : int, keyword-only
+        Seed of the hands (>= 0).
+    mount : CameraMount, keyword-only, optional
+        The paper's device by default.
+    spread : float, keyword-only
+        Multiplies every s.d. of :meth:`HandVariation.random` (0: each hand
+        its random :class:`HandShape` unvaried).
+    segment_width_sd, flesh_offset_sd_mm : float, keyword-only
+        As :meth:`HandVariation.with_random_surface` takes them.
+
+    Returns
+    -------
+    list of TestHand
+        Named ``model0``, ``model1``, ...
+
+    Raises
+    ------
+    InvalidInputError
+        `n` not an integer >= 0, `seed` not an integer >= 0, `spread` not a
+        finite number >= 0 (each named with the value received); a `mount`
+        that is not a :class:`CameraMount` (:class:`InvalidCameraError`); an
+        s.d. out of range (:class:`InvalidShapeError`).
     """
     from ..models import GRID_LEVELS
 
+    n = check_integer(n, "n", minimum=0)
+    seed = check_integer(seed, "seed", minimum=0)
+    spread = check_number(spread, "spread", minimum=0)
     mount = as_mount(mount)
     rng = np.random.default_rng(np.random.SeedSequence([seed, 0x7E57]))
     surface_rng = np.random.default_rng(np.random.SeedSequence([seed, 0x7E57, 0x5E6]))

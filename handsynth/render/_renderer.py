@@ -16,7 +16,7 @@ from ._camera import CameraMount, as_mount
 from ._masks import MaskMaker
 from ._scene import check_samples, scene_mjcf
 
-__all__ = ["SilhouetteRenderer", "render_rgb"]
+__all__ = ["GLContextOwner", "SilhouetteRenderer", "offscreen_renderer", "render_rgb"]
 
 
 #: Off-screen renderers not yet closed, closed at exit while the GL library is still there
@@ -33,6 +33,31 @@ def _close_open_renderers() -> None:
 
 
 def offscreen_renderer(model, w: int, h: int):
+    """A MuJoCo off-screen renderer of `model`, `w` by `h` pixels.
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+        The scene to draw; its off-screen buffer (``<visual><global
+        offwidth offheight>``, as :func:`scene_mjcf` writes it) must be at
+        least `w` by `h`.
+    w, h : int
+        Width and height of the images, in pixels.
+
+    Returns
+    -------
+    mujoco.Renderer
+        Holding a GL context of its own: release it with its ``close()``
+        when done (or hold it in a :class:`GLContextOwner`).  Any not closed
+        is closed at interpreter exit, while the GL library is still loaded.
+
+    Raises
+    ------
+    RenderError
+        The renderer could not be made (no GL backend for ``MUJOCO_GL``, a
+        size larger than the model's off-screen buffer), with the reason and
+        what to install on a machine without a display.
+    """
     import mujoco
 
     try:

@@ -22,7 +22,7 @@ from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
-from .._checks import check_instance
+from .._checks import check_instance, check_number
 from ..errors import InvalidInputError, InvalidShapeError
 from ..models import FINGERS, HandShape
 from ._camera import CameraMount, as_mount
@@ -144,8 +144,14 @@ class HandVariation:
         flesh_offset_sd_mm : float, keyword-only
             S.d. of each ``flesh_offset_mm`` (times `spread`), drawn after the
             widths; 0 (the default) draws nothing.
+
+        Raises
+        ------
+        InvalidShapeError
+            `spread` not a finite number >= 0, or an s.d. out of range
+            (:meth:`with_random_surface`), naming it.
         """
-        s = float(spread)
+        s = check_number(spread, "spread", minimum=0, error=InvalidShapeError)
         common = rng.normal(0.0, 0.07 * s)
         out = cls(
             segment_length=tuple(np.exp(common + rng.normal(0.0, 0.15 * s, 15))),
@@ -171,8 +177,10 @@ class HandVariation:
         Raises
         ------
         InvalidShapeError
-            An s.d. outside [0, 1] (widths) or [0, 10] mm (offsets), naming it.
+            `spread` not a finite number >= 0, or an s.d. outside [0, 1]
+            (widths) or [0, 10] mm (offsets), naming it.
         """
+        spread = check_number(spread, "spread", minimum=0, error=InvalidShapeError)
         if not (np.isfinite(segment_width_sd) and 0.0 <= segment_width_sd <= 1.0):
             raise InvalidShapeError(f"segment_width_sd must be in [0, 1], got {segment_width_sd!r}")
         if not (np.isfinite(flesh_offset_sd_mm) and 0.0 <= flesh_offset_sd_mm <= 10.0):

@@ -584,3 +584,33 @@ def test_each_calibration_is_a_stream_of_its_own(data):
     assert a._a is b._a  # the learnt arrays are shared, not copied
     assert "one instance per\n    camera stream" in LearnedEstimator.__doc__
     assert "keeps no state" not in LearnedEstimator.__doc__
+
+
+@pytest.mark.parametrize("value", [1, 1.0, 1.5, -0.1, float("nan"), float("inf"), "0.5", None,
+                                   True, np.array([0.5])])
+def test_smoothing_refuses_anything_but_a_finite_number_in_0_to_1_by_name(data, value):
+    # the command line checked --smoothing; the estimator's attribute took 1.5 or "x"
+    import re
+
+    est = train_learned(data, LearnedOptions(kind="knn", k=5, lists=0))
+    assert est.smoothing == 0.0
+    with pytest.raises(InvalidInputError, match=rf"^smoothing must be a finite number >= 0 and "
+                                                rf"< 1, got {re.escape(repr(value))}"):
+        est.smoothing = value
+    assert est.smoothing == 0.0  # unchanged
+
+
+def test_smoothing_reports_the_weighted_mean_of_the_previous_and_the_new_answer(data):
+    est = train_learned(data, LearnedOptions(kind="knn", k=5, lists=0))
+    rest, a, b = _frames(data, [0, 3, 4])
+    plain = est.calibrated(rest, check_moved=False)
+    first, second = plain.estimate(a).angles, plain.estimate(b).angles
+    smooth = est.calibrated(rest, check_moved=False)
+    smooth.smoothing = np.float64(0.25)
+    assert type(smooth.smoothing) is float and smooth.smoothing == 0.25
+    assert np.allclose(smooth.estimate(a).angles, first)
+    assert np.allclose(smooth.estimate(b).angles, 0.25 * first + 0.75 * second)
+    kept = smooth.calibrated(rest)  # a copy keeps the setting, not the previous answer
+    assert kept.smoothing == 0.25 and np.allclose(kept.estimate(b).angles, second)
+    smooth.smoothing = 0  # off again
+    assert smooth.smoothing == 0.0 and np.allclose(smooth.estimate(a).angles, first)

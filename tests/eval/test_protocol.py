@@ -230,3 +230,34 @@ def test_mesh_test_hands_scaled_say_so_and_refuse_a_bad_scale():
         0.9 * mesh_test_hands(["mrtk"])[0].make().hand_length_mm)
     with pytest.raises(InvalidInputError, match=r"scale must be a number in \[0.5, 2\], got 4"):
         mesh_test_hands(scale=4)
+
+
+@pytest.mark.parametrize("args, kwargs, named", [
+    ((-3,), {}, "n must be an integer >= 0, got -3"),
+    ((1.5,), {}, "n must be an integer >= 0, got 1.5"),
+    ((True,), {}, "n must be an integer >= 0, got True (bool)"),
+    (("2",), {}, "n must be an integer >= 0, got '2' (str)"),
+    ((1,), {"spread": -1.0}, "spread must be a finite number >= 0, got -1.0"),
+    ((1,), {"spread": float("nan")}, "spread must be a finite number >= 0, got nan"),
+    ((1,), {"spread": float("inf")}, "spread must be a finite number >= 0, got inf"),
+    ((1,), {"spread": "1.5"}, "spread must be a finite number >= 0, got '1.5' (str)"),
+    ((1,), {"spread": None}, "spread must be a finite number >= 0, got None (NoneType)"),
+    ((1,), {"seed": -1}, "seed must be an integer >= 0, got -1"),
+])
+def test_model_test_hands_refuses_a_bad_count_spread_or_seed_by_name(args, kwargs, named):
+    # once numpy's "scale < 0", an error about an internal field, or [] for n < 0
+    import re
+
+    with pytest.raises(InvalidInputError, match=f"^{re.escape(named)}$"):
+        model_test_hands(*args, **kwargs)
+
+
+def test_model_test_hands_may_be_none_and_a_spread_of_0_leaves_each_shape_unvaried():
+    assert model_test_hands(0) == []  # the command line's glTF-only run (--hands 0 --mesh ...)
+    plain = model_test_hands(2, seed=4, spread=0)
+    varied = model_test_hands(2, seed=4, spread=1.0)
+    for p, v in zip(plain, varied):
+        assert p.info["shape"] == v.info["shape"]
+        var = p.info["variation"]
+        assert var["segment_length"] == [1.0] * 15 and var["mcp_offset_mm"] == [0.0] * 8
+        assert var["palm_length"] == 1.0 and v.info["variation"] != var

@@ -140,3 +140,23 @@ def test_bad_variations_are_refused_by_name():
         HandVariation(mcp_offset_mm=(0.0,) * 7 + (np.nan,))
     with pytest.raises(InvalidShapeError, match="HandVariation"):
         VariedRasterizer(width_px=W, height_px=H).vary("long")
+
+
+@pytest.mark.parametrize("spread", [-1.0, -1e-9, float("nan"), float("inf"), "1", None, True])
+def test_a_random_hand_refuses_a_spread_that_is_not_a_finite_number_at_least_0(spread):
+    # -1 was numpy's "ValueError: scale < 0"; NaN an error about an internal field
+    import re
+
+    named = rf"^spread must be a finite number >= 0, got {re.escape(repr(spread))}"
+    with pytest.raises(InvalidShapeError, match=named):
+        HandVariation.random(np.random.default_rng(0), spread=spread)
+    with pytest.raises(InvalidShapeError, match=named):
+        HandVariation().with_random_surface(np.random.default_rng(0), spread=spread,
+                                            segment_width_sd=0.1)
+
+
+def test_a_random_hand_of_spread_0_is_the_built_hand():
+    rng = np.random.default_rng(5)
+    assert HandVariation.random(rng, spread=0, segment_width_sd=0.1,
+                                flesh_offset_sd_mm=2.0) == HandVariation()
+    assert HandVariation.random(rng, spread=np.float32(0.5)) != HandVariation()
