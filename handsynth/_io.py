@@ -28,6 +28,8 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import json
+import math
 import os
 from collections.abc import Iterable, Iterator
 from pathlib import Path
@@ -44,6 +46,7 @@ __all__ = [
     "os_error_reason",
     "same_file",
     "write_bytes",
+    "write_json",
     "write_text",
 ]
 
@@ -360,3 +363,62 @@ def write_text(path, text: str, *, what: str = "output file", inputs: Iterable =
     with atomic_open(path, "w", what=what, inputs=inputs, error=error) as f:
         f.write(text)
     return Path(path)
+
+
+def _finite_or_null(obj):
+    """`obj` with every NaN or infinite number, at any depth, replaced by ``None``.
+
+    Dicts, lists and tuples are walked (a tuple becomes a list, as JSON has
+    it); numpy scalars become Python numbers and numpy arrays nested lists.
+    Anything else is returned unchanged, for :func:`json.dumps` to judge.
+    """
+    if isinstance(obj, float):  # float and numpy.float64
+        return float(obj) if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: _finite_or_null(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_finite_or_null(v) for v in obj]
+    if isinstance(obj, (bool, int, str)) or obj is None:
+        return obj
+    import numpy as np
+
+    if isinstance(obj, (np.generic, np.ndarray)):
+        return _finite_or_null(obj.tolist())
+    return obj
+
+
+def write_json(path, obj, *, what: str = "JSON file", inputs: Iterable = (),
+               error: type[HandsynthError] = OutputError, indent: int | None = 2) -> Path:
+    """Write `obj` as JSON to `path` atomically; return `path` as a Path.
+
+    The file is always valid JSON (:rfc:`8259`): a NaN or infinite number
+    anywhere in `obj` -- a Python ``float`` or a numpy scalar or array
+    element, at any depth of dicts, lists and tuples -- is written as
+    ``null``, never as the bare ``NaN``/``Infinity`` tokens that
+    :func:`json.dumps` writes by default and that strict readers refuse.
+    numpy scalars and arrays are written as numbers and (nested) lists.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    obj : JSON-like
+        Dicts, lists, tuples, strings, numbers (Python or numpy), booleans,
+        ``None`` and numpy arrays.
+    what, inputs, error : keyword-only
+        As in :func:`check_output`.
+    indent : int or None, keyword-only
+        As in :func:`json.dumps`; the text ends with a newline.
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    HandsynthError
+        (`error`) as :func:`check_output`, or the file cannot be written.
+    TypeError
+        `obj` holds a value JSON cannot represent (a set, a path...).
+    """
+    text = json.dumps(_finite_or_null(obj), indent=indent, allow_nan=False)
+    return write_text(path, text + "\n", what=what, inputs=inputs, error=error)

@@ -1,5 +1,7 @@
 """The one atomic writer of every output (handsynth/_io.py): whole or nothing, never over an input."""
 
+import json
+import math
 import os
 from pathlib import Path
 
@@ -132,3 +134,51 @@ def test_make_folder_names_the_folder_and_why(tmp_path):
         make_folder(tmp_path / "f" / "p", what="--plots folder")
     with pytest.raises(DatabaseError, match="cannot create the output folder"):
         make_folder(tmp_path / "f", error=DatabaseError)
+
+
+def _strict_loads(text):
+    def refuse(token):
+        raise ValueError(f"bare {token} in the JSON")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+def test_write_json_writes_non_finite_numbers_as_null(tmp_path):
+    import numpy as np
+
+    from handsynth._io import write_json
+
+    obj = {"nan": float("nan"), "inf": float("inf"), "ninf": -math.inf, "ok": 1.5, "n": 3,
+           "np_nan": np.float64("nan"), "np32_inf": np.float32("inf"), "np_int": np.int64(7),
+           "np_ok": np.float32(0.25), "flag": np.bool_(True), "none": None, "s": "NaN",
+           "nested": [{"t": (1.0, math.nan, np.nan)}, [np.array([1.0, np.nan, np.inf])]],
+           "array2d": np.array([[np.nan, 2.0], [3.0, -np.inf]])}
+    out = write_json(tmp_path / "r.json", obj)
+    text = out.read_text()
+    assert out == tmp_path / "r.json" and text.endswith("\n")
+    assert "NaN" not in text.replace('"NaN"', "") and "Infinity" not in text
+    assert _strict_loads(text) == {
+        "nan": None, "inf": None, "ninf": None, "ok": 1.5, "n": 3, "np_nan": None,
+        "np32_inf": None, "np_int": 7, "np_ok": 0.25, "flag": True, "none": None, "s": "NaN",
+        "nested": [{"t": [1.0, None, None]}, [[1.0, None, None]]],
+        "array2d": [[None, 2.0], [3.0, None]]}
+    assert sorted(os.listdir(tmp_path)) == ["r.json"]
+    with pytest.raises(ValueError, match="bare NaN"):  # the strict reader the test relies on
+        _strict_loads('{"a": NaN}')
+
+
+def test_write_json_checks_its_output_like_the_other_writers(tmp_path):
+    from handsynth._io import write_json
+
+    source = tmp_path / "in.json"
+    source.write_text("{}")
+    with pytest.raises(OutputError, match="is the input"):
+        write_json(source, {"a": 1}, inputs=[source])
+    assert source.read_text() == "{}"
+    with pytest.raises(OutputError, match=r"cannot write the JSON file '.*missing/r.json'"):
+        write_json(tmp_path / "missing" / "r.json", {"a": 1})
+    with pytest.raises(TypeError):  # not JSON: refused before anything is written
+        write_json(tmp_path / "r.json", {"a": {1, 2}})
+    assert sorted(os.listdir(tmp_path)) == ["in.json"]
+    write_json(tmp_path / "r.json", [1], indent=None)
+    assert (tmp_path / "r.json").read_text() == "[1]\n"

@@ -125,7 +125,7 @@ def eval_(ctx, db_folder, protocol, mesh, mesh_scale, learned_hands, hand_spread
     skill per hand kind, pose set and method; --json writes every figure
     (per hand, per joint).
     """
-    from .._io import check_output
+    from .._io import check_output, write_json
     from ..errors import OutputError
     from ..eval import EvalOptions, evaluate
 
@@ -164,7 +164,9 @@ def eval_(ctx, db_folder, protocol, mesh, mesh_scale, learned_hands, hand_spread
     report = evaluate(options, progress=say)
     click.echo(report.format())
     if json_path:
-        click.echo(f"json: {report.write_json(json_path, frames=json_frames)}")
+        # not report.write_json: non-finite numbers must become null, not NaN tokens
+        path = write_json(json_path, report.to_dict(frames=json_frames), what="JSON report")
+        click.echo(f"json: {path}")
     if out_dir:
         if prefix is None:
             prefix = "eval_mesh_" if hand == "mesh" else "eval_"
@@ -175,11 +177,10 @@ def eval_(ctx, db_folder, protocol, mesh, mesh_scale, learned_hands, hand_spread
 
 def _protocol(folder, mesh, mesh_scale, learned_hands, hand_spread, json_path, n_hands, frames, pose_sets,
               methods, seed, rest, slip, say) -> None:
-    import json
     import time
 
     from .. import __version__
-    from .._io import write_text
+    from .._io import write_json
     from ..db import LearningSetOptions
     from ..eval import (
         ProtocolOptions,
@@ -217,6 +218,6 @@ def _protocol(folder, mesh, mesh_scale, learned_hands, hand_spread, json_path, n
     result["handsynth"] = __version__
     click.echo(format_headline(result["headline"]))
     if json_path:
-        path = write_text(json_path, json.dumps(result, indent=1), what="JSON report")
+        path = write_json(json_path, result, what="JSON report", indent=1)
         click.echo(f"json: {path}")
     sys.stdout.flush()

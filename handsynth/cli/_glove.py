@@ -2,19 +2,11 @@
 
 from __future__ import annotations
 
-import json
-
 import click
 
 from ._main import cli
 
 _MODELS = ("model1", "model2", "model3", "model4")
-
-
-def _write_json(path: str, payload) -> None:
-    from .._io import write_text
-
-    write_text(path, json.dumps(payload, indent=2) + "\n", what="JSON file")
 
 
 @cli.group()
@@ -214,7 +206,7 @@ def apply(calibration, readings, out, name, motion, range_csv, adc_max):
               help="Write every table as JSON.")
 def eval_(kind, trials, test_trials, seed, seeds, json_out):
     """The seed's tables (per finger, motion, model: MCP error, R^2) on simulated data."""
-    from .._io import check_output
+    from .._io import check_output, write_json
     from ..sensors.glove import EvalOptions, evaluate
 
     if json_out:
@@ -227,7 +219,7 @@ def eval_(kind, trials, test_trials, seed, seeds, json_out):
     for k, res in results.items():
         _print_eval(k, res)
     if json_out:
-        _write_json(json_out, {"kinds": list(kinds), "results": results})
+        write_json(json_out, {"kinds": list(kinds), "results": results})  # NaN -> null
         click.echo(f"wrote {json_out}")
 
 

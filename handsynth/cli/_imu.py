@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from .._io import check_outputs, make_folder
+from .._io import check_outputs, make_folder, write_json
 from ._main import cli
 
 _TRACK_FILTERS = ("raw", "filter1", "gated", "vqf", "vqf_online", "madgwick", "mahony", "ahrs_ekf",
@@ -39,13 +39,6 @@ def _write_table(path, header, table, *, inputs=()) -> None:
     with atomic_open(path, "w", what="CSV file", inputs=inputs) as f:
         f.write(",".join(header) + "\n")
         np.savetxt(f, table, delimiter=",", fmt="%.8g")
-
-
-def _write_json(path: str, payload, *, inputs=()) -> None:
-    from .._io import write_text
-
-    write_text(path, json.dumps(payload, indent=2, allow_nan=False) + "\n", what="JSON file",
-               inputs=inputs)
 
 
 def _unique_keys(pairs) -> dict:
@@ -137,7 +130,7 @@ def eval_(config_name, filters, durations, elbows, no_grasps, no_sensor_calibrat
                    sensor_calibration=not no_sensor_calibration,
                    plate_fusion=not no_plate_fusion, series=series)
     if json_out:
-        _write_json(json_out, rep)
+        write_json(json_out, rep)  # a NaN error becomes null
     if plots:
         out = plots
         last = rep["trials"][-1]
@@ -318,7 +311,7 @@ def broad(directory, filters, json_out) -> None:
     res = run_broad(directory, filters=_filters(filters, BROAD_FILTERS),
                     progress=lambda line: click.echo(line, err=True))
     if json_out:
-        _write_json(json_out, res, inputs=trials)
+        write_json(json_out, res, inputs=trials)
     click.echo(f"{len(res['trials'])} BROAD trial(s); mean RMSE over the movement phases, deg "
                f"({res['anchor']})")
     click.echo(f"{'filter':<10}{'total':>8}{'heading':>9}{'inclination':>13}")

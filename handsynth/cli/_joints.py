@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import warnings
 from pathlib import Path
 
@@ -15,12 +14,6 @@ _METHODS = ("patent", "variance3d", "obrien", "score")
 #: is 864,000 frames per trial and estimator.
 _MIN_DURATION_S, _MAX_DURATION_S = 2.0, 3600.0
 _MAX_SEEDS = 100
-
-
-def _write_json(path: str, payload, inputs=()) -> None:
-    from .._io import write_text
-
-    write_text(path, json.dumps(payload, indent=2) + "\n", what="JSON file", inputs=inputs)
 
 
 def _lateral(value: str):
@@ -100,7 +93,7 @@ def joints() -> None:
 def estimate(recording, methods, frames, lateral_axis, lateral_frame, bins, units, angles,
              sensors, rate_hz, strict, take, json_out, plot_out) -> None:
     """Estimate the joint centre of RECORDING (.h5, PiMgr CSV or Liberty ASCII)."""
-    from .._io import check_outputs
+    from .._io import check_outputs, write_json
     from ..errors import EstimationError, InvalidInputError
     from ..sensors.trackers import (
         AxisAngleFilter,
@@ -181,9 +174,9 @@ def estimate(recording, methods, frames, lateral_axis, lateral_frame, bins, unit
     for x in refused:
         click.echo(f"  {x['method']}/{x['frames_mode']}: refused: {x['refused']}")
     if json_out:
-        _write_json(json_out, {"recording": str(recording), "joint": rec.joint,
-                               "n_frames": rec.n_frames, "quality": quality.to_dict(),
-                               "results": rows, "refused": refused}, inputs=[recording])
+        write_json(json_out, {"recording": str(recording), "joint": rec.joint,
+                              "n_frames": rec.n_frames, "quality": quality.to_dict(),
+                              "results": rows, "refused": refused}, inputs=[recording])
     if plot_out and results:
         filtered = next((r.axis_filter for r in results if r.axis_filter is not None), None)
         plot_axis_histogram(filtered if filtered is not None else filt.apply(rec), plot_out,
@@ -207,7 +200,7 @@ def estimate(recording, methods, frames, lateral_axis, lateral_frame, bins, unit
               help="Instead: every method at 10-70 deg range of motion, ok / warned / refused.")
 def eval_(configs, json_out, duration_s, seeds, rom_sweep) -> None:
     """The patent's table (mock vs finger, all vs filtered) on two simulator configurations."""
-    from .._io import check_output
+    from .._io import check_output, write_json
     from ..errors import InvalidInputError
     from ..sensors.trackers import evaluate
     from ..sensors.trackers import rom_sweep as sweep
@@ -232,8 +225,8 @@ def eval_(configs, json_out, duration_s, seeds, rom_sweep) -> None:
                        f"{r['frames']:<9}{r['status']:<8}{r['error_mm']:8.2f}"
                        f"{r['baseline_mm']:9.2f}")
         if json_out:
-            _write_json(json_out, {"duration_s": min(duration_s, 20.0), "seeds": seeds,
-                                   "rows": rows})
+            write_json(json_out, {"duration_s": min(duration_s, 20.0), "seeds": seeds,
+                                  "rows": rows})
         return
     rows = [r for c in names for r in evaluate(config=c, duration_s=duration_s,
                                                seeds=tuple(range(seeds)))]
@@ -251,4 +244,5 @@ def eval_(configs, json_out, duration_s, seeds, rom_sweep) -> None:
                    f"{counts:>14}"
                    f"{r['time_ms']:7.1f}")
     if json_out:
-        _write_json(json_out, {"duration_s": duration_s, "seeds": seeds, "rows": rows})
+        # a row whose every trial was refused has NaN errors: written as null
+        write_json(json_out, {"duration_s": duration_s, "seeds": seeds, "rows": rows})

@@ -274,3 +274,25 @@ def test_take_reads_a_later_take_of_a_file_of_several(tmp_path, sim):
     assert "take=3, but the time restarts 1 time(s)" in res.output, res.output
     assert "Traceback" not in res.output
 
+
+
+def test_eval_json_writes_refused_rows_as_null_not_nan(tmp_path, monkeypatch):
+    # a row whose every trial was refused has NaN errors (and the midpoint row a NaN
+    # distance): json.dumps wrote bare NaN tokens, which strict JSON readers refuse
+    row = {"config": "project", "scenario": "mock", "noise": "datasheet", "method": "obrien",
+           "frames": "all", "n_frames_used": 0, "error_upper_mm": float("nan"),
+           "error_lower_mm": np.nan, "error_mm": np.float64("nan"), "distance_mm": float("inf"),
+           "axis_error_mm": np.nan, "answered": 0, "warned": 0, "refused": 1, "time_ms": 1.0}
+    monkeypatch.setattr("handsynth.sensors.trackers.evaluate", lambda **kw: [dict(row)])
+    out = tmp_path / "eval.json"
+    res = CliRunner().invoke(cli, ["joints", "eval", "--config", "project", "--seeds", "1",
+                                   "--json", str(out)])
+    assert res.exit_code == 0, res.output
+
+    def refuse(token):
+        raise AssertionError(f"bare {token} in the JSON file")
+
+    (got,) = json.loads(out.read_text(), parse_constant=refuse)["rows"]
+    assert got["error_upper_mm"] is None and got["error_mm"] is None
+    assert got["distance_mm"] is None and got["refused"] == 1 and got["method"] == "obrien"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["eval.json"]

@@ -1,4 +1,9 @@
-"""Plots of an IMU evaluation: orientation error over time, side-view stick figure."""
+"""Plots of an IMU evaluation: orientation error over time, side-view stick figure.
+
+Matplotlib is imported here only, lazily, and drawn with the Agg canvas
+directly (never through pyplot), so the caller's backend and figures are
+never touched; the PNG is written atomically by :func:`handsynth._io.atomic_open`.
+"""
 
 from __future__ import annotations
 
@@ -6,19 +11,27 @@ from pathlib import Path
 
 import numpy as np
 
+from ..._io import atomic_open
+
 __all__ = ["plot_orientation_error", "plot_stick_figure"]
 
 
-def _figure():
-    import matplotlib
+def _figure(figsize):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    fig = Figure(figsize=figsize)  # dpi from rcParams, as pyplot's figures
+    FigureCanvasAgg(fig)
+    return fig
 
-    return plt
+
+def _save(fig, path, inputs) -> Path:
+    with atomic_open(path, "wb", what="plot", inputs=inputs) as f:
+        fig.savefig(f, format="png", dpi=110)
+    return Path(path)
 
 
-def plot_orientation_error(t, errors: dict, path, *, title: str = "") -> Path:
+def plot_orientation_error(t, errors: dict, path, *, title: str = "", inputs=()) -> Path:
     """Mean orientation error over the segments against time, one line per filter.
 
     Parameters
@@ -27,10 +40,23 @@ def plot_orientation_error(t, errors: dict, path, *, title: str = "") -> Path:
     errors : dict
         filter -> (N,) error in degrees.
     path : path-like
-        PNG to write.
+        PNG to write (atomically).
+    title : str, keyword-only
+    inputs : iterable of path-like, keyword-only
+        Files the caller read; `path` must be none of them.
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    OutputError
+        `path` cannot be written (its folder is missing, it is a folder...),
+        naming it; nothing is left under `path` then.
     """
-    plt = _figure()
-    fig, ax = plt.subplots(figsize=(7, 3.5))
+    fig = _figure((7, 3.5))
+    ax = fig.subplots()
     for name, e in errors.items():
         ax.plot(t, e, label=name, lw=1)
     ax.set_xlabel("time [s]")
@@ -40,12 +66,10 @@ def plot_orientation_error(t, errors: dict, path, *, title: str = "") -> Path:
     ax.legend(fontsize=7, ncol=2)
     ax.set_title(title, fontsize=9)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return Path(path)
+    return _save(fig, path, inputs)
 
 
-def plot_stick_figure(chains: dict, path, *, title: str = "") -> Path:
+def plot_stick_figure(chains: dict, path, *, title: str = "", inputs=()) -> Path:
     """Side view (world y-z plane) of the chains from the elbow, truth and estimates.
 
     Parameters
@@ -53,9 +77,21 @@ def plot_stick_figure(chains: dict, path, *, title: str = "") -> Path:
     chains : dict
         label -> dict finger -> (L + 1, 3) points from the elbow (metres).
     path : path-like
+        PNG to write (atomically).
+    title, inputs : keyword-only
+        As in :func:`plot_orientation_error`.
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    OutputError
+        As in :func:`plot_orientation_error`.
     """
-    plt = _figure()
-    fig, ax = plt.subplots(figsize=(6, 4))
+    fig = _figure((6, 4))
+    ax = fig.subplots()
     styles = ["-k", "--r", ":b", "-.g"]
     for (label, fingers), style in zip(chains.items(), styles):
         for k, pts in enumerate(fingers.values()):
@@ -69,6 +105,4 @@ def plot_stick_figure(chains: dict, path, *, title: str = "") -> Path:
     ax.legend(fontsize=8)
     ax.set_title(title, fontsize=9)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return Path(path)
+    return _save(fig, path, inputs)

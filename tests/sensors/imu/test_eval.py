@@ -34,3 +34,70 @@ def test_small_evaluation_is_json_and_has_baselines():
     assert np.isfinite(s["filter4"]["fingertip_mean_rmse_mm"])
     v = rep["vectors"]
     assert v["rotation_method"]["median_mm"] < v["baseline_zero_vector"]["median_mm"]
+
+
+# --------------------------------------------------------------------------- plots
+
+
+def _plot_args():
+    t = np.linspace(0.0, 4.0, 50)
+    chains = {label: {"index": np.cumsum(np.full((4, 3), s), axis=0)}
+              for label, s in (("truth", 0.02), ("filter4", 0.021))}
+    return t, {"raw": 1.0 + t, "filter4": 0.5 + 0.1 * t}, chains
+
+
+def test_plots_are_pngs_written_whole_and_a_bad_path_is_an_output_error(tmp_path, monkeypatch):
+    from matplotlib.figure import Figure
+
+    from handsynth.errors import OutputError
+    from handsynth.sensors.imu import plot_orientation_error, plot_stick_figure
+
+    t, errors, chains = _plot_args()
+    a = plot_orientation_error(t, errors, tmp_path / "err.png", title="t")
+    b = plot_stick_figure(chains, tmp_path / "stick.png", title="t")
+    assert (a, b) == (tmp_path / "err.png", tmp_path / "stick.png")
+    for p in (a, b):
+        assert p.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["err.png", "stick.png"]  # no .tmp-
+    # a path under a file: the project's output error naming the path, not FileNotFoundError
+    (tmp_path / "afile").write_text("")
+    bad = tmp_path / "afile" / "p.png"
+    with pytest.raises(OutputError, match=r"cannot write the plot '.*afile/p\.png'"):
+        plot_orientation_error(t, errors, bad)
+    with pytest.raises(OutputError, match=r"cannot write the plot '.*afile/p\.png'"):
+        plot_stick_figure(chains, bad)
+    with pytest.raises(OutputError, match="never replaces an input"):
+        plot_stick_figure(chains, tmp_path / "in.png", inputs=[tmp_path / "in.png"])
+
+    # a failure half-way through the PNG leaves neither a half-written file nor a temporary one
+    def half_then_fail(self, f, **kw):
+        f.write(b"\x89PNG half")
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(Figure, "savefig", half_then_fail)
+    with pytest.raises(OutputError, match=r"cannot write the plot .*no space left"):
+        plot_orientation_error(t, errors, tmp_path / "half.png")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["afile", "err.png", "stick.png"]
+
+
+def test_plots_leave_the_callers_matplotlib_backend_and_pyplot_alone(tmp_path):
+    # _plot called matplotlib.use("Agg") and drew through pyplot's global state
+    import subprocess
+    import sys
+
+    code = f"""
+import sys
+import matplotlib
+matplotlib.use("svg")
+import numpy as np
+from handsynth.sensors.imu import plot_orientation_error, plot_stick_figure
+t = np.linspace(0.0, 1.0, 10)
+plot_orientation_error(t, {{"raw": 1.0 + t}}, {str(tmp_path / "e.png")!r})
+plot_stick_figure({{"truth": {{"index": np.eye(3)}}}}, {str(tmp_path / "s.png")!r})
+assert "matplotlib.pyplot" not in sys.modules, "pyplot was imported"
+assert matplotlib.get_backend() == "svg", matplotlib.get_backend()
+print("ok")
+"""
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert res.returncode == 0 and res.stdout.strip() == "ok", res.stderr
+    assert (tmp_path / "e.png").read_bytes()[:4] == b"\x89PNG"
