@@ -43,6 +43,7 @@ __all__ = [
     "atomic_path",
     "check_output",
     "is_tmp_name",
+    "json_text",
     "os_error_reason",
     "same_file",
     "write_bytes",
@@ -420,5 +421,23 @@ def write_json(path, obj, *, what: str = "JSON file", inputs: Iterable = (),
     TypeError
         `obj` holds a value JSON cannot represent (a set, a path...).
     """
-    text = json.dumps(_finite_or_null(obj), indent=indent, allow_nan=False)
-    return write_text(path, text + "\n", what=what, inputs=inputs, error=error)
+    return write_text(path, json_text(obj, indent=indent) + "\n", what=what, inputs=inputs,
+                      error=error)
+
+
+def json_text(obj, *, indent: int | None = 2) -> str:
+    """`obj` as JSON text, non-finite numbers as ``null`` (see :func:`write_json`).
+
+    Parameters
+    ----------
+    obj : JSON-like
+        As in :func:`write_json`.
+    indent : int or None, keyword-only
+        As in :func:`json.dumps`.
+
+    Returns
+    -------
+    str
+        Without a final newline.
+    """
+    return json.dumps(_finite_or_null(obj), indent=indent, allow_nan=False)

@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from .._io import make_folder, write_text
+from .._io import json_text, make_folder, write_json
 from ..errors import InvalidInputError
 from ..models import JOINT_NAMES, HandShape
 from ._options import (
@@ -232,12 +231,12 @@ class EvalReport:
         return out
 
     def to_json(self, *, frames: bool = False, indent: int | None = 2) -> str:
-        """:meth:`to_dict` as a JSON string."""
-        return json.dumps(self.to_dict(frames=frames), indent=indent)
+        """:meth:`to_dict` as a JSON string (a non-finite number as ``null``)."""
+        return json_text(self.to_dict(frames=frames), indent=indent)
 
     def write_json(self, path, *, frames: bool = False) -> Path:
         """Write :meth:`to_json` to `path` atomically (temporary file, then rename)."""
-        return write_text(path, self.to_json(frames=frames) + "\n", what="JSON report")
+        return write_json(path, self.to_dict(frames=frames), what="JSON report")
 
     def write_plots(self, folder, *, prefix: str = "eval_") -> list[Path]:
         """Write the figures as PNG files (matplotlib, Agg canvas).
