@@ -14,7 +14,23 @@ __all__ = ["HandModel", "compile_mjcf"]
 
 
 def compile_mjcf(xml: str):
-    """Compile an MJCF string, turning MuJoCo's errors into :class:`RenderError`."""
+    """Compile an MJCF string, turning MuJoCo's errors into :class:`RenderError`.
+
+    Parameters
+    ----------
+    xml : str
+        A complete MJCF document (as :func:`hand_mjcf` writes), passed to
+        ``mujoco.MjModel.from_xml_string``.
+
+    Returns
+    -------
+    mujoco.MjModel
+
+    Raises
+    ------
+    RenderError
+        MuJoCo could not compile `xml` (its ``ValueError``, message kept).
+    """
     import mujoco
 
     from ..errors import RenderError

@@ -57,6 +57,16 @@ JOINT_LIMITS_DEG.setflags(write=False)
 def joint_index(name: str) -> int:
     """Return the canonical index of joint `name`.
 
+    Parameters
+    ----------
+    name : str
+        A joint name of :data:`JOINT_NAMES` (case matters).
+
+    Returns
+    -------
+    int
+        Its position in :data:`JOINT_NAMES`, 0 to 19.
+
     Raises
     ------
     InvalidPoseError

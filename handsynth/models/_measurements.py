@@ -411,7 +411,27 @@ def formula_ratios(user: HandMeasurements, standard: HandMeasurements, *,
 
 
 def hull_width_at(points_xy: np.ndarray, y: float) -> float:
-    """Breadth along x of the convex hull of `points_xy` (M, 2) cut by the line at `y`."""
+    """Breadth along x of the convex hull of `points_xy` (M, 2) cut by the line at `y`.
+
+    Parameters
+    ----------
+    points_xy : ndarray, shape (M, 2), float
+        Points (x, y), e.g. a mesh's vertices seen from the back of the hand; mm
+        in this package's callers (the message of the error says mm).
+    y : float
+        Height of the horizontal cutting line, in the unit of `points_xy`.
+
+    Returns
+    -------
+    float
+        Largest minus smallest x where the hull's edges cross the line, in the
+        unit of `points_xy`.
+
+    Raises
+    ------
+    InvalidShapeError
+        The hull does not reach height `y` (fewer than two crossings).
+    """
     from scipy.spatial import ConvexHull
 
     hull = points_xy[ConvexHull(points_xy).vertices]

@@ -108,7 +108,27 @@ class HandSpec:
 
 
 def hand_spec(shape: HandShape, *, side: str = "right") -> HandSpec:
-    """Build the segment tree of a hand of `shape` (see :class:`HandShape`)."""
+    """Build the segment tree of a hand of `shape` (see :class:`HandShape`).
+
+    Parameters
+    ----------
+    shape : HandShape
+        Scale factors of the standard hand.
+    side : {"right", "left"}, keyword-only
+        The left hand is the right one mirrored in the y-z plane (x -> -x),
+        joint senses kept.
+
+    Returns
+    -------
+    HandSpec
+        Positions, meshes and the forearm stub in mm.
+
+    Raises
+    ------
+    InvalidShapeError
+        `shape` not a :class:`HandShape`, or `side` neither ``"right"`` nor
+        ``"left"``.
+    """
     from ..errors import InvalidShapeError
 
     check_instance(shape, HandShape, name="shape", error=InvalidShapeError)

@@ -108,6 +108,17 @@ for _p in NAMED_POSES.values():
 def named_pose(name: str) -> np.ndarray:
     """Return a copy of the named standard pose (degrees, canonical order).
 
+    Parameters
+    ----------
+    name : str
+        A key of :data:`NAMED_POSES` (``"open"``, ``"spread"``, ``"fist"``,
+        ``"point"``, ``"pinch"``, ``"grasp"``).
+
+    Returns
+    -------
+    ndarray, shape (20,), float64
+        Degrees, canonical order; a writable copy.
+
     Raises
     ------
     InvalidPoseError

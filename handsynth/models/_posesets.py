@@ -160,7 +160,30 @@ POSE_SETS = {"paper": paper_pose_set, "natural": natural_pose_set}
 
 
 def pose_set(name: str, n: int | None = None, *, seed: int = 0) -> np.ndarray:
-    """Pose set `name` (``"paper"`` or ``"natural"``) of `n` poses (default 20,448)."""
+    """Pose set `name` (``"paper"`` or ``"natural"``) of `n` poses (default 20,448).
+
+    Parameters
+    ----------
+    name : {"paper", "natural"}
+        A key of :data:`POSE_SETS`: :func:`paper_pose_set` or
+        :func:`natural_pose_set`.
+    n : int, optional
+        Number of poses, a positive integer; None for ``PAPER_SIZE`` (20,448),
+        for either set.
+    seed : int, keyword-only
+        Non-negative seed, passed to the set's function.
+
+    Returns
+    -------
+    ndarray, shape (n, 20), float64
+        Degrees, canonical order.
+
+    Raises
+    ------
+    InvalidInputError
+        `name` not a key of :data:`POSE_SETS`; `n` or `seed` refused by the
+        set's function.
+    """
     try:
         fn = POSE_SETS[name]
     except KeyError:

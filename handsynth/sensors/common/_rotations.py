@@ -76,14 +76,43 @@ def check_rotations(rotations: np.ndarray, *, name: str = "rotations") -> None:
 
 
 def rotvec_to_matrix(rotvec: np.ndarray) -> np.ndarray:
-    """Rotation vectors ``(..., 3)`` in radians to matrices ``(..., 3, 3)``."""
+    """Rotation vectors ``(..., 3)`` in radians to matrices ``(..., 3, 3)``.
+
+    Parameters
+    ----------
+    rotvec : (..., 3) array_like of float
+        ``angle * unit_axis``, radians.
+
+    Returns
+    -------
+    (..., 3, 3) ndarray of float64
+        The matrices (:meth:`scipy.spatial.transform.Rotation.from_rotvec`).
+    """
     v = np.asarray(rotvec, dtype=np.float64)
     flat = Rotation.from_rotvec(v.reshape(-1, 3)).as_matrix()
     return flat.reshape(v.shape[:-1] + (3, 3))
 
 
 def matrix_to_rotvec(rotations: np.ndarray) -> np.ndarray:
-    """Rotation matrices ``(..., 3, 3)`` to rotation vectors ``(..., 3)`` (rad)."""
+    """Rotation matrices ``(..., 3, 3)`` to rotation vectors ``(..., 3)`` (rad).
+
+    Parameters
+    ----------
+    rotations : (..., 3, 3) array_like of float
+        Not checked to be rotations (see :func:`check_rotations`): scipy's
+        :meth:`~scipy.spatial.transform.Rotation.from_matrix` orthogonalises a
+        matrix that is not orthogonal.
+
+    Returns
+    -------
+    (..., 3) ndarray of float64
+        ``angle * unit_axis``, radians, angle in [0, pi].
+
+    Raises
+    ------
+    ValueError
+        (scipy's) a matrix with a non-positive determinant.
+    """
     r = np.asarray(rotations, dtype=np.float64)
     flat = Rotation.from_matrix(r.reshape(-1, 3, 3)).as_rotvec()
     return flat.reshape(r.shape[:-2] + (3,))

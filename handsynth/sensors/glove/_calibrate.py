@@ -111,6 +111,21 @@ def default_synergies(k: int = 2) -> Synergies:
     """Synergies of the hand model's natural pose set (4,096 poses, seed 0).
 
     Fitted once per `k` and shared by every caller: the arrays are read-only.
+
+    Parameters
+    ----------
+    k : int
+        Number of components kept, 1 to 20.
+
+    Returns
+    -------
+    Synergies
+        Angles in degrees; the same object for every call with the same `k`.
+
+    Raises
+    ------
+    InvalidInputError
+        `k` not an integer in 1..20.
     """
     return _default_synergies(check_integer(k, "k", minimum=1, maximum=20))
 
@@ -283,6 +298,21 @@ def range_readings(rec: GloveRecording, *, where: str = "recording"
                    ) -> tuple[np.ndarray, np.ndarray] | None:
     """Median readings (open, fist), each shape (5,), or None without both holds.
 
+    Parameters
+    ----------
+    rec : GloveRecording
+        A recording whose ``motion`` labels some samples ``"range_open"`` and
+        ``"range_fist"`` (:data:`RANGE_LABELS`, compared exactly).
+    where : str, keyword-only
+        What the recording is (a file name), for the message.
+
+    Returns
+    -------
+    tuple of two ndarray, shape (5,), float64, counts; or None
+        Per sensor (thumb to little), the median of the readings labelled
+        ``"range_open"`` and of those labelled ``"range_fist"``, NaN samples
+        left out; None when either label is missing.
+
     Raises
     ------
     RecordingError
@@ -306,7 +336,35 @@ def range_readings(rec: GloveRecording, *, where: str = "recording"
 def save_calibration(path, estimators: dict, *, kind: str = "",
                      range_reference: tuple[np.ndarray, np.ndarray] | None = None,
                      meta: dict | None = None) -> Path:
-    """Write estimators (and the range-hold readings) as JSON, atomically."""
+    """Write estimators (and the range-hold readings) as JSON, atomically.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file written; it appears only when complete.
+    estimators : dict of str to GloveEstimator
+        Written with each estimator's ``to_dict``, read back by
+        :func:`load_calibration`.
+    kind : str, keyword-only
+        Glove design, one of :data:`GLOVE_KINDS` or ``""`` when unknown; written
+        as given (not checked here; :func:`load_calibration` refuses others).
+    range_reference : tuple of two ndarray, shape (5,), counts, keyword-only, optional
+        Readings (open, fist) of the range holds, as :func:`range_readings`
+        returns; None when there were none.
+    meta : dict, keyword-only, optional
+        Written as the ``"meta"`` field (``{}`` for None); must be
+        JSON-serialisable.
+
+    Returns
+    -------
+    Path
+        `path`.
+
+    Raises
+    ------
+    OutputError
+        The file cannot be written.
+    """
     payload = {
         "format": _FORMAT, "version": _VERSION, "kind": kind,
         "range_reference": None if range_reference is None
@@ -320,6 +378,12 @@ def save_calibration(path, estimators: dict, *, kind: str = "",
 
 def load_calibration(path) -> dict:
     """Read a calibration file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A JSON file written by :func:`save_calibration` (a UTF-8 byte-order
+        mark is accepted).
 
     Returns
     -------

@@ -497,6 +497,20 @@ class RangeNormalizer:
 def estimator_from_dict(d: dict) -> GloveEstimator:
     """Rebuild an estimator written by its ``to_dict``.
 
+    Parameters
+    ----------
+    d : dict
+        One estimator's ``to_dict`` (as read back from JSON); its ``"type"``
+        (``"constant"``, ``"regression"``, ``"gated"`` or ``"synergy"``)
+        chooses the class.  A gated estimator's ``"primary"`` and
+        ``"fallback"`` are rebuilt by this function too.
+
+    Returns
+    -------
+    GloveEstimator
+        A :class:`ConstantEstimator`, :class:`RegressionEstimator`,
+        :class:`GatedEstimator` or :class:`SynergyEstimator`.
+
     Raises
     ------
     InvalidInputError

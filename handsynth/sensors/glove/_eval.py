@@ -221,6 +221,12 @@ def _mean_tree(trees: list):
 def evaluate(options: EvalOptions | None = None) -> dict:
     """Run the four conditions and return the tables (JSON-serialisable).
 
+    Parameters
+    ----------
+    options : EvalOptions, optional
+        Glove kind, trial counts, seeds and calibration; ``EvalOptions()`` for
+        None.
+
     Returns
     -------
     dict
@@ -233,6 +239,11 @@ def evaluate(options: EvalOptions | None = None) -> dict:
         constant answer's beside them).  With ``seeds > 1`` every number is
         the mean over the seeds, and each summary entry adds
         ``mcp_error_deg_per_seed``.
+
+    Raises
+    ------
+    InvalidInputError
+        `options` neither None nor an :class:`EvalOptions`.
     """
     o = check_options(options, EvalOptions)
     runs = [_evaluate_one(o, s) for s in range(o.seed, o.seed + o.seeds)]

@@ -92,6 +92,21 @@ def motions_for(kind: str) -> tuple[str, ...]:
 
     ``"dg5"`` (PIP-only sensors): Standard, Lateral Contact, Tripod;
     ``"5dt"`` (MCP + PIP sensors): the four of section 2.1.
+
+    Parameters
+    ----------
+    kind : {"dg5", "5dt"}
+        Glove design.
+
+    Returns
+    -------
+    tuple of str
+        Keys of :data:`REPRESENTATIVE_MOTIONS`.
+
+    Raises
+    ------
+    InvalidInputError
+        `kind` neither ``"dg5"`` nor ``"5dt"``.
     """
     if kind == "dg5":
         return ("standard", "lateral_contact", "tripod")
@@ -102,6 +117,17 @@ def motions_for(kind: str) -> tuple[str, ...]:
 
 def grasp_posture(name: str) -> np.ndarray:
     """Copy of the grasp posture of motion `name` (deg, canonical order).
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`MOTIONS`.
+
+    Returns
+    -------
+    ndarray, shape (20,), float64, deg
+        The posture clipped to :data:`handsynth.models.JOINT_LIMITS_DEG`; a
+        writable copy.
 
     Raises
     ------

@@ -190,6 +190,28 @@ def write_glove_csv(path, rec: GloveRecording, *, with_angles: bool = True) -> P
     The file appears complete or not at all.  Reference `angles` are written
     when present and `with_angles` is true; the simulator's noise-free truth
     is never written.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Written whole or not at all.
+    rec : GloveRecording
+        Its ``time_s`` (s, 6 decimals), ``motion``, ``trial`` and ``sensors``
+        (counts, 4 decimals) are written; its ``kind``, ``adc_max`` and
+        ``meta`` are not.
+    with_angles : bool, keyword-only
+        Write the reference ``angles`` (deg, 4 decimals) as the joint columns
+        when `rec` has them.
+
+    Returns
+    -------
+    pathlib.Path
+        `path`.
+
+    Raises
+    ------
+    OutputError
+        The file cannot be written.
     """
     angles = rec.angles if with_angles else None
     header = ["time_s", "motion", "trial", *SENSOR_NAMES]

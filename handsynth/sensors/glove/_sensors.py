@@ -76,6 +76,11 @@ _DISTAL_5DT = ("thumb_ip_flex", *(f"{f}_pip_flex" for f in FINGERS[1:]))
 def sensor_joints(kind: str) -> dict[str, np.ndarray]:
     """Nominal joint weights of each sensor of glove `kind`.
 
+    Parameters
+    ----------
+    kind : {"dg5", "5dt"}
+        Glove design, one of :data:`GLOVE_KINDS`.
+
     Returns
     -------
     dict with keys ``"proximal"``, ``"distal"`` (int arrays, shape (5,): the
@@ -241,7 +246,20 @@ def _as_angles(angles) -> np.ndarray:
 
 
 def play_operator_reference(x: np.ndarray, width: np.ndarray) -> np.ndarray:
-    """Plain per-sample loop of :func:`play_operator` (the reference version)."""
+    """Plain per-sample loop of :func:`play_operator` (the reference version).
+
+    Parameters
+    ----------
+    x : ndarray, shape (N, K), float
+        Inputs in time order, one column per channel; N >= 1 (an empty `x`
+        raises ``IndexError``, where :func:`play_operator` returns it empty).
+    width : array_like, shape (K,), same unit as `x`
+        Full width of each column's band.
+
+    Returns
+    -------
+    ndarray, shape (N, K), float64
+    """
     x = np.asarray(x, dtype=np.float64)
     out = np.empty_like(x)
     half = np.asarray(width, dtype=np.float64) / 2.0

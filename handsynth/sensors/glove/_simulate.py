@@ -109,6 +109,22 @@ def make_user(seed: int, *, name: str | None = None,
     standard hand's 187 mm; :mod:`handsynth.models`), not the survey's
     spread.
 
+    Parameters
+    ----------
+    seed : int
+        Non-negative; the same seed gives the same user.
+    name : str, keyword-only, optional
+        The user's name; ``f"user{seed}"`` for None (or ``""``).
+    hand_length : float, keyword-only, optional
+        Ratio to the standard hand; None draws it from 0.92-1.08.  Giving it
+        skips that draw, so the style scale, style offset and DIP/PIP ratios
+        drawn after it differ from those of ``make_user(seed)`` (the rest
+        posture and lead exponents, drawn before, do not).
+
+    Returns
+    -------
+    GloveUser
+
     Raises
     ------
     InvalidInputError
@@ -155,6 +171,29 @@ def don_glove(user: GloveUser, kind: str, *, seed: int, glove_seed: int = 0) -> 
     in counts; see :class:`SensorParams` for what is sourced).  Calibration
     and test data come from the same ranges (other draws, not other
     figures; docs/glove.md, "The simulation").
+
+    Parameters
+    ----------
+    user : GloveUser
+        Only its ``hand_length`` is used (the slip toward the knuckle).
+    kind : {"dg5", "5dt"}
+        Glove design.
+    seed : int, keyword-only
+        Seed of this donning (offset, gain change, slip, distal weight error).
+    glove_seed : int, keyword-only
+        Seed of the glove itself (nominal gain, nonlinearity, hysteresis,
+        noise): the same `glove_seed` is the same physical glove.
+
+    Returns
+    -------
+    SensorParams
+        Gains in counts/deg, offsets and noise in counts, hysteresis in deg;
+        ``adc_max`` the default 4095.
+
+    Raises
+    ------
+    InvalidInputError
+        `kind` not one of :data:`GLOVE_KINDS` (from :class:`SensorParams`).
     """
     g = np.random.default_rng([int(glove_seed), 23])
     rng = np.random.default_rng([int(seed), 37])
@@ -276,6 +315,37 @@ def simulate_poses(user: GloveUser, sensors: SensorParams, postures: np.ndarray,
     wearer.  The user's style is not applied: the postures are what the
     user is asked to hold, plus 3 deg s.d. of not holding them exactly (an
     assumption).
+
+    Parameters
+    ----------
+    user : GloveUser
+        Not used by the code (the user's slip is already in `sensors`).
+    sensors : SensorParams
+        The glove as worn (:func:`don_glove`).
+    postures : array_like, shape (M, 20) or (20,), deg
+        Canonical order; one 3 deg s.d. error is drawn per posture and kept
+        over its hold, then the angles are clipped to the joint limits.
+    seed : int, keyword-only
+        Seed of the holding error and the sensor noise.
+    hold_samples : int, keyword-only
+        Samples per posture; the holds follow each other in one sequence, so
+        the sensors' hysteresis carries from one hold into the next.
+
+    Returns
+    -------
+    GloveRecording
+        ``M * hold_samples`` samples; ``angles`` and ``truth`` both hold the
+        held angles (no reference-glove error), ``trial`` the posture index,
+        ``motion`` is ``""`` and ``time_s`` the sample index (the default of
+        :class:`GloveRecording`, not seconds).
+
+    Raises
+    ------
+    InvalidInputError
+        Postures not finite (from :func:`simulate_sensors`).
+    ValueError
+        Postures without 20 columns (numpy's broadcasting error: the shape is
+        not checked first).
     """
     rng = np.random.default_rng([int(seed), 31])
     postures = np.atleast_2d(np.asarray(postures, dtype=np.float64))

@@ -103,6 +103,22 @@ class Synergies:
 def fit_synergies(postures: np.ndarray, *, k: int = 2, source: str = "") -> Synergies:
     """PCA of `postures` (N, 20) deg keeping `k` components.
 
+    Parameters
+    ----------
+    postures : array_like, shape (N, 20), deg
+        Joint angles, canonical order; rows with a NaN or infinite value are
+        left out.
+    k : int, keyword-only
+        Components kept, 1 to 20.
+    source : str, keyword-only
+        What the postures are, stored as ``Synergies.source``.
+
+    Returns
+    -------
+    Synergies
+        Mean and sample covariance (``numpy.cov``, N - 1) of the finite rows;
+        the residual variance is floored at 1e-6 deg^2.
+
     Raises
     ------
     InvalidInputError

@@ -129,7 +129,25 @@ def _static_samples(rec: ImuRecording, static: StaticStart) -> int:
 
 
 def gyro_bias(rec: ImuRecording, static: StaticStart = StaticStart()) -> np.ndarray:
-    """Mean gyro over the static start, rad/s, shape (S, 3) (seed 003 section 4.2.4)."""
+    """Mean gyro over the static start, rad/s, shape (S, 3) (seed 003 section 4.2.4).
+
+    Parameters
+    ----------
+    rec : ImuRecording
+    static : StaticStart
+        Its ``static_s`` gives the samples averaged: ``round(static_s *
+        rate_hz)``, at least 1 and at most the recording's N (a static start
+        longer than the recording is not refused here).
+
+    Returns
+    -------
+    ndarray, shape (S, 3), float64, rad/s
+
+    Raises
+    ------
+    InvalidInputError
+        `rec` not an :class:`ImuRecording` or `static` not a :class:`StaticStart`.
+    """
     n0 = _static_samples(rec, static)
     return rec.gyr[:, :n0].mean(axis=1)
 
@@ -137,8 +155,26 @@ def gyro_bias(rec: ImuRecording, static: StaticStart = StaticStart()) -> np.ndar
 def azimuth_correction(rec: ImuRecording, static: StaticStart = StaticStart()) -> np.ndarray:
     """Per-sensor compass heading correction psi_cor, radians, shape (S,) (eqs. 4.18-4.21).
 
+    Parameters
+    ----------
+    rec : ImuRecording
+        All sensors must turn together during the common rotation.
+    static : StaticStart
+        The static start (mean accelerometer and magnetometer, and the gyro
+        bias removed from the rotation) and the common rotation's window,
+        s; a window cut by the recording's end is used as far as it goes.
+
+    Returns
+    -------
+    ndarray, shape (S,), float64, rad
+        Wrapped to (-pi, pi]; zeros when `static` has no common rotation
+        (``align_start_s`` None).
+
     Raises
     ------
+    InvalidInputError
+        `rec` or `static` of the wrong type; a common rotation of fewer than
+        2 samples inside the recording.
     EstimationError
         If the common rotation is too slow (< 0.5 rad/s) or about the vertical
         (then g x w_max vanishes and fixes no heading).
@@ -177,7 +213,29 @@ def azimuth_correction(rec: ImuRecording, static: StaticStart = StaticStart()) -
 
 def initial_attitude(rec: ImuRecording, static: StaticStart = StaticStart(), *,
                      align: bool = True) -> np.ndarray:
-    """Initial sensor-to-world quaternions, shape (S, 4) (eqs. 2.9-2.11, 4.22)."""
+    """Initial sensor-to-world quaternions, shape (S, 4) (eqs. 2.9-2.11, 4.22).
+
+    Parameters
+    ----------
+    rec : ImuRecording
+    static : StaticStart
+        Accelerometer and magnetometer are averaged over its static start;
+        its common rotation gives the azimuth correction.
+    align : bool, keyword-only
+        Add :func:`azimuth_correction` to each compass heading; False keeps
+        the compass headings as they are.
+
+    Returns
+    -------
+    ndarray, shape (S, 4), float64
+        Unit quaternions (w, x, y, z), world frame z up, x magnetic north.
+
+    Raises
+    ------
+    InvalidInputError, EstimationError
+        As :func:`azimuth_correction` (with `align`); `rec` or `static` of the
+        wrong type.
+    """
     n0 = _static_samples(rec, static)
     g = rec.acc[:, :n0].mean(axis=1)
     mag = rec.mag[:, :n0].mean(axis=1)

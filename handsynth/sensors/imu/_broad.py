@@ -92,6 +92,11 @@ def _rate(path: Path, value) -> float:
 def read_broad_trial(path) -> tuple[ImuRecording, np.ndarray, np.ndarray]:
     """Read one BROAD trial.
 
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A ``.mat`` file (read with scipy); any other suffix is read as HDF5.
+
     Returns
     -------
     rec : ImuRecording
@@ -142,7 +147,29 @@ def read_broad_trial(path) -> tuple[ImuRecording, np.ndarray, np.ndarray]:
 
 
 def broad_errors(q_enu: np.ndarray, opt_quat: np.ndarray, movement: np.ndarray) -> dict:
-    """BROAD's total, heading and inclination RMSE (degrees) over the movement phases."""
+    """BROAD's total, heading and inclination RMSE (degrees) over the movement phases.
+
+    Parameters
+    ----------
+    q_enu : ndarray, shape (N, 4), float
+        Estimated IMU-to-earth quaternions (w, x, y, z), earth frame ENU;
+        normalised here.
+    opt_quat : ndarray, shape (N, 4), float
+        The reference of :func:`read_broad_trial`; NaN rows are left out of
+        the means.
+    movement : ndarray, shape (N,), bool
+        The samples the metric uses (a boolean mask: integers would index).
+
+    Returns
+    -------
+    dict
+        ``"total_rmse_deg"``, ``"heading_rmse_deg"`` and
+        ``"inclination_rmse_deg"``, floats in degrees: the RMS over the
+        movement samples of the angle of the earth-frame error
+        ``q_enu opt_quat^-1``, of its rotation about the vertical and of the
+        rest.  NaN (with numpy's warning) when the reference is NaN over the
+        whole movement phase.
+    """
     q = q_enu / np.linalg.norm(q_enu, axis=1, keepdims=True)
     o = opt_quat / np.linalg.norm(opt_quat, axis=1, keepdims=True)
     e = qmul(q, qconj(o))
@@ -159,7 +186,26 @@ def broad_errors(q_enu: np.ndarray, opt_quat: np.ndarray, movement: np.ndarray) 
 
 
 def find_broad_trials(directory) -> list[Path]:
-    """BROAD trial files in `directory` (or its data_mat/data_hdf5), one per trial name."""
+    """BROAD trial files in `directory` (or its data_mat/data_hdf5), one per trial name.
+
+    Parameters
+    ----------
+    directory : str or os.PathLike
+        Searched, then its ``data_mat`` and ``data_hdf5`` subfolders, for
+        ``.mat``, ``.hdf5`` and ``.h5`` files whose names start with two
+        digits.  Of files with the same stem, the first found is kept (in
+        that folder order, names sorted within a folder).
+
+    Returns
+    -------
+    list of pathlib.Path
+        Sorted by stem.
+
+    Raises
+    ------
+    RecordingError
+        `directory` is not a directory, or holds no trial file.
+    """
     directory = Path(directory)
     if not directory.is_dir():
         raise RecordingError(f"{directory}: not a directory")

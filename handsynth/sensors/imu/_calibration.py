@@ -304,6 +304,36 @@ def calibrate(rec: ImuRecording, *, sensor_calibration: bool = True) -> ImuCalib
     it to every recording); ``sensor_calibration=False`` skips it, e.g. for
     a recording already corrected.  The forearm plate's constant rotations
     (:func:`plate_rotations`) are stored too when all its sensors are there.
+
+    Parameters
+    ----------
+    rec : ImuRecording
+        The calibration recording: the labelled stretches of
+        :func:`calibration_motion` (in ``segments`` or its truth's), the link
+        sensors and the fingertip sensors.
+    sensor_calibration : bool, keyword-only
+        Fit and apply :func:`fit_sensor_calibration` when the recording has at
+        least 8 stretches labelled ``acc_pose_<k>``; with fewer it is skipped
+        silently.  False skips it always.
+
+    Returns
+    -------
+    ImuCalibration
+        Link model, link frames, zero offsets (measured as for a right hand:
+        :func:`zero_offsets`' default side), thumb CMC model, the sensor
+        correction (None when skipped) and the plate rotations (None without
+        all of :data:`PLATE_SENSORS`).
+
+    Raises
+    ------
+    InvalidInputError
+        A labelled stretch that a step needs is missing.
+    RecordingError
+        A sensor that a step needs is missing.
+    EstimationError
+        A calibration rotation too short, slow or badly shaped to estimate
+        from (see :func:`calibrate_vectors`, :func:`link_frames`,
+        :func:`azimuth_correction`).
     """
     sensor_cal = None
     if sensor_calibration and sum(name.startswith(POSE_PREFIX) for name, _, _ in rec.labelled()) >= 8:

@@ -143,7 +143,31 @@ FILTER4B = ChainEKFOptions(bias_tau_s=5.0)
 
 
 def sensor_tree(sensors) -> tuple[list[int], list[tuple[str, str]]]:
-    """Parent sensor index (-1 for the forearm roots) and (proximal, distal) link of each."""
+    """Parent sensor index (-1 for the forearm roots) and (proximal, distal) link of each.
+
+    Parameters
+    ----------
+    sensors : iterable of str
+        Sensor names, each the measuring sensor of a link of :data:`LINKS`
+        (no fingertip sensors).
+
+    Returns
+    -------
+    parent : list of int, length S
+        Index in `sensors` of the sensor whose link ends at this sensor's
+        proximal point (the first such in :data:`LINKS` order, e.g.
+        ``forearm_3`` before ``forearm_1`` for ``hand_radial``); -1 where
+        none of `sensors` is (the forearm sensors, or any sensor whose parent
+        is absent).
+    link : list of (str, str), length S
+        The (proximal, distal) points of the sensor's first link in
+        :data:`LINKS` (``hand_radial`` and ``hand_ulnar`` measure several).
+
+    Raises
+    ------
+    InvalidInputError
+        A sensor that measures no link of :data:`LINKS`.
+    """
     sensors = tuple(sensors)
     parent, link = [], []
     for s in sensors:

@@ -110,7 +110,29 @@ HELDOUT = SimConfig("heldout", HandShape(length=1.08, width=0.93, palm=0.95), EV
 
 
 def make_filter(name: str, model=None):
-    """An estimator by name (``filter4`` needs the link model)."""
+    """An estimator by name (``filter4`` needs the link model).
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`FILTERS`.
+    model : ChainModel, optional
+        The link model (:func:`chain_model`), needed by ``"filter4"`` and
+        ``"filter4b"``; ignored by the others.
+
+    Returns
+    -------
+    OrientationEstimator
+        A new estimator with its default options (``"filter4b"``:
+        :data:`FILTER4B`; ``"vqf_online"``: :class:`VQFEstimator` with
+        ``online=True``).
+
+    Raises
+    ------
+    InvalidInputError
+        An unknown `name`; ``"filter4"`` or ``"filter4b"`` without `model`, or
+        with one that is no :class:`ChainModel`.
+    """
     table: dict[str, Callable[[], Any]] = {
         "constant": ConstantEstimator, "raw": RawIntegration, "filter1": Filter1,
         "gated": GatedFilter, "vqf": VQFEstimator,

@@ -112,10 +112,32 @@ def _rotation_axis(cal: ImuRecording, sensor: str, label: str,
 def link_frames(cal: ImuRecording, model: ChainModel, *, hold_s: float = 0.5) -> dict:
     """L_R_S of every link sensor from the calibration rotations (eqs. 5.1-5.2).
 
+    Parameters
+    ----------
+    cal : ImuRecording
+        The calibration recording, with the labelled rotation of each
+        sensor's frame axis (its proximal joint's flexion; the wrist's for
+        ``hand_ulnar``).
+    model : ChainModel
+        The link model (:func:`chain_model`): a frame is made for every sensor
+        of its ``own``, its link vector giving the frame's y direction.
+    hold_s : float, keyword-only
+        Still time at the start of every rotation, s, whose mean gyro is
+        subtracted.
+
     Returns
     -------
     dict
         sensor -> (3, 3) rotation from sensor frame to link frame.
+
+    Raises
+    ------
+    InvalidInputError
+        A rotation the recording has no labelled stretch for.
+    RecordingError
+        A sensor of `model` missing from `cal`.
+    EstimationError
+        A flexion axis parallel to its link vector.
     """
     out = {}
     for s in model.own:
@@ -162,6 +184,34 @@ def thumb_cmc_model(cal: ImuRecording, frames: dict, *, static=None,
     the joint toward mid-range (flexion, palmar abduction) before it
     oscillates (:func:`calibration_motion`).  The static pose comes from the
     attitudes of the static start, as :func:`zero_offsets` takes them.
+
+    Parameters
+    ----------
+    cal : ImuRecording
+        The calibration recording, with the ``thumb_cmc_flex`` and
+        ``thumb_cmc_abd`` rotations labelled and the ``hand_radial`` and
+        ``thumb_metacarpal`` sensors.
+    frames : dict
+        sensor -> (3, 3) link frame, from :func:`link_frames`.
+    static : StaticStart, keyword-only, optional
+        The static start and common rotation; None takes them from the
+        recording's ``"static"`` and ``"elbow_flex"`` stretches.
+    hold_s : float, keyword-only
+        Still time at the start of each CMC rotation, s, whose mean gyro is
+        subtracted.
+
+    Returns
+    -------
+    ThumbCmcModel
+
+    Raises
+    ------
+    InvalidInputError
+        A labelled stretch missing.
+    RecordingError
+        A sensor missing from `cal`.
+    EstimationError
+        From the azimuth alignment (:func:`azimuth_correction`).
     """
     from ._attitude import initial_attitude
     from ._vectors import _calibration_static
@@ -178,7 +228,32 @@ def thumb_cmc_model(cal: ImuRecording, frames: dict, *, static=None,
 
 
 def truth_link_frames(rec: ImuRecording, model: ChainModel, hand) -> dict:
-    """Link frames from the model's true flexion axes (for reference)."""
+    """Link frames from the model's true flexion axes (for reference).
+
+    Parameters
+    ----------
+    rec : ImuRecording
+        A simulated recording; only its truth's joint count is used (and its
+        truth required).
+    model : ChainModel
+        A frame is made for every sensor of its ``own``; its link vectors
+        give the frames' y directions.
+    hand : ImuHand
+        The MuJoCo hand (with its sensor placement) the recording was
+        simulated on; it is left at the zero pose, where the axes are read.
+
+    Returns
+    -------
+    dict
+        sensor -> (3, 3) rotation from sensor frame to link frame.
+
+    Raises
+    ------
+    InvalidInputError
+        `rec` has no truth.
+    EstimationError
+        A flexion axis parallel to its link vector.
+    """
     import mujoco
 
     out = {}
@@ -293,9 +368,30 @@ def zero_offsets(cal: ImuRecording, frames: dict, *, side: str = "right",
     removes the constant offsets that link-vector and axis errors leave
     (an addition to the thesis, which reports the raw Euler angles).
 
+    Parameters
+    ----------
+    cal : ImuRecording
+        The calibration recording.
+    frames : dict
+        sensor -> (3, 3) link frame, from :func:`link_frames`.
+    side : {"right", "left"}, keyword-only
+        As :func:`joint_angles` (the sign of MCP abduction).
+    static : StaticStart, keyword-only, optional
+        The static start and common rotation; None takes them from the
+        recording's ``"static"`` and ``"elbow_flex"`` stretches.
+
     Returns
     -------
     ndarray, shape (20,), degrees (0 for the thumb CMC).
+        Canonical order; any NaN is written as 0.
+
+    Raises
+    ------
+    InvalidInputError
+        `side` not ``"right"`` or ``"left"``; a stretch missing; a sensor or
+        frame :func:`joint_angles` needs missing.
+    EstimationError
+        From the azimuth alignment (:func:`azimuth_correction`).
     """
     from ._attitude import initial_attitude
     from ._vectors import _calibration_static
@@ -308,6 +404,15 @@ def zero_offsets(cal: ImuRecording, frames: dict, *, side: str = "right",
 
 def fingertip_positions(quats, sensors, model: ChainModel) -> dict:
     """Fingertip positions from the elbow by chaining link vectors (eq. 3.12).
+
+    Parameters
+    ----------
+    quats : ndarray, shape (S, N, 4)
+        Sensor-to-world unit quaternions (w, x, y, z).
+    sensors : sequence of str, length S
+        Names of the rows of `quats`; every sensor of :data:`CHAINS`.
+    model : ChainModel
+        Its link vectors (metres, sensor frame) are summed.
 
     Returns
     -------

@@ -112,7 +112,29 @@ def _full_pose(hand_deg=None, arm=None) -> np.ndarray:
 
 
 def static_motion(duration_s: float = 2.0, *, rate_hz: float = 100.0, pose=None) -> Motion:
-    """Hold `pose` (shape (29,), default zeros) still for `duration_s`."""
+    """Hold `pose` (shape (29,), default zeros) still for `duration_s`.
+
+    Parameters
+    ----------
+    duration_s : float
+        Length, s (finite, > 0); ``round(duration_s * rate_hz)`` samples.
+    rate_hz : float, keyword-only
+        Sampling rate, Hz, in [10, 1000].
+    pose : array_like, shape (29,), keyword-only, optional
+        Positions of :data:`MODEL_JOINTS`: hinges in deg, the elbow slides in
+        m; None for all zeros.
+
+    Returns
+    -------
+    Motion
+        Zero velocities and accelerations; labelled ``"static"`` with one
+        segment ``("static", 0, N)``.
+
+    Raises
+    ------
+    InvalidInputError
+        `duration_s` not finite and > 0, or `rate_hz` outside [10, 1000].
+    """
     t = _grid(duration_s, rate_hz)
     q, qd, qdd = _base(t.size, pose)
     return Motion(rate_hz, q, qd, qdd, "static", (("static", 0, t.size),))
@@ -256,7 +278,27 @@ def _minjerk_add(t, q, qd, qdd, j, delta, t0, t1):
 
 
 def concat_motions(motions, *, label: str = "") -> Motion:
-    """Join motions end to end (same rate; each must start where the last ended)."""
+    """Join motions end to end (same rate; each must start where the last ended).
+
+    Parameters
+    ----------
+    motions : iterable of Motion
+        At least one, all at the same ``rate_hz``.  That each starts where the
+        last ended is the caller's to ensure: it is not checked.
+    label : str, keyword-only
+        Label of the result.
+
+    Returns
+    -------
+    Motion
+        The samples one after another; every motion's ``segments`` kept, their
+        sample indices shifted to the joined grid.
+
+    Raises
+    ------
+    InvalidInputError
+        Motions of different rates.
+    """
     motions = list(motions)
     rate = motions[0].rate_hz
     segs: list[tuple[str, int, int]] = []
@@ -394,6 +436,43 @@ def grasp_motion(grasps=("power_sphere", "medium_wrap", "lateral_pinch", "tip_pi
 
     ``segments`` names every hold ``grasp:<name>`` for classification tests.
     With ``elbow="moving"`` the arm sways as in :func:`free_motion`.
+
+    Parameters
+    ----------
+    grasps : sequence of str
+        Keys of :data:`GRASP_POSES`, formed in this order, each from and back
+        to the open hand.
+    rate_hz : float, keyword-only
+        Sampling rate, Hz, in [10, 1000].
+    hold_s : float, keyword-only
+        Time each grasp is held, s.
+    move_s : float, keyword-only
+        Duration of each reach and each release, s.
+    static_s : float, keyword-only
+        Still start, s (segment ``"static"``).
+    elbow : str, keyword-only
+        ``"moving"``: the elbow centre sways (one sinusoid of 0.04 m on each
+        axis) and the wrist flexion and humeral rotation oscillate (10 deg);
+        any other value keeps the arm still (not checked).
+    seed : int, keyword-only
+        Seed of the sway's frequencies and phases (used only with
+        ``elbow="moving"``).
+    align_rotation : bool, keyword-only
+        Insert a 2 s elbow-flexion oscillation after the static start
+        (segment ``"align"``), the common rotation of the azimuth alignment.
+
+    Returns
+    -------
+    Motion
+        Labelled ``"grasps"``; hinges in deg, elbow slides in m, elbow flexion
+        held at 35 deg; ``static_s + 2 (with align_rotation) +
+        len(grasps) * (2 * move_s + hold_s) + 0.5`` s long.
+
+    Raises
+    ------
+    InvalidInputError
+        An unknown grasp; `rate_hz` outside [10, 1000]; a motion that leaves
+        a joint's range.
     """
     for g in grasps:
         if g not in GRASP_POSES:

@@ -342,6 +342,17 @@ def draw_fixed_errors(noise: AxisNoise, n_sensors: int, rng: np.random.Generator
                       ) -> tuple[np.ndarray, np.ndarray]:
     """Scale/cross-axis matrices and turn-on biases of `n_sensors` physical sensors.
 
+    Parameters
+    ----------
+    noise : AxisNoise
+        Its ``scale_error`` and ``cross_axis`` (s.d., fractions) and
+        ``turn_on_bias`` (s.d., rad/s for a gyro, m/s^2 for an accelerometer)
+        are used.
+    n_sensors : int
+        S, the number of sensors.
+    rng : numpy.random.Generator
+        Draws the matrices first, then the biases.
+
     Returns
     -------
     matrix : ndarray, shape (S, 3, 3), float64

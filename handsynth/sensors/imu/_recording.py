@@ -430,6 +430,16 @@ def write_imu_csv(rec: ImuRecording, path) -> None:
     The file is written to a temporary name and renamed, so a crash never
     leaves a half-written file under `path`.
 
+    Parameters
+    ----------
+    rec : ImuRecording
+        Its samples are written (``time_s`` = sample index / ``rate_hz``, s;
+        acc m/s^2, gyr rad/s, mag uT; 9 significant digits) and its rate in the
+        comment line (``rate_hz``, 6 significant digits); its truth and
+        ``segments`` are not written.
+    path : str or os.PathLike
+        The file written.
+
     Raises
     ------
     RecordingError
@@ -438,6 +448,8 @@ def write_imu_csv(rec: ImuRecording, path) -> None:
         separator, quote, line break or surrounding space).  Names that
         repeat and rates that are not finite numbers > 0 are refused when
         the recording is made.
+    OutputError
+        The file cannot be written.
     """
     check_instance(rec, ImuRecording, name="rec", error=RecordingError)
     for s in rec.sensors:

@@ -260,11 +260,31 @@ def calibrate_vectors(rec: ImuRecording, *, hold_s: float = 0.5, static_pose: bo
 
     `hold_s` and `static_pose` as :func:`rotation_vector`.
 
+    Parameters
+    ----------
+    rec : ImuRecording
+        A calibration recording with every sensor of :data:`LINKS` and the
+        fingertip sensors, and the labelled rotations of :data:`ROTATIONS`.
+    hold_s : float, keyword-only
+        Still time at the start of every rotation, s (gravity and gyro bias).
+    static_pose : bool, keyword-only
+        Extrapolate the vectors of sensors whose skin moves with the rotation
+        to the static pose (see :func:`rotation_vector`).
+
     Returns
     -------
     dict
         ``(sensor, point) -> VectorEstimate`` for each link's own sensor to
         its proximal point and the next link's sensor to both ends.
+
+    Raises
+    ------
+    InvalidInputError
+        A rotation the recording has no labelled stretch for.
+    RecordingError
+        A sensor missing from the recording.
+    EstimationError
+        A rotation with fewer than 2 usable turning points.
     """
     out = {}
     for s1, j1, j2 in LINKS:
@@ -354,7 +374,37 @@ class ChainModel:
 
 
 def chain_model(rec: ImuRecording, vectors: dict | None = None, **kw) -> ChainModel:
-    """The link model from a calibration recording (eqs. 3.2-3.11)."""
+    """The link model from a calibration recording (eqs. 3.2-3.11).
+
+    Parameters
+    ----------
+    rec : ImuRecording
+        The calibration recording; its static start gives the relative
+        rotations of :func:`link_vectors`.
+    vectors : dict, optional
+        ``(sensor, point) -> (3,)`` vector (metres, sensor frame) or
+        :class:`VectorEstimate`, as :func:`calibrate_vectors` returns; None
+        computes them with :func:`calibrate_vectors`'s defaults.
+    **kw
+        Passed to :func:`link_vectors` (``static``, ``tip_offset_m``).
+
+    Returns
+    -------
+    ChainModel
+        Vectors in metres.
+
+    Raises
+    ------
+    InvalidInputError
+        `vectors` lacks a link's own sensor-to-proximal-point vector (a
+        missing next-link vector raises ``KeyError`` in :func:`link_vectors`);
+        without ``static``, a recording without the ``"static"`` and
+        ``"elbow_flex"`` stretches; as :func:`calibrate_vectors`.
+    RecordingError, EstimationError
+        As :func:`calibrate_vectors` when `vectors` is None; the azimuth
+        alignment of the static start (:func:`azimuth_correction`) may raise
+        EstimationError too.
+    """
     vectors = vectors if vectors is not None else calibrate_vectors(rec)
     missing = [f"{s1}->{j1}" for s1, j1, _ in LINKS if (s1, j1) not in vectors]
     if missing:
@@ -370,7 +420,24 @@ def chain_model(rec: ImuRecording, vectors: dict | None = None, **kw) -> ChainMo
 
 
 def truth_chain_model(rec: ImuRecording) -> ChainModel:
-    """The exact link model of a simulated recording (for tests and as a reference)."""
+    """The exact link model of a simulated recording (for tests and as a reference).
+
+    Parameters
+    ----------
+    rec : ImuRecording
+        A simulated recording: its truth's ``joint_vectors`` (zero pose,
+        nominal mounting) give every vector.
+
+    Returns
+    -------
+    ChainModel
+        Vectors in metres, each sensor's frame.
+
+    Raises
+    ------
+    InvalidInputError
+        `rec` has no truth.
+    """
     if rec.truth is None:
         raise InvalidInputError("truth_chain_model needs a simulated recording")
     jv = rec.truth.joint_vectors

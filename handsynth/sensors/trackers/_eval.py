@@ -61,7 +61,26 @@ ESTIMATORS = {
 
 
 def make_estimator(name: str, **options):
-    """Instantiate estimator `name` (a key of :data:`ESTIMATORS`) with `options`."""
+    """Instantiate estimator `name` (a key of :data:`ESTIMATORS`) with `options`.
+
+    Parameters
+    ----------
+    name : {"patent", "variance3d", "obrien", "score"}
+        A key of :data:`ESTIMATORS`.
+    **options
+        Fields of that estimator's dataclass, passed to its constructor (which
+        checks their values).
+
+    Returns
+    -------
+    PlaneVarianceEstimator, VarianceEstimator, OBrienEstimator or ScoreEstimator
+
+    Raises
+    ------
+    InvalidInputError
+        An unknown `name`, or an option that is not a field of the class
+        (the message lists its fields).
+    """
     if name not in ESTIMATORS:
         raise InvalidInputError(
             f"name: expected one of {', '.join(ESTIMATORS)}, got {name!r}"
@@ -140,6 +159,11 @@ def midpoint_baseline(recording) -> tuple[np.ndarray, np.ndarray]:
 
     Needs no joint model and no motion; an estimator that does not beat it
     has learnt nothing from the motion.
+
+    Parameters
+    ----------
+    recording : Recording
+        Its :meth:`~Recording.relative` poses are averaged over all frames.
 
     Returns
     -------

@@ -144,12 +144,27 @@ def save_recording(path: str | os.PathLike, recording: Recording, *, inputs=()) 
 def load_recording(path: str | os.PathLike) -> Recording:
     """Read a recording written by :func:`save_recording`.
 
+    Parameters
+    ----------
+    path : str or os.PathLike
+        An HDF5 file of a readable format version.
+
+    Returns
+    -------
+    Recording
+        With its labels, joint, metadata and, when stored, its ground truth.
+
     Raises
     ------
     RecordingError
         Missing or unreadable file, another format or version, missing or
         damaged data (checksum), attributes that are not the text or JSON
         written.
+
+    Warns
+    -----
+    UserWarning
+        A version-1 file, which has no checksum to verify.
     """
     path = Path(path)
     try:

@@ -72,6 +72,14 @@ def foot_of_perpendicular(p1, p2, p3, v) -> np.ndarray:
     ``l = -(a x_v + b y_v + c z_v + d) / sqrt(a^2 + b^2 + c^2)`` (eq. 7),
     ``VP = l n`` (eq. 8), ``OP = OV + l n`` (eq. 9).
 
+    Parameters
+    ----------
+    p1, p2, p3 : (3,) array_like of float
+        Three points of the plane, not collinear; any length unit, the same
+        for all four points.
+    v : (3,) array_like of float
+        The point projected, in the unit of the others.
+
     Returns
     -------
     (3,) ndarray of float64
@@ -88,7 +96,27 @@ def foot_of_perpendicular(p1, p2, p3, v) -> np.ndarray:
 
 
 def plane_point(p1, p2, p3, s, t) -> np.ndarray:
-    """Point of parameters ``(s, t)`` (eq. 4); broadcasts over `s`, `t`."""
+    """Point of parameters ``(s, t)`` (eq. 4); broadcasts over `s`, `t`.
+
+    Parameters
+    ----------
+    p1, p2, p3 : (3,) array_like of float
+        The plane's points (any length unit; not checked for collinearity
+        here).
+    s, t : array_like of float
+        Parameters along ``P2 - P1`` and ``P3 - P1`` (dimensionless),
+        broadcast against each other; not checked to be finite.
+
+    Returns
+    -------
+    (..., 3) ndarray of float64
+        ``...`` is the broadcast shape of `s` and `t`; the unit of the points.
+
+    Raises
+    ------
+    InvalidInputError
+        If a point is not 3 finite numbers.
+    """
     p1, p2, p3 = _points(p1, p2, p3)
     s = np.asarray(s, dtype=np.float64)[..., None]
     t = np.asarray(t, dtype=np.float64)[..., None]

@@ -990,6 +990,26 @@ def read_recording(path: str | os.PathLike, **kwargs) -> Recording:
 
     ``.h5`` / ``.hdf5`` files go to :func:`~handsynth.sensors.load_recording`
     (no options), anything else to :func:`read_polhemus` with `kwargs`.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The suffix, in any case, chooses the reader.
+    **kwargs
+        Keyword options of :func:`read_polhemus` (``units``, ``sensors``,
+        ``rate_hz``, ...); none for an HDF5 file.
+
+    Returns
+    -------
+    Recording
+
+    Raises
+    ------
+    InvalidInputError
+        Options given for an HDF5 file; bad option values of
+        :func:`read_polhemus` (an unknown option name is Python's TypeError).
+    RecordingError
+        As :func:`~handsynth.sensors.load_recording` or :func:`read_polhemus`.
     """
     from ._hdf5 import SUFFIXES, load_recording
 
