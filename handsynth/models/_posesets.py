@@ -12,8 +12,10 @@
     limits, all with the DIP ~ 2/3 PIP coupling (the relation used by seed 004,
     SPEC.md section 4).
 
-Both are deterministic functions of ``(n, seed)``, sampled with scrambled
-Sobol sequences (scipy.stats.qmc) so that any size covers its space evenly.
+Both are deterministic functions of ``(n, seed)``.  The paper set is sampled
+with scrambled Sobol sequences (scipy.stats.qmc), so that any size covers its
+space evenly; the natural set with NumPy's random generator (normal jitter
+around the named poses, uniform grasp closures).
 """
 
 from __future__ import annotations

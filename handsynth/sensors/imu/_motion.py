@@ -349,8 +349,9 @@ def free_motion(duration_s: float = 30.0, *, rate_hz: float = 100.0, seed: int =
         Frequency scale (2 doubles every angular velocity).
     static_s : float, keyword-only
     align_rotation : bool, keyword-only
-        Insert a 2 s whole-arm rotation (humeral rotation) after the static
-        start, the common rotation of seed 003 section 4.2.5.
+        Insert a 2 s elbow-flexion oscillation (25 deg, 0.5 Hz) after the
+        static start: the common rotation of seed 003 section 4.2.5, turning
+        every sensor of the forearm and hand together.
     """
     if elbow not in ("fixed", "moving"):
         raise InvalidInputError(f"elbow must be 'fixed' or 'moving', got {elbow!r}")
@@ -435,7 +436,7 @@ def grasp_motion(grasps=("power_sphere", "medium_wrap", "lateral_pinch", "tip_pi
     """Open hand, then each grasp in turn: reach it (min-jerk), hold, release.
 
     ``segments`` names every hold ``grasp:<name>`` for classification tests.
-    With ``elbow="moving"`` the arm sways as in :func:`free_motion`.
+    With ``elbow="moving"`` the arm sways (its own sway, below).
 
     Parameters
     ----------
@@ -450,10 +451,10 @@ def grasp_motion(grasps=("power_sphere", "medium_wrap", "lateral_pinch", "tip_pi
         Duration of each reach and each release, s.
     static_s : float, keyword-only
         Still start, s (segment ``"static"``).
-    elbow : str, keyword-only
+    elbow : {"fixed", "moving"}, keyword-only
         ``"moving"``: the elbow centre sways (one sinusoid of 0.04 m on each
         axis) and the wrist flexion and humeral rotation oscillate (10 deg);
-        any other value keeps the arm still (not checked).
+        ``"fixed"`` keeps the arm still.
     seed : int, keyword-only
         Seed of the sway's frequencies and phases (used only with
         ``elbow="moving"``).
@@ -471,9 +472,11 @@ def grasp_motion(grasps=("power_sphere", "medium_wrap", "lateral_pinch", "tip_pi
     Raises
     ------
     InvalidInputError
-        An unknown grasp; `rate_hz` outside [10, 1000]; a motion that leaves
-        a joint's range.
+        An unknown grasp or `elbow`; `rate_hz` outside [10, 1000]; a motion
+        that leaves a joint's range.
     """
+    if elbow not in ("fixed", "moving"):
+        raise InvalidInputError(f"elbow must be 'fixed' or 'moving', got {elbow!r}")
     for g in grasps:
         if g not in GRASP_POSES:
             raise InvalidInputError(f"unknown grasp {g!r}; expected one of {', '.join(GRASP_POSES)}")

@@ -53,3 +53,11 @@ def test_bad_options_raise():
         free_motion(8.0, elbow="loose")
     with pytest.raises(InvalidInputError, match="grasp 'fist2'"):
         grasp_motion(("fist2",))
+
+
+def test_grasp_motion_names_an_elbow_it_does_not_know():
+    # before, any value but "moving" silently meant a fixed elbow
+    from handsynth.sensors.imu import grasp_motion
+
+    with pytest.raises(InvalidInputError, match=r"^elbow must be 'fixed' or 'moving', got 'Moving'$"):
+        grasp_motion(elbow="Moving")
