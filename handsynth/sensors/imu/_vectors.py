@@ -325,6 +325,7 @@ def link_vectors(rec: ImuRecording, vectors: dict, *, static: StaticStart | None
     dict
         ``(sensor, proximal point, distal point) -> (3,)`` metres.
     """
+    _check_vector_keys(vectors)
     vec = {k: (v.vector if isinstance(v, VectorEstimate) else np.asarray(v, float))
            for k, v in vectors.items()}
     if static is None:
@@ -340,6 +341,32 @@ def link_vectors(rec: ImuRecording, vectors: dict, *, static: StaticStart | None
         else:
             out[(s1, j1, j2)] = r12 @ (vec[(s2, j1)] - vec[(s2, j2)])     # eq. 3.6
     return out
+
+
+def _needed_vector_keys() -> list[tuple[str, str]]:
+    """The (sensor, joint) vectors that the link model of :data:`LINKS` reads, in order."""
+    keys: dict[tuple[str, str], None] = {}
+    for s1, j1, j2 in LINKS:
+        s2 = _child(s1, j2)
+        keys[(s1, j1)] = None
+        keys[(s2, j1)] = None
+        if not j2.endswith("_tip"):
+            keys[(s2, j2)] = None
+    return list(keys)
+
+
+def _check_vector_keys(vectors) -> None:
+    """Refuse `vectors` without every key the link model reads, naming the first missing."""
+    if not isinstance(vectors, dict):
+        raise InvalidInputError(f"vectors must be a dict of (sensor, joint) -> vector, as "
+                                f"calibrate_vectors returns, got {type(vectors).__name__}")
+    needed = _needed_vector_keys()
+    missing = [f"{s}->{j}" for s, j in needed if (s, j) not in vectors]
+    if missing:
+        raise InvalidInputError(f"vectors lacks {len(missing)} of the {len(needed)} sensor-to-joint "
+                                f"vectors the link model needs: {', '.join(missing[:4])}"
+                                + (", ..." if len(missing) > 4 else "")
+                                + " (keys are (sensor, joint) pairs, as calibrate_vectors returns)")
 
 
 def _calibration_static(rec: ImuRecording) -> StaticStart:
@@ -406,12 +433,7 @@ def chain_model(rec: ImuRecording, vectors: dict | None = None, **kw) -> ChainMo
         EstimationError too.
     """
     vectors = vectors if vectors is not None else calibrate_vectors(rec)
-    missing = [f"{s1}->{j1}" for s1, j1, _ in LINKS if (s1, j1) not in vectors]
-    if missing:
-        raise InvalidInputError(f"vectors lacks {len(missing)} of the {len(LINKS)} sensor-to-joint "
-                                f"vectors the link model needs: {', '.join(missing[:4])}"
-                                + (", ..." if len(missing) > 4 else "")
-                                + " (keys are (sensor, joint) pairs, as calibrate_vectors returns)")
+    _check_vector_keys(vectors)
     own = {}
     for s1, j1, _ in LINKS:
         v = vectors[(s1, j1)]

@@ -383,3 +383,18 @@ def test_helpers_name_an_argument_of_the_wrong_kind(one):
     with pytest.raises(InvalidInputError,
                        match=r"^vectors lacks (\d+) of the \1 sensor-to-joint vectors .*forearm_3->elbow"):
         chain_model(one, {})
+
+
+def test_a_link_model_missing_only_a_next_links_vector_is_named(one):
+    # before: a bare KeyError from link_vectors once each link's own vector was there
+    from handsynth.sensors.imu import chain_model
+    from handsynth.sensors.imu._layout import LINKS
+    from handsynth.sensors.imu._vectors import _needed_vector_keys
+
+    own = {(s1, j1) for s1, j1, _ in LINKS}
+    vectors = {k: np.zeros(3) for k in _needed_vector_keys()}
+    gone = next(k for k in vectors if k not in own)
+    del vectors[gone]
+    with pytest.raises(InvalidInputError,
+                       match=rf"^vectors lacks 1 of the \d+ .*: {gone[0]}->{gone[1]} "):
+        chain_model(one, vectors)
