@@ -164,8 +164,10 @@ def eval_(config_name, filters, durations, elbows, no_grasps, no_sensor_calibrat
 @_unit_options
 @click.option("--out", "out_path", type=click.Path(dir_okay=False), required=True,
               help="Calibration JSON (link model, link frames, zero pose).")
+@click.option("--side", type=click.Choice(("right", "left")), default="right", show_default=True,
+              help="The hand the sensors are on; 'track' reads its joint angles as that hand's.")
 def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz, acc_range_g,
-              gyr_range_dps, out_path) -> None:
+              gyr_range_dps, out_path, side) -> None:
     """Sensor-to-joint vectors, link vectors and link frames from a calibration RECORDING."""
     import dataclasses
 
@@ -186,11 +188,12 @@ def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz
                                                                   source=str(segments_path)))
     for w in check_recording(rec, source=str(recording), **full_scale):
         click.echo(f"handsynth: warning: {w}", err=True)
-    cal = run_calibration(rec)
+    cal = run_calibration(rec, side=side)
     cal.save(out_path, inputs=inputs)
     lengths = ", ".join(f"{a}->{b} {1e3 * float((v @ v) ** 0.5):.0f} mm"
                         for (s, a, b), v in cal.model.links.items() if s.startswith("index"))
-    click.echo(f"calibrated {len(cal.sensors)} sensors -> {out_path}; index links: {lengths}")
+    click.echo(f"calibrated {len(cal.sensors)} sensors of a {side} hand -> {out_path}; "
+               f"index links: {lengths}")
     sc = cal.sensor_calibration
     click.echo("accelerometer/gyro/magnetometer calibration: " + (
         "none (no static poses acc_pose_<k> in the segments)" if sc is None else

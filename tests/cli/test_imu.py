@@ -160,7 +160,7 @@ def test_calibrate_then_track_joint_angles(tmp_path):
     assert "accelerometer/gyro/magnetometer calibration: 25 sensors" in res.output
     # the file holds corrections that undo the sensors' own errors
     stored = json.loads(model.read_text())
-    assert stored["version"] == 5 and len(stored["sensor_calibration"]) == 25
+    assert stored["version"] == 6 and len(stored["sensor_calibration"]) == 25
     (m_acc, b_acc), (m_gyr, _) = _fixed_errors(MPU9250_DATASHEET, cal.sensors, 5)
     ratio: dict = {"acc": [], "gyr": [], "bias": []}
     for k, s in enumerate(cal.sensors):

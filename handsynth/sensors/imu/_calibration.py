@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..._checks import check_options, is_number
+from ..._checks import check_options, check_side, is_number
 from ..._io import atomic_open
 from ...errors import InvalidInputError, RecordingError
 from ._attitude import StaticStart
@@ -38,7 +38,7 @@ __all__ = ["ImuCalibration", "calibrate", "segments_from_seconds"]
 # 2: the thumb CMC axes; 3: the accelerometer/gyro calibration; 4: the
 # magnetometer calibration; 5: the forearm plate's rotations (older files load
 # without them)
-_VERSION = 5
+_VERSION = 6
 
 
 def segments_from_seconds(spans: dict, rate_hz: float, n: int, *, source: str | None = None) -> tuple:
@@ -104,6 +104,9 @@ class ImuCalibration:
         sensor -> rotation from its frame to the first plate sensor's.  None
         (files before version 5): every forearm sensor keeps its own
         attitude.
+    side : {"right", "left"}
+        The hand the sensors are on; its joint angles are measured as that
+        hand's (files before version 6: ``"right"``).
     """
 
     model: ChainModel
@@ -113,6 +116,7 @@ class ImuCalibration:
     cmc: ThumbCmcModel | None = None
     sensor_calibration: SensorCalibration | None = None
     plate: dict | None = None
+    side: str = "right"
 
     def fuse(self, quats, sensors, *, plate_fusion: bool = True) -> np.ndarray:
         """Attitudes with the forearm plate's sensors fused into one (:func:`fuse_plate`).
@@ -185,14 +189,15 @@ class ImuCalibration:
         applied = sensor_calibration and self.sensor_calibration is not None
         est = ChainEKF(self.model, options=options, static=static)
         q = self.fuse(est.run(sub), sub.sensors, plate_fusion=plate_fusion)
-        angles, _ = joint_angles(q, sub.sensors, self.frames, zero=self.zero, cmc=self.cmc)
+        angles, _ = joint_angles(q, sub.sensors, self.frames, side=self.side, zero=self.zero,
+                                 cmc=self.cmc)
         tips = {f: v for f, v in fingertip_positions(q, sub.sensors, self.model).items()
                 if not f.endswith("_joints")}
         return {"quat": q, "angles": angles, "tips": tips, "sensor_calibration": applied}
 
     def to_dict(self) -> dict:
         return {"format": "handsynth-imu-calibration", "version": _VERSION,
-                "sensors": list(self.sensors),
+                "side": self.side, "sensors": list(self.sensors),
                 "own_m": {s: v.tolist() for s, v in self.model.own.items()},
                 "links_m": [[s, a, b, v.tolist()] for (s, a, b), v in self.model.links.items()],
                 "frames": {s: v.tolist() for s, v in self.frames.items()},
@@ -289,10 +294,14 @@ class ImuCalibration:
             if bad:
                 raise RecordingError(f"{path}: plate rotation(s) of {', '.join(bad)} are not "
                                      "rotations of calibrated sensors")
-        return cls(model, frames, zero, tuple(d["sensors"]), cmc, sensor_cal, plate)
+        side = d.get("side", "right")
+        if side not in ("right", "left"):
+            raise RecordingError(f"{path}: field side must be \"right\" or \"left\", got {side!r:.60}")
+        return cls(model, frames, zero, tuple(d["sensors"]), cmc, sensor_cal, plate, side)
 
 
-def calibrate(rec: ImuRecording, *, sensor_calibration: bool = True) -> ImuCalibration:
+def calibrate(rec: ImuRecording, *, sensor_calibration: bool = True,
+              side: str = "right") -> ImuCalibration:
     """Calibrate from a recording with labelled stretches (see :func:`calibration_motion`).
 
     Needs the five fingertip sensors of the calibration (:data:`TIP_SENSORS`)
@@ -315,12 +324,15 @@ def calibrate(rec: ImuRecording, *, sensor_calibration: bool = True) -> ImuCalib
         Fit and apply :func:`fit_sensor_calibration` when the recording has at
         least 8 stretches labelled ``acc_pose_<k>``; with fewer it is skipped
         silently.  False skips it always.
+    side : {"right", "left"}, keyword-only
+        The hand the sensors are on: the zero offsets and every tracked
+        joint angle are measured as that hand's (a left hand read as a right
+        one has its abductions turned the other way).
 
     Returns
     -------
     ImuCalibration
-        Link model, link frames, zero offsets (measured as for a right hand:
-        :func:`zero_offsets`' default side), thumb CMC model, the sensor
+        Link model, link frames, zero offsets, thumb CMC model, the sensor
         correction (None when skipped) and the plate rotations (None without
         all of :data:`PLATE_SENSORS`).
 
@@ -335,13 +347,14 @@ def calibrate(rec: ImuRecording, *, sensor_calibration: bool = True) -> ImuCalib
         from (see :func:`calibrate_vectors`, :func:`link_frames`,
         :func:`azimuth_correction`).
     """
+    check_side(side)
     sensor_cal = None
     if sensor_calibration and sum(name.startswith(POSE_PREFIX) for name, _, _ in rec.labelled()) >= 8:
         sensor_cal = fit_sensor_calibration(rec)
         rec = sensor_cal.apply(rec)
     model = chain_model(rec)
     frames = link_frames(rec, model)
-    zero = zero_offsets(rec, frames)
+    zero = zero_offsets(rec, frames, side=side)
     plate = plate_rotations(rec) if all(s in rec.sensors for s in PLATE_SENSORS) else None
     return ImuCalibration(model, frames, zero, tuple(model.own), thumb_cmc_model(rec, frames),
-                          sensor_cal, plate)
+                          sensor_cal, plate, side)

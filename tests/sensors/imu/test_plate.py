@@ -187,7 +187,7 @@ def test_calibration_file_keeps_the_plate(tmp_path, ideal_rec):
     cal = ImuCalibration(model, {s: np.eye(3) for s in sensors}, np.zeros(20), sensors, plate=rel)
     path = cal.save(tmp_path / "c.json")
     d = json.loads(path.read_text())
-    assert d["version"] == 5 and set(d["plate"]) == set(PLATE_SENSORS)
+    assert d["version"] == 6 and set(d["plate"]) == set(PLATE_SENSORS)
     back = ImuCalibration.load(path)
     for s in PLATE_SENSORS:
         assert np.allclose(back.plate[s], rel[s])
