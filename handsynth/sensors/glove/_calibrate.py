@@ -423,8 +423,16 @@ def load_calibration(path) -> dict:
         raise InvalidInputError(f"{path}: field 'estimators' must map names to estimators, "
                                 f"got {entries!r:.40}")
     rr = d.get("range_reference")
+    est = {}
+    for name, entry in entries.items():
+        try:
+            est[name] = estimator_from_dict(entry)
+        except KeyError as exc:
+            raise InvalidInputError(f"{path}: estimator {name!r} lacks field {exc.args[0]!r}") \
+                from None
+        except InvalidInputError as exc:
+            raise InvalidInputError(f"{path}: estimator {name!r}: {exc}") from None
     try:
-        est = {k: estimator_from_dict(v) for k, v in entries.items()}
         if rr is not None:
             if not isinstance(rr, dict):
                 raise InvalidInputError("field 'range_reference' must be an object with "

@@ -167,3 +167,18 @@ def test_the_range_travels_with_the_file_and_older_files_take_it_from_meta(
     assert [str(w.message).split(" (read there")[0] for w in got] == [
         f"model4: 100 % of the {s} readings lie off the calibration's range 0-10 counts"
         for s in SENSOR_NAMES]
+
+
+def test_a_damaged_estimator_entry_is_named_not_blamed_on_the_range_reference(tmp_path, cal_rec):
+    # before, a field missing inside an estimator read "field 'range_reference' lacks ..."
+    import json
+
+    from handsynth.sensors.glove import load_calibration, save_calibration
+
+    path = save_calibration(tmp_path / "c.json", calibrate(cal_rec), kind="dg5")
+    d = json.loads(path.read_text())
+    name = next(iter(d["estimators"]))
+    del d["estimators"][name]["type"]
+    path.write_text(json.dumps(d))
+    with pytest.raises(InvalidInputError, match=rf"c\.json: estimator '{name}'"):
+        load_calibration(path)
