@@ -20,7 +20,7 @@ import numpy as np
 from ..._checks import check_instance, is_number
 from ...errors import EstimationError, InvalidInputError, RecordingError
 from ._quat import quat_from_acc_mag
-from ._recording import ImuRecording, _reported, check_recording, check_static
+from ._recording import ImuRecording, check_recording, check_static
 
 __all__ = ["StaticStart", "azimuth_correction", "check_run_input", "gyro_bias", "initial_attitude"]
 
@@ -110,7 +110,7 @@ def check_run_input(rec, static) -> ImuRecording:
         raise RecordingError(f"the static start static_s={static.static_s:g} s is longer than "
                              f"the recording ({rec.n} samples, {rec.n / rec.rate_hz:.4g} s); "
                              "shorten the static start")
-    before = _reported(rec)
+    before = rec.reported or frozenset()
     for w in check_recording(rec, static_s=static.static_s):
         if w not in before:
             warnings.warn(w, UserWarning, stacklevel=3)

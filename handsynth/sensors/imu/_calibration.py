@@ -182,7 +182,7 @@ class ImuCalibration:
         static = check_options(static, StaticStart, name="static")
         options = check_options(options, ChainEKFOptions)
         sub = self.correct(rec, sensor_calibration=sensor_calibration)
-        if hasattr(rec, "_reported"):
+        if rec.reported is not None:
             # the caller has had check_recording's warnings of `rec`: the filter's run
             # does not repeat them for the corrected copy
             check_recording(sub, static_s=static.static_s)

@@ -92,6 +92,11 @@ class ImuRecording:
         Labelled stretches (label, first sample, end sample), e.g. the
         calibration rotations of a real recording; a simulation's are in
         its truth.
+    reported : frozenset of str or None
+        The warnings :func:`check_recording` has returned for this object;
+        None before it was checked (when made, and for a copy made with
+        :func:`dataclasses.replace`).  Not a field to give: an estimator run
+        on a recording already checked does not repeat them.
     """
 
     rate_hz: float
@@ -101,6 +106,7 @@ class ImuRecording:
     mag: np.ndarray
     truth: ImuTruth | None = None
     segments: tuple = ()
+    reported: frozenset | None = field(default=None, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         """Check what is cheap to check and store the arrays as float64, C order.
@@ -314,13 +320,8 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
                 f"{med:.1f} uT during {i.size / rate:.2f} s from t={i[0] / rate:.2f} s "
                 "(magnetic disturbance)")
     # what was reported for this object, so that an estimator's run does not repeat it
-    object.__setattr__(rec, "_reported", _reported(rec) | set(warnings))
+    object.__setattr__(rec, "reported", (rec.reported or frozenset()) | frozenset(warnings))
     return warnings
-
-
-def _reported(rec: ImuRecording) -> set:
-    """The warnings :func:`check_recording` has returned for `rec` so far."""
-    return set(getattr(rec, "_reported", ()))
 
 
 def _per_axis(reduce, a: np.ndarray) -> np.ndarray:
