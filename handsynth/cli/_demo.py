@@ -62,12 +62,15 @@ def _learned_demo(out_dir: Path, hands: int, frames: int, tile_width: int) -> No
     from ..estimate import LEARNED_PERCEPTRONS, EnsembleEstimator, shipped_members
     from ..eval import (
         ProtocolOptions,
+        backgrounds_sheet,
+        estimates_sheet,
         format_headline,
         mesh_test_hands,
         protocol_headline,
         protocol_methods,
         run_protocol,
     )
+    from ..render import write_png
 
     folder = out_dir / "learned"
     t = time.perf_counter()
@@ -89,110 +92,9 @@ def _learned_demo(out_dir: Path, hands: int, frames: int, tile_width: int) -> No
                "--protocol):")
     click.echo(format_headline(protocol_headline(result)))
     if shipped is not None:
-        path = out_dir / "estimates_mrtk.png"
-        _estimates_picture(path, shipped, tile_width)
-        click.echo(f"wrote {path}")
-        path = out_dir / "backgrounds_mrtk.png"
-        _backgrounds_picture(path, shipped, tile_width)
-        click.echo(f"wrote {path}")
-
-
-def _estimates_picture(path: Path, estimator, tile_width: int, count: int = 4) -> None:
-    """What `estimator` reads on the MRTK glTF hand: the device's view, the truth and the reading.
-
-    Natural poses from a relaxed rest (the protocol's generators); columns are
-    frames; rows show the mesh hand as the device sees it, and from the thumb
-    side at the true angles and at the estimated ones.
-    """
-    import cv2
-    import numpy as np
-
-    from ..eval import JOINT_GROUPS, natural_test_poses, relaxed_rest_posture
-    from ..render import CameraMount, label_image, write_png
-    from ..testhands import MeshHandRenderer, shipped_hand_path
-
-    flex = list(JOINT_GROUPS["finger_flexion"])
-    mount = CameraMount.paper()
-    th = round(tile_width * mount.height_px / mount.width_px)
-    rng = np.random.default_rng(7)
-    rest = relaxed_rest_posture(rng)
-    poses = natural_test_poses(rest, count, rng)[0]
-    hand = shipped_hand_path("mrtk")
-    with MeshHandRenderer(mount, path=hand) as full:
-        reader = estimator.calibrated(full.mask(rest))
-        got = [reader.estimate(m).angles for m in full.masks(poses)]
-    rows: list[list[np.ndarray]] = [[], [], []]
-    with MeshHandRenderer(mount, width_px=tile_width, height_px=th, path=hand) as mesh:
-        for i, (truth, est) in enumerate(zip(poses, got)):
-            mae = float(np.abs(est[flex] - truth[flex]).mean())
-            rows[0].append(label_image(mesh.render_rgb(truth), f"frame {i + 1}: the device's view"))
-            rows[1].append(label_image(mesh.render_rgb(truth, camera="side"), "true angles, side view"))
-            rows[2].append(label_image(mesh.render_rgb(est, camera="side"),
-                                       f"estimated: flexion error {mae:.1f} deg"))
-    sheet = np.vstack([np.hstack(r) for r in rows])
-    write_png(path, cv2.copyMakeBorder(sheet, 2, 2, 2, 2, cv2.BORDER_CONSTANT, value=(255, 255, 255)))
-
-
-def _backgrounds_picture(path: Path, estimator, tile_width: int, count: int = 4) -> None:
-    """The MRTK glTF hand over photographs, told by brightness and by the skin's colour.
-
-    Natural poses from a relaxed rest, the hand painted in a shaded skin
-    colour over photographs bundled with scikit-image (the rest frame over
-    one too); columns are frames; rows show the frame, the hand as Otsu's
-    threshold tells it and as the skin's colour tells it, each with the
-    flexion error of `estimator` calibrated that way.
-    """
-    import cv2
-    import numpy as np
-
-    from ..eval import JOINT_GROUPS, background_photos, natural_test_poses, relaxed_rest_posture
-    from ..render import (
-        CameraMount,
-        binarize,
-        label_image,
-        skin_mask,
-        write_png,
-    )
-    from ..testhands import MeshHandRenderer, shipped_hand_path
-
-    flex = list(JOINT_GROUPS["finger_flexion"])
-    mount = CameraMount.paper()
-    th = round(tile_width * mount.height_px / mount.width_px)
-    photos = background_photos()
-    rng = np.random.default_rng(11)
-    rest = relaxed_rest_posture(rng)
-    poses = natural_test_poses(rest, count, rng)[0]
-    shade = np.linspace(0.55, 1.0, mount.width_px, dtype=np.float32)[None, :, None]
-    skin = np.array([95, 125, 180], np.float32)  # BGR
-
-    def paint(mask, photo):
-        f = photo.astype(np.float32)
-        f[mask] = (skin * shade * np.ones_like(f))[mask]
-        return np.clip(f + rng.normal(0.0, 4.0, f.shape), 0, 255).astype(np.uint8)
-
-    with MeshHandRenderer(mount, path=shipped_hand_path("mrtk")) as full:
-        rest_frame = paint(full.mask(rest), photos[-1])
-        frames = [paint(m, photos[i % (len(photos) - 1)]) for i, m in enumerate(full.masks(poses))]
-    readers = {"brightness": estimator.calibrated(rest_frame, segment="brightness"),
-               "colour": estimator.calibrated(rest_frame, segment="colour")}
-    colour = readers["colour"].members[0].skin  # the skin its members tell the hand by
-
-    def tile(image):  # the label's strip darkened, so that white text reads on white
-        out = cv2.resize(image, (tile_width, th), interpolation=cv2.INTER_AREA)
-        out[:24] //= 3
-        return out
-
-    rows: list[list[np.ndarray]] = [[], [], []]
-    for i, (truth, frame) in enumerate(zip(poses, frames)):
-        rows[0].append(label_image(tile(frame[..., ::-1]), f"frame {i + 1} over a photograph"))
-        told = {"brightness": binarize(frame),
-                "colour": skin_mask(frame, colour)}
-        for r, (how, mask) in enumerate(told.items(), start=1):
-            mae = float(np.abs(readers[how].estimate(frame).angles[flex] - truth[flex]).mean())
-            grey = np.repeat(tile(mask.view(np.uint8) * 255)[..., None], 3, axis=2)
-            rows[r].append(label_image(grey, f"by {how}: flexion error {mae:.1f} deg"))
-    sheet = np.vstack([np.hstack(r) for r in rows])
-    write_png(path, cv2.copyMakeBorder(sheet, 2, 2, 2, 2, cv2.BORDER_CONSTANT, value=(255, 255, 255)))
+        for name, sheet in (("estimates_mrtk", estimates_sheet), ("backgrounds_mrtk", backgrounds_sheet)):
+            path = write_png(out_dir / f"{name}.png", sheet(shipped, tile_width_px=tile_width))
+            click.echo(f"wrote {path}")
 
 
 def _lookup_demo(db_dir: Path, frames: int) -> None:
@@ -223,15 +125,9 @@ def _lookup_demo(db_dir: Path, frames: int) -> None:
 
 
 def _report(what: str, lookup, masks, poses) -> None:
-    import time
+    from ..eval import lookup_errors
 
-    import numpy as np
-
-    if len(masks):
-        lookup.estimate(masks[0])  # compiles the search on a fresh install; not timed
-    t = time.perf_counter()
-    est = np.array([lookup.estimate(m).angles for m in masks])
-    dt = time.perf_counter() - t
-    err = np.abs(est - poses)
-    click.echo(f"{what}: {len(masks) / dt:.0f} frames/s, mean absolute error {err.mean():.2f} "
-               f"deg (index PIP {err[:, 6].mean():.2f}, thumb CMC flex {err[:, 0].mean():.2f})")
+    r = lookup_errors(lookup, masks, poses)
+    click.echo(f"{what}: {r['frames_per_s']:.0f} frames/s, mean absolute error {r['mae_deg']:.2f} "
+               f"deg (index PIP {r['index_pip_mae_deg']:.2f}, thumb CMC flex "
+               f"{r['thumb_cmc_flex_mae_deg']:.2f})")

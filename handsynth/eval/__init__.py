@@ -127,6 +127,7 @@ from ._protocol import (
 )
 from ._report import EvalReport
 from ._run import evaluate
+from ._sheets import backgrounds_sheet, estimates_sheet, lookup_errors
 from ._stats import JointStats, joint_stats, ratio_distance, silhouette_ambiguity
 from ._testposes import (
     REST_POSTURES,
@@ -150,11 +151,14 @@ __all__ = [
     "ProtocolOptions",
     "TestHand",
     "background_photos",
+    "backgrounds_sheet",
     "condition_stats",
     "describe_methods",
+    "estimates_sheet",
     "evaluate",
     "format_headline",
     "joint_stats",
+    "lookup_errors",
     "mesh_test_hands",
     "model_test_hands",
     "natural_test_poses",
