@@ -69,7 +69,36 @@ def render_entries(angles, shape: HandShape | None = None, mount: CameraMount | 
 
 def database_meta(shape: HandShape, mount: CameraMount, *, side: str, pose_set: str,
                   count: int, seed: int, render_size: tuple[int, int]) -> dict:
-    """The self-describing attributes of a database file (compared when it is opened)."""
+    """The self-describing attributes of a database file (compared when it is opened).
+
+    The arguments are not checked here (:class:`BuildOptions` checks them
+    for a build).
+
+    Parameters
+    ----------
+    shape : HandShape
+        The database's hand shape (its four ratios and its name are stored).
+    mount : CameraMount
+        The device the masks were rendered for (every field is stored).
+    side : {"right", "left"}, keyword-only
+    pose_set : str, keyword-only
+        Name of the pose set (a key of :data:`~handsynth.models.POSE_SETS`).
+    count : int, keyword-only
+        Poses in the database.
+    seed : int, keyword-only
+        Seed of the pose set.
+    render_size : (int, int), keyword-only
+        (width, height) in pixels of the masks before preprocessing.
+
+    Returns
+    -------
+    dict
+        JSON-able: ``shape`` (ratios), ``shape_name``, ``side``, ``mount``
+        (:meth:`~handsynth.render.CameraMount.as_dict`), ``model`` (the hand model's generator
+        and forearm), ``features`` (preprocessing and feature settings,
+        `render_size` as a list), ``pose_set`` (``name``, ``count``,
+        ``seed``) and ``handsynth_version``.
+    """
     from .._version import __version__
     from .features import HLAC_SIZE
 

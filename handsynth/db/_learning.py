@@ -233,6 +233,21 @@ def random_rest_posture(rng: np.random.Generator, *, near_open: bool = False) ->
     1) of a full fan (index +8, middle +1, ring -6, little -12 deg) plus 3 deg
     each; the thumb anywhere in a band around its rest (CMC flexion -15 to 25,
     palmar abduction 0 to 40, MCP -5 to 25, IP -10 to 30 deg).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Draws the thumb's four angles first, then the fan share, then each
+        finger's (index to little) MCP flexion, abduction, PIP and DIP.
+    near_open : bool, keyword-only
+        Draw every finger flexion (MCP, PIP, DIP) uniform in [-3, 8] deg
+        instead of the relaxed ranges (as many draws, in the same order).
+
+    Returns
+    -------
+    ndarray, shape (20,), float64
+        Degrees, canonical order, clipped to
+        :data:`~handsynth.models.JOINT_LIMITS_DEG`.
     """
     a = np.zeros(20)
     a[0] = rng.uniform(-15, 25)

@@ -263,6 +263,17 @@ def select_shape_from_frame(open_frame, *, mount: CameraMount | None = None,
 def reference_silhouette(database) -> np.ndarray:
     """The 64x64 silhouette of a database's open-hand entry (the first with all angles 0).
 
+    Parameters
+    ----------
+    database : Database
+        Read: its ``angles`` (N, 20) in degrees, its ``sil_bits`` (N, 64)
+        uint64 and its ``path`` (for the message).
+
+    Returns
+    -------
+    ndarray of bool, shape (64, 64)
+        That entry's stored silhouette, unpacked (:func:`~handsynth.db.unpack_mask`).
+
     Raises
     ------
     InvalidInputError

@@ -265,6 +265,14 @@ def shipped_members(*, members=LEARNED_ENSEMBLE) -> list[LearnedEstimator]:
     right hand, whose shipped file is intact (:mod:`._shipped`); the others
     are left out.  Reads nothing else and learns nothing.
 
+    Parameters
+    ----------
+    members : sequence, keyword-only
+        Ensemble members as :func:`learned_ensemble` takes them:
+        ``(LearnedOptions, weight)`` or ``(LearnedOptions, weight, changes)``
+        (:data:`LEARNED_ENSEMBLE` by default).  Only perceptrons
+        (``kind="mlp"``) are looked for; the weights are not used.
+
     Returns
     -------
     list of LearnedEstimator

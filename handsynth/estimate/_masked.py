@@ -65,6 +65,20 @@ def masked_band_areas(sil_bits, calibration: Calibration) -> np.ndarray:
     query ``q`` from below (the pixels of a band that one silhouette has and
     the other has not).  :func:`masked_search` computes it when not given;
     :meth:`PoseLookup.calibrated` computes it once per calibration.
+
+    Parameters
+    ----------
+    sil_bits : array_like of uint64, shape (N, 64)
+        Packed silhouettes, one 64-bit word per row (``Database.sil_bits``,
+        or :func:`~handsynth.db.pack_mask` of a query as ``(1, 64)``).
+    calibration : Calibration
+        Its `keep_bits` (the complement of the ignore mask) select the pixels
+        counted.
+
+    Returns
+    -------
+    ndarray of int32, shape (N, 8)
+        Column ``b`` counts the kept pixels of rows ``8 b`` to ``8 b + 7``.
     """
     table = np.asarray(sil_bits, dtype=np.uint64)
     if table.ndim != 2 or table.shape[1] % _BANDS:
@@ -182,7 +196,24 @@ def masked_search(silhouette, sil_bits, calibration: Calibration, *,
 
 
 def masked_search_reference(silhouette, sil_bits, calibration: Calibration) -> MaskedMatch:
-    """:func:`masked_search` written plainly with numpy (the specification for tests)."""
+    """:func:`masked_search` written plainly with numpy (the specification for tests).
+
+    Every entry's masked difference is counted; there is no lower bound and
+    no early exit.
+
+    Parameters
+    ----------
+    silhouette : ndarray of bool, shape (64, 64)
+        The input's preprocessed silhouette.
+    sil_bits : array_like of uint64, shape (N, 64)
+        The database's packed silhouettes (``Database.sil_bits``).
+    calibration : Calibration
+
+    Returns
+    -------
+    MaskedMatch
+        Equal to :func:`masked_search`'s for the same arguments.
+    """
     table = np.asarray(sil_bits, dtype=np.uint64)
     q = _check_query(silhouette, calibration, table)
     x = np.bitwise_count((table ^ q[None, :]) & calibration.keep_bits[None, :]).sum(axis=1)

@@ -186,12 +186,25 @@ def describe_methods(names, *, data: LearningSetOptions | None = None) -> dict:
 def protocol_headline(result: dict) -> dict:
     """Headline figures of a :func:`~handsynth.eval.run_protocol` result.
 
+    Parameters
+    ----------
+    result : dict
+        A :func:`~handsynth.eval.run_protocol` result.  Read: its
+        ``options["pose_sets"]`` and, of every hand, its ``kind`` and per
+        pose set and method the ``method`` and ``constant`` figures'
+        ``groups_mae_deg["finger_flexion"]`` and the method's
+        ``joints["index_pip_flex"]["moving_mae_deg"]``.
+
     Returns
     -------
     dict
         ``"<hand kind>/<pose set>/<method>"`` to the finger flexion MAE, the
         constant's, the skill and the index PIP MAE on frames where it truly
-        moves (means over the hands of that kind; degrees).
+        moves (means over the hands of that kind; degrees).  Each value is a
+        dict: ``flexion_mae`` and ``constant`` (2 decimals), ``skill``
+        (``1 - flexion_mae / constant`` of the unrounded means, 3 decimals)
+        and ``index_pip_moving_mae`` (2 decimals, over the hands that have
+        the figure; None when none has).
     """
     rows: dict = {}
     for hand in result["hands"].values():
@@ -213,7 +226,21 @@ def protocol_headline(result: dict) -> dict:
 
 
 def format_headline(headline: dict) -> str:
-    """The headline of :func:`protocol_headline` as lines of text, one per condition."""
+    """The headline of :func:`protocol_headline` as lines of text, one per condition.
+
+    Parameters
+    ----------
+    headline : dict
+        As :func:`protocol_headline` returns it: a condition's key to its
+        ``flexion_mae``, ``constant``, ``skill`` and ``index_pip_moving_mae``
+        (None is printed as ``-``).
+
+    Returns
+    -------
+    str
+        One line per key, in the dict's order, joined by newlines (none at
+        the end); MAEs in degrees.  Empty for an empty `headline`.
+    """
     lines = []
     for key, v in headline.items():
         pip = v["index_pip_moving_mae"]

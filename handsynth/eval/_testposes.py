@@ -48,6 +48,18 @@ def relaxed_rest_posture(rng: np.random.Generator) -> np.ndarray:
     ring -5, little -11 deg); thumb CMC flexion ~ N(5, 8), palmar abduction
     ~ U(5, 35), MCP ~ N(8, 6), IP ~ N(8, 8).  Every finger joint is jittered
     by N(0, 2) (abduction) or N(0, 3) (flexion).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Draws ``r`` and ``s`` first, then the thumb's four angles, then each
+        finger's (index to little) MCP, abduction, PIP and DIP jitter.
+
+    Returns
+    -------
+    ndarray, shape (20,), float64
+        Degrees, canonical order, clipped to
+        :data:`~handsynth.models.JOINT_LIMITS_DEG`.
     """
     r, s = rng.uniform(0, 1, 2)
     a = np.zeros(20)
@@ -70,6 +82,18 @@ def open_rest_posture(rng: np.random.Generator) -> np.ndarray:
     describes a natural rest ("non-moving finger joints flexed 3-5 deg,
     fingers fanned"); the fingers fanned by a new spread level ``s ~ U(0,
     1)`` with ``N(0, 2)`` jitter.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Draws all of :func:`relaxed_rest_posture`'s numbers first, then ``s``,
+        then each finger's (index to little) MCP, abduction, PIP and DIP.
+
+    Returns
+    -------
+    ndarray, shape (20,), float64
+        Degrees, canonical order, clipped to
+        :data:`~handsynth.models.JOINT_LIMITS_DEG`.
     """
     a = relaxed_rest_posture(rng)
     s = rng.uniform(0, 1)

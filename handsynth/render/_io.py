@@ -60,6 +60,25 @@ def write_png(path: str | os.PathLike, rgb: np.ndarray, *, inputs=()) -> Path:
     A bool image is written as black and white; an RGBA image keeps its
     alpha channel.
 
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file, written as PNG whatever its suffix; its folder must exist.
+        The image appears under this name only when complete (written under
+        ``<path>.tmp-<pid>`` first, then renamed); a symbolic link is written
+        through to the file it names.
+    rgb : array_like, shape (H, W, 3), (H, W, 4) or (H, W), uint8 or bool
+        RGB, RGBA or grey pixels (channels in that order, not OpenCV's BGR);
+        bool pixels are written as 0 and 255.
+    inputs : iterable of path-like, keyword-only
+        Files the caller reads; `path` must be none of them (``None`` items
+        are skipped).
+
+    Returns
+    -------
+    pathlib.Path
+        `path` as given.
+
     Raises
     ------
     InvalidInputError

@@ -45,6 +45,34 @@ def scene_parts(mount: CameraMount | None, side: str, silhouette: bool,
                  samples: int = 0) -> tuple[str, str]:
     """The ``<visual>`` element and the worldbody lights and cameras of a scene.
 
+    Parameters
+    ----------
+    mount : CameraMount or None
+        The device camera; the paper's device for ``None``.
+    side : {"right", "left"}
+        Hand side: the device camera sits on that hand's thumb side
+        (:meth:`CameraMount.pose_in_hand`).
+    silhouette : bool
+        No lights (headlight off, no key light), for flat masks; a key light
+        and a headlight when False.
+    width_px, height_px : int or None
+        Off-screen buffer size in pixels, which also sets the device camera's
+        vertical field of view (:meth:`CameraMount.fovy_deg`); the mount's
+        frame size for ``None``.
+    samples : int
+        Multisample anti-aliasing samples of the off-screen buffer, one of
+        :data:`MSAA_SAMPLES` (0: none).
+
+    Returns
+    -------
+    visual : str
+        The ``<visual>`` element (buffer size, samples, headlight), indented
+        for a child of ``<mujoco>``.
+    world : str
+        The key light (none with `silhouette`) and the cameras ``"device"``,
+        ``"side"`` and ``"top"``, indented for children of ``<worldbody>``;
+        positions in metres, ``fovy`` in degrees.
+
     Raises
     ------
     InvalidInputError
@@ -111,7 +139,27 @@ def scene_mjcf(shape: HandShape | None = None, mount: CameraMount | None = None,
 
 def scene_include_mjcf(hand_file: str, mount: CameraMount | None = None, *,
                        side: str = "right") -> str:
-    """A scene document that includes the hand document `hand_file` (Menagerie layout)."""
+    """A scene document that includes the hand document `hand_file` (Menagerie layout).
+
+    Parameters
+    ----------
+    hand_file : str
+        The hand document's file name as the ``<include file=...>`` gives it
+        (relative to the scene file, e.g. ``"right_hand.xml"``); written as
+        given, not read or checked.
+    mount : CameraMount, optional
+        The device camera; the paper's device by default.
+    side : {"right", "left"}, keyword-only
+        Hand side: places the device camera and names the model
+        ``"handsynth_<side>_scene"``.
+
+    Returns
+    -------
+    str
+        A complete MJCF document: lit (not a silhouette scene), the mount's
+        frame size as off-screen buffer, no multisampling, with the cameras of
+        :func:`scene_parts`.
+    """
     visual, world = scene_parts(mount, side, False, None, None)
     return (f'<mujoco model="handsynth_{side}_scene">\n  <include file="{hand_file}"/>\n'
             f"{visual}  <worldbody>\n{world}  </worldbody>\n</mujoco>\n")

@@ -19,10 +19,31 @@ def contact_sheet(shapes: dict[str, HandShape], poses: tuple[str, ...] = ("open"
 
     With `side_view`, a last column shows the pinch from the thumb side.
 
+    Parameters
+    ----------
+    shapes : dict of str to HandShape
+        Row label to hand shape, one row each in the dict's order; every hand
+        is rendered as a right hand.
+    poses : tuple of str
+        Names of :data:`~handsynth.models.NAMED_POSES`
+        (:func:`~handsynth.models.named_pose`), one column each, in order.
+    mount : CameraMount, optional
+        The device camera; the paper's device by default.  Its frame's aspect
+        ratio sets the tiles' height.
+    tile_width_px : int, keyword-only
+        Width of one tile in pixels; its height is
+        ``round(tile_width_px * mount.height_px / mount.width_px)``.
+    side_view : bool, keyword-only
+        Add the last column: the ``"pinch"`` pose seen by the ``"side"``
+        camera (:func:`render_rgb`).
+
     Returns
     -------
     ndarray, shape (H, W, 3), uint8
-        RGB.
+        RGB.  Each tile is labelled ``"<label>: <pose>"`` and framed
+        (:func:`label_image`); the grid has a 2-pixel white border, so
+        ``H = len(shapes) * tile height + 4`` and
+        ``W = (len(poses) + side_view) * tile_width_px + 4``.
     """
     import cv2
 
