@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._checks import check_integer, short_repr
 from ..errors import InvalidInputError
 from ..models import HandShape, named_pose
 from ._camera import CameraMount, as_mount
@@ -44,11 +45,23 @@ def contact_sheet(shapes: dict[str, HandShape], poses: tuple[str, ...] = ("open"
         (:func:`label_image`); the grid has a 2-pixel white border, so
         ``H = len(shapes) * tile height + 4`` and
         ``W = (len(poses) + side_view) * tile_width_px + 4``.
+
+    Raises
+    ------
+    InvalidInputError
+        `shapes` empty or not a dict, no pose and no side view, or
+        `tile_width_px` not an integer >= 16; a pose name
+        :func:`~handsynth.models.named_pose` does not know.
     """
     import cv2
 
     mount = as_mount(mount)
-    tw = tile_width_px
+    if not isinstance(shapes, dict) or not shapes:
+        raise InvalidInputError(f"shapes must be a non-empty dict of label -> HandShape, got "
+                                f"{short_repr(shapes)}")
+    if not poses and not side_view:
+        raise InvalidInputError("contact_sheet needs at least one pose or the side view")
+    tw = check_integer(tile_width_px, "tile_width_px", minimum=16)
     th = round(tw * mount.height_px / mount.width_px)
     rows = []
     for label, shape in shapes.items():
