@@ -80,10 +80,12 @@ def masked_band_areas(sil_bits, calibration: Calibration) -> np.ndarray:
     ndarray of int32, shape (N, 8)
         Column ``b`` counts the kept pixels of rows ``8 b`` to ``8 b + 7``.
     """
+    check_instance(calibration, Calibration, name="calibration")
     table = np.asarray(sil_bits, dtype=np.uint64)
-    if table.ndim != 2 or table.shape[1] % _BANDS:
-        raise InvalidInputError(f"sil_bits must have shape (N, W) with W a multiple of {_BANDS}, "
-                                f"got {table.shape}")
+    words = calibration.keep_bits.size
+    if table.ndim != 2 or table.shape[1] != words or not len(table):
+        raise InvalidInputError(f"sil_bits must have shape (N, {words}) with N >= 1 (the "
+                                f"calibration's silhouette size), got {table.shape}")
     counts = np.bitwise_count(table & calibration.keep_bits[None, :]).astype(np.int32)
     return counts.reshape(len(table), _BANDS, -1).sum(axis=2, dtype=np.int32)
 
@@ -137,8 +139,9 @@ def _check_query(silhouette, calibration, sil_bits) -> np.ndarray:
         raise InvalidInputError(f"silhouette must be bool of shape {calibration.ignore.shape}, "
                                 f"got {s.dtype} {s.shape}")
     q = pack_mask(s)
-    if sil_bits.ndim != 2 or sil_bits.shape[1] != q.size:
-        raise InvalidInputError(f"sil_bits must have shape (N, {q.size}), got {sil_bits.shape}")
+    if sil_bits.ndim != 2 or sil_bits.shape[1] != q.size or not len(sil_bits):
+        raise InvalidInputError(f"sil_bits must have shape (N, {q.size}) with N >= 1, got "
+                                f"{sil_bits.shape}")
     return q
 
 

@@ -319,3 +319,20 @@ def test_select_shape_from_frame_names_a_bad_mount_or_side():
         select_shape_from_frame(frame, mount="paper", shapes=[HandShape()])
     with pytest.raises(InvalidInputError, match=r"side must be 'right' or 'left', got 'Right'"):
         select_shape_from_frame(frame, side="Right", shapes=[HandShape()])
+
+
+def test_masked_search_names_a_bad_calibration_and_an_empty_or_narrow_table():
+    # before: AttributeError, numpy's broadcast or reshape errors
+    rng = np.random.default_rng(6)
+    cal = Calibration.from_silhouettes(rng.random((64, 64)) < 0.05, rng.random((64, 64)) < 0.05,
+                                       min_open_iou=0.0)
+    sil = rng.random((64, 64)) < 0.3
+    table = pack_mask(rng.random((5, 64, 64)) < 0.3)
+    with pytest.raises(InvalidInputError, match=r"^calibration must be a Calibration, got str"):
+        masked_band_areas(table, "cal")
+    for bad in (table[:0], table[:, :32]):
+        with pytest.raises(InvalidInputError, match=r"^sil_bits must have shape \(N, 64\) with N >= 1"):
+            masked_band_areas(bad, cal)
+        for search in (masked_search, masked_search_reference):
+            with pytest.raises(InvalidInputError, match=r"^sil_bits must have shape \(N, 64\) with N >= 1"):
+                search(sil, bad, cal)
