@@ -97,7 +97,7 @@ def estimate(recording, methods, frames, lateral_axis, lateral_frame, bins, unit
     from ..errors import EstimationError, InvalidInputError
     from ..sensors.trackers import (
         AxisAngleFilter,
-        make_estimator,
+        estimate_all,
         motion_quality,
         plot_axis_histogram,
         read_recording,
@@ -139,13 +139,7 @@ def estimate(recording, methods, frames, lateral_axis, lateral_frame, bins, unit
     click.echo(f"{rec.joint}: sensors {rec.labels[0]} / {rec.labels[1]}")
     for line in quality.lines():
         click.echo(line)
-    results, refused = [], []
-    for m in names:
-        for mode in modes:
-            try:
-                results.append(make_estimator(m, frames=mode, axis_filter=filt).estimate(rec))
-            except EstimationError as exc:
-                refused.append({"method": m, "frames_mode": mode, "refused": str(exc)})
+    results, refused = estimate_all(rec, names, frames_modes=modes, axis_filter=filt)
 
     head = (f"{'method':<11}{'frames':<9}{'used':>6}  {'P_U (mm, upper sensor)':<26}"
             f"{'P_L (mm, lower sensor)':<26}{'|PU-PL|':>8}{'resid':>7}{'exp.err':>8}")

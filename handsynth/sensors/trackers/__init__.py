@@ -21,7 +21,15 @@ from ._estimators import (
     PlaneVarianceEstimator,
     VarianceEstimator,
 )
-from ._eval import CONFIGS, ESTIMATORS, evaluate, make_estimator, midpoint_baseline, rom_sweep
+from ._eval import (
+    CONFIGS,
+    ESTIMATORS,
+    estimate_all,
+    evaluate,
+    make_estimator,
+    midpoint_baseline,
+    rom_sweep,
+)
 from ._geometry import SUPPORTED_JOINTS, JointGeometry, joint_geometry
 from ._hdf5 import load_recording, save_recording
 from ._joint_models import ArcJoint, FingerJoint, HingeJoint
@@ -74,6 +82,7 @@ __all__ = [
     "SensorNoise",
     "VarianceEstimator",
     "assess_determinability",
+    "estimate_all",
     "evaluate",
     "foot_of_perpendicular",
     "joint_geometry",

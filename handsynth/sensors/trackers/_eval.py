@@ -49,7 +49,8 @@ from ._noise import DISTORTED_FIELD, LIBERTY, LIBERTY_RESOLUTION
 from ._score import ScoreEstimator
 from ._simulate import SensorMount, simulate_recording
 
-__all__ = ["CONFIGS", "ESTIMATORS", "evaluate", "make_estimator", "midpoint_baseline", "rom_sweep"]
+__all__ = ["CONFIGS", "ESTIMATORS", "estimate_all", "evaluate", "make_estimator", "midpoint_baseline",
+           "rom_sweep"]
 
 #: Estimator classes by name.
 ESTIMATORS = {
@@ -91,6 +92,46 @@ def make_estimator(name: str, **options):
         raise InvalidInputError(f"{name} has no option {', '.join(map(repr, unknown))}; its options: "
                                 f"{', '.join(f.name for f in fields(cls))}")
     return cls(**options)
+
+
+def estimate_all(recording, names=tuple(ESTIMATORS), *, frames_modes=("all",),
+                 **options) -> tuple[list, list[dict]]:
+    """Every estimator of `names` on `recording`, with each frame selection of `frames_modes`.
+
+    Parameters
+    ----------
+    recording : Recording
+    names : sequence of str
+        Keys of :data:`ESTIMATORS`, in the order wanted (repeats are run once).
+    frames_modes : sequence of {"all", "filtered"}, keyword-only
+        The ``frames`` option of each run.
+    **options
+        Further estimator options for every run (``axis_filter=...``), as
+        :func:`make_estimator` takes them.
+
+    Returns
+    -------
+    results : list of JointCentreResult
+        The answers, in the order of `names`, then of `frames_modes`.
+    refused : list of dict
+        ``{"method", "frames_mode", "refused"}`` (the message) of every run
+        that refused to answer (:class:`~handsynth.errors.EstimationError`).
+
+    Raises
+    ------
+    InvalidInputError
+        An unknown name or option (:func:`make_estimator`).
+    """
+    names = tuple(dict.fromkeys(names))
+    estimators = [(m, mode, make_estimator(m, frames=mode, **options))
+                  for m in names for mode in frames_modes]
+    results, refused = [], []
+    for m, mode, est in estimators:
+        try:
+            results.append(est.estimate(recording))
+        except EstimationError as exc:
+            refused.append({"method": m, "frames_mode": mode, "refused": str(exc)})
+    return results, refused
 
 
 @dataclass(frozen=True)

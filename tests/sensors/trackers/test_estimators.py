@@ -146,3 +146,15 @@ def test_small_range_of_motion_is_refused():
 def test_wrong_input_type():
     with pytest.raises(InvalidInputError, match="Recording"):
         ScoreEstimator().estimate(np.zeros((10, 2, 3)))
+
+
+def test_estimate_all_runs_every_method_and_mode_and_collects_refusals():
+    from handsynth.sensors.trackers import estimate_all
+
+    rec = simulate_recording(motion=FlexionMotion(duration_s=10.0), seed=3, geometry_source="table")
+    results, refused = estimate_all(rec, ["obrien", "patent", "obrien"], frames_modes=("all", "filtered"))
+    assert [(r.method, r.frames_mode) for r in results] == [
+        ("obrien", "all"), ("obrien", "filtered"), ("patent", "all"), ("patent", "filtered")]
+    assert refused == []
+    results, refused = estimate_all(rec, ["obrien"], min_rom_deg=179.0)
+    assert results == [] and refused[0]["method"] == "obrien" and "range of motion" in refused[0]["refused"]
