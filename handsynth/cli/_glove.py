@@ -33,17 +33,13 @@ def glove() -> None:
 @click.option("--no-angles", is_flag=True, help="Leave out the reference joint angles.")
 def simulate(out, kind, user_seed, donning, motions, trials, seed, range_holds, no_angles):
     """Write a simulated glove recording OUT (CSV, canonical joint names)."""
-    import numpy as np
-
     from ..errors import InvalidInputError
-    from ..models import NAMED_POSES
     from ..sensors.glove import (
-        RANGE_LABELS,
         GloveRecording,
         don_glove,
         make_user,
         motions_for,
-        simulate_poses,
+        simulate_range_holds,
         simulate_session,
         write_glove_csv,
     )
@@ -57,13 +53,7 @@ def simulate(out, kind, user_seed, donning, motions, trials, seed, range_holds, 
     params = don_glove(user, kind, seed=donning)
     rec = simulate_session(user, params, motions or motions_for(kind), trials=trials, seed=seed)
     if range_holds:
-        holds = simulate_poses(user, params, np.stack([NAMED_POSES["open"], NAMED_POSES["fist"]]),
-                               seed=seed + 1)
-        holds = GloveRecording(
-            sensors=holds.sensors, angles=holds.angles,
-            motion=np.repeat(RANGE_LABELS, holds.n_samples // 2),
-            trial=holds.trial, time_s=rec.time_s[-1] + 1.0 + np.arange(holds.n_samples) / 60.0,
-            kind=kind, adc_max=holds.adc_max)
+        holds = simulate_range_holds(user, params, seed=seed + 1, start_s=rec.time_s[-1] + 1.0)
         rec = GloveRecording.concatenate([rec, holds])
     write_glove_csv(out, rec, with_angles=not no_angles)
     click.echo(f"wrote {rec.n_samples} samples ({kind}, {user.name}) to {out}")

@@ -75,7 +75,14 @@ from ._sensors import (
     sensor_joints,
     simulate_sensors,
 )
-from ._simulate import GloveUser, don_glove, make_user, simulate_poses, simulate_session
+from ._simulate import (
+    GloveUser,
+    don_glove,
+    make_user,
+    simulate_poses,
+    simulate_range_holds,
+    simulate_session,
+)
 from ._synergy import Synergies, fit_synergies
 
 __all__ = [
@@ -136,6 +143,7 @@ __all__ = [
     "save_calibration",
     "sensor_joints",
     "simulate_poses",
+    "simulate_range_holds",
     "simulate_sensors",
     "simulate_session",
     "write_angles_csv",

@@ -37,14 +37,14 @@ import numpy as np
 
 from ..._checks import check_options
 from ...errors import InvalidInputError
-from ...models import FINGERS, NAMED_POSES
-from ._calibrate import RANGE_LABELS, CalibrationOptions, calibrate, range_readings
+from ...models import FINGERS
+from ._calibrate import CalibrationOptions, calibrate, range_readings
 from ._estimators import RangeNormalizer, RegressionEstimator
 from ._models import MODELS, GloveWarning, finger_joints
 from ._motions import OTHER_MOTIONS, motions_for
 from ._recording import GloveRecording
 from ._sensors import SensorParams
-from ._simulate import GloveUser, don_glove, make_user, simulate_poses, simulate_session
+from ._simulate import GloveUser, don_glove, make_user, simulate_range_holds, simulate_session
 
 __all__ = [
     "CONDITIONS",
@@ -113,11 +113,10 @@ class EvalOptions:
                                     f"{type(self.calibration).__name__} {self.calibration!r:.40}")
 
 
-def _range_holds(user, params, seed) -> GloveRecording:
-    rec = simulate_poses(user, params, np.stack([NAMED_POSES["open"], NAMED_POSES["fist"]]),
-                         seed=seed)
-    return GloveRecording(sensors=rec.sensors, motion=np.repeat(RANGE_LABELS, 30),
-                          trial=rec.trial, kind=rec.kind, adc_max=rec.adc_max)
+
+
+def _holds(user, params, seed) -> GloveRecording:
+    return simulate_range_holds(user, params, seed=seed, with_angles=False)
 
 
 def _variants(estimators: dict, representative: bool) -> dict:
@@ -364,7 +363,7 @@ class EvalSetup:
                                seed=session_seed)
         norm = None
         if condition != "second_user_raw":
-            src = range_readings(_range_holds(user, don, s_seed + 2))
+            src = range_readings(_holds(user, don, s_seed + 2))
             assert src is not None  # _range_holds labels both holds
             norm = RangeNormalizer(source_open=src[0], source_fist=src[1],
                                    target_open=self.range_reference[0],
@@ -397,7 +396,7 @@ def eval_setup(options: EvalOptions | None = None, seed: int | None = None) -> E
     don_a2 = don_glove(user_a, o.kind, seed=seed + 2, glove_seed=seed)
     don_b = don_glove(user_b, o.kind, seed=seed + 3, glove_seed=seed)
     cal = simulate_session(user_a, don_a1, motions_for(o.kind), trials=o.trials, seed=seed + 10)
-    ref = range_readings(_range_holds(user_a, don_a1, seed + 11))
+    ref = range_readings(_holds(user_a, don_a1, seed + 11))
     assert ref is not None  # _range_holds labels both holds
     return EvalSetup(kind=o.kind, seed=seed, test_trials=o.test_trials,
                      users={"calibration": user_a, "second": user_b},

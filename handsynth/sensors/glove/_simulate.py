@@ -25,13 +25,14 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ...errors import InvalidInputError
-from ...models import JOINT_LIMITS_DEG, JOINT_NAMES
+from ...models import JOINT_LIMITS_DEG, JOINT_NAMES, NAMED_POSES
 from ._fields import as_array, as_number
 from ._motions import MOTIONS, grasp_posture
-from ._recording import GloveRecording
+from ._recording import RANGE_LABELS, GloveRecording
 from ._sensors import SensorParams, simulate_sensors
 
-__all__ = ["GloveUser", "don_glove", "make_user", "simulate_poses", "simulate_session"]
+__all__ = ["GloveUser", "don_glove", "make_user", "simulate_poses", "simulate_range_holds",
+           "simulate_session"]
 
 _MCP = np.array([JOINT_NAMES.index(n) for n in JOINT_NAMES if n.endswith("mcp_flex")
                  or n == "thumb_cmc_flex"])
@@ -356,3 +357,45 @@ def simulate_poses(user: GloveUser, sensors: SensorParams, postures: np.ndarray,
     return GloveRecording(sensors=counts, angles=held, truth=held, kind=sensors.kind,
                           trial=np.repeat(np.arange(len(postures)), hold_samples),
                           adc_max=float(sensors.adc_max))
+
+
+def simulate_range_holds(user: GloveUser, sensors: SensorParams, *, seed: int = 0,
+                         start_s: float = 0.0, rate_hz: float = 60.0, hold_samples: int = 30,
+                         with_angles: bool = True) -> GloveRecording:
+    """The open-hand and fist holds of a range calibration, labelled as such.
+
+    :func:`simulate_poses` of the named poses ``open`` and ``fist``, with
+    ``motion`` :data:`RANGE_LABELS` (``"range_open"``, ``"range_fist"``),
+    which :func:`range_readings` and ``glove apply --range`` read.
+
+    Parameters
+    ----------
+    user : GloveUser
+    sensors : SensorParams
+        The glove as worn (:func:`don_glove`).
+    seed : int, keyword-only
+        Seed of the holding error and the sensor noise.
+    start_s : float, keyword-only
+        Time of the first sample, s (for holds appended to a session: after
+        its last sample).
+    rate_hz : float, keyword-only
+        Sampling rate of ``time_s``, Hz (:func:`simulate_session`'s default).
+    hold_samples : int, keyword-only
+        Samples per hold.
+    with_angles : bool, keyword-only
+        Keep the held angles as the reference ``angles``.
+
+    Returns
+    -------
+    GloveRecording
+        ``2 * hold_samples`` samples, open hand first.
+    """
+    if not rate_hz > 0:
+        raise InvalidInputError(f"rate_hz must be > 0, got {rate_hz!r}")
+    holds = simulate_poses(user, sensors, np.stack([NAMED_POSES["open"], NAMED_POSES["fist"]]),
+                           seed=seed, hold_samples=hold_samples)
+    return GloveRecording(
+        sensors=holds.sensors, angles=holds.angles if with_angles else None,
+        motion=np.repeat(RANGE_LABELS, hold_samples), trial=holds.trial,
+        time_s=start_s + np.arange(holds.n_samples) / rate_hz, kind=holds.kind,
+        adc_max=holds.adc_max)

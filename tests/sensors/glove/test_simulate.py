@@ -73,3 +73,17 @@ def test_user_fields_are_checked(user):
         user.replace(dip_ratio=np.ones(20))
     with pytest.raises(InvalidInputError, match="name must be a string"):
         make_user(1, name=7)
+
+
+def test_range_holds_are_labelled_timed_and_read_as_a_range(user, dg5):
+    from handsynth.sensors.glove import RANGE_LABELS, range_readings, simulate_range_holds
+
+    holds = simulate_range_holds(user, dg5, seed=3, start_s=10.0, hold_samples=20)
+    assert holds.n_samples == 40 and holds.angles is not None
+    assert list(holds.motion[[0, 19, 20, 39]]) == [RANGE_LABELS[0]] * 2 + [RANGE_LABELS[1]] * 2
+    np.testing.assert_allclose(holds.time_s[[0, 1]], [10.0, 10.0 + 1 / 60])
+    open_, fist = range_readings(holds)
+    assert (fist > open_).all()  # every sensor bends further in a fist
+    assert simulate_range_holds(user, dg5, with_angles=False).angles is None
+    with pytest.raises(InvalidInputError, match="rate_hz must be > 0"):
+        simulate_range_holds(user, dg5, rate_hz=0)
