@@ -196,7 +196,7 @@ def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz
                f"index links: {lengths}")
     sc = cal.sensor_calibration
     click.echo("accelerometer/gyro/magnetometer calibration: " + (
-        "none (no static poses acc_pose_<k> in the segments)" if sc is None else
+        "none (fewer than 8 static poses acc_pose_<k> in the segments)" if sc is None else
         f"{len(sc.sensors)} sensors, largest accelerometer residual "
         f"{float(sc.acc_residual_mps2.max()):.3f} m/s^2, largest magnetometer residual "
         f"{float(sc.mag_residual.max()) if sc.mag_residual is not None else 0.0:.2%} "

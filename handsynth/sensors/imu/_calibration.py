@@ -10,6 +10,7 @@ recording of the same sensors into attitudes, joint angles and fingertips.
 from __future__ import annotations
 
 import json
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -39,6 +40,8 @@ __all__ = ["ImuCalibration", "calibrate", "segments_from_seconds"]
 # magnetometer calibration; 5: the forearm plate's rotations (older files load
 # without them)
 _VERSION = 6
+#: Static poses (``acc_pose_<k>``) the sensor calibration needs at least.
+_MIN_POSES = 8
 
 
 def segments_from_seconds(spans: dict, rate_hz: float, n: int, *, source: str | None = None) -> tuple:
@@ -322,8 +325,8 @@ def calibrate(rec: ImuRecording, *, sensor_calibration: bool = True,
         sensors and the fingertip sensors.
     sensor_calibration : bool, keyword-only
         Fit and apply :func:`fit_sensor_calibration` when the recording has at
-        least 8 stretches labelled ``acc_pose_<k>``; with fewer it is skipped
-        silently.  False skips it always.
+        least 8 stretches labelled ``acc_pose_<k>``; with none it is skipped,
+        with 1-7 skipped with a warning.  False skips it always.
     side : {"right", "left"}, keyword-only
         The hand the sensors are on: the zero offsets and every tracked
         joint angle are measured as that hand's (a left hand read as a right
@@ -346,10 +349,20 @@ def calibrate(rec: ImuRecording, *, sensor_calibration: bool = True,
         A calibration rotation too short, slow or badly shaped to estimate
         from (see :func:`calibrate_vectors`, :func:`link_frames`,
         :func:`azimuth_correction`).
+
+    Warns
+    -----
+    UserWarning
+        1-7 static poses labelled (too few for the sensor calibration).
     """
     check_side(side)
     sensor_cal = None
-    if sensor_calibration and sum(name.startswith(POSE_PREFIX) for name, _, _ in rec.labelled()) >= 8:
+    poses = sum(name.startswith(POSE_PREFIX) for name, _, _ in rec.labelled())
+    if sensor_calibration and 0 < poses < _MIN_POSES:
+        warnings.warn(f"{poses} static pose(s) labelled {POSE_PREFIX}<k>: the accelerometer and gyro "
+                      f"calibration needs {_MIN_POSES} or more, so the readings are used "
+                      "uncorrected", UserWarning, stacklevel=2)
+    if sensor_calibration and poses >= _MIN_POSES:
         sensor_cal = fit_sensor_calibration(rec)
         rec = sensor_cal.apply(rec)
     model = chain_model(rec)

@@ -1,3 +1,4 @@
+import dataclasses
 import json
 
 import numpy as np
@@ -207,3 +208,21 @@ def test_a_left_hand_is_read_as_a_left_hand(tmp_path):
     (tmp_path / "bad.json").write_text(json.dumps(d))
     with pytest.raises(RecordingError, match=r"field side must be \"right\" or \"left\", got 'Left'"):
         ImuCalibration.load(tmp_path / "bad.json")
+
+
+def test_too_few_static_poses_for_the_sensor_calibration_are_warned_about():
+    # before, 1-7 labelled poses were skipped silently and the readings used uncorrected
+    import warnings
+
+    from handsynth.sensors.imu import ImuHand, calibrate, calibration_motion, simulate_imu
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        rec = simulate_imu(calibration_motion(acc_poses=True), hand=ImuHand(tip_sensors=True),
+                           seed=1, device_seed=2)
+    kept = tuple(seg for seg in rec.truth.segments if not seg[0].startswith("acc_pose_")
+                 or seg[0] in ("acc_pose_0", "acc_pose_1", "acc_pose_2"))
+    few = dataclasses.replace(rec, segments=kept)
+    with pytest.warns(UserWarning, match=r"^3 static pose\(s\) labelled acc_pose_<k>: .* needs 8"):
+        cal = calibrate(few)
+    assert cal.sensor_calibration is None
