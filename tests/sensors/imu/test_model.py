@@ -71,3 +71,34 @@ def test_tilt_moves_the_sensor_frame(imu_hand):
         heading.append(np.degrees(np.arctan2(m[1], m[0])))
     # turning the sensor 30 deg about its z turns the field -30 deg in its frame
     assert heading[1] - heading[0] == pytest.approx(-30.0, abs=1e-6)
+
+
+@pytest.mark.parametrize("side", ["right", "left"])
+@pytest.mark.parametrize("tips", [True, False])
+def test_the_imu_arm_compiles_without_warning_and_uses_its_classes(side, tips):
+    import xml.etree.ElementTree as ET
+
+    import mujoco
+
+    from handsynth.models import HandShape
+    from handsynth.sensors.imu import ImuPlacement, imu_hand_mjcf
+
+    caught: list = []
+    old = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(caught.append)
+
+    placement = ImuPlacement(tilts_deg={"index_distal": (5.0, 0.0, 0.0)})
+    xml = imu_hand_mjcf(HandShape(1.05, 1.1, 1.05, 1.1), side=side, placement=placement,
+                        tip_sensors=tips)
+    try:
+        m = mujoco.MjModel.from_xml_string(xml)
+        d = mujoco.MjData(m)
+        mujoco.mj_forward(m, d)
+    finally:
+        mujoco.set_mju_user_warning(old)
+    assert not caught and all(w.number == 0 for w in d.warning)
+    root = ET.fromstring(xml)
+    assert root.get("model") == f"handsynth_{side}_imu_arm"
+    sites = [s for s in root.iter("site") if s.get("name", "").startswith("imu_")]
+    assert sites and all(s.get("class") == "imu" and "size" not in s.attrib for s in sites)
+    assert [g.get("class") for g in root.iter("geom") if g.get("fromto")] == ["arm"]
