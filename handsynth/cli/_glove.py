@@ -70,7 +70,7 @@ def simulate(out, kind, user_seed, donning, motions, trials, seed, range_holds, 
 @click.option("--t-threshold", type=float, default=2.0, show_default=True,
               help="|t| below which models 3 and 4 drop a sensor (seed eq. 11).")
 @click.option("--points", "n_points", type=int, default=20, show_default=True,
-              help="Points along each motion for the mixing likelihood (seed eq. 4).")
+              help="Points along each motion for the mixing likelihood (seed eq. 4), 1-200.")
 @click.option("--synergies", "synergy_k", type=int, default=2, show_default=True,
               help="Synergies of the synergy baseline (0 leaves it out).")
 @click.option("--synergy-csv", type=click.Path(dir_okay=False),

@@ -104,7 +104,7 @@ def imu() -> None:
 def eval_(config_name, filters, durations, elbows, no_grasps, no_sensor_calibration,
           no_plate_fusion, json_out, plot_dir) -> None:
     """Reproduce the thesis' tables on simulated data, beside trivial baselines."""
-    from ..errors import InvalidInputError
+    from ..errors import InvalidInputError, OutputError
     from ..sensors.imu import (
         FILTERS,
         HELDOUT,
@@ -114,7 +114,12 @@ def eval_(config_name, filters, durations, elbows, no_grasps, no_sensor_calibrat
         plot_stick_figure,
     )
 
-    # the plots' folder is made and checked before the evaluation's minutes, not after
+    # the plots' folder is made and checked before the evaluation's minutes, not after;
+    # never where the JSON file goes
+    if json_out and plot_dir and Path(json_out).resolve() == Path(plot_dir).resolve():
+        raise OutputError(f"--json and --plots name the same path {json_out!r}: choose a file "
+                          "for the JSON and a folder for the plots")
+    check_outputs([("--json", json_out)])
     plots = make_folder(plot_dir, what="--plots folder") if plot_dir else None
     check_outputs([("--json", json_out),
                    *((("--plots", plots / name) for name in ("orientation_error.png",

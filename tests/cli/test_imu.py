@@ -139,6 +139,11 @@ def test_eval_plots_folder_is_checked_before_the_evaluation(tmp_path):
     (tmp_path / "p" / "stick_figure.png").mkdir(parents=True)
     res = CliRunner().invoke(cli, ["imu", "eval", "--plots", str(tmp_path / "p")])
     assert res.exit_code == 2 and "--plots file" in res.output and "it is a folder" in res.output
+    # before: the folder was made where the JSON goes, then the JSON refused as "a folder"
+    same = str(tmp_path / "s.json")
+    res = CliRunner().invoke(cli, ["imu", "eval", "--json", same, "--plots", same])
+    assert res.exit_code == 2 and "--json and --plots name the same path" in res.output
+    assert not (tmp_path / "s.json").exists()
 
 
 @pytest.mark.slow

@@ -64,7 +64,7 @@ class CalibrationOptions:
     t_threshold : float
         |t| below which models 3 and 4 drop a sensor (eq. 11: 2).
     n_points : int
-        Points along each motion for the mixing likelihood (eq. 4).
+        Points along each motion for the mixing likelihood (eq. 4), 1-200.
     ridge : float
         Added to each point covariance, standardised units squared.
     pooled : bool
@@ -102,7 +102,8 @@ class CalibrationOptions:
         if not isinstance(self.pooled, (bool, np.bool_)):
             raise InvalidInputError(f"CalibrationOptions.pooled must be True or False, "
                                     f"got {self.pooled!r}")
-        for name, lo, hi in (("n_points", 1, None), ("synergy_k", 0, 20)):
+        # n_points: a point per 0.5 % of a motion is more than its samples can fill
+        for name, lo, hi in (("n_points", 1, 200), ("synergy_k", 0, 20)):
             check_integer(getattr(self, name), f"CalibrationOptions.{name}", minimum=lo,
                           maximum=hi)
 

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..._checks import check_integer
-from ...errors import EstimationError
+from ...errors import EstimationError, InvalidInputError
 from ._fields import array_field
 
 __all__ = ["MotionMixer", "fit_mixer"]
@@ -77,8 +77,12 @@ class MotionMixer:
     def from_dict(cls, d: dict) -> MotionMixer:
         motions = tuple(str(m) for m in d["motions"])
         means = array_field(d, "means", (len(motions), None, 5))
-        return cls(motions=motions, centre=array_field(d, "centre", (5,)),
-                   scale=array_field(d, "scale", (5,)), means=means,
+        scale = array_field(d, "scale", (5,))
+        if not (scale > 0).all():
+            i = int(np.argmin(scale > 0))
+            raise InvalidInputError(f"field 'scale' must be positive (the readings' spread), got "
+                                    f"{float(scale[i])!r} at index {i}")
+        return cls(motions=motions, centre=array_field(d, "centre", (5,)), scale=scale, means=means,
                    inv_covs=array_field(d, "inv_covs", (len(motions), means.shape[1], 5, 5)))
 
 

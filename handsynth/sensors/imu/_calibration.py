@@ -275,6 +275,11 @@ class ImuCalibration:
                 raise RecordingError(f"{path}: field {key}{' ' + item if item else ''} holds "
                                      f"{float(v.reshape(-1)[i])!r} at index {i}; every value must be a "
                                      "finite number")
+        skew = [s for s, r in frames.items() if not np.allclose(r.T @ r, np.eye(3), atol=1e-6)
+                or np.linalg.det(r) < 0]
+        if skew:
+            raise RecordingError(f"{path}: field frames holds {len(skew)} matri(x/ces) that are not "
+                                 f"rotations ({', '.join(skew[:4])}): a damaged file")
         sensor_cal = None
         if "sensor_calibration" in d:
             try:

@@ -122,6 +122,10 @@ def _turning_points(gyr, dgyr, *, frac_w=0.25, frac_dw=0.5):
     return i[loc]
 
 
+#: Samples a labelled rotation needs at least: the Savitzky-Golay window of its gyro.
+_MIN_ROTATION_SAMPLES = 7
+
+
 def _rotation_data(rec: ImuRecording, k: int, a: int, b: int, hold: int):
     """gyro, angular acceleration and rotational acceleration (eq. 3.7) of sensor k on a:b."""
     dt = 1.0 / rec.rate_hz
@@ -222,6 +226,11 @@ def rotation_vector(rec: ImuRecording, sensor: str, point: str, *, hold_s: float
     data = {}
     for lab in dir_rot:
         a, b = _segment(segments, lab)
+        if b - a < _MIN_ROTATION_SAMPLES:
+            raise EstimationError(
+                f"rotation {lab!r} spans {b - a} samples ({(b - a) / rec.rate_hz:.3g} s); at least "
+                f"{_MIN_ROTATION_SAMPLES} are needed, and turning points need seconds (rotate "
+                "longer, or check its span in the segments)")
         data[lab] = _rotation_data(rec, k, a, b, hold)
     pts = {lab: _turning_points(data[lab][0], data[lab][1]) for lab in dir_rot}
     for lab, idx in pts.items():

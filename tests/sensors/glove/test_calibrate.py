@@ -113,8 +113,10 @@ def test_failed_write_leaves_no_file(tmp_path, monkeypatch, estimators):
     ("pooled", "no", "pooled must be True or False, got 'no'"),
     ("pooled", 0, "pooled must be True or False, got 0"),
     ("models", "model4", "models must be a tuple of model names"),
-    ("n_points", 2.5, r"n_points must be an integer >= 1, got 2.5"),
-    ("n_points", 0, r"n_points must be an integer >= 1, got 0"),
+    ("n_points", 2.5, r"n_points must be an integer >= 1 and <= 200, got 2.5"),
+    ("n_points", 0, r"n_points must be an integer >= 1 and <= 200, got 0"),
+    # before: a 56 GiB allocation and a traceback
+    ("n_points", 100_000_000, r"n_points must be an integer >= 1 and <= 200, got 100000000"),
     ("synergy_k", True, r"synergy_k must be an integer >= 0 and <= 20, got True"),
     ("synergy_k", 21, r"synergy_k must be an integer >= 0 and <= 20, got 21"),
     ("t_threshold", "2", "t_threshold must be a finite number, got '2'"),
@@ -181,4 +183,20 @@ def test_a_damaged_estimator_entry_is_named_not_blamed_on_the_range_reference(tm
     del d["estimators"][name]["type"]
     path.write_text(json.dumps(d))
     with pytest.raises(InvalidInputError, match=rf"c\.json: estimator '{name}'"):
+        load_calibration(path)
+
+
+def test_a_zero_reading_scale_in_a_calibration_file_is_refused(tmp_path, cal_rec):
+    # before: every estimate NaN, with numpy's "divide by zero" as the only word
+    import json
+
+    from handsynth.sensors.glove import load_calibration, save_calibration
+
+    path = save_calibration(tmp_path / "c.json", calibrate(cal_rec), kind="dg5")
+    d = json.loads(path.read_text())
+    hit = [n for n, e in d["estimators"].items() if isinstance(e.get("mixer"), dict)]
+    assert hit
+    d["estimators"][hit[0]]["mixer"]["scale"] = [0.0] * 5
+    path.write_text(json.dumps(d))
+    with pytest.raises(InvalidInputError, match=rf"estimator '{hit[0]}': field 'scale' must be positive"):
         load_calibration(path)

@@ -226,3 +226,15 @@ def test_too_few_static_poses_for_the_sensor_calibration_are_warned_about():
     with pytest.warns(UserWarning, match=r"^3 static pose\(s\) labelled acc_pose_<k>: .* needs 8"):
         cal = calibrate(few)
     assert cal.sensor_calibration is None
+
+
+def test_a_link_frame_that_is_not_a_rotation_is_refused_at_load(tmp_path, ideal_rec):
+    # before: read as given, and the joint it belongs to came out constant
+    model = truth_chain_model(ideal_rec)
+    cal = ImuCalibration(model, {s: np.eye(3) for s in model.own}, np.zeros(20), tuple(model.own))
+    d = json.loads(cal.save(tmp_path / "c.json").read_text())
+    name = next(iter(d["frames"]))
+    d["frames"][name] = [[2, 0, 0], [0, 2, 0], [0, 0, 2]]
+    (tmp_path / "bad.json").write_text(json.dumps(d))
+    with pytest.raises(RecordingError, match=rf"field frames holds 1 .* not rotations \({name}\)"):
+        ImuCalibration.load(tmp_path / "bad.json")

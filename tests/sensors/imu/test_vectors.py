@@ -83,3 +83,16 @@ def test_static_pose_fit_removes_part_of_the_skin_error(imu_hand):
     a = rotation_vector(skin, "index_middle", "index_mcp", static_pose=True).vector
     b = rotation_vector(skin, "index_middle", "index_mcp", static_pose=False).vector
     assert np.array_equal(a, b)
+
+
+def test_a_rotation_of_a_few_samples_is_named_not_a_filter_traceback(cal_rec):
+    # before: scipy's "window_length must be less than or equal to the size of x"
+    import dataclasses
+
+    from handsynth.errors import EstimationError
+
+    segments = tuple((lab, a, a + 2) if lab == "index_mcp_flex" else (lab, a, b)
+                     for lab, a, b in cal_rec.labelled())
+    rec = dataclasses.replace(cal_rec, segments=segments)
+    with pytest.raises(EstimationError, match=r"^rotation 'index_mcp_flex' spans 2 samples .* at least 7"):
+        rotation_vector(rec, "index_proximal", "index_mcp")
