@@ -146,12 +146,14 @@ def eval_(ctx, db_folder, protocol, mesh, mesh_scale, learned_hands, hand_spread
                                     "to the paper's experiment, not to --protocol")
         _protocol(db_folder, mesh, mesh_scale, learned_hands, hand_spread, json_path, n_hands, frames,
                   _parse_list(pose_sets, "--pose-sets"),
-                  _parse_list(conditions or PROTOCOL_DEFAULT, "--conditions"), seed, rest, slip, say)
+                  _parse_list(PROTOCOL_DEFAULT if conditions is None else conditions, "--conditions"),
+                  seed, rest, slip, say)
         return
     for n in ("mesh", "mesh_scale", "learned_hands", "hand_spread", "rest", "slip"):
         if ctx.get_parameter_source(n) == click.core.ParameterSource.COMMANDLINE:
             raise InvalidInputError(f"--{n.replace('_', '-')} applies with --protocol only")
-    conditions = conditions or "standard,selected,selected_none,personal,calibrated,own_shape"
+    if conditions is None:
+        conditions = "standard,selected,selected_none,personal,calibrated,own_shape"
 
     options = EvalOptions(
         db_folder=db_folder, n_hands=n_hands, frames_per_hand=frames,

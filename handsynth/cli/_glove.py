@@ -24,7 +24,8 @@ def glove() -> None:
               help="Seed of this wearing of the glove (offsets, gains, slip).")
 @click.option("--motion", "motions", multiple=True,
               help="Motion to record (repeat); default the glove's representative motions.")
-@click.option("--trials", type=int, default=5, show_default=True, help="Trials per motion.")
+@click.option("--trials", type=click.IntRange(1, 100), default=5, show_default=True,
+              help="Trials per motion.")
 @click.option("--seed", type=int, default=0, show_default=True,
               help="Seed of trial variation and noise.")
 @click.option("--range-holds/--no-range-holds", default=True, show_default=True,
@@ -44,8 +45,6 @@ def simulate(out, kind, user_seed, donning, motions, trials, seed, range_holds, 
         write_glove_csv,
     )
 
-    if trials < 1:
-        raise InvalidInputError(f"--trials must be >= 1, got {trials}")
     for flag, value in (("--user", user_seed), ("--donning", donning), ("--seed", seed)):
         if value < 0:
             raise InvalidInputError(f"{flag} must be a seed >= 0, got {value}")

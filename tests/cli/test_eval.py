@@ -47,6 +47,8 @@ def test_eval_prints_table_and_writes_json_and_plots(tmp_path):
     (["--frames", "0"], "frames_per_hand"),
     (["--hands", "-1"], "n_hands"),
     (["--conditions", "standard,best"], "conditions"),
+    (["--conditions", ""], "--conditions must name at least one item"),  # was: every condition
+    (["--protocol", "--conditions", ""], "--conditions must name at least one item"),
     (["--pose-sets", "paper,random"], "pose_sets"),
     (["--frame-size", "720"], "--frame-size"),
     (["--ratio-margin", "9"], "ratio_margin"),

@@ -423,3 +423,9 @@ def test_motion_labels_are_read_whatever_their_case(files, tmp_path):
     res = _run("glove", "calibrate", rec, "-o", tmp_path / "c.json", "--kind", "dg5")
     assert res.exit_code == 0, res.output
     assert "range holds (open, fist): stored" in res.output
+
+
+def test_simulate_trials_are_bounded(tmp_path):
+    # before: --trials 100000000 ran on for ever
+    res = _run("glove", "simulate", tmp_path / "s.csv", "--trials", 100_000_000)
+    assert res.exit_code == 2 and "--trials" in res.output and not (tmp_path / "s.csv").exists()
