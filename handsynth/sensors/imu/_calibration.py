@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 import warnings
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -61,6 +62,11 @@ def segments_from_seconds(spans: dict, rate_hz: float, n: int, *, source: str | 
     ------
     RecordingError
         A span that is not two finite numbers, or that lies outside the recording.
+
+    Warns
+    -----
+    UserWarning
+        Labels that no step of :func:`calibrate` reads (a misspelt rotation).
     """
     where = f"{source}: " if source else ""
     if not isinstance(spans, dict):
@@ -81,7 +87,25 @@ def segments_from_seconds(spans: dict, rate_hz: float, n: int, *, source: str | 
             raise RecordingError(f"{where}segment {label!r} = [{a}, {b}] s lies outside the "
                                  f"recording (0-{n / rate_hz:.2f} s) or is empty")
         out.append((str(label), i, j))
+    known = _calibration_labels()
+    unknown = [lab for lab, _, _ in out if lab not in known and not _is_pose_label(lab)]
+    if unknown:
+        warnings.warn(f"{where}segment(s) {', '.join(map(repr, unknown))} are no stretch the "
+                      "calibration reads (calibration_motion's labels, and acc_pose_<k>): "
+                      "ignored", UserWarning, stacklevel=2)
     return tuple(out)
+
+
+@lru_cache(maxsize=1)
+def _calibration_labels() -> frozenset:
+    """The labels of :func:`calibration_motion`'s stretches, the static poses left out."""
+    from ._motion import calibration_motion
+
+    return frozenset(lab for lab, _, _ in calibration_motion(acc_poses=False).segments)
+
+
+def _is_pose_label(label: str) -> bool:
+    return label.startswith(POSE_PREFIX) and label[len(POSE_PREFIX):].isdigit()
 
 
 @dataclass(frozen=True)

@@ -238,3 +238,11 @@ def test_a_link_frame_that_is_not_a_rotation_is_refused_at_load(tmp_path, ideal_
     (tmp_path / "bad.json").write_text(json.dumps(d))
     with pytest.raises(RecordingError, match=rf"field frames holds 1 .* not rotations \({name}\)"):
         ImuCalibration.load(tmp_path / "bad.json")
+
+
+def test_a_segment_label_no_step_reads_is_warned_about():
+    # before: a misspelt rotation was ignored without a word
+    with pytest.warns(UserWarning, match=r"^s\.json: segment\(s\) 'index_mcp_flx' are no stretch"):
+        out = segments_from_seconds({"static": [0, 2], "index_mcp_flx": [2, 4], "acc_pose_3": [4, 5]},
+                                    100.0, 1000, source="s.json")
+    assert [lab for lab, _, _ in out] == ["static", "index_mcp_flx", "acc_pose_3"]
