@@ -1136,6 +1136,11 @@ def measure_photo(image, *, mm_per_px: float | None = None,
             "give the photo's scale: exactly one of mm_per_px (mm per pixel at the hand) or "
             f"reference_width_mm (a reference object's width); got mm_per_px={mm_per_px!r}, "
             f"reference_width_mm={reference_width_mm!r}")
+    # the scale given is checked before the photo's analysis
+    if reference_width_mm is not None:
+        reference_width_mm = _positive(reference_width_mm, "reference_width_mm")
+    else:
+        mm_per_px = _positive(mm_per_px, "mm_per_px")
     if isinstance(image, (str, os.PathLike)):
         from ..render import read_image
 

@@ -361,3 +361,11 @@ def test_a_path_that_is_not_a_readable_image_is_named(tmp_path):
         measure_photo(text, mm_per_px=MM)
     with pytest.raises(InvalidInputError, match=r"photo .*"):
         measure_photo(tmp_path, mm_per_px=MM)  # a folder
+
+
+@pytest.mark.parametrize("width", [-5.0, 0.0, float("nan")])
+def test_a_bad_reference_width_is_named_before_the_photo_is_read(width):
+    # before: a blank image gave "the reference object is ambiguous" instead
+    blank = np.zeros((200, 300), np.uint8)
+    with pytest.raises(InvalidInputError, match="reference_width_mm must be a positive"):
+        measure_photo(blank, reference_width_mm=width)
