@@ -36,6 +36,15 @@ def _tile_height(mount: CameraMount, tile_width_px: int) -> int:
     return round(tile_width_px * mount.height_px / mount.width_px)
 
 
+def _sheet_poses(seed: int, tile_width_px: int, count: int):
+    """The sheet's arguments checked; its generator, relaxed rest and `count` natural poses."""
+    check_integer(tile_width_px, "tile_width_px", minimum=64)
+    check_integer(count, "count", minimum=1)
+    rng = np.random.default_rng(seed)
+    rest = relaxed_rest_posture(rng)
+    return rng, rest, natural_test_poses(rest, count, rng)[0]
+
+
 def estimates_sheet(estimator, *, tile_width_px: int = 360, count: int = 4) -> np.ndarray:
     """What `estimator` reads on the MRTK glTF hand: the device's view, the truth and the reading.
 
@@ -58,13 +67,9 @@ def estimates_sheet(estimator, *, tile_width_px: int = 360, count: int = 4) -> n
     ndarray, shape (3 H + 4, count W + 4, 3), uint8
         RGB, ``W = tile_width_px`` and ``H`` its height at the device's aspect.
     """
-    check_integer(tile_width_px, "tile_width_px", minimum=64)
-    check_integer(count, "count", minimum=1)
+    _, rest, poses = _sheet_poses(7, tile_width_px, count)
     flex = list(JOINT_GROUPS["finger_flexion"])
     mount = CameraMount.paper()
-    rng = np.random.default_rng(7)
-    rest = relaxed_rest_posture(rng)
-    poses = natural_test_poses(rest, count, rng)[0]
     hand = shipped_hand_path("mrtk")
     with MeshHandRenderer(mount, path=hand) as full:
         reader = estimator.calibrated(full.mask(rest))
@@ -108,15 +113,11 @@ def backgrounds_sheet(estimator, *, tile_width_px: int = 360, count: int = 4) ->
     """
     import cv2
 
-    check_integer(tile_width_px, "tile_width_px", minimum=64)
-    check_integer(count, "count", minimum=1)
+    rng, rest, poses = _sheet_poses(11, tile_width_px, count)
     flex = list(JOINT_GROUPS["finger_flexion"])
     mount = CameraMount.paper()
     th = _tile_height(mount, tile_width_px)
     photos = background_photos()
-    rng = np.random.default_rng(11)
-    rest = relaxed_rest_posture(rng)
-    poses = natural_test_poses(rest, count, rng)[0]
     shade = np.linspace(0.55, 1.0, mount.width_px, dtype=np.float32)[None, :, None]
     skin = np.array([95, 125, 180], np.float32)  # BGR
 

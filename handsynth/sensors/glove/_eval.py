@@ -115,10 +115,6 @@ class EvalOptions:
 
 
 
-def _holds(user, params, seed) -> GloveRecording:
-    return simulate_range_holds(user, params, seed=seed, with_angles=False)
-
-
 def _variants(estimators: dict, representative: bool) -> dict:
     """Prediction functions name -> f(sensors, motion) for a motion set."""
     out = {}
@@ -363,7 +359,7 @@ class EvalSetup:
                                seed=session_seed)
         norm = None
         if condition != "second_user_raw":
-            src = range_readings(_holds(user, don, s_seed + 2))
+            src = range_readings(simulate_range_holds(user, don, seed=s_seed + 2))
             assert src is not None  # _range_holds labels both holds
             norm = RangeNormalizer(source_open=src[0], source_fist=src[1],
                                    target_open=self.range_reference[0],
@@ -396,7 +392,7 @@ def eval_setup(options: EvalOptions | None = None, seed: int | None = None) -> E
     don_a2 = don_glove(user_a, o.kind, seed=seed + 2, glove_seed=seed)
     don_b = don_glove(user_b, o.kind, seed=seed + 3, glove_seed=seed)
     cal = simulate_session(user_a, don_a1, motions_for(o.kind), trials=o.trials, seed=seed + 10)
-    ref = range_readings(_holds(user_a, don_a1, seed + 11))
+    ref = range_readings(simulate_range_holds(user_a, don_a1, seed=seed + 11))
     assert ref is not None  # _range_holds labels both holds
     return EvalSetup(kind=o.kind, seed=seed, test_trials=o.test_trials,
                      users={"calibration": user_a, "second": user_b},
