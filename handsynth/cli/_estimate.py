@@ -134,19 +134,43 @@ def _calibrate(lookup, source, open_image, db_dir, mount, side, build, err):
 
 def _check_learned_options(db_dir, shape_name, measurements, personal, build_count,
                            calibrate, video_out, no_temporal, keypoints) -> None:
-    """--learned replaces the database lookup: its options do not apply."""
+    """--learned replaces the database lookup: its options do not apply (but for --shape and
+    --measurements, which with --keypoints say whose keypoints to report)."""
     given = [flag for flag, on in (("--db", db_dir is not None),
-                                   ("--shape", shape_name is not None),
-                                   ("--measurements", measurements is not None),
                                    ("--personal", personal),
                                    ("--build-count", build_count is not None),
                                    ("--calibrate", calibrate), ("--video-out", video_out is not None),
-                                   ("--no-temporal", no_temporal), ("--keypoints", keypoints)) if on]
+                                   ("--no-temporal", no_temporal)) if on]
     if given:
         raise InvalidInputError(f"{', '.join(given)} appl{'ies' if len(given) == 1 else 'y'} to "
                                 "the database lookup, not to --learned (the learnt estimator "
-                                "reads angles only and is calibrated to the hand at rest; "
-                                "--calibrate-image gives that frame)")
+                                "is calibrated to the hand at rest; --calibrate-image gives "
+                                "that frame)")
+    if not keypoints and (shape_name is not None or measurements is not None):
+        flag = "--shape" if shape_name is not None else "--measurements"
+        raise InvalidInputError(f"{flag} with --learned says whose keypoints to report, and "
+                                "--keypoints was not given (the learnt estimator reads angles "
+                                "whatever the hand's size)")
+
+
+def _keypoint_shape(shape_name, measurements, err):
+    """The hand whose keypoints a learnt run reports: --shape, --measurements or the standard."""
+    from ..estimate import SelectionOptions, select_shape
+    from ..models import HandMeasurements, HandShape
+
+    if shape_name is not None and measurements is not None:
+        raise InvalidInputError("give --shape or --measurements, not both")
+    if measurements is not None:
+        meas = HandMeasurements.from_file(measurements)
+        ratios = select_shape(meas, options=SelectionOptions(normalize="none")).ratios
+        shape = HandShape.from_name(ratios.name)
+    elif shape_name is not None and shape_name != "standard":
+        shape = HandShape.from_name(shape_name)
+    else:
+        shape = HandShape()
+    click.echo(f"keypoints of the handsynth hand {shape.name} posed by the estimated angles",
+               err=err)
+    return shape
 
 
 def _open_learned(cache, kind, hands, rest, smoothing, side, err):
@@ -230,9 +254,11 @@ def _progress(stream):
                    "default database in ~/.cache/handsynth/db].")
 @click.option("--shape", "shape_name", default=None, metavar="NAME",
               help="Use the database of the grid shape nearest to this hand shape "
-                   "(e.g. L1.050_W0.900_P1.000_T1.000, or 'standard').")
+                   "(e.g. L1.050_W0.900_P1.000_T1.000, or 'standard'); with --learned "
+                   "--keypoints, the hand whose keypoints are reported.")
 @click.option("--measurements", default=None, metavar="FILE",
-              help="Choose the database from hand measurements in mm (.json or .csv).")
+              help="Choose the database from hand measurements in mm (.json or .csv); with "
+                   "--learned --keypoints, the hand whose keypoints are reported.")
 @click.option("--personal", is_flag=True,
               help="Use a database of exactly the --shape or --measurements hand (built in "
                    "--db when missing, 20,448 paper poses, a few seconds) instead of the "
@@ -306,7 +332,10 @@ def _progress(stream):
               help="Write one row per frame (.csv or .jsonl; '-' for standard output, with --format).")
 @click.option("--format", "fmt", type=click.Choice(["csv", "jsonl"]), default=None,
               help="Row format [default: from the --out suffix].")
-@click.option("--keypoints", is_flag=True, help="Add the 21 keypoints (metres) to the rows.")
+@click.option("--keypoints", is_flag=True,
+              help="Add the 21 keypoints (metres, hand frame) to the rows; with --learned, "
+                   "those of the handsynth hand of --shape or --measurements (the standard "
+                   "hand by default) posed by the estimated angles.")
 @click.option("--video-out", default=None, metavar="FILE",
               help="Write input and matched render side by side (.mp4 or .avi).")
 @click.option("--synthetic-shape", default=SYNTHETIC_SHAPE, show_default=True, metavar="NAME",
@@ -371,9 +400,12 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
     if keypoints and out is None:
         raise InvalidInputError("--keypoints adds columns to the rows of --out, and no --out "
                                 "was given")
+    kp_shape = None
     if learned:
         _check_learned_options(db_dir, shape_name, measurements, personal, build_count,
                                calibrate, video_out, no_temporal, keypoints)
+        if keypoints:
+            kp_shape = _keypoint_shape(shape_name, measurements, info_err)
     elif learned_cache is not None or learned_hands is not None or smoothing is not None or \
             one_euro or learned_rest is not None or segment is not None or \
             click.get_current_context().get_parameter_source("learned_kind") \
@@ -445,6 +477,10 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
                 from ..estimate import SmoothedEstimator
 
                 lookup = SmoothedEstimator(lookup, rate_hz=source.fps or fps)
+            if keypoints:
+                from ..estimate import KeypointEstimator
+
+                lookup = KeypointEstimator(lookup, shape=kp_shape, side=side)
         # opened above, or made from the open hand by the calibration
         assert lookup is not None
         if not learned:

@@ -29,6 +29,9 @@
 * Steady angles over time (beyond the paper): the One Euro filter
   (:class:`OneEuroFilter`, :class:`OneEuroOptions`, :func:`one_euro`) and
   :class:`SmoothedEstimator`, which wraps any estimator with it.
+* Keypoints for the estimators that read angles only (beyond the paper):
+  :class:`KeypointEstimator` poses the handsynth hand of a given shape by
+  any estimator's angles and reports its 21 keypoints.
 * Calibration from one open-hand frame (beyond the paper):
   :func:`select_shape_from_frame`, :class:`Calibration` and the masked search
   (:func:`masked_search` / :func:`masked_search_reference`,
@@ -56,6 +59,7 @@ from ._ensemble import (
     shipped_members,
     shipped_perceptrons,
 )
+from ._keypoints import KeypointEstimator
 from ._learned import (
     AUTO_OVERLAP,
     LearnedEstimator,
@@ -94,6 +98,7 @@ __all__ = [
     "Calibration",
     "EnsembleEstimator",
     "FrameSelection",
+    "KeypointEstimator",
     "LearnedEstimator",
     "LearnedOptions",
     "MaskedMatch",

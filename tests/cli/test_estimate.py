@@ -195,6 +195,19 @@ def test_killed_run_leaves_complete_lines(tmp_path, db):
     assert len(frames) >= 10 and frames == list(range(len(frames)))
 
 
+def test_a_damaged_video_file_is_one_error_line_without_ffmpegs_own(tmp_path, db):
+    """FFmpeg writes to the terminal itself (not through Python): run the real process."""
+    bad = tmp_path / "clip.mp4"
+    bad.write_bytes(b"not a video at all\n" * 20)
+    env = {k: v for k, v in os.environ.items() if k != "OPENCV_FFMPEG_LOGLEVEL"}
+    proc = subprocess.run([sys.executable, "-c", "from handsynth.cli import main; main()",
+                           "estimate", "--video", str(bad), "--db", str(db), "--frames", "2"],
+                          capture_output=True, text=True, timeout=120, env=env)
+    assert proc.returncode == 2
+    assert proc.stderr.strip().splitlines() == [
+        f"handsynth: error: cannot open video file {str(bad)!r}: OpenCV cannot decode it"]
+
+
 @pytest.mark.parametrize("args, word", [
     ([], "exactly one source"),
     (["--camera", "0", "--synthetic"], "exactly one source"),
@@ -502,6 +515,51 @@ def test_the_shipped_perceptrons_alone_run_on_a_first_run_without_learning_anyth
     assert est.shape == (24, 20) and np.isfinite(est).all()
     # natural poses: far better than answering the open hand
     assert np.abs(est - truth).mean() < 0.5 * np.abs(truth).mean()
+
+
+@pytest.mark.parametrize("side", ["right", "left"])
+def test_learned_keypoints_are_the_named_hand_posed_by_the_written_angles(tmp_path, side):
+    """--learned --keypoints: each row's keypoints are the --shape hand posed by its angles."""
+    from handsynth.models import HandModel
+
+    out = tmp_path / "rows.csv"
+    shape = HandShape(length=1.1, width=0.95)
+    res = _run("--synthetic", "--learned", "--learned-kind", "perceptrons", "--learned-cache",
+               str(tmp_path / "learned"), "--frames", "10", "--synthetic-motion", "natural",
+               "--keypoints", "--shape", shape.name, "--side", side, "--out", str(out), *SMALL)
+    assert res.exit_code == 0, res.output
+    assert f"keypoints of the handsynth hand {shape.name}" in res.output
+    header, rows = _read_csv(out)
+    assert header[-len(TRUTH_COLUMNS) - len(KEYPOINT_COLUMNS):-len(TRUTH_COLUMNS)] \
+        == list(KEYPOINT_COLUMNS)
+    model = HandModel(shape, side=side)
+    tips = []
+    for r in rows:
+        model.set_pose([float(r[n]) for n in JOINT_NAMES])
+        got = np.array([float(r[c]) for c in KEYPOINT_COLUMNS]).reshape(21, 3)
+        np.testing.assert_allclose(got, model.keypoints(), atol=2e-6)  # written to 6 decimals
+        tips.append(got[[4, 8, 12, 16, 20]])
+    assert np.ptp(np.array(tips), axis=0).max() > 0.01  # the fingertips move with the hand
+    # a left hand's thumb lies at +x, a right hand's at -x
+    assert (np.array(tips)[:, 0, 0] > 0).all() == (side == "left")
+
+
+@pytest.mark.parametrize(("extra", "message"), [
+    (["--shape", "standard"], "--shape with --learned says whose keypoints to report, and "
+                              "--keypoints was not given"),
+    (["--measurements", "m.json"], "--measurements with --learned says whose keypoints"),
+    (["--keypoints", "--shape", "standard", "--measurements", "m.json"],
+     "give --shape or --measurements, not both"),
+    (["--keypoints", "--shape", "L9"], "hand-shape name 'L9' is not of the form"),
+    (["--personal", "--shape", "standard"], "--personal applies to the database lookup"),
+])
+def test_learned_keypoint_options_are_checked_by_name(tmp_path, extra, message):
+    res = CliRunner().invoke(cli, ["estimate", "--synthetic", "--learned", "--learned-cache",
+                                   str(tmp_path / "c"), "--out", str(tmp_path / "r.csv"),
+                                   *extra, *SMALL])
+    assert res.exit_code == 2, res.output
+    assert message in res.output
+    assert "Traceback" not in res.output and not (tmp_path / "r.csv").exists()
 
 
 def test_learned_estimator_for_the_left_hand(tmp_path):
