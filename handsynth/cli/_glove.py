@@ -32,10 +32,19 @@ def glove() -> None:
               help="Add open-hand and fist holds (motions 'range_open', 'range_fist') for "
                    "the range calibration.")
 @click.option("--no-angles", is_flag=True, help="Leave out the reference joint angles.")
-def simulate(out, kind, user_seed, donning, motions, trials, seed, range_holds, no_angles):
+@click.option("--adc-max", type=int, default=4095, show_default=True,
+              help="Full scale of the simulated converter, counts (readings are clipped to "
+                   "0..adc-max; 4095: 12 bits).")
+def simulate(out, kind, user_seed, donning, motions, trials, seed, range_holds, no_angles,
+             adc_max):
     """Write a simulated glove recording OUT (CSV, canonical joint names)."""
+    from dataclasses import replace
+
+    from .._checks import check_integer
+    from .._io import check_output
     from ..errors import InvalidInputError
     from ..sensors.glove import (
+        MOTIONS,
         GloveRecording,
         don_glove,
         make_user,
@@ -45,11 +54,20 @@ def simulate(out, kind, user_seed, donning, motions, trials, seed, range_holds, 
         write_glove_csv,
     )
 
+    check_output(out, what="glove CSV")  # before the simulation, not after it
     for flag, value in (("--user", user_seed), ("--donning", donning), ("--seed", seed)):
         if value < 0:
             raise InvalidInputError(f"{flag} must be a seed >= 0, got {value}")
+    check_integer(adc_max, "--adc-max", minimum=1)
+    for i, m in enumerate(motions):
+        if m not in MOTIONS:
+            raise InvalidInputError(f"--motion: unknown motion {m!r}; expected one of "
+                                    f"{', '.join(MOTIONS)}")
+        if m in motions[:i]:
+            raise InvalidInputError(f"--motion {m} is given twice; for more trials of it use "
+                                    "--trials")
     user = make_user(user_seed)
-    params = don_glove(user, kind, seed=donning)
+    params = replace(don_glove(user, kind, seed=donning), adc_max=adc_max)
     rec = simulate_session(user, params, motions or motions_for(kind), trials=trials, seed=seed)
     if range_holds:
         holds = simulate_range_holds(user, params, seed=seed + 1, start_s=rec.time_s[-1] + 1.0)
@@ -82,6 +100,7 @@ def simulate(out, kind, user_seed, donning, motions, trials, seed, range_holds, 
 def calibrate(recording, out, kind, models, t_threshold, n_points, synergy_k, synergy_csv,
               synergy_units, adc_max):
     """Fit every estimator on RECORDING (CSV with motions and reference angles)."""
+    from .._checks import check_integer, check_number
     from .._io import check_output
     from ..errors import InvalidInputError
     from ..sensors.glove import (
@@ -96,13 +115,16 @@ def calibrate(recording, out, kind, models, t_threshold, n_points, synergy_k, sy
     from ..sensors.glove import calibrate as fit
 
     check_output(out, what="calibration file", inputs=[recording, synergy_csv])
+    check_number(t_threshold, "--t-threshold", minimum=0)
+    check_integer(n_points, "--points", minimum=1, maximum=200)
+    check_integer(synergy_k, "--synergies", minimum=0, maximum=20)
+    if synergy_csv and synergy_k < 1:
+        raise InvalidInputError("--synergy-csv needs --synergies >= 1, got --synergies 0")
     rec = read_glove_csv(recording, kind=kind, adc_max=adc_max)
     opts = CalibrationOptions(models=tuple(models) or _MODELS, t_threshold=t_threshold,
                               n_points=n_points, synergy_k=synergy_k)
     synergies = None
     if synergy_csv:
-        if synergy_k < 1:
-            raise InvalidInputError("--synergy-csv needs --synergies >= 1")
         synergies = fit_synergies(read_cyberglove_csv(synergy_csv, units=synergy_units),
                                   k=synergy_k, source=str(synergy_csv))
         click.echo(f"synergies from {synergy_csv}: {synergy_k} explain "
@@ -145,39 +167,11 @@ def calibrate(recording, out, kind, models, t_threshold, n_points, synergy_k, sy
               help="Full scale of the readings, counts.")
 def apply(calibration, readings, out, name, motion, range_csv, adc_max):
     """Estimate joint angles from READINGS (CSV) with CALIBRATION (JSON)."""
-    from .._io import check_output
-    from ..errors import InvalidInputError
-    from ..sensors.glove import (
-        RangeNormalizer,
-        check_sensors,
-        load_calibration,
-        range_readings,
-        read_glove_csv,
-        write_angles_csv,
-    )
+    from ..sensors.glove import apply_calibration
 
-    check_output(out, what="angles file", inputs=[calibration, readings, range_csv])
-    cal = load_calibration(calibration)
-    est = cal["estimators"].get(name)
-    if est is None:
-        raise InvalidInputError(f"{calibration}: no estimator {name!r}; it holds "
-                                f"{', '.join(cal['estimators'])}")
-    rec = read_glove_csv(readings, kind=cal["kind"], adc_max=adc_max)
-    sensors = rec.sensors
-    check_sensors(sensors, adc_max=adc_max, where=str(readings))
-    if range_csv:
-        if cal["range_reference"] is None:
-            raise InvalidInputError(f"{calibration}: the calibration had no range_open/"
-                                    "range_fist holds, so --range cannot be used")
-        src = range_readings(read_glove_csv(range_csv, adc_max=adc_max), where=range_csv)
-        if src is None:
-            raise InvalidInputError(f"{range_csv}: needs rows with motion 'range_open' "
-                                    "and rows with motion 'range_fist'")
-        tgt = cal["range_reference"]
-        sensors = RangeNormalizer(src[0], src[1], tgt[0], tgt[1]).apply(sensors)
-    angles = est.predict(sensors, motion=motion)  # warns of readings off the calibration's range
-    write_angles_csv(out, angles, time_s=rec.time_s)
-    click.echo(f"{readings}: {rec.n_samples} samples -> {out} ({name}"
+    angles = apply_calibration(calibration, readings, out, model=name, motion=motion,
+                               range_csv=range_csv, adc_max=adc_max)
+    click.echo(f"{readings}: {len(angles)} samples -> {out} ({name}"
                + (f", motion {motion}" if motion else ", mixed over motions") + ")")
 
 

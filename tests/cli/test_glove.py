@@ -76,7 +76,7 @@ def test_apply_flags_bad_readings_and_keeps_rows(files):
     assert "handsynth: warning: " in res.output
     assert "sensor_middle is dead" in res.output
     assert "sensor_little is saturated (at 4095 counts) in 10 of 60" in res.output
-    assert "1 of 60 rows have a NaN reading (first rows 7)" in res.output
+    assert "bad.csv: 1 of 60 rows have a NaN reading (at line 9)" in res.output
     with out.open() as f:
         rows = list(csv.reader(f))[1:]
     assert len(rows) == 60 and rows[7][1] == "nan" and rows[8][1] != "nan"
@@ -429,3 +429,149 @@ def test_simulate_trials_are_bounded(tmp_path):
     # before: --trials 100000000 ran on for ever
     res = _run("glove", "simulate", tmp_path / "s.csv", "--trials", 100_000_000)
     assert res.exit_code == 2 and "--trials" in res.output and not (tmp_path / "s.csv").exists()
+
+
+def _one_error_line(res, *words):
+    """The run failed with exit 2 and one error line naming `words`, no traceback."""
+    assert res.exit_code == 2, res.output
+    errors = [ln for ln in res.output.splitlines() if ln.startswith("handsynth: error: ")]
+    assert len(errors) == 1 and "Traceback" not in res.output, res.output
+    for w in words:
+        assert w in errors[0], res.output
+    return errors[0]
+
+
+def test_an_all_saturated_recording_names_the_saturated_sensors(files, tmp_path):
+    # the error was "no samples labelled with a motion" (calibrate) or a file of
+    # meaningless angles with exit 0 (apply)
+    rec = tmp_path / "sat.csv"
+    res = _run("glove", "simulate", rec, "--trials", 1, "--adc-max", 1)
+    assert res.exit_code == 0, res.output
+    res = _run("glove", "calibrate", rec, "-o", tmp_path / "c.json", "--kind", "dg5",
+               "--adc-max", 1)
+    line = _one_error_line(res, "sat.csv", "have a saturated reading")
+    assert "labelled" not in line
+    for name in SENSOR_NAMES:
+        assert f"{name} saturated (at 1 counts) in " in line, line
+    res = _run("glove", "apply", files["cal"], rec, "-o", tmp_path / "a.csv", "--adc-max", 1)
+    _one_error_line(res, "sat.csv: every reading is saturated",
+                    "sensor_little saturated (at 1 counts) in ")
+    assert not (tmp_path / "a.csv").exists() and not (tmp_path / "c.json").exists()
+    res = _run("glove", "apply", files["cal"], files["wear"], "-o", tmp_path / "a.csv",
+               "--adc-max", 1)                          # readings above the full scale
+    _one_error_line(res, "above the full scale 1 counts", "--adc-max")
+    assert not (tmp_path / "a.csv").exists()
+
+
+def test_saturated_range_holds_are_named_by_hold_and_sensor(files, tmp_path):
+    # a fist hold at the converter's end was taken as the hold's reading, without a word
+    def fist_at_top(header, rows):
+        k, m = header.index("sensor_index"), header.index("motion")
+        return header, [r[:k] + ["4095"] + r[k + 1:] if r[m] == "range_fist" else r
+                        for r in rows]
+
+    def open_negative(header, rows):
+        k, m = header.index("sensor_ring"), header.index("motion")
+        return header, [r[:k] + ["-12"] + r[k + 1:] if r[m] == "range_open" else r
+                        for r in rows]
+
+    cal = _edit_csv(files["cal_csv"], tmp_path / "calfist.csv", fist_at_top)
+    res = _run("glove", "calibrate", cal, "-o", tmp_path / "c.json", "--kind", "dg5")
+    _one_error_line(res, "calfist.csv: sensor_index is saturated (at 4095 counts) in 30 of the "
+                         "30 rows labelled range_fist")
+    assert not (tmp_path / "c.json").exists()
+    rng = _edit_csv(files["wear"], tmp_path / "neg.csv", open_negative)
+    res = _run("glove", "apply", files["cal"], files["wear"], "-o", tmp_path / "a.csv",
+               "--range", rng)
+    line = _one_error_line(res, "neg.csv: sensor_ring is below the converter's range (negative, "
+                                "down to -12 counts) in 30 of the 30 rows labelled range_open")
+    assert "saturated" not in line.split("neg.csv: ", 1)[1]
+    assert not (tmp_path / "a.csv").exists()
+
+
+def test_warnings_count_rows_and_name_them_by_file_line(files, tmp_path):
+    # the same rows were "rows" (counted from 0 after the header) in one warning and
+    # "samples" in the next
+    def holes(header, rows):
+        k = header.index("sensor_thumb")
+        for i in (3, 40):
+            rows[i][k] = ""
+        rows[7][header.index("sensor_middle")] = "-5"
+        return header, rows
+
+    rec = _edit_csv(files["cal_csv"], tmp_path / "holes.csv", holes)
+    res = _run("glove", "calibrate", rec, "-o", tmp_path / "c.json", "--kind", "dg5")
+    assert res.exit_code == 0, res.output
+    n = len(files["cal_csv"].read_text().splitlines()) - 1
+    assert f"holes.csv: dropped 2 of {n} rows with NaN (first at lines 5, 42)" in res.output
+    assert (f"holes.csv: dropped 1 of {n} rows with an out-of-range reading (sensor_middle below "
+            "the converter's range (negative, down to -5 counts) in 1 row; at line 9)"
+            in res.output), res.output
+
+
+def test_apply_writes_what_the_library_function_writes(files, tmp_path):
+    from handsynth.sensors.glove import apply_calibration
+
+    res = _run("glove", "apply", files["cal"], files["wear"], "-o", tmp_path / "cli.csv",
+               "--range", files["wear"], "--model", "model4+synergy")
+    assert res.exit_code == 0, res.output
+    apply_calibration(files["cal"], files["wear"], tmp_path / "lib.csv", model="model4+synergy",
+                      range_csv=files["wear"])
+    assert (tmp_path / "cli.csv").read_bytes() == (tmp_path / "lib.csv").read_bytes()
+
+
+@pytest.mark.parametrize("content, words", [
+    ("0,pinch,0,1,2,3,4,5\n1,pinch,0,1,2,3,4,5\n", "line 1: the first line holds numbers"),
+    ("time_s,sensor_thumb,sensor_index,sensor_middle,sensor_ring,sensor_little\n"
+     "0,1500,1500,1500,1500,inf\n", "line 2: sensor_little is 'inf', not a finite number"),
+    ("time_s,sensor_thumb,sensor_index,sensor_middle,sensor_ring,sensor_little\n"
+     "0,1500,,1500,1500,1500\n0.1,nan,1500,1500,1500,1500\n", "none of the 2 rows has all five"),
+    ("time_s,sensor_thumb,sensor_index,sensor_middle,sensor_ring,sensor_little\n"
+     "0,1500,1500,1500\n", "line 2: 4 fields, header has 6"),
+    ("time_s,sensor_thumb,sensor_index,sensor_middle,sensor_ring\n0,1,2,3,4\n",
+     "missing sensor column(s) sensor_little"),
+    ("", "empty file"),
+])
+def test_a_damaged_readings_file_is_one_line_and_nothing_is_written(files, tmp_path, content,
+                                                                    words):
+    bad = tmp_path / "bad.csv"
+    bad.write_text(content)
+    res = _run("glove", "apply", files["cal"], bad, "-o", tmp_path / "a.csv")
+    _one_error_line(res, "bad.csv", words)
+    assert not (tmp_path / "a.csv").exists()
+
+
+@pytest.mark.parametrize("args, words", [
+    (["calibrate", "{cal}", "-o", "{tmp}/c.json", "--kind", "dg5", "--t-threshold", "-1"],
+     "--t-threshold must be a finite number >= 0, got -1"),
+    (["calibrate", "{cal}", "-o", "{tmp}/c.json", "--kind", "dg5", "--t-threshold", "nan"],
+     "--t-threshold must be a finite number >= 0, got nan"),
+    (["calibrate", "{cal}", "-o", "{tmp}/c.json", "--kind", "dg5", "--points", "0"],
+     "--points must be an integer >= 1 and <= 200, got 0"),
+    (["calibrate", "{cal}", "-o", "{tmp}/c.json", "--kind", "dg5", "--synergies", "21"],
+     "--synergies must be an integer >= 0 and <= 20, got 21"),
+    (["simulate", "{tmp}/s.csv", "--motion", "tripod", "--motion", "tripod"],
+     "--motion tripod is given twice"),
+    (["simulate", "{tmp}/s.csv", "--motion", "wave"], "--motion: unknown motion 'wave'"),
+    (["simulate", "{tmp}/s.csv", "--adc-max", "0"], "--adc-max must be an integer >= 1, got 0"),
+])
+def test_options_past_their_limits_name_the_option(files, tmp_path, args, words):
+    args = [a.replace("{tmp}", str(tmp_path)).replace("{cal}", str(files["cal_csv"]))
+            for a in args]
+    res = _run("glove", *args)
+    _one_error_line(res, words)
+    assert not list(tmp_path.iterdir())
+
+
+def test_a_corrupt_synergy_export_is_one_line(files, tmp_path):
+    # a 1e308 cell crashed calibrate with a traceback from the eigen-decomposition
+    from handsynth.sensors.glove import CYBERGLOVE_COLUMNS
+
+    data = np.random.default_rng(0).uniform(0, 40, (50, len(CYBERGLOVE_COLUMNS)))
+    data[7, 5] = 1e308
+    export = tmp_path / "cyber.csv"
+    np.savetxt(export, data, delimiter=",")
+    res = _run("glove", "calibrate", files["cal_csv"], "-o", tmp_path / "c.json", "--kind",
+               "dg5", "--synergy-csv", export)
+    _one_error_line(res, "cyber.csv, line 8: index_pip is", "beyond any joint angle")
+    assert not (tmp_path / "c.json").exists()

@@ -11,6 +11,7 @@ model, a postural-synergy baseline and the constant answer.
 Units: readings in ADC counts, angles in degrees, times in seconds.
 """
 
+from ._apply import apply_calibration
 from ._calibrate import (
     RANGE_LABELS,
     CalibrationOptions,
@@ -118,6 +119,7 @@ __all__ = [
     "SensorParams",
     "Synergies",
     "SynergyEstimator",
+    "apply_calibration",
     "bend_angle_deg",
     "calibrate",
     "check_reading_range",

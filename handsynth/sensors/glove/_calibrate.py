@@ -21,8 +21,8 @@ import numpy as np
 from ..._checks import check_instance, check_integer, check_options
 from ..._io import write_text
 from ...errors import EstimationError, InvalidInputError, RecordingError
-from ...models import natural_pose_set
-from ._checks import check_sensors
+from ...models import JOINT_NAMES, natural_pose_set
+from ._checks import check_sensors, off_scale_words, row_positions, scale_hint
 from ._estimators import (
     ConstantEstimator,
     GatedEstimator,
@@ -33,7 +33,7 @@ from ._estimators import (
 )
 from ._fields import array_field, as_number
 from ._mixing import fit_mixer
-from ._models import MODELS, GloveWarning, fit_motion_model
+from ._models import MODELS, GloveWarning, finger_joints, fit_motion_model
 from ._recording import RANGE_LABELS, GloveRecording
 from ._sensors import GLOVE_KINDS, SENSOR_NAMES
 from ._synergy import Synergies, fit_synergies
@@ -141,7 +141,8 @@ def _default_synergies(k: int) -> Synergies:
 
 
 def _clean(rec: GloveRecording, where: str) -> GloveRecording:
-    """Drop NaN rows and saturated samples; refuse dead sensors."""
+    """Drop rows with a NaN and rows with a saturated or out-of-range reading; refuse dead
+    sensors and a recording with no row left (saying why each row went)."""
     if rec.angles is None:
         raise EstimationError(f"{where}: no reference joint angles; calibration needs them")
     chk = check_sensors(rec.sensors, adc_max=rec.adc_max, where=where, warn=False)
@@ -149,21 +150,48 @@ def _clean(rec: GloveRecording, where: str) -> GloveRecording:
         k = chk.dead[0]
         raise EstimationError(
             f"{where}: {SENSOR_NAMES[k]} is dead (it reads "
-            f"{rec.sensors[~np.isnan(rec.sensors[:, k]), k][0]:g} counts in every sample); "
+            f"{rec.sensors[~np.isnan(rec.sensors[:, k]), k][0]:g} counts in every row); "
             "fix the sensor before calibrating")
+    n = rec.n_samples
     bad = np.isnan(rec.sensors).any(axis=1) | np.isnan(rec.angles).any(axis=1)
     if bad.any():
-        rows = ", ".join(str(int(r)) for r in np.flatnonzero(bad)[:5])
-        warnings.warn(f"{where}: dropped {int(bad.sum())} of {rec.n_samples} rows with NaN "
-                      f"(first rows {rows})", GloveWarning, stacklevel=3)
-    sat = chk.saturated.any(axis=1) & ~bad
-    if sat.any():
-        per = ", ".join(f"{SENSOR_NAMES[k]} {int(chk.saturated[:, k].sum())}"
-                        for k in range(5) if chk.saturated[:, k].any())
-        warnings.warn(f"{where}: dropped {int(sat.sum())} of {rec.n_samples} samples with a "
-                      f"saturated reading ({per}); a saturated sensor says only 'at least "
-                      "this far'", GloveWarning, stacklevel=3)
+        warnings.warn(f"{where}: dropped {int(bad.sum())} of {n} rows with NaN "
+                      f"({row_positions(np.flatnonzero(bad), rec.lines)})", GloveWarning,
+                      stacklevel=3)
+    off = chk.off_scale & ~bad[:, None]
+    sat = off.any(axis=1)
+    per = "; ".join(f"{SENSOR_NAMES[k]} "
+                    + " and ".join(off_scale_words(rec.sensors, chk, k, adc_max=rec.adc_max,
+                                                   rows=~bad, unit="row"))
+                    for k in range(5) if off[:, k].any())
+    what = " or ".join(w for w, hit in (("saturated", chk.saturated[~bad].any()),
+                                         ("out-of-range", (chk.below | chk.above)[~bad].any()))
+                       if hit)
+    if sat.any() and not (bad | sat).all():
+        warnings.warn(f"{where}: dropped {int(sat.sum())} of {n} rows with {_article(what)} "
+                      f"{what} reading ({per}; "
+                      f"{row_positions(np.flatnonzero(sat), rec.lines)})"
+                      + ("; a saturated sensor says only 'at least this far'"
+                         if chk.saturated[~bad].any() else "") + scale_hint(chk),
+                      GloveWarning, stacklevel=3)
+    if (bad | sat).all():
+        why = []
+        if bad.any():
+            why.append(f"{int(bad.sum())} have a NaN reading or angle")
+        if sat.any():
+            why.append(f"{int(sat.sum())} have {_article(what)} {what} reading ({per})")
+        raise EstimationError(f"{where}: no row is left to calibrate on: of the {n} rows, "
+                              f"{' and '.join(why)}{scale_hint(chk)}")
     return rec.select(~bad & ~sat)
+
+
+def _article(word: str) -> str:
+    return "an" if word[:1] in "aeiou" else "a"
+
+
+def _motion_rows(rec: GloveRecording) -> np.ndarray:
+    """Rows labelled with a motion (not empty, not a range hold), shape (N,), bool."""
+    return ~np.isin(rec.motion.astype(str), ("", *RANGE_LABELS))
 
 
 def calibrate(rec: GloveRecording, *, options: CalibrationOptions | None = None,
@@ -195,25 +223,33 @@ def calibrate(rec: GloveRecording, *, options: CalibrationOptions | None = None,
     Raises
     ------
     EstimationError
-        No reference angles, no motion samples, a dead sensor, or a
-        regression that cannot be fitted (named in the message).
+        No reference angles; no row left once rows with a NaN or a saturated
+        or out-of-range reading are dropped (each sensor named with its count
+        of rows); no motion rows, or none left; a dead sensor; or a regression
+        that cannot be fitted (named in the message, after `where`).
 
     Warns
     -----
     GloveWarning
-        Rows dropped for NaN or saturation; too few samples for a regression
-        (with the t-values).
+        Rows dropped for NaN, saturation or readings out of the converter's
+        range (counted in rows, named by file line where ``rec.lines`` is
+        set); too few samples for a regression (with the t-values); models 3
+        and 4 keeping no sensor for a joint-3 fit (`t_threshold` too high).
     """
     opts = check_options(options, CalibrationOptions)
     check_instance(rec, GloveRecording, name="rec")
+    n_motion_rows = int(_motion_rows(rec).sum())
     rec = _clean(rec, where)
-    is_motion = ~np.isin(rec.motion.astype(str), ("", *RANGE_LABELS))
-    cal = rec.select(is_motion)
+    cal = rec.select(_motion_rows(rec))
     angles = cal.angles
     assert angles is not None  # _clean refused a recording without them
     motions = tuple(dict.fromkeys(cal.motion.tolist()))
+    if not motions and n_motion_rows:
+        raise EstimationError(f"{where}: every one of the {n_motion_rows} rows labelled with a "
+                              "motion was dropped (NaN, saturated or out-of-range readings: "
+                              "see the warning); only range holds are left")
     if not motions:
-        raise EstimationError(f"{where}: no samples labelled with a motion (column 'motion')")
+        raise EstimationError(f"{where}: no rows labelled with a motion (column 'motion')")
     reading_range = np.stack([rec.sensors.min(axis=0), rec.sensors.max(axis=0)])
     centre = cal.sensors.mean(axis=0)
     scale = cal.sensors.std(axis=0)
@@ -224,28 +260,37 @@ def calibrate(rec: GloveRecording, *, options: CalibrationOptions | None = None,
     out: dict[str, GloveEstimator] = {
         "constant": ConstantEstimator(posture=angles.mean(axis=0), reading_range=reading_range)}
     mixer = None
-    if len(motions) > 1:
-        mixer = fit_mixer(cal.sensors, cal.motion, cal.phase(), motions=motions,
-                          centre=centre, scale=scale, n_points=opts.n_points, ridge=opts.ridge)
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", GloveWarning)
-        for model in opts.models:
-            fits = {}
-            for m in motions:
-                sel = cal.motion == m
-                fits[m] = fit_motion_model(cal.sensors[sel], angles[sel], model=model,
-                                           motion=m, t_threshold=opts.t_threshold,
-                                           centre=centre, scale=scale)
-            out[model] = RegressionEstimator(name=model, models=fits, mixer=mixer,
-                                             reading_range=reading_range)
-    _reemit(caught, where)
-    if opts.pooled:
-        out["pooled_model4"] = RegressionEstimator(
-            name="pooled_model4",
-            models={"pooled": fit_motion_model(cal.sensors, angles, model="model4",
-                                               motion="pooled", t_threshold=opts.t_threshold,
-                                               centre=centre, scale=scale)},
-            reading_range=reading_range)
+    try:
+        if len(motions) > 1:
+            mixer = fit_mixer(cal.sensors, cal.motion, cal.phase(), motions=motions,
+                              centre=centre, scale=scale, n_points=opts.n_points,
+                              ridge=opts.ridge)
+        caught: list = []
+        try:
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always", GloveWarning)
+                for model in opts.models:
+                    fits = {}
+                    for m in motions:
+                        sel = cal.motion == m
+                        fits[m] = fit_motion_model(cal.sensors[sel], angles[sel], model=model,
+                                                   motion=m, t_threshold=opts.t_threshold,
+                                                   centre=centre, scale=scale)
+                    out[model] = RegressionEstimator(name=model, models=fits, mixer=mixer,
+                                                     reading_range=reading_range)
+        finally:  # also when a fit fails: the warnings (too few samples) explain it
+            _reemit(caught, where)
+        if opts.pooled:
+            out["pooled_model4"] = RegressionEstimator(
+                name="pooled_model4",
+                models={"pooled": fit_motion_model(cal.sensors, angles, model="model4",
+                                                   motion="pooled",
+                                                   t_threshold=opts.t_threshold,
+                                                   centre=centre, scale=scale)},
+                reading_range=reading_range)
+    except EstimationError as exc:  # a fit that failed: name the recording
+        raise EstimationError(f"{where}: {exc}") from None
+    _warn_no_sensor_kept(out, opts.t_threshold, where)
     if opts.synergy_k:
         if rec.kind not in GLOVE_KINDS:
             raise EstimationError(f"{where}: the glove kind is unknown; give one of "
@@ -257,6 +302,23 @@ def calibrate(rec: GloveRecording, *, options: CalibrationOptions | None = None,
             out["model4+synergy"] = GatedEstimator(primary=primary, fallback=out["synergy"],
                                                    reading_range=reading_range)
     return out
+
+
+def _warn_no_sensor_kept(estimators: dict, t_threshold: float, where: str) -> None:
+    """Warn when models 3 or 4 keep no sensor for a joint-3 fit (|t| below the threshold
+    for all five): that joint is then a constant, whatever the readings."""
+    j3 = [f["j3"] for f in finger_joints()]
+    for name, est in estimators.items():
+        if not isinstance(est, RegressionEstimator) or name in ("model1", "model2"):
+            continue
+        empty = [f"{m} {JOINT_NAMES[j]}" for m, mm in est.models.items() for j in j3
+                 if not mm.fits[j].terms]
+        if empty:
+            n = len(est.models) * len(j3)
+            warnings.warn(f"{where}: {name} keeps no sensor (every |t| < {t_threshold:g}, "
+                          f"the t threshold) in {len(empty)} of {n} joint-3 fits "
+                          f"({', '.join(empty[:3])}{', ...' if len(empty) > 3 else ''}): "
+                          "those joints are constants", GloveWarning, stacklevel=3)
 
 
 def _reemit(caught, where: str) -> None:
@@ -303,7 +365,8 @@ def range_readings(rec: GloveRecording, *, where: str = "recording"
     ----------
     rec : GloveRecording
         A recording whose ``motion`` labels some samples ``"range_open"`` and
-        ``"range_fist"`` (:data:`RANGE_LABELS`, compared exactly).
+        ``"range_fist"`` (:data:`RANGE_LABELS`, compared exactly); its
+        ``adc_max`` tells saturated readings.
     where : str, keyword-only
         What the recording is (a file name), for the message.
 
@@ -317,8 +380,17 @@ def range_readings(rec: GloveRecording, *, where: str = "recording"
     Raises
     ------
     RecordingError
-        A sensor has no reading (only NaN) in one of the holds (`where` names
-        the file).
+        A sensor has no reading (only NaN) in one of the holds, or half or
+        more of its readings in a hold are saturated or out of the
+        converter's range (its median is then not the hold's reading); the
+        message names the file (`where`), the hold, the sensor and the count.
+
+    Warns
+    -----
+    GloveWarning
+        Fewer than half of a sensor's readings in a hold are saturated or out
+        of the converter's range (the median is still the hold's reading, but
+        the hold is at the end of the range).
     """
     lab = rec.motion.astype(str)
     if not all((lab == r).any() for r in RANGE_LABELS):
@@ -326,10 +398,26 @@ def range_readings(rec: GloveRecording, *, where: str = "recording"
     out = []
     for r in RANGE_LABELS:
         held = rec.sensors[lab == r]
+        n = len(held)
         empty = np.flatnonzero(np.isnan(held).all(axis=0))
         if empty.size:
             raise RecordingError(f"{where}: {SENSOR_NAMES[empty[0]]} has no reading in the "
-                                 f"{int((lab == r).sum())} rows labelled {r}")
+                                 f"{n} rows labelled {r}")
+        chk = check_sensors(held, adc_max=rec.adc_max, where=where, warn=False)
+        for k in range(5):
+            valid = ~np.isnan(held[:, k])
+            n_off = int(chk.off_scale[valid, k].sum())
+            if not n_off:
+                continue
+            words = " and ".join(off_scale_words(held, chk, k, adc_max=rec.adc_max, rows=valid))
+            text = (f"{where}: {SENSOR_NAMES[k]} is {words} of the {int(valid.sum())} rows "
+                    f"labelled {r}")
+            hint = scale_hint(chk) if chk.above[valid, k].any() else ""
+            if 2 * n_off >= valid.sum():
+                raise RecordingError(f"{text}: its reading in that hold is not known; record "
+                                     f"the hold again with the sensor inside the range{hint}")
+            warnings.warn(f"{text}; the hold's median is kept, but the hold reaches the end of "
+                          f"the range{hint}", GloveWarning, stacklevel=2)
         out.append(np.nanmedian(held, axis=0))
     return out[0], out[1]
 

@@ -25,6 +25,7 @@ with a header is read by name, a file without one in that order; pass
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -32,6 +33,7 @@ import numpy as np
 from ..._csv import column_index, read_rows
 from ...errors import RecordingError
 from ...models import JOINT_LIMITS_DEG, JOINT_NAMES
+from ._models import GloveWarning
 
 __all__ = ["CYBERGLOVE_COLUMNS", "read_cyberglove_csv"]
 
@@ -52,6 +54,9 @@ _DIRECT = {
        for j in ("mcp", "pip", "dip")},
 }
 
+#: Largest |angle| (deg) a cell can hold: beyond, it is corrupt (the synergies' covariance
+#: would overflow).
+_MAX_ANGLE_DEG = 720.0
 #: Share of values beyond the joint limits (by more than 30 deg) above which
 #: the file is refused as being in other units.
 _UNIT_SUSPECT_SHARE = 0.05
@@ -82,7 +87,13 @@ def read_cyberglove_csv(path, *, units: str = "deg",
     ------
     RecordingError
         No such file, no data, a missing column, a cell that is not a number
-        (file, line and column named), or values that look like another unit.
+        or is infinite or beyond +-720 deg (file, line and column named), or
+        values that look like another unit.
+
+    Warns
+    -----
+    GloveWarning
+        Rows with an empty or NaN cell (counted, named by file line).
     """
     if units not in ("deg", "rad"):
         raise RecordingError(f"units must be 'deg' or 'rad', got {units!r}")
@@ -120,10 +131,17 @@ def read_cyberglove_csv(path, *, units: str = "deg",
                 raw[i, k] = np.nan
                 continue
             try:
-                raw[i, k] = float(cell) * scale
+                v = float(cell) * scale
             except ValueError:
                 raise RecordingError(f"{path}, line {line}: {name} is {cell!r}, not a "
                                      "number") from None
+            if not np.isfinite(v) or abs(v) > _MAX_ANGLE_DEG:
+                hint = "; is the file in degrees? pass units='deg' (--synergy-units deg)" \
+                    if units == "rad" and np.isfinite(v) else ""
+                raise RecordingError(f"{path}, line {line}: {name} is {cell!r}"
+                                     f"{' rad' if units == 'rad' else ''}, beyond any joint "
+                                     f"angle (|angle| <= {_MAX_ANGLE_DEG:g} deg){hint}")
+            raw[i, k] = v
     g = dict(zip(CYBERGLOVE_COLUMNS[:19], raw.T))
     out = np.empty((len(body), len(JOINT_NAMES)))
     for joint, sensor in _DIRECT.items():
@@ -133,8 +151,15 @@ def read_cyberglove_csv(path, *, units: str = "deg",
     out[:, JOINT_NAMES.index("middle_mcp_abd")] = 0.0
     out[:, JOINT_NAMES.index("ring_mcp_abd")] = ring
     out[:, JOINT_NAMES.index("little_mcp_abd")] = ring - g["little_ring_abduction"]
-    out[np.isnan(out).any(axis=1)] = np.nan
+    gaps = np.isnan(out).any(axis=1)
+    out[gaps] = np.nan
     _check_units(out, path, units)
+    if gaps.any():
+        idx = np.flatnonzero(gaps)
+        at = f"at line {lines[idx[0]]}" if idx.size == 1 else \
+            "first at lines " + ", ".join(str(lines[r]) for r in idx[:5])
+        warnings.warn(f"{path}: {idx.size} of {len(body)} rows have an empty or NaN cell "
+                      f"({at}); their postures are NaN (left out of synergies)", GloveWarning, stacklevel=2)
     return out
 
 

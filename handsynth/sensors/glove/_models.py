@@ -309,9 +309,10 @@ def fit_motion_model(sensors: np.ndarray, angles: np.ndarray, *, model: str,
         raise InvalidInputError(f"t_threshold must be >= 0, got {t_threshold!r}")
     bad = np.isnan(s).any(axis=1) | np.isnan(a).any(axis=1)
     if bad.any():
-        rows = ", ".join(str(int(r)) for r in np.flatnonzero(bad)[:5])
-        warnings.warn(f"{label}: dropped {int(bad.sum())} of {len(s)} rows with NaN "
-                      f"(first rows {rows})", GloveWarning, stacklevel=2)
+        idx = np.flatnonzero(bad)
+        at = "at row index" if idx.size == 1 else "first at row indices"
+        warnings.warn(f"{label}: dropped {idx.size} of {len(s)} rows with NaN ({at} "
+                      f"{', '.join(str(int(r)) for r in idx[:5])})", GloveWarning, stacklevel=2)
         s, a = s[~bad], a[~bad]
     if not len(s):
         raise EstimationError(f"{label}: no calibration samples with every reading and angle")
@@ -326,7 +327,7 @@ def fit_motion_model(sensors: np.ndarray, angles: np.ndarray, *, model: str,
         if dead.size:
             raise EstimationError(
                 f"motion {motion!r}: {SENSOR_NAMES[dead[0]]} reads a constant "
-                f"{s[0, dead[0]]:g} counts over {len(s)} samples (a dead sensor)")
+                f"{s[0, dead[0]]:g} counts over {len(s)} rows (a dead sensor)")
     z = (s - centre) / scale
     fits = {}
     for i, fj in enumerate(finger_joints()):

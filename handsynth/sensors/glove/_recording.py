@@ -82,7 +82,14 @@ class GloveRecording:
         Noise-free joint angles of a simulated recording (``angles`` then
         carries the reference glove's error); None for real data.
     adc_max : float
-        Full scale of the readings (a reading at 0 or `adc_max` is saturated).
+        Full scale of the readings (a reading at 0 or `adc_max` is saturated; one
+        below 0 or above `adc_max` is out of the converter's range).
+    meta : dict
+        Free-form notes (not written to CSV).
+    lines : ndarray, shape (N,), int64, or None
+        Line of each sample in the file it was read from (1 = the header line),
+        so that messages name rows as the file numbers them; None for data not
+        read from a file.
 
     Raises
     ------
@@ -100,6 +107,7 @@ class GloveRecording:
     truth: np.ndarray | None = None
     adc_max: float = 4095.0
     meta: dict = field(default_factory=dict)
+    lines: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         s = np.asarray(self.sensors, dtype=np.float64)
@@ -130,6 +138,11 @@ class GloveRecording:
             raise RecordingError(f"kind must be one of {', '.join(GLOVE_KINDS)} or '', "
                                  f"got {self.kind!r}")
         _check_adc_max(self.adc_max)
+        if self.lines is not None:
+            lines = np.asarray(self.lines, dtype=np.int64)
+            if lines.shape != (n,):
+                raise RecordingError(f"lines must have shape ({n},), got {lines.shape}")
+            object.__setattr__(self, "lines", lines)
 
     @property
     def n_samples(self) -> int:
@@ -143,7 +156,8 @@ class GloveRecording:
             angles=None if self.angles is None else self.angles[m],
             motion=self.motion[m], trial=self.trial[m], time_s=self.time_s[m],
             kind=self.kind, truth=None if self.truth is None else self.truth[m],
-            adc_max=self.adc_max, meta=dict(self.meta))
+            adc_max=self.adc_max, meta=dict(self.meta),
+            lines=None if self.lines is None else self.lines[m])
 
     def trials(self) -> list[tuple[str, int]]:
         """The (motion, trial) pairs in order of first appearance."""
@@ -301,15 +315,18 @@ def read_glove_csv(path, *, kind: str = "", adc_max: float = 4095.0) -> GloveRec
     Returns
     -------
     GloveRecording
-        With ``angles`` when all 20 joint columns are present.
+        With ``angles`` when all 20 joint columns are present, and ``lines``,
+        each row's line in the file (for messages).
 
     Raises
     ------
     RecordingError
-        No such file, no header, a missing sensor column, two columns that
+        No such file, no header (a first line of numbers is named as such), a
+        missing sensor column, two columns that
         name one finger's sensor, some but not all
         joint columns, a row of the wrong length, or a cell that is not a
-        number; the message names the file, line and column.
+        number, is infinite or beyond any reading or angle; the message names
+        the file, line and column.
     """
     path = Path(path)
     _check_adc_max(adc_max)  # before reading the file
@@ -327,6 +344,10 @@ def read_glove_csv(path, *, kind: str = "", adc_max: float = 4095.0) -> GloveRec
             warnings.warn(f"{path}: {len(renamed)} columns read by their meaning "
                           f"({shown})", GloveWarning, stacklevel=2)
     missing = [c for c in SENSOR_NAMES if c not in header]
+    if missing and sum(_is_number(c) for c in rows[0]) >= len(SENSOR_NAMES):
+        raise RecordingError(f"{path}, line {content.lines[0]}: the first line holds numbers, "
+                             "not column names; a glove CSV starts with a header line naming "
+                             f"its columns ({', '.join(('time_s', 'motion', 'trial', *SENSOR_NAMES))})")
     if missing:
         raise RecordingError(f"{path}: missing sensor column(s) {', '.join(missing)}; "
                              f"header is {', '.join(header)}")
@@ -371,7 +392,8 @@ def read_glove_csv(path, *, kind: str = "", adc_max: float = 4095.0) -> GloveRec
         _check_degrees(angles, path)
     _check_trials(time_s, motion, trial, content.lines[1:], path, has_time="time_s" in col)
     return GloveRecording(sensors=sensors, angles=angles, motion=motion, trial=trial,
-                          time_s=time_s, kind=kind, adc_max=adc_max)
+                          time_s=time_s, kind=kind, adc_max=adc_max,
+                          lines=np.asarray(content.lines[1:], dtype=np.int64))
 
 
 def _check_trials(time_s, motion, trial, lines, path, *, has_time: bool) -> None:
@@ -401,6 +423,14 @@ def _check_trials(time_s, motion, trial, lines, path, *, has_time: bool) -> None
         prev_key = key
 
 
+def _is_number(cell: str) -> bool:
+    try:
+        float(cell)
+    except ValueError:
+        return False
+    return True
+
+
 def _check_adc_max(adc_max) -> None:
     if isinstance(adc_max, bool) or not isinstance(adc_max, (int, float)) \
             or not 0 < adc_max < np.inf:
@@ -424,7 +454,7 @@ def _num(cell: str, path, line: int, name: str, *, allow_empty: bool = False,
     except ValueError:
         raise RecordingError(f"{path}, line {line}: {name} is {cell!r}, not a number") from None
     if np.isinf(v) or (finite and np.isnan(v)):
-        raise RecordingError(f"{path}, line {line}: {name} is {cell!r}")
+        raise RecordingError(f"{path}, line {line}: {name} is {cell!r}, not a finite number")
     if abs(v) > bound:
         raise RecordingError(f"{path}, line {line}: {name} is {cell!r}, beyond any "
                              f"{'reading' if name in SENSOR_NAMES else 'joint angle'} "

@@ -257,7 +257,8 @@ def simulate_session(user: GloveUser, sensors: SensorParams, motions, *, trials:
     sensors : SensorParams
         The glove as worn (:func:`don_glove`).
     motions : sequence of str
-        Names from :data:`MOTIONS`.
+        Names from :data:`MOTIONS`, each at most once (one name alone is
+        taken as a sequence of one).
     trials : int, keyword-only
         Repetitions of each motion.
     seed : int, keyword-only
@@ -285,10 +286,15 @@ def simulate_session(user: GloveUser, sensors: SensorParams, motions, *, trials:
         raise InvalidInputError(f"trials must be a positive integer, got {trials!r}")
     if not rate_hz > 0:
         raise InvalidInputError(f"rate_hz must be positive, got {rate_hz!r}")
-    motions = list(motions)
-    for m in motions:
+    motions = [motions] if isinstance(motions, str) else list(motions)
+    if not motions:
+        raise InvalidInputError("motions must name at least one motion, got none")
+    for i, m in enumerate(motions):
         if m not in MOTIONS:
             raise InvalidInputError(f"unknown motion {m!r}; expected one of {', '.join(MOTIONS)}")
+        if m in motions[:i]:
+            # its trials would share numbers and read back as one trial of two grasps
+            raise InvalidInputError(f"motions: {m!r} is given twice; ask for more trials instead")
     rng = np.random.default_rng([int(seed), 29])
     parts, labels, trial_ids = [], [], []
     order = [(m, k) for k in range(trials) for m in motions]

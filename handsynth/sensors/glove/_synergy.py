@@ -34,6 +34,10 @@ from ._fields import array_field, number_field
 
 __all__ = ["Synergies", "fit_synergies"]
 
+#: Largest |joint angle| (deg) a posture can hold: beyond, a value is corrupt (and the
+#: covariance would overflow).
+_MAX_ANGLE_DEG = 720.0
+
 
 @dataclass(frozen=True, eq=False)
 class Synergies:
@@ -122,18 +126,26 @@ def fit_synergies(postures: np.ndarray, *, k: int = 2, source: str = "") -> Syne
     Raises
     ------
     InvalidInputError
-        `postures` not of shape (N, 20), or `k` not an integer in 1..20.
+        `postures` not of shape (N, 20), `k` not an integer in 1..20, or an
+        angle beyond +-720 deg (`source` named).
     EstimationError
-        Fewer than k + 2 finite postures, or postures that hardly vary (a
+        Fewer than k + 2 finite postures (`source` named), or postures that hardly vary (a
         total variance under 1 deg^2: nothing to find synergies in).
     """
     p = np.asarray(postures, dtype=np.float64)
     if p.ndim != 2 or p.shape[1] != len(JOINT_NAMES):
         raise InvalidInputError(f"postures must have shape (N, 20), got {p.shape}")
+    where = f"{source}: " if source else ""
     p = p[np.isfinite(p).all(axis=1)]
     check_integer(k, "k", minimum=1, maximum=20)
     if len(p) < k + 2:
-        raise EstimationError(f"{len(p)} finite postures cannot give {k} synergies")
+        raise EstimationError(f"{where}{len(p)} finite postures cannot give {k} synergies "
+                              f"(at least {k + 2} are needed)")
+    if np.abs(p).max() > _MAX_ANGLE_DEG:
+        row, col = np.unravel_index(int(np.argmax(np.abs(p))), p.shape)
+        raise InvalidInputError(f"{where}{JOINT_NAMES[col]} is {p[row, col]:g} deg in a "
+                                f"posture, beyond any joint angle (|angle| <= "
+                                f"{_MAX_ANGLE_DEG:g} deg)")
     mean = p.mean(axis=0)
     var_all, vec = np.linalg.eigh(np.cov(p, rowvar=False))
     order = np.argsort(var_all)[::-1]
@@ -141,7 +153,7 @@ def fit_synergies(postures: np.ndarray, *, k: int = 2, source: str = "") -> Syne
     vt = vec[:, order].T
     total = var.sum()
     if total < 1.0:
-        raise EstimationError(f"the {len(p)} postures hardly vary (total variance "
+        raise EstimationError(f"{where}the {len(p)} postures hardly vary (total variance "
                               f"{total:.3g} deg^2 over the 20 joints): synergies need "
                               "postures of many grasps")
     resid = float(var[k:].sum() / len(JOINT_NAMES))

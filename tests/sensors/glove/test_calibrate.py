@@ -39,8 +39,8 @@ def test_nan_and_saturated_rows_are_dropped_with_warnings(cal_rec):
         est = calibrate(_with(cal_rec, s), where="cal.csv",
                         options=CalibrationOptions(synergy_k=0))
     msgs = " | ".join(str(w.message) for w in got if issubclass(w.category, GloveWarning))
-    assert "cal.csv: dropped 3 of" in msgs and "first rows 10, 20, 30" in msgs
-    assert "dropped 40 of" in msgs and "sensor_middle 40" in msgs
+    assert "cal.csv: dropped 3 of" in msgs and "first at row indices 10, 20, 30" in msgs
+    assert "dropped 40 of" in msgs and "sensor_middle saturated (at 4095 counts) in 40" in msgs
     assert "synergy" not in est
 
 
@@ -52,7 +52,8 @@ def test_too_few_samples_warn_with_t_values(cal_rec):
     with warnings.catch_warnings(record=True) as got:
         warnings.simplefilter("always")
         calibrate(cal_rec.select(keep), options=CalibrationOptions(n_points=4, synergy_k=0))
-    msgs = [str(w.message) for w in got if issubclass(w.category, GloveWarning)]
+    msgs = [str(w.message) for w in got if issubclass(w.category, GloveWarning)
+            and "calibration samples" in str(w.message)]
     assert len(msgs) == 3                            # one per motion, not one per model
     std = next(m for m in msgs if "'standard'" in m)
     assert re.match(r"calibration: motion 'standard' \(model2\): only \d+ calibration "
@@ -66,7 +67,7 @@ def test_no_reference_angles_or_motions_raise(cal_rec):
     with pytest.raises(EstimationError, match="no reference joint angles"):
         calibrate(bare)
     unl = GloveRecording(sensors=cal_rec.sensors, angles=cal_rec.angles, kind="dg5")
-    with pytest.raises(EstimationError, match="no samples labelled with a motion"):
+    with pytest.raises(EstimationError, match="no rows labelled with a motion"):
         calibrate(unl)
 
 
@@ -200,3 +201,86 @@ def test_a_zero_reading_scale_in_a_calibration_file_is_refused(tmp_path, cal_rec
     path.write_text(json.dumps(d))
     with pytest.raises(InvalidInputError, match=rf"estimator '{hit[0]}': field 'scale' must be positive"):
         load_calibration(path)
+
+
+def test_an_all_saturated_recording_says_so(cal_rec):
+    # every row dropped for saturation; the error said "no samples labelled with a motion"
+    sensors = np.full_like(cal_rec.sensors, cal_rec.adc_max)
+    with pytest.raises(EstimationError) as got:
+        calibrate(_with(cal_rec, sensors), where="cal.csv")
+    msg = str(got.value)
+    assert "labelled" not in msg and "dead" not in msg, msg
+    n = cal_rec.n_samples
+    assert msg.startswith(f"cal.csv: no row is left to calibrate on: of the {n} rows, {n} have "
+                          "a saturated reading")
+    for name in SENSOR_NAMES:
+        assert f"{name} saturated (at 4095 counts) in {n} rows" in msg, msg
+
+
+def test_readings_above_the_full_scale_ask_for_it(cal_rec):
+    rec = GloveRecording(sensors=cal_rec.sensors, angles=cal_rec.angles, motion=cal_rec.motion,
+                         trial=cal_rec.trial, time_s=cal_rec.time_s, kind="dg5", adc_max=1.0)
+    with pytest.raises(EstimationError, match=r"sensor_thumb above the full scale 1 counts .*"
+                                              r"is the full scale \(--adc-max\) right\?"):
+        calibrate(rec, where="cal.csv")
+
+
+def test_negative_readings_are_dropped_as_below_range(cal_rec):
+    s = cal_rec.sensors.copy()
+    s[100:110, 1] = -4.0
+    with warnings.catch_warnings(record=True) as got:
+        warnings.simplefilter("always")
+        calibrate(_with(cal_rec, s), where="cal.csv", options=CalibrationOptions(synergy_k=0))
+    msgs = " | ".join(str(w.message) for w in got if issubclass(w.category, GloveWarning))
+    assert "dropped 10 of" in msgs and "sensor_index below the converter's range (negative, " \
+        "down to -4 counts) in 10 rows" in msgs, msgs
+    assert "saturated" not in msgs, msgs
+
+
+def _holds(open_, fist, n=20, adc_max=4095.0):
+    sensors = np.vstack([np.tile(open_, (n, 1)), np.tile(fist, (n, 1))]).astype(float)
+    sensors[:, :] += np.arange(2 * n)[:, None] % 3       # a count or two of noise
+    sensors = np.minimum(sensors, adc_max)
+    return GloveRecording(sensors=sensors, motion=["range_open"] * n + ["range_fist"] * n,
+                          trial=[0] * n + [1] * n, adc_max=adc_max)
+
+
+def test_saturated_range_holds_are_named():
+    from handsynth.errors import RecordingError
+    from handsynth.sensors.glove import range_readings
+
+    open_, fist = np.full(5, 1500.0), np.full(5, 2500.0)
+    fist[2] = 4095.0                                     # the middle sensor saturates in a fist
+    with pytest.raises(RecordingError, match=r"range.csv: sensor_middle is saturated \(at 4095 "
+                                             r"counts\) in 20 of the 20 rows labelled "
+                                             r"range_fist: its reading in that hold is not known"):
+        range_readings(_holds(open_, fist), where="range.csv")
+    open_[0] = -20.0                                     # below the range: not "saturated"
+    with pytest.raises(RecordingError, match=r"sensor_thumb is below the converter's range "
+                                             r"\(negative, down to -20 counts\) in 20 of the 20 "
+                                             r"rows labelled range_open"):
+        range_readings(_holds(open_, np.full(5, 2500.0)), where="range.csv")
+
+
+def test_a_partly_saturated_range_hold_is_warned_about():
+    from handsynth.sensors.glove import range_readings
+
+    rec = _holds(np.full(5, 1500.0), np.full(5, 4093.0))  # 4093 + noise: some at 4095
+    with pytest.warns(GloveWarning, match=r"range.csv: sensor_thumb is saturated \(at 4095 "
+                                          r"counts\) in \d of the 20 rows labelled range_fist"):
+        _, fist = range_readings(rec, where="range.csv")
+    assert (fist >= 4093).all()
+
+
+def test_a_failed_fit_names_the_recording(cal_rec):
+    # "motion 'standard' (model1), thumb_mcp_flex: the regressors are collinear", no file
+    tiny = cal_rec.select(np.arange(cal_rec.n_samples) < 5)
+    with pytest.raises(EstimationError, match=r"^cal.csv: motion 'standard'"):
+        calibrate(tiny, where="cal.csv", options=CalibrationOptions(synergy_k=0))
+
+
+def test_a_t_threshold_that_keeps_no_sensor_is_warned_about(cal_rec):
+    with pytest.warns(GloveWarning, match=r"cal.csv: model4 keeps no sensor \(every \|t\| < "
+                                          r"1e\+06, the t threshold\) in 15 of 15 joint-3 fits"):
+        calibrate(cal_rec, where="cal.csv",
+                  options=CalibrationOptions(t_threshold=1e6, synergy_k=0, pooled=False))

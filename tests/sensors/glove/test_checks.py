@@ -18,7 +18,8 @@ def test_dead_sensor_is_named():
     s = _live()
     s[:, 2] = 812.0
     with pytest.warns(GloveWarning, match=r"x.csv: sensor_middle is dead: it reads 812 "
-                                          r"counts in all 100 valid samples"):
+                                          r"counts in all 100 rows with five "
+                                          r"readings"):
         chk = check_sensors(s, adc_max=4095, where="x.csv")
     assert chk.dead == (2,)
 
@@ -27,7 +28,7 @@ def test_saturated_sensor_is_named_with_counts():
     s = _live()
     s[:12, 4] = 4095
     with pytest.warns(GloveWarning, match=r"sensor_little is saturated \(at 4095 counts\) "
-                                          r"in 12 of 100 samples \(12.0 %\)"):
+                                          r"in 12 of 100 rows \(12.0 %\)"):
         chk = check_sensors(s, adc_max=4095, where="x.csv")
     assert chk.saturated_sensors == (4,)
 
@@ -35,7 +36,47 @@ def test_saturated_sensor_is_named_with_counts():
 def test_nan_rows_are_listed():
     s = _live()
     s[[3, 50], 1] = np.nan
-    with pytest.warns(GloveWarning, match=r"2 of 100 rows have a NaN reading \(first rows "
-                                          r"3, 50\)"):
+    with pytest.warns(GloveWarning, match=r"2 of 100 rows have a NaN reading \("
+                                          r"first at row indices 3, 50\)"):
         chk = check_sensors(s, adc_max=4095, where="x.csv")
     assert chk.nan_rows.tolist() == [3, 50]
+
+
+def test_a_negative_reading_is_below_the_range_not_saturated():
+    # a negative reading was called "saturated (at 0 counts)"
+    s = _live()
+    s[:5, 1] = -3.0
+    with pytest.warns(GloveWarning) as got:
+        chk = check_sensors(s, adc_max=4095, where="x.csv")
+    msgs = [str(w.message) for w in got]
+    assert any("x.csv: sensor_index is below the converter's range (negative, down to -3 "
+               "counts) in 5 of 100 rows (5.0 %)" in m for m in msgs), msgs
+    assert not any("saturated" in m for m in msgs), msgs
+    assert chk.below[:, 1].sum() == 5 and not chk.saturated.any()
+    assert chk.out_of_range_sensors == (1,) and chk.off_scale[:5, 1].all()
+
+
+def test_a_reading_above_full_scale_asks_for_the_full_scale():
+    s = _live()
+    with pytest.warns(GloveWarning, match=r"sensor_thumb is above the full scale 1000 counts "
+                                          r"\(up to 15\d\d\) in 100 of 100 rows .*--adc-max"):
+        chk = check_sensors(s, adc_max=1000, where="x.csv")
+    assert chk.above.all() and not chk.saturated.any()
+
+
+def test_a_sensor_stuck_at_full_scale_is_saturated_not_dead(recwarn):
+    s = _live()
+    s[:, 3] = 4095
+    chk = check_sensors(s, adc_max=4095, where="x.csv")
+    msgs = [str(w.message) for w in recwarn if issubclass(w.category, GloveWarning)]
+    assert chk.dead == () and chk.saturated_sensors == (3,)
+    assert msgs == ["x.csv: sensor_ring is saturated (at 4095 counts) in 100 of 100 rows "
+                    "(100.0 %)"]
+
+
+def test_rows_are_named_by_file_line_when_known():
+    s = _live()
+    s[[3, 50], 1] = np.nan
+    with pytest.warns(GloveWarning, match=r"x.csv: 2 of 100 rows have a NaN reading \(first "
+                                          r"at lines 5, 52\)"):
+        check_sensors(s, adc_max=4095, where="x.csv", lines=np.arange(2, 102))

@@ -3,7 +3,7 @@ import pytest
 
 from handsynth.errors import RecordingError
 from handsynth.models import JOINT_NAMES, natural_pose_set
-from handsynth.sensors.glove import CYBERGLOVE_COLUMNS, fit_synergies, read_cyberglove_csv
+from handsynth.sensors.glove import CYBERGLOVE_COLUMNS, GloveWarning, fit_synergies, read_cyberglove_csv
 
 
 def _export(angles: np.ndarray, rng) -> np.ndarray:
@@ -72,7 +72,9 @@ def test_nan_rows_stay_nan(tmp_path, poses):
     lines[3] = lines[3].replace(lines[3].split(",")[5], "", 1)
     p = tmp_path / "g.csv"
     p.write_text("\n".join(lines) + "\n")
-    got = read_cyberglove_csv(p)
+    with pytest.warns(GloveWarning, match=r"g.csv: 1 of 5 rows have an empty or NaN cell "
+                                          r"\(at line 4\)"):
+        got = read_cyberglove_csv(p)
     assert np.isnan(got[2]).all() and np.isfinite(got[[0, 1, 3, 4]]).all()
 
 
@@ -88,10 +90,34 @@ def test_bad_files_are_named(tmp_path, poses):
     with pytest.raises(RecordingError, match=r"g.csv, line 3: thumb_rotation is 'oops'"):
         read_cyberglove_csv(p)
     np.savetxt(p, _export(poses, np.random.default_rng(4)), delimiter=",")
-    with pytest.raises(RecordingError, match=r"outside its limits .*degrees\? pass units='deg'"):
+    with pytest.raises(RecordingError, match=r"degrees\? pass units='deg'"):
         read_cyberglove_csv(p, units="rad")
     np.savetxt(p, np.radians(_export(poses, np.random.default_rng(4))), delimiter=",")
     with pytest.raises(RecordingError, match=r"radians\? pass units='rad'"):
         read_cyberglove_csv(p)
     with pytest.raises(RecordingError, match="no such file"):
         read_cyberglove_csv(tmp_path / "none.csv")
+
+
+@pytest.mark.parametrize("cell", ["1e308", "inf", "-inf", "1e5"])
+def test_a_corrupt_cell_is_refused_by_line(tmp_path, poses, cell):
+    # 1e308 crashed the synergy fit with a traceback; inf and 1e5 were taken silently
+    data = _export(poses[:20], np.random.default_rng(5))
+    lines = [",".join(CYBERGLOVE_COLUMNS)] + [",".join(f"{v:.3f}" for v in r) for r in data]
+    lines[4] = cell + "," + lines[4].split(",", 1)[1]
+    p = tmp_path / "g.csv"
+    p.write_text("\n".join(lines) + "\n")
+    with pytest.raises(RecordingError, match=rf"g.csv, line 5: thumb_rotation is '{cell}', "
+                                             r"beyond any joint angle"):
+        read_cyberglove_csv(p)
+
+
+def test_synergy_errors_name_their_source(poses):
+    from handsynth.errors import EstimationError, InvalidInputError
+
+    with pytest.raises(EstimationError, match=r"^g.csv: 2 finite postures cannot give 2 "):
+        fit_synergies(poses[:2], k=2, source="g.csv")
+    huge = poses[:30].copy()
+    huge[3, 4] = 1e300
+    with pytest.raises(InvalidInputError, match=r"^g.csv: index_mcp_flex is 1e\+300 deg"):
+        fit_synergies(huge, k=2, source="g.csv")

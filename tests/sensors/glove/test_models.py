@@ -119,7 +119,7 @@ def test_nan_rows_are_dropped_with_a_warning_naming_them():
     a[7, 3] = np.nan
     s[11, 2] = np.nan
     with pytest.warns(GloveWarning, match=r"motion 'tripod' \(model4\): dropped 2 of 600 rows "
-                                          r"with NaN \(first rows 7, 11\)"):
+                                          r"with NaN \(first at row indices 7, 11\)"):
         m = fit_motion_model(s, a, model="model4", motion="tripod")
     clean = fit_motion_model(np.delete(s, [7, 11], axis=0), np.delete(a, [7, 11], axis=0),
                              model="model4", motion="tripod")

@@ -121,3 +121,29 @@ def test_two_trials_under_one_number_are_refused(tmp_path, cal_rec):
     with pytest.raises(RecordingError, match=r"t.csv, line 4: time_s goes back from 0.1 s \(line 3\) "
                                              "to 0 s within motion 'tripod', trial 1"):
         read_glove_csv(p)
+
+
+def test_rows_keep_their_file_lines(tmp_path):
+    p = tmp_path / "s.csv"
+    p.write_text("# a comment\ntime_s," + ",".join(SENSOR_NAMES) + "\n0,1,2,3,4,5\n\n0.1,1,2,3,4,5\n")
+    rec = read_glove_csv(p)
+    assert rec.lines.tolist() == [3, 5]
+    assert rec.select(np.array([False, True])).lines.tolist() == [5]
+    with pytest.raises(RecordingError, match=r"lines must have shape \(2,\)"):
+        GloveRecording(sensors=rec.sensors, lines=[1])
+
+
+def test_a_file_without_a_header_line_is_named_so(tmp_path):
+    p = tmp_path / "s.csv"
+    p.write_text("0,standard,0,1,2,3,4,5\n0.1,standard,0,1,2,3,4,5\n")
+    with pytest.raises(RecordingError, match=r"s.csv, line 1: the first line holds numbers, not "
+                                             r"column names"):
+        read_glove_csv(p)
+
+
+def test_an_infinite_reading_is_named_as_such(tmp_path):
+    p = tmp_path / "s.csv"
+    p.write_text("time_s," + ",".join(SENSOR_NAMES) + "\n0,1,2,3,4,5\n0.1,1,inf,3,4,5\n")
+    with pytest.raises(RecordingError, match=r"s.csv, line 3: sensor_index is 'inf', not a "
+                                             r"finite number"):
+        read_glove_csv(p)

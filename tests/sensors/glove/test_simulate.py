@@ -87,3 +87,11 @@ def test_range_holds_are_labelled_timed_and_read_as_a_range(user, dg5):
     assert simulate_range_holds(user, dg5, with_angles=False).angles is None
     with pytest.raises(InvalidInputError, match="rate_hz must be > 0"):
         simulate_range_holds(user, dg5, rate_hz=0)
+
+
+def test_a_motion_given_twice_or_none_is_refused(user, dg5):
+    # its trials shared numbers and were read back as one trial of two grasps
+    with pytest.raises(InvalidInputError, match="'tripod' is given twice"):
+        simulate_session(user, dg5, ["tripod", "tripod"], trials=1)
+    with pytest.raises(InvalidInputError, match="at least one motion"):
+        simulate_session(user, dg5, [], trials=1)
