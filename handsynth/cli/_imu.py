@@ -68,7 +68,10 @@ def _full_scale(acc_range_g, gyr_range_dps) -> dict:
 def _filters(values, allowed):
     from ..errors import InvalidInputError
 
-    names = tuple(dict.fromkeys(v for item in values for v in item.split(",") if v))
+    names = tuple(dict.fromkeys(v.strip() for item in values for v in item.split(",") if v.strip()))
+    if values and not names:
+        raise InvalidInputError(f"--filter {values[0]!r} names no filter; expected one or more of "
+                                f"{', '.join(allowed)}")
     for n in names:
         if n not in allowed:
             raise InvalidInputError(f"unknown filter {n!r}; expected one of {', '.join(allowed)}")
@@ -193,7 +196,7 @@ def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz
                                                                   source=str(segments_path)))
     for w in check_recording(rec, source=str(recording), **full_scale):
         click.echo(f"handsynth: warning: {w}", err=True)
-    cal = run_calibration(rec, side=side)
+    cal = run_calibration(rec, side=side, source=str(recording))
     cal.save(out_path, inputs=inputs)
     lengths = ", ".join(f"{a}->{b} {1e3 * float((v @ v) ** 0.5):.0f} mm"
                         for (s, a, b), v in cal.model.links.items() if s.startswith("index"))
@@ -239,7 +242,7 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
 
     import numpy as np
 
-    from ..errors import InvalidInputError
+    from ..errors import InvalidInputError, RecordingError
     from ..models import JOINT_NAMES
     from ..sensors.imu import (
         FILTER4B,
@@ -272,6 +275,10 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
     full_scale = _full_scale(acc_range_g, gyr_range_dps)
     rec = read_imu_csv(recording, acc_units=acc_units, gyr_units=gyr_units, mag_units=mag_units,
                        rate_hz=rate_hz)
+    if static_s * rec.rate_hz > rec.n:
+        raise RecordingError(f"{recording}: the static start --static {static_s:g} s is longer than "
+                             f"the recording ({rec.n} samples, {rec.duration_s:.3g} s); shorten "
+                             "--static")
     for w in check_recording(rec, static_s=static_s, source=str(recording), **full_scale):
         click.echo(f"handsynth: warning: {w}", err=True)
     t = np.arange(rec.n) / rec.rate_hz

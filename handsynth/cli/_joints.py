@@ -116,6 +116,9 @@ def estimate(recording, methods, frames, lateral_axis, lateral_frame, bins, unit
                 f"{', '.join(given)} apply to text exports (PiMgr CSV, Liberty ASCII), not to "
                 f"the HDF5 recording {recording!r}, which stores units, rotations and sensors")
     else:
+        from .._checks import check_number
+
+        check_number(rate_hz, "--rate", above=0.0, maximum=100_000.0)
         kwargs = dict(units=units, angles=None if angles == "auto" else angles,
                       rate_hz=rate_hz, on_invalid="raise" if strict else "drop", take=take)
         if sensors is not None:

@@ -440,3 +440,93 @@ def test_magnetometer_units_and_eval_durations_out_of_range_are_named(tmp_path, 
     for duration in ("1e9", "5.9"):  # 5.9 s passed here and failed after a trial's work
         res = CliRunner().invoke(cli, ["imu", "eval", "--duration", duration])
         assert res.exit_code == 2 and "--duration must be within [6, 600] s" in res.output
+
+
+def test_calibrate_refuses_a_rotation_labelled_over_a_still_stretch(tmp_path):
+    # before: accepted, and the calibration held a sensor-to-joint vector of metres
+    from handsynth.sensors.imu import ImuRecording
+
+    rng = np.random.default_rng(1)
+    n = 1000
+    gyr = 0.003 * rng.standard_normal((2, n, 3))
+    gyr[1, 500:, 0] += np.sin(np.pi * np.arange(500) / 100.0)
+    rec = ImuRecording(100.0, ("forearm_1", "index_middle"),
+                       np.tile([0.0, 0.0, 9.81], (2, n, 1)) + 0.02 * rng.standard_normal((2, n, 3)),
+                       gyr, np.tile([20.0, 0.0, -40.0], (2, n, 1)) + 0.3 * rng.standard_normal((2, n, 3)))
+    src, seg, out = tmp_path / "cal.csv", tmp_path / "seg.json", tmp_path / "c.json"
+    write_imu_csv(rec, src)
+    seg.write_text(json.dumps({"static": [0, 2], "index_pip_flex": [2, 5]}))
+    res = CliRunner().invoke(cli, ["imu", "calibrate", str(src), "--segments", str(seg),
+                                   "--out", str(out)])
+    assert res.exit_code == 2, res.output
+    (line,) = res.output.strip().splitlines()
+    assert line.startswith(f"handsynth: error: {src}: segment 'index_pip_flex' (samples 200-499 "
+                           "(2.00-5.00 s)) is still"), line
+    assert not out.exists() and "Traceback" not in res.output
+
+
+def _damaged_csv(tmp_path, rec, edit):
+    """`rec` written as CSV, then `edit` (a function of the lines) applied to its text."""
+    src = tmp_path / "rec.csv"
+    write_imu_csv(rec, src)
+    src.write_text("\n".join(edit(src.read_text().splitlines())) + "\n")
+    return src
+
+
+def _set_column(lines, name, value_of):
+    """Lines with column `name` of every data row replaced by value_of(row index, old text)."""
+    header = next(i for i, line in enumerate(lines) if not line.startswith("#"))
+    j = lines[header].split(",").index(name)
+    out = list(lines)
+    for i in range(header + 1, len(lines)):
+        cells = out[i].split(",")
+        cells[j] = value_of(i - header - 1, cells[j])
+        out[i] = ",".join(cells)
+    return out
+
+
+@pytest.mark.parametrize("kind, words", [
+    # 1e300 uT in one sample: only a "magnetic disturbance" warning, then exit 0
+    ("huge-mag", "sensor 'forearm_1' mag axis y reads 1e+300 uT at sample 300, beyond any "
+                 "magnetometer's full scale"),
+    # a gyro reading 0.0 in every sample: tracked without a word
+    ("dead-gyro", "the gyro of sensor(s) 'forearm_1' reads exactly 0 on every axis in all 800"),
+    # a file in rad/s read with --gyr-units deg/s: 57 times too little rotation, exit 0
+    ("rad-as-deg", "but its gyro turns"),
+    # no header: "column '0' stands twice"
+    ("no-header", "line 1: the first line holds numbers"),
+    # the estimator's refusal, without the file
+    ("short", "rec.csv: the static start --static 2 s is longer than the recording (5 samples"),
+])
+def test_track_damaged_recordings_are_one_line(tmp_path, sim, kind, words):
+    rec = sim.subset(("forearm_1", "index_distal"))
+    args = []
+    if kind == "huge-mag":
+        src = _damaged_csv(tmp_path, rec, lambda lines: _set_column(
+            lines, "forearm_1_mag_y", lambda i, v: "1e300" if i == 300 else v))
+    elif kind == "dead-gyro":
+        def zero(lines):
+            for axis in "xyz":
+                lines = _set_column(lines, f"forearm_1_gyr_{axis}", lambda i, v: "0")
+            return lines
+        src = _damaged_csv(tmp_path, rec, zero)
+    elif kind == "rad-as-deg":
+        src = _damaged_csv(tmp_path, rec, lambda lines: lines)
+        args = ["--gyr-units", "deg/s"]
+    elif kind == "no-header":
+        src = _damaged_csv(tmp_path, rec, lambda lines: lines[2:])
+    else:
+        src = _damaged_csv(tmp_path, rec, lambda lines: lines[:7])
+    out = tmp_path / "q.csv"
+    res = CliRunner().invoke(cli, ["imu", "track", str(src), "--filter", "raw", "--out", str(out),
+                                   *args])
+    assert res.exit_code == 2, res.output
+    (line,) = res.output.strip().splitlines()
+    assert line.startswith(f"handsynth: error: {src}") and words in line, line
+    assert not out.exists()
+
+
+def test_a_filter_option_naming_no_filter_is_refused():
+    # "--filter ," ran every filter for minutes
+    res = CliRunner().invoke(cli, ["imu", "eval", "--filter", ","])
+    assert res.exit_code == 2 and "--filter ',' names no filter" in res.output, res.output

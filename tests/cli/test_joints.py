@@ -296,3 +296,94 @@ def test_eval_json_writes_refused_rows_as_null_not_nan(tmp_path, monkeypatch):
     assert got["error_upper_mm"] is None and got["error_mm"] is None
     assert got["distance_mm"] is None and got["refused"] == 1 and got["method"] == "obrien"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["eval.json"]
+
+
+def _damage(lines, row, col, value, sep=","):
+    """`lines` with cell `col` of line index `row` replaced by `value`."""
+    out = list(lines)
+    cells = out[row].split(sep) if sep else out[row].split()
+    cells[col] = value
+    out[row] = (sep or " ").join(cells)
+    return out
+
+
+@pytest.mark.parametrize("fmt, col, value, named", [
+    ("pimgr", 10, "1e300", "column 'loc1_y': value 1e+300"),     # a position
+    ("pimgr", 12, "-1e200", "column 'loc2_x': value -1e+200"),
+    ("pimgr", 1, "1e300", "column 'w1': value 1e+300"),          # a quaternion component
+    ("pimgr", 0, "1e300", "column 'time': value 1e+300"),        # read as a restart before
+    ("pimgr", 10, "1e20", "column 'loc1_y': value 1e+20"),       # no overflow, still no position
+    ("liberty", 3, "1e300", "column 4: value 1e+300"),
+    ("liberty", 1, "1e300", "column 2: value 1e+300"),           # the frame counter
+])
+def test_huge_values_are_one_line_naming_file_line_column_value(tmp_path, sim, fmt, col, value,
+                                                                 named):
+    # 1e300 in a position column let numpy's overflow warnings reach the terminal, then was
+    # dropped as a glitch; in the time column it was read as a second take
+    lines = _pimgr(sim) if fmt == "pimgr" else _liberty(sim, counter=True)
+    path = tmp_path / f"huge.{'csv' if fmt == 'pimgr' else 'txt'}"
+    path.write_text("\n".join(_damage(lines, 50, col, value, "," if fmt == "pimgr" else None))
+                    + "\n")
+    out = tmp_path / "c.json"
+    res = _run("estimate", path, "--json", out)
+    assert res.exit_code == 2, res.output
+    assert res.output.strip().splitlines() == [res.output.strip()], res.output
+    assert res.output.startswith("handsynth: error: ") and "huge." in res.output
+    assert "line 51" in res.output and named in res.output, res.output
+    assert "overflow" not in res.output and not out.exists()
+
+
+def _header_edit(lines, old, new):
+    return [lines[0].replace(old, new)] + lines[1:]
+
+
+@pytest.mark.parametrize("kind, words", [
+    # a header naming loc2_y twice read as "no position columns loc2_x, loc2_y, loc2_z"
+    ("twice", "the header names column 'loc2_y' 2 times (columns 14, 15)"),
+    # a used column named again at the end: the last one was read without a word
+    ("again", "the header names column 'loc1_x' 2 times (columns 10, 16)"),
+    # numpy's "All-NaN slice encountered" reached the terminal before the error
+    ("nan-times", "the time column holds no number on any of its"),
+    # "only 1 usable frames of 1" without the reason
+    ("backwards", "the time column goes back or stands still on"),
+    ("one-sample", "only 1 usable frames of 1 (59 duplicated rows dropped before"),
+])
+def test_damaged_pimgr_columns_are_one_line(tmp_path, sim, kind, words):
+    lines = _pimgr(sim)[:1] + [row for i, row in enumerate(_pimgr(sim)[1:]) if i < 900]
+    if kind == "twice":
+        lines = _header_edit(lines, "loc2_z", "loc2_y")
+    elif kind == "again":
+        lines = [lines[0] + ",loc1_x"] + [row + "," + row.split(",")[9] for row in lines[1:]]
+    elif kind == "nan-times":
+        lines = lines[:1] + ["nan," + row.split(",", 1)[1] for row in lines[1:]]
+    elif kind == "backwards":
+        lines = lines[:1] + [f"{-float(row.split(',')[0])!r}," + row.split(",", 1)[1]
+                             for row in lines[1:]]
+    else:
+        lines = lines[:1] + [lines[1]] * 60
+    path = tmp_path / "bad.csv"
+    path.write_text("\n".join(lines) + "\n")
+    res = _run("estimate", path)
+    assert res.exit_code == 2, res.output
+    (line,) = res.output.strip().splitlines()
+    assert line.startswith("handsynth: error: bad.csv: ") and words in line, line
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--rate", "1e300"], "--rate must be a finite number > 0 and <= 100000, got 1e+300"),
+    (["--rate", "nan"], "--rate must be a finite number > 0 and <= 100000, got nan"),
+])
+def test_rate_out_of_bounds_is_named(tmp_path, sim, args, words):
+    # --rate 1e300 gave every frame a time of 1e-300 s apart
+    path = tmp_path / "rec.txt"
+    path.write_text("\n".join(_liberty(sim, counter=True)) + "\n")
+    res = _run("estimate", path, *args)
+    assert res.exit_code == 2 and res.output.strip() == f"handsynth: error: {words}", res.output
+
+
+def test_a_huge_or_tiny_lateral_axis_is_a_direction(rec_path):
+    # 1e300,0,0 let numpy's overflow warnings reach the terminal; 1e-300,0,0 was "zero"
+    for value in ("1e300,0,0", "1e-300,0,0"):
+        res = _run("estimate", rec_path, "--method", "obrien", "--lateral-axis", value)
+        assert res.exit_code == 0 and "overflow" not in res.output, res.output
+        assert "expected a non-zero 3-vector" not in res.output

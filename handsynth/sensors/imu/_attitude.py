@@ -193,8 +193,10 @@ def azimuth_correction(rec: ImuRecording, static: StaticStart = StaticStart()) -
     k = int(np.argmax(np.linalg.norm(gyr, axis=-1).mean(axis=0)))
     wmax = gyr[:, k]
     if np.any(np.linalg.norm(wmax, axis=-1) < 0.5):
-        raise EstimationError("the common rotation is slower than 0.5 rad/s; "
-                              "cannot align compass azimuths")
+        raise EstimationError(f"the common rotation {static.align_start_s:g}-"
+                              f"{static.align_end_s:g} s (--align) is slower than 0.5 rad/s "
+                              f"(its fastest sample: {float(np.linalg.norm(wmax, axis=-1).min()):.3g} "
+                              "rad/s in the slowest sensor); cannot align compass azimuths")
     wg = np.cross(g, wmax)                                              # eq. 4.18
     if np.any(np.linalg.norm(wg, axis=-1) < 0.2 * np.linalg.norm(g, axis=-1)
               * np.linalg.norm(wmax, axis=-1)):

@@ -18,8 +18,8 @@ from pathlib import Path
 import numpy as np
 
 from ..._checks import check_options, check_side, is_number
-from ..._io import atomic_open
-from ...errors import InvalidInputError, RecordingError
+from ..._io import write_text
+from ...errors import InvalidInputError, OutputError, RecordingError
 from ._attitude import StaticStart
 from ._ekf import ChainEKF, ChainEKFOptions
 from ._kinematics import (
@@ -30,12 +30,13 @@ from ._kinematics import (
     thumb_cmc_model,
     zero_offsets,
 )
+from ._layout import FLEX_JOINT
 from ._plate import PLATE_SENSORS, fuse_plate, plate_rotations
 from ._recording import ImuRecording, check_recording
 from ._sensorcal import POSE_PREFIX, SensorCalibration, fit_sensor_calibration
 from ._vectors import ChainModel, chain_model
 
-__all__ = ["ImuCalibration", "calibrate", "segments_from_seconds"]
+__all__ = ["ImuCalibration", "calibrate", "check_stretches", "segments_from_seconds"]
 
 # 2: the thumb CMC axes; 3: the accelerometer/gyro calibration; 4: the
 # magnetometer calibration; 5: the forearm plate's rotations (older files load
@@ -106,6 +107,112 @@ def _calibration_labels() -> frozenset:
 
 def _is_pose_label(label: str) -> bool:
     return label.startswith(POSE_PREFIX) and label[len(POSE_PREFIX):].isdigit()
+
+
+#: A calibration rotation turns its joint by tens of degrees (12 deg for an abduction
+#: of :func:`calibration_motion`, 15-76 deg otherwise); a still stretch turns no sensor by
+#: more than 0.1 deg once the gyro bias of its first half second is taken off.
+_MIN_ROTATION_DEG = 3.0
+#: A still stretch (``static``, ``acc_pose_<k>``) moves no gyro by more than this RMS
+#: about its mean, deg/s (0.2 deg/s in the simulated still poses; tens in a motion).
+_MAX_STILL_RMS_DPS = 5.0
+#: Start of a rotation taken as still for its gyro bias, s (as :func:`rotation_vector`).
+_BIAS_HOLD_S = 0.5
+
+
+def _span_text(a: int, b: int, rate_hz: float) -> str:
+    return f"samples {a}-{b - 1} ({a / rate_hz:.2f}-{b / rate_hz:.2f} s)"
+
+
+def check_stretches(rec: ImuRecording, *, source: str | None = None) -> list[str]:
+    """Refuse a calibration rotation labelled over a still stretch; warn of a moving pose.
+
+    A rotation (every label of :func:`calibration_motion` but ``static``) must turn at
+    least one sensor: the angle turned, the gyro integrated after the bias of the
+    stretch's first half second is taken off, must reach 3 deg for some sensor.  A label
+    placed over a still stretch would otherwise give link vectors of metres from noise.
+    A flexion must also turn the sensors on the segment it moves (:data:`FLEX_JOINT`):
+    ``index_pip_flex`` placed over the DIP's rotation, which leaves ``index_middle``
+    still, gave an index MCP-PIP link of half a metre.
+    A still stretch (``static``, ``acc_pose_<k>``) in which some sensor's gyro moves by
+    more than 5 deg/s RMS about its mean is returned as a warning.
+
+    Parameters
+    ----------
+    rec : ImuRecording
+        The calibration recording with its labelled stretches.
+    source : str, keyword-only, optional
+        The recording's file, for messages.
+
+    Returns
+    -------
+    list of str
+        Warnings (a still stretch that moves), each naming the label and its samples.
+
+    Raises
+    ------
+    RecordingError
+        A rotation in which no sensor turns, or a flexion in which a sensor of the
+        segment it moves does not turn, naming the label, its samples and the angles.
+    """
+    where = f"{source}: " if source else ""
+    rotations = _calibration_labels() - {"static"}
+    found = []
+    for label, a, b in rec.labelled():
+        if b - a < 2:
+            continue
+        gyr = rec.gyr[:, a:b]
+        if label in rotations:
+            hold = min(b - a, max(3, int(_BIAS_HOLD_S * rec.rate_hz)))
+            turned = np.cumsum(gyr - gyr[:, :hold].mean(axis=1, keepdims=True), axis=1)
+            angle = np.degrees(np.linalg.norm(turned, axis=2).max(axis=1) / rec.rate_hz)
+            k = int(np.argmax(angle))
+            if not angle[k] >= _MIN_ROTATION_DEG:  # NaN fails too
+                raise RecordingError(
+                    f"{where}segment {label!r} ({_span_text(a, b, rec.rate_hz)}) is still: no "
+                    f"sensor turns more than {angle[k]:.2g} deg in it (the most: "
+                    f"{rec.sensors[k]}), and a calibration rotation turns its joint by tens of "
+                    f"degrees; is the label on the rotation's stretch?")
+            # the sensors on the segment that this flexion moves must turn with it
+            own = [i for i, sensor in enumerate(rec.sensors) if FLEX_JOINT.get(sensor) == label]
+            still = [i for i in own if not angle[i] >= _MIN_ROTATION_DEG]
+            if still:
+                i = still[0]
+                raise RecordingError(
+                    f"{where}segment {label!r} ({_span_text(a, b, rec.rate_hz)}) does not turn "
+                    f"{rec.sensors[i]} ({angle[i]:.2g} deg), the sensor on the segment this "
+                    f"rotation moves, while {rec.sensors[k]} turns {angle[k]:.3g} deg: is the "
+                    "label on another rotation's stretch?")
+        elif label == "static" or _is_pose_label(label):
+            rms = np.degrees(np.sqrt(np.mean(np.sum(
+                (gyr - gyr.mean(axis=1, keepdims=True)) ** 2, axis=2), axis=1)))
+            k = int(np.argmax(rms))
+            if rms[k] > _MAX_STILL_RMS_DPS:
+                found.append(
+                    f"{where}segment {label!r} ({_span_text(a, b, rec.rate_hz)}) should be "
+                    f"still, but the gyro of {rec.sensors[k]} moves by {rms[k]:.3g} deg/s RMS in "
+                    f"it; is the label on a still stretch?")
+    return found
+
+
+def _non_finite(obj, where: str = "") -> tuple[str, float] | None:
+    """The first NaN or infinite number in nested dicts and lists, as (field, value).
+
+    The field is written as a path: ``own_m.index_middle[1]``.
+    """
+    if isinstance(obj, float):
+        return None if np.isfinite(obj) else (where, obj)
+    if isinstance(obj, dict):
+        items = ((f"{where}.{k}" if where else str(k), v) for k, v in obj.items())
+    elif isinstance(obj, (list, tuple)):
+        items = ((f"{where}[{i}]", v) for i, v in enumerate(obj))
+    else:
+        return None
+    for name, value in items:
+        found = _non_finite(value, name)
+        if found is not None:
+            return found
+    return None
 
 
 @dataclass(frozen=True)
@@ -239,16 +346,36 @@ class ImuCalibration:
     def save(self, path, *, inputs=()) -> Path:
         """Write JSON atomically (never a half-written file under `path`).
 
+        The whole text is made first and written with :func:`handsynth._io.write_text`
+        (a temporary file renamed onto `path`); a NaN or infinite value, which JSON cannot
+        hold and :meth:`load` would refuse, is refused before anything is written.
+
         Parameters
         ----------
         path : path-like
         inputs : iterable of path-like, keyword-only
             The run's input files; `path` must be none of them.
+
+        Returns
+        -------
+        pathlib.Path
+
+        Raises
+        ------
+        OutputError
+            A non-finite value (the field named, e.g. ``own_m.index_middle[1]``), or
+            the file cannot be written (see :func:`handsynth._io.write_text`).
         """
         path = Path(path)
-        with atomic_open(path, "w", what="calibration file", inputs=inputs) as f:
-            json.dump(self.to_dict(), f, indent=1)
-        return path
+        data = self.to_dict()
+        bad = _non_finite(data)
+        if bad is not None:
+            field, value = bad
+            raise OutputError(f"cannot write the calibration file {str(path)!r}: field {field} is "
+                              f"{value!r}, and the file must hold finite numbers to be read back "
+                              "(a calibration that failed?); nothing was written")
+        text = json.dumps(data, indent=1, allow_nan=False) + "\n"
+        return write_text(path, text, what="calibration file", inputs=inputs)
 
     @classmethod
     def load(cls, path) -> ImuCalibration:
@@ -333,7 +460,7 @@ class ImuCalibration:
 
 
 def calibrate(rec: ImuRecording, *, sensor_calibration: bool = True,
-              side: str = "right") -> ImuCalibration:
+              side: str = "right", source: str | None = None) -> ImuCalibration:
     """Calibrate from a recording with labelled stretches (see :func:`calibration_motion`).
 
     Needs the five fingertip sensors of the calibration (:data:`TIP_SENSORS`)
@@ -360,6 +487,8 @@ def calibrate(rec: ImuRecording, *, sensor_calibration: bool = True,
         The hand the sensors are on: the zero offsets and every tracked
         joint angle are measured as that hand's (a left hand read as a right
         one has its abductions turned the other way).
+    source : str, keyword-only, optional
+        The recording's file, named in the messages of :func:`check_stretches`.
 
     Returns
     -------
@@ -373,7 +502,8 @@ def calibrate(rec: ImuRecording, *, sensor_calibration: bool = True,
     InvalidInputError
         A labelled stretch that a step needs is missing.
     RecordingError
-        A sensor that a step needs is missing.
+        A sensor that a step needs is missing; a rotation labelled over a still stretch
+        (:func:`check_stretches`).
     EstimationError
         A calibration rotation too short, slow or badly shaped to estimate
         from (see :func:`calibrate_vectors`, :func:`link_frames`,
@@ -382,9 +512,12 @@ def calibrate(rec: ImuRecording, *, sensor_calibration: bool = True,
     Warns
     -----
     UserWarning
-        1-7 static poses labelled (too few for the sensor calibration).
+        1-7 static poses labelled (too few for the sensor calibration); a still stretch
+        (``static``, ``acc_pose_<k>``) in which a gyro moves (:func:`check_stretches`).
     """
     check_side(side)
+    for message in check_stretches(rec, source=source):
+        warnings.warn(message, UserWarning, stacklevel=2)
     sensor_cal = None
     poses = sum(name.startswith(POSE_PREFIX) for name, _, _ in rec.labelled())
     if sensor_calibration and 0 < poses < _MIN_POSES:

@@ -213,7 +213,11 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
         1 g (wrong acceleration units), whose gyro reads more than 0.5 rad/s
         while the accelerometer is still (deg/s given as rad/s) or whose
         accelerometer moves (the start is not still); a magnetometer that
-        reads zero field (dead); a median field strength outside 10-200 uT
+        reads zero field (dead), or a value beyond 10,000 uT (no magnetometer's
+        range: a damaged sample or the wrong units); a gyro that reads exactly 0
+        on every axis in every sample of 10 or more (dead), or that turns less
+        than half the angle its accelerometer's gravity direction tilts (rad/s
+        given as deg/s); a median field strength outside 10-200 uT
         (magnetometer units).
 
     Returns
@@ -271,6 +275,21 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
                 f"{source}: sensor {rec.sensors[k]!r} {name} axis {'xyz'[j]} is saturated "
                 f"(|value| {abs(a[k, i, j]):.4g} {unit} held at the full scale) for {run[0]} "
                 f"samples from sample {i}")
+    peak = _per_axis(np.max, np.abs(rec.mag))
+    k, j = np.unravel_index(int(np.argmax(peak)), peak.shape)
+    if peak[k, j] > _MAG_FULL_SCALE_UT:
+        i = int(np.argmax(np.abs(rec.mag[k, :, j])))
+        raise RecordingError(
+            f"{source}: sensor {rec.sensors[k]!r} mag axis {'xyz'[j]} reads {rec.mag[k, i, j]:.4g} "
+            f"uT at sample {i}, beyond any magnetometer's full scale ({_MAG_FULL_SCALE_UT:g} uT; "
+            "the Earth's field is 25-65 uT): a damaged sample, or the magnetometer units "
+            "(--mag-units)")
+    dead_gyr = [rec.sensors[k] for k in range(s) if not rec.gyr[k].any()]
+    if dead_gyr and rec.n >= 10:
+        raise RecordingError(
+            f"{source}: the gyro of sensor(s) {', '.join(map(repr, dead_gyr))} reads exactly 0 on "
+            f"every axis in all {rec.n} samples, which a working gyro never does (its noise "
+            "alone moves it): dead or unconnected; leave that sensor out of the recording")
     n0 = max(2, min(rec.n, int(static_s * rate)))
     w0 = np.linalg.norm(rec.gyr[:, :n0], axis=-1).mean(axis=1)
     acc_spread = np.linalg.norm(rec.acc[:, :n0].std(axis=1), axis=-1)
@@ -294,6 +313,7 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
                 f"{source}: sensor {rec.sensors[k]!r} gyro reads {w:.3g} rad/s during the static "
                 f"start while its accelerometer is still; deg/s given as rad/s? (use gyro units "
                 f"'deg/s', --gyr-units deg/s)")
+    _check_gyro_turns(rec, n0, source)
     warnings: list[str] = []
     field_norm = np.sqrt(np.einsum("snk,snk->sn", rec.mag, rec.mag))
     per_sensor = np.median(field_norm, axis=1)
@@ -322,6 +342,48 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
     # what was reported for this object, so that an estimator's run does not repeat it
     object.__setattr__(rec, "reported", (rec.reported or frozenset()) | frozenset(warnings))
     return warnings
+
+
+#: Smallest tilt, deg, of a sensor's gravity direction over a recording that the gyro check
+#: judges, and the smallest ratio of the angle the gyro turns (the sum of its magnitude,
+#: never less than the rotation) to that tilt: 3.0 or more in the simulated recordings,
+#: 0.14 or less with rad/s read as deg/s (57 times too small).
+_TILT_CHECKED_DEG = 20.0
+_MIN_TURN_PER_TILT = 0.5
+
+
+def _check_gyro_turns(rec: ImuRecording, n0: int, source: str) -> None:
+    """Refuse a gyro that turns far less than the accelerometer says its sensor tilts.
+
+    The accelerometer averaged over 0.5 s gives the gravity direction where the sensor
+    moves little (its magnitude within 20 % of 1 g); the largest angle between that and
+    the static start's is the least the sensor turned.  A gyro whose magnitude summed over
+    the recording is less than half that angle reads too small a unit: rad/s given as
+    deg/s (``--gyr-units deg/s`` on a file in rad/s).
+    """
+    w = max(1, min(rec.n, int(0.5 * rec.rate_hz)))
+    if rec.n < 2 * w:
+        return
+    c = np.cumsum(rec.acc, axis=1)
+    lp = (c[:, w - 1:] - np.concatenate([np.zeros((len(rec.sensors), 1, 3)), c[:, :-w]], axis=1)) / w
+    g0 = rec.acc[:, :n0].mean(axis=1)
+    norm = np.linalg.norm(lp, axis=-1)
+    quasi = np.abs(norm - GRAVITY_MPS2) < 0.2 * GRAVITY_MPS2
+    cos = np.einsum("snk,sk->sn", lp, g0) / (norm * np.linalg.norm(g0, axis=-1)[:, None] + 1e-300)
+    tilt = np.degrees(np.arccos(np.clip(np.where(quasi, cos, 1.0), -1.0, 1.0))).max(axis=1)
+    turned = np.degrees(np.linalg.norm(rec.gyr, axis=-1).sum(axis=1) / rec.rate_hz)
+    for k in range(len(rec.sensors)):
+        if tilt[k] > _TILT_CHECKED_DEG and turned[k] < _MIN_TURN_PER_TILT * tilt[k]:
+            raise RecordingError(
+                f"{source}: sensor {rec.sensors[k]!r} tilts by {tilt[k]:.3g} deg (its "
+                f"accelerometer's gravity direction) but its gyro turns {turned[k]:.3g} deg in "
+                "all: the gyro reads far too little; rad/s given as deg/s? (gyro units "
+                "'rad/s': --gyr-units rad/s)")
+
+
+#: Largest magnetometer reading taken, uT: above the widest full scale of MEMS
+#: magnetometers (the MPU-9250's AK8963: 4912 uT; others 800-1600 uT), with a margin.
+_MAG_FULL_SCALE_UT = 10_000.0
 
 
 def _per_axis(reduce, a: np.ndarray) -> np.ndarray:
@@ -495,6 +557,24 @@ def _meaning(name: str) -> str | None:
     return f"time_{t['unit'].lower()}" if t else None
 
 
+def _is_float(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _check_header(header, path, line) -> None:
+    """Refuse a first line of numbers: the header is missing (its numbers would be read as
+    column names, and the first repeated value named as a column that stands twice)."""
+    names = [h for h in header if h]
+    if names and all(_is_float(h) for h in names):
+        raise RecordingError(
+            f"{path}, line {line}: the first line holds numbers ({', '.join(names[:3])}, ...), "
+            "not column names: the header (time_s, <sensor>_acc_x .. <sensor>_mag_z) is missing")
+
+
 def _columns(header, col, path) -> tuple[dict[str, int], list[str], str | None, list[str],
                                          list[tuple[str, str]]]:
     """The columns by name, the sensors, the time column (or None), the columns to read,
@@ -539,6 +619,7 @@ def _read_any_csv(path: Path) -> tuple:
         raise RecordingError(f"{path}: needs a header and at least 2 rows, got "
                              f"{len(content.rows)} lines")
     header = content.rows[0]
+    _check_header(header, path, content.lines[0])
     col = column_index(header, path=path, line=content.lines[0])
     for row, line in zip(content.rows[1:], content.lines[1:]):
         if len(row) != len(header):
@@ -575,6 +656,7 @@ def _read_plain_csv(path: Path) -> tuple | None:
     picked: dict = {}
 
     def usecols(header, line):
+        _check_header(header, path, line)
         col = column_index(header, path=path, line=line)
         col, sensors, time_name, needed, renamed = _columns(header, col, path)
         picked.update(col=col, sensors=sensors, time_name=time_name, needed=needed,

@@ -54,7 +54,9 @@ def check_vector3(value: Any, name: str, *, nonzero: bool = False) -> np.ndarray
     name : str
         Name of the argument, for the message.
     nonzero : bool
-        Also refuse the zero vector (a direction).
+        Also refuse the zero vector, and return the direction scaled so that its
+        largest component is +-1 (its norm then neither overflows, for ``1e300``,
+        nor underflows to zero, for ``1e-300``).
 
     Raises
     ------
@@ -68,9 +70,9 @@ def check_vector3(value: Any, name: str, *, nonzero: bool = False) -> np.ndarray
         a = np.array(value, dtype=np.float64)
     except (TypeError, ValueError):
         raise InvalidInputError(f"{name}: expected {want}, got {value!r}") from None
-    if a.shape != (3,) or not np.isfinite(a).all() or (nonzero and not np.linalg.norm(a) > 0):
+    if a.shape != (3,) or not np.isfinite(a).all() or (nonzero and not np.abs(a).max() > 0):
         raise InvalidInputError(f"{name}: expected {want}, got {value!r}")
-    return a
+    return a / np.abs(a).max() if nonzero else a
 
 
 def check_array(value: Any, name: str, shape: tuple[int | None, ...], *,

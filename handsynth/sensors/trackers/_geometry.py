@@ -18,8 +18,12 @@ Table values: phalanx lengths are the hand model's own constants,
 times :data:`handsynth.models.HAND_LENGTH_MM` (187 mm, about the pooled mean
 of Gordon et al. 1989), so that the table and the standard hand share one
 source.  MCP positions are rough placements in the hand frame (origin at the
-wrist, ``+y`` to the middle-finger MCP, ``+z`` dorsal) and matter only for
-where the sensors sit relative to the transmitter.
+wrist, ``+y`` to the middle-finger MCP, ``+z`` dorsal, ``+x = y x z``) and
+matter only for where the sensors sit relative to the transmitter.  The hand
+is a right hand, as the model's standard hand
+(``handsynth.models.HandModel(side="right")``): seen from the back with the
+fingers pointing away, the thumb and the index finger are on the left, at
+``-x``, and the little finger at ``+x``.
 """
 
 from __future__ import annotations
@@ -41,7 +45,9 @@ _HAND_LENGTH_M = HAND_LENGTH_MM / 1000.0
 _BUCHHOLZ: dict[str, tuple[float, ...]] = {
     finger: tuple(coefficients[1:]) for finger, coefficients in SEGMENT_COEFFICIENTS.items()
 }
-_MCP_X_M = {"index": 0.022, "middle": 0.0, "ring": -0.019, "little": -0.036}
+#: Lateral MCP positions of a right hand: the index finger at -x, the little finger at +x
+#: (the sides of ``HandModel(side="right").keypoints()``).
+_MCP_X_M = {"index": -0.022, "middle": 0.0, "ring": 0.019, "little": 0.036}
 _MCP_Y_M = {"index": 0.092, "middle": 0.095, "ring": 0.088, "little": 0.078}
 
 #: Joints that can be simulated: ``<finger>_<joint>``.
@@ -102,7 +108,7 @@ def _table(joint: str) -> JointGeometry:
     finger, upper, lower, _ = _split(joint)
     lengths = np.asarray(_BUCHHOLZ[finger]) * _HAND_LENGTH_M
     if finger == "thumb":
-        origin = np.array([0.045, 0.060, 0.0])
+        origin = np.array([-0.045, 0.060, 0.0])  # the thumb on the index side, -x
         i_up = 0
     else:
         i_up = 0 if joint.endswith("pip") else 1

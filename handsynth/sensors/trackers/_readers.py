@@ -34,7 +34,10 @@ Polhemus' azimuth, elevation, roll are rotations about the transmitter's
 Decimal commas (``12,5`` with ``;`` or whitespace between fields) are read
 and recorded.  A number with an underscore (``1_000``, which Python's
 ``float`` reads but no exporter writes) is refused, naming the line and the
-cell.  A file that ends without a line end was cut off while being written
+cell; so is a number no tracker writes (beyond 1e100 in any column, a position
+beyond 1e5 in the file's unit, a time beyond 1e13, a frame counter beyond 1e12),
+naming the line, the column and the value, and a header that names a column the
+reader uses twice.  A file that ends without a line end was cut off while being written
 (the last line may stop mid-number, ``12.3`` of ``12.345``): its last line is
 left out with a warning naming it.  Position units are checked against a
 finger joint: two sensors on adjacent phalanges are 10-90 mm apart
@@ -79,6 +82,8 @@ from ._recording import Recording
 
 __all__ = ["DEFAULT_COLUMNS", "read_polhemus", "read_recording"]
 
+#: Highest sampling rate taken: trackers sample at up to about 1 kHz (Polhemus Viper 960 Hz).
+_MAX_RATE_HZ = 100_000.0
 #: Column layout of Liberty ASCII without frame counter (Euler angles).
 DEFAULT_COLUMNS = ("sensor", "x", "y", "z", "a1", "a2", "a3")
 _UNITS_M = {"cm": 1e-2, "in": 0.0254, "mm": 1e-3, "m": 1.0}
@@ -200,8 +205,63 @@ def _tokenise(path: Path) -> _Table:
             f"{k} numeric fields most lines have (mixed field counts or text; first: "
             f"line {skipped[0]})"
         )
-    return _Table(np.asarray(rows, dtype=np.float64), np.asarray(lines), header, dec, skipped,
-                  cut_line)
+    table = _Table(np.asarray(rows, dtype=np.float64), np.asarray(lines), header, dec, skipped,
+                   cut_line)
+    _refuse_huge(table, path, np.ones(k, dtype=bool), _MAX_ABS_VALUE,
+                 "no tracker export writes a number this large")
+    return table
+
+
+def _column_name(table: _Table, j: int) -> str:
+    """The header's name of column `j` (0-based), or its number."""
+    if table.header is not None and len(table.header) == table.rows.shape[1]:
+        return f"column {table.header[j]!r}"
+    return f"column {j + 1}"
+
+
+def _refuse_huge(table: _Table, path: Path, columns: np.ndarray, limit: float, why: str) -> None:
+    """Refuse the first cell of `columns` (a boolean mask of the table's columns) whose
+    magnitude exceeds `limit`, naming the line, the column and the value.
+
+    Such a cell is a damaged line, never a measurement; left in, it would overflow in
+    the arithmetic that follows (``1e300`` squared) or pass for a glitch or a restart.
+    NaN and infinity are not judged here (they make invalid frames, dropped and counted).
+    """
+    if table.rows.size == 0 or not columns.any():
+        return
+    with np.errstate(invalid="ignore"):
+        big = np.isfinite(table.rows) & (np.abs(table.rows) > limit) & columns[None, :]
+    if big.any():
+        i, j = (int(v) for v in np.argwhere(big)[0])
+        raise RecordingError(
+            f"{path}, line {int(table.lines[i])}, {_column_name(table, j)}: value "
+            f"{table.rows[i, j]:g} is beyond {limit:g} in magnitude ({why}); a damaged line?")
+
+
+#: Largest magnitude of any number in a text export: beyond it the file is damaged.
+_MAX_ABS_VALUE = 1e100
+#: Largest magnitude of a position in the file's unit: 100 m in millimetres, 1 km in
+#: centimetres; a tracker's range is a few metres.
+_MAX_ABS_POSITION = 1e5
+#: Largest time stamp: Unix time in milliseconds is about 1.7e12.
+_MAX_ABS_TIME = 1e13
+#: Largest frame counter: 130 years at 240 Hz.
+_MAX_COUNTER = 1e12
+
+
+def _check_magnitudes(table: _Table, lay: _Layout, path: Path) -> None:
+    """Refuse a position, time or frame counter beyond what a tracker can write."""
+    k = table.rows.shape[1]
+    pos = np.zeros(k, dtype=bool)
+    pos[[j for p in lay.pos for j in p]] = True
+    _refuse_huge(table, path, pos, _MAX_ABS_POSITION,
+                 "a position 100 m away in millimetres, farther in any other unit")
+    for col, limit, what in ((lay.time, _MAX_ABS_TIME, "a time stamp"),
+                             (lay.frame, _MAX_COUNTER, "a frame counter")):
+        if col is not None:
+            mask = np.zeros(k, dtype=bool)
+            mask[col] = True
+            _refuse_huge(table, path, mask, limit, f"not {what}")
 
 
 # --------------------------------------------------------------------------
@@ -361,7 +421,16 @@ def _header_layout(header: tuple[str, ...], k: int, path: Path) -> _Layout:
     idx = {h: i for i, h in enumerate(header)}
 
     def find(*names: str) -> int | None:
-        return next((idx[n] for n in names if n in idx), None)
+        """Column of the first of `names` in the header; a name it gives twice is refused."""
+        name = next((n for n in names if n in idx), None)
+        if name is None:
+            return None
+        where = [i + 1 for i, h in enumerate(header) if h == name]
+        if len(where) > 1:
+            raise RecordingError(
+                f"{path.name}: the header names column {name!r} {len(where)} times (columns "
+                f"{', '.join(map(str, where))}); which one holds the data is unknown")
+        return idx[name]
 
     pos, ang = [], []
     for s in ("1", "2"):
@@ -594,6 +663,11 @@ def _check_times(
     dropped; a constant column refused; a restart (two takes pasted together) and a time
     that looks like milliseconds warned about."""
     fin = np.isfinite(times)
+    if not fin.any():
+        raise RecordingError(
+            f"{path.name}: the time column holds no number on any of its {times.size} rows "
+            f"(first: line {int(line_no[0])} reads {times[0]:g}); is it the time column of "
+            f"this export?")
     if fin.sum() > 1 and np.ptp(times[fin]) == 0:
         raise RecordingError(
             f"{path.name}: the time column is {times[fin][0]:g} on all {int(fin.sum())} rows: "
@@ -608,7 +682,8 @@ def _check_times(
         k = _select_take(path, "time", [int(b) + 1 for b in back], line_no,
                          (times[i - 1], times[i]), take, notes, stacklevel=3)
         pos_file, ang, times, line_no = pos_file[k], [a[k] for a in ang], times[k], line_no[k]
-    times = times - np.nanmin(times)
+    origin = float(np.nanmin(times))
+    times = times - origin
     # rows re-written with a time that does not advance
     ok = np.ones(times.size, dtype=bool)
     last = -np.inf
@@ -617,6 +692,12 @@ def _check_times(
             ok[i] = False
         elif np.isfinite(tt):
             last = tt
+    if not ok.all() and (~ok).sum() >= 0.5 * ok.size:
+        i = int(np.flatnonzero(~ok)[0])
+        raise RecordingError(
+            f"{path.name}: the time column goes back or stands still on {int((~ok).sum())} of "
+            f"{ok.size} rows (first: line {int(line_no[i])}, {float(times[i] + origin)!r} after "
+            f"{float(times[i - 1] + origin)!r}); are the rows in time order, and is it the time column?")
     if not ok.all():
         notes["non_increasing_times"] = int((~ok).sum())
         pos_file, ang, times, line_no = pos_file[ok], [a[ok] for a in ang], times[ok], line_no[ok]
@@ -739,7 +820,8 @@ def read_polhemus(
     rate_hz : float
         Sampling rate used for times when the file has none (frame counter
         times ``1 / rate_hz`` when there is a counter); a time column is
-        used instead of it (``metadata["times_from"]`` says which).
+        used instead of it (``metadata["times_from"]`` says which).  At most
+        100 kHz.
     labels, joint : see :class:`Recording`.
     on_invalid : {"drop", "raise"}
         Frames with NaN values, half frames (lost lines), glitches,
@@ -778,7 +860,7 @@ def read_polhemus(
         raise InvalidInputError(f"angles: expected 'euler' or 'quaternion', got {angles!r}")
     if on_invalid not in ("raise", "drop"):
         raise InvalidInputError(f"on_invalid: expected 'drop' or 'raise', got {on_invalid!r}")
-    check_number(rate_hz, "rate_hz", above=0.0)
+    check_number(rate_hz, "rate_hz", above=0.0, maximum=_MAX_RATE_HZ)
     check_number(glitch_mm, "glitch_mm", above=0.0)
     take = check_integer(take, "take", minimum=1)
     if sensors is not None and (len(sensors) != 2 or sensors[0] == sensors[1]):
@@ -792,6 +874,7 @@ def read_polhemus(
         lay = _header_layout(t.header, k, path)
     else:
         lay = _detect_station_layout(t, path)
+    _check_magnitudes(t, lay, path)
     if angles is not None and lay.angles != angles:
         raise RecordingError(
             f"{path.name}: the layout found is {lay.description!r}, whose orientation is "
@@ -883,7 +966,7 @@ def read_polhemus(
         pos_file, ang, times, line_no = (pos_file[keep], [a[keep] for a in ang], times[keep],
                                          line_no[keep])
         notes["half_frames"] = 0
-        if lay.time is not None and times.size and np.nanmin(times) > 1e8:
+        if lay.time is not None and np.isfinite(times).any() and np.nanmin(times) > 1e8:
             notes["time_origin_unix_s"] = float(np.nanmin(times))
         pair = (order[0] + 1, order[1] + 1)
     if lay.time is not None and times.size:
@@ -955,6 +1038,12 @@ def read_polhemus(
     if problems and on_invalid == "raise":
         raise RecordingError(msg + " (on_invalid='drop' drops them)")
     if keep.sum() < 10:  # the reasons go with the refusal, not in a warning before it
+        if notes["duplicates"]:
+            problems.append(f"{notes['duplicates']} duplicated rows dropped before (the same "
+                            "sample written again)")
+        if notes.get("non_increasing_times"):
+            problems.append(f"{notes['non_increasing_times']} rows dropped before whose time "
+                            "does not advance")
         raise RecordingError(f"{path.name}: only {int(keep.sum())} usable frames of {n}"
                              + (f" ({'; '.join(problems)})" if problems else ""))
     if problems:

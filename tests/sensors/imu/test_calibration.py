@@ -246,3 +246,106 @@ def test_a_segment_label_no_step_reads_is_warned_about():
         out = segments_from_seconds({"static": [0, 2], "index_mcp_flx": [2, 4], "acc_pose_3": [4, 5]},
                                     100.0, 1000, source="s.json")
     assert [lab for lab, _, _ in out] == ["static", "index_mcp_flx", "acc_pose_3"]
+
+
+def _still_then_turning(n=1000, rate=100.0, seed=0):
+    """Two sensors still for `n` // 2 samples, then the second one turning at 1 rad/s peak."""
+    from handsynth.sensors.imu import ImuRecording
+
+    rng = np.random.default_rng(seed)
+    acc = np.tile([0.0, 0.0, 9.81], (2, n, 1)) + 0.02 * rng.standard_normal((2, n, 3))
+    gyr = 0.003 * rng.standard_normal((2, n, 3))
+    t = np.arange(n // 2) / rate
+    gyr[1, n // 2:, 0] += np.sin(2 * np.pi * 0.5 * t)
+    mag = np.tile([20.0, 0.0, -40.0], (2, n, 1)) + 0.3 * rng.standard_normal((2, n, 3))
+    return ImuRecording(rate, ("forearm_1", "index_middle"), acc, gyr, mag)
+
+
+def test_a_rotation_labelled_over_a_still_stretch_is_refused():
+    # before: accepted, and the sensor-to-joint vector came out metres long from the noise
+    from handsynth.sensors.imu import calibrate
+    from handsynth.sensors.imu._calibration import check_stretches
+
+    rec = _still_then_turning()
+    moving = dataclasses.replace(rec, segments=(("static", 0, 200), ("index_pip_flex", 500, 1000)))
+    assert check_stretches(moving) == []
+    still = dataclasses.replace(rec, segments=(("static", 0, 200), ("index_pip_flex", 200, 500)))
+    message = (r"^cal\.csv: segment 'index_pip_flex' \(samples 200-499 \(2\.00-5\.00 s\)\) is "
+               r"still: no sensor turns more than 0\.\d+ deg")
+    with pytest.raises(RecordingError, match=message):
+        check_stretches(still, source="cal.csv")
+    with pytest.raises(RecordingError, match=message):
+        calibrate(still, source="cal.csv")
+
+
+def test_a_still_stretch_that_moves_is_warned_about():
+    from handsynth.sensors.imu._calibration import check_stretches
+
+    rec = dataclasses.replace(_still_then_turning(), segments=(("static", 0, 200),
+                                                               ("acc_pose_0", 600, 800)))
+    (warning,) = check_stretches(rec)
+    assert warning.startswith("segment 'acc_pose_0' (samples 600-799 (6.00-8.00 s)) should be "
+                              "still, but the gyro of index_middle moves by")
+
+
+def test_a_non_finite_calibration_value_is_refused_by_name_and_nothing_is_written(tmp_path,
+                                                                                  ideal_rec):
+    # before: json.dump wrote the bare token NaN, which strict JSON readers refuse and
+    # load() refused only after the file was there
+    from handsynth.errors import OutputError
+
+    model = truth_chain_model(ideal_rec)
+    sensor = next(iter(model.own))
+    own = dict(model.own, **{sensor: np.array([0.01, np.nan, 0.0])})
+    bad = ImuCalibration(dataclasses.replace(model, own=own), {s: np.eye(3) for s in model.own},
+                         np.zeros(20), tuple(model.own))
+    out = tmp_path / "c.json"
+    with pytest.raises(OutputError, match=rf"field own_m\.{sensor}\[1\] is nan, .*nothing was "
+                                          "written"):
+        bad.save(out)
+    assert list(tmp_path.iterdir()) == []
+    zero = np.zeros(20)
+    zero[3] = np.inf
+    with pytest.raises(OutputError, match=r"field zero_deg\[3\] is inf"):
+        dataclasses.replace(bad, model=model, zero=zero).save(out)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_calibration_file_is_written_whole_or_not_at_all(tmp_path, ideal_rec, monkeypatch):
+    import os
+
+    from handsynth import _io
+    from handsynth.errors import OutputError
+
+    model = truth_chain_model(ideal_rec)
+    cal = ImuCalibration(model, {s: np.eye(3) for s in model.own}, np.zeros(20), tuple(model.own))
+    out = cal.save(tmp_path / "c.json")
+    before = out.read_bytes()
+    json.loads(before, parse_constant=lambda token: pytest.fail(f"non-JSON token {token}"))
+
+    def fail(src, dst):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(_io.os, "replace", fail)
+    changed = dataclasses.replace(cal, zero=np.ones(20))
+    with pytest.raises(OutputError, match="no space left"):
+        changed.save(out)
+    monkeypatch.setattr(_io.os, "replace", os.replace)
+    assert out.read_bytes() == before and sorted(p.name for p in tmp_path.iterdir()) == ["c.json"]
+
+
+def test_a_flexion_labelled_over_another_joints_rotation_is_refused():
+    # index_pip_flex over the DIP's rotation (index_middle still, index_distal turning) was
+    # accepted and gave an index MCP-PIP link of half a metre
+    from handsynth.sensors.imu import ImuRecording
+    from handsynth.sensors.imu._calibration import check_stretches
+
+    rec = _still_then_turning()
+    three = ImuRecording(rec.rate_hz, ("forearm_1", "index_middle", "index_distal"),
+                         rec.acc[[0, 0, 1]], rec.gyr[[0, 0, 1]], rec.mag[[0, 0, 1]])
+    assert check_stretches(dataclasses.replace(three, segments=(("index_dip_flex", 500, 1000),))) == []
+    wrong = dataclasses.replace(three, segments=(("index_pip_flex", 500, 1000),))
+    with pytest.raises(RecordingError, match=r"^segment 'index_pip_flex' \(samples 500-999 "
+                                             r"\(5\.00-10\.00 s\)\) does not turn index_middle "
+                                             r"\(0\.\d+ deg\), .* while index_distal turns"):
+        check_stretches(wrong)

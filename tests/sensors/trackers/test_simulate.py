@@ -130,3 +130,21 @@ def test_table_geometry_is_the_hand_models_buchholz_table_1(joint):
     if j == "dip":  # the upper segment starts one proximal phalanx beyond the MCP
         mcp = joint_geometry(f"{finger}_pip", source="table").upper_origin
         assert g.upper_origin[1] - mcp[1] == pytest.approx(coeff[1] * HAND_LENGTH_MM / 1e3, abs=1e-12)
+
+
+@pytest.mark.parametrize("joint", ["index_pip", "ring_pip", "little_dip", "thumb_ip"])
+def test_table_geometry_is_a_right_hand_as_the_model_is(joint):
+    # the simulated hand is a right hand: each finger on the side the model's right hand has it
+    # (the index and thumb at -x, the ring and little fingers at +x), never mirrored
+    from handsynth.models import HandModel, HandShape
+    from handsynth.sensors.trackers import joint_geometry
+
+    hand = HandModel(HandShape(), side="right")
+    hand.set_pose(np.zeros(20))
+    kp = np.asarray(hand.keypoints())
+    finger = joint.split("_")[0]
+    base = kp[1 + 4 * ("thumb", "index", "middle", "ring", "little").index(finger)]
+    table = joint_geometry(joint, source="table").upper_origin
+    model = joint_geometry(joint, hand=hand).upper_origin
+    assert np.sign(table[0]) == np.sign(base[0]) == np.sign(model[0])
+    assert abs(table[0] - model[0]) < 0.025  # a rough placement, on the model's side
