@@ -160,7 +160,9 @@ class EnsembleEstimator:
         -------
         PoseEstimate
             ``angles``: the weighted mean of the members' (NaN when any finds
-            no hand); ``keypoints`` the mean of those given (NaN if none);
+            no hand); ``keypoints`` the mean of those given (NaN if none, as
+            for learnt members: :class:`~handsynth.estimate.KeypointEstimator`
+            adds a model hand's);
             ``confidence`` the weighted mean; ``entry`` -1; ``low_confidence``
             and ``moved`` when any member's is.  Learnt members
             of the same :attr:`~LearnedEstimator.view_key` share one coverage

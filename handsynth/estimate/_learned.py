@@ -843,7 +843,9 @@ class LearnedEstimator:
         Returns
         -------
         PoseEstimate
-            ``keypoints`` are NaN (this estimator reports angles only);
+            ``keypoints`` are NaN (this estimator reports angles only;
+            :class:`~handsynth.estimate.KeypointEstimator` adds those of a model
+            hand posed by them);
             ``entry`` is -1; ``confidence`` is a heuristic, low for frames
             unlike any learnt (``"fingers"``: ``1 / (1 + error)``, ``error``
             the mean over the digits of the nearest learning frame's
