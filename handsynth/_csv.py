@@ -31,8 +31,16 @@ import numpy as np
 
 from .errors import RecordingError
 
-__all__ = ["NumberTable", "Rows", "column_index", "names_by_meaning", "read_number_table",
-           "read_rows", "read_text"]
+__all__ = [
+    "NumberTable",
+    "Rows",
+    "column_index",
+    "names_by_meaning",
+    "read_number_table",
+    "read_rows",
+    "read_text",
+    "reads_as_number",
+]
 
 _COMMA_NUMBER = re.compile(r"[-+]?\d*,\d+(?:[eE][-+]?\d+)?")
 #: A number as Python's ``float`` reads it, underscores included.
@@ -121,6 +129,15 @@ def _underscore_number(cell: str) -> bool:
     """`cell` is a number written with underscores (``1_000``), which Python reads."""
     return "_" in cell and bool(_UNDERSCORE_NUMBER.fullmatch(cell)) \
         and any(c.isdigit() for c in cell)
+
+
+def reads_as_number(cell: str) -> bool:
+    """Whether Python's ``float`` reads `cell` (a header line of numbers is no header)."""
+    try:
+        float(cell)
+    except ValueError:
+        return False
+    return True
 
 
 def read_rows(path, *, what: str = "CSV table") -> Rows:

@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..._csv import column_index, read_rows
+from ..._csv import column_index, read_rows, reads_as_number
 from ...errors import RecordingError
 from ...models import JOINT_LIMITS_DEG, JOINT_NAMES
 from ._models import GloveWarning
@@ -103,7 +103,7 @@ def read_cyberglove_csv(path, *, units: str = "deg",
     if not rows:
         raise RecordingError(f"{path}: empty file")
     first = rows[0]
-    if all(_is_number(c) for c in first):
+    if all(reads_as_number(c) for c in first):
         names = list(columns or CYBERGLOVE_COLUMNS)
         body, lines = rows, content.lines
     else:
@@ -162,13 +162,6 @@ def read_cyberglove_csv(path, *, units: str = "deg",
                       f"({at}); their postures are NaN (left out of synergies)", GloveWarning, stacklevel=2)
     return out
 
-
-def _is_number(cell: str) -> bool:
-    try:
-        float(cell)
-    except ValueError:
-        return False
-    return True
 
 
 def _check_units(angles: np.ndarray, path: Path, units: str) -> None:

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..._csv import column_index, names_by_meaning, read_rows
+from ..._csv import column_index, names_by_meaning, read_rows, reads_as_number
 from ..._io import atomic_open
 from ...errors import InvalidInputError, RecordingError
 from ...models import JOINT_NAMES
@@ -344,7 +344,7 @@ def read_glove_csv(path, *, kind: str = "", adc_max: float = 4095.0) -> GloveRec
             warnings.warn(f"{path}: {len(renamed)} columns read by their meaning "
                           f"({shown})", GloveWarning, stacklevel=2)
     missing = [c for c in SENSOR_NAMES if c not in header]
-    if missing and sum(_is_number(c) for c in rows[0]) >= len(SENSOR_NAMES):
+    if missing and sum(reads_as_number(c) for c in rows[0]) >= len(SENSOR_NAMES):
         raise RecordingError(f"{path}, line {content.lines[0]}: the first line holds numbers, "
                              "not column names; a glove CSV starts with a header line naming "
                              f"its columns ({', '.join(('time_s', 'motion', 'trial', *SENSOR_NAMES))})")
@@ -422,13 +422,6 @@ def _check_trials(time_s, motion, trial, lines, path, *, has_time: bool) -> None
         last[key] = (t, line)
         prev_key = key
 
-
-def _is_number(cell: str) -> bool:
-    try:
-        float(cell)
-    except ValueError:
-        return False
-    return True
 
 
 def _check_adc_max(adc_max) -> None:

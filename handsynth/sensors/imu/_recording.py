@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from ..._checks import check_instance, is_number
-from ..._csv import column_index, names_by_meaning, read_number_table, read_rows, read_text
+from ..._csv import column_index, names_by_meaning, read_number_table, read_rows, read_text, reads_as_number
 from ..._io import atomic_open
 from ...errors import InvalidInputError, RecordingError
 from ._model import GRAVITY_MPS2
@@ -557,19 +557,12 @@ def _meaning(name: str) -> str | None:
     return f"time_{t['unit'].lower()}" if t else None
 
 
-def _is_float(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
-
 
 def _check_header(header, path, line) -> None:
     """Refuse a first line of numbers: the header is missing (its numbers would be read as
     column names, and the first repeated value named as a column that stands twice)."""
     names = [h for h in header if h]
-    if names and all(_is_float(h) for h in names):
+    if names and all(reads_as_number(h) for h in names):
         raise RecordingError(
             f"{path}, line {line}: the first line holds numbers ({', '.join(names[:3])}, ...), "
             "not column names: the header (time_s, <sensor>_acc_x .. <sensor>_mag_z) is missing")
