@@ -8,9 +8,14 @@ import sys
 import click
 
 from ..errors import InvalidInputError
-from ._main import cli
+from ._main import cli, option_names
 
 _BAR = 24
+
+#: The option each library argument of this command's errors comes from.
+_OPTION_NAMES = {"count": "--count", "seed": "--seed", "render_size": "--render-size",
+                 "workers": "--workers", "side": "--side", "pose_set": "--pose-set",
+                 "executor": "--executor", "shapes": "--shapes"}
 
 
 def _parse_shapes(text: str):
@@ -85,6 +90,7 @@ def _printer(stream):
               show_default=True, help="Local process pool, or Ray (pip install handsynth[ray]).")
 @click.option("--force", is_flag=True, help="Rebuild files that already verify.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress line.")
+@option_names(_OPTION_NAMES)
 def build_db(out_dir, default, shapes, pose_set, count, seed, side, mount, render_size,
              workers, executor, force, quiet) -> None:
     """Build the pose databases, one HDF5 file per hand shape.
@@ -100,6 +106,8 @@ def build_db(out_dir, default, shapes, pose_set, count, seed, side, mount, rende
     )
     from ..render import CameraMount
 
+    if not out_dir.strip():  # '' would be the current folder
+        raise InvalidInputError(f"--out must name a folder, got {out_dir!r}")
     if workers is not None and workers < 1:
         raise InvalidInputError(f"--workers must be a positive integer, got {workers}")
     show = None if quiet else _printer(sys.stderr)
@@ -108,7 +116,7 @@ def build_db(out_dir, default, shapes, pose_set, count, seed, side, mount, rende
         click.echo(f"default database: {path}")
         return
     options = BuildOptions(side=side, pose_set=pose_set, count=count, seed=seed,
-                           render_size=_parse_size(render_size) if render_size
+                           render_size=_parse_size(render_size) if render_size is not None
                            else DEFAULT_RENDER_SIZE)
     cam = CameraMount.paper() if mount == "paper" else CameraMount.whole_hand()
     summary = build_databases(out_dir, _parse_shapes(shapes), cam, options=options,

@@ -6,12 +6,17 @@ from pathlib import Path
 
 import click
 
-from ._main import cli
+from ..errors import InvalidInputError
+from ._main import cli, option_names
+
+#: The option each library argument or field of this command's errors comes from.
+_OPTION_NAMES = {"tile_width_px": "--tile-width", "LearningSetOptions.hands": "--learned-hands",
+                 "ProtocolOptions.frames": "--frames"}
 
 
 @cli.command()
-@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
-              default=Path("demo_out"), show_default=True, help="Folder for the pictures.")
+@click.option("--out", "out_dir", type=click.Path(file_okay=False), default="demo_out",
+              show_default=True, help="Folder for the pictures.")
 @click.option("--tile-width", type=click.IntRange(64, 1440), default=360, show_default=True,
               help="Width of one picture in pixels.")
 @click.option("--frames", type=click.IntRange(0, 10_000), default=200, show_default=True,
@@ -19,7 +24,8 @@ from ._main import cli
 @click.option("--learned-hands", type=click.IntRange(0, 100_000), default=300, show_default=True,
               help="Random hands of the learned estimator's small demo learning set "
                    "(0: skip that part).")
-def demo(out_dir: Path, tile_width: int, frames: int, learned_hands: int) -> None:
+@option_names(_OPTION_NAMES)
+def demo(out_dir: str, tile_width: int, frames: int, learned_hands: int) -> None:
     """Render pictures, build the embedded default database and look up synthetic frames.
 
     Pictures: the open hand, a fist and a pinch for the smallest and largest
@@ -35,24 +41,27 @@ def demo(out_dir: Path, tile_width: int, frames: int, learned_hands: int) -> Non
     """
     import time
 
+    from .._io import make_folder
     from ..models import HandShape
     from ..render import CameraMount, backend, contact_sheet, write_png
 
+    if not out_dir.strip():  # '' would be the current folder
+        raise InvalidInputError(f"--out must name a folder, got {out_dir!r}")
     t = time.perf_counter()
     grid = HandShape.grid()
     shapes = {"smallest": grid[0], "largest": grid[-1]}
-    out_dir.mkdir(parents=True, exist_ok=True)
+    folder = make_folder(out_dir, what="--out folder")
     for name, mount in (("hands_paper_mount", CameraMount.paper()),
                         ("hands_whole_hand_mount", CameraMount.whole_hand())):
-        path = out_dir / f"{name}.png"
+        path = folder / f"{name}.png"
         write_png(path, contact_sheet(shapes, mount=mount, tile_width_px=tile_width))
         click.echo(f"wrote {path}")
     click.echo(f"smallest = {grid[0].name}, largest = {grid[-1].name}; "
                f"MUJOCO_GL={backend()}; {time.perf_counter() - t:.1f} s")
     if frames:
-        _lookup_demo(out_dir / "db", frames)
+        _lookup_demo(folder / "db", frames)
     if learned_hands:
-        _learned_demo(out_dir, learned_hands, max(frames, 20), tile_width)
+        _learned_demo(folder, learned_hands, max(frames, 20), tile_width)
 
 
 def _learned_demo(out_dir: Path, hands: int, frames: int, tile_width: int) -> None:

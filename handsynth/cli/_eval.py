@@ -8,7 +8,7 @@ from pathlib import Path
 import click
 
 from ..errors import InvalidInputError
-from ._main import cli
+from ._main import cli, option_names
 
 
 def _parse_size(text: str, option: str) -> tuple[int, int]:
@@ -27,10 +27,46 @@ def _parse_list(text: str, option: str) -> tuple[str, ...]:
     return items
 
 
+def _check_writable(folder: Path, option: str) -> None:
+    """Refuse, before the work, an output folder this process cannot write into.
+
+    A read-only file system or a folder without write permission would
+    otherwise refuse the output only after the whole run.
+    """
+    import os
+
+    from ..errors import OutputError
+
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise OutputError(f"cannot write {option} into the folder {str(folder)!r}: it is "
+                          "read-only or not writable by this user")
+
+
 #: Options of the paper's experiment that the protocol does not take.
 _EXPERIMENT_ONLY = ("out_dir", "prefix", "json_frames", "hand", "count", "db_pose_set",
                     "ratio_margin", "mount", "frame_size", "render_size", "workers", "ties",
                     "photo_mm_per_px")
+#: The option each library argument or field of this command's errors comes from.
+_OPTION_NAMES = {
+    **{f"EvalOptions.{field}": option for field, option in (
+        ("db_folder", "--db"), ("n_hands", "--hands"), ("frames_per_hand", "--frames"),
+        ("pose_sets", "--pose-sets"), ("seed", "--seed"), ("ratio_margin", "--ratio-margin"),
+        ("hand", "--hand"), ("conditions", "--conditions"), ("count", "--count"),
+        ("db_pose_set", "--db-pose-set"), ("render_size", "--render-size"), ("mount", "--mount"),
+        ("frame_size", "--frame-size"), ("workers", "--workers"), ("ties", "--ties"),
+        ("photo_mm_per_px", "--photo-mm-per-px"))},
+    **{f"ProtocolOptions.{field}": f"--{field.replace('_', '-')}"
+       for field in ("frames", "pose_sets", "seed", "rest", "slip")},
+    "LearningSetOptions.hands": "--learned-hands",
+    "LearningSetOptions.hand_spread": "--hand-spread",
+    "methods": "--conditions",          # protocol_methods
+    "n": "--hands", "spread": "--hand-spread",  # model_test_hands
+    "scale": "--mesh-scale",            # mesh_test_hands
+    "workers": "--workers",             # build_databases
+}
+#: Most random hands of the learnt estimators' learning set (as ``demo --learned-hands``).
+_MAX_LEARNED_HANDS = 100_000
+
 #: What ``--protocol`` compares unless ``--conditions`` says otherwise.
 PROTOCOL_DEFAULT = "standard,calibrated,fingers,fingers_mean,mlp,ensemble"
 
@@ -107,6 +143,7 @@ PROTOCOL_DEFAULT = "standard,calibrated,fingers,fingers_mean,mlp,ensemble"
               help="Scale of the photos that measure model hands for the personal condition.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress lines.")
 @click.pass_context
+@option_names(_OPTION_NAMES)
 def eval_(ctx, db_folder, protocol, mesh, mesh_scale, learned_hands, hand_spread, rest, slip, out_dir, prefix,
           json_path, json_frames, n_hands, frames, pose_sets, hand, conditions, count,
           db_pose_set, seed, ratio_margin, mount, frame_size, render_size, workers, ties,
@@ -125,13 +162,20 @@ def eval_(ctx, db_folder, protocol, mesh, mesh_scale, learned_hands, hand_spread
     skill per hand kind, pose set and method; --json writes every figure
     (per hand, per joint).
     """
-    from .._io import check_output, write_json
+    from .._io import check_output, check_outputs, make_folder, write_json
     from ..errors import OutputError
     from ..eval import EvalOptions, evaluate
 
+    for option, value in (("--db", db_folder), ("--out", out_dir), ("--json", json_path)):
+        if value is not None and not value.strip():  # '' would be the current folder, or nothing
+            raise InvalidInputError(f"{option} must name a {'file' if option == '--json' else 'folder'}, "
+                                    f"got {value!r}")
+    if prefix is not None and ("/" in prefix or "\\" in prefix or prefix in (".", "..")):
+        raise InvalidInputError(f"--prefix must be the start of a file name (no folder), got {prefix!r}")
     if json_path:  # before the work, not after it
         path = check_output(json_path, what="JSON report",
                             inputs=sorted(Path(db_folder).glob("*.h5")) if db_folder else ())
+        _check_writable(path.parent, "--json")
         if db_folder and path.suffix.lower() in (".h5", ".hdf5") \
                 and path.resolve().parent == Path(db_folder).resolve():
             raise OutputError(f"the JSON report {json_path!r} would be a database file in "
@@ -154,15 +198,24 @@ def eval_(ctx, db_folder, protocol, mesh, mesh_scale, learned_hands, hand_spread
             raise InvalidInputError(f"--{n.replace('_', '-')} applies with --protocol only")
     if conditions is None:
         conditions = "standard,selected,selected_none,personal,calibrated,own_shape"
+    if prefix is None:
+        prefix = "eval_mesh_" if hand == "mesh" else "eval_"
 
     options = EvalOptions(
         db_folder=db_folder, n_hands=n_hands, frames_per_hand=frames,
         pose_sets=_parse_list(pose_sets, "--pose-sets"), seed=seed, ratio_margin=ratio_margin,
         hand=hand, conditions=_parse_list(conditions, "--conditions"), count=count,
         db_pose_set=db_pose_set,
-        render_size=_parse_size(render_size, "--render-size") if render_size else None,
+        render_size=None if render_size is None else _parse_size(render_size, "--render-size"),
         mount=mount, frame_size=_parse_size(frame_size, "--frame-size"), workers=workers,
         ties=ties, photo_mm_per_px=photo_mm_per_px)
+    if out_dir:  # the plot folder and names, before the work, not after it
+        plots = make_folder(out_dir, what="--out folder")
+        _check_writable(plots, "--out")
+        check_outputs([("--out", plots / f"{prefix}{name}.png")
+                       for name in ("error_hist", "error_vs_distance", "joint_mae")],
+                      inputs=[json_path])
+    make_folder(db_folder, what="--db folder")  # before the work: a file in the way fails now
     report = evaluate(options, progress=say)
     click.echo(report.format())
     if json_path:
@@ -170,8 +223,6 @@ def eval_(ctx, db_folder, protocol, mesh, mesh_scale, learned_hands, hand_spread
         path = write_json(json_path, report.to_dict(frames=json_frames), what="JSON report")
         click.echo(f"json: {path}")
     if out_dir:
-        if prefix is None:
-            prefix = "eval_mesh_" if hand == "mesh" else "eval_"
         for path in report.write_plots(out_dir, prefix=prefix):
             click.echo(f"plot: {path}")
     sys.stdout.flush()
@@ -182,7 +233,7 @@ def _protocol(folder, mesh, mesh_scale, learned_hands, hand_spread, json_path, n
     import time
 
     from .. import __version__
-    from .._io import write_json
+    from .._io import make_folder, write_json
     from ..db import LearningSetOptions
     from ..eval import (
         ProtocolOptions,
@@ -198,8 +249,9 @@ def _protocol(folder, mesh, mesh_scale, learned_hands, hand_spread, json_path, n
 
     if n_hands < 0:
         raise InvalidInputError(f"--hands must be a non-negative integer, got {n_hands}")
-    if learned_hands is not None and learned_hands < 1:
-        raise InvalidInputError(f"--learned-hands must be a positive integer, got {learned_hands}")
+    if learned_hands is not None and not 1 <= learned_hands <= _MAX_LEARNED_HANDS:
+        raise InvalidInputError(f"--learned-hands must be an integer in [1, {_MAX_LEARNED_HANDS:,}], "
+                                f"got {learned_hands}")
     if not hand_spread > 0:
         raise InvalidInputError(f"--hand-spread must be a positive number, got {hand_spread}")
     options = ProtocolOptions(frames=frames, pose_sets=pose_sets, seed=seed, rest=rest, slip=slip)
@@ -209,8 +261,14 @@ def _protocol(folder, mesh, mesh_scale, learned_hands, hand_spread, json_path, n
     hands += mesh_test_hands(meshes, mount=mount, scale=mesh_scale) if meshes else []
     if not hands:
         raise InvalidInputError("no test hands: give --hands N > 0 or --mesh NAMES")
+    names = [h.name for h in hands]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:  # before the learning, not after it
+        raise InvalidInputError(f"two test hands named {', '.join(map(repr, twice))}: --mesh files are "
+                                "named by their stem, model hands model0, model1, ...; rename the file")
     data = (LearningSetOptions() if learned_hands is None
             else LearningSetOptions(hands=learned_hands))
+    make_folder(folder, what="--db folder")  # before the learning: a file in the way fails now
     factories = protocol_methods(methods, folder, data=data, mount=mount, progress=say)
     t0 = time.perf_counter()
     result = run_protocol(factories, hands, options, progress=say)

@@ -9,13 +9,22 @@ comes, ``handsynth: warning: <what>``, also when the command then fails (the
 warnings are often what explains the error).  A
 sub-command module that cannot be imported is a bug of the installation and
 raises (it never silently drops its command).
+
+The library names a bad value by its argument or field
+(``ProtocolOptions.frames must be ...``); a command whose options are
+passed on as such fields says which option each one comes from with
+:func:`option_names`, so that its error line names the option the user
+typed (``--frames must be ...``).
 """
 
 from __future__ import annotations
 
+import functools
 import importlib
+import re
 import sys
 import warnings
+from collections.abc import Callable, Mapping
 from contextlib import contextmanager
 
 import click
@@ -42,6 +51,68 @@ def _warnings_as_lines():
         warnings.simplefilter("always")
         warnings.showwarning = _warning_line
         yield
+
+
+def renamed_message(message: str, names: Mapping[str, str]) -> str | None:
+    """`message` with the library name it starts with replaced by its command-line option.
+
+    Parameters
+    ----------
+    message : str
+        An error's message, e.g. ``"ProtocolOptions.frames must be an integer >= 2,
+        got 1"``.
+    names : mapping of str to str
+        Library argument or field name (``"ProtocolOptions.frames"``,
+        ``"count"``) to the option (``"--frames"``).
+
+    Returns
+    -------
+    str or None
+        The message starting with the option instead (an option the library
+        already named in brackets after the field, ``EvalOptions.count
+        (--count)``, is dropped with it); None when it starts with none of
+        `names` (only a whole name counts: ``count`` does not match
+        ``counts``).
+    """
+    for name in sorted(names, key=len, reverse=True):
+        m = re.match(re.escape(name) + r"(?: \(--[\w-]+\))?(?=[\s:,]|$)", message)
+        if m:
+            return names[name] + message[m.end():]
+    return None
+
+
+def option_names(names: Mapping[str, str]) -> Callable:
+    """Decorator of a command's function: its errors name the options, not the library's fields.
+
+    A :class:`~handsynth.errors.HandsynthError` raised while the command runs
+    whose message starts with one of `names` is raised again, the same
+    error, with that name replaced by the command-line option the value came
+    from (:func:`renamed_message`); any other error passes unchanged.
+
+    Parameters
+    ----------
+    names : mapping of str to str
+        Library argument or field name to the command-line option.
+
+    Returns
+    -------
+    callable
+        The decorator (place it just above the function, below the click
+        decorators).
+    """
+    def decorate(func: Callable) -> Callable:
+        @functools.wraps(func)
+        def run(*args, **kwargs):
+            try:
+                return func(*args, **kwargs)
+            except HandsynthError as exc:
+                if len(exc.args) == 1 and isinstance(exc.args[0], str):
+                    renamed = renamed_message(exc.args[0], names)
+                    if renamed is not None:
+                        exc.args = (renamed,)
+                raise
+        return run
+    return decorate
 
 
 class _Group(click.Group):

@@ -2,13 +2,44 @@
 
 from __future__ import annotations
 
+import os
+import sys
+from contextlib import contextmanager
 from pathlib import Path
 
 import click
 
 from ..errors import InvalidInputError
 from ..render import read_image
-from ._main import cli
+from ._main import cli, option_names
+
+#: The option each library argument of this command's errors comes from.
+_OPTION_NAMES = {"mm_per_px": "--mm-per-px", "reference_width_mm": "--reference-width-mm",
+                 "MeasureOptions.normalize": "--normalize"}
+
+
+@contextmanager
+def _quiet_native_stderr():
+    """Silence what C libraries write to the process's standard error (file descriptor 2).
+
+    OpenCV's PNG and JPEG readers print lines of their own (``libpng error:
+    Read Error``) for a damaged file before returning nothing; the error
+    handsynth raises names the file, in one line.  Python's ``sys.stderr``
+    is untouched; where descriptor 2 cannot be duplicated nothing is done.
+    """
+    try:
+        sys.stderr.flush()
+        saved = os.dup(2)
+    except (OSError, ValueError):
+        yield
+        return
+    try:
+        with open(os.devnull, "wb") as null:
+            os.dup2(null.fileno(), 2)
+        yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
 
 
 def _format(result) -> str:
@@ -30,20 +61,20 @@ def _format(result) -> str:
 
 
 @cli.command()
-@click.argument("photo", type=click.Path(path_type=Path))
+@click.argument("photo", type=click.Path(dir_okay=False))
 @click.option("--mm-per-px", type=float, default=None,
               help="Scale at the plane of the hand, mm per pixel.")
 @click.option("--reference-width-mm", type=float, default=None,
               help="Instead of --mm-per-px: the longer side, in mm, of a reference object "
                    "lying beside the hand (the second-largest object in the photo), e.g. 85.6 "
                    "for a bank card.")
-@click.option("--out", type=click.Path(dir_okay=False, path_type=Path), default=None,
+@click.option("--out", type=click.Path(dir_okay=False), default=None,
               help="Write the measurements to FILE.json or FILE.csv (the format "
                    "--measurements of 'handsynth estimate' reads).")
-@click.option("--details", type=click.Path(dir_okay=False, path_type=Path), default=None,
+@click.option("--details", type=click.Path(dir_okay=False), default=None,
               help="Write everything found (joints, axes, valleys, wrist, fit quality, the "
                    "selection) to FILE.json.")
-@click.option("--annotate", type=click.Path(dir_okay=False, path_type=Path), default=None,
+@click.option("--annotate", type=click.Path(dir_okay=False), default=None,
               help="Write the photo with what was found drawn on it to FILE.png.")
 @click.option("--normalize", type=click.Choice(["none", "palm_width"]), default="none",
               show_default=True,
@@ -51,6 +82,7 @@ def _format(result) -> str:
                    "'palm_width' the paper's scale-free normalisation.")
 @click.option("--raw", is_flag=True,
               help="No corrections from the model (MeasureCalibration, ShapeCorrection).")
+@option_names(_OPTION_NAMES)
 def measure(photo, mm_per_px, reference_width_mm, out, details, annotate, normalize,
             raw) -> None:
     """Measure the open hand on PHOTO and print the database it selects.
@@ -61,9 +93,7 @@ def measure(photo, mm_per_px, reference_width_mm, out, details, annotate, normal
     --reference-width-mm with a reference object of known size beside the
     hand.
     """
-    import json
-
-    from .._io import check_output, write_text
+    from .._io import check_output, write_json
     from ..measure import (
         NO_CALIBRATION,
         NO_SHAPE_CORRECTION,
@@ -74,6 +104,12 @@ def measure(photo, mm_per_px, reference_width_mm, out, details, annotate, normal
     )
     from ..render import write_png
 
+    for name, text in (("PHOTO", photo), ("--out", out), ("--details", details),
+                       ("--annotate", annotate)):
+        if text is not None and not text.strip():  # '' would be the current folder
+            raise InvalidInputError(f"{name} must name a file, got {text!r}")
+    photo = Path(photo)
+    out, details, annotate = (None if p is None else Path(p) for p in (out, details, annotate))
     for path, suffixes, name in ((out, (".json", ".csv"), "--out"),
                                  (details, (".json",), "--details"),
                                  (annotate, (".png",), "--annotate")):
@@ -89,7 +125,8 @@ def measure(photo, mm_per_px, reference_width_mm, out, details, annotate, normal
         check_output(path, what="output file", inputs=[photo])
     if len({p.resolve() for p in outputs}) < len(outputs):
         raise InvalidInputError("--out, --details and --annotate must be different files")
-    image = read_image(photo, what="photo")
+    with _quiet_native_stderr():  # libpng's own line about a damaged file; the error says it
+        image = read_image(photo, what="photo")
     options = MeasureOptions(normalize=normalize)
     if raw:
         options = MeasureOptions(normalize=normalize, calibration=NO_CALIBRATION,
@@ -103,8 +140,8 @@ def measure(photo, mm_per_px, reference_width_mm, out, details, annotate, normal
         write_measurement_file(out, result.measurements, inputs=[photo])
         click.echo(f"wrote {out}")
     if details is not None:
-        write_text(details, json.dumps(result.as_dict(), indent=1) + "\n", what="details file",
-                   inputs=[photo])
+        # write_json: a non-finite figure becomes null, never a bare NaN token
+        write_json(details, result.as_dict(), what="details file", inputs=[photo], indent=1)
         click.echo(f"wrote {details}")
     if annotate is not None:
         write_png(annotate, annotate_measurement(image, result)[..., ::-1], inputs=[photo])

@@ -114,7 +114,7 @@ from ._methods import (
     protocol_headline,
     protocol_methods,
 )
-from ._options import CONDITIONS, EvalOptions
+from ._options import CONDITIONS, MAX_FRAMES, MAX_HANDS, EvalOptions
 from ._protocol import (
     JOINT_GROUPS,
     MOVING_DEG,
@@ -142,6 +142,8 @@ __all__ = [
     "CONDITIONS",
     "JOINT_GROUPS",
     "LEARNED_METHODS",
+    "MAX_FRAMES",
+    "MAX_HANDS",
     "MOVING_DEG",
     "PROTOCOL_METHODS",
     "REST_POSTURES",

@@ -183,6 +183,17 @@ def describe_methods(names, *, data: LearningSetOptions | None = None) -> dict:
     return out
 
 
+def _finite(value) -> float:
+    """`value` as a float, NaN for None, a non-number or a non-finite number."""
+    if value is None or isinstance(value, bool):
+        return float("nan")
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        return float("nan")
+    return v if np.isfinite(v) else float("nan")
+
+
 def protocol_headline(result: dict) -> dict:
     """Headline figures of a :func:`~handsynth.eval.run_protocol` result.
 
@@ -193,7 +204,9 @@ def protocol_headline(result: dict) -> dict:
         ``options["pose_sets"]`` and, of every hand, its ``kind`` and per
         pose set and method the ``method`` and ``constant`` figures'
         ``groups_mae_deg["finger_flexion"]`` and the method's
-        ``joints["index_pip_flex"]["moving_mae_deg"]``.
+        ``joints["index_pip_flex"]["moving_mae_deg"]``.  A figure may be
+        None or NaN (a method that found the hand in no frame, an index PIP
+        that never moves): it is left out, never averaged in.
 
     Returns
     -------
@@ -202,27 +215,70 @@ def protocol_headline(result: dict) -> dict:
         constant's, the skill and the index PIP MAE on frames where it truly
         moves (means over the hands of that kind; degrees).  Each value is a
         dict: ``flexion_mae`` and ``constant`` (2 decimals), ``skill``
-        (``1 - flexion_mae / constant`` of the unrounded means, 3 decimals)
-        and ``index_pip_moving_mae`` (2 decimals, over the hands that have
-        the figure; None when none has).
+        (``1 - flexion_mae / constant`` of the unrounded means, 3 decimals),
+        ``index_pip_moving_mae`` (2 decimals, over the hands that have
+        the figure), ``hands`` (how many hands the flexion figures are the
+        mean of: those with both the method's and the constant's figure) and
+        ``note``: None, or why a figure is None or leaves hands out.  A
+        figure no hand has is None, never NaN: ``flexion_mae``,
+        ``constant`` and ``skill`` when no hand has both flexion figures,
+        ``skill`` also when the constant's MAE is 0 (the fingers never
+        moved from the open hand), ``index_pip_moving_mae`` when the index
+        PIP moved in no hand's frames.
+
+    Raises
+    ------
+    InvalidInputError
+        `result` is not shaped as :func:`~handsynth.eval.run_protocol`
+        returns it (a key missing), naming what is missing.
     """
     rows: dict = {}
-    for hand in result["hands"].values():
-        for ps in result["options"]["pose_sets"]:
-            for m, s in hand.get(ps, {}).items():
-                rows.setdefault(f"{hand['kind']}/{ps}/{m}", []).append((
-                    s["method"]["groups_mae_deg"]["finger_flexion"],
-                    s["constant"]["groups_mae_deg"]["finger_flexion"],
-                    s["method"]["joints"]["index_pip_flex"]["moving_mae_deg"]))
+    try:
+        for name, hand in result["hands"].items():
+            for ps in result["options"]["pose_sets"]:
+                for m, s in hand.get(ps, {}).items():
+                    rows.setdefault(f"{hand['kind']}/{ps}/{m}", []).append((
+                        name,
+                        _finite(s["method"]["groups_mae_deg"]["finger_flexion"]),
+                        _finite(s["constant"]["groups_mae_deg"]["finger_flexion"]),
+                        _finite(s["method"]["joints"]["index_pip_flex"]["moving_mae_deg"])))
+    except (KeyError, TypeError, AttributeError) as exc:
+        raise InvalidInputError(f"result is not a run_protocol result: {type(exc).__name__} "
+                                f"{exc}") from None
     out = {}
     for key, vals in rows.items():
-        a = np.array([[np.nan if x is None else x for x in v] for v in vals], float)
+        names = [v[0] for v in vals]
+        a = np.array([v[1:] for v in vals], float).reshape(-1, 3)
+        both = np.isfinite(a[:, 0]) & np.isfinite(a[:, 1])
         pip = a[:, 2][np.isfinite(a[:, 2])]
-        out[key] = {"flexion_mae": round(float(np.mean(a[:, 0])), 2),
-                    "constant": round(float(np.mean(a[:, 1])), 2),
-                    "skill": round(float(1 - np.mean(a[:, 0]) / np.mean(a[:, 1])), 3),
-                    "index_pip_moving_mae": round(float(pip.mean()), 2) if len(pip) else None}
+        notes = []
+        if not both.all():
+            left = [n for n, ok in zip(names, both, strict=True) if not ok]
+            why = "no frame with a reading: the method found no hand, or there were no frames"
+            notes.append(f"no flexion figure ({', '.join(left)}: {why})" if not both.any() else
+                         f"{len(left)} of {len(names)} hands left out ({', '.join(left)}: {why})")
+        flexion = float(np.mean(a[both, 0])) if both.any() else None
+        constant = float(np.mean(a[both, 1])) if both.any() else None
+        skill = None
+        if flexion is not None and constant is not None:
+            if constant > 0:
+                skill = round(1.0 - flexion / constant, 3)
+            else:
+                notes.append("no skill: the constant's flexion MAE is 0 (the fingers never "
+                             "moved from the open hand)")
+        if not len(pip):
+            notes.append("no index PIP figure: no frame where it moved and the hand was found")
+        out[key] = {"flexion_mae": None if flexion is None else round(flexion, 2),
+                    "constant": None if constant is None else round(constant, 2),
+                    "skill": skill,
+                    "index_pip_moving_mae": round(float(pip.mean()), 2) if len(pip) else None,
+                    "hands": int(both.sum()),
+                    "note": "; ".join(notes) or None}
     return out
+
+
+def _fmt(value, spec: str) -> str:
+    return "-" if value is None else format(value, spec)
 
 
 def format_headline(headline: dict) -> str:
@@ -233,7 +289,8 @@ def format_headline(headline: dict) -> str:
     headline : dict
         As :func:`protocol_headline` returns it: a condition's key to its
         ``flexion_mae``, ``constant``, ``skill`` and ``index_pip_moving_mae``
-        (None is printed as ``-``).
+        (None is printed as ``-``) and its ``note`` (printed in brackets at
+        the end of the line when there is one).
 
     Returns
     -------
@@ -243,8 +300,11 @@ def format_headline(headline: dict) -> str:
     """
     lines = []
     for key, v in headline.items():
-        pip = v["index_pip_moving_mae"]
-        lines.append(f"{key:32s} flexion MAE {v['flexion_mae']:6.2f} (constant "
-                     f"{v['constant']:6.2f}, skill {v['skill']:+.3f}); index PIP where it moves: "
-                     f"MAE {'-' if pip is None else f'{pip:.1f}'}")
+        pip = v.get("index_pip_moving_mae")
+        line = (f"{key:32s} flexion MAE {_fmt(v.get('flexion_mae'), '6.2f'):>6s} (constant "
+                f"{_fmt(v.get('constant'), '6.2f'):>6s}, skill {_fmt(v.get('skill'), '+.3f')}); "
+                f"index PIP where it moves: MAE {_fmt(pip, '.1f')}")
+        if v.get("note"):
+            line += f" [{v['note']}]"
+        lines.append(line)
     return "\n".join(lines)

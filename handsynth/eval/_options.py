@@ -11,7 +11,7 @@ from ..errors import InvalidInputError
 from ..models import PAPER_SIZE, HandShape
 from ..render import CameraMount
 
-__all__ = ["CONDITIONS", "EvalOptions"]
+__all__ = ["CONDITIONS", "MAX_FRAMES", "MAX_HANDS", "EvalOptions"]
 
 
 #: Conditions of the experiment, in report order (module docstring).
@@ -68,8 +68,14 @@ def _field(name: str) -> str:
     return f"EvalOptions.{name}" + (f" ({flag})" if flag else "")
 
 
-def _check_int(value, name: str, lo: int) -> int:
-    return check_integer(value, _field(name), minimum=lo)
+#: Most test hands and frames per hand and pose set (every frame of a hand is held in memory,
+#: 0.35 MB at 720x480: 10,000 frames are 3.5 GB).
+MAX_HANDS = 1000
+MAX_FRAMES = 10_000
+
+
+def _check_int(value, name: str, lo: int, hi: int | None = None) -> int:
+    return check_integer(value, _field(name), minimum=lo, maximum=hi)
 
 
 def _check_size(value, name: str) -> tuple[int, int]:
@@ -94,10 +100,10 @@ class EvalOptions:
         Folder of the databases (``<shape.name>.h5``); the ones needed are
         built there on demand and reused when they verify.
     n_hands : int
-        Test hands (random off-grid ratios for ``hand="model"``; for
+        Test hands, 1 to :data:`MAX_HANDS` (random off-grid ratios for ``hand="model"``; for
         ``hand="mesh"`` the one mesh, each "hand" with its own poses).
     frames_per_hand : int
-        Test frames per hand *and per pose set*.
+        Test frames per hand *and per pose set*, 1 to :data:`MAX_FRAMES`.
     pose_sets : tuple of str
         Pose sets of the test frames (``"paper"``, ``"natural"``).
     seed : int
@@ -125,7 +131,8 @@ class EvalOptions:
         (width, height) of the test frames: the device's 720x480 by default,
         as a live camera delivers them.
     workers : int
-        Worker processes for building missing databases.
+        Worker processes for building missing databases, at most the CPU
+        cores (each renders on one core).
     side : {"right", "left"}
     ties : {"mean", "first"}
         What the lookups report when several entries match equally well
@@ -170,9 +177,10 @@ class EvalOptions:
         except TypeError:
             raise InvalidInputError(
                 f"{_field('db_folder')} must be a folder path, got {self.db_folder!r}") from None
-        for name, lo in (("n_hands", 1), ("frames_per_hand", 1), ("seed", 0), ("count", 1),
-                         ("db_seed", 0), ("workers", 1)):
-            object.__setattr__(self, name, _check_int(getattr(self, name), name, lo))
+        for name, lo, hi in (("n_hands", 1, MAX_HANDS), ("frames_per_hand", 1, MAX_FRAMES),
+                             ("seed", 0, None), ("count", 1, None), ("db_seed", 0, None),
+                             ("workers", 1, os.cpu_count() or 1)):
+            object.__setattr__(self, name, _check_int(getattr(self, name), name, lo, hi))
         sets = (self.pose_sets,) if isinstance(self.pose_sets, str) else tuple(self.pose_sets)
         if not sets or any(s not in POSE_SETS for s in sets) or len(set(sets)) != len(sets):
             raise InvalidInputError(

@@ -51,6 +51,7 @@ from ..render import (
     VariedRasterizer,
     as_mount,
 )
+from ._options import MAX_FRAMES, MAX_HANDS
 from ._testposes import REST_POSTURES, natural_test_poses, paper_protocol_poses
 
 __all__ = [
@@ -82,11 +83,12 @@ class ProtocolOptions:
     Parameters
     ----------
     frames : int
-        Frames per hand and pose set.
+        Frames per hand and pose set, 2 to :data:`~handsynth.eval.MAX_FRAMES` (every
+        frame of a hand is held in memory).
     pose_sets : tuple of str
-        ``"paper"`` and/or ``"natural"``.
+        ``"paper"`` and/or ``"natural"``, each once.
     seed : int
-        Seed of the test poses and rest postures (independent of any
+        Seed of the test poses and rest postures, >= 0 (independent of any
         estimator's seeds: it is mixed with a constant of this module).
     rest : {"relaxed", "open"}
         The test hands' rest postures (:data:`REST_POSTURES`).
@@ -106,14 +108,14 @@ class ProtocolOptions:
     slip: float = 0.0
 
     def __post_init__(self) -> None:
-        check_integer(self.frames, "ProtocolOptions.frames", minimum=2)
-        bad = [p for p in self.pose_sets if p not in ("paper", "natural")]
-        if bad or not self.pose_sets:
+        check_integer(self.frames, "ProtocolOptions.frames", minimum=2, maximum=MAX_FRAMES)
+        check_integer(self.seed, "ProtocolOptions.seed", minimum=0)
+        sets = self.pose_sets
+        if isinstance(sets, str) or not isinstance(sets, (list, tuple)) or not sets \
+                or any(p not in ("paper", "natural") for p in sets) or len(set(sets)) < len(sets):
             raise InvalidInputError(f"ProtocolOptions.pose_sets must name 'paper' and/or "
-                                    f"'natural', got {self.pose_sets!r}")
-        if isinstance(self.slip, bool) or not isinstance(self.slip, (int, float)) \
-                or not 0 <= self.slip <= 5:
-            raise InvalidInputError(f"ProtocolOptions.slip must be in [0, 5], got {self.slip!r}")
+                                    f"'natural', each once, got {sets!r}")
+        check_number(self.slip, "ProtocolOptions.slip", minimum=0, maximum=5)
         if self.rest not in REST_POSTURES:
             raise InvalidInputError(f"ProtocolOptions.rest must be one of "
                                     f"{', '.join(REST_POSTURES)}, got {self.rest!r}")
@@ -164,7 +166,8 @@ def model_test_hands(n: int, *, seed: int = 0, mount: CameraMount | None = None,
     Parameters
     ----------
     n : int
-        How many hands; 0 gives none (a run of glTF hands only).
+        How many hands, at most :data:`~handsynth.eval.MAX_HANDS`; 0 gives none (a run of
+        glTF hands only).
     seed : int, keyword-only
         Seed of the hands (>= 0).
     mount : CameraMount, keyword-only, optional
@@ -190,7 +193,7 @@ def model_test_hands(n: int, *, seed: int = 0, mount: CameraMount | None = None,
     """
     from ..models import GRID_LEVELS
 
-    n = check_integer(n, "n", minimum=0)
+    n = check_integer(n, "n", minimum=0, maximum=MAX_HANDS)
     seed = check_integer(seed, "seed", minimum=0)
     spread = check_number(spread, "spread", minimum=0)
     mount = as_mount(mount)
@@ -236,12 +239,19 @@ def mesh_test_hands(names=None, *, mount: CameraMount | None = None,
         Every hand made larger or smaller about its wrist joint by this
         factor (:meth:`handsynth.testhands.MeshRig.scaled`); 1 by default.
 
+    Returns
+    -------
+    list of TestHand
+        Each with its :attr:`TestHand.measurements` (taken on the mesh here,
+        which also checks it).
+
     Raises
     ------
     InvalidInputError
         A name that is neither a shipped hand nor a glTF file, a file that
-        does not load as a rigged hand (the loader's message), or a `scale`
-        outside [0.5, 2].
+        does not load as a rigged hand or whose mesh cannot be measured (a
+        damaged file: the loader's message, naming the file), two hands of
+        one name, or a `scale` outside [0.5, 2].
     """
     from ..testhands import (
         PROTOCOL_HANDS,
@@ -253,7 +263,8 @@ def mesh_test_hands(names=None, *, mount: CameraMount | None = None,
 
     mount = as_mount(mount)
     out: list[TestHand] = []
-    for entry in (names or PROTOCOL_HANDS):
+    entries = list(names or PROTOCOL_HANDS)
+    for entry in entries:
         if str(entry) in TEST_HANDS:
             name, path = str(entry), shipped_hand_path(str(entry))
         elif Path(entry).suffix.lower() in (".gltf", ".glb"):
@@ -265,15 +276,38 @@ def mesh_test_hands(names=None, *, mount: CameraMount | None = None,
             raise InvalidInputError(f"a test hand is one of {sorted(TEST_HANDS)} or a .gltf/.glb "
                                     f"file, got {str(entry)!r}")
 
-        # a file that is no rigged hand, or a bad scale, fails here, not hours later
-        load_mesh_rig(path).scaled(scale)
+        if name in (h.name for h in out):
+            raise InvalidInputError(f"two test hands named {name!r} (the results are keyed by "
+                                    f"the name), got {', '.join(str(e) for e in entries)}")
+        # a file that is no rigged hand, a damaged mesh or a bad scale fails here, not after
+        # hours of learning: the rig is loaded, scaled, put in a scene and measured
+        try:
+            rig = load_mesh_rig(path)
+        except InvalidInputError as exc:
+            raise _naming(exc, path) from None
+        rig.scaled(scale)
 
         def make(at=None, path=path):
             return MeshHandRenderer(at or mount, path=path, scale=scale)
 
+        renderer = make()
+        try:
+            measurements = renderer.measurements()
+        except InvalidInputError as exc:
+            raise _naming(exc, path) from None
+        finally:
+            renderer.close()
         info = {"file": path.name, **({"scale": float(scale)} if scale != 1.0 else {})}
-        out.append(TestHand(name, "mesh", make, info=info, mount=mount))
+        out.append(TestHand(name, "mesh", make, info=info, measurements=measurements,
+                            mount=mount))
     return out
+
+
+def _naming(exc: InvalidInputError, path: Path) -> InvalidInputError:
+    """`exc` with the test hand file named, unless its message names it already."""
+    if str(path) not in str(exc) and len(exc.args) == 1:
+        exc.args = (f"{exc.args[0]} (test hand file {str(path)!r})",)
+    return exc
 
 
 def _seed(seed: int, hand: str, pose_set: str) -> np.random.SeedSequence:

@@ -20,6 +20,8 @@ from ._options import (
     ShapeCorrection,
 )
 from ._photo import (
+    MAX_MM_PER_PX,
+    MAX_REFERENCE_WIDTH_MM,
     FingerFit,
     PhotoMeasurement,
     annotate_measurement,
@@ -29,6 +31,8 @@ from ._photo import (
 from ._render import MEASURE_POSE, RenderedPhoto, render_measurement_photo
 
 __all__ = [
+    "MAX_MM_PER_PX",
+    "MAX_REFERENCE_WIDTH_MM",
     "MEASURE_POSE",
     "MODEL_CALIBRATION",
     "MODEL_SHAPE_CORRECTION",

@@ -23,6 +23,24 @@ from ._render import render_measurement_photo
 
 __all__ = ["calibrate_on_model", "fit_shape_correction"]
 
+
+def _scales(mm_per_px) -> list[float]:
+    """`mm_per_px` (one number or a sequence of them) as a list of positive finite floats.
+
+    Raises
+    ------
+    InvalidInputError
+        An empty sequence, or an item that is not a positive finite number
+        (a text such as ``"0.25"`` included), named by its position.
+    """
+    if np.ndim(mm_per_px) == 0 and not isinstance(mm_per_px, (list, tuple)):
+        return [_positive(mm_per_px, "mm_per_px")]
+    items = list(np.asarray(mm_per_px, dtype=object).ravel())
+    if not items:
+        raise InvalidInputError("mm_per_px must be one or more positive numbers, got none")
+    return [_positive(v, f"mm_per_px[{i}]") for i, v in enumerate(items)]
+
+
 def calibrate_on_model(shape=None, *, mm_per_px=(0.2, 0.25, 0.3, 0.4, 0.5),
                        angles=None) -> MeasureCalibration:
     """Read the :class:`MeasureCalibration` off photos of the model hand of known shape.
@@ -49,10 +67,16 @@ def calibrate_on_model(shape=None, *, mm_per_px=(0.2, 0.25, 0.3, 0.4, 0.5),
     Returns
     -------
     MeasureCalibration
+
+    Raises
+    ------
+    InvalidInputError
+        A scale that is not a positive finite number (a text included).
     """
+    scales = _scales(mm_per_px)
     truth = model_measurements(shape)
     found = []
-    for scale in np.atleast_1d(np.asarray(mm_per_px, float)):
+    for scale in scales:
         photo = render_measurement_photo(shape, angles, mm_per_px=float(scale))
         raw = measure_photo(photo.image, mm_per_px=float(scale),
                             options=MeasureOptions(calibration=NO_CALIBRATION))
@@ -103,14 +127,15 @@ def fit_shape_correction(shapes, *, mm_per_px=(0.15, 0.25, 0.4), seed: int = 0,
     Raises
     ------
     InvalidInputError
-        Fewer than 10 shapes, or something that is not a HandShape.
+        Fewer than 10 shapes, or something that is not a HandShape; a scale
+        that is not a positive finite number (a text included).
     """
     shapes = list(shapes)
     if len(shapes) < 10 or not all(isinstance(s, HandShape) for s in shapes):
         raise InvalidInputError(
             f"shapes must be at least 10 HandShape objects, got {len(shapes)} items")
     opts = replace(check_options(options, MeasureOptions), shape_correction=NO_SHAPE_CORRECTION)
-    scales = [_positive(v, "mm_per_px") for v in np.atleast_1d(np.asarray(mm_per_px, float))]
+    scales = _scales(mm_per_px)
     rng = np.random.default_rng(seed)
     x, y = [], []
     for shape in shapes:

@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from .._checks import check_number, is_number
 from ..errors import InvalidInputError
 from ..models import HandShape
 
@@ -24,13 +24,13 @@ _NORMALIZE = ("none", "palm_width")
 
 
 def _positive(value, name: str) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise InvalidInputError(f"{name} must be a positive number, got {value!r}") from None
-    if not math.isfinite(v) or v <= 0:
-        raise InvalidInputError(f"{name} must be a positive finite number, got {value!r}")
-    return v
+    """`value` as a positive finite ``float``; a text, a bool or an array is refused by name.
+
+    ``"12"`` and ``"12mm"`` are refused although ``float()`` reads the first:
+    a scale or a size must be given as a number, never as a text that reads
+    as one (:func:`handsynth._checks.check_number`).
+    """
+    return check_number(value, name, above=0.0)
 
 
 @dataclass(frozen=True)
@@ -71,29 +71,20 @@ class MeasureCalibration:
 
     def __post_init__(self) -> None:
         for name in ("wrist_offset_mm", "thumb_axis_shift"):
-            v = getattr(self, name)
-            try:
-                v = float(v)
-            except (TypeError, ValueError):
-                raise InvalidInputError(
-                    f"MeasureCalibration.{name} must be a number, got {v!r}") from None
-            if not math.isfinite(v):
-                raise InvalidInputError(f"MeasureCalibration.{name} must be finite, got {v!r}")
-            object.__setattr__(self, name, v)
-        try:
-            wf = tuple(float(v) for v in self.thumb_width_factors)
-        except (TypeError, ValueError):
-            wf = ()
-        if len(wf) != 2:
+            object.__setattr__(self, name, check_number(getattr(self, name),
+                                                        f"MeasureCalibration.{name}"))
+        factors = self.thumb_width_factors
+        if isinstance(factors, (str, bytes)) or not hasattr(factors, "__len__") \
+                or len(factors) != 2 or not all(is_number(v) for v in factors):
             raise InvalidInputError("MeasureCalibration.thumb_width_factors must be 2 numbers, "
-                                    f"got {self.thumb_width_factors!r}")
+                                    f"got {factors!r}")
+        wf = tuple(check_number(v, f"MeasureCalibration.thumb_width_factors[{i}]", above=0.5,
+                                below=2.0) for i, v in enumerate(factors))
         object.__setattr__(self, "thumb_width_factors", wf)
-        for name, v in (("thumb_width_factors", wf[0]), ("thumb_width_factors", wf[1]),
-                        ("thumb_length_factor", self.thumb_length_factor)):
-            if not (isinstance(v, (int, float)) and 0.5 < float(v) < 2.0):
-                raise InvalidInputError(
-                    f"MeasureCalibration.{name} must lie in (0.5, 2), got {v!r}")
-        object.__setattr__(self, "thumb_length_factor", float(self.thumb_length_factor))
+        object.__setattr__(self, "thumb_length_factor",
+                           check_number(self.thumb_length_factor,
+                                        "MeasureCalibration.thumb_length_factor", above=0.5,
+                                        below=2.0))
 
 
 #: No correction: the raw silhouette measurements.

@@ -132,20 +132,28 @@ from pathlib import Path
 
 import numpy as np
 
-from .._checks import check_options
+from .._checks import check_number, check_options
 from .._io import write_text
 from ..errors import InvalidInputError
 from ..estimate import Selection, SelectionOptions, select_shape, shape_ratios
 from ..models import HandMeasurements, HandShape, model_measurements
-from ._options import MeasureCalibration, MeasureOptions, _positive
+from ._options import MeasureCalibration, MeasureOptions
 
 __all__ = [
+    "MAX_MM_PER_PX",
+    "MAX_REFERENCE_WIDTH_MM",
     "FingerFit",
     "PhotoMeasurement",
     "annotate_measurement",
     "measure_photo",
     "write_measurement_file",
 ]
+
+#: Largest scale accepted, mm per pixel (a photo of a hand has about 0.05 to 1; far
+#: beyond that is a scale in other units, refused by the hand's area).
+MAX_MM_PER_PX = 1000.0
+#: Longest reference object accepted, mm.
+MAX_REFERENCE_WIDTH_MM = 10_000.0
 
 _FINGER_ORDER = ("thumb", "index", "middle", "ring", "little")
 _LIGHTNESS_WEIGHT = 0.35
@@ -1109,11 +1117,12 @@ def measure_photo(image, *, mm_per_px: float | None = None,
         leave the picture at the border; nothing else of the hand may touch
         it.
     mm_per_px : float, keyword-only
-        Scale at the plane of the hand, mm per pixel.
+        Scale at the plane of the hand, mm per pixel: a number (not a text
+        such as ``"0.25"``) in (0, :data:`MAX_MM_PER_PX`].
     reference_width_mm : float, keyword-only
         Instead of `mm_per_px`: the length in mm of the longer side of a
         reference object lying beside the hand on the same plane (e.g. 85.60
-        for an ISO/IEC 7810 ID-1 card).  The reference object is the
+        for an ISO/IEC 7810 ID-1 card), in (0, :data:`MAX_REFERENCE_WIDTH_MM`].  The reference object is the
         second-largest object in the photo; it must not touch the hand.
     options : MeasureOptions, keyword-only, optional
 
@@ -1124,7 +1133,9 @@ def measure_photo(image, *, mm_per_px: float | None = None,
     Raises
     ------
     InvalidInputError
-        No scale or two scales; an image that is not a uint8 grey/BGR image
+        No scale or two scales, or a scale that is not a positive finite
+        number within its bound (a text or a bool included; named with the
+        value received); an image that is not a uint8 grey/BGR image
         or bool mask, or a path that is not a readable image file (named);
         no hand; two hand-sized objects; a missing or
         ambiguous reference object; a hand touching the border; fewer than
@@ -1136,24 +1147,27 @@ def measure_photo(image, *, mm_per_px: float | None = None,
             "give the photo's scale: exactly one of mm_per_px (mm per pixel at the hand) or "
             f"reference_width_mm (a reference object's width); got mm_per_px={mm_per_px!r}, "
             f"reference_width_mm={reference_width_mm!r}")
-    # the scale given is checked before the photo's analysis
+    # the scale given is checked before the photo's analysis; the upper bounds are far
+    # beyond any photo of a hand and only keep the arithmetic finite
+    ref_mm: float | None = None
+    scale: float = 0.0
     if reference_width_mm is not None:
-        reference_width_mm = _positive(reference_width_mm, "reference_width_mm")
+        ref_mm = check_number(reference_width_mm, "reference_width_mm", above=0.0,
+                              maximum=MAX_REFERENCE_WIDTH_MM)
     else:
-        mm_per_px = _positive(mm_per_px, "mm_per_px")
+        scale = check_number(mm_per_px, "mm_per_px", above=0.0, maximum=MAX_MM_PER_PX)
     if isinstance(image, (str, os.PathLike)):
         from ..render import read_image
 
         image = read_image(image, what="photo")
-    hand, ref = _hand_and_reference(_foreground(image), reference_width_mm is not None)
+    hand, ref = _hand_and_reference(_foreground(image), ref_mm is not None)
     reference_px = None
-    if ref is not None:
-        mm_per_px, reference_px = _reference_scale(
-            ref, _positive(reference_width_mm, "reference_width_mm"))
+    if ref is not None and ref_mm is not None:
+        scale, reference_px = _reference_scale(ref, ref_mm)
         scale_source = "reference"
     else:
-        mm_per_px = _positive(mm_per_px, "mm_per_px")
         scale_source = "mm_per_px"
+    mm_per_px = scale
     px = 1.0 / mm_per_px
     area_mm2 = float(hand.sum()) * mm_per_px ** 2
     if area_mm2 < opts.min_hand_area_mm2:

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._checks import check_options
+from .._checks import check_number, check_options, check_side
 from ..errors import InvalidInputError
 from ..models import HandShape
 from ._options import _positive
@@ -84,6 +84,12 @@ def render_measurement_photo(shape=None, angles=None, *, mm_per_px: float = 0.4,
     Returns
     -------
     RenderedPhoto
+
+    Raises
+    ------
+    InvalidInputError
+        A scale, size, roll or colour that is not a (finite) number -- a text
+        such as ``"0.4"`` included -- or out of range; another `side`.
     """
     import mujoco
 
@@ -94,6 +100,12 @@ def render_measurement_photo(shape=None, angles=None, *, mm_per_px: float = 0.4,
     shape = check_options(shape, HandShape, name="shape")
     mm_per_px = _positive(mm_per_px, "mm_per_px")
     size_mm = _positive(size_mm, "size_mm")
+    roll_deg = check_number(roll_deg, "roll_deg")
+    side = check_side(side)
+    if isinstance(background_rgb, (str, bytes)) or np.shape(background_rgb) != (3,):
+        raise InvalidInputError(f"background_rgb must be 3 numbers in [0, 1], got {background_rgb!r}")
+    background_rgb = tuple(check_number(v, f"background_rgb[{i}]", minimum=0.0, maximum=1.0)
+                           for i, v in enumerate(background_rgb))
     n_px = round(size_mm / mm_per_px)
     if not 32 <= n_px <= 4096:
         raise InvalidInputError(

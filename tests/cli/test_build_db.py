@@ -62,8 +62,11 @@ def test_default_database(tmp_path):
     (["--shapes", "L1.0_bogus"], "L1.0_bogus"),
     (["--render-size", "120"], "--render-size"),
     (["--workers", "0"], "--workers"),
-    (["--count", "0"], "count"),
-    (["--seed", "-3"], "seed"),
+    (["--count", "0"], "--count must be an integer >= 1, got 0"),
+    (["--seed", "-3"], "--seed must be an integer >= 0, got -3"),
+    (["--render-size", "8x8"], "--render-size must be (width, height)"),
+    (["--render-size", ""], "--render-size must be WIDTHxHEIGHT"),  # was: the default size
+    (["--shapes", "standard,standard"], "--shapes must be distinct"),
 ])
 def test_bad_options_give_one_line_errors(tmp_path, args, word):
     res = _run("--out", str(tmp_path), *args)
@@ -151,8 +154,8 @@ def test_a_read_only_folder_names_the_real_reason(read_only_folder):
 
 
 @pytest.mark.parametrize("args, word", [
-    (["--count", "1000000000"], "count must be at most 5,000,000"),
-    (["--workers", "4096"], "workers must be at most the"),
+    (["--count", "1000000000"], "--count must be at most 5,000,000"),
+    (["--workers", "4096"], "--workers must be at most the"),
 ])
 def test_upper_bounds_are_clear_errors(tmp_path, args, word):
     # item 16: a memory-error traceback, and 29 processes on 2 cores
@@ -248,3 +251,11 @@ def test_help_states_the_default_render_size():
     assert res.exit_code == 0
     w, h = DEFAULT_RENDER_SIZE
     assert f"[default: {w}x{h}]" in " ".join(res.output.split())
+
+
+def test_an_empty_out_folder_is_refused_not_the_current_folder(tmp_path, monkeypatch):
+    # before: --out '' built every database into the current folder
+    monkeypatch.chdir(tmp_path)
+    res = _run("--out", "", "--shapes", "standard", "--count", "3")
+    assert res.exit_code == 2 and res.output == "handsynth: error: --out must name a folder, got ''\n"
+    assert list(tmp_path.iterdir()) == []

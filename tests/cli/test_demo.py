@@ -45,3 +45,26 @@ def test_demo_writes_pictures_and_looks_up_frames(tmp_path):
 def test_demo_bad_option_is_one_line(tmp_path):
     res = CliRunner().invoke(cli, ["demo", "--out", str(tmp_path), "--tile-width", "5"])
     assert res.exit_code == 2 and "tile-width" in res.output
+
+
+def test_an_empty_or_impossible_out_folder_is_one_line_and_writes_nothing(tmp_path, monkeypatch):
+    # before: --out '' was the current folder, which got the pictures and the databases
+    monkeypatch.chdir(tmp_path)
+    res = CliRunner().invoke(cli, ["demo", "--out", "", "--frames", "0", "--learned-hands", "0"])
+    assert res.exit_code == 2 and res.output == "handsynth: error: --out must name a folder, got ''\n"
+    assert list(tmp_path.iterdir()) == []
+    (tmp_path / "file").write_text("x")  # a folder under a regular file: was an OSError traceback
+    res = CliRunner().invoke(cli, ["demo", "--out", str(tmp_path / "file" / "pictures"),
+                                   "--frames", "0", "--learned-hands", "0"])
+    assert res.exit_code == 2, res.output
+    lines = res.output.strip().splitlines()
+    assert len(lines) == 1 and "cannot create the --out folder" in lines[0] and "file" in lines[0]
+
+
+def test_a_read_only_out_folder_is_one_line_and_nothing_written(read_only_folder):
+    res = CliRunner().invoke(cli, ["demo", "--out", str(read_only_folder), "--frames", "0",
+                                   "--learned-hands", "0", "--tile-width", "64"])
+    assert res.exit_code == 2, res.output
+    assert res.output.strip().splitlines()[-1].startswith("handsynth: error: cannot write")
+    assert "read-only" in res.output and "Traceback" not in res.output
+    assert list(read_only_folder.iterdir()) == []

@@ -44,15 +44,25 @@ def test_eval_prints_table_and_writes_json_and_plots(tmp_path):
 
 
 @pytest.mark.parametrize("args, word", [
-    (["--frames", "0"], "frames_per_hand"),
-    (["--hands", "-1"], "n_hands"),
-    (["--conditions", "standard,best"], "conditions"),
+    (["--frames", "0"], "--frames must be an integer >= 1 and <= 10000, got 0"),
+    (["--hands", "-1"], "--hands must be an integer >= 1 and <= 1000, got -1"),
+    (["--hands", "5000"], "--hands must be an integer >= 1 and <= 1000, got 5000"),
+    (["--frames", "100000"], "--frames must be an integer >= 1 and <= 10000, got 100000"),
+    (["--conditions", "standard,best"], "--conditions"),
     (["--conditions", ""], "--conditions must name at least one item"),  # was: every condition
     (["--protocol", "--conditions", ""], "--conditions must name at least one item"),
-    (["--pose-sets", "paper,random"], "pose_sets"),
+    (["--pose-sets", "paper,random"], "--pose-sets must be distinct names"),
     (["--frame-size", "720"], "--frame-size"),
-    (["--ratio-margin", "9"], "ratio_margin"),
-    (["--seed", "-2"], "seed"),
+    (["--ratio-margin", "9"], "--ratio-margin must be"),
+    (["--ratio-margin", "nan"], "--ratio-margin must be"),
+    (["--photo-mm-per-px", "0"], "--photo-mm-per-px must be"),
+    (["--count", "0"], "--count must be an integer >= 1, got 0"),
+    (["--seed", "-2"], "--seed must be an integer >= 0, got -2"),
+    (["--json", ""], "--json must name a file, got ''"),  # was: no report, exit 0
+    (["--render-size", ""], "--render-size must be WIDTHxHEIGHT"),  # was: the default size
+    (["--workers", "100000"], "--workers must be an integer >= 1 and <= "),  # was: after a line
+    (["--out", ""], "--out must name a folder, got ''"),
+    (["--out", "plots", "--prefix", "sub/eval_"], "--prefix must be the start of a file name"),
 ])
 def test_bad_options_give_one_line_errors(tmp_path, args, word):
     res = _run("--db", str(tmp_path), *args)
@@ -86,7 +96,8 @@ def test_a_json_report_in_a_missing_folder_is_refused_before_the_work(tmp_path):
 
 def test_a_bad_count_names_the_option(tmp_path):
     res = _run("--db", str(tmp_path / "dbs"), "--hands", "0", "-q")
-    assert res.exit_code == 2 and "(--hands) must be an integer >= 1, got 0" in res.output
+    assert res.exit_code == 2 and res.output == (
+        "handsynth: error: --hands must be an integer >= 1 and <= 1000, got 0\n")
 
 
 def test_a_json_report_never_replaces_a_database_of_the_run(tmp_path):
@@ -148,9 +159,21 @@ def test_protocol_puts_the_constant_beside_every_method_and_writes_json(tmp_path
     (["--rest", "open"], "--rest applies with --protocol only"),
     (["--slip", "0.5"], "--slip applies with --protocol only"),
     (["--mesh-scale", "0.9"], "--mesh-scale applies with --protocol only"),
-    (["--protocol", "--hands", "0", "--mesh-scale", "3"], "scale must be a number in [0.5, 2], got 3.0"),
-    (["--protocol", "--slip", "-1", "--hands", "1"], "ProtocolOptions.slip must be in [0, 5], got -1.0"),
-    (["--protocol", "--conditions", "fingers,tree"], "methods must be distinct names from"),
+    (["--protocol", "--hands", "0", "--mesh-scale", "3"],
+     "--mesh-scale must be a number in [0.5, 2], got 3.0"),
+    (["--protocol", "--slip", "-1", "--hands", "1"],
+     "--slip must be a finite number >= 0 and <= 5, got -1.0"),
+    (["--protocol", "--conditions", "fingers,tree"], "--conditions must be distinct names from"),
+    # the options the user typed, not ProtocolOptions.frames and the like
+    (["--protocol", "--frames", "1"], "--frames must be an integer >= 2 and <= 10000, got 1"),
+    (["--protocol", "--seed", "-1"], "--seed must be an integer >= 0, got -1"),  # was: learnt first
+    (["--protocol", "--pose-sets", "paper,paper"], "--pose-sets must name 'paper' and/or 'natural'"),
+    (["--protocol", "--hands", "2000"], "--hands must be an integer >= 0 and <= 1000, got 2000"),
+    (["--protocol", "--hand-spread", "inf"], "--hand-spread must be a finite number >= 0, got inf"),
+    (["--protocol", "--learned-hands", "1000000"], "--learned-hands must be an integer in [1, 100,000]"),
+    (["--protocol", "--hands", "0", "--mesh", "mrtk,mrtk"], "two test hands named 'mrtk'"),
+    (["--protocol", "--db", ""], "--db must name a folder, got ''"),
+    (["--protocol", "--json", ""], "--json must name a file, got ''"),
     (["--protocol", "--hands", "0", "--mesh", ""], "no test hands"),
     (["--protocol", "--hands", "0", "--mesh", "mrtk,nowhere/hand.glb"],
      "test hand file 'nowhere/hand.glb' does not exist"),
@@ -159,3 +182,61 @@ def test_protocol_options_are_checked_by_name(tmp_path, args, message):
     res = CliRunner().invoke(cli, ["eval", "--db", str(tmp_path / "c"), *args])
     assert res.exit_code == 2, res.output
     assert message in res.output and "Traceback" not in res.output
+
+
+def test_a_damaged_glTF_hand_is_one_line_naming_it_before_any_learning(tmp_path):
+    # before: a .glb zero-filled in the middle loaded, then the run learnt its estimators
+    # (4,000 hands by default) and failed with "mesh hand: no surface at the middle of thumb
+    # proximal", naming no file
+    from handsynth.testhands import shipped_hand_path
+
+    data = bytearray(shipped_hand_path("mrtk").read_bytes())
+    data[len(data) // 2:len(data) // 2 + 20000] = bytes(20000)
+    damaged = tmp_path / "damaged.glb"
+    damaged.write_bytes(bytes(data))
+    (tmp_path / "text.glb").write_text("a text file named .glb")
+    for hand in (damaged, tmp_path / "text.glb"):
+        res = CliRunner().invoke(cli, ["eval", "--protocol", "--db", str(tmp_path / "c"),
+                                       "--hands", "0", "--mesh", str(hand)])
+        assert res.exit_code == 2, res.output
+        lines = res.output.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("handsynth: error:") and hand.name in lines[0]
+        assert not (tmp_path / "c").exists()  # nothing learnt, no folder made
+
+
+def test_a_db_or_plot_folder_under_a_file_is_one_line_before_the_work(tmp_path):
+    (tmp_path / "file").write_text("x")
+    res = CliRunner().invoke(cli, ["eval", "--db", str(tmp_path / "file" / "dbs"), *SMALL])
+    assert res.exit_code == 2 and res.output.strip().splitlines() == [
+        f"handsynth: error: cannot create the --db folder {str(tmp_path / 'file' / 'dbs')!r}: "
+        "not a directory"], res.output  # before: a progress line first
+    res = CliRunner().invoke(cli, ["eval", "--db", str(tmp_path / "dbs"), "--out",
+                                   str(tmp_path / "file" / "plots"), *SMALL])
+    assert res.exit_code == 2 and "cannot create the --out folder" in res.output, res.output
+    assert not (tmp_path / "dbs").exists()  # refused before any database was built
+
+
+def test_a_glTF_hand_named_like_a_model_hand_is_refused_before_any_learning(tmp_path):
+    import shutil
+
+    from handsynth.testhands import shipped_hand_path
+
+    shutil.copyfile(shipped_hand_path("mrtk"), tmp_path / "model0.glb")
+    res = CliRunner().invoke(cli, ["eval", "--protocol", "--db", str(tmp_path / "c"), "--hands", "1",
+                                   "--mesh", str(tmp_path / "model0.glb")])
+    assert res.exit_code == 2 and res.output.startswith(
+        "handsynth: error: two test hands named 'model0'"), res.output
+    assert len(res.output.strip().splitlines()) == 1 and not (tmp_path / "c").exists()
+
+
+@pytest.mark.parametrize("option", ["--json", "--out"])
+def test_an_output_in_a_read_only_folder_is_refused_before_the_work(tmp_path, read_only_folder,
+                                                                    option):
+    # before: the whole run, then "cannot write ... the file system is read-only"
+    target = read_only_folder / "r.json" if option == "--json" else read_only_folder
+    res = _run("--db", str(tmp_path / "dbs"), option, str(target), "-q", *SMALL)
+    assert res.exit_code == 2, res.output
+    assert res.output.strip().splitlines() == [
+        f"handsynth: error: cannot write {option} into the folder {str(read_only_folder)!r}: it "
+        "is read-only or not writable by this user"]
+    assert not (tmp_path / "dbs").exists()

@@ -55,3 +55,40 @@ def test_help_and_version_exit_zero():
     assert _run("--help").exit_code == 0
     res = _run("--version")
     assert res.exit_code == 0 and "version" in res.output
+
+
+@pytest.mark.parametrize("message, renamed", [
+    ("ProtocolOptions.frames must be an integer >= 2, got 1", "--frames must be an integer >= 2, got 1"),
+    ("EvalOptions.count (--count) must be an integer >= 1, got 0",
+     "--count must be an integer >= 1, got 0"),
+    ("count must be at most 5,000,000 poses", "--count must be at most 5,000,000 poses"),
+    ("count: bad", "--count: bad"),
+    ("counts must be", None),                   # a whole name only
+    ("the count must be", None),                # at the start only
+    ("ProtocolOptions.frames_x must be", None),
+])
+def test_a_library_name_at_the_start_of_a_message_becomes_the_option(message, renamed):
+    names = {"ProtocolOptions.frames": "--frames", "EvalOptions.count": "--count", "count": "--count"}
+    assert _main.renamed_message(message, names) == renamed
+
+
+def test_a_command_with_option_names_names_the_option_the_user_typed():
+    import click
+
+    from handsynth.errors import InvalidInputError, InvalidShapeError
+
+    @cli.command("test-option-names")
+    @click.option("--points", type=int)
+    @_main.option_names({"SomethingOptions.n_points": "--points"})
+    def command(points):
+        if points < 0:
+            raise InvalidShapeError(f"SomethingOptions.n_points must be >= 0, got {points}")
+        raise InvalidInputError(f"something else named SomethingOptions.n_points, got {points}")
+
+    try:
+        res = _run("test-option-names", "--points", "-1")
+        _one_error_line(res, "handsynth: error: --points must be >= 0, got -1")
+        res = _run("test-option-names", "--points", "2")  # not at the start: left as it was
+        _one_error_line(res, "something else named SomethingOptions.n_points, got 2")
+    finally:
+        cli.commands.pop("test-option-names")

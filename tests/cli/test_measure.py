@@ -79,7 +79,13 @@ def test_reference_card_and_csv(tmp_path, photos):
     (["hand.png", "--mm-per-px", "0.5", "--out", "m.txt"], "--out must end in"),
     (["hand.png", "--mm-per-px", "0.5", "--annotate", "a.jpg"], "--annotate must end in"),
     (["hand.png", "--reference-width-mm", "85.6"], "no reference object"),
-    (["hand.png", "--mm-per-px", "-2"], "mm_per_px"),
+    (["hand.png", "--mm-per-px", "-2"], "--mm-per-px must be a finite number > 0"),
+    # an overflow (OverflowError traceback) before
+    (["hand.png", "--mm-per-px", "1e300"], "--mm-per-px must be a finite number > 0 and <= 1000, "
+                                           "got 1e+300"),
+    (["hand_card.jpg", "--reference-width-mm", "1e308"], "--reference-width-mm must be a finite "
+                                                          "number > 0 and <= 10000, got 1e+308"),
+    (["hand.png", "--mm-per-px", "nan"], "--mm-per-px must be a finite number > 0"),
     # a scale far too large said the hand touches the border, not to check the scale
     (["hand.png", "--mm-per-px", "100"], "check the scale"),
     (["hand.png", "--mm-per-px", "1.2"], "check the scale"),
@@ -128,3 +134,54 @@ def test_the_annotated_picture_never_replaces_the_photo(tmp_path, photos):
                                    str(photo)])
     assert res.exit_code == 2 and "never replaces an input" in res.output, res.output
     assert photo.read_bytes() == (photos / "hand.png").read_bytes()
+
+
+@pytest.mark.parametrize("args, line", [
+    # before: '' was the folder '.', named as such ("cannot read the photo '.'", "--out must
+    # end in .json or .csv, got '.'")
+    (["", "--mm-per-px", "0.5"], "PHOTO must name a file, got ''"),
+    (["{photos}/hand.png", "--mm-per-px", "0.5", "--out", ""], "--out must name a file, got ''"),
+    (["{photos}/hand.png", "--mm-per-px", "0.5", "--annotate", " "],
+     "--annotate must name a file, got ' '"),
+])
+def test_an_empty_path_is_refused_by_name(photos, args, line):
+    res = _run(*[a.format(photos=photos) for a in args])
+    assert res.exit_code == 2 and res.output == f"handsynth: error: {line}\n", res.output
+
+
+def test_damaged_photos_are_one_line_on_the_real_stderr(tmp_path, photos):
+    # before: libpng printed "libpng error: Read Error" on the process's stderr above the error
+    import os
+    import subprocess
+    import sys
+
+    data = (photos / "hand.png").read_bytes()
+    (tmp_path / "cut.png").write_bytes(data[:len(data) // 2])
+    (tmp_path / "head.png").write_bytes(data[:60])
+    (tmp_path / "text.png").write_text("a text file named .png")
+    (tmp_path / "empty.png").write_bytes(b"")
+    (tmp_path / "file").write_text("x")
+    env = {k: v for k, v in os.environ.items() if k != "MUJOCO_GL"}
+    env["MUJOCO_GL"] = "egl"
+    for name in ("cut.png", "head.png", "text.png", "empty.png", "missing.png", "file/under.png"):
+        proc = subprocess.run([sys.executable, "-c", "from handsynth.cli import main; main()",
+                               "measure", str(tmp_path / name), "--mm-per-px", "0.5", "--out",
+                               str(tmp_path / "m.json")], capture_output=True, text=True, env=env,
+                              timeout=120)
+        assert proc.returncode == 2 and proc.stdout == "", proc.stderr
+        lines = proc.stderr.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("handsynth: error: cannot read the photo"), \
+            proc.stderr
+        assert name in lines[0]
+    assert not (tmp_path / "m.json").exists()
+
+
+@pytest.mark.parametrize("option, name", [("--out", "m.json"), ("--details", "d.json"),
+                                          ("--annotate", "a.png")])
+def test_an_output_in_a_read_only_folder_is_one_line_and_nothing(read_only_folder, photos,
+                                                                  option, name):
+    res = _run(photos / "hand.png", "--mm-per-px", "0.5", option, read_only_folder / name)
+    assert res.exit_code == 2, res.output
+    assert res.output.strip().splitlines()[-1].startswith("handsynth: error: cannot write")
+    assert "read-only" in res.output and "Traceback" not in res.output
+    assert list(read_only_folder.iterdir()) == []

@@ -1,4 +1,5 @@
 import json
+import warnings
 
 import numpy as np
 import pytest
@@ -149,6 +150,80 @@ def test_bad_options_are_refused():
         run_protocol({}, [])
 
 
+@pytest.mark.parametrize("kwargs, named", [
+    # before: a negative seed passed, and failed in numpy after the estimators had learnt
+    ({"seed": -1}, "ProtocolOptions.seed must be an integer >= 0, got -1"),
+    ({"seed": "3"}, "ProtocolOptions.seed must be an integer >= 0, got '3' (str)"),
+    ({"frames": 10**6}, "ProtocolOptions.frames must be an integer >= 2 and <= 10000, got 1000000"),
+    ({"pose_sets": ("paper", "paper")}, "ProtocolOptions.pose_sets must name 'paper' and/or "
+                                        "'natural', each once, got ('paper', 'paper')"),
+    ({"pose_sets": "paper"}, "ProtocolOptions.pose_sets must name 'paper' and/or 'natural', "
+                             "each once, got 'paper'"),
+    ({"slip": "1"}, "ProtocolOptions.slip must be a finite number >= 0 and <= 5, got '1' (str)"),
+    ({"slip": float("nan")}, "ProtocolOptions.slip must be a finite number >= 0 and <= 5, got nan"),
+])
+def test_protocol_options_are_refused_by_field_and_value(kwargs, named):
+    import re
+
+    with pytest.raises(InvalidInputError, match=f"^{re.escape(named)}$"):
+        ProtocolOptions(**kwargs)
+
+
+def _stats(flexion, constant, pip):
+    return {"method": {"groups_mae_deg": {"finger_flexion": flexion},
+                       "joints": {"index_pip_flex": {"moving_mae_deg": pip}}},
+            "constant": {"groups_mae_deg": {"finger_flexion": constant},
+                         "joints": {"index_pip_flex": {"moving_mae_deg": 20.0}}}}
+
+
+def test_protocol_headline_gives_none_with_a_reason_for_a_figure_no_hand_has():
+    # before: a method that found the hand in no frame gave NaN figures without a word (and
+    # NaN for every hand's mean when one hand had none), and a constant of 0 a skill of -inf
+    from handsynth.eval import format_headline, protocol_headline
+
+    nan = float("nan")
+    result = {"options": {"pose_sets": ["paper", "natural"]}, "hands": {
+        "model0": {"kind": "model",
+                   "paper": {"ok": _stats(4.0, 10.0, 6.0), "blind": _stats(None, 10.0, None),
+                             "still": _stats(1.0, 0.0, None)},
+                   "natural": {"ok": _stats(8.0, 16.0, 12.0)}},
+        "model1": {"kind": "model",
+                   "paper": {"ok": _stats(nan, 12.0, None), "blind": _stats(nan, 8.0, None),
+                             "still": _stats(3.0, 0.0, None)}},
+        "model2": {"kind": "model"},  # a hand with no frames of either pose set
+    }}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no "divide by zero" or "mean of empty slice"
+        head = protocol_headline(result)
+    assert head["model/paper/ok"] == {
+        "flexion_mae": 4.0, "constant": 10.0, "skill": 0.6, "index_pip_moving_mae": 6.0,
+        "hands": 1, "note": "1 of 2 hands left out (model1: no frame with a reading: the method "
+                            "found no hand, or there were no frames)"}
+    blind = head["model/paper/blind"]
+    assert blind["flexion_mae"] is None and blind["constant"] is None and blind["skill"] is None
+    assert blind["index_pip_moving_mae"] is None and blind["hands"] == 0
+    assert blind["note"].startswith("no flexion figure (model0, model1: no frame with a reading")
+    still = head["model/paper/still"]
+    assert still["flexion_mae"] == 2.0 and still["constant"] == 0.0 and still["skill"] is None
+    assert "no skill: the constant's flexion MAE is 0" in still["note"]
+    assert head["model/natural/ok"]["note"] is None and head["model/natural/ok"]["hands"] == 1
+    assert all(v is None or (isinstance(v, (int, float, str)) and v == v)
+               for row in head.values() for v in row.values())  # no NaN anywhere
+    json.dumps(head, allow_nan=False)
+    text = format_headline(head).splitlines()
+    assert text[1].startswith("model/paper/blind") and "flexion MAE      - (constant      -, " \
+        "skill -); index PIP where it moves: MAE - [no flexion figure" in text[1]
+    assert text[0].endswith("MAE 6.0 [1 of 2 hands left out (model1: no frame with a reading: "
+                            "the method found no hand, or there were no frames)]")
+
+
+def test_protocol_headline_names_a_result_of_another_shape():
+    from handsynth.eval import protocol_headline
+
+    with pytest.raises(InvalidInputError, match="not a run_protocol result: KeyError 'hands'"):
+        protocol_headline({"options": {"pose_sets": ["paper"]}})
+
+
 def test_model_test_hands_with_segment_widths_and_flesh_offsets_are_the_same_hands_otherwise():
     plain = model_test_hands(3, seed=6, spread=1.5)
     wide = model_test_hands(3, seed=6, spread=1.5, segment_width_sd=0.1, flesh_offset_sd_mm=1.0)
@@ -232,17 +307,45 @@ def test_mesh_test_hands_scaled_say_so_and_refuse_a_bad_scale():
         mesh_test_hands(scale=4)
 
 
+def test_a_damaged_glTF_hand_is_refused_with_its_file_before_any_work(tmp_path):
+    # before: a .glb whose mesh was zero-filled in the middle loaded, and failed, without
+    # naming the file, only when the protocol measured it (after the estimators had learnt)
+    from handsynth.eval import mesh_test_hands
+    from handsynth.testhands import shipped_hand_path
+
+    data = bytearray(shipped_hand_path("mrtk").read_bytes())
+    data[len(data) // 2:len(data) // 2 + 20000] = bytes(20000)
+    damaged = tmp_path / "damaged.glb"
+    damaged.write_bytes(bytes(data))
+    with pytest.raises(InvalidInputError, match=r"damaged\.glb"):
+        mesh_test_hands([damaged])
+    cut = tmp_path / "cut.glb"
+    cut.write_bytes(shipped_hand_path("mrtk").read_bytes()[:5000])
+    with pytest.raises(InvalidInputError, match=r"cut\.glb"):
+        mesh_test_hands([cut])
+    hands = mesh_test_hands(["mrtk"])  # measured once here, not again by run_protocol
+    assert hands[0].measurements is not None
+
+
+def test_two_glTF_hands_of_one_name_are_refused_before_any_work(tmp_path):
+    from handsynth.eval import mesh_test_hands
+
+    with pytest.raises(InvalidInputError, match="two test hands named 'mrtk'"):
+        mesh_test_hands(["mrtk", "mrtk"])
+
+
 @pytest.mark.parametrize("args, kwargs, named", [
-    ((-3,), {}, "n must be an integer >= 0, got -3"),
-    ((1.5,), {}, "n must be an integer >= 0, got 1.5"),
-    ((True,), {}, "n must be an integer >= 0, got True (bool)"),
-    (("2",), {}, "n must be an integer >= 0, got '2' (str)"),
+    ((-3,), {}, "n must be an integer >= 0 and <= 1000, got -3"),
+    ((1.5,), {}, "n must be an integer >= 0 and <= 1000, got 1.5"),
+    ((True,), {}, "n must be an integer >= 0 and <= 1000, got True (bool)"),
+    (("2",), {}, "n must be an integer >= 0 and <= 1000, got '2' (str)"),
     ((1,), {"spread": -1.0}, "spread must be a finite number >= 0, got -1.0"),
     ((1,), {"spread": float("nan")}, "spread must be a finite number >= 0, got nan"),
     ((1,), {"spread": float("inf")}, "spread must be a finite number >= 0, got inf"),
     ((1,), {"spread": "1.5"}, "spread must be a finite number >= 0, got '1.5' (str)"),
     ((1,), {"spread": None}, "spread must be a finite number >= 0, got None (NoneType)"),
     ((1,), {"seed": -1}, "seed must be an integer >= 0, got -1"),
+    ((10**6,), {}, "n must be an integer >= 0 and <= 1000, got 1000000"),
 ])
 def test_model_test_hands_refuses_a_bad_count_spread_or_seed_by_name(args, kwargs, named):
     # once numpy's "scale < 0", an error about an internal field, or [] for n < 0

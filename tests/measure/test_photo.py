@@ -367,5 +367,81 @@ def test_a_path_that_is_not_a_readable_image_is_named(tmp_path):
 def test_a_bad_reference_width_is_named_before_the_photo_is_read(width):
     # before: a blank image gave "the reference object is ambiguous" instead
     blank = np.zeros((200, 300), np.uint8)
-    with pytest.raises(InvalidInputError, match="reference_width_mm must be a positive"):
+    with pytest.raises(InvalidInputError, match="reference_width_mm must be a finite number > 0"):
         measure_photo(blank, reference_width_mm=width)
+
+
+@pytest.mark.parametrize("kwargs, named", [
+    ({"mm_per_px": "0.5"}, "mm_per_px must be a finite number > 0 and <= 1000, got '0.5' (str)"),
+    ({"mm_per_px": "12mm"}, "mm_per_px must be a finite number > 0 and <= 1000, got '12mm' (str)"),
+    ({"mm_per_px": True}, "mm_per_px must be a finite number > 0 and <= 1000, got True (bool)"),
+    ({"mm_per_px": [0.5]}, "mm_per_px must be a finite number > 0 and <= 1000, got [0.5] (list)"),
+    ({"mm_per_px": 1e300}, "mm_per_px must be a finite number > 0 and <= 1000, got 1e+300"),
+    ({"reference_width_mm": "85.6"},
+     "reference_width_mm must be a finite number > 0 and <= 10000, got '85.6' (str)"),
+    ({"reference_width_mm": np.True_},
+     "reference_width_mm must be a finite number > 0 and <= 10000, got np.True_ (bool)"),
+    ({"reference_width_mm": 1e308},
+     "reference_width_mm must be a finite number > 0 and <= 10000, got 1e+308"),
+])
+def test_a_scale_that_is_not_a_number_is_refused_by_name(standard, kwargs, named):
+    # before: float() read "0.5" and True as numbers and measured on; "12mm" said "a positive
+    # number"; 1e300 mm/px overflowed (OverflowError traceback from the command line)
+    import re
+
+    with pytest.raises(InvalidInputError, match=f"^{re.escape(named)}$"):
+        measure_photo(standard.image, **kwargs)
+    assert measure_photo(standard.image, mm_per_px=np.float32(MM)).mm_per_px == MM  # numbers pass
+
+
+@pytest.mark.parametrize("kwargs, named", [
+    ({"tip_arc_mm": "22"}, "MeasureOptions.tip_arc_mm must be a finite number > 0, got '22' (str)"),
+    ({"min_hand_area_mm2": True}, "MeasureOptions.min_hand_area_mm2 must be a finite number > 0, "
+                                  "got True (bool)"),
+])
+def test_options_that_are_text_or_bool_are_refused_by_name(kwargs, named):
+    import re
+
+    with pytest.raises(InvalidInputError, match=f"^{re.escape(named)}$"):
+        MeasureOptions(**kwargs)
+
+
+@pytest.mark.parametrize("kwargs, named", [
+    ({"wrist_offset_mm": "1.2"}, "MeasureCalibration.wrist_offset_mm must be a finite number, "
+                                 "got '1.2' (str)"),
+    ({"thumb_axis_shift": False}, "MeasureCalibration.thumb_axis_shift must be a finite number, "
+                                  "got False (bool)"),
+    ({"thumb_width_factors": ("1.1", "1.2")}, "MeasureCalibration.thumb_width_factors must be 2 "
+                                              "numbers, got ('1.1', '1.2')"),
+    ({"thumb_width_factors": "12"}, "MeasureCalibration.thumb_width_factors must be 2 numbers, "
+                                    "got '12'"),
+    ({"thumb_length_factor": "1.04"}, "MeasureCalibration.thumb_length_factor must be a finite "
+                                      "number > 0.5 and < 2, got '1.04' (str)"),
+])
+def test_calibration_values_that_are_text_or_bool_are_refused_by_name(kwargs, named):
+    import re
+
+    with pytest.raises(InvalidInputError, match=f"^{re.escape(named)}$"):
+        MeasureCalibration(**kwargs)
+
+
+@pytest.mark.parametrize("call, named", [
+    (lambda: render_measurement_photo(mm_per_px="0.4"), "mm_per_px must be a finite number > 0, "
+                                                         "got '0.4' (str)"),
+    (lambda: render_measurement_photo(size_mm=True), "size_mm must be a finite number > 0, "
+                                                      "got True (bool)"),
+    (lambda: render_measurement_photo(roll_deg="90"), "roll_deg must be a finite number, "
+                                                       "got '90' (str)"),
+    (lambda: calibrate_on_model(mm_per_px="0.25"), "mm_per_px must be a finite number > 0, "
+                                                    "got '0.25' (str)"),
+    (lambda: calibrate_on_model(mm_per_px=(0.25, "0.3")), "mm_per_px[1] must be a finite number "
+                                                           "> 0, got '0.3' (str)"),
+    (lambda: fit_shape_correction([HandShape()] * 10, mm_per_px=["0.25"]),
+     "mm_per_px[0] must be a finite number > 0, got '0.25' (str)"),
+])
+def test_photo_scales_that_are_text_are_refused_before_any_render(call, named):
+    # before: np.asarray(mm_per_px, float) and float() read the texts as numbers
+    import re
+
+    with pytest.raises(InvalidInputError, match=f"^{re.escape(named)}$"):
+        call()
