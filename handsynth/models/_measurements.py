@@ -49,7 +49,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._checks import check_options
+from .._checks import check_number, check_options, short_repr
 from ..errors import InvalidShapeError
 from ._hand import HandModel
 from ._joints import FINGERS
@@ -75,29 +75,27 @@ _RANGE_SLACK = 0.05  # check_consistent: ratios this fraction beyond [0.5, 2.0] 
 
 
 def _positive_vector(value, name: str) -> tuple[float, ...]:
-    try:
-        arr = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise InvalidShapeError(f"{name} must be {_N_SEG} numbers in mm, got {value!r}") from None
-    if arr.shape != (_N_SEG,):
-        raise InvalidShapeError(f"{name} must hold {_N_SEG} values (mm), got shape {arr.shape}")
-    bad = ~np.isfinite(arr) | (arr <= 0)
-    if bad.any():
-        i = int(np.flatnonzero(bad)[0])
-        raise InvalidShapeError(
-            f"{name}{i + 1} must be a positive finite length in mm, got {arr[i].item()!r}"
-        )
-    return tuple(float(v) for v in arr)
+    if isinstance(value, (str, bytes)) or np.ndim(value) != 1:
+        raise InvalidShapeError(f"{name} must be {_N_SEG} numbers in mm, got {short_repr(value)}")
+    items = list(value)
+    if len(items) != _N_SEG:
+        raise InvalidShapeError(f"{name} must hold {_N_SEG} values (mm), got {len(items)}")
+    return tuple(check_number(v, f"{name}{i + 1}", above=0.0, error=InvalidShapeError)
+                 for i, v in enumerate(items))
 
 
 def _positive_scalar(value, name: str) -> float:
+    return check_number(value, name, above=0.0, error=InvalidShapeError)
+
+
+def _made(source, cls, values: dict):
+    """``cls(**values)``, its errors naming `source` (a file) when given."""
     try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise InvalidShapeError(f"{name} must be a length in mm, got {value!r}") from None
-    if not math.isfinite(v) or v <= 0:
-        raise InvalidShapeError(f"{name} must be a positive finite length in mm, got {value!r}")
-    return v
+        return cls(**values)
+    except InvalidShapeError as exc:
+        if source is None:
+            raise
+        raise InvalidShapeError(f"{source}: {exc}") from None
 
 
 @dataclass(frozen=True)
@@ -176,7 +174,7 @@ class HandMeasurements:
                 f"measurements have unknown keys {unknown} and missing keys {missing}; "
                 f"expected {sorted(expected)}"
             )
-        measured = cls(**values)
+        measured = _made(source, cls, values)
         measured._refuse_absurd(source)
         measured._warn_if_not_hand_sized(source)
         return measured
@@ -267,11 +265,9 @@ class HandMeasurements:
             raise InvalidShapeError(
                 f"measurements have unknown names {unknown} and missing names {missing}"
             )
-        measured = cls(
-            L=tuple(values[f"L{i}"] for i in range(1, 15)),
-            W=tuple(values[f"W{i}"] for i in range(1, 15)),
-            **{n: values[n] for n in _SCALARS},
-        )
+        measured = _made(source, cls, {"L": tuple(values[f"L{i}"] for i in range(1, 15)),
+                                       "W": tuple(values[f"W{i}"] for i in range(1, 15)),
+                                       **{n: values[n] for n in _SCALARS}})
         measured._refuse_absurd(source)
         measured._warn_if_not_hand_sized(source)
         return measured

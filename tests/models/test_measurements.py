@@ -1,5 +1,8 @@
 """Measurement files as people make them: Excel's BOM, other encodings, repeated rows (issue 16)."""
 
+import json
+import re
+
 import numpy as np
 import pytest
 
@@ -143,3 +146,28 @@ def test_check_consistent_blames_a_value_the_reader_lets_through(measured):
                                                 r"times what the other values suggest"):
         m.check_consistent()
     measured.check_consistent()
+
+
+@pytest.mark.parametrize(("key", "value", "shown"), [
+    ("P_width", "82", "'82' (str)"),       # text that reads as a number was taken as one
+    ("T_height", True, "True (bool)"),
+    ("P_height", -3.0, "-3.0"),
+    ("L", [10.0] * 13, "got 13"),
+])
+def test_a_json_value_that_is_no_length_is_refused_naming_the_file(tmp_path, measured, key,
+                                                                   value, shown):
+    values = {**measured.as_dict(), key: value}
+    path = tmp_path / "hand.json"
+    path.write_text(json.dumps(values))
+    with pytest.raises(InvalidShapeError, match=rf"hand.json: {key} .*{re.escape(shown)}"):
+        HandMeasurements.from_file(path)
+
+
+@pytest.mark.parametrize(("field", "value"), [
+    ("T_width", "12"), ("T_width", b"12"), ("T_width", False), ("T_width", float("nan")),
+    ("W", [10.0] * 13 + ["x"]),
+])
+def test_measurements_built_in_code_take_numbers_only(measured, field, value):
+    fields = {k: v for k, v in measured.as_dict().items() if k != "units"}
+    with pytest.raises(InvalidShapeError, match=field):
+        HandMeasurements(**{**fields, field: value})
