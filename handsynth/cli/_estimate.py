@@ -9,7 +9,7 @@ from pathlib import Path
 import click
 
 from .._io import check_outputs
-from ..errors import EstimationError, InvalidInputError
+from ..errors import EstimationError, InvalidInputError, InvalidShapeError
 from ..render import read_image
 from ._main import cli
 
@@ -19,6 +19,10 @@ SYNTHETIC_SHAPE = "L1.02_W0.97_P1.01_T1.03"
 SYNTHETIC_FRAMES = 300
 #: Reads ``--calibrate`` waits for a frame showing a hand (10 s at 30 fps).
 CALIBRATION_READS = 300
+#: Frame rates ``--fps`` accepts, frames per second (a camera reports at most 10,000).
+FPS_RANGE = (0.01, 10_000.0)
+#: Most random hands ``--learned-hands`` may learn from (as ``eval --learned-hands``).
+MAX_LEARNED_HANDS = 100_000
 
 
 def _parse_size(text: str, flag: str) -> tuple[int, int]:
@@ -34,6 +38,49 @@ def _parse_size(text: str, flag: str) -> tuple[int, int]:
     return w, h
 
 
+def _check_names(**named) -> None:
+    """Every file option given must name something: an empty name would be read as the
+    current folder (``--video ''`` was refused as "video file '.' is a folder")."""
+    for flag, value in named.items():
+        if value is not None and not str(value).strip():
+            raise InvalidInputError(f"--{flag.replace('_', '-')} must name a file, got {value!r}")
+
+
+def _shape_option(name: str, flag: str):
+    """The hand of a hand-shape option: ``standard`` or a name such as L1.000_W1.000_P1.000_T1.000.
+
+    Raises
+    ------
+    InvalidShapeError
+        A name of another form or outside the supported ratios, naming `flag`.
+    """
+    from ..models import HandShape
+
+    if name.strip().lower() == "standard":
+        return HandShape()
+    try:
+        return HandShape.from_name(name.strip())
+    except InvalidShapeError as exc:
+        raise InvalidShapeError(f"{flag} {name!r}: {exc}") from None
+
+
+def _read_measurements(path):
+    """The measurements of ``--measurements`` FILE, every error naming the option and the file."""
+    from ..models import HandMeasurements
+
+    try:
+        return HandMeasurements.from_file(path)
+    except InvalidInputError as exc:
+        raise _about_measurements(exc, path) from None
+
+
+def _about_measurements(exc: InvalidInputError, path) -> InvalidInputError:
+    """`exc` (an error about the measurements of `path`) with the option and the file named."""
+    text = str(exc)
+    where = "--measurements" if str(path) in text else f"--measurements {str(path)!r}"
+    return type(exc)(f"{where}: {text}")
+
+
 def _check_limits(frames, seconds, max_dead, fps) -> None:
     if frames is not None and frames < 0:
         raise InvalidInputError(f"--frames must be a non-negative integer, got {frames}")
@@ -43,6 +90,11 @@ def _check_limits(frames, seconds, max_dead, fps) -> None:
         raise InvalidInputError(f"--max-dead must be a positive integer, got {max_dead}")
     if not 0 < fps < math.inf:
         raise InvalidInputError(f"--fps must be a positive finite number, got {fps}")
+    if not FPS_RANGE[0] <= fps <= FPS_RANGE[1]:
+        # 1e-310 made the media time infinite (an OverflowError traceback), 1e-300 wrote
+        # timestamps of 1e300 s, and above a million every timestamp rounds to the same
+        raise InvalidInputError(f"--fps must be within [{FPS_RANGE[0]:g}, {FPS_RANGE[1]:g}] "
+                                f"frames per second, got {fps:g}")
 
 
 def _check_db_folder(db_dir) -> None:
@@ -61,21 +113,25 @@ def _open_lookup(db_dir, shape_name, measurements, temporal, err, personal=False
 
     from ..estimate import PoseLookup, SelectionOptions
     from ..live import default_database_dir
-    from ..models import HandMeasurements, HandShape
 
     shape = meas = None
     if shape_name is not None and measurements is not None:
         raise InvalidInputError("give --shape or --measurements, not both")
     if shape_name is not None:
-        shape = HandShape() if shape_name == "standard" else HandShape.from_name(shape_name)
+        shape = _shape_option(shape_name, "--shape")
     if measurements is not None:
-        meas = HandMeasurements.from_file(measurements)
+        meas = _read_measurements(measurements)
     if personal:
         if shape is None and meas is None:
             raise InvalidInputError("--personal needs --shape NAME or --measurements FILE")
         t = time.perf_counter()
-        lookup = PoseLookup.personal(db_dir or default_database_dir(), shape=shape,
-                                     measurements=meas, build=build, temporal=temporal)
+        try:
+            lookup = PoseLookup.personal(db_dir or default_database_dir(), shape=shape,
+                                         measurements=meas, build=build, temporal=temporal)
+        except InvalidShapeError as exc:
+            if measurements is None:
+                raise
+            raise _about_measurements(exc, measurements) from None
         click.echo(f"personal database {lookup.database.path} ready in "
                    f"{time.perf_counter() - t:.1f} s", err=err)
         return lookup
@@ -91,8 +147,13 @@ def _open_lookup(db_dir, shape_name, measurements, temporal, err, personal=False
     # a measurement file is in millimetres: chosen as `measure` and --personal choose, on
     # the ratios as measured (the paper's palm-width scaling is for photos without a scale)
     selection = SelectionOptions(normalize="none") if meas is not None else None
-    return PoseLookup.open(db_dir, shape=shape, measurements=meas, temporal=temporal, side=side,
-                           selection=selection)
+    try:
+        return PoseLookup.open(db_dir, shape=shape, measurements=meas, temporal=temporal,
+                               side=side, selection=selection)
+    except InvalidShapeError as exc:  # values that give no hand (centimetres read as mm)
+        if measurements is None:
+            raise
+        raise _about_measurements(exc, measurements) from None
 
 
 def _calibration_frame(source, image, mount, side, err, *, synthetic: str, prompt: str):
@@ -156,16 +217,19 @@ def _check_learned_options(db_dir, shape_name, measurements, personal, build_cou
 def _keypoint_shape(shape_name, measurements, err):
     """The hand whose keypoints a learnt run reports: --shape, --measurements or the standard."""
     from ..estimate import SelectionOptions, select_shape
-    from ..models import HandMeasurements, HandShape
+    from ..models import HandShape
 
     if shape_name is not None and measurements is not None:
         raise InvalidInputError("give --shape or --measurements, not both")
     if measurements is not None:
-        meas = HandMeasurements.from_file(measurements)
-        ratios = select_shape(meas, options=SelectionOptions(normalize="none")).ratios
-        shape = HandShape.from_name(ratios.name)
-    elif shape_name is not None and shape_name != "standard":
-        shape = HandShape.from_name(shape_name)
+        meas = _read_measurements(measurements)
+        try:  # values that give no hand of the supported ratios (centimetres read as mm)
+            ratios = select_shape(meas, options=SelectionOptions(normalize="none")).ratios
+            shape = HandShape.from_name(ratios.name)
+        except InvalidInputError as exc:
+            raise _about_measurements(exc, measurements) from None
+    elif shape_name is not None:
+        shape = _shape_option(shape_name, "--shape")
     else:
         shape = HandShape()
     click.echo(f"keypoints of the handsynth hand {shape.name} posed by the estimated angles",
@@ -184,6 +248,11 @@ def _open_learned(cache, kind, hands, rest, smoothing, side, err):
 
     if hands is not None and hands < 1:
         raise InvalidInputError(f"--learned-hands must be a positive integer, got {hands}")
+    if hands is not None and hands > MAX_LEARNED_HANDS:
+        # 99999999999 hands: a numpy MemoryError traceback (12 PiB of learning frames)
+        raise InvalidInputError(f"--learned-hands must be at most {MAX_LEARNED_HANDS:,} (as "
+                                f"eval --learned-hands; every learning frame is held in "
+                                f"memory), got {hands}")
     if smoothing is not None and not 0 <= smoothing < 1:
         raise InvalidInputError(f"--smoothing must be in [0, 1), got {smoothing}")
     folder = Path(cache) if cache is not None else default_database_dir().parent / "learned"
@@ -381,7 +450,6 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
         open_row_writer,
         run_live,
     )
-    from ..models import HandShape
     from ..render import CameraMount
 
     chosen = [n for n, on in (("--camera", camera is not None), ("--video", video_in is not None),
@@ -389,6 +457,8 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
     if len(chosen) != 1:
         raise InvalidInputError("give exactly one source: --camera INDEX, --video FILE or "
                                 f"--synthetic (got {', '.join(chosen) or 'none'})")
+    _check_names(video=video_in, measurements=measurements, calibrate_image=calibrate_image,
+                 out=out, video_out=video_out)
     _check_limits(frames, seconds, max_dead, fps)
     to_stdout = out == "-"
     info_err = to_stdout  # keep standard output for the rows
@@ -418,7 +488,7 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
                                 "give one")
     inputs = [p for p in (video_in, measurements, calibrate_image) if p is not None]
     size = _parse_size(synthetic_size, "--synthetic-size") if synthetic else None
-    user_shape = HandShape.from_name(synthetic_shape) if synthetic else None
+    user_shape = _shape_option(synthetic_shape, "--synthetic-shape") if synthetic else None
     if synthetic and frames is None and seconds is None:
         frames = SYNTHETIC_FRAMES
     calibrate = calibrate or calibrate_image is not None
@@ -467,9 +537,9 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
                 lookup = _calibrate(lookup, source, open_image, db_dir, mount, side, build,
                                     info_err)
         except (InvalidInputError, EstimationError) as exc:
-            if calibrate_image is None:
-                raise
-            raise type(exc)(f"--calibrate-image {calibrate_image}: {exc}") from None
+            # the frame came from the image or the source: name the one it came from
+            where = what if calibrate_image is None else f"--calibrate-image {calibrate_image}"
+            raise type(exc)(f"{where}: {exc}") from None
         if learned:
             assert lookup is not None  # calibrated above
             told = lookup.segment

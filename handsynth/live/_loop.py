@@ -240,7 +240,9 @@ def first_hand_frame(source: FrameSource, *, mount: CameraMount | None = None,
     <handsynth.estimate.PoseLookup.from_open_frame>`).  Frames are read
     until one's silhouette (:func:`handsynth.render.preprocess` with `mount`
     and `side`) is not empty; empty, dropped or unreadable frames are
-    skipped.  The frames read are consumed.
+    skipped, and so are uint8 frames of almost one grey level (fewer than
+    :data:`~handsynth.render.MIN_CONTRAST` levels: a flat grey or white
+    view, whose silhouette is empty).  The frames read are consumed.
 
     Parameters
     ----------
@@ -333,6 +335,10 @@ def run_live(lookup, source: FrameSource, *, sink=None, video_out=None,
 
     Notes
     -----
+    A uint8 frame of almost one grey level (fewer than
+    :data:`~handsynth.render.MIN_CONTRAST` levels: a flat grey, white or
+    covered view) is a no-hand row where the estimator tells the hand by
+    brightness: Otsu's threshold finds no hand in it.
     Unusable reads never raise: ``None``/empty frames count as ``dropped``,
     frames the estimator refuses (:class:`~handsynth.errors.InvalidInputError`,
     :class:`~handsynth.errors.EstimationError`) as ``invalid``.  After

@@ -161,8 +161,8 @@ class VideoSource(_Source):
     Raises
     ------
     InvalidInputError
-        The file does not exist or OpenCV cannot decode it (the message
-        names the file).
+        The file does not exist, is a folder, device or pipe, or OpenCV
+        cannot decode it (the message names the file).
 
     Notes
     -----
@@ -179,8 +179,11 @@ class VideoSource(_Source):
         self.path = Path(path)
         if self.path.is_dir():
             raise InvalidInputError(f"video file {str(self.path)!r} is a folder")
-        if not self.path.is_file():
+        if not self.path.exists():
             raise InvalidInputError(f"video file {str(self.path)!r} does not exist")
+        if not self.path.is_file():  # was "does not exist" for /dev/null or a named pipe
+            raise InvalidInputError(f"video file {str(self.path)!r} is not a regular file (a "
+                                    "device, pipe or socket); give a video file")
         with _quiet_opencv():
             cap = cv2.VideoCapture(str(self.path))
             opened = cap.isOpened()

@@ -18,6 +18,7 @@ from ._coverage import DEFAULT_CELLS, coverage
 from ._io import read_image, write_png
 from ._masks import MaskMaker
 from ._preprocess import (
+    MIN_CONTRAST,
     binarize,
     check_frame,
     crop_resize,
@@ -47,6 +48,7 @@ from ._varied import HandVariation, MountVariation, VariedRasterizer
 
 __all__ = [
     "DEFAULT_CELLS",
+    "MIN_CONTRAST",
     "WORK_WIDTH_PX",
     "CameraMount",
     "GLContextOwner",

@@ -62,6 +62,7 @@ from ..errors import InvalidInputError
 from ..models import DORSUM_Z_MM
 from ._camera import CameraMount, as_mount
 from ._runs import (
+    MIN_CONTRAST,
     OTSU_STEP,
     _frame_threshold,
     _threshold,
@@ -71,6 +72,7 @@ from ._runs import (
 )
 
 __all__ = [
+    "MIN_CONTRAST",
     "MIN_FRAME_SIDE",
     "OTSU_STEP",
     "binarize",
@@ -94,7 +96,8 @@ def binarize(frame: np.ndarray, *, threshold: int | None = None) -> np.ndarray:
     threshold : int, keyword-only, optional
         Grey level above which a pixel is hand (``grey > threshold``); by
         default :func:`otsu_threshold` of the frame, and an empty mask when
-        that is -1 (a flat frame).
+        that is -1 (a flat frame, or one of fewer than :data:`MIN_CONTRAST`
+        grey levels).
 
     Returns
     -------
@@ -126,7 +129,9 @@ def otsu_threshold(frame: np.ndarray) -> int:
     int
         OpenCV's ``THRESH_OTSU`` level (0-255) of the grey levels of the
         pixels ``(y, x)`` with `y` and `x` multiples of :data:`OTSU_STEP`;
-        -1 when those all have the same grey level (no hand).
+        -1 when those all have the same grey level, or when their grey levels
+        (largest above 1) span fewer than :data:`MIN_CONTRAST` (a flat grey or
+        white view: no hand).
     """
     frame = check_frame(frame)
     if frame.dtype == bool:

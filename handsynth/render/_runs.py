@@ -47,7 +47,7 @@ from numba.extending import intrinsic
 
 from ..errors import InvalidInputError
 
-__all__ = ["OTSU_STEP", "binarize_frame", "silhouette_from_frame", "silhouette_from_mask"]
+__all__ = ["MIN_CONTRAST", "OTSU_STEP", "binarize_frame", "silhouette_from_frame", "silhouette_from_mask"]
 
 
 _ONES = np.uint64(0x0101010101010101)  # eight True bytes
@@ -331,6 +331,14 @@ def _kernel(mask, words, lo, hi, size):
 #: multiples of this step (every 16th pixel).
 OTSU_STEP = 4
 
+#: A uint8 frame whose sample (:data:`OTSU_STEP`) spans fewer grey levels than this shows
+#: no hand: a flat grey, white (overexposed) or covered view with its compression noise,
+#: which Otsu's threshold would split into a random silhouette (values 126 and 128 of a
+#: grey MJPG video were read by a learnt estimator as a hand with confidence 0.74-0.79).
+#: A hand on the dimmest frames studied spans 35 levels (docs/camera_estimator.md,
+#: "Imaging on a dark background").  Frames of only 0 and 1 (masks as uint8) are exempt.
+MIN_CONTRAST = 12
+
 _LANES = 32  # pixels per SIMD block
 _I8, _I16, _I32 = ir.IntType(8), ir.IntType(16), ir.IntType(32)
 
@@ -527,14 +535,20 @@ def _otsu(hist):
 
 @njit(cache=True, nogil=True)
 def _frame_threshold(frame):
-    """Otsu's threshold of the sample's histogram; -1 when all samples share one level."""
+    """Otsu's threshold of the sample's histogram; -1 when the samples share one level or,
+    above 1, span fewer than :data:`MIN_CONTRAST` levels (no hand)."""
     h, w = frame.shape[0], frame.shape[1]
     src = frame.reshape(frame.size)
     hist = _grey_histogram(src, h, w, frame.size // (h * w))
-    levels = 0
+    lo, hi = -1, -1
     for i in range(256):
-        levels += hist[i] > 0
-    return _otsu(hist) if levels > 1 else -1
+        if hist[i] > 0:
+            if lo < 0:
+                lo = i
+            hi = i
+    if hi == lo or (hi > 1 and hi - lo < MIN_CONTRAST):
+        return -1
+    return _otsu(hist)
 
 
 @njit(cache=True, nogil=True)

@@ -584,6 +584,9 @@ def test_learned_estimator_for_the_left_hand(tmp_path):
      "--one-euro and --smoothing are two ways to steady the angles; give one"),
     (["--learned", "--smoothing", "1"], "--smoothing must be in [0, 1), got 1.0"),
     (["--learned", "--learned-hands", "0"], "--learned-hands must be a positive integer, got 0"),
+    # found by trying: a MemoryError traceback (12 PiB of learning frames)
+    (["--learned", "--learned-kind", "fingers", "--learned-hands", "99999999999"],
+     "--learned-hands must be at most 100,000"),
 ])
 def test_learned_options_that_do_not_apply_are_refused_by_name(tmp_path, extra, message):
     res = CliRunner().invoke(cli, ["estimate", "--synthetic", "--learned-cache" if "--learned" in
@@ -736,3 +739,130 @@ def test_out_of_range_sizes_rates_and_names_are_named(tmp_path, db, args, words)
     args = [a.replace("{tmp}", str(tmp_path)) for a in args]
     res = _run(*args, "--db", str(db), "-q")
     assert res.exit_code == 2 and words in res.output, res.output
+
+
+# --------------------------------------------------------------------------- found by trying
+
+LEARNT = ["--learned", "--learned-kind", "perceptrons"]
+
+
+def _measurement_files(folder):
+    """Damaged measurement files, each with a word its error must hold (the field)."""
+    from handsynth.models import model_measurements
+
+    good = model_measurements(HandShape(length=1.05, width=0.95)).as_dict()
+    cm = {k: ([x / 10 for x in v] if isinstance(v, list) else v / 10 if isinstance(v, float)
+              else v) for k, v in good.items()}
+    files = {
+        "empty.csv": ("", "L1"),
+        "text.json": ("hello\n", "JSON"),
+        "negative.json": (json.dumps({**good, "L": [-x for x in good["L"]]}),
+                          "L1"),
+        "no_palm.json": (json.dumps({k: v for k, v in good.items() if k != "P_width"}),
+                         "P_width"),
+        "cm.json": (json.dumps(cm), ""),  # the field depends on the check that refuses it
+    }
+    for name, (text, _) in files.items():
+        (folder / name).write_text(text)
+    return {name: words for name, (_, words) in files.items()}
+
+
+@pytest.mark.parametrize("learned", [True, False])
+def test_a_damaged_measurement_file_is_one_line_naming_the_option_and_the_file(tmp_path, db,
+                                                                               learned):
+    # "measurements have unknown names [] and missing names [...]", "L1 must be a positive
+    # finite length in mm, got -38.5", "HandShape.length=0.105 is outside the supported
+    # range": no word of which option or file
+    for name, words in _measurement_files(tmp_path).items():
+        path = tmp_path / name
+        args = ([*LEARNT, "--learned-cache", str(tmp_path / "c"), "--keypoints", "--out",
+                 str(tmp_path / "r.csv")] if learned else ["--db", str(db)])
+        res = _run("--synthetic", *args, "--measurements", str(path), "--frames", "2", *SMALL)
+        assert res.exit_code == 2, (name, res.output)
+        errors = [line for line in res.output.splitlines() if "error" in line]
+        assert len(errors) == 1 and "Traceback" not in res.output, res.output
+        assert "--measurements" in errors[0] and str(path) in errors[0], errors[0]
+        assert words in errors[0], errors[0]
+        assert not (tmp_path / "r.csv").exists()
+
+
+@pytest.mark.parametrize("option", ["--video", "--measurements", "--calibrate-image", "--out",
+                                    "--video-out"])
+def test_an_empty_file_name_is_refused_by_option_not_read_as_the_current_folder(tmp_path, db,
+                                                                                option):
+    # --video '' said "video file '.' is a folder", --calibrate-image '' "cannot read the
+    # calibration image '.'", --measurements '' "cannot read measurement file .: Is a directory"
+    source = ["--video", str(tmp_path / "v.avi")] if option != "--video" else []
+    res = _run(*source, "--db", str(db), option, "", "-q")
+    assert res.exit_code == 2
+    assert res.output.strip() == f"handsynth: error: {option} must name a file, got ''"
+
+
+@pytest.mark.parametrize("fps", ["1e-310", "1e-300", "1e9"])
+def test_a_frame_rate_far_outside_any_camera_is_refused(tmp_path, db, fps):
+    # 1e-310: an OverflowError traceback (infinite media time); 1e-300: rows with timestamps
+    # of 1e300 s written as valid; 1e9: every timestamp 0.0
+    res = _run("--synthetic", "--db", str(db), "--frames", "3", "--out",
+               str(tmp_path / "r.jsonl"), "--synthetic-size", f"{W}x{H}", "--fps", fps, "-q")
+    assert res.exit_code == 2
+    assert res.output.strip() == ("handsynth: error: --fps must be within [0.01, 10000] frames "
+                                  f"per second, got {float(fps):g}")
+    assert not (tmp_path / "r.jsonl").exists()
+
+
+def test_hand_shape_options_name_themselves_and_take_standard_alike(tmp_path, db):
+    # --shape standard was taken and --synthetic-shape standard refused; a bad name did not
+    # say which of the two options it came from
+    res = _run("--synthetic", "--db", str(db), "--synthetic-shape", "standard", "--frames", "2",
+               *SMALL)
+    assert res.exit_code == 0 and "synthetic hand L1.000_W1.000_P1.000_T1.000" in res.output, \
+        res.output
+    for option in ("--synthetic-shape", "--shape"):
+        res = _run("--synthetic", "--db", str(db), option, "L9", "--frames", "2", *SMALL)
+        assert res.exit_code == 2
+        assert res.output.startswith(f"handsynth: error: {option} 'L9': hand-shape name 'L9' is "
+                                     "not of the form"), res.output
+
+
+def test_a_video_that_gives_no_rest_frame_is_named(tmp_path):
+    # "the source ended before a frame showed a hand to calibrate with" and "frame is
+    # 3840x2160 pixels; ..." without the video's name
+    import cv2
+
+    empty = tmp_path / "empty.avi"  # a header and no frame
+    cv2.VideoWriter(str(empty), cv2.VideoWriter_fourcc(*"MJPG"), 15.0, (W, H)).release()
+    wide_frames = [np.zeros((90, 160, 3), np.uint8) for _ in range(2)]
+    for f in wide_frames:
+        f[20:70, 40:120] = 255
+    wide = _write_video(tmp_path / "wide.avi", wide_frames)
+    for video, words in ((empty, "the source ended before a frame showed a hand"),
+                         (wide, "frame is 160x90 pixels")):
+        res = _run("--video", str(video), *LEARNT, "--learned-cache", str(tmp_path / "c"), "-q")
+        assert res.exit_code == 2, res.output
+        err = res.output.strip().splitlines()[-1]
+        assert err.startswith(f"handsynth: error: video {video}: ") and words in err, err
+
+
+def test_a_grey_video_is_no_hand_not_a_confident_pose(tmp_path):
+    # the learnt estimator read a hand into the compression noise of a grey video (values
+    # 126 and 128), with confidence 0.74-0.79 and no low_confidence; without a rest image
+    # it even calibrated to the first grey frame
+    grey = np.full((H, W, 3), 128, np.uint8)
+    grey[: H // 3] = 126
+    video = _write_video(tmp_path / "grey.avi", [grey] * 4)
+    rest = tmp_path / "rest.png"
+    import cv2
+
+    cv2.imwrite(str(rest), _open_mask().view(np.uint8) * np.uint8(255))
+    out = tmp_path / "rows.csv"
+    res = _run("--video", str(video), *LEARNT, "--learned-cache", str(tmp_path / "c"),
+               "--calibrate-image", str(rest), "--keypoints", "--out", str(out), "-q")
+    assert res.exit_code == 0, res.output
+    _, rows = _read_csv(out)
+    assert len(rows) == 4 and all(r["no_hand"] == "1" and r["confidence"] == "0.0" for r in rows)
+    assert all(r[c] == "" for r in rows for c in (*JOINT_NAMES, *KEYPOINT_COLUMNS))
+    res = _run("--video", str(video), *LEARNT, "--learned-cache", str(tmp_path / "c"), "-q")
+    assert res.exit_code == 2
+    assert res.output.strip().splitlines()[-1] == (
+        f"handsynth: error: video {video}: the source ended before a frame showed a hand to "
+        "calibrate with")

@@ -455,3 +455,50 @@ def test_the_loop_runs_blas_on_one_thread(lookup):
         frames = [src.read(), src.read()]
     run_live(Counting(), _Frames(frames))
     assert seen and set(seen) == {1}
+
+
+def _flat_grey(levels=(126, 128)):
+    """A grey frame as an MJPG video decodes it: two grey levels in patches."""
+    frame = np.full((H, W, 3), levels[0], np.uint8)
+    frame[: H // 3] = levels[1]
+    return frame
+
+
+def test_a_flat_grey_or_white_frame_is_a_no_hand_row_not_a_confident_answer(tmp_path, lookup):
+    # found by trying: a grey video (values 126 and 128) was read as a hand with
+    # confidence 0.74-0.79 by the learnt estimator, every row a confident wrong pose
+    frames = [_flat_grey(), np.full((H, W, 3), 255, np.uint8), np.full((H, W), 20, np.uint8),
+              _flat_grey((0, 40))]
+    path = tmp_path / "rows.csv"
+    with CsvRowWriter(path, columns=live_columns(keypoints=True)) as w:
+        s = run_live(lookup, _Frames(frames), sink=w,
+                     options=LiveOptions(keypoints=True, retry_delay_s=0))
+    assert s.frames == 4 and s.no_hand == 3 and s.invalid == 0
+    _, rows = _read_csv(path)
+    assert [r["no_hand"] for r in rows] == ["1", "1", "1", "0"]  # a contrast of 40 is an image
+    assert all(r[c] == "" for r in rows[:3] for c in (*JOINT_NAMES, *KEYPOINT_COLUMNS))
+    mask = np.zeros((H, W), np.uint8)  # a mask given as 0 and 1 is read as a mask
+    mask[40:80, 60:120] = 1
+    assert run_live(lookup, _Frames([mask]), options=LiveOptions(retry_delay_s=0)).no_hand == 0
+
+
+def test_first_hand_frame_skips_flat_frames(lookup):
+    hand = _synthetic(lookup, frames=1).open_frame()
+    grey, white = _flat_grey(), np.full((H, W, 3), 255, np.uint8)
+    src = _Frames([grey, white, hand])
+    assert first_hand_frame(src, retry_delay_s=0) is hand and src.reads == 3
+    with pytest.raises(EstimationError, match="ended before a frame showed a hand"):
+        first_hand_frame(_Frames([grey] * 3), retry_delay_s=0)
+
+
+def test_a_device_or_pipe_given_as_a_video_is_named_as_such(tmp_path):
+    # found by trying: /dev/null and a named pipe were "video file ... does not exist"
+    import os
+
+    pipe = tmp_path / "clip.avi"
+    os.mkfifo(pipe)
+    for path in (pipe, "/dev/null"):
+        with pytest.raises(InvalidInputError, match=r"is not a regular file \(a device, pipe"):
+            VideoSource(path)
+    with pytest.raises(InvalidInputError, match="does not exist"):
+        VideoSource(tmp_path / "gone.avi")

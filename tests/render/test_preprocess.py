@@ -192,6 +192,28 @@ def test_otsu_of_a_uniform_histogram_is_opencvs_and_the_frame_is_empty():
         assert not preprocess(frame[..., 0].copy()).any()
 
 
+@pytest.mark.parametrize(("low", "high", "hand"), [
+    (126, 128, False),   # a grey MJPG video's two levels: was split into a random silhouette
+    (240, 251, False),   # an overexposed, almost white view
+    (0, 11, False),
+    (0, 1, True),        # a mask given as uint8 0 and 1
+    (20, 32, True),      # MIN_CONTRAST levels apart: an image
+    (20, 55, True),      # the dimmest hand of the imaging study against its background
+])
+def test_a_frame_of_fewer_than_min_contrast_grey_levels_shows_no_hand(low, high, hand):
+    from handsynth.render import MIN_CONTRAST, binarize, preprocess_reference
+    from handsynth.render._preprocess import otsu_threshold
+
+    assert MIN_CONTRAST == 12
+    frame = np.full((120, 180, 3), low, np.uint8)
+    frame[30:90, 40:140] = high  # a patch where a hand would be
+    for f in (frame, np.ascontiguousarray(frame[..., 0])):
+        assert (otsu_threshold(f) >= 0) == hand
+        assert binarize(f).any() == hand
+        assert preprocess(f).any() == hand
+        np.testing.assert_array_equal(preprocess(f), preprocess_reference(f))
+
+
 def test_bright_hand_on_dark_frame_gives_the_silhouette_of_its_mask():
     import cv2
 
