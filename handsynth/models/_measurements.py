@@ -309,8 +309,22 @@ class HandMeasurements:
         supported range (at most 4.2 times at its corners).
         """
         ratio, median = self._ratios_to_standard()
-        if any(abs(math.log(r / median)) > math.log(_ABSURD_FACTOR) for r in ratio.values()):
-            self.check_consistent(source=source)
+        odd = sorted((n for n, r in ratio.items()
+                      if abs(math.log(r / median)) > math.log(_ABSURD_FACTOR)),
+                     key=lambda n: -abs(math.log(ratio[n] / median)))
+        if not odd:
+            return
+        self.check_consistent(source=source)  # its message where the ratios leave the range
+        # the ratios stay in range, one value diluted among its digit's (L4 ten times too
+        # long gave L 1.725): the value is still beyond any hand of the supported range
+        mine, theirs = self._flat(), model_measurements(HandShape())._flat()
+        where = f"{source}: " if source is not None else ""
+        raise InvalidShapeError(
+            f"{where}" + "; ".join(
+                f"{n} {mine[n]:.6g} mm is {ratio[n] / median:.3g} times what the other values "
+                f"suggest (about {median * theirs[n]:.3g} mm)" for n in odd[:3])
+            + f": beyond any hand ({_ABSURD_FACTOR:g} times at most); check the value and that "
+            "it is in millimetres")
 
     def check_consistent(self, *, source=None) -> None:
         """Refuse values that give no hand shape, naming the values that stand out.
@@ -324,7 +338,7 @@ class HandMeasurements:
         hand's is more than twice or less than half the median ratio of all 32.
         The readers (:meth:`from_file`, :meth:`from_dict`, :meth:`from_flat`)
         call it where one value is more than 5 times (or less than a fifth of)
-        what the others suggest; call it before
+        what the others suggest, and refuse that value when this passes; call it before
         :func:`~handsynth.estimate.select_shape` to get this error instead of
         a bare ratio out of range.
 

@@ -2,6 +2,7 @@
 
 import json
 import re
+import warnings
 
 import numpy as np
 import pytest
@@ -171,3 +172,25 @@ def test_measurements_built_in_code_take_numbers_only(measured, field, value):
     fields = {k: v for k, v in measured.as_dict().items() if k != "units"}
     with pytest.raises(InvalidShapeError, match=field):
         HandMeasurements(**{**fields, field: value})
+
+
+@pytest.mark.parametrize(("index", "factor"), [(3, 10.0), (3, 0.1), (5, 6.0)])
+def test_one_length_far_off_the_others_is_refused_though_the_ratios_stay_in_range(
+        measured, index, factor):
+    # found by trying: L4 ten times too long was taken (the length ratio 1.725, in range)
+    lengths = list(measured.L)
+    lengths[index] *= factor
+    values = {**measured.as_dict(), "L": lengths}
+    with pytest.raises(InvalidShapeError, match=rf"^hand.json: L{index + 1} [\d.]+ mm is [\d.]+ "
+                                                r"times what the other values suggest"):
+        HandMeasurements.from_dict(values, source="hand.json")
+
+
+@pytest.mark.parametrize("ratios", [(0.5, 2.0, 0.5, 2.0), (2.0, 0.5, 2.0, 0.5), (2.0, 2.0, 0.5, 0.5)])
+def test_hands_at_the_corners_of_the_supported_range_are_read(ratios):
+    shape = HandShape(length=ratios[0], width=ratios[1], palm=ratios[2], thumb=ratios[3])
+    values = model_measurements(shape).as_dict()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)  # some are far from a person's size
+        got = HandMeasurements.from_dict(values)
+    np.testing.assert_allclose(got.L, model_measurements(shape).L)
