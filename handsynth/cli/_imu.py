@@ -58,9 +58,12 @@ def _full_scale(acc_range_g, gyr_range_dps) -> dict:
     from ..errors import InvalidInputError
     from ..sensors.imu import GRAVITY_MPS2
 
-    for flag, v in (("--acc-range", acc_range_g), ("--gyr-range", gyr_range_dps)):
-        if not (math.isfinite(v) and v > 0):
-            raise InvalidInputError(f"{flag} must be a finite number > 0, got {v!r}")
+    # beyond any MEMS part's range (high-g accelerometers reach 400 g, gyros 4,000 deg/s):
+    # a larger figure would only switch the saturation check off without a word
+    for flag, v, top in (("--acc-range", acc_range_g, 1000.0),
+                         ("--gyr-range", gyr_range_dps, 50000.0)):
+        if not (math.isfinite(v) and 0 < v <= top):
+            raise InvalidInputError(f"{flag} must be a number > 0 and <= {top:g}, got {v!r}")
     return {"acc_full_scale": acc_range_g * GRAVITY_MPS2,
             "gyr_full_scale": math.radians(gyr_range_dps)}
 

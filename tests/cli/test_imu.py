@@ -422,8 +422,11 @@ def test_broad_skips_a_trial_without_reference_and_writes_no_nan(tmp_path, sim):
 
 def test_track_full_scale_ranges(tmp_path, base):
     out = tmp_path / "q.csv"
-    res = CliRunner().invoke(cli, ["imu", "track", str(base), "--gyr-range", "nan", "--out", str(out)])
-    assert res.exit_code == 2 and "--gyr-range must be a finite number > 0, got nan" in res.output
+    for flag, value, top in (("--gyr-range", "nan", "50000"), ("--acc-range", "1e308", "1000"),
+                             ("--gyr-range", "-1", "50000")):
+        res = CliRunner().invoke(cli, ["imu", "track", str(base), flag, value, "--out", str(out)])
+        assert res.exit_code == 2, res.output
+        assert f"{flag} must be a number > 0 and <= {top}, got {float(value)!r}" in res.output
     res = CliRunner().invoke(cli, ["imu", "track", str(base), "--gyr-range", "20", "--out", str(out)])
     assert res.exit_code == 2 and "full scale 0.3491 rad/s" in res.output, res.output
     assert "--gyr-range" in res.output and not out.exists()

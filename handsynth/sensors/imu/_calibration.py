@@ -34,7 +34,7 @@ from ._layout import FLEX_JOINT
 from ._plate import PLATE_SENSORS, fuse_plate, plate_rotations
 from ._recording import ImuRecording, check_recording
 from ._sensorcal import POSE_PREFIX, SensorCalibration, fit_sensor_calibration
-from ._vectors import ChainModel, chain_model
+from ._vectors import _MIN_ROTATION_SAMPLES, ChainModel, chain_model
 
 __all__ = ["ImuCalibration", "calibrate", "check_stretches", "segments_from_seconds"]
 
@@ -163,8 +163,13 @@ def check_stretches(rec: ImuRecording, *, source: str | None = None) -> list[str
             continue
         gyr = rec.gyr[:, a:b]
         if label in rotations:
-            hold = min(b - a, max(3, int(_BIAS_HOLD_S * rec.rate_hz)))
-            turned = np.cumsum(gyr - gyr[:, :hold].mean(axis=1, keepdims=True), axis=1)
+            if b - a < _MIN_ROTATION_SAMPLES:
+                continue  # too short to be still or not: refused as such (chain_model)
+            hold = max(3, int(_BIAS_HOLD_S * rec.rate_hz))
+            # the hold at the start gives the gyro biases; a stretch too short to begin with
+            # one is read as it is (the biases turn a sensor a few degrees per second at most)
+            bias = gyr[:, :hold].mean(axis=1, keepdims=True) if b - a >= 2 * hold else 0.0
+            turned = np.cumsum(gyr - bias, axis=1)
             angle = np.degrees(np.linalg.norm(turned, axis=2).max(axis=1) / rec.rate_hz)
             k = int(np.argmax(angle))
             if not angle[k] >= _MIN_ROTATION_DEG:  # NaN fails too

@@ -278,6 +278,36 @@ def test_a_rotation_labelled_over_a_still_stretch_is_refused():
         calibrate(still, source="cal.csv")
 
 
+def test_a_rotation_too_short_is_called_too_short_not_still():
+    # before: a rotation of a few samples was "still" (its bias hold was all of it)
+    import warnings
+
+    from handsynth.errors import EstimationError
+    from handsynth.sensors.imu import ImuHand, calibrate, calibration_motion, simulate_imu
+    from handsynth.sensors.imu._calibration import check_stretches
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        rec = simulate_imu(calibration_motion(), hand=ImuHand(tip_sensors=True), seed=1,
+                           device_seed=2)
+    segments = tuple((lab, a, a + 5) if lab == "index_pip_flex" else (lab, a, b)
+                     for lab, a, b in rec.truth.segments)
+    short = dataclasses.replace(rec, segments=segments)
+    assert check_stretches(short) == []
+    with pytest.raises(EstimationError, match=r"rotation 'index_pip_flex' spans 5 samples .*"
+                                              r"at least 7 are needed"):
+        calibrate(short, source="cal.csv")
+
+
+def test_a_short_rotation_is_measured_without_its_bias_hold():
+    from handsynth.sensors.imu._calibration import check_stretches
+
+    rec = _still_then_turning()  # turning from sample 500, 1 rad/s peak
+    assert check_stretches(dataclasses.replace(rec, segments=(("index_pip_flex", 520, 580),))) == []
+    with pytest.raises(RecordingError, match="is still"):
+        check_stretches(dataclasses.replace(rec, segments=(("index_pip_flex", 100, 160),)))
+
+
 def test_a_still_stretch_that_moves_is_warned_about():
     from handsynth.sensors.imu._calibration import check_stretches
 
