@@ -142,7 +142,9 @@ def off_scale_words(sensors: np.ndarray, check: SensorCheck, k: int, *, adc_max:
     sat = check.saturated[sel, k]
     if sat.any():
         ends = sorted({0.0 if v <= 0 else float(adc_max) for v in s[sat]})
-        out.append(f"saturated (at {' and '.join(f'{e:g}' for e in ends)} counts) in "
+        # a sensor at 0 in every row may as well be unplugged as bent past its range
+        what = "saturated or disconnected" if ends == [0.0] and sat.all() else "saturated"
+        out.append(f"{what} (at {' and '.join(f'{e:g}' for e in ends)} counts) in "
                    f"{count(sat)}")
     below = check.below[sel, k]
     if below.any():

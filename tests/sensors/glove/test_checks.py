@@ -77,6 +77,18 @@ def test_a_sensor_stuck_at_full_scale_is_saturated_not_dead(recwarn):
                     "(100.0 %)"]
 
 
+@pytest.mark.parametrize(("rows", "words"), [
+    (slice(None), "saturated or disconnected (at 0 counts) in 100 of 100 rows (100.0 %)"),
+    (slice(0, 10), "saturated (at 0 counts) in 10 of 100 rows (10.0 %)"),
+])
+def test_a_sensor_at_zero_in_every_row_may_be_disconnected(recwarn, rows, words):
+    s = _live()
+    s[rows, 1] = 0
+    check_sensors(s, adc_max=4095, where="x.csv")
+    msgs = [str(w.message) for w in recwarn if issubclass(w.category, GloveWarning)]
+    assert msgs == [f"x.csv: sensor_index is {words}"]
+
+
 def test_rows_are_named_by_file_line_when_known():
     s = _live()
     s[[3, 50], 1] = np.nan
