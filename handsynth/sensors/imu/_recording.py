@@ -431,6 +431,10 @@ _NOT_IN_NAMES = ",;\t\"'\n\r"
 _EARTH_FIELD_UT = (10.0, 200.0)
 #: Highest sampling rate taken for an IMU's, Hz (MEMS IMUs sample at up to a few kHz).
 _MAX_RATE_HZ = 100_000.0
+#: A ``time_ms`` column stepping faster than this holds seconds: it is above the fastest
+#: output of an MPU-9250-class gyroscope (32 kHz, its low-pass filter bypassed), and a
+#: 100-Hz recording in seconds under ``time_ms`` steps at 100 kHz.
+_MS_COLUMN_MAX_HZ = 32_000.0
 
 
 def check_unique_names(sensors, *, error: type[InvalidInputError] = RecordingError) -> None:
@@ -762,9 +766,11 @@ def read_imu_csv(path, *, acc_units: str = "m/s2", gyr_units: str = "rad/s",
                 f"{dt[i]:.4g} s long after t={t[i]:.4g} s (expected {step:.4g} s): "
                 "missing samples")
         file_rate = 1.0 / step
-        if not 0.5 <= file_rate <= _MAX_RATE_HZ:
+        seconds_as_ms = time_name == "time_ms" and file_rate > _MS_COLUMN_MAX_HZ
+        if seconds_as_ms or not 0.5 <= file_rate <= _MAX_RATE_HZ:
             hint = (" (milliseconds under time_s? name the column time_ms)"
-                    if time_name == "time_s" and file_rate < 0.5 else "")
+                    if time_name == "time_s" and file_rate < 0.5 else
+                    " (seconds under time_ms? name the column time_s)" if seconds_as_ms else "")
             if rate_hz is None:
                 raise RecordingError(
                     f"{path}: the {time_name} column steps {step:.4g} s on average, "

@@ -159,6 +159,11 @@ def test_time_column_errors_name_the_line(tmp_path, free_rec):
         read_imu_csv(slow)
     with pytest.warns(UserWarning, match=r"100 Hz \(--rate\), contradicts the time_s column's 0.1 Hz"):
         assert read_imu_csv(slow, rate_hz=100.0).rate_hz == 100.0
+    fast = tmp_path / "fast.csv"  # seconds written under time_ms: read as 100 kHz before
+    _rewrite_time(p, fast, t, "{:.2f}", "time_ms")
+    with pytest.raises(RecordingError, match=r"1e\+05 Hz: not an IMU sampling rate \(seconds "
+                                             r"under time_ms\? name the column time_s\)"):
+        read_imu_csv(fast)
     with pytest.raises(RecordingError, match=r"rate_hz \(--rate\) must be a finite number > 0"):
         read_imu_csv(p, rate_hz=float("nan"))
 
