@@ -113,6 +113,14 @@ def _is_pose_label(label: str) -> bool:
 #: of :func:`calibration_motion`, 15-76 deg otherwise); a still stretch turns no sensor by
 #: more than 0.1 deg once the gyro bias of its first half second is taken off.
 _MIN_ROTATION_DEG = 3.0
+#: Besides each flexion's own segment (:data:`FLEX_JOINT`), the sensors that the other
+#: calibration rotations turn: a label on another rotation's stretch leaves them still.
+_ALSO_TURNS = {
+    "humeral_rot": ("forearm_1", "forearm_2", "forearm_3"),
+    "wrist_dev": ("hand_radial", "hand_ulnar"),
+    "thumb_cmc_abd": ("thumb_metacarpal",),
+    **{f"{f}_mcp_abd": (f"{f}_proximal",) for f in ("index", "middle", "ring", "little")},
+}
 #: A still stretch (``static``, ``acc_pose_<k>``) moves no gyro by more than this RMS
 #: about its mean, deg/s (0.2 deg/s in the simulated still poses; tens in a motion).
 _MAX_STILL_RMS_DPS = 5.0
@@ -178,8 +186,9 @@ def check_stretches(rec: ImuRecording, *, source: str | None = None) -> list[str
                     f"sensor turns more than {angle[k]:.2g} deg in it (the most: "
                     f"{rec.sensors[k]}), and a calibration rotation turns its joint by tens of "
                     f"degrees; is the label on the rotation's stretch?")
-            # the sensors on the segment that this flexion moves must turn with it
-            own = [i for i, sensor in enumerate(rec.sensors) if FLEX_JOINT.get(sensor) == label]
+            # the sensors on the segment that this rotation moves must turn with it
+            own = [i for i, sensor in enumerate(rec.sensors)
+                   if FLEX_JOINT.get(sensor) == label or sensor in _ALSO_TURNS.get(label, ())]
             still = [i for i in own if not angle[i] >= _MIN_ROTATION_DEG]
             if still:
                 i = still[0]

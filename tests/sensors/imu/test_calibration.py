@@ -278,25 +278,50 @@ def test_a_rotation_labelled_over_a_still_stretch_is_refused():
         calibrate(still, source="cal.csv")
 
 
-def test_a_rotation_too_short_is_called_too_short_not_still():
-    # before: a rotation of a few samples was "still" (its bias hold was all of it)
+@pytest.fixture(scope="module")
+def calibration_rec():
     import warnings
 
-    from handsynth.errors import EstimationError
-    from handsynth.sensors.imu import ImuHand, calibrate, calibration_motion, simulate_imu
-    from handsynth.sensors.imu._calibration import check_stretches
+    from handsynth.sensors.imu import ImuHand, calibration_motion, simulate_imu
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        rec = simulate_imu(calibration_motion(), hand=ImuHand(tip_sensors=True), seed=1,
-                           device_seed=2)
+        return simulate_imu(calibration_motion(), hand=ImuHand(tip_sensors=True), seed=1,
+                            device_seed=2)
+
+
+def test_a_rotation_too_short_is_called_too_short_not_still(calibration_rec):
+    # before: a rotation of a few samples was "still" (its bias hold was all of it)
+    from handsynth.errors import EstimationError
+    from handsynth.sensors.imu import calibrate
+    from handsynth.sensors.imu._calibration import check_stretches
+
     segments = tuple((lab, a, a + 5) if lab == "index_pip_flex" else (lab, a, b)
-                     for lab, a, b in rec.truth.segments)
-    short = dataclasses.replace(rec, segments=segments)
+                     for lab, a, b in calibration_rec.truth.segments)
+    short = dataclasses.replace(calibration_rec, segments=segments)
     assert check_stretches(short) == []
     with pytest.raises(EstimationError, match=r"rotation 'index_pip_flex' spans 5 samples .*"
                                               r"at least 7 are needed"):
         calibrate(short, source="cal.csv")
+
+
+@pytest.mark.parametrize(("label", "on", "still"), [
+    ("middle_mcp_abd", "index_mcp_abd", "middle_proximal"),
+    ("wrist_dev", "index_mcp_flex", "hand_ulnar"),
+    ("humeral_rot", "wrist_flex", "forearm_1"),
+    ("thumb_cmc_abd", "thumb_mcp_flex", "thumb_metacarpal"),
+])
+def test_an_abduction_or_rotation_label_on_another_rotations_stretch_is_refused(
+        calibration_rec, label, on, still):
+    # before: only flexion labels were checked for the sensor their rotation must turn
+    from handsynth.sensors.imu._calibration import check_stretches
+
+    spans = {lab: (a, b) for lab, a, b in calibration_rec.truth.segments}
+    segments = tuple((lab, *spans[on]) if lab == label else (lab, a, b)
+                     for lab, a, b in calibration_rec.truth.segments)
+    with pytest.raises(RecordingError, match=rf"segment '{label}' .* does not turn {still} "):
+        check_stretches(dataclasses.replace(calibration_rec, segments=segments))
+    assert check_stretches(calibration_rec) == []
 
 
 def test_a_short_rotation_is_measured_without_its_bias_hold():
