@@ -28,6 +28,20 @@ __all__ = ["KeypointEstimator"]
 _SIDES = ("right", "left")
 
 
+def _side_of(estimator, depth: int = 0) -> str | None:
+    """The hand side an estimator reads: its own ``side``, or that of the estimator it wraps
+    (``estimator``, as :class:`~handsynth.estimate.SmoothedEstimator`) or of its members
+    (``members``, as :class:`~handsynth.estimate.EnsembleEstimator`); None if none says."""
+    side = getattr(estimator, "side", None)
+    if side in _SIDES or depth > 8:
+        return side if side in _SIDES else None
+    inner = getattr(estimator, "estimator", None)
+    if inner is not None:
+        return _side_of(inner, depth + 1)
+    sides = {_side_of(m, depth + 1) for m in getattr(estimator, "members", ())} - {None}
+    return sides.pop() if len(sides) == 1 else None
+
+
 class KeypointEstimator:
     """Any pose estimator's answer with the keypoints of a model hand in its angles.
 
@@ -51,8 +65,11 @@ class KeypointEstimator:
         measurements with :func:`~handsynth.estimate.select_shape`
         (``select_shape(m, options=SelectionOptions(normalize="none")).ratios``).
     side : {"right", "left"}, keyword-only, optional
-        The hand's side; by default the estimator's ``side`` if it has one,
-        else ``"right"``.  A side other than the estimator's is refused.
+        The hand's side; by default the estimator's: its ``side``, or that of
+        the estimator it wraps or of its members (a
+        :class:`~handsynth.estimate.SmoothedEstimator`, an
+        :class:`~handsynth.estimate.EnsembleEstimator`), else ``"right"``.  A
+        side other than the estimator's is refused.
 
     Raises
     ------
@@ -66,7 +83,7 @@ class KeypointEstimator:
                  side: str | None = None) -> None:
         if not callable(getattr(estimator, "estimate", None)):
             raise InvalidInputError(f"estimator {estimator!r} has no estimate(frame) method")
-        own = getattr(estimator, "side", None)
+        own = _side_of(estimator)
         if side is None:
             side = own if own in _SIDES else "right"
         if side not in _SIDES:

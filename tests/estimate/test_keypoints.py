@@ -79,6 +79,23 @@ def test_wrapping_a_smoothed_estimator_gives_the_keypoints_of_the_steadied_angle
         np.testing.assert_allclose(got.keypoints, model.keypoints(), atol=1e-7)
 
 
+def test_a_left_estimator_inside_a_wrapper_gives_a_left_hands_keypoints():
+    # a SmoothedEstimator or an ensemble has no side of its own: the right hand was assumed
+    from handsynth.estimate import EnsembleEstimator
+
+    pose = natural_pose_set(2, seed=5)[1]
+    left = HandModel(side="left")
+    left.set_pose(pose)
+    wrapped = (SmoothedEstimator(_Fixed([pose], side="left"), rate_hz=30.0),
+               EnsembleEstimator([_Fixed([pose], side="left"), _Fixed([pose], side="left")]))
+    for inner in wrapped:
+        est = KeypointEstimator(inner)
+        assert est.side == "left"
+        np.testing.assert_allclose(est.estimate(None).keypoints, left.keypoints(), atol=1e-6)
+        with pytest.raises(InvalidInputError, match="side 'right' differs from the estimator's"):
+            KeypointEstimator(inner, side="right")
+
+
 def test_calibrated_and_check_ready_reach_the_wrapped_estimator():
     inner = _Fixed([np.zeros(20)])
     ready = []
