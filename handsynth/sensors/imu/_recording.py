@@ -284,12 +284,17 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
             f"uT at sample {i}, beyond any magnetometer's full scale ({_MAG_FULL_SCALE_UT:g} uT; "
             "the Earth's field is 25-65 uT): a damaged sample, or the magnetometer units "
             "(--mag-units)")
-    dead_gyr = [rec.sensors[k] for k in range(s) if not rec.gyr[k].any()]
+    # a gyro at exactly 0 while its own accelerometer's readings change: the accelerometer
+    # shows the sensor alive (noise or motion), the gyro is dead.  A noise-free simulation
+    # of a still hand reads 0 and a constant gravity, and is left alone.
+    dead_gyr = [rec.sensors[k] for k in range(s)
+                if not rec.gyr[k].any() and np.ptp(rec.acc[k], axis=0).max() > 0]
     if dead_gyr and rec.n >= 10:
         raise RecordingError(
             f"{source}: the gyro of sensor(s) {', '.join(map(repr, dead_gyr))} reads exactly 0 on "
-            f"every axis in all {rec.n} samples, which a working gyro never does (its noise "
-            "alone moves it): dead or unconnected; leave that sensor out of the recording")
+            f"every axis in all {rec.n} samples while the accelerometer's readings change, which "
+            "a working gyro never does (its noise alone moves it): dead or unconnected; leave "
+            "that sensor out of the recording")
     n0 = max(2, min(rec.n, int(static_s * rate)))
     w0 = np.linalg.norm(rec.gyr[:, :n0], axis=-1).mean(axis=1)
     acc_spread = np.linalg.norm(rec.acc[:, :n0].std(axis=1), axis=-1)

@@ -398,3 +398,18 @@ def test_a_link_model_missing_only_a_next_links_vector_is_named(one):
     with pytest.raises(InvalidInputError,
                        match=rf"^vectors lacks 1 of the \d+ .*: {gone[0]}->{gone[1]} "):
         chain_model(one, vectors)
+
+
+def test_a_gyro_at_zero_is_dead_only_where_its_accelerometer_lives():
+    # a noise-free simulation of a still hand reads gyros of exactly 0 and a constant
+    # gravity: taken; a gyro at 0 beside an accelerometer whose readings change: dead
+    from handsynth.sensors.imu import ImuHand, check_recording, simulate_imu, static_motion
+
+    ideal = simulate_imu(static_motion(3.0), hand=ImuHand(), noise=None)
+    assert not ideal.gyr.any()
+    assert check_recording(ideal) == []
+    acc = ideal.acc.copy()
+    acc[0] += 0.01 * np.random.default_rng(0).standard_normal(acc[0].shape)
+    with pytest.raises(RecordingError, match=r"the gyro of sensor\(s\) 'forearm_1' reads exactly 0 "
+                                             r"on every axis in all 300 samples while"):
+        check_recording(dataclasses.replace(ideal, acc=acc))
