@@ -33,8 +33,9 @@ def glove() -> None:
                    "the range calibration.")
 @click.option("--no-angles", is_flag=True, help="Leave out the reference joint angles.")
 @click.option("--adc-max", type=int, default=4095, show_default=True,
-              help="Full scale of the simulated converter, counts (readings are clipped to "
-                   "0..adc-max; 4095: 12 bits).")
+              help="Clip the simulated readings to 0..adc-max counts, to try saturation "
+                   "(the sensors keep a 12-bit converter's offsets and gains; 4095: none "
+                   "clipped).")
 def simulate(out, kind, user_seed, donning, motions, trials, seed, range_holds, no_angles,
              adc_max):
     """Write a simulated glove recording OUT (CSV, canonical joint names)."""

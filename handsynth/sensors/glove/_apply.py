@@ -63,14 +63,15 @@ def apply_calibration(calibration, readings, out, *, model: str = "model4",
     OutputError
         `out` cannot be written or names an input (checked first).
     InvalidInputError
-        A file name that is empty; the calibration file is unreadable or malformed, holds no estimator
-        `model`, has no range holds while `range_csv` is given; `motion` was
-        not calibrated; `adc_max` is not a positive number.
+        A file name that is empty; the calibration file is unreadable or
+        malformed, holds no estimator `model`, or has no range holds while
+        `range_csv` is given; `range_csv` has no ``range_open`` and
+        ``range_fist`` rows; `motion` was not calibrated.
     RecordingError
         `readings` or `range_csv` cannot be read (file, line and column
-        named); no row of `readings` has five readings, or every reading is
-        saturated or out of the converter's range; `range_csv` has no
-        ``range_open`` and ``range_fist`` rows, or a hold of a sensor is mostly
+        named); `adc_max` is not a positive number of counts; no row of
+        `readings` has five readings, or every reading is saturated or out of
+        the converter's range; a hold of a sensor in `range_csv` is mostly
         saturated.
     EstimationError
         The range holds cannot be used (a sensor reads the same open and
@@ -101,7 +102,7 @@ def apply_calibration(calibration, readings, out, *, model: str = "model4",
     if range_csv is not None:
         if cal["range_reference"] is None:
             raise InvalidInputError(f"{calibration}: the calibration had no range_open/"
-                                    "range_fist holds, so --range cannot be used")
+                                    "range_fist holds, so range_csv (--range) cannot be used")
         src = range_readings(read_glove_csv(range_csv, adc_max=adc_max), where=str(range_csv))
         if src is None:
             raise InvalidInputError(f"{range_csv}: needs rows with motion 'range_open' "
