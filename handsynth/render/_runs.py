@@ -337,6 +337,9 @@ OTSU_STEP = 4
 #: grey MJPG video were read by a learnt estimator as a hand with confidence 0.74-0.79).
 #: A hand on the dimmest frames studied spans 35 levels (docs/camera_estimator.md,
 #: "Imaging on a dark background").  Frames of only 0 and 1 (masks as uint8) are exempt.
+#: A constant compiled into the threshold (assigning it changes nothing).  The rule reads
+#: the sample's extremes: a flat view with a dark bar or a bright overlay spans more and
+#: is still split by the threshold.
 MIN_CONTRAST = 12
 
 _LANES = 32  # pixels per SIMD block
