@@ -6,6 +6,7 @@ from pathlib import Path
 
 import click
 
+from ..db import MAX_LEARNING_HANDS
 from ..errors import InvalidInputError
 from ._main import cli, option_names
 
@@ -21,7 +22,7 @@ _OPTION_NAMES = {"tile_width_px": "--tile-width", "LearningSetOptions.hands": "-
               help="Width of one picture in pixels.")
 @click.option("--frames", type=click.IntRange(0, 10_000), default=200, show_default=True,
               help="Synthetic frames of an off-grid hand to look up in the default database.")
-@click.option("--learned-hands", type=click.IntRange(0, 100_000), default=300, show_default=True,
+@click.option("--learned-hands", type=click.IntRange(0, MAX_LEARNING_HANDS), default=300, show_default=True,
               help="Random hands of the learned estimator's small demo learning set "
                    "(0: skip that part).")
 @option_names(_OPTION_NAMES)

@@ -21,8 +21,6 @@ SYNTHETIC_FRAMES = 300
 CALIBRATION_READS = 300
 #: Frame rates ``--fps`` accepts, frames per second (a camera reports at most 10,000).
 FPS_RANGE = (0.01, 10_000.0)
-#: Most random hands ``--learned-hands`` may learn from (as ``eval --learned-hands``).
-MAX_LEARNED_HANDS = 100_000
 
 
 def _parse_size(text: str, flag: str) -> tuple[int, int]:
@@ -242,15 +240,15 @@ def _open_learned(cache, kind, hands, rest, smoothing, side, err):
     import dataclasses
     import time
 
-    from ..db import LearningSetOptions
+    from ..db import MAX_LEARNING_HANDS, LearningSetOptions
     from ..estimate import LEARNED_ENSEMBLES, LearnedOptions, learned_ensemble, learned_estimator
     from ..live import default_database_dir
 
     if hands is not None and hands < 1:
         raise InvalidInputError(f"--learned-hands must be a positive integer, got {hands}")
-    if hands is not None and hands > MAX_LEARNED_HANDS:
+    if hands is not None and hands > MAX_LEARNING_HANDS:
         # 99999999999 hands: a numpy MemoryError traceback (12 PiB of learning frames)
-        raise InvalidInputError(f"--learned-hands must be at most {MAX_LEARNED_HANDS:,} (as "
+        raise InvalidInputError(f"--learned-hands must be at most {MAX_LEARNING_HANDS:,} (as "
                                 f"eval --learned-hands; every learning frame is held in "
                                 f"memory), got {hands}")
     if smoothing is not None and not 0 <= smoothing < 1:

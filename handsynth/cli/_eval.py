@@ -7,6 +7,7 @@ from pathlib import Path
 
 import click
 
+from ..db import MAX_LEARNING_HANDS
 from ..errors import InvalidInputError
 from ._main import cli, option_names
 
@@ -64,8 +65,6 @@ _OPTION_NAMES = {
     "scale": "--mesh-scale",            # mesh_test_hands
     "workers": "--workers",             # build_databases
 }
-#: Most random hands of the learnt estimators' learning set (as ``demo --learned-hands``).
-_MAX_LEARNED_HANDS = 100_000
 
 #: What ``--protocol`` compares unless ``--conditions`` says otherwise.
 PROTOCOL_DEFAULT = "standard,calibrated,fingers,fingers_mean,mlp,ensemble"
@@ -249,8 +248,8 @@ def _protocol(folder, mesh, mesh_scale, learned_hands, hand_spread, json_path, n
 
     if n_hands < 0:
         raise InvalidInputError(f"--hands must be a non-negative integer, got {n_hands}")
-    if learned_hands is not None and not 1 <= learned_hands <= _MAX_LEARNED_HANDS:
-        raise InvalidInputError(f"--learned-hands must be an integer in [1, {_MAX_LEARNED_HANDS:,}], "
+    if learned_hands is not None and not 1 <= learned_hands <= MAX_LEARNING_HANDS:
+        raise InvalidInputError(f"--learned-hands must be an integer in [1, {MAX_LEARNING_HANDS:,}], "
                                 f"got {learned_hands}")
     if not hand_spread > 0:
         raise InvalidInputError(f"--hand-spread must be a positive number, got {hand_spread}")

@@ -40,6 +40,7 @@ from ._build import (
 )
 from ._entries import DEFAULT_RENDER_SIZE, database_meta, render_entries
 from ._learning import (
+    MAX_LEARNING_HANDS,
     LearningSet,
     LearningSetOptions,
     learning_poses,
@@ -77,6 +78,7 @@ __all__ = [
     "IMAGE_SIZE",
     "KEYPOINT_SCALE_M",
     "MAX_COUNT",
+    "MAX_LEARNING_HANDS",
     "BuildOptions",
     "BuildProgress",
     "BuildSummary",

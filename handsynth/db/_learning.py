@@ -49,10 +49,14 @@ from ..render import (
     coverage,
 )
 
-__all__ = ["LearningSet", "LearningSetOptions", "learning_poses", "learning_set",
-           "random_rest_posture", "render_learning_set"]
+__all__ = ["MAX_LEARNING_HANDS", "LearningSet", "LearningSetOptions", "learning_poses",
+           "learning_set", "random_rest_posture", "render_learning_set"]
 
 _FORMAT = 1
+#: Most hands a learning set may hold: 100,000 hands of 100 frames are about 14 GB of
+#: coverage grids (the shipped perceptrons learnt from 16,000); more would fail for memory
+#: after hours of rendering.
+MAX_LEARNING_HANDS = 100_000
 _LO, _HI = JOINT_LIMITS_DEG[:, 0], JOINT_LIMITS_DEG[:, 1]
 # abduction of index, middle, ring, little in a fully fanned rest (deg toward the thumb)
 _FAN_DEG = np.array([8.0, 1.0, -6.0, -12.0])
@@ -134,6 +138,9 @@ class LearningSetOptions:
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
                 raise InvalidInputError(f"LearningSetOptions.{name} must be a positive integer, "
                                         f"got {v!r}")
+        if self.hands > MAX_LEARNING_HANDS:
+            raise InvalidInputError(f"LearningSetOptions.hands must be at most "
+                                    f"{MAX_LEARNING_HANDS:,}, got {self.hands!r}")
         try:
             mix = tuple(float(m) for m in self.mix)
         except (TypeError, ValueError):

@@ -94,6 +94,8 @@ def test_bad_options_are_refused_by_name():
     ({"cells": (10, 2.5)}, r"cells must be .* got \(10, 2.5\)"),
     ({"edge_px": 2.5}, r"edge_px must be an integer in \[0, 20\], got 2.5"),
     ({"mix": ("a", 0, 1)}, r"mix must be 3 shares summing to 1"),
+    # 99999999999 hands: a MemoryError after the draw (12 PiB of learning frames)
+    ({"hands": 100_001}, r"hands must be at most 100,000, got 100001"),
 ])
 def test_options_that_would_fail_later_are_refused_by_name(kwargs, words):
     with pytest.raises(InvalidInputError, match=r"LearningSetOptions\." + words):
