@@ -14,8 +14,8 @@ import numpy as np
 
 from .errors import HandsynthError, InvalidInputError
 
-__all__ = ["SIDES", "check_instance", "check_integer", "check_number", "check_options", "check_side",
-           "is_number", "short_repr"]
+__all__ = ["SIDES", "check_instance", "check_integer", "check_number", "check_options",
+           "check_path_names", "check_side", "is_number", "short_repr"]
 
 _T = TypeVar("_T")
 
@@ -255,3 +255,26 @@ def check_integer(value: Any, name: str, *, minimum: int | None = None,
                                                                and v > maximum):
         _refuse("an integer", name, value, bounds, error, _number_kind(value) is not None)
     return v
+
+
+def check_path_names(named, *, kind: str = "file",
+                     error: type[HandsynthError] = InvalidInputError) -> None:
+    """Refuse an empty or blank path name, which would be read as the current folder.
+
+    Parameters
+    ----------
+    named : iterable of (str, object)
+        Each argument's or option's name and its value (a path or text; None,
+        not given, is skipped).
+    kind : str, keyword-only
+        What the name must name, for the message (``"file"``, ``"folder"``).
+    error : type of HandsynthError, keyword-only
+
+    Raises
+    ------
+    HandsynthError
+        (`error`) ``<name> must name a <kind>, got ''``, for the first empty one.
+    """
+    for name, value in named:
+        if value is not None and not str(value).strip():
+            raise error(f"{name} must name a {kind}, got {str(value)!r}")

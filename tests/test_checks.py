@@ -172,3 +172,16 @@ def test_a_falsy_shape_or_placement_is_refused_not_read_as_the_default(bad):
         with pytest.raises(InvalidInputError, match=rf"^{message}, got {type(bad).__name__} "):
             call()
             pytest.fail(f"{where} took {bad!r}")
+
+
+def test_an_empty_or_blank_path_name_is_refused_by_name():
+    from pathlib import Path
+
+    from handsynth._checks import check_path_names
+    from handsynth.errors import OutputError
+
+    check_path_names([("--out", "rows.csv"), ("--json", None), ("path", Path("x"))])
+    with pytest.raises(InvalidInputError, match=r"^--out must name a folder, got ''$"):
+        check_path_names([("--db", "dbs"), ("--out", "")], kind="folder")
+    with pytest.raises(OutputError, match=r"^out must name a file, got ' '$"):
+        check_path_names([("out", " ")], error=OutputError)

@@ -7,6 +7,7 @@ import sys
 
 import click
 
+from .._checks import check_path_names
 from ..errors import InvalidInputError
 from ._main import cli, option_names
 
@@ -106,8 +107,7 @@ def build_db(out_dir, default, shapes, pose_set, count, seed, side, mount, rende
     )
     from ..render import CameraMount
 
-    if not out_dir.strip():  # '' would be the current folder
-        raise InvalidInputError(f"--out must name a folder, got {out_dir!r}")
+    check_path_names([("--out", out_dir)], kind="folder")
     if workers is not None and workers < 1:
         raise InvalidInputError(f"--workers must be a positive integer, got {workers}")
     show = None if quiet else _printer(sys.stderr)

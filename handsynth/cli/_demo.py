@@ -6,8 +6,8 @@ from pathlib import Path
 
 import click
 
+from .._checks import check_path_names
 from ..db import MAX_LEARNING_HANDS
-from ..errors import InvalidInputError
 from ._main import cli, option_names
 
 #: The option each library argument or field of this command's errors comes from.
@@ -46,8 +46,7 @@ def demo(out_dir: str, tile_width: int, frames: int, learned_hands: int) -> None
     from ..models import HandShape
     from ..render import CameraMount, backend, contact_sheet, write_png
 
-    if not out_dir.strip():  # '' would be the current folder
-        raise InvalidInputError(f"--out must name a folder, got {out_dir!r}")
+    check_path_names([("--out", out_dir)], kind="folder")
     t = time.perf_counter()
     grid = HandShape.grid()
     shapes = {"smallest": grid[0], "largest": grid[-1]}

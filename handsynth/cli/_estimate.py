@@ -8,6 +8,7 @@ from pathlib import Path
 
 import click
 
+from .._checks import check_path_names
 from .._io import check_outputs
 from ..errors import EstimationError, InvalidInputError, InvalidShapeError
 from ..render import read_image
@@ -36,14 +37,6 @@ def _parse_size(text: str, flag: str) -> tuple[int, int]:
     return w, h
 
 
-def _check_names(**named) -> None:
-    """Every file option given must name something: an empty name would be read as the
-    current folder (``--video ''`` was refused as "video file '.' is a folder")."""
-    for flag, value in named.items():
-        if value is not None and not str(value).strip():
-            raise InvalidInputError(f"--{flag.replace('_', '-')} must name a file, got {value!r}")
-
-
 def _shape_option(name: str, flag: str):
     """The hand of a hand-shape option: ``standard`` or a name such as L1.000_W1.000_P1.000_T1.000.
 
@@ -70,6 +63,15 @@ def _read_measurements(path):
         return HandMeasurements.from_file(path)
     except InvalidInputError as exc:
         raise _about_measurements(exc, path) from None
+
+
+def _hand_options(shape_name, measurements):
+    """The hand of ``--shape`` NAME or ``--measurements`` FILE (at most one of them):
+    ``(HandShape or None, HandMeasurements or None)``."""
+    if shape_name is not None and measurements is not None:
+        raise InvalidInputError("give --shape or --measurements, not both")
+    return (None if shape_name is None else _shape_option(shape_name, "--shape"),
+            None if measurements is None else _read_measurements(measurements))
 
 
 def _about_measurements(exc: InvalidInputError, path) -> InvalidInputError:
@@ -112,13 +114,7 @@ def _open_lookup(db_dir, shape_name, measurements, temporal, err, personal=False
     from ..estimate import PoseLookup, SelectionOptions
     from ..live import default_database_dir
 
-    shape = meas = None
-    if shape_name is not None and measurements is not None:
-        raise InvalidInputError("give --shape or --measurements, not both")
-    if shape_name is not None:
-        shape = _shape_option(shape_name, "--shape")
-    if measurements is not None:
-        meas = _read_measurements(measurements)
+    shape, meas = _hand_options(shape_name, measurements)
     if personal:
         if shape is None and meas is None:
             raise InvalidInputError("--personal needs --shape NAME or --measurements FILE")
@@ -217,18 +213,14 @@ def _keypoint_shape(shape_name, measurements, err):
     from ..estimate import SelectionOptions, select_shape
     from ..models import HandShape
 
-    if shape_name is not None and measurements is not None:
-        raise InvalidInputError("give --shape or --measurements, not both")
-    if measurements is not None:
-        meas = _read_measurements(measurements)
+    shape, meas = _hand_options(shape_name, measurements)
+    if meas is not None:
         try:  # values that give no hand of the supported ratios (centimetres read as mm)
             ratios = select_shape(meas, options=SelectionOptions(normalize="none")).ratios
             shape = HandShape.from_name(ratios.name)
         except InvalidInputError as exc:
             raise _about_measurements(exc, measurements) from None
-    elif shape_name is not None:
-        shape = _shape_option(shape_name, "--shape")
-    else:
+    elif shape is None:
         shape = HandShape()
     click.echo(f"keypoints of the handsynth hand {shape.name} posed by the estimated angles",
                err=err)
@@ -455,8 +447,9 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
     if len(chosen) != 1:
         raise InvalidInputError("give exactly one source: --camera INDEX, --video FILE or "
                                 f"--synthetic (got {', '.join(chosen) or 'none'})")
-    _check_names(video=video_in, measurements=measurements, calibrate_image=calibrate_image,
-                 out=out, video_out=video_out)
+    check_path_names((("--video", video_in), ("--measurements", measurements),
+                      ("--calibrate-image", calibrate_image), ("--out", out),
+                      ("--video-out", video_out)))
     _check_limits(frames, seconds, max_dead, fps)
     to_stdout = out == "-"
     info_err = to_stdout  # keep standard output for the rows

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import click
 
+from .._checks import check_path_names
 from ..db import MAX_LEARNING_HANDS
 from ..errors import InvalidInputError
 from ._main import cli, option_names
@@ -165,10 +166,8 @@ def eval_(ctx, db_folder, protocol, mesh, mesh_scale, learned_hands, hand_spread
     from ..errors import OutputError
     from ..eval import EvalOptions, evaluate
 
-    for option, value in (("--db", db_folder), ("--out", out_dir), ("--json", json_path)):
-        if value is not None and not value.strip():  # '' would be the current folder, or nothing
-            raise InvalidInputError(f"{option} must name a {'file' if option == '--json' else 'folder'}, "
-                                    f"got {value!r}")
+    check_path_names((("--db", db_folder), ("--out", out_dir)), kind="folder")
+    check_path_names([("--json", json_path)])
     if prefix is not None and ("/" in prefix or "\\" in prefix or prefix in (".", "..")):
         raise InvalidInputError(f"--prefix must be the start of a file name (no folder), got {prefix!r}")
     if json_path:  # before the work, not after it

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import click
 
+from .._checks import check_path_names
 from ..errors import InvalidInputError
 from ..render import read_image
 from ._main import cli, option_names
@@ -104,10 +105,8 @@ def measure(photo, mm_per_px, reference_width_mm, out, details, annotate, normal
     )
     from ..render import write_png
 
-    for name, text in (("PHOTO", photo), ("--out", out), ("--details", details),
-                       ("--annotate", annotate)):
-        if text is not None and not text.strip():  # '' would be the current folder
-            raise InvalidInputError(f"{name} must name a file, got {text!r}")
+    check_path_names((("PHOTO", photo), ("--out", out), ("--details", details),
+                      ("--annotate", annotate)))
     photo = Path(photo)
     out, details, annotate = (None if p is None else Path(p) for p in (out, details, annotate))
     for path, suffixes, name in ((out, (".json", ".csv"), "--out"),

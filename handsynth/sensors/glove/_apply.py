@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..._checks import check_path_names
 from ..._io import check_output
 from ...errors import EstimationError, InvalidInputError
 from ._calibrate import load_calibration, range_readings
@@ -85,10 +86,8 @@ def apply_calibration(calibration, readings, out, *, model: str = "model4",
         off the calibration's range (:func:`check_reading_range`, once per
         sensor).
     """
-    for name, value in (("calibration", calibration), ("readings", readings), ("out", out),
-                        ("range_csv", range_csv)):
-        if value is not None and not str(value).strip():
-            raise InvalidInputError(f"{name} must name a file, got {str(value)!r}")
+    check_path_names((("calibration", calibration), ("readings", readings), ("out", out),
+                      ("range_csv", range_csv)))
     check_output(out, what="angles file", inputs=[calibration, readings, range_csv])
     cal = load_calibration(calibration)
     est = cal["estimators"].get(model)
