@@ -1,5 +1,8 @@
 """The root command: one error style for every bad option, no silently missing command."""
 
+import subprocess
+import sys
+
 import pytest
 from click.testing import CliRunner
 
@@ -92,3 +95,39 @@ def test_a_command_with_option_names_names_the_option_the_user_typed():
         _one_error_line(res, "something else named SomethingOptions.n_points, got 2")
     finally:
         cli.commands.pop("test-option-names")
+
+
+def test_the_entry_point_loads_nothing_heavy_before_main():
+    # Ctrl-C can only be turned into one line once main() runs: before it, nothing big loads
+    code = ("import sys, handsynth.cli; "
+            "print(sorted(m for m in ('numpy', 'mujoco', 'cv2', 'click') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]", out.stdout + out.stderr
+
+
+def test_ctrl_c_while_the_commands_load_is_one_line():
+    # the KeyboardInterrupt a Ctrl-C raises, injected where the commands' imports begin
+    code = ("import builtins\n"
+            "real = builtins.__import__\n"
+            "def fake(name, *a, **k):\n"
+            "    if name == 'click':\n"
+            "        raise KeyboardInterrupt\n"
+            "    return real(name, *a, **k)\n"
+            "builtins.__import__ = fake\n"
+            "from handsynth.cli import main\n"
+            "main(['--version'])\n")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert proc.returncode == 1
+    assert proc.stderr.strip() == "handsynth: error: aborted", proc.stderr
+    assert proc.stdout == ""
+
+
+def test_the_package_names_load_when_used():
+    code = ("import sys, handsynth; before = 'mujoco' in sys.modules; "
+            "shape = handsynth.HandShape(); "
+            "print(before, type(shape).__name__, 'PoseLookup' in dir(handsynth))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["False", "HandShape", "True"], out.stdout + out.stderr
+    with pytest.raises(AttributeError, match="no attribute 'PoseLookups'"):
+        import handsynth
+        handsynth.PoseLookups  # noqa: B018
