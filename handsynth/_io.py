@@ -84,7 +84,7 @@ def os_error_reason(exc: BaseException) -> str:
     return str(exc)
 
 
-def make_folder(path, *, what: str = "output folder",
+def make_folder(path, *, what: str = "output folder", writable: bool = False,
                 error: type[HandsynthError] = OutputError) -> Path:
     """Create the folder `path` (and its parents) unless it exists.
 
@@ -93,6 +93,12 @@ def make_folder(path, *, what: str = "output folder",
     path : str or os.PathLike
     what : str, keyword-only
         What the folder is, for messages (``"--plots folder"``).
+    writable : bool, keyword-only
+        Also refuse a folder this process cannot write into (a read-only
+        file system, no write permission), so that a run whose outputs go
+        there stops before its work rather than after it.  False for a
+        folder that may only be read (a cache that already holds what is
+        asked for).
     error : HandsynthError subclass, keyword-only
         Class of the error raised.
 
@@ -104,14 +110,29 @@ def make_folder(path, *, what: str = "output folder",
     ------
     HandsynthError
         (`error`) it cannot be made: a file stands in the way, no
-        permission, a full disk (the reason in words).
+        permission, a full disk (the reason in words); or, with `writable`,
+        it cannot be written into.
     """
     path = Path(path)
     try:
         path.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise error(f"cannot create the {what} {str(path)!r}: {os_error_reason(exc)}") from None
+    if writable and (why := _unwritable(path)):
+        raise error(f"cannot write into the {what} {str(path)!r}: {why}")
     return path
+
+
+def _unwritable(folder: Path) -> str | None:
+    """Why this process cannot create a file in the existing `folder`, or None when it can."""
+    if os.access(folder, os.W_OK | os.X_OK):
+        return None
+    try:
+        if os.statvfs(folder).f_flag & os.ST_RDONLY:
+            return "the file system is read-only"
+    except OSError:
+        pass
+    return "this user may not write into it"
 
 
 def check_output(path, *, what: str = "output file", inputs: Iterable = (),
@@ -138,9 +159,11 @@ def check_output(path, *, what: str = "output file", inputs: Iterable = (),
     Raises
     ------
     HandsynthError
-        (`error`) `path` is a folder, its folder does not exist or is not a
-        folder, it is not a regular file (a device such as ``/dev/null``, a
-        pipe), or it names an input file.
+        (`error`) `path` is a folder, its folder does not exist, is not a
+        folder or cannot be written into (a read-only file system, no write
+        permission: refused now rather than after the run's work), it is not
+        a regular file (a device such as ``/dev/null``, a pipe), or it names
+        an input file.
     """
     path = Path(path)
     if path.name in ("", ".", ".."):
@@ -158,6 +181,9 @@ def check_output(path, *, what: str = "output file", inputs: Iterable = (),
         why = "is not a folder" if parent.exists() else "does not exist"
         raise error(f"cannot write the {what} {str(path)!r}: folder {str(parent)!r} {why} "
                     "(create it first)")
+    if reason := _unwritable(parent):
+        raise error(f"cannot write the {what} {str(path)!r} into folder {str(parent)!r}: "
+                    f"{reason}")
     for source in inputs:
         if source is not None and same_file(path, source):
             raise error(f"the {what} {str(path)!r} is the input {str(source)!r}; an output "

@@ -182,3 +182,26 @@ def test_write_json_checks_its_output_like_the_other_writers(tmp_path):
     assert sorted(os.listdir(tmp_path)) == ["in.json"]
     write_json(tmp_path / "r.json", [1], indent=None)
     assert (tmp_path / "r.json").read_text() == "[1]\n"
+
+
+def test_a_folder_that_cannot_be_written_is_refused_before_any_work(read_only_folder):
+    from handsynth._io import make_folder
+
+    with pytest.raises(OutputError, match=r"cannot write the JSON file '.*r.json' into folder "
+                                          r"'.*read_only': the file system is read-only"):
+        check_output(read_only_folder / "r.json", what="JSON file")
+    with pytest.raises(OutputError, match=r"cannot write into the --plots folder '.*read_only': "
+                                          r"the file system is read-only"):
+        make_folder(read_only_folder, what="--plots folder", writable=True)
+    assert make_folder(read_only_folder) == read_only_folder  # a folder only read: fine
+
+
+def test_a_folder_without_write_permission_is_named(tmp_path, monkeypatch):
+    # root may write anywhere, so the permission check is what a user without it meets
+    from handsynth import _io
+
+    monkeypatch.setattr(_io.os, "access", lambda path, mode: False)
+    with pytest.raises(OutputError, match="x.csv' into folder .*: this user may not write into it"):
+        check_output(tmp_path / "x.csv")
+    with pytest.raises(OutputError, match="this user may not write into it"):
+        _io.make_folder(tmp_path, writable=True)

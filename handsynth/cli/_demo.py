@@ -50,7 +50,7 @@ def demo(out_dir: str, tile_width: int, frames: int, learned_hands: int) -> None
     t = time.perf_counter()
     grid = HandShape.grid()
     shapes = {"smallest": grid[0], "largest": grid[-1]}
-    folder = make_folder(out_dir, what="--out folder")
+    folder = make_folder(out_dir, what="--out folder", writable=True)
     for name, mount in (("hands_paper_mount", CameraMount.paper()),
                         ("hands_whole_hand_mount", CameraMount.whole_hand())):
         path = folder / f"{name}.png"

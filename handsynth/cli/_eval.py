@@ -29,21 +29,6 @@ def _parse_list(text: str, option: str) -> tuple[str, ...]:
     return items
 
 
-def _check_writable(folder: Path, option: str) -> None:
-    """Refuse, before the work, an output folder this process cannot write into.
-
-    A read-only file system or a folder without write permission would
-    otherwise refuse the output only after the whole run.
-    """
-    import os
-
-    from ..errors import OutputError
-
-    if not os.access(folder, os.W_OK | os.X_OK):
-        raise OutputError(f"cannot write {option} into the folder {str(folder)!r}: it is "
-                          "read-only or not writable by this user")
-
-
 #: Options of the paper's experiment that the protocol does not take.
 _EXPERIMENT_ONLY = ("out_dir", "prefix", "json_frames", "hand", "count", "db_pose_set",
                     "ratio_margin", "mount", "frame_size", "render_size", "workers", "ties",
@@ -173,7 +158,6 @@ def eval_(ctx, db_folder, protocol, mesh, mesh_scale, learned_hands, hand_spread
     if json_path:  # before the work, not after it
         path = check_output(json_path, what="JSON report",
                             inputs=sorted(Path(db_folder).glob("*.h5")) if db_folder else ())
-        _check_writable(path.parent, "--json")
         if db_folder and path.suffix.lower() in (".h5", ".hdf5") \
                 and path.resolve().parent == Path(db_folder).resolve():
             raise OutputError(f"the JSON report {json_path!r} would be a database file in "
@@ -208,8 +192,7 @@ def eval_(ctx, db_folder, protocol, mesh, mesh_scale, learned_hands, hand_spread
         mount=mount, frame_size=_parse_size(frame_size, "--frame-size"), workers=workers,
         ties=ties, photo_mm_per_px=photo_mm_per_px)
     if out_dir:  # the plot folder and names, before the work, not after it
-        plots = make_folder(out_dir, what="--out folder")
-        _check_writable(plots, "--out")
+        plots = make_folder(out_dir, what="--out folder", writable=True)
         check_outputs([("--out", plots / f"{prefix}{name}.png")
                        for name in ("error_hist", "error_vs_distance", "joint_mae")],
                       inputs=[json_path])

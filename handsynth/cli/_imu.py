@@ -126,7 +126,7 @@ def eval_(config_name, filters, durations, elbows, no_grasps, no_sensor_calibrat
         raise OutputError(f"--json and --plots name the same path {json_out!r}: choose a file "
                           "for the JSON and a folder for the plots")
     check_outputs([("--json", json_out)])
-    plots = make_folder(plot_dir, what="--plots folder") if plot_dir else None
+    plots = make_folder(plot_dir, what="--plots folder", writable=True) if plot_dir else None
     check_outputs([("--json", json_out),
                    *((("--plots", plots / name) for name in ("orientation_error.png",
                                                                "stick_figure.png")) if plots else ())])

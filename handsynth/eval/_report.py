@@ -266,7 +266,7 @@ class EvalReport:
             The folder cannot be created or a file cannot be written (each
             file appears complete or not at all).
         """
-        folder = make_folder(folder, what="plot folder")
+        folder = make_folder(folder, what="plot folder", writable=True)
         return [_plot_histograms(self, folder / f"{prefix}error_hist.png"),
                 _plot_distance(self, folder / f"{prefix}error_vs_distance.png"),
                 _plot_joint_mae(self, folder / f"{prefix}joint_mae.png")]

@@ -236,7 +236,7 @@ def test_an_output_in_a_read_only_folder_is_refused_before_the_work(tmp_path, re
     target = read_only_folder / "r.json" if option == "--json" else read_only_folder
     res = _run("--db", str(tmp_path / "dbs"), option, str(target), "-q", *SMALL)
     assert res.exit_code == 2, res.output
-    assert res.output.strip().splitlines() == [
-        f"handsynth: error: cannot write {option} into the folder {str(read_only_folder)!r}: it "
-        "is read-only or not writable by this user"]
+    lines = res.output.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("handsynth: error: cannot write"), res.output
+    assert f"folder {str(read_only_folder)!r}: the file system is read-only" in lines[0]
     assert not (tmp_path / "dbs").exists()
