@@ -111,7 +111,7 @@ def _open_lookup(db_dir, shape_name, measurements, temporal, err, personal=False
                  side="right"):
     import time
 
-    from ..estimate import PoseLookup, SelectionOptions
+    from ..estimate import PoseLookup, SelectionOptions, select_shape
     from ..live import default_database_dir
 
     shape, meas = _hand_options(shape_name, measurements)
@@ -129,6 +129,14 @@ def _open_lookup(db_dir, shape_name, measurements, temporal, err, personal=False
         click.echo(f"personal database {lookup.database.path} ready in "
                    f"{time.perf_counter() - t:.1f} s", err=err)
         return lookup
+    # a measurement file is in millimetres: chosen as `measure` and --personal choose, on
+    # the ratios as measured (the paper's palm-width scaling is for photos without a scale)
+    selection = SelectionOptions(normalize="none") if meas is not None else None
+    if meas is not None:  # values that give no hand (centimetres read as mm) fail before a build
+        try:
+            select_shape(meas, options=selection)
+        except InvalidShapeError as exc:
+            raise _about_measurements(exc, measurements) from None
     if db_dir is None:
         from ..db import build_default_database
 
@@ -138,9 +146,6 @@ def _open_lookup(db_dir, shape_name, measurements, temporal, err, personal=False
         click.echo(f"default database {path} ready in {time.perf_counter() - t:.1f} s", err=err)
     else:
         _check_db_folder(db_dir)  # names the option; the library names the file
-    # a measurement file is in millimetres: chosen as `measure` and --personal choose, on
-    # the ratios as measured (the paper's palm-width scaling is for photos without a scale)
-    selection = SelectionOptions(normalize="none") if meas is not None else None
     try:
         return PoseLookup.open(db_dir, shape=shape, measurements=meas, temporal=temporal,
                                side=side, selection=selection)

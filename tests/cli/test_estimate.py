@@ -786,6 +786,19 @@ def test_a_damaged_measurement_file_is_one_line_naming_the_option_and_the_file(t
         assert not (tmp_path / "r.csv").exists()
 
 
+def test_measurements_that_give_no_hand_fail_before_the_default_database_is_built(
+        tmp_path, monkeypatch):
+    # a file in centimetres was refused only after the default database had been built
+    # (5 s; a first run's cache did not exist yet)
+    _measurement_files(tmp_path)
+    monkeypatch.setenv("HANDSYNTH_CACHE_DIR", str(tmp_path / "cache"))
+    res = _run("--synthetic", "--measurements", str(tmp_path / "cm.json"), "--frames", "2")
+    assert res.exit_code == 2, res.output
+    assert res.output.splitlines()[-1].startswith("handsynth: error: --measurements"), res.output
+    assert "millimetres" in res.output  # the warning says why
+    assert not (tmp_path / "cache").exists()
+
+
 @pytest.mark.parametrize("option", ["--video", "--measurements", "--calibrate-image", "--out",
                                     "--video-out"])
 def test_an_empty_file_name_is_refused_by_option_not_read_as_the_current_folder(tmp_path, db,
