@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import math
 import numbers
+import os
+from pathlib import Path
 from typing import Any, TypeVar
 
 import numpy as np
@@ -15,7 +17,7 @@ import numpy as np
 from .errors import HandsynthError, InvalidInputError
 
 __all__ = ["SIDES", "check_instance", "check_integer", "check_number", "check_options",
-           "check_path_names", "check_side", "is_number", "short_repr"]
+           "check_path", "check_path_names", "check_side", "is_number", "short_repr"]
 
 _T = TypeVar("_T")
 
@@ -278,3 +280,34 @@ def check_path_names(named, *, kind: str = "file",
     for name, value in named:
         if value is not None and not str(value).strip():
             raise error(f"{name} must name a {kind}, got {str(value)!r}")
+
+
+def check_path(value: Any, name: str, *, kind: str = "file",
+               error: type[HandsynthError] = InvalidInputError) -> Path:
+    """A file or folder name given to a library function, as a :class:`pathlib.Path`.
+
+    Parameters
+    ----------
+    value : str or os.PathLike
+        The name as given.
+    name : str
+        The argument's name, for the message.
+    kind : str, keyword-only
+        What it must name (``"file"``, ``"folder"``), for the message.
+    error : type of HandsynthError, keyword-only
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    HandsynthError
+        (`error`) `value` is not a str or path-like (``None``, a number, an open file), or an
+        empty or blank name (which would be read as the current folder), naming `name`.
+    """
+    if isinstance(value, bytes) or not isinstance(value, (str, os.PathLike)):
+        got = "None" if value is None else f"{type(value).__name__} {short_repr(value)}"
+        raise error(f"{name} must be a {kind} name (str or path), got {got}")
+    check_path_names([(name, value)], kind=kind, error=error)
+    return Path(value)

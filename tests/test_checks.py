@@ -185,3 +185,20 @@ def test_an_empty_or_blank_path_name_is_refused_by_name():
         check_path_names([("--db", "dbs"), ("--out", "")], kind="folder")
     with pytest.raises(OutputError, match=r"^out must name a file, got ' '$"):
         check_path_names([("out", " ")], error=OutputError)
+
+
+def test_a_path_argument_must_be_a_name():
+    from pathlib import Path
+
+    from handsynth._checks import check_path
+
+    assert check_path("a.csv", "path") == Path("a.csv")
+    assert check_path(Path("dbs"), "folder", kind="folder") == Path("dbs")
+    with pytest.raises(InvalidInputError, match=r"^path must be a file name \(str or path\), got None$"):
+        check_path(None, "path")
+    with pytest.raises(InvalidInputError, match=r"^folder must be a folder name .*, got int 3$"):
+        check_path(3, "folder", kind="folder")
+    with pytest.raises(InvalidInputError, match="got bytes"):
+        check_path(b"a.csv", "path")
+    with pytest.raises(InvalidInputError, match=r"^path must name a file, got ''$"):
+        check_path("", "path")
