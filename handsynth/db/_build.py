@@ -33,17 +33,19 @@ from __future__ import annotations
 
 import os
 import time
+import warnings
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 import numpy as np
 
-from .._checks import check_integer, check_options, check_side
+from .._checks import check_integer, check_options, check_path, check_side, short_repr
 from .._io import make_folder, os_error_reason
 from ..errors import (
     DatabaseError,
     DatabaseMismatchError,
+    InvalidCameraError,
     InvalidInputError,
     InvalidShapeError,
     OutputError,
@@ -51,7 +53,7 @@ from ..errors import (
 from ..models import PAPER_SIZE, HandShape
 from ..models import pose_set as make_pose_set
 from ..render import CameraMount, as_mount
-from ._entries import DEFAULT_RENDER_SIZE, database_meta, render_entries
+from ._entries import DEFAULT_RENDER_SIZE, check_render_size, database_meta, render_entries
 from ._executors import EXECUTORS, run_tasks
 from ._store import LEFT_SUFFIX, verify, write_database
 
@@ -112,9 +114,10 @@ class BuildOptions:
         check_side(self.side)
         from ..models import POSE_SETS
 
-        if self.pose_set not in POSE_SETS:
+        if not isinstance(self.pose_set, str) or self.pose_set not in POSE_SETS:
             raise InvalidInputError(
-                f"pose_set must be one of {', '.join(POSE_SETS)}, got {self.pose_set!r}")
+                f"pose_set must be one of {', '.join(POSE_SETS)}, got "
+                f"{type(self.pose_set).__name__} {short_repr(self.pose_set)}")
         for name in ("count", "seed"):
             v = check_integer(getattr(self, name), name, minimum=1 if name == "count" else 0)
             object.__setattr__(self, name, v)
@@ -123,16 +126,7 @@ class BuildOptions:
                 f"count must be at most {MAX_COUNT:,} poses per shape (a database is held in "
                 f"memory, 2.8 kB per entry: {self.count:,} would need "
                 f"{self.count * 2832 / 1e9:,.0f} GB), got {self.count}")
-        size = self.render_size
-        try:
-            w, h = (int(s) for s in size)
-            ok = (w, h) == tuple(size) and 16 <= w <= 4096 and 16 <= h <= 4096
-        except (TypeError, ValueError):
-            ok = False
-        if not ok:
-            raise InvalidInputError(
-                f"render_size must be (width, height) with integers in [16, 4096], got {size!r}")
-        object.__setattr__(self, "render_size", (w, h))
+        object.__setattr__(self, "render_size", check_render_size(self.render_size))
 
     def meta(self, shape: HandShape, mount: CameraMount) -> dict:
         """The metadata a database of `shape` built with these options carries."""
@@ -273,12 +267,14 @@ def database_path(out_dir, shape: HandShape | str, side: str = "right") -> Path:
     Raises
     ------
     InvalidInputError
+        `out_dir` is not a folder name (None, a number, an empty name),
         `shape` is neither a HandShape nor a shape name, or `side` is not
         ``"right"`` or ``"left"``.
     """
+    out_dir = check_path(out_dir, "out_dir", kind="folder")
     shape = _as_shape(shape)
     suffix = LEFT_SUFFIX if check_side(side) == "left" else ""
-    return Path(out_dir) / f"{shape.name}{suffix}.h5"
+    return out_dir / f"{shape.name}{suffix}.h5"
 
 
 def check_database_hand(meta, shape: HandShape, side: str, path) -> None:
@@ -337,6 +333,7 @@ def find_database(folder, shape: HandShape | str, side: str = "right") -> Path:
     Raises
     ------
     InvalidInputError
+        `folder` is not a folder name (None, a number, an empty name),
         `shape` is neither a HandShape nor a shape name, or `side` is not
         ``"right"`` or ``"left"``.
     DatabaseError
@@ -344,8 +341,8 @@ def find_database(folder, shape: HandShape | str, side: str = "right") -> Path:
         nothing; or there is no such file (the message lists the database
         files that are there).
     """
+    folder = check_path(folder, "folder", kind="folder")
     path = database_path(folder, shape, side)
-    folder = Path(folder)
     if not folder.is_dir():
         why = "is a file, not a folder" if folder.exists() else "does not exist"
         raise DatabaseError(f"database folder {str(folder)!r} {why}")
@@ -499,6 +496,35 @@ def _as_shapes(shapes) -> list[HandShape]:
     return out
 
 
+def _options_from(option_fields: dict, caller: str) -> BuildOptions:
+    """:class:`BuildOptions` of the option keywords given to `caller`, an unknown one refused."""
+    known = [f.name for f in fields(BuildOptions)]
+    unknown = [k for k in option_fields if k not in known]
+    if unknown:
+        raise InvalidInputError(
+            f"{caller} got an unexpected keyword argument {unknown[0]!r} (the option keywords "
+            f"are {', '.join(known)})")
+    return BuildOptions(**option_fields)
+
+
+def _check_progress(progress) -> None:
+    if progress is not None and not callable(progress):
+        raise InvalidInputError(
+            f"progress must be None or a callable taking a BuildProgress, got "
+            f"{type(progress).__name__} {short_repr(progress)}")
+
+
+def _check_in_view(sil_bits: np.ndarray, mount: CameraMount, shape: HandShape, side: str,
+                   path: Path) -> None:
+    """Refuse the rows of a database whose every silhouette is empty: the mount never sees
+    the hand, and such a database would match every frame equally badly."""
+    if len(sil_bits) and not sil_bits.any():
+        raise InvalidCameraError(
+            f"mount {mount!r} never sees the hand: all {len(sil_bits)} silhouettes of shape "
+            f"{shape.name} ({side} hand) are empty, so {path.name} is not written; place the "
+            "camera where it sees the back of the hand")
+
+
 # --------------------------------------------------------------------------- public
 
 
@@ -539,6 +565,9 @@ def build_databases(out_dir, shapes: Sequence[HandShape | str], mount: CameraMou
     progress : callable, keyword-only, optional
         Called with a :class:`BuildProgress` after each finished chunk and
         once at the end.
+    **option_fields
+        Fields of :class:`BuildOptions`: ``side``, ``pose_set``, ``count``,
+        ``seed``, ``render_size``.
 
     Returns
     -------
@@ -549,8 +578,15 @@ def build_databases(out_dir, shapes: Sequence[HandShape | str], mount: CameraMou
     ------
     InvalidInputError
         Bad shapes, options, workers or executor (the message names it); an
+        `out_dir` that is not a folder name (None, a number, an empty name);
+        a keyword that is not an option field (``build_databases got an
+        unexpected keyword argument 'bogus'``); a `progress` that is neither
+        None nor callable; an
         :class:`~handsynth.errors.InvalidShapeError` for a shape with ratios
         finer than 0.001, which its file name would not tell apart.
+    InvalidCameraError
+        Every silhouette of a shape is empty: `mount` never sees the hand
+        (the message names the mount); that database is not written.
     DatabaseMismatchError
         An existing file under a shape's name holds another shape or the
         other side (:func:`check_database_hand`); it is left as it is.
@@ -561,12 +597,14 @@ def build_databases(out_dir, shapes: Sequence[HandShape | str], mount: CameraMou
         The folder cannot be created or locked, or a database could not be
         written (full disk, read-only folder); finished files stay.
     """
+    out_dir = check_path(out_dir, "out_dir", kind="folder")
     if options is None:
-        options = BuildOptions(**option_fields)
+        options = _options_from(option_fields, "build_databases")
     elif option_fields:
         raise InvalidInputError(
             f"give either options or option keywords, got both (keywords {sorted(option_fields)})")
     options = check_options(options, BuildOptions)
+    _check_progress(progress)
     if workers is None:
         workers = os.cpu_count() or 1
     if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1:
@@ -644,6 +682,7 @@ def _build_locked(out: Path, shape_list, mount, options, workers, executor, chun
                 got = parts.pop(k)
                 chunks = [got[a] for a, _ in bounds]
                 joined = {name: np.concatenate([c[name] for c in chunks]) for name in _STORED}
+                _check_in_view(joined["sil_bits"], mount, shape, options.side, path)
                 write_database(path, meta=meta, **joined)
                 done_shapes += 1
             report()
@@ -683,11 +722,38 @@ def build_database(out_dir, shape: HandShape | str | None = None,
     -------
     pathlib.Path
         The database file.
+
+    Warns
+    -----
+    UserWarning
+        ``built again, replacing an existing file: <why>`` when the file
+        existed but was damaged or built with other parameters (another
+        count, seed or pose set): this function returns only the path, so the
+        replacement is said here (:func:`build_databases` lists it in its
+        summary's ``rebuilt``).
+
+    Raises
+    ------
+    InvalidInputError
+        `out_dir` is not a folder name (None, a number, an empty name); a
+        keyword that is not an option field (``build_database got an
+        unexpected keyword argument 'bogus'``); a `progress` that is neither
+        None nor callable; bad options, shape, workers or executor, as in
+        :func:`build_databases`.
+    InvalidCameraError
+        Every silhouette is empty: `mount` never sees the hand (the message
+        names the mount); nothing is written.
+    DatabaseMismatchError, OutputError, DatabaseError
+        As in :func:`build_databases`.
     """
-    summary = build_databases(out_dir, [check_options(shape, HandShape, name="shape")], mount,
-                              workers=workers,
-                              executor=executor, force=force, progress=progress,
-                              **option_fields)
+    out_dir = check_path(out_dir, "out_dir", kind="folder")
+    shape = check_options(shape, HandShape, name="shape")
+    options = _options_from(option_fields, "build_database")
+    _check_progress(progress)
+    summary = build_databases(out_dir, [shape], mount, options=options, workers=workers,
+                              executor=executor, force=force, progress=progress)
+    for reason in summary.rebuilt.values():
+        warnings.warn(f"built again, replacing an existing file: {reason}", stacklevel=2)
     return summary.paths[0]
 
 

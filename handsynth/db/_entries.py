@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import InvalidInputError
 from ..models import HandShape, as_angles
 from ..render import CameraMount, SilhouetteRasterizer, preprocess
 from ._validation import IMAGE_SIZE
@@ -22,6 +23,26 @@ __all__ = ["DEFAULT_RENDER_SIZE", "database_meta", "render_entries"]
 #: The masks come from :class:`~handsynth.render.SilhouetteRasterizer`
 #: (the same masks as MuJoCo's renderer, tested, at a fraction of the cost).
 DEFAULT_RENDER_SIZE: tuple[int, int] = (720, 480)
+
+
+def check_render_size(size, name: str = "render_size") -> tuple[int, int]:
+    """`size` as ``(width, height)``, two integers in [16, 4096] pixels.
+
+    Raises
+    ------
+    InvalidInputError
+        Anything else (``"720x480"``, three numbers, floats), naming `name` and the whole
+        value.
+    """
+    try:
+        w, h = (int(s) for s in size)
+        ok = (w, h) == tuple(size) and 16 <= w <= 4096 and 16 <= h <= 4096
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:
+        raise InvalidInputError(
+            f"{name} must be (width, height) with integers in [16, 4096], got {size!r}")
+    return w, h
 
 
 def render_entries(angles, shape: HandShape | None = None, mount: CameraMount | None = None, *,
@@ -37,7 +58,8 @@ def render_entries(angles, shape: HandShape | None = None, mount: CameraMount | 
         Standard hand and paper device by default (ignored when `renderer` is given).
     side : {"right", "left"}, keyword-only
     render_size : (int, int), keyword-only
-        (width, height) of the masks before preprocessing.
+        (width, height) of the masks before preprocessing, pixels
+        (:func:`check_render_size`; ignored when `renderer` is given).
     renderer : SilhouetteRasterizer or SilhouetteRenderer, keyword-only, optional
         Reuse an open mask maker (one model load for many calls); a new
         :class:`~handsynth.render.SilhouetteRasterizer` by default.
@@ -53,8 +75,11 @@ def render_entries(angles, shape: HandShape | None = None, mount: CameraMount | 
     a = as_angles(angles)
     if a.ndim == 1:
         a = a[None]
-    r = renderer or SilhouetteRasterizer(shape, mount, side=side, width_px=render_size[0],
-                                         height_px=render_size[1])
+    if renderer is None:
+        w, h = check_render_size(render_size)
+        r = SilhouetteRasterizer(shape, mount, side=side, width_px=w, height_px=h)
+    else:
+        r = renderer
     sils = np.empty((len(a), IMAGE_SIZE, IMAGE_SIZE), dtype=bool)
     keypoints = np.empty((len(a), 21, 3))
     buf = np.zeros((1, r.height_px, r.width_px), dtype=bool)  # one mask buffer for all poses

@@ -11,11 +11,16 @@ from .._checks import check_instance, check_number, check_side
 from ..errors import InvalidCameraError
 from ..models import DORSUM_Z_MM
 
-__all__ = ["MAX_WRIST_CUT_MM", "CameraMount", "as_mount"]
+__all__ = ["MAX_DISTANCE_MM", "MAX_IMAGE_SIDE_PX", "MAX_WRIST_CUT_MM", "CameraMount", "as_mount"]
 
 
 #: Largest wrist cut, mm from the wrist joint centre along the hand.
 MAX_WRIST_CUT_MM = 40.0
+#: Farthest a camera worn on the hand is placed from it: the bound of ``height_mm`` and of
+#: the size of ``thumb_offset_mm`` and ``along_mm``, mm.
+MAX_DISTANCE_MM = 1000.0
+#: Largest image side, pixels (a 16384 x 16384 mask is already 268 MB).
+MAX_IMAGE_SIDE_PX = 16384
 
 
 @dataclass(frozen=True)
@@ -39,15 +44,16 @@ class CameraMount:
     height_mm : float
         Distance of the optical centre above the back of the hand (the dorsum
         over the metacarpal heads, ``DORSUM_Z_MM`` above the hand frame's
-        x-y plane).  Paper: about 120 mm.
+        x-y plane).  Paper: about 120 mm.  Above 0, at most
+        :data:`MAX_DISTANCE_MM` (1000 mm).
     thumb_offset_mm : float
         Offset across the hand toward the thumb side (mirrored for a left
         hand), from the hand axis.  Default 25 mm: over the index metacarpal,
-        "on the thumb side".
+        "on the thumb side".  In [-1000, 1000] mm (:data:`MAX_DISTANCE_MM`).
     along_mm : float
         Offset along the hand from the wrist joint centre toward the
         fingers.  Default 60 mm: over the middle of the metacarpals, where a
-        flexible arm from a wrist support reaches.
+        flexible arm from a wrist support reaches.  In [-1000, 1000] mm.
     tilt_deg : float
         Rotation of the optical axis toward the fingertips (about the hand
         x axis).  0 = perpendicular to the back of the hand.
@@ -56,8 +62,9 @@ class CameraMount:
     fov_deg : float
         Horizontal field of view (across the 720-pixel side).
     width_px, height_px : int
-        Frame size of the device.  Renders at other sizes keep the
-        horizontal field of view and use square pixels.
+        Frame size of the device, 1 to :data:`MAX_IMAGE_SIDE_PX` (16384)
+        pixels a side.  Renders at other sizes keep the horizontal field of
+        view and use square pixels.
     wrist_cut_mm : float
         Position along the hand (from the wrist joint centre) of the wrist
         cut: preprocessing removes what the camera sees of the hand frame's
@@ -90,8 +97,14 @@ class CameraMount:
             if f.name == "wrist_cut_mm" and v is None:
                 continue
             check_number(v, f"CameraMount.{f.name}", error=InvalidCameraError)
-        if self.height_mm <= 0:
-            raise InvalidCameraError(f"CameraMount.height_mm must be > 0, got {self.height_mm!r}")
+        if not 0.0 < self.height_mm <= MAX_DISTANCE_MM:
+            raise InvalidCameraError(f"CameraMount.height_mm must be in (0, {MAX_DISTANCE_MM:g}] mm, "
+                                     f"got {self.height_mm!r}")
+        for n in ("thumb_offset_mm", "along_mm"):
+            v = getattr(self, n)
+            if not -MAX_DISTANCE_MM <= v <= MAX_DISTANCE_MM:
+                raise InvalidCameraError(f"CameraMount.{n} must be in [-{MAX_DISTANCE_MM:g}, "
+                                         f"{MAX_DISTANCE_MM:g}] mm, got {v!r}")
         if not 1.0 <= self.fov_deg <= 170.0:
             raise InvalidCameraError(f"CameraMount.fov_deg must be in [1, 170], got {self.fov_deg!r}")
         if self.wrist_cut_mm is not None and not -100.0 <= self.wrist_cut_mm <= MAX_WRIST_CUT_MM:
@@ -102,8 +115,9 @@ class CameraMount:
             raise InvalidCameraError(f"CameraMount.tilt_deg must be in [-80, 80], got {self.tilt_deg!r}")
         for n in ("width_px", "height_px"):
             v = getattr(self, n)
-            if int(v) != v or v < 1:
-                raise InvalidCameraError(f"CameraMount.{n} must be a positive integer, got {v!r}")
+            if int(v) != v or not 1 <= v <= MAX_IMAGE_SIDE_PX:
+                raise InvalidCameraError(f"CameraMount.{n} must be an integer in [1, "
+                                         f"{MAX_IMAGE_SIDE_PX}] pixels, got {v!r}")
             object.__setattr__(self, n, int(v))
 
     # -- presets -----------------------------------------------------------------
@@ -192,12 +206,20 @@ class CameraMount:
         return math.degrees(2 * math.atan(0.5 * h / f))
 
     def size(self, width_px: int | None = None, height_px: int | None = None) -> tuple[int, int]:
-        """Validated (width, height) of a render; the device's frame size by default."""
+        """Validated (width, height) of a render; the device's frame size by default.
+
+        Raises
+        ------
+        InvalidCameraError
+            A size that is not an integer in [1, :data:`MAX_IMAGE_SIDE_PX`] (16384), naming it.
+        """
         w = self.width_px if width_px is None else width_px
         h = self.height_px if height_px is None else height_px
         for n, v in (("width_px", w), ("height_px", h)):
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
-                raise InvalidCameraError(f"image {n} must be a positive integer, got {v!r}")
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) \
+                    or not 1 <= v <= MAX_IMAGE_SIDE_PX:
+                raise InvalidCameraError(f"image {n} must be a positive integer at most "
+                                         f"{MAX_IMAGE_SIDE_PX}, got {v!r}")
         return int(w), int(h)
 
     def project(self, points_m: np.ndarray, *, side: str = "right",

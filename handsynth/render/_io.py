@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._checks import check_path
 from .._io import write_bytes
 from ..errors import InvalidInputError
 
@@ -32,12 +33,13 @@ def read_image(path: str | os.PathLike, *, what: str = "image") -> np.ndarray:
     Raises
     ------
     InvalidInputError
-        No such file, not an image OpenCV can decode, or pixels that are not
-        8- or 16-bit (the message names the file and `what` it is).
+        `path` is not a file name (None, a number, an empty name), no such
+        file, not an image OpenCV can decode, or pixels that are not 8- or
+        16-bit (the message names the file and `what` it is).
     """
     import cv2
 
-    path = Path(path)
+    path = check_path(path, "path")
     img = cv2.imread(str(path), cv2.IMREAD_UNCHANGED) if path.is_file() else None
     if img is None:
         raise InvalidInputError(f"cannot read the {what} {str(path)!r}: no such file or not an "
@@ -63,7 +65,7 @@ def write_png(path: str | os.PathLike, rgb: np.ndarray, *, inputs=()) -> Path:
     Parameters
     ----------
     path : str or os.PathLike
-        The file, written as PNG whatever its suffix; its folder must exist.
+        The file, whose name must end in ``.png`` (any case); its folder must exist.
         The image appears under this name only when complete (written under
         ``<path>.tmp-<pid>`` first, then renamed); a symbolic link is written
         through to the file it names.
@@ -82,15 +84,20 @@ def write_png(path: str | os.PathLike, rgb: np.ndarray, *, inputs=()) -> Path:
     Raises
     ------
     InvalidInputError
-        `rgb` is not a uint8 or bool image of one of those shapes (the
-        message names it, its dtype and its shape).
+        `path` is not a file name (None, a number, an empty name) or does not
+        end in ``.png`` (a PNG under a ``.jpg`` name would mislead its readers),
+        naming it; `rgb` is not a uint8 or bool image of one of those shapes
+        (the message names it, its dtype and its shape).
     OutputError
         `path` cannot be written (missing folder, full disk...) or is one of
         `inputs`; nothing is left under its name.
     """
     import cv2
 
-    path = Path(path)
+    path = check_path(path, "path")
+    if path.suffix.lower() != ".png":
+        raise InvalidInputError(f"path must name a .png file (write_png writes PNG), got "
+                                f"{str(path)!r}")
     img = np.asarray(rgb)
     if img.dtype == bool:
         img = img.astype(np.uint8) * 255

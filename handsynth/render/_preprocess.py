@@ -58,6 +58,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from .._checks import check_integer, short_repr
 from ..errors import InvalidInputError
 from ..models import DORSUM_Z_MM
 from ._camera import CameraMount, as_mount
@@ -72,8 +73,10 @@ from ._runs import (
 )
 
 __all__ = [
+    "MAX_SIZE",
     "MIN_CONTRAST",
     "MIN_FRAME_SIDE",
+    "MIN_SIZE",
     "OTSU_STEP",
     "binarize",
     "check_frame",
@@ -304,6 +307,20 @@ def _rows_kept(mount: CameraMount | None, side: str, w: int, h: int):
     return lo, hi
 
 
+def _check_mask(mask) -> np.ndarray:
+    """`mask` refused unless it is a non-empty 2-D bool or uint8 numpy array."""
+    if not isinstance(mask, np.ndarray):
+        raise InvalidInputError(f"mask must be a 2-D bool or uint8 numpy array, got "
+                                f"{type(mask).__name__} {short_repr(mask)}")
+    if mask.ndim != 2 or mask.dtype not in (np.bool_, np.uint8):
+        raise InvalidInputError(f"mask must be a 2-D bool or uint8 numpy array, got dtype "
+                                f"{mask.dtype} shape {mask.shape}")
+    if mask.size == 0:
+        raise InvalidInputError(f"mask must not be empty (at least 1x1 pixels), got shape "
+                                f"{mask.shape}")
+    return mask
+
+
 def largest_component(mask: np.ndarray) -> np.ndarray:
     """The largest 8-connected foreground component of `mask` (all False if none).
 
@@ -312,14 +329,22 @@ def largest_component(mask: np.ndarray) -> np.ndarray:
 
     Parameters
     ----------
-    mask : ndarray, shape (H, W), bool
+    mask : ndarray, shape (H, W), bool or uint8
+        Foreground where True (nonzero).
 
     Returns
     -------
     ndarray, shape (H, W), bool
+
+    Raises
+    ------
+    InvalidInputError
+        `mask` is not a numpy array, not 2-D, empty (a side of 0 pixels), or
+        of a dtype other than bool or uint8; the message names it.
     """
     import cv2
 
+    mask = _check_mask(mask)
     n, labels = cv2.connectedComponents(mask.view(np.uint8), connectivity=8)
     if n <= 1:
         return np.zeros(mask.shape, dtype=bool)
@@ -351,15 +376,27 @@ def crop_resize(mask: np.ndarray, *, size: int = 64) -> np.ndarray:
 
     Parameters
     ----------
-    mask : ndarray, shape (H, W), bool
+    mask : ndarray, shape (H, W), bool or uint8
+        Foreground where True (nonzero).
     size : int, keyword-only
-        Side of the result in pixels (64 in the paper).
+        Side of the result in pixels (64 in the paper), 8 to 4096 (``MIN_SIZE``
+        to ``MAX_SIZE``), as for :func:`preprocess`.
 
     Returns
     -------
     ndarray, shape (size, size), bool
         All False when `mask` is empty.
+
+    Raises
+    ------
+    InvalidInputError
+        `mask` is not a non-empty 2-D bool or uint8 numpy array, or `size` is
+        not an integer in [8, 4096]; the message names it.
     """
+    size = _check_size(size)
+    mask = _check_mask(mask)
+    if mask.dtype != np.bool_:
+        mask = mask != 0
     out = np.zeros((size, size), dtype=bool)
     rows = np.flatnonzero(mask.any(axis=1))
     if rows.size == 0:
@@ -373,10 +410,14 @@ def crop_resize(mask: np.ndarray, *, size: int = 64) -> np.ndarray:
     return wy @ box @ wx.T >= 0.5 - 1e-9
 
 
+#: Smallest and largest side, pixels, of a silhouette (`size` of :func:`preprocess` and
+#: :func:`crop_resize`); 4096 x 4096 is already 16 MB of mask.
+MIN_SIZE = 8
+MAX_SIZE = 4096
+
+
 def _check_size(size) -> int:
-    if isinstance(size, bool) or not isinstance(size, (int, np.integer)) or size < 8:
-        raise InvalidInputError(f"size must be an integer >= 8, got {size!r}")
-    return int(size)
+    return check_integer(size, "size", minimum=MIN_SIZE, maximum=MAX_SIZE)
 
 
 def preprocess(frame: np.ndarray, mount: CameraMount | None = None, *, side: str = "right",
@@ -392,7 +433,7 @@ def preprocess(frame: np.ndarray, mount: CameraMount | None = None, *, side: str
         by default.  The frame may have any size: the cut is computed for it.
     side : {"right", "left"}, keyword-only
     size : int, keyword-only
-        Output side, 64 in the paper.
+        Output side, 64 in the paper; 8 to 4096 (``MIN_SIZE`` to ``MAX_SIZE``).
     threshold : int, keyword-only, optional
         Fixed grey threshold for uint8 frames (``grey > threshold`` is hand);
         Otsu's threshold of the frame's sample by default (see :func:`binarize`).
@@ -405,8 +446,8 @@ def preprocess(frame: np.ndarray, mount: CameraMount | None = None, *, side: str
     Raises
     ------
     InvalidInputError
-        A frame that is not an image (:func:`check_frame`), a `size` under
-        8, a `threshold` that is not a finite number, or a `mount` that is
+        A frame that is not an image (:func:`check_frame`), a `size` that
+        is not an integer in [8, 4096], a `threshold` that is not a finite number, or a `mount` that is
         not a :class:`CameraMount` (:class:`~handsynth.errors.InvalidCameraError`);
         the message names the argument.
     """

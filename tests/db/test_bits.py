@@ -6,6 +6,7 @@ from handsynth.db import (
     count_outside,
     count_outside_batch,
     pack_mask,
+    popcount64,
     popcount_bits,
     unpack_mask,
 )
@@ -74,3 +75,58 @@ def test_bits_reject_wrong_dtype():
         unpack_mask(np.zeros(63, np.uint64))
     with pytest.raises(InvalidInputError, match=r"mask.*\(64, 65\)"):
         pack_mask(np.zeros((64, 65), bool))
+
+
+_ONES = np.full(64, 2**64 - 1, np.uint64)
+
+
+@pytest.mark.parametrize("a, b, words", [
+    # issue: lengths 64 and 32 gave 3501, the kernel reading past the shorter array
+    (_ONES, np.zeros(32, np.uint64), r"b_bits must be a uint64 numpy array of shape \(64,\), got "
+                                     r"dtype uint64 shape \(32,\)"),
+    (np.zeros(32, np.uint64), _ONES, r"a_bits .*shape \(32,\)"),
+    (_ONES.astype(float), _ONES, r"a_bits .*got dtype float64 shape \(64,\)"),  # was: TypingError
+    (_ONES, _ONES.astype(np.int64), r"b_bits .*got dtype int64"),
+    (_ONES.reshape(8, 8), _ONES.reshape(8, 8), r"a_bits .*shape \(8, 8\)"),
+    ([1] * 64, _ONES, r"a_bits must be a uint64 numpy array of shape \(64,\), got list \[1, 1"),
+])
+def test_count_outside_refuses_what_is_not_one_packed_mask(a, b, words):
+    with pytest.raises(InvalidInputError, match=words):
+        count_outside(a, b)
+
+
+def test_count_outside_batch_refuses_stacks_that_do_not_broadcast():
+    with pytest.raises(InvalidInputError, match=r"a_bits and b_bits must broadcast .*got shapes "
+                                                r"\(3, 64\) and \(4, 64\)"):
+        count_outside_batch(np.zeros((3, 64), np.uint64), np.zeros((4, 64), np.uint64))
+
+
+@pytest.mark.parametrize("x, words", [
+    (1.5, r"x must be an integer, got 1.5"),  # was: a numba TypingError
+    (-1, r"x must be an integer >= 0 and < 2\*\*64 \(one uint64 word\), got -1"),  # was: 64
+    (2**64, r"x must be an integer >= 0 and < 2\*\*64 .*got 18446744073709551616"),
+    (True, r"x must be an integer, got True \(bool\)"),
+    ("3", r"x must be an integer, got '3' \(str\)"),
+    (np.float64(3.0), r"x must be an integer, got np.float64\(3.0\)"),
+])
+def test_popcount64_refuses_what_is_not_one_word(x, words):
+    with pytest.raises(InvalidInputError, match=words):
+        popcount64(x)
+
+
+def test_popcount64_counts_words_and_stays_a_kernel_in_compiled_code():
+    from numba import njit
+
+    assert [popcount64(v) for v in (0, 5, np.uint64(7), np.int64(3), 2**64 - 1)] == [0, 2, 3, 2, 64]
+    assert isinstance(popcount64(np.uint64(2**63)), int)
+
+    @njit
+    def total(a, b):  # the public names called from compiled code (as the search does)
+        t = 0
+        for r in range(a.shape[0]):
+            t += popcount64(a[r])
+        return t + count_outside(a, b)
+
+    b = np.zeros(64, np.uint64)
+    b[0] = 1
+    assert total(_ONES, b) == 2 * 4096 - 1

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import re
 
 import numpy as np
 import pytest
@@ -227,3 +228,64 @@ def test_shape_names_and_bad_arguments_of_path_functions(tmp_path):
     with pytest.raises(DatabaseError, match=r"no database for the right hand of shape "
                                             r"L1.000_W1.000_P1.000_T1.000 in"):
         find_database(tmp_path, SHAPE.name)
+
+
+@pytest.mark.parametrize("call, words", [
+    (lambda d: build_database(None), r"out_dir must be a folder name \(str or path\), got None"),
+    (lambda d: build_databases(None, [SHAPE], count=10), r"out_dir must be a folder name .*got None"),
+    (lambda d: build_database(3, count=10), r"out_dir must be a folder name .*got int 3"),
+    (lambda d: database_path(None, SHAPE), r"out_dir must be a folder name .*got None"),
+    (lambda d: build_database(d, count=10, bogus=1),
+     r"^build_database got an unexpected keyword argument 'bogus' \(the option keywords are side, "),
+    (lambda d: build_databases(d, [SHAPE], count=10, bogus=1),
+     r"^build_databases got an unexpected keyword argument 'bogus'"),
+    (lambda d: build_database(d, count=10, progress="x"),
+     r"progress must be None or a callable taking a BuildProgress, got str 'x'"),
+    (lambda d: build_databases(d, [SHAPE], count=10, progress=3), r"progress must be .*got int 3"),
+])
+def test_build_arguments_are_refused_by_name_before_any_file(tmp_path, call, words):
+    # issue: None gave a raw pathlib TypeError, bogus=1 named BuildOptions.__init__, and
+    # progress="x" failed deep inside with "'str' object is not callable"
+    with pytest.raises(InvalidInputError, match=words):
+        call(tmp_path)
+    assert not any(tmp_path.iterdir())
+
+
+def test_find_database_refuses_a_folder_that_is_not_a_name(tmp_path):
+    from handsynth.db import find_database
+
+    with pytest.raises(InvalidInputError, match=r"folder must be a folder name .*got None"):
+        find_database(None, SHAPE)
+    with pytest.raises(InvalidInputError, match=r"folder must name a folder, got ''"):
+        find_database("", SHAPE)
+
+
+@pytest.mark.parametrize("pose_set, words", [(["paper"], r"got list \['paper'\]"),
+                                             ({"paper": 1}, r"got dict \{'paper': 1\}"),
+                                             ("yoga", r"got str 'yoga'")])
+def test_a_pose_set_that_is_not_a_name_is_refused(pose_set, words):
+    # issue: BuildOptions(pose_set=["paper"]) said "unhashable type: 'list'"
+    with pytest.raises(InvalidInputError, match=rf"pose_set must be one of paper, natural, {words}"):
+        BuildOptions(pose_set=pose_set)
+
+
+def test_a_mount_that_never_sees_the_hand_writes_no_database(tmp_path):
+    # issue: a mount allowed by CameraMount but with the hand out of view wrote a database
+    # whose every silhouette was empty
+    from handsynth.errors import InvalidCameraError
+
+    mount = CameraMount(thumb_offset_mm=1000.0)
+    with pytest.raises(InvalidCameraError, match=r"mount CameraMount\(.*thumb_offset_mm=1000.0.* "
+                                                 r"never sees the hand: all 6 silhouettes of "
+                                                 r"shape L1.000_W1.000_P1.000_T1.000 \(right "
+                                                 r"hand\) are empty"):
+        build_database(tmp_path, SHAPE, mount, count=6, render_size=(72, 48))
+    assert not list(tmp_path.glob("*.h5*"))
+
+
+@pytest.mark.parametrize("size", ["720x480", (720, 480, 3), (720.5, 480), (8, 480), None])
+def test_render_entries_refuses_a_render_size_that_is_not_two_pixel_counts(size):
+    # "720x480" was refused as "got '7'"; (720, 480, 3) was taken
+    with pytest.raises(InvalidInputError, match=r"render_size must be \(width, height\) with "
+                                                r"integers in \[16, 4096\], got " + re.escape(repr(size))):
+        render_entries(np.zeros((1, 20)), render_size=size)

@@ -78,3 +78,33 @@ def test_a_wrist_cut_that_removes_the_hand_is_refused(cut):
         CameraMount(wrist_cut_mm=cut)
     assert CameraMount(wrist_cut_mm=40.0).wrist_cut_mm == 40.0
     assert CameraMount(wrist_cut_mm=None).wrist_cut_mm is None
+
+
+@pytest.mark.parametrize("field, value, words", [
+    ("width_px", 10**30, r"width_px must be an integer in \[1, 16384\] pixels, got 10{30}"),
+    ("width_px", 10**8, r"width_px must be an integer in \[1, 16384\] pixels, got 100000000"),
+    ("height_px", 16385, r"height_px must be an integer in \[1, 16384\] pixels, got 16385"),
+    ("height_mm", 1000.5, r"height_mm must be in \(0, 1000\] mm, got 1000.5"),
+    ("height_mm", 0, r"height_mm must be in \(0, 1000\] mm, got 0"),
+    ("thumb_offset_mm", -1e4, r"thumb_offset_mm must be in \[-1000, 1000\] mm, got -10000.0"),
+    ("along_mm", 1e6, r"along_mm must be in \[-1000, 1000\] mm, got 1000000.0"),
+])
+def test_mount_sizes_and_distances_have_upper_bounds(field, value, words):
+    # issue: width_px=10**30 was stored as a 31-digit integer, 10**8 gave a raw MemoryError
+    # in the rasterizer; no distance had an upper bound
+    with pytest.raises(InvalidCameraError, match=rf"CameraMount\.{words}"):
+        CameraMount(**{field: value})
+
+
+def test_mount_bounds_themselves_are_accepted():
+    m = CameraMount(width_px=16384, height_px=1, height_mm=1000.0, thumb_offset_mm=-1000.0,
+                    along_mm=1000.0)
+    assert (m.width_px, m.height_px, m.height_mm) == (16384, 1, 1000.0)
+    assert m.size(16384, 16384) == (16384, 16384)
+
+
+@pytest.mark.parametrize("size", [(10**8, 480), (720, 16385)])
+def test_a_render_size_past_the_largest_image_side_is_refused(size):
+    with pytest.raises(InvalidCameraError, match=r"_px must be a positive integer at most 16384, "
+                                                 rf"got {max(size)}"):
+        CameraMount().size(*size)

@@ -62,3 +62,21 @@ def test_read_image_reads_what_write_png_wrote(tmp_path):
     np.testing.assert_array_equal(read_image(tmp_path / "deep.png"), rgb[..., 0])
     with pytest.raises(InvalidInputError, match=r"cannot read the frame .*nothing\.png"):
         read_image(tmp_path / "nothing.png", what="frame")
+
+
+@pytest.mark.parametrize("name", ["x.jpg", "x.PNG.bak", "x", "x.png.tmp"])
+def test_write_png_refuses_a_name_that_is_not_a_png(tmp_path, name):
+    # issue: write_png("x.jpg", img) wrote PNG bytes under a .jpg name
+    with pytest.raises(InvalidInputError, match=rf"path must name a \.png file .*got "
+                                                rf"'{tmp_path / name}'"):
+        write_png(tmp_path / name, np.zeros((4, 4), np.uint8))
+    assert not (tmp_path / name).exists()
+    assert write_png(str(tmp_path / "upper.PNG"), np.zeros((4, 4), np.uint8)).is_file()
+
+
+@pytest.mark.parametrize("path, words", [(None, "got None"), (3, "got int 3"), ("", "got ''")])
+def test_read_image_and_write_png_refuse_a_path_that_is_not_a_name(path, words):
+    # issue: read_image(None) gave a raw pathlib TypeError
+    for call in (lambda: read_image(path), lambda: write_png(path, np.zeros((4, 4), np.uint8))):
+        with pytest.raises(InvalidInputError, match=rf"path must .*{words}"):
+            call()

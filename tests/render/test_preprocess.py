@@ -296,3 +296,45 @@ def test_a_three_channel_bool_frame_is_refused():
                                                     r"\(H, W\), got \(48, 64, 3\)"):
             fn(frame)
     assert preprocess(frame[..., 0], CameraMount()).any()  # its one channel is fine
+
+
+# ---- arguments of the plain steps
+
+@pytest.mark.parametrize("mask, words", [
+    (np.zeros((0, 5), bool), r"mask must not be empty .*got shape \(0, 5\)"),  # was: a segfault
+    (np.zeros((5, 0), bool), r"mask must not be empty .*got shape \(5, 0\)"),
+    (np.zeros((0, 0), bool), r"mask must not be empty .*got shape \(0, 0\)"),
+    (np.zeros((5, 5, 3), np.uint8), r"mask must be a 2-D bool or uint8 numpy array, got dtype uint8 "
+                                    r"shape \(5, 5, 3\)"),
+    (np.zeros((5, 5, 3), bool), r"mask must be a 2-D .*got dtype bool shape \(5, 5, 3\)"),
+    (np.zeros((5, 5), np.float64), r"mask must be a 2-D .*got dtype float64 shape \(5, 5\)"),
+    ([[True, False]], r"mask must be a 2-D bool or uint8 numpy array, got list \[\[True, False\]\]"),
+    (None, "mask must be a 2-D bool or uint8 numpy array, got NoneType None"),
+])
+def test_largest_component_and_crop_resize_refuse_a_mask_that_is_not_one(mask, words):
+    # issue: an empty mask killed the interpreter in largest_component; a 3-D one gave a
+    # raw cv2.error there, and crop_resize took a 3-D bool mask as a 64x64 silhouette
+    for fn in (largest_component, crop_resize):
+        with pytest.raises(InvalidInputError, match=words):
+            fn(mask)
+
+
+@pytest.mark.parametrize("size", [0, -4, 7, 4097, 100000, 8.0, "64", True, None])
+def test_crop_resize_and_preprocess_share_one_size_rule(size):
+    # issue: crop_resize(size=0) gave a (0, 0) array, size=-4 a raw numpy error, and
+    # preprocess(size=100000) a raw MemoryError
+    m = np.zeros((20, 20), bool)
+    m[5:15, 5:15] = True
+    for fn in (crop_resize, preprocess):
+        with pytest.raises(InvalidInputError, match=rf"size must be an integer >= 8 and <= 4096, "
+                                                    rf"got {size!r}"):
+            fn(m, size=size)
+
+
+def test_small_masks_and_the_size_bounds_are_accepted():
+    m = np.zeros((3, 4), bool)
+    m[1, 1:3] = True
+    assert largest_component(m).sum() == 2
+    assert crop_resize(m, size=8).sum() == 32  # a 1 x 2 bar fills half of 8 x 8
+    assert crop_resize(m.astype(np.uint8) * 255, size=8).sum() == 32  # uint8: nonzero is hand
+    assert crop_resize(m, size=np.int64(4096)).shape == (4096, 4096)
