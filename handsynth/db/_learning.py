@@ -35,7 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._checks import check_number, check_options
+from .._checks import check_number, check_options, check_path
 from .._io import atomic_open, make_folder
 from ..errors import DatabaseCorruptError, DatabaseError, InvalidInputError
 from ..models import GRID_LEVELS, JOINT_LIMITS_DEG, HandShape, natural_pose_set
@@ -424,12 +424,16 @@ def learning_set(folder, options: LearningSetOptions | None = None, *,
 
     Raises
     ------
+    InvalidInputError
+        `folder` is not a folder name (None, a number, ``""``), or an option
+        of the wrong type or value.
     DatabaseError
-        The folder cannot be created or written.
+        The folder cannot be created or written (a file in the way, a
+        read-only folder): refused before the set is rendered.
     """
+    folder = check_path(folder, "folder", kind="folder")
     opts = check_options(options, LearningSetOptions)
     mount = as_mount(mount)
-    folder = Path(folder)
     key = hashlib.sha256(json.dumps([opts.digest(), mount.as_dict(), side],
                                     sort_keys=True).encode()).hexdigest()[:16]
     path = folder / f"learning_{key}.npz"
@@ -438,8 +442,9 @@ def learning_set(folder, options: LearningSetOptions | None = None, *,
             return _read(path, opts, mount, side)
         except DatabaseCorruptError:
             pass
+    # checked before the rendering (minutes with the defaults), not after it
+    make_folder(folder, what="learning-set folder", writable=True, error=DatabaseError)
     out = render_learning_set(opts, mount=mount, side=side, progress=progress)
-    make_folder(folder, what="learning-set folder", error=DatabaseError)
     with atomic_open(path, "wb", what="learning set", error=DatabaseError) as f:
         np.savez(f, grids=out.grids, rest_grids=out.rest_grids, hand=out.hand,
                  angles=out.angles, rest_angles=out.rest_angles,

@@ -65,8 +65,16 @@ from pathlib import Path
 
 import numpy as np
 
-from .._checks import check_instance, check_integer, check_number, check_options, check_side
-from .._io import atomic_open, os_error_reason
+from .._checks import (
+    check_instance,
+    check_integer,
+    check_number,
+    check_options,
+    check_path,
+    check_side,
+    short_repr,
+)
+from .._io import atomic_open, make_folder, os_error_reason
 from ..db import LearningSet, LearningSetOptions, learning_set
 from ..errors import (
     DatabaseCorruptError,
@@ -85,7 +93,7 @@ from ..render import (
     fit_skin_colour,
     skin_mask,
 )
-from ._lookup import PoseEstimate
+from ._lookup import PoseEstimate, check_frame_ratio
 from ._moved import MoveCheck
 from ._shipped import shipped_path
 
@@ -173,6 +181,17 @@ class LearnedOptions:
         their float32 codes either way, so only which are found can differ.
         Read when frames are read (not part of what is learnt).
     seed : int
+
+    Raises
+    ------
+    InvalidInputError
+        A field of the wrong type or range, naming it and the value
+        received: a choice not among its values; a count that is not an
+        integer in range; `learning_rate` or `weight_decay` or `ridge` that is not
+        a finite number (``"0.01"``, ``inf``, ``True``: a flag is not a
+        number) above 0 (`learning_rate`) or at least 0; `hidden` that is not
+        a tuple of positive integers; `use_rest` or `quantize` that is not
+        True or False.
     """
 
     kind: str = "fingers"
@@ -203,11 +222,11 @@ class LearnedOptions:
         if self.local not in ("linear", "mean"):
             raise InvalidInputError(f"LearnedOptions.local must be 'linear' or 'mean', "
                                     f"got {self.local!r}")
-        if not isinstance(self.quantize, (bool, np.bool_)):
-            raise InvalidInputError(f"LearnedOptions.quantize must be True or False, "
-                                    f"got {self.quantize!r}")
-        if not (isinstance(self.ridge, (int, float)) and self.ridge >= 0):
-            raise InvalidInputError(f"LearnedOptions.ridge must be a number >= 0, got {self.ridge!r}")
+        for name in ("use_rest", "quantize"):
+            if not isinstance(getattr(self, name), (bool, np.bool_)):
+                raise InvalidInputError(f"LearnedOptions.{name} must be True or False, "
+                                        f"got {getattr(self, name)!r}")
+        check_number(self.ridge, "LearnedOptions.ridge", minimum=0)
         if self.kind not in ("mlp", "knn", "fingers"):
             raise InvalidInputError(f"LearnedOptions.kind must be 'mlp', 'knn' or 'fingers', "
                                     f"got {self.kind!r}")
@@ -215,12 +234,16 @@ class LearnedOptions:
             check_integer(getattr(self, name), f"LearnedOptions.{name}", minimum=0)
         for name in ("components", "epochs", "batch", "k"):
             check_integer(getattr(self, name), f"LearnedOptions.{name}", minimum=1)
-        object.__setattr__(self, "hidden", tuple(int(h) for h in self.hidden))
-        if not self.hidden or min(self.hidden) < 1:
-            raise InvalidInputError(f"LearnedOptions.hidden must be positive widths, "
-                                    f"got {self.hidden!r}")
-        if not (self.learning_rate > 0 and self.weight_decay >= 0):
-            raise InvalidInputError("LearnedOptions.learning_rate must be > 0 and weight_decay >= 0")
+        hidden = self.hidden
+        if not isinstance(hidden, (tuple, list)) or not hidden:
+            raise InvalidInputError(
+                f"LearnedOptions.hidden must be a tuple of positive integers (the widths of the "
+                f"hidden layers), got {type(hidden).__name__} {short_repr(hidden)}")
+        for i, width in enumerate(hidden):
+            check_integer(width, f"LearnedOptions.hidden[{i}]", minimum=1)
+        object.__setattr__(self, "hidden", tuple(int(h) for h in hidden))
+        check_number(self.learning_rate, "LearnedOptions.learning_rate", above=0)
+        check_number(self.weight_decay, "LearnedOptions.weight_decay", minimum=0)
 
     def digest(self) -> str:
         """Hash of the options that shape what is learnt (the cache's name).
@@ -687,8 +710,11 @@ class LearnedEstimator:
         ------
         InvalidInputError
             The frame shows no hand, or is not an image; ``"colour"`` with a
-            rest frame that is not a colour frame; an unknown `segment`.
+            rest frame that is not a colour frame; an unknown `segment`;
+            `check_moved` that is not a bool (``"no"``, 0, None), before the
+            frame is read.
         """
+        check_instance(check_moved, bool, name="check_moved")
         if not isinstance(segment, SkinColour) and segment not in ("auto", "brightness", "colour"):
             raise InvalidInputError(f"segment must be 'auto', 'brightness' or 'colour', "
                                     f"got {segment!r}")
@@ -804,20 +830,14 @@ class LearnedEstimator:
         ------
         InvalidInputError
             A frame whose width-to-height ratio is not the device's (the grid's
-            cells would fall on other parts of the view), or not an image.
+            cells would fall on other parts of the view), or not an image
+            (:func:`~handsynth.estimate._lookup.check_frame_ratio`).
         """
-        shape = np.shape(frame)
-        if len(shape) in (2, 3) and shape[0] > 0 and shape[1] > 0:
-            want = self.mount.width_px / self.mount.height_px
-            if abs(shape[1] / shape[0] - want) > 0.01 * want:
-                raise InvalidInputError(
-                    f"frame is {shape[1]}x{shape[0]} pixels; this estimator learnt the "
-                    f"device's {self.mount.width_px}x{self.mount.height_px} view: give frames "
-                    "of that width-to-height ratio (scaled, not cropped)")
-        if self._mirror and len(shape) in (2, 3):
-            frame = np.asarray(frame)[::-1]
+        frame = check_frame_ratio(frame, self.mount, view="this estimator learnt")
+        if self._mirror:
+            frame = frame[::-1]
         mount, side = self._learnt_view
-        if self._skin is not None and len(shape) == 3 and getattr(frame, "dtype", None) == np.uint8:
+        if self._skin is not None and frame.ndim == 3 and frame.dtype == np.uint8:
             frame = skin_mask(frame, self._skin)
         c = coverage(frame, mount, side=side, cells=self.cells)
         return np.rint(c * 255).astype(np.uint8)
@@ -1210,7 +1230,18 @@ def learned_estimator(folder, options: LearnedOptions | None = None, *,
     shipped : bool, keyword-only
         Read a shipped estimator of these options when there is one (default)
         instead of learning it.
+
+    Raises
+    ------
+    InvalidInputError
+        `folder` is not a folder name (None, a number, ``""``), or an option
+        of the wrong type or value.
+    DatabaseError
+        The estimator has to be learnt and `folder` cannot be created or
+        written into (a file in the way, a read-only folder): refused before
+        the learning set is rendered.
     """
+    folder = check_path(folder, "folder", kind="folder")
     opts = check_options(options, LearnedOptions)
     data = check_options(data, LearningSetOptions, name="data")
     mount = as_mount(mount)
@@ -1218,7 +1249,7 @@ def learned_estimator(folder, options: LearnedOptions | None = None, *,
     if side == "left":
         return learned_estimator(folder, opts, data=data, mount=mount.mirrored(), side="right",
                                  progress=progress, shipped=shipped).mirrored()
-    path = Path(folder) / learned_file_name(opts, data, mount, side)
+    path = folder / learned_file_name(opts, data, mount, side)
     say = progress or (lambda _line: None)
     if path.is_file():
         try:
@@ -1234,6 +1265,8 @@ def learned_estimator(folder, options: LearnedOptions | None = None, *,
         else:
             say(f"{opts.kind} ({path.name}): shipped with handsynth")
             return est
+    # checked before minutes of rendering and learning, not when the result is saved
+    make_folder(folder, what="learnt-estimator folder", writable=True, error=DatabaseError)
     say(f"learning set: {data.hands} hands x {data.poses_per_hand} frames")
     ls = learning_set(folder, data, mount=mount, side=side)
     say(f"learning {opts.kind}")

@@ -11,6 +11,7 @@ and the same features (:func:`handsynth.db.extract_features`).
 from __future__ import annotations
 
 import copy
+import inspect
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -18,7 +19,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from .._checks import check_instance, check_options, check_side
+from .._checks import check_instance, check_options, check_path, check_side
 from ..db import (
     BuildOptions,
     Database,
@@ -31,13 +32,70 @@ from ..db import (
 )
 from ..errors import DatabaseError, InvalidInputError
 from ..models import JOINT_NAMES, HandMeasurements, HandShape
-from ..render import CameraMount, as_mount, preprocess
+from ..render import CameraMount, as_mount, check_frame, preprocess
 from ._calibration import Calibration, reference_silhouette, select_shape_from_frame
 from ._masked import masked_band_areas, masked_search
 from ._search import SearchOptions, SearchTables, search
 from ._selection import SelectionOptions, select_shape
 
 __all__ = ["PoseEstimate", "PoseEstimator", "PoseLookup"]
+
+#: Largest relative difference of a frame's width-to-height ratio from the device's
+#: (:func:`check_frame_ratio`): a frame scaled to another size stays within it.
+FRAME_RATIO_TOLERANCE = 0.01
+
+#: Who needs the device's view, in :func:`check_frame_ratio`'s message for a lookup.
+_LOOKUP_VIEW = "this lookup's database holds"
+
+
+def check_frame_ratio(frame, mount: CameraMount, *, view: str) -> np.ndarray:
+    """`frame`, refused unless it is an image of the device's width-to-height ratio.
+
+    A frame of another ratio (a portrait frame, a 4:3 webcam for a 3:2
+    device) is not the device's view: read as it, it would be stretched and
+    matched wrong with no sign of it.  Frames of any size with the device's
+    ratio (within :data:`FRAME_RATIO_TOLERANCE`) are the same view scaled.
+
+    Parameters
+    ----------
+    frame : object
+        What was given as a frame.
+    mount : CameraMount
+        The device; its ``width_px`` and ``height_px`` give the ratio.
+    view : str
+        Who needs the device's view, for the message (``"this estimator learnt"``).
+
+    Returns
+    -------
+    ndarray
+        `frame` itself.
+
+    Raises
+    ------
+    InvalidInputError
+        `frame` is not an image (:func:`~handsynth.render.check_frame`), or
+        its width-to-height ratio is not the device's, naming its size.
+    """
+    frame = check_frame(frame)
+    h, w = frame.shape[:2]
+    want = mount.width_px / mount.height_px
+    if abs(w / h - want) > FRAME_RATIO_TOLERANCE * want:
+        raise InvalidInputError(
+            f"frame is {w}x{h} pixels; {view} the device's {mount.width_px}x{mount.height_px} "
+            "view: give frames of that width-to-height ratio (scaled, not cropped)")
+    return frame
+
+
+def _check_lookup_kwargs(kwargs: dict, where: str) -> None:
+    """Refuse keyword arguments that :class:`PoseLookup` does not take, naming `where`."""
+    # what PoseLookup takes besides its database: the keyword arguments its constructors pass on
+    taken = [n for n, p in inspect.signature(PoseLookup).parameters.items()
+             if p.kind is p.KEYWORD_ONLY]
+    unknown = [k for k in kwargs if k not in taken]
+    if unknown:
+        raise InvalidInputError(
+            f"{where}() got an unexpected keyword argument {unknown[0]!r} (it passes on to "
+            f"PoseLookup only {', '.join(taken)})")
 
 
 def _refuse_for_calibration(*, options, temporal, approximate) -> None:
@@ -270,7 +328,8 @@ class PoseLookup:
         Raises
         ------
         InvalidInputError
-            The frame is not an image or shows no hand, the database has no
+            The frame is not an image, is not of the device's width-to-height
+            ratio (:meth:`silhouette`) or shows no hand, the database has no
             open-hand entry, or this lookup was made with an option the
             calibrated search cannot honour: the approximate index,
             `options` or ``temporal=True`` (naming it and the value).
@@ -331,12 +390,20 @@ class PoseLookup:
 
         Raises
         ------
+        InvalidInputError
+            `folder` is not a folder name (None, a number, ``""``), both
+            `shape` and `measurements` are given, `shape` is neither a
+            HandShape nor a shape name, or `kwargs` hold an argument
+            :class:`PoseLookup` does not take (naming ``PoseLookup.open``),
+            before any file is read.
         DatabaseError
             The folder or the chosen database file does not exist.
         DatabaseMismatchError
             The file holds another shape or side than the one asked for
             (:func:`handsynth.db.check_database_hand`).
         """
+        folder = check_path(folder, "folder", kind="folder")
+        _check_lookup_kwargs(kwargs, "PoseLookup.open")
         if shape is not None and measurements is not None:
             raise InvalidInputError("give shape or measurements, not both")
         if measurements is not None:
@@ -399,11 +466,14 @@ class PoseLookup:
         Raises
         ------
         InvalidInputError
-            Neither or both of `shape` and `measurements`, or values of the
-            wrong type.
+            Neither or both of `shape` and `measurements`, values of the
+            wrong type, or `kwargs` holding an argument :class:`PoseLookup`
+            does not take (naming ``PoseLookup.personal``), before anything
+            is built.
         DatabaseError
             The database could not be built or read.
         """
+        _check_lookup_kwargs(kwargs, "PoseLookup.personal")
         if (shape is None) == (measurements is None):
             raise InvalidInputError("give exactly one of shape or measurements")
         if measurements is not None:
@@ -462,18 +532,23 @@ class PoseLookup:
         Raises
         ------
         InvalidInputError
-            The frame is not an image or shows no hand, an option is
-            invalid, or `kwargs` hold an option the calibrated search cannot
-            honour (``options``, ``temporal=True``, ``approximate``), before
-            anything is built.
+            The frame is not an image, is not of the device's
+            width-to-height ratio (:meth:`silhouette`) or shows no hand, an
+            option is invalid, or `kwargs` hold an argument
+            :class:`PoseLookup` does not take (naming
+            ``PoseLookup.from_open_frame``) or an option the calibrated
+            search cannot honour (``options``, ``temporal=True``,
+            ``approximate``), before anything is built.
         DatabaseError
             The database could not be built or read.
         """
+        _check_lookup_kwargs(kwargs, "PoseLookup.from_open_frame")
         _refuse_for_calibration(options=kwargs.get("options"),
                                 temporal=kwargs.get("temporal"),
                                 approximate=kwargs.get("approximate"))
         build = check_options(build, BuildOptions, name="build")
         mount = as_mount(mount)
+        check_frame_ratio(open_frame, mount, view=_LOOKUP_VIEW)
         chosen = select_shape_from_frame(open_frame, mount=mount, side=build.side,
                                          shapes=shapes).shape
         chosen = HandShape.from_name(chosen.name)  # the ratios its file name gives
@@ -513,8 +588,11 @@ class PoseLookup:
             A missing key, an array of the wrong shape, dtype or range (NaN
             or out-of-limit angles, keypoints beyond +/-0.32767 m, rows of
             different lengths), or `mount`, `shape` or `side` of the wrong
-            type or value; the message names it.
+            type or value; the message names it.  `kwargs` holding an
+            argument :class:`PoseLookup` does not take (naming
+            ``PoseLookup.from_rows``).
         """
+        _check_lookup_kwargs(kwargs, "PoseLookup.from_rows")
         mount = as_mount(mount)
         if shape is not None:
             check_instance(shape, HandShape, name="shape")
@@ -533,7 +611,16 @@ class PoseLookup:
         return len(self.tables)
 
     def silhouette(self, frame: np.ndarray) -> np.ndarray:
-        """The 64x64 bool silhouette of `frame` as the database sees it."""
+        """The 64x64 bool silhouette of `frame` as the database sees it.
+
+        Raises
+        ------
+        InvalidInputError
+            A frame that is not an image, or whose width-to-height ratio is
+            not the database's camera mount's (:func:`check_frame_ratio`:
+            it would be stretched).
+        """
+        check_frame_ratio(frame, self.mount, view=_LOOKUP_VIEW)
         return preprocess(frame, self.mount, side=self.side, size=self.image_size)
 
     def estimate(self, frame: np.ndarray) -> PoseEstimate:
@@ -543,7 +630,8 @@ class PoseLookup:
         ----------
         frame : ndarray, shape (H, W) or (H, W, 3)
             A BGR uint8 camera frame, a grey uint8 frame or a bool mask, of
-            any size (at least 8x8) taken by the database's camera mount.
+            any size (at least 8x8) taken by the database's camera mount
+            (its width-to-height ratio, within 1 %).
 
         Returns
         -------
@@ -554,7 +642,9 @@ class PoseLookup:
         ------
         InvalidInputError
             A frame that is not an image: not an array, wrong dtype (float,
-            NaN...), wrong shape, smaller than 8x8.
+            NaN...), wrong shape, smaller than 8x8; or a frame whose
+            width-to-height ratio is not the device's (a portrait frame, a
+            640x480 webcam frame for a 720x480 device), naming its size.
         """
         sil = self.silhouette(frame)
         if not sil.any():

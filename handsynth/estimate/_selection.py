@@ -26,11 +26,10 @@ from dataclasses import dataclass, field
 
 from .._checks import check_instance, check_options
 from ..errors import InvalidShapeError
+from ..models import NORMALIZATIONS as _NORMALIZE
 from ..models import HandMeasurements, HandShape, formula_ratios, model_measurements
 
 __all__ = ["Selection", "SelectionOptions", "select_shape", "shape_ratios"]
-
-_NORMALIZE = ("palm_width", "none")
 
 
 @dataclass(frozen=True)

@@ -12,13 +12,13 @@ from typing import TypeGuard
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from .._checks import check_integer, check_number, check_side
+from .._checks import check_integer, check_number, check_path, check_side, short_repr
 from ..errors import EstimationError, InvalidInputError
 from ..models import JOINT_NAMES
 from ..render import CameraMount, as_mount
-from ._sources import FrameSource
+from ._sources import FrameSource, SyntheticSource
 from ._video import SideBySideWriter
-from ._writers import TRUTH_COLUMNS, _make_row
+from ._writers import TRUTH_COLUMNS, _make_row, live_columns, open_row_writer
 
 __all__ = ["LiveOptions", "LiveSummary", "default_database_dir", "first_hand_frame", "run_live"]
 
@@ -300,12 +300,16 @@ def run_live(lookup, source: FrameSource, *, sink=None, video_out=None,
     source : FrameSource
         A camera, video file, synthetic hand or any object with ``read()``
         and ``close()``.  Not closed here (the caller owns it).
-    sink : row writer, keyword-only, optional
+    sink : row writer, str or os.PathLike, keyword-only, optional
         Any object with ``write(row: dict)``, e.g. from
         :func:`open_row_writer` with ``columns=live_columns(keypoints=...,
-        truth=...)``.  Not closed here.  The rows carry the true angles when
+        truth=...)``: not closed here.  The rows carry the true angles when
         the source has ``truth_deg`` and the sink's ``columns`` (if it has
-        that attribute) include them.
+        that attribute) include them.  A file name (``.csv``, ``.jsonl`` or
+        ``.ndjson``) is opened here with :func:`open_row_writer` (as the
+        command line does: the columns of ``options.keypoints``, the true
+        angles for a :class:`SyntheticSource` or a source that has
+        ``truth_deg``) before any frame is read, and closed here.
     video_out : str, os.PathLike or SideBySideWriter, keyword-only, optional
         Side-by-side video of input and matched render; a path is opened
         (at the source's ``fps``, 30 if unknown) and closed here, a writer
@@ -326,7 +330,14 @@ def run_live(lookup, source: FrameSource, *, sink=None, video_out=None,
     Raises
     ------
     InvalidInputError
-        Bad `options`, `source` or `video_out`.
+        Bad `options`, `source` or `video_out` (a `video_out` that is
+        neither a writer nor a file name named); a `sink` that is neither a
+        row writer (no ``write`` method) nor a file name, or a file name
+        whose suffix does not tell the row format (checked before any read).
+    OutputError
+        A `sink` file name that cannot be written (a missing or read-only
+        folder, a folder, the source video or the database file), before
+        any read.
     EstimationError
         Before any read, when the estimator cannot read any frame as it is:
         its ``check_ready()`` method, if it has one, refuses (e.g. a
@@ -353,14 +364,44 @@ def run_live(lookup, source: FrameSource, *, sink=None, video_out=None,
     if not callable(getattr(lookup, "estimate", None)):
         raise InvalidInputError(
             f"lookup must have an estimate(frame) method, got {type(lookup).__name__}")
+    if sink is not None and not callable(getattr(sink, "write", None)) \
+            and not isinstance(sink, (str, os.PathLike)):
+        raise InvalidInputError(
+            f"sink must be a row writer (an object with write(row)) or a row file name (.csv, "
+            f".jsonl or .ndjson), got {type(sink).__name__} {short_repr(sink)}")
     ready = getattr(lookup, "check_ready", None)
     if callable(ready):
         ready()  # an estimator that cannot read any frame: its reason, before a read
+    own_sink = None  # opened here, so closed here
+    if isinstance(sink, (str, os.PathLike)):
+        sink = own_sink = _open_sink(sink, lookup, source, keypoints=opts.keypoints)
+    try:
+        return _run(lookup, source, sink, video_out, opts, progress)
+    finally:
+        if own_sink is not None:
+            own_sink.close()
+
+
+def _open_sink(sink, lookup, source, *, keypoints: bool):
+    """The row writer of the file name `sink`, with the columns the command line gives."""
+    check_path(sink, "sink", kind="file")
+    inputs = [p for p in (getattr(source, "path", None),
+                          getattr(getattr(lookup, "database", None), "path", None))
+              if isinstance(p, (str, os.PathLike))]
+    truth = isinstance(source, SyntheticSource) or getattr(source, "truth_deg", None) is not None
+    return open_row_writer(sink, columns=live_columns(keypoints=keypoints, truth=truth),
+                           inputs=inputs)
+
+
+def _run(lookup, source: FrameSource, sink, video_out, opts: LiveOptions,
+         progress) -> LiveSummary:
+    """The loop of :func:`run_live`, its arguments checked."""
     video: SideBySideWriter | None = None
     own_video: SideBySideWriter | None = None  # opened here, so closed here
     if isinstance(video_out, SideBySideWriter):
         video = video_out
     elif video_out is not None:
+        check_path(video_out, "video_out", kind="file")
         video = own_video = SideBySideWriter(video_out, lookup,
                                              fps=getattr(source, "fps", None) or 30.0)
 

@@ -5,12 +5,11 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass
-from pathlib import Path
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
 
-from .._checks import check_instance, check_integer, check_number
+from .._checks import check_instance, check_integer, check_number, check_path
 from ..errors import InvalidInputError
 from ..models import JOINT_LIMITS_DEG, JOINT_NAMES, HandShape, as_angles
 from ..models import pose_set as make_pose_set
@@ -151,6 +150,31 @@ class CameraSource(_Source):
             cap.release()
 
 
+#: Codecs of what FFmpeg opens as a "video" that is not one: ``ansi``, the pictures of a
+#: text file's characters (FFmpeg's tty demuxer takes any ``.txt`` of a few hundred bytes).
+_NOT_VIDEO_CODECS = ("ansi",)
+
+
+def _not_a_video(cap) -> str:
+    """Why the opened capture `cap` is not a video (``" (...)"``), or ``""`` when it is one.
+
+    OpenCV opens some files that hold no video: a damaged image (no frame size,
+    and no frame is ever read) or a text file (FFmpeg draws its characters).
+    A real video, even one without frames, has its frame size in its header.
+    """
+    import cv2
+
+    fourcc = int(cap.get(cv2.CAP_PROP_FOURCC) or 0) & 0xFFFFFFFF
+    codec = fourcc.to_bytes(4, "little").decode("latin-1").rstrip("\0 ").lower()
+    if codec in _NOT_VIDEO_CODECS:
+        return " (it is text, not a video)"
+    width = cap.get(cv2.CAP_PROP_FRAME_WIDTH)
+    height = cap.get(cv2.CAP_PROP_FRAME_HEIGHT)
+    if not (width > 0 and height > 0):
+        return " (it has no frame size: not a video, or a damaged one)"
+    return ""
+
+
 class VideoSource(_Source):
     """Frames of a video file (anything OpenCV's FFmpeg backend decodes).
 
@@ -161,8 +185,11 @@ class VideoSource(_Source):
     Raises
     ------
     InvalidInputError
-        The file does not exist, is a folder, device or pipe, or OpenCV
-        cannot decode it (the message names the file).
+        `path` is not a file name (None, a number, ``""``); the file does not
+        exist, is a folder, device or pipe, or OpenCV cannot decode it: it
+        does not open, or it is not a video (no frame size; a text file,
+        which FFmpeg would draw as pictures of its characters) (the message
+        names the file).
 
     Notes
     -----
@@ -176,7 +203,7 @@ class VideoSource(_Source):
     def __init__(self, path) -> None:
         import cv2
 
-        self.path = Path(path)
+        self.path = check_path(path, "path", kind="file")
         if self.path.is_dir():
             raise InvalidInputError(f"video file {str(self.path)!r} is a folder")
         if not self.path.exists():
@@ -187,10 +214,11 @@ class VideoSource(_Source):
         with _quiet_opencv():
             cap = cv2.VideoCapture(str(self.path))
             opened = cap.isOpened()
-        if not opened:
+        why = _not_a_video(cap) if opened else ""
+        if not opened or why:
             cap.release()
             raise InvalidInputError(
-                f"cannot open video file {str(self.path)!r}: OpenCV cannot decode it")
+                f"cannot open video file {str(self.path)!r}: OpenCV cannot decode it{why}")
         self._cap = cap
         self.fps = _capture_fps(cap)
         self._count = 0

@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .._checks import check_number
+from .._checks import check_number, check_path
 from .._io import PendingOutput
 from ..errors import InvalidInputError, OutputError
 from ..models import JOINT_LIMITS_DEG
@@ -68,7 +67,8 @@ class SideBySideWriter:
     Raises
     ------
     InvalidInputError
-        Unknown suffix or codec, or OpenCV cannot open a writer for the file.
+        `path` is not a file name (None, a number, ``""``), an unknown
+        suffix or codec, or OpenCV cannot open a writer for the file.
     OutputError
         `path` is a folder, in a missing folder, or one of `inputs`; or, on
         :meth:`close`, the video could not be written completely.
@@ -76,7 +76,7 @@ class SideBySideWriter:
 
     def __init__(self, path, lookup, *, fps: float = 30.0, codec: str | None = None,
                  labels: bool = True, inputs=()) -> None:
-        self.path = Path(path)
+        self.path = check_path(path, "path", kind="file")
         suffix = self.path.suffix.lower()
         if codec is None:
             if suffix not in _CODECS:

@@ -17,6 +17,7 @@ from ._anthropometry import (
 from ._hand import HandModel, compile_mjcf
 from ._joints import FINGERS, JOINT_LIMITS_DEG, JOINT_NAMES, joint_index
 from ._measurements import (
+    NORMALIZATIONS,
     SEGMENTS,
     HandMeasurements,
     formula_ratios,
@@ -46,6 +47,7 @@ __all__ = [
     "JOINT_NAMES",
     "KEYPOINT_SITES",
     "NAMED_POSES",
+    "NORMALIZATIONS",
     "PAPER_SIZE",
     "POSE_SETS",
     "SEGMENTS",

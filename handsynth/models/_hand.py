@@ -118,7 +118,14 @@ class HandModel:
         return self.data.site_xpos[self._sites].copy()
 
     def body_pose(self, name: str) -> tuple[np.ndarray, np.ndarray]:
-        """Position (3,) in metres and rotation (3, 3) body-to-hand of body `name`."""
+        """Position (3,) in metres and rotation (3, 3) body-to-hand of body `name`.
+
+        Raises
+        ------
+        InvalidInputError
+            `name` is not a str (``3``, None: MuJoCo would raise its own error, or crash), or
+            no body of the model, named with the value received.
+        """
         b = self._body(name)
         return self.data.xpos[b].copy(), self.data.xmat[b].reshape(3, 3).copy()
 
@@ -133,6 +140,7 @@ class HandModel:
     def _body(self, name: str) -> int:
         from ..errors import InvalidInputError
 
+        check_instance(name, str, name="name", error=InvalidInputError)
         b = self._mj.mj_name2id(self.model, self._mj.mjtObj.mjOBJ_BODY, name)
         if b < 0:
             names = [self.model.body(i).name for i in range(1, self.model.nbody)]

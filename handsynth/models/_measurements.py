@@ -45,18 +45,18 @@ import math
 import warnings
 from dataclasses import dataclass
 from functools import lru_cache
-from pathlib import Path
 
 import numpy as np
 
-from .._checks import check_number, check_options, short_repr
+from .._checks import check_instance, check_number, check_options, check_path, short_repr
 from ..errors import InvalidShapeError
 from ._hand import HandModel
 from ._joints import FINGERS
 from ._mjcf import hand_spec
 from ._shape import HandShape
 
-__all__ = ["SEGMENTS", "HandMeasurements", "formula_ratios", "hull_width_at", "model_measurements"]
+__all__ = ["NORMALIZATIONS", "SEGMENTS", "HandMeasurements", "formula_ratios", "hull_width_at",
+           "model_measurements"]
 
 #: The 14 segments of ``L1..L14`` / ``W1..W14`` in order, as (finger, segment).
 SEGMENTS: tuple[tuple[str, str], ...] = (
@@ -186,7 +186,8 @@ class HandMeasurements:
         Raises
         ------
         InvalidShapeError
-            Unreadable or non-UTF-8 file, unknown suffix, a name given twice,
+            `path` is not a file name (None, a number, ``""``); an
+            unreadable or non-UTF-8 file, unknown suffix, a name given twice,
             a CSV value column other than ``value_mm``, or bad values (naming
             file, line and field; a value so far off the others that the values
             give no hand shape: :meth:`check_consistent`).  A UTF-8
@@ -198,7 +199,7 @@ class HandMeasurements:
             A hand far from a person's size, naming the file (values not in
             millimetres?).
         """
-        path = Path(path)
+        path = check_path(path, "path", kind="file", error=InvalidShapeError)
         suffix = path.suffix.lower()
         try:
             # utf-8-sig: a byte-order mark (Excel's "CSV UTF-8") is not part of the text
@@ -382,6 +383,11 @@ class HandMeasurements:
             + "check the values and that they are in millimetres")
 
 
+#: How formulas (1)-(4) scale the user's measurements: by the palm width (the paper's, for
+#: photos without a scale) or not at all (millimetres as measured).
+NORMALIZATIONS: tuple[str, ...] = ("palm_width", "none")
+
+
 def formula_ratios(user: HandMeasurements, standard: HandMeasurements, *,
                    normalize: str = "palm_width") -> dict[str, float]:
     """Formulas (1)-(4) of SPEC.md section 1: the user's ratios to the standard hand.
@@ -404,12 +410,25 @@ def formula_ratios(user: HandMeasurements, standard: HandMeasurements, *,
     user, standard : HandMeasurements
         The user's hand and the standard model, mm.
     normalize : {"palm_width", "none"}, keyword-only
+        One of :data:`NORMALIZATIONS`.
 
     Returns
     -------
     dict
         ``{"length", "width", "palm", "thumb"}`` to the ratio.
+
+    Raises
+    ------
+    InvalidShapeError
+        `user` or `standard` is not a :class:`HandMeasurements`, or `normalize`
+        is not one of :data:`NORMALIZATIONS` (a misspelt ``"palm-width"`` was
+        read as ``"none"``).
     """
+    check_instance(user, HandMeasurements, name="user", error=InvalidShapeError)
+    check_instance(standard, HandMeasurements, name="standard", error=InvalidShapeError)
+    if not isinstance(normalize, str) or normalize not in NORMALIZATIONS:
+        raise InvalidShapeError(f"normalize must be one of {NORMALIZATIONS}, got "
+                                f"{short_repr(normalize)}")
     s = standard.P_width / user.P_width if normalize == "palm_width" else 1.0
     return {
         "length": float(np.mean(s * np.asarray(user.L) / np.asarray(standard.L))),  # (1)
@@ -441,10 +460,27 @@ def hull_width_at(points_xy: np.ndarray, y: float) -> float:
     ------
     InvalidShapeError
         The hull does not reach height `y` (fewer than two crossings).
+    InvalidInputError
+        `points_xy` is not an (M, 2) array of finite numbers with M >= 3, or
+        `y` is not a finite number.
     """
     from scipy.spatial import ConvexHull
 
-    hull = points_xy[ConvexHull(points_xy).vertices]
+    from ..errors import InvalidInputError
+
+    try:
+        pts = np.asarray(points_xy, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"points_xy must be an (M, 2) array of numbers, got "
+                                f"{type(points_xy).__name__} {short_repr(points_xy)}") from None
+    if pts.ndim != 2 or pts.shape[1] != 2 or pts.shape[0] < 3:
+        raise InvalidInputError(f"points_xy must have shape (M, 2) with M >= 3 points, got "
+                                f"shape {pts.shape}")
+    if not np.isfinite(pts).all():
+        raise InvalidInputError("points_xy must be finite, got NaN or inf at row "
+                                f"{int(np.argwhere(~np.isfinite(pts))[0, 0])}")
+    y = check_number(y, "y")
+    hull = pts[ConvexHull(pts).vertices]
     xs = []
     for (x0, y0), (x1, y1) in zip(hull, np.roll(hull, -1, axis=0)):
         if (y0 - y) * (y1 - y) <= 0 and y0 != y1:

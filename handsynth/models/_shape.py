@@ -6,6 +6,7 @@ import itertools
 import math
 from dataclasses import dataclass, fields
 
+from .._checks import check_instance
 from ..errors import InvalidShapeError
 
 __all__ = ["GRID_LEVELS", "HandShape"]
@@ -124,8 +125,9 @@ class HandShape:
         Raises
         ------
         InvalidShapeError
-            If `name` does not have the form produced by :attr:`name`.
+            If `name` is not a str, or does not have the form produced by :attr:`name`.
         """
+        check_instance(name, str, name="name", error=InvalidShapeError)
         parts = name.split("_")
         keys = {"L": "length", "W": "width", "P": "palm", "T": "thumb"}
         try:

@@ -147,3 +147,42 @@ def test_a_rest_slip_moves_the_device_between_a_hand_s_rest_frame_and_its_other_
         LearningSetOptions(rest_slip=-1)
     with pytest.raises(InvalidInputError, match="rest_slip_share"):
         LearningSetOptions(rest_slip=1, rest_slip_share=2)
+
+
+def test_the_folder_is_checked_before_the_set_is_rendered(tmp_path, monkeypatch):
+    # a file in the way was found only after rendering the whole set (minutes by default)
+    import re
+
+    import handsynth._io
+    import handsynth.db._learning
+    from handsynth.errors import DatabaseError
+
+    def no_rendering(*args, **kwargs):
+        raise AssertionError("the learning set was rendered")
+
+    monkeypatch.setattr(handsynth.db._learning, "render_learning_set", no_rendering)
+    in_the_way = tmp_path / "some_file.h5"
+    in_the_way.write_bytes(b"x")
+    with pytest.raises(DatabaseError, match=r"cannot create the learning-set folder "
+                                            rf"{re.escape(repr(str(in_the_way)))}"):
+        learning_set(in_the_way, SMALL)
+    with pytest.raises(DatabaseError, match=r"cannot create the learning-set folder"):
+        learning_set(in_the_way / "below", SMALL)
+    monkeypatch.setattr(handsynth._io, "_unwritable", lambda folder: "the file system is read-only")
+    with pytest.raises(DatabaseError, match=r"cannot write into the learning-set folder .*"
+                                            r"read-only"):
+        learning_set(tmp_path / "sets", SMALL)
+    for folder, words in ((None, "folder must be a folder name (str or path), got None"),
+                          (3.5, "folder must be a folder name (str or path), got float 3.5"),
+                          (" ", "folder must name a folder, got ' '")):
+        with pytest.raises(InvalidInputError, match=re.escape(words)):
+            learning_set(folder, SMALL)
+
+
+def test_a_kept_set_is_read_from_a_folder_that_cannot_be_written(tmp_path, monkeypatch):
+    import handsynth._io
+
+    first = learning_set(tmp_path, SMALL)
+    monkeypatch.setattr(handsynth._io, "_unwritable", lambda folder: "the file system is read-only")
+    again = learning_set(tmp_path, SMALL)  # nothing to write: only read
+    assert np.array_equal(first.grids, again.grids)

@@ -1,4 +1,5 @@
 import json
+import re
 from dataclasses import replace
 
 import numpy as np
@@ -614,3 +615,80 @@ def test_smoothing_reports_the_weighted_mean_of_the_previous_and_the_new_answer(
     assert kept.smoothing == 0.25 and np.allclose(kept.estimate(b).angles, second)
     smooth.smoothing = 0  # off again
     assert smooth.smoothing == 0.0 and np.allclose(smooth.estimate(a).angles, first)
+
+
+@pytest.mark.parametrize("field, value, words", [
+    ("hidden", None, "LearnedOptions.hidden must be a tuple of positive integers (the widths of "
+                     "the hidden layers), got NoneType None"),
+    ("hidden", "384", "LearnedOptions.hidden must be a tuple of positive integers"),
+    ("hidden", (), "LearnedOptions.hidden must be a tuple of positive integers"),
+    ("hidden", (64, 0), "LearnedOptions.hidden[1] must be an integer >= 1, got 0"),
+    ("hidden", (64.5,), "LearnedOptions.hidden[0] must be an integer >= 1, got 64.5"),
+    ("hidden", (True,), "LearnedOptions.hidden[0] must be an integer >= 1, got True"),
+    ("learning_rate", "0.01", "LearnedOptions.learning_rate must be a finite number > 0, "
+                              "got '0.01' (str)"),
+    ("learning_rate", float("inf"), "LearnedOptions.learning_rate must be a finite number > 0, "
+                                    "got inf"),
+    ("learning_rate", 0.0, "LearnedOptions.learning_rate must be a finite number > 0, got 0.0"),
+    ("learning_rate", True, "LearnedOptions.learning_rate must be a finite number > 0, got True"),
+    ("weight_decay", "x", "LearnedOptions.weight_decay must be a finite number >= 0, got 'x'"),
+    ("weight_decay", float("nan"), "LearnedOptions.weight_decay must be a finite number >= 0, "
+                                   "got nan"),
+    ("weight_decay", -1e-5, "LearnedOptions.weight_decay must be a finite number >= 0"),
+    ("ridge", True, "LearnedOptions.ridge must be a finite number >= 0, got True (bool)"),
+    ("ridge", float("inf"), "LearnedOptions.ridge must be a finite number >= 0, got inf"),
+    ("ridge", "3", "LearnedOptions.ridge must be a finite number >= 0, got '3' (str)"),
+    ("use_rest", "no", "LearnedOptions.use_rest must be True or False, got 'no'"),
+])
+def test_each_numeric_field_is_checked_by_name(field, value, words):
+    # hidden=None, learning_rate="0.01" and weight_decay="x" were raw TypeErrors;
+    # learning_rate=inf and ridge=True were accepted
+    with pytest.raises(InvalidInputError, match=re.escape(words)):
+        LearnedOptions(**{field: value})
+
+
+def test_valid_numeric_fields_keep_their_values():
+    opts = LearnedOptions(hidden=[np.int64(16), 8], learning_rate=1, weight_decay=0, ridge=0)
+    assert opts.hidden == (16, 8) and type(opts.hidden[0]) is int
+    assert (opts.learning_rate, opts.weight_decay, opts.ridge) == (1, 0, 0)
+    assert opts.digest() == LearnedOptions(hidden=(16, 8), learning_rate=1, weight_decay=0).digest()
+
+
+def test_check_moved_must_be_a_bool(data):
+    # check_moved="no" was read as True
+    est = train_learned(data, LearnedOptions(kind="fingers", components=4, k=2, lists=0))
+    rest = _frames(data, [0])[0]
+    for value in ("no", 0, None, np.bool_(False)):
+        with pytest.raises(InvalidInputError, match=rf"^check_moved must be a bool, got "
+                                                    rf"{type(value).__name__} "):
+            est.calibrated(rest, check_moved=value)
+    assert est.calibrated(rest, check_moved=False)._move_check is None
+    assert est.calibrated(rest)._move_check is not None
+
+
+def test_a_folder_that_cannot_be_written_is_refused_before_the_learning_set(tmp_path,
+                                                                            monkeypatch):
+    # learned_estimator("some_file.h5") failed only after rendering the whole learning set
+    import handsynth._io
+    import handsynth.db._learning
+    from handsynth.errors import DatabaseError
+
+    def no_rendering(*args, **kwargs):
+        raise AssertionError("the learning set was rendered")
+
+    monkeypatch.setattr(handsynth.db._learning, "render_learning_set", no_rendering)
+    small = LearningSetOptions(hands=2, poses_per_hand=3, seed=1)
+    opts = LearnedOptions(kind="knn", components=4, k=2, lists=0)
+    in_the_way = tmp_path / "some_file.h5"
+    in_the_way.write_bytes(b"x")
+    with pytest.raises(DatabaseError, match=rf"cannot create the learnt-estimator folder "
+                                            rf"{re.escape(repr(str(in_the_way)))}"):
+        learned_estimator(in_the_way, opts, data=small, shipped=False)
+    monkeypatch.setattr(handsynth._io, "_unwritable", lambda folder: "the file system is read-only")
+    with pytest.raises(DatabaseError, match=r"cannot write into the learnt-estimator folder .*"
+                                            r"read-only"):
+        learned_estimator(tmp_path / "cache", opts, data=small, shipped=False)
+    for folder, words in ((None, "folder must be a folder name (str or path), got None"),
+                          ("", "folder must name a folder, got ''")):
+        with pytest.raises(InvalidInputError, match=re.escape(words)):
+            learned_estimator(folder, opts, data=small)

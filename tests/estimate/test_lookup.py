@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
@@ -85,9 +86,15 @@ def test_open_by_measurements_and_missing_database(db_folder, tmp_path):
         PoseLookup.open(tmp_path / "nope")
 
 
+def _device_frames(silhouettes) -> list[np.ndarray]:
+    """64x64 silhouettes as frames of the device's 3:2 view (black columns either side): a
+    lookup refuses frames of another width-to-height ratio."""
+    return [np.pad(s, ((0, 0), (16, 16))) for s in silhouettes]
+
+
 @pytest.mark.parametrize("calibrated", [False, True])
 def test_threads_share_one_lookup(lookup, query_rows, calibrated):
-    frames = list(query_rows["silhouette"])
+    frames = _device_frames(query_rows["silhouette"])
     if calibrated:
         lookup = lookup.calibrated(frames[-1])
     serial = [lookup.estimate(f) for f in frames]
@@ -134,7 +141,7 @@ def test_approximate_lookup_probing_every_cell_equals_exact(db_folder, query_row
     approx = PoseLookup.open(db_folder, shape=HandShape(),
                              approximate=ApproximateOptions(nlist=8, nprobe=8, dims=16))
     assert approx.approximate is not None and exact.approximate is None
-    for sil in query_rows["silhouette"][:8]:
+    for sil in _device_frames(query_rows["silhouette"][:8]):
         a, b = exact.estimate(sil), approx.estimate(sil)
         assert (a.entry, a.error, a.low_confidence) == (b.entry, b.error, b.low_confidence)
     with pytest.raises(InvalidInputError, match="approximate"):
@@ -293,3 +300,71 @@ def test_open_checks_the_stored_hand_against_the_one_asked_for(tmp_path, db_fold
     # the right hand's file of the shared fixture opens as before
     assert PoseLookup.open(db_folder, shape=HandShape()).shape == HandShape()
     assert open_database(tmp_path / f"{HandShape().name}_left.h5").meta["side"] == "left"
+
+
+def _scaled(frame: np.ndarray, width: int, height: int) -> np.ndarray:
+    """`frame` resized to `width` x `height` (nearest pixel): stretched unless the ratio is kept."""
+    rows = np.arange(height) * frame.shape[0] // height
+    cols = np.arange(width) * frame.shape[1] // width
+    return frame[rows][:, cols]
+
+
+def test_a_frame_of_another_width_to_height_ratio_is_refused_with_its_size(lookup, small_rows):
+    # a portrait 480x720 frame or a 4:3 webcam frame for the 720x480 mount was stretched
+    # silently (confidence down, low_confidence still False); the learnt estimator's rule
+    r = SilhouetteRenderer(HandShape(), CameraMount(), width_px=RENDER_SIZE[0],
+                           height_px=RENDER_SIZE[1])
+    mask = r.mask(small_rows["angles"][50])
+    assert lookup.estimate(mask).error == 0.0
+    bgr = np.where(mask[..., None], np.uint8([120, 160, 210]), np.uint8([15, 20, 25]))
+    for width, height in ((120, 180), (160, 120), (640, 480), (480, 720)):
+        for frame in (_scaled(mask, width, height), _scaled(bgr, width, height)):
+            with pytest.raises(InvalidInputError,
+                               match=rf"^frame is {width}x{height} pixels; this lookup's database "
+                                     r"holds the device's 720x480 view: give frames of that "
+                                     r"width-to-height ratio \(scaled, not cropped\)$"):
+                lookup.estimate(frame)
+    # any size of the device's ratio is the same view: masks and camera frames alike
+    for width, height in ((90, 60), (360, 240), (720, 480), (181, 120)):
+        for frame in (_scaled(mask, width, height), _scaled(bgr, width, height)):
+            est = lookup.estimate(frame)
+            assert not est.no_hand and est.confidence > 0.3
+    with pytest.raises(InvalidInputError, match=r"frame is 120x180 pixels"):
+        lookup.calibrated(_scaled(_open_frame(), 120, 180))
+
+
+def test_from_open_frame_refuses_a_frame_of_another_ratio_before_building(tmp_path):
+    with pytest.raises(InvalidInputError, match=r"^frame is 160x120 pixels; .* 720x480 view"):
+        PoseLookup.from_open_frame(tmp_path / "dbs", _scaled(_open_frame(), 160, 120),
+                                   shapes=[HandShape()])
+    assert not (tmp_path / "dbs").exists()  # nothing was built
+
+
+@pytest.mark.parametrize("folder, words", [
+    (None, "folder must be a folder name (str or path), got None"),
+    (7, "folder must be a folder name (str or path), got int 7"),
+    ("", "folder must name a folder, got ''"),
+])
+def test_open_names_a_folder_that_is_no_name(folder, words):
+    # None gave pathlib's "expected str, bytes or os.PathLike object, not NoneType"
+    with pytest.raises(InvalidInputError, match=re.escape(words)):
+        PoseLookup.open(folder)
+
+
+def test_arguments_that_the_lookup_does_not_take_are_named_with_the_method(db_folder, small_rows,
+                                                                        tmp_path):
+    # "PoseLookup.__init__() got an unexpected keyword argument 'mount'"
+    with pytest.raises(InvalidInputError,
+                       match=r"^PoseLookup\.open\(\) got an unexpected keyword argument 'mount'"):
+        PoseLookup.open(db_folder, mount=CameraMount())
+    with pytest.raises(InvalidInputError, match=r"^PoseLookup\.from_rows\(\) got an unexpected "
+                                                r"keyword argument 'temporl'"):
+        PoseLookup.from_rows(small_rows, temporl=False)
+    with pytest.raises(InvalidInputError, match=r"^PoseLookup\.personal\(\) got an unexpected "
+                                                r"keyword argument 'count'"):
+        PoseLookup.personal(tmp_path / "dbs", shape=HandShape(), count=10)
+    with pytest.raises(InvalidInputError, match=r"^PoseLookup\.from_open_frame\(\) got an "
+                                                r"unexpected keyword argument 'side'"):
+        PoseLookup.from_open_frame(tmp_path / "dbs", _open_frame(), side="left")
+    assert not (tmp_path / "dbs").exists()  # refused before building
+    assert PoseLookup.open(db_folder, ties="first", temporal=False).ties == "first"

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -75,6 +76,17 @@ def test_files_json_and_csv(tmp_path):
     rows += ["P_width,80", "P_height,80", "T_width,20", "T_height,25"]
     (tmp_path / "m.csv").write_text("\n".join(rows))
     assert HandMeasurements.from_file(tmp_path / "m.csv") == m
+
+
+@pytest.mark.parametrize("path, words", [
+    (None, "path must be a file name (str or path), got None"),
+    (12, "path must be a file name (str or path), got int 12"),
+    ("", "path must name a file, got ''"),
+])
+def test_a_measurement_file_name_that_is_no_name_is_refused(path, words):
+    # None gave pathlib's "expected str, bytes or os.PathLike object, not NoneType"
+    with pytest.raises(InvalidShapeError, match=re.escape(words)):
+        HandMeasurements.from_file(path)
 
 
 @pytest.mark.parametrize(

@@ -5,11 +5,12 @@ from __future__ import annotations
 import csv
 import json
 import math
+import re
 
 import numpy as np
 import pytest
 
-from handsynth.errors import EstimationError, InvalidInputError
+from handsynth.errors import EstimationError, InvalidInputError, OutputError
 from handsynth.estimate import PoseEstimate, PoseLookup
 from handsynth.live import (
     CsvRowWriter,
@@ -502,3 +503,87 @@ def test_a_device_or_pipe_given_as_a_video_is_named_as_such(tmp_path):
             VideoSource(path)
     with pytest.raises(InvalidInputError, match="does not exist"):
         VideoSource(tmp_path / "gone.avi")
+
+
+# --------------------------------------------------------------------------- input checks
+
+
+def test_a_row_file_name_as_sink_is_opened_and_closed_here(tmp_path, lookup):
+    # sink="rows.csv" ran the whole loop and then failed: "'str' object has no attribute 'write'"
+    path = tmp_path / "rows.csv"
+    with _synthetic(lookup, frames=3) as src:
+        s = run_live(lookup, src, sink=str(path))
+    assert s.frames == 3
+    header, rows = _read_csv(path)  # complete and closed: the header, then one row a frame
+    assert tuple(header) == live_columns(truth=True) and len(rows) == 3
+    jsonl = tmp_path / "rows.jsonl"
+    with _synthetic(lookup, frames=2) as src:
+        run_live(lookup, src, sink=jsonl, options=LiveOptions(keypoints=True))
+    lines = [json.loads(line) for line in jsonl.read_text().splitlines()]
+    assert len(lines) == 2 and tuple(lines[0]) == live_columns(keypoints=True, truth=True)
+
+
+@pytest.mark.parametrize("sink, error, words", [
+    (3, InvalidInputError, r"sink must be a row writer .*, got int 3"),
+    (b"rows.csv", InvalidInputError, r"sink must be a row writer .*, got bytes b'rows.csv'"),
+    ("", InvalidInputError, r"sink must name a file, got ''"),
+    ("{tmp}/rows.txt", InvalidInputError, r"cannot tell the row format of '.*rows\.txt'"),
+    ("{tmp}/missing/rows.csv", OutputError, r"folder '.*missing' does not exist"),
+])
+def test_a_sink_that_cannot_take_rows_is_refused_before_any_read(tmp_path, lookup, sink, error,
+                                                                 words):
+    src = _Frames([np.zeros((H, W), bool)] * 3)
+    if isinstance(sink, str):
+        sink = sink.format(tmp=tmp_path)
+    with pytest.raises(error, match=words):
+        run_live(lookup, src, sink=sink)
+    assert src.reads == 0
+
+
+def test_a_text_or_broken_file_is_not_a_video(tmp_path):
+    # a text file opened (FFmpeg draws its characters) and a damaged image opened with no
+    # frame size; both gave a run of 0 frames and NaN statistics with no error
+    import cv2
+
+    notes = tmp_path / "notes.txt"
+    notes.write_text("Notes of the session: the device sat a little high.\n" * 20)
+    image = np.zeros((48, 64, 3), np.uint8)
+    cv2.imwrite(str(tmp_path / "whole.png"), image)
+    broken = tmp_path / "broken.png"
+    data = (tmp_path / "whole.png").read_bytes()
+    broken.write_bytes(data[:len(data) // 2])
+    for path in (notes, broken):
+        with pytest.raises(InvalidInputError, match=rf"^cannot open video file {str(path)!r}: "
+                                                    r"OpenCV cannot decode it"):
+            VideoSource(path)
+    empty = tmp_path / "empty.avi"  # a video without frames is still a video: it just ends
+    cv2.VideoWriter(str(empty), cv2.VideoWriter_fourcc(*"MJPG"), 15.0, (W, H)).release()
+    with VideoSource(empty) as src:
+        assert src.read() is None and src.ended
+
+
+@pytest.mark.parametrize("path, words", [
+    (None, "path must be a file name (str or path), got None"),
+    (3, "path must be a file name (str or path), got int 3"),
+    ("  ", "path must name a file, got '  '"),
+])
+def test_a_video_source_names_a_path_that_is_no_name(path, words):
+    with pytest.raises(InvalidInputError, match=re.escape(words)):
+        VideoSource(path)
+
+
+@pytest.mark.parametrize("video_out, words", [
+    (7, "video_out must be a file name (str or path), got int 7"),
+    ("", "video_out must name a file, got ''"),
+])
+def test_a_video_out_that_is_no_name_is_refused_before_any_read(tmp_path, lookup, video_out,
+                                                                words):
+    # 7 gave pathlib's "expected str, bytes or os.PathLike object, not int"
+    src = _Frames([np.zeros((H, W), bool)] * 3)
+    rows = tmp_path / "rows.csv"
+    with pytest.raises(InvalidInputError, match=re.escape(words)):
+        run_live(lookup, src, sink=rows, video_out=video_out)
+    assert src.reads == 0 and not rows.exists()
+    with pytest.raises(InvalidInputError, match=re.escape("path must be a file name (str or path), "
+                                                          "got None")):
+        SideBySideWriter(None, lookup)

@@ -194,3 +194,45 @@ def test_hands_at_the_corners_of_the_supported_range_are_read(ratios):
         warnings.simplefilter("ignore", UserWarning)  # some are far from a person's size
         got = HandMeasurements.from_dict(values)
     np.testing.assert_allclose(got.L, model_measurements(shape).L)
+
+
+def test_formula_ratios_refuses_a_normalization_it_does_not_know():
+    # "palm-width" (a hyphen) was read as "none" without a word
+    from handsynth.models import NORMALIZATIONS, formula_ratios, model_measurements
+
+    std = model_measurements()
+    user = HandMeasurements(L=std.L, W=std.W, P_width=std.P_width * 1.1, P_height=std.P_height,
+                            T_width=std.T_width, T_height=std.T_height)
+    assert formula_ratios(user, std, normalize="palm_width") != formula_ratios(user, std,
+                                                                               normalize="none")
+    for bad in ("palm-width", "None", None, 1):
+        with pytest.raises(InvalidShapeError, match=r"normalize must be one of \('palm_width', "
+                                                    r"'none'\), got"):
+            formula_ratios(user, std, normalize=bad)
+    with pytest.raises(InvalidShapeError, match="user must be a HandMeasurements, got NoneType"):
+        formula_ratios(None, std)
+    with pytest.raises(InvalidShapeError, match="standard must be a HandMeasurements, got dict"):
+        formula_ratios(user, std.as_dict())
+    assert NORMALIZATIONS == ("palm_width", "none")
+
+
+@pytest.mark.parametrize("points, y, words", [
+    ([[0, 0], [1, 0], [1, 1]], 0.5, None),
+    ("abc", 0.5, "must be an (M, 2) array of numbers"),
+    ([], 0.5, "shape (M, 2) with M >= 3 points, got shape (0,)"),
+    ([1, 2, 3], 0.5, "got shape (3,)"),
+    ([[0, 0], [1, 0]], 0.5, "got shape (2, 2)"),
+    ([[0, 0], [1, np.nan], [1, 1]], 0.5, "finite, got NaN or inf at row 1"),
+    ([[0, 0], [1, 0], [1, 1]], np.inf, "y must be"),
+    ([[0, 0], [1, 0], [1, 1]], "half", "y must be"),
+])
+def test_hull_width_at_checks_its_points(points, y, words):
+    from handsynth.errors import InvalidInputError
+    from handsynth.models import hull_width_at
+
+    if words is None:
+        assert hull_width_at(points, y) == pytest.approx(0.5)  # the list is taken as an array
+        return
+    with pytest.raises(InvalidInputError) as err:
+        hull_width_at(points, y)
+    assert words in str(err.value)
