@@ -135,7 +135,7 @@ def calibrate(recording, out, kind, models, t_threshold, n_points, synergy_k, sy
     # each estimator carries the range of the readings (checked by its predict)
     save_calibration(out, est, kind=kind, range_reference=ref,
                      meta={"recording": str(recording), "n_samples": rec.n_samples})
-    click.echo(f"{recording}: {rec.n_samples} samples; estimators: {', '.join(est)}")
+    click.echo(f"{recording}: {rec.n_samples} rows read; estimators: {', '.join(est)}")
     click.echo("range holds (open, fist): " + ("stored" if ref is not None else
                                                "none; apply cannot take --range"))
     best = next((est[m] for m in ("model4", "model3", "model2", "model1") if m in est), None)

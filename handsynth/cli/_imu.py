@@ -278,7 +278,7 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
     full_scale = _full_scale(acc_range_g, gyr_range_dps)
     rec = read_imu_csv(recording, acc_units=acc_units, gyr_units=gyr_units, mag_units=mag_units,
                        rate_hz=rate_hz)
-    if static_s * rec.rate_hz > rec.n:
+    if static_s * rec.rate_hz > rec.n + 0.5:  # as check_static_fits, in the option's words
         raise RecordingError(f"{recording}: the static start --static {static_s:g} s is longer than "
                              f"the recording ({rec.n} samples, {rec.duration_s:.3g} s); shorten "
                              "--static")

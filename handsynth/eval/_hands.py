@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._checks import check_integer, check_number
 from ..errors import InvalidInputError
 from ..estimate import SelectionOptions, select_shape, shape_ratios
 from ..models import GRID_LEVELS, HandMeasurements, HandShape, model_measurements
@@ -14,6 +15,16 @@ from ._options import _NORMALIZE, EvalOptions
 from ._stats import _num, ratio_distance
 
 __all__ = ["random_hand_shapes"]
+
+#: The largest `margin` of :func:`random_hand_shapes`, in grid steps (the bound of
+#: ``EvalOptions.ratio_margin``): 4 steps beyond the outer levels keep every ratio within
+#: what :class:`HandShape` accepts.
+_MAX_MARGIN = 4.0
+
+#: Draws of one ratio before :func:`random_hand_shapes` gives up landing off the grid levels
+#: (over a range of at least 0.1, rounded to 4 decimals, a draw lands on a level about once in
+#: 300 draws, so this is never reached by chance).
+_MAX_REDRAWS = 100
 
 
 def random_hand_shapes(n: int, *, seed: int = 0, margin: float = 0.5) -> list[HandShape]:
@@ -30,19 +41,40 @@ def random_hand_shapes(n: int, *, seed: int = 0, margin: float = 0.5) -> list[Ha
     -------
     list of HandShape
         Ratios rounded to 4 decimals, never exactly on a grid level.
+
+    Raises
+    ------
+    InvalidInputError
+        `n` or `seed` not an integer >= 0, or `margin` not a finite number in
+        [0, 4] (as ``EvalOptions.ratio_margin``: below 0 the draw range shrinks to
+        nothing and no draw is off the levels; beyond 4, ratios may leave the
+        range :class:`HandShape` accepts).
     """
+    n = check_integer(n, "n", minimum=0)
+    seed = check_integer(seed, "seed", minimum=0)
+    margin = check_number(margin, "margin", minimum=0.0, maximum=_MAX_MARGIN)
     rng = np.random.default_rng(np.random.SeedSequence([seed, 0x4A11D]))
     out = []
     for _ in range(n):
         ratios = {}
         for name, (lo, mid, hi) in GRID_LEVELS.items():
-            a, b = lo - margin * (mid - lo), hi + margin * (hi - mid)
-            v = lo
-            while v in (lo, mid, hi):  # rounding may land on a level: draw again
-                v = round(float(rng.uniform(a, b)), 4)
-            ratios[name] = v
+            ratios[name] = _draw_off_levels(rng, (lo, mid, hi), margin, name)
         out.append(HandShape(**ratios))
     return out
+
+
+def _draw_off_levels(rng: np.random.Generator, levels: tuple[float, float, float], margin: float,
+                     name: str) -> float:
+    """A ratio drawn uniformly over the levels' range plus `margin` steps, rounded to 4
+    decimals and not on a level; redrawn a bounded number of times."""
+    lo, mid, hi = levels
+    a, b = lo - margin * (mid - lo), hi + margin * (hi - mid)
+    for _ in range(_MAX_REDRAWS):  # rounding may land on a level: draw again
+        v = round(float(rng.uniform(a, b)), 4)
+        if v not in levels:
+            return v
+    raise InvalidInputError(f"random_hand_shapes: no {name} ratio off the grid levels {levels} "
+                            f"in {_MAX_REDRAWS} draws over [{a:g}, {b:g}] (margin={margin!r})")
 
 
 def _pose_seed(seed: int, hand: int, set_index: int) -> int:

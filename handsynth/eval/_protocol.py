@@ -116,7 +116,7 @@ class ProtocolOptions:
             raise InvalidInputError(f"ProtocolOptions.pose_sets must name 'paper' and/or "
                                     f"'natural', each once, got {sets!r}")
         check_number(self.slip, "ProtocolOptions.slip", minimum=0, maximum=5)
-        if self.rest not in REST_POSTURES:
+        if not isinstance(self.rest, str) or self.rest not in REST_POSTURES:
             raise InvalidInputError(f"ProtocolOptions.rest must be one of "
                                     f"{', '.join(REST_POSTURES)}, got {self.rest!r}")
 

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._checks import check_number
 from ..errors import InvalidInputError
 from ..models import GRID_LEVELS, JOINT_NAMES, HandShape
 
@@ -75,7 +76,8 @@ def joint_stats(errors_deg) -> JointStats:
     Raises
     ------
     InvalidInputError
-        Not an (N, 20) array of numbers, or infinite values.
+        Not an (N, 20) array of numbers, no rows (N = 0: no statistic is
+        defined), or infinite values.
     """
     try:
         e = np.asarray(errors_deg, dtype=np.float64)
@@ -84,6 +86,8 @@ def joint_stats(errors_deg) -> JointStats:
                                 f"{type(errors_deg).__name__}") from None
     if e.ndim != 2 or e.shape[1] != len(JOINT_NAMES):
         raise InvalidInputError(f"errors_deg must have shape (N, 20), got {e.shape}")
+    if len(e) == 0:
+        raise InvalidInputError(f"errors_deg must have at least one row (frame), got shape {e.shape}")
     if np.isinf(e).any():
         raise InvalidInputError("errors_deg must be finite or NaN, got an infinite value")
     ok = ~np.isnan(e)
@@ -142,7 +146,14 @@ def silhouette_ambiguity(database, *, spread_deg: float = 20.0) -> dict:
         (entries with at least one ambiguous joint), ``spread_deg`` and
         ``per_joint``: canonical joint name -> number of entries in which it
         is ambiguous.
+
+    Raises
+    ------
+    InvalidInputError
+        `spread_deg` not a finite number > 0 (at 0 or below every entry would
+        read as ambiguous), or `database` without (N, words) silhouettes, N >= 1.
     """
+    check_number(spread_deg, "spread_deg", above=0)
     bits = np.ascontiguousarray(np.asarray(database.sil_bits, dtype=np.uint64))
     if bits.ndim != 2 or len(bits) == 0:
         raise InvalidInputError(f"database.sil_bits must be (N, words) with N >= 1, "

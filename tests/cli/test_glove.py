@@ -575,3 +575,20 @@ def test_a_corrupt_synergy_export_is_one_line(files, tmp_path):
                "dg5", "--synergy-csv", export)
     _one_error_line(res, "cyber.csv, line 8: index_pip is", "beyond any joint angle")
     assert not (tmp_path / "c.json").exists()
+
+
+def test_readings_that_hold_their_own_range_are_read_and_warned_about_once(files, tmp_path):
+    # export-style names: "6 columns read by their meaning" was printed twice, once for the
+    # readings and once for the same file as --range
+    names = {"sensor_thumb": "Thumb", "sensor_index": "index sensor", "sensor_middle": "Bend-Middle",
+             "sensor_ring": "Ring", "sensor_little": "pinky", "time_s": "Time (s)"}
+    wear = _edit_csv(files["wear"], tmp_path / "export.csv",
+                     lambda header, rows: ([names.get(h, h) for h in header], rows))
+    out = tmp_path / "a.csv"
+    res = _run("glove", "apply", files["cal"], wear, "-o", out, "--range", wear)
+    assert res.exit_code == 0, res.output
+    assert res.output.count("read by their meaning") == 1, res.output
+    plain = tmp_path / "b.csv"
+    assert _run("glove", "apply", files["cal"], files["wear"], "-o", plain, "--range",
+                files["wear"]).exit_code == 0
+    assert out.read_text() == plain.read_text()  # the same angles either way

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..._checks import check_path_names
-from ..._io import check_output
+from ..._io import check_output, same_file
 from ...errors import EstimationError, InvalidInputError
 from ._calibrate import load_calibration, range_readings
 from ._checks import check_sensors, refuse_unreadable
@@ -102,7 +102,9 @@ def apply_calibration(calibration, readings, out, *, model: str = "model4",
         if cal["range_reference"] is None:
             raise InvalidInputError(f"{calibration}: the calibration had no range_open/"
                                     "range_fist holds, so range_csv (--range) cannot be used")
-        src = range_readings(read_glove_csv(range_csv, adc_max=adc_max), where=str(range_csv))
+        # the holds are often in the readings' own file: read once, warned about once
+        held = rec if same_file(range_csv, readings) else read_glove_csv(range_csv, adc_max=adc_max)
+        src = range_readings(held, where=str(range_csv))
         if src is None:
             raise InvalidInputError(f"{range_csv}: needs rows with motion 'range_open' "
                                     "and rows with motion 'range_fist'")

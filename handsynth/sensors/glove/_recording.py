@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..._checks import check_path
 from ..._csv import column_index, names_by_meaning, read_rows, reads_as_number
 from ..._io import atomic_open
 from ...errors import InvalidInputError, RecordingError
@@ -327,8 +328,10 @@ def read_glove_csv(path, *, kind: str = "", adc_max: float = 4095.0) -> GloveRec
         joint columns, a row of the wrong length, or a cell that is not a
         number, is infinite or beyond any reading or angle; the message names
         the file, line and column.
+    InvalidInputError
+        `path` not a str or path-like (None, a number, an open file), or an empty name.
     """
-    path = Path(path)
+    path = check_path(path, "path")
     _check_adc_max(adc_max)  # before reading the file
     content = read_rows(path, what="glove CSV")
     rows = content.rows

@@ -10,7 +10,7 @@ into one attitude; joint angles and fingertip positions.
 """
 
 from ._allan import KalmanDenoiser, NoiseCoefficients, allan_deviation, noise_coefficients
-from ._attitude import StaticStart, azimuth_correction, gyro_bias, initial_attitude
+from ._attitude import StaticStart, azimuth_correction, check_static_fits, gyro_bias, initial_attitude
 from ._broad import BROAD_FILTERS, broad_errors, find_broad_trials, read_broad_trial, run_broad
 from ._calibration import ImuCalibration, calibrate, segments_from_seconds
 from ._ekf import FILTER4B, ChainEKF, ChainEKFOptions, sensor_tree
@@ -56,6 +56,7 @@ from ._motion import (
     ACC_POSES,
     CALIBRATION_PLAN,
     GRASP_POSES,
+    MAX_MOTION_S,
     Motion,
     calibration_motion,
     concat_motions,
@@ -113,6 +114,7 @@ __all__ = [
     "HELDOUT",
     "JOINT_LINKS",
     "LINKS",
+    "MAX_MOTION_S",
     "MODEL_JOINTS",
     "MPU9250_DATASHEET",
     "PLATE_SENSORS",
@@ -164,6 +166,7 @@ __all__ = [
     "calibration_motion",
     "chain_model",
     "check_recording",
+    "check_static_fits",
     "classify_grasp",
     "concat_motions",
     "draw_fixed_errors",

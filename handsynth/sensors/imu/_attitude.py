@@ -22,7 +22,8 @@ from ...errors import EstimationError, InvalidInputError, RecordingError
 from ._quat import quat_from_acc_mag
 from ._recording import ImuRecording, check_recording, check_static
 
-__all__ = ["StaticStart", "azimuth_correction", "check_run_input", "gyro_bias", "initial_attitude"]
+__all__ = ["StaticStart", "azimuth_correction", "check_run_input", "check_static_fits", "gyro_bias",
+           "initial_attitude"]
 
 
 #: Default common rotation (azimuth alignment), s.
@@ -104,12 +105,7 @@ def check_run_input(rec, static) -> ImuRecording:
     """
     check_instance(rec, ImuRecording, name="rec")
     check_instance(static, StaticStart, name="static")
-    # half a sample's tolerance: 2.0 s of a recording of 200 samples at 100 Hz fit
-    end = (rec.n + 0.5) / rec.rate_hz
-    if static.static_s > end:
-        raise RecordingError(f"the static start static_s={static.static_s:g} s is longer than "
-                             f"the recording ({rec.n} samples, {rec.n / rec.rate_hz:.4g} s); "
-                             "shorten the static start")
+    check_static_fits(rec, static.static_s)
     before = rec.reported or frozenset()
     for w in check_recording(rec, static_s=static.static_s):
         if w not in before:
@@ -117,14 +113,45 @@ def check_run_input(rec, static) -> ImuRecording:
     return rec
 
 
+def check_static_fits(rec: ImuRecording, static_s: float, *, source: str = "") -> None:
+    """Refuse a static start longer than the recording (by more than half a sample).
+
+    The one test of every use of a static start: :func:`check_run_input` (the
+    estimators), :func:`gyro_bias`, :func:`azimuth_correction` and
+    :func:`initial_attitude`; the command line can share it.
+
+    Parameters
+    ----------
+    rec : ImuRecording
+    static_s : float
+        Length of the static start, s (already checked to be finite and > 0).
+    source : str, keyword-only
+        Prefix of the message (a file name), none by default.
+
+    Raises
+    ------
+    RecordingError
+        ``round(static_s * rate_hz)`` beyond the recording's N samples: 2.0 s of
+        200 samples at 100 Hz fit (half a sample's tolerance), 2.01 s do not.
+    """
+    end = (rec.n + 0.5) / rec.rate_hz
+    if static_s > end:
+        where = f"{source}: " if source else ""
+        raise RecordingError(f"{where}the static start static_s={static_s:g} s is longer than "
+                             f"the recording ({rec.n} samples, {rec.n / rec.rate_hz:.4g} s); "
+                             "shorten the static start")
+
+
 def _n(rec: ImuRecording, seconds: float) -> int:
     return max(1, min(rec.n, round(seconds * rec.rate_hz)))
 
 
 def _static_samples(rec: ImuRecording, static: StaticStart) -> int:
-    """Samples of the static start, after checking the two arguments' types."""
+    """Samples of the static start, after checking the two arguments' types and that the
+    static start fits in the recording."""
     check_instance(rec, ImuRecording, name="rec")
     check_instance(static, StaticStart, name="static")
+    check_static_fits(rec, static.static_s)
     return _n(rec, static.static_s)
 
 
@@ -136,8 +163,7 @@ def gyro_bias(rec: ImuRecording, static: StaticStart = StaticStart()) -> np.ndar
     rec : ImuRecording
     static : StaticStart
         Its ``static_s`` gives the samples averaged: ``round(static_s *
-        rate_hz)``, at least 1 and at most the recording's N (a static start
-        longer than the recording is not refused here).
+        rate_hz)``, at least 1 and at most the recording's N.
 
     Returns
     -------
@@ -147,6 +173,8 @@ def gyro_bias(rec: ImuRecording, static: StaticStart = StaticStart()) -> np.ndar
     ------
     InvalidInputError
         `rec` not an :class:`ImuRecording` or `static` not a :class:`StaticStart`.
+    RecordingError
+        A static start longer than the recording (:func:`check_static_fits`).
     """
     n0 = _static_samples(rec, static)
     return rec.gyr[:, :n0].mean(axis=1)
@@ -175,6 +203,8 @@ def azimuth_correction(rec: ImuRecording, static: StaticStart = StaticStart()) -
     InvalidInputError
         `rec` or `static` of the wrong type; a common rotation of fewer than
         2 samples inside the recording.
+    RecordingError
+        A static start longer than the recording (:func:`check_static_fits`).
     EstimationError
         If the common rotation is too slow (< 0.5 rad/s) or about the vertical
         (then g x w_max vanishes and fixes no heading).
@@ -237,6 +267,8 @@ def initial_attitude(rec: ImuRecording, static: StaticStart = StaticStart(), *,
     InvalidInputError, EstimationError
         As :func:`azimuth_correction` (with `align`); `rec` or `static` of the
         wrong type.
+    RecordingError
+        A static start longer than the recording (:func:`check_static_fits`).
     """
     n0 = _static_samples(rec, static)
     g = rec.acc[:, :n0].mean(axis=1)

@@ -29,7 +29,7 @@ from types import MappingProxyType
 
 import numpy as np
 
-from ..._checks import check_options
+from ..._checks import check_instance, check_number, check_options, short_repr
 from ...errors import InvalidInputError
 from ...models import (
     FINGERS,
@@ -133,6 +133,13 @@ class ImuPlacement:
         Extra displacement of named sensors in their body frame, mm.
     tilts_deg : mapping of str to (3,) float
         Extra rotation of named sensors (x, y, z rotation vector, degrees).
+
+    Raises
+    ------
+    InvalidInputError
+        A field that is not a finite number in its range (`height_mm` in [0, 50),
+        `along` in (0, 1), `forearm_length_mm` in [100, 400]), `offsets_mm` or
+        `tilts_deg` not a mapping of names of :data:`SENSOR_NAMES` to 3 finite numbers.
     """
 
     height_mm: float = 4.0
@@ -142,17 +149,30 @@ class ImuPlacement:
     tilts_deg: Mapping[str, tuple[float, float, float]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        if not (0.0 <= self.height_mm < 50.0):
-            raise InvalidInputError(f"height_mm must be in [0, 50), got {self.height_mm!r}")
-        if not (0.0 < self.along < 1.0):
-            raise InvalidInputError(f"along must be in (0, 1), got {self.along!r}")
-        if not (100.0 <= self.forearm_length_mm <= 400.0):
-            raise InvalidInputError(
-                f"forearm_length_mm must be in [100, 400], got {self.forearm_length_mm!r}")
-        for name in (*self.offsets_mm, *self.tilts_deg):
-            if name not in SENSOR_NAMES:
-                raise InvalidInputError(
-                    f"unknown sensor {name!r} in placement; expected one of {', '.join(SENSOR_NAMES)}")
+        check_number(self.height_mm, "ImuPlacement.height_mm", minimum=0.0, below=50.0)
+        check_number(self.along, "ImuPlacement.along", above=0.0, below=1.0)
+        check_number(self.forearm_length_mm, "ImuPlacement.forearm_length_mm", minimum=100.0,
+                     maximum=400.0)
+        for what in ("offsets_mm", "tilts_deg"):
+            value = getattr(self, what)
+            check_instance(value, Mapping, name=f"ImuPlacement.{what}",  # type: ignore[type-abstract]
+                           hint=" (a mapping of sensor name to (x, y, z))")
+            for name, vec in value.items():
+                if name not in SENSOR_NAMES:
+                    raise InvalidInputError(
+                        f"unknown sensor {name!r} in placement; expected one of {', '.join(SENSOR_NAMES)}")
+                _check_vector(vec, f"ImuPlacement.{what}[{name!r}]")
+
+
+def _check_vector(vec, name: str) -> None:
+    """Refuse anything but 3 finite numbers (a text, a number, a wrong length, NaN)."""
+    try:
+        v = None if isinstance(vec, (str, bytes)) else np.asarray(vec, dtype=np.float64)
+    except (TypeError, ValueError):
+        v = None
+    if v is None or v.shape != (3,) or not np.isfinite(v).all():
+        raise InvalidInputError(f"{name} must be 3 finite numbers (x, y, z), got "
+                                f"{type(vec).__name__} {short_repr(vec)}")
 
 
 def _fmt(v) -> str:

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..._checks import check_number, short_repr
 from ...errors import InvalidInputError
 from ...models import JOINT_LIMITS_DEG, JOINT_NAMES
 from ._model import ARM_JOINTS, MODEL_JOINTS
@@ -26,6 +27,7 @@ __all__ = [
     "ACC_POSES",
     "CALIBRATION_PLAN",
     "GRASP_POSES",
+    "MAX_MOTION_S",
     "Motion",
     "calibration_motion",
     "concat_motions",
@@ -35,6 +37,10 @@ __all__ = [
 ]
 
 _J = {n: i for i, n in enumerate(MODEL_JOINTS)}
+
+#: The longest motion a generator makes, s (one hour: 360,000 samples at 100 Hz; each sample
+#: holds positions, velocities and accelerations of the 29 joints).
+MAX_MOTION_S = 3600.0
 
 
 @dataclass(frozen=True)
@@ -69,12 +75,35 @@ class Motion:
         return np.arange(self.n) / self.rate_hz
 
 
-def _grid(duration_s: float, rate_hz: float) -> np.ndarray:
-    if not (np.isfinite(duration_s) and duration_s > 0):
-        raise InvalidInputError(f"duration_s must be positive, got {duration_s!r}")
-    if not (10.0 <= rate_hz <= 1000.0):
-        raise InvalidInputError(f"rate_hz must be in [10, 1000], got {rate_hz!r}")
+def _grid(duration_s: float, rate_hz: float, name: str = "duration_s") -> np.ndarray:
+    """Sample times of a motion of `duration_s` (named `name` in messages) at `rate_hz`."""
+    duration_s = check_number(duration_s, name, above=0.0, maximum=MAX_MOTION_S)
+    rate_hz = check_number(rate_hz, "rate_hz", minimum=10.0, maximum=1000.0)
     return np.arange(round(duration_s * rate_hz)) / rate_hz
+
+
+def _check_pose(pose, name: str) -> np.ndarray | None:
+    """`pose` as the 29 positions of :data:`MODEL_JOINTS` (None passes); 20 canonical hand
+    angles (:func:`handsynth.models.named_pose`) are placed with the arm joints at 0."""
+    if pose is None:
+        return None
+    shapes = (f"an array of shape ({len(MODEL_JOINTS)},) (MODEL_JOINTS) or ({len(JOINT_NAMES)},) "
+              f"(canonical hand angles, deg)")
+    if isinstance(pose, (str, bytes)):
+        raise InvalidInputError(f"{name} must be {shapes}, got {type(pose).__name__} "
+                                f"{short_repr(pose)} (a named pose: handsynth.models.named_pose(name))")
+    try:
+        a = np.asarray(pose, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"{name} must be {shapes} of numbers, got {type(pose).__name__} "
+                                f"{short_repr(pose)}") from None
+    if a.shape == (len(JOINT_NAMES),):
+        a = _full_pose(hand_deg=a)
+    elif a.shape != (len(MODEL_JOINTS),):
+        raise InvalidInputError(f"{name} must be {shapes}, got shape {a.shape}")
+    if not np.isfinite(a).all():
+        raise InvalidInputError(f"{name} must be finite, got {short_repr(pose)}")
+    return a
 
 
 def _smoothstep(t, t0, t1):
@@ -112,17 +141,20 @@ def _full_pose(hand_deg=None, arm=None) -> np.ndarray:
 
 
 def static_motion(duration_s: float = 2.0, *, rate_hz: float = 100.0, pose=None) -> Motion:
-    """Hold `pose` (shape (29,), default zeros) still for `duration_s`.
+    """Hold `pose` (shape (29,) or (20,), default zeros) still for `duration_s`.
 
     Parameters
     ----------
     duration_s : float
-        Length, s (finite, > 0); ``round(duration_s * rate_hz)`` samples.
+        Length, s (finite, > 0, at most :data:`MAX_MOTION_S`); ``round(duration_s *
+        rate_hz)`` samples.
     rate_hz : float, keyword-only
         Sampling rate, Hz, in [10, 1000].
-    pose : array_like, shape (29,), keyword-only, optional
+    pose : array_like, shape (29,) or (20,), keyword-only, optional
         Positions of :data:`MODEL_JOINTS`: hinges in deg, the elbow slides in
-        m; None for all zeros.
+        m; or the 20 canonical hand angles in deg (a
+        :func:`handsynth.models.named_pose`), the arm joints then at 0; None
+        for all zeros.
 
     Returns
     -------
@@ -133,10 +165,12 @@ def static_motion(duration_s: float = 2.0, *, rate_hz: float = 100.0, pose=None)
     Raises
     ------
     InvalidInputError
-        `duration_s` not finite and > 0, or `rate_hz` outside [10, 1000].
+        `duration_s` not a finite number > 0 and <= :data:`MAX_MOTION_S`, `rate_hz` outside
+        [10, 1000], or `pose` not a finite array of shape (29,) or (20,) (a pose name is
+        refused: give ``named_pose(name)``).
     """
     t = _grid(duration_s, rate_hz)
-    q, qd, qdd = _base(t.size, pose)
+    q, qd, qdd = _base(t.size, _check_pose(pose, "pose"))
     return Motion(rate_hz, q, qd, qdd, "static", (("static", 0, t.size),))
 
 
@@ -209,7 +243,7 @@ def _pose_sequence(rest, poses, rate_hz, *, move_s=1.0, hold_s=1.5) -> list[Moti
     targets.append(rest.copy())
     for k, p in enumerate(targets):
         last = k == len(targets) - 1
-        t = _grid(move_s + (0.5 if last else hold_s), rate_hz)
+        t = _grid(move_s + (0.5 if last else hold_s), rate_hz, "length of an acc_pose move")
         q, qd, qdd = _base(t.size, cur)
         for j in arm:
             if p[j] != cur[j]:
@@ -237,7 +271,8 @@ def calibration_motion(*, rate_hz: float = 100.0, cycles: float = 5.0, static_s:
     plan : sequence of (label, joints, amp_deg, freq_hz), keyword-only
     rest_pose : (29,) float, keyword-only
         Posture between rotations; by default every joint at its oscillation
-        centre's neighbour zero except the elbow at 30 deg.
+        centre's neighbour zero except the elbow at 30 deg.  20 canonical hand
+        angles (deg) place the arm joints at 0, as in :func:`static_motion`.
     acc_poses : bool, keyword-only
         After the static start, hold the arm still in the postures of
         :data:`ACC_POSES` (1 s move, 1.5 s hold each, labelled
@@ -248,16 +283,22 @@ def calibration_motion(*, rate_hz: float = 100.0, cycles: float = 5.0, static_s:
     -------
     Motion
         ``segments`` names each rotation by its label.
+
+    Raises
+    ------
+    InvalidInputError
+        `rest_pose` not a finite array of shape (29,) or (20,); `static_s` not in
+        (0, :data:`MAX_MOTION_S`]; `rate_hz` outside [10, 1000].
     """
-    rest = _full_pose(arm={"elbow_flex": _CAL_CENTRE["elbow_flex"]}) if rest_pose is None \
-        else np.asarray(rest_pose, float)
+    checked = _check_pose(rest_pose, "rest_pose")
+    rest = _full_pose(arm={"elbow_flex": _CAL_CENTRE["elbow_flex"]}) if checked is None else checked
     pieces = [static_motion(static_s, rate_hz=rate_hz, pose=rest)]
     if acc_poses:
         pieces += _pose_sequence(rest, ACC_POSES, rate_hz)
     hold = 0.5  # still at the rest pose at the start of every rotation
     for label, joints, amp, freq in plan:
         dur = hold + cycles / freq + 1.0
-        t = _grid(dur, rate_hz)
+        t = _grid(dur, rate_hz, f"length of the {label!r} rotation")
         q, qd, qdd = _base(t.size, rest)
         for j in joints:
             c = _CAL_CENTRE.get(j, rest[_J[j]])
@@ -482,7 +523,7 @@ def grasp_motion(grasps=("power_sphere", "medium_wrap", "lateral_pinch", "tip_pi
             raise InvalidInputError(f"unknown grasp {g!r}; expected one of {', '.join(GRASP_POSES)}")
     lead = static_s + (2.0 if align_rotation else 0.0)
     dur = lead + len(grasps) * (2 * move_s + hold_s) + 0.5
-    t = _grid(dur, rate_hz)
+    t = _grid(dur, rate_hz, "length of the grasp motion")
     rest = _full_pose(arm={"elbow_flex": 35.0})
     q, qd, qdd = _base(t.size, rest)
     segs: list[tuple[str, int, int]] = [("static", 0, int(static_s * rate_hz))]

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..._checks import check_instance, is_number
+from ..._checks import check_instance, check_number, check_path, is_number
 from ..._csv import column_index, names_by_meaning, read_number_table, read_rows, read_text, reads_as_number
 from ..._io import atomic_open
 from ...errors import InvalidInputError, RecordingError
@@ -723,8 +723,12 @@ def read_imu_csv(path, *, acc_units: str = "m/s2", gyr_units: str = "rad/s",
         a rate that is not a finite number > 0, unknown units (see
         :func:`check_recording` for the content checks, which the caller
         runs).
+    InvalidInputError
+        `path` not a str or path-like (None, a number, an open file), or an empty
+        name; `max_gap` not a finite number > 0 (NaN would turn the gap check off).
     """
-    path = Path(path)
+    path = check_path(path, "path")
+    max_gap = check_number(max_gap, "max_gap", above=0.0)
     for ch, u in (("acc", acc_units), ("gyr", gyr_units), ("mag", mag_units)):
         if u not in UNITS[ch]:
             raise RecordingError(f"unknown {ch} units {u!r}; expected one of {', '.join(UNITS[ch])}")

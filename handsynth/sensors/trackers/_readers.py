@@ -65,6 +65,7 @@ column gives the sample times; `rate_hz` gives them only without one.
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import os
 import re
 import warnings
@@ -75,6 +76,7 @@ import numpy as np
 from scipy.ndimage import median_filter
 from scipy.spatial.transform import Rotation
 
+from ..._checks import check_path
 from ..._csv import read_text
 from ...errors import InvalidInputError, RecordingError
 from ._checks import check_integer, check_number
@@ -1095,17 +1097,28 @@ def read_recording(path: str | os.PathLike, **kwargs) -> Recording:
     Raises
     ------
     InvalidInputError
-        Options given for an HDF5 file; bad option values of
-        :func:`read_polhemus` (an unknown option name is Python's TypeError).
+        `path` not a str or path-like, or an empty name; options given for an
+        HDF5 file; an option :func:`read_polhemus` does not take (named, with
+        the ones it takes); bad option values of :func:`read_polhemus`.
     RecordingError
         As :func:`~handsynth.sensors.load_recording` or :func:`read_polhemus`.
     """
     from ._hdf5 import SUFFIXES, load_recording
 
-    if Path(path).suffix.lower() in SUFFIXES:
+    path = check_path(path, "path")
+    if path.suffix.lower() in SUFFIXES:
         if kwargs:
             raise InvalidInputError(
                 f"options {sorted(kwargs)} apply to text exports, not HDF5 {str(path)!r}"
             )
         return load_recording(path)
+    unknown = sorted(set(kwargs) - set(_POLHEMUS_OPTIONS))
+    if unknown:
+        raise InvalidInputError(f"read_recording() got unknown options {unknown}; the options of a "
+                                f"text export are {', '.join(_POLHEMUS_OPTIONS)}")
     return read_polhemus(path, **kwargs)
+
+
+#: Keyword options of :func:`read_polhemus`, which :func:`read_recording` forwards.
+_POLHEMUS_OPTIONS: tuple[str, ...] = tuple(
+    n for n, p in inspect.signature(read_polhemus).parameters.items() if p.kind is p.KEYWORD_ONLY)

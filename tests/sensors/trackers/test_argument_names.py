@@ -1,0 +1,21 @@
+"""read_recording names itself and its arguments, not the reader it forwards to."""
+
+from __future__ import annotations
+
+import pytest
+
+from handsynth.errors import InvalidInputError
+from handsynth.sensors.trackers import read_recording
+
+
+def test_read_recording_names_an_unknown_option_as_its_own(tmp_path):
+    # before: "read_polhemus() got an unexpected keyword argument 'bogus'" (a TypeError)
+    with pytest.raises(InvalidInputError, match=r"^read_recording\(\) got unknown options \['bogus'\]; "
+                                                r"the options of a text export are columns, units"):
+        read_recording(tmp_path / "take.txt", bogus=1)
+
+
+def test_read_recording_names_a_path_that_is_not_one():
+    # before: TypeError from pathlib
+    with pytest.raises(InvalidInputError, match=r"^path must be a file name \(str or path\), got None$"):
+        read_recording(None)
