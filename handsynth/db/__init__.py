@@ -38,7 +38,7 @@ from ._build import (
     database_path,
     find_database,
 )
-from ._entries import DEFAULT_RENDER_SIZE, database_meta, render_entries
+from ._entries import DEFAULT_RENDER_SIZE, check_render_size, database_meta, render_entries
 from ._learning import (
     MAX_LEARNING_HANDS,
     LearningSet,
@@ -90,6 +90,7 @@ __all__ = [
     "build_databases",
     "build_default_database",
     "check_database_hand",
+    "check_render_size",
     "check_rows",
     "complement_bits",
     "contour",

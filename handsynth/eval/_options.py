@@ -7,6 +7,7 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 
 from .._checks import check_integer, check_side
+from ..db import check_render_size
 from ..errors import InvalidInputError
 from ..models import PAPER_SIZE, HandShape
 from ..render import CameraMount
@@ -79,15 +80,7 @@ def _check_int(value, name: str, lo: int, hi: int | None = None) -> int:
 
 
 def _check_size(value, name: str) -> tuple[int, int]:
-    try:
-        w, h = (int(s) for s in value)
-        ok = (w, h) == tuple(value) and 16 <= w <= 4096 and 16 <= h <= 4096
-    except (TypeError, ValueError):
-        ok = False
-    if not ok:
-        raise InvalidInputError(
-            f"{_field(name)} must be (width, height) in pixels within [16, 4096], got {value!r}")
-    return w, h
+    return check_render_size(value, _field(name))
 
 
 @dataclass(frozen=True)

@@ -64,17 +64,23 @@ def rotation_error(rotations: np.ndarray) -> np.ndarray:
     InvalidInputError
         `rotations` not an array of numbers of shape (..., 3, 3).
     """
-    from ..._checks import short_repr
     from ...errors import InvalidInputError
 
+    return _rotation_error(_as_matrices(rotations, "rotations", InvalidInputError))
+
+
+def _as_matrices(value, name: str, error) -> np.ndarray:
+    """`value` as a float64 array of shape (..., 3, 3) (NaN allowed), else `error` naming `name`."""
+    from ..._checks import short_repr
+
     try:
-        r = np.asarray(rotations, dtype=np.float64)
+        r = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError):
-        raise InvalidInputError(f"rotations must be a (..., 3, 3) array of numbers, got "
-                                f"{type(rotations).__name__} {short_repr(rotations)}") from None
+        raise error(f"{name} must be a (..., 3, 3) array of numbers, got "
+                    f"{type(value).__name__} {short_repr(value)}") from None
     if r.ndim < 2 or r.shape[-2:] != (3, 3):
-        raise InvalidInputError(f"rotations must have shape (..., 3, 3), got shape {r.shape}")
-    return _rotation_error(r)
+        raise error(f"{name} must have shape (..., 3, 3), got shape {r.shape}")
+    return r
 
 
 def _rotation_error(r: np.ndarray) -> np.ndarray:
@@ -99,17 +105,9 @@ def check_rotations(rotations: np.ndarray, *, name: str = "rotations") -> None:
         Naming the first offending index and its error; or `rotations` not an
         array of numbers of shape (..., 3, 3), naming `name` and the shape.
     """
-    from ..._checks import short_repr
     from ...errors import RecordingError
 
-    try:
-        r = np.asarray(rotations, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise RecordingError(f"{name} must be a (..., 3, 3) array of numbers, got "
-                             f"{type(rotations).__name__} {short_repr(rotations)}") from None
-    if r.ndim < 2 or r.shape[-2:] != (3, 3):
-        raise RecordingError(f"{name} must have shape (..., 3, 3), got shape {r.shape}")
-    err = _rotation_error(r)
+    err = _rotation_error(_as_matrices(rotations, name, RecordingError))
     bad = ~(err <= ROTATION_TOLERANCE)
     if bad.any():
         idx = tuple(int(i) for i in np.argwhere(bad)[0])
