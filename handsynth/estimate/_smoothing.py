@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._checks import check_number, check_options
+from .._checks import check_number, check_options, short_repr
 from ..errors import InvalidInputError
 from ._lookup import PoseEstimate
 
@@ -155,8 +155,17 @@ def one_euro(x, *, rate_hz: float, options: OneEuroOptions | None = None) -> np.
     Returns
     -------
     ndarray, shape (N, J), float64
+
+    Raises
+    ------
+    InvalidInputError
+        `x` not a finite (N, J) array of numbers, bad `rate_hz` or `options`.
     """
-    x = np.asarray(x, dtype=np.float64)
+    try:
+        x = np.asarray(x, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"x must be a finite (N, J) array of numbers, got "
+                                f"{type(x).__name__} {short_repr(x)}") from None
     if x.ndim != 2 or not np.all(np.isfinite(x)):
         raise InvalidInputError(f"x must be a finite (N, J) array, got shape {x.shape}")
     o = check_options(options, OneEuroOptions)

@@ -191,7 +191,8 @@ class CsvRowWriter(_RowWriter):
         writes no row leaves it as it was), ``"-"`` for standard output, or
         an open text stream.
     columns : sequence of str, keyword-only, optional
-        :func:`live_columns` by default.
+        :func:`live_columns` by default; any of the columns of
+        ``live_columns(keypoints=True, truth=True)``, in any order.
     flush_every : int, keyword-only
         Flush after this many rows (1: every row).
     """
@@ -254,11 +255,21 @@ def open_row_writer(target, *, format: str | None = None, columns=None,
     Raises
     ------
     InvalidInputError
-        Unknown format, or a suffix that does not tell the format.
+        Unknown format, a suffix that does not tell the format, or a column
+        that no row has (it would be written empty on every row), named.
     OutputError
         A file that cannot be created: its folder is missing, it is a
         folder, or it is one of `inputs`.
     """
+    if columns is not None:
+        if isinstance(columns, str):
+            raise InvalidInputError(f"columns must be a sequence of column names, got str {columns!r}")
+        known = live_columns(keypoints=True, truth=True)
+        unknown = [c for c in columns if c not in known]
+        if unknown:
+            raise InvalidInputError(f"columns: no row has a column {unknown[0]!r}; the columns are "
+                                    f"those of live_columns(keypoints=True, truth=True), e.g. "
+                                    f"{', '.join(known[:7])}, ...")
     if format is None:
         suffix = Path(str(target)).suffix.lower() if isinstance(target, (str, os.PathLike)) else ""
         if suffix not in _SUFFIXES:

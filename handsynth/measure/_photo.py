@@ -132,7 +132,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._checks import check_number, check_options
+from .._checks import check_instance, check_number, check_options, check_path
 from .._io import write_text
 from ..errors import InvalidInputError
 from ..estimate import Selection, SelectionOptions, select_shape, shape_ratios
@@ -1251,14 +1251,16 @@ def write_measurement_file(path, measurements: HandMeasurements, *, inputs=()) -
     Raises
     ------
     InvalidInputError
-        Another suffix.
+        Another suffix, `path` not a file name, or `measurements` not a
+        :class:`HandMeasurements`.
     OutputError
         The file cannot be written (missing folder, full disk...) or is one
         of `inputs`.
     """
     import json
 
-    path = Path(path)
+    path = check_path(path, "path")
+    check_instance(measurements, HandMeasurements, name="measurements")
     suffix = path.suffix.lower()
     if suffix == ".json":
         text = json.dumps(measurements.as_dict(), indent=1) + "\n"

@@ -34,7 +34,7 @@ from ._mjcf import (
     hand_spec,
 )
 from ._pose import NAMED_POSES, as_angles, named_pose
-from ._posesets import PAPER_SIZE, POSE_SETS, natural_pose_set, paper_pose_set, pose_set
+from ._posesets import MAX_POSES, PAPER_SIZE, POSE_SETS, natural_pose_set, paper_pose_set, pose_set
 from ._shape import GRID_LEVELS, HandShape
 
 __all__ = [
@@ -46,6 +46,7 @@ __all__ = [
     "JOINT_LIMITS_DEG",
     "JOINT_NAMES",
     "KEYPOINT_SITES",
+    "MAX_POSES",
     "NAMED_POSES",
     "NORMALIZATIONS",
     "PAPER_SIZE",

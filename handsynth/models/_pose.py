@@ -48,6 +48,8 @@ def as_angles(angles, *, argname: str = "angles", check_limits: bool = True) -> 
             out[joint_index(name)] = _scalar(value, f"{argname}[{name!r}]")
         arr = out
     else:
+        if np.iscomplexobj(angles):  # the conversion would drop the imaginary parts
+            raise InvalidPoseError(f"{argname} must be real joint angles, got complex values")
         try:
             arr = np.array(angles, dtype=np.float64)
         except (TypeError, ValueError) as exc:

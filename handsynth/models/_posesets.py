@@ -26,7 +26,7 @@ from ..errors import InvalidInputError
 from ._joints import FINGERS, JOINT_LIMITS_DEG, JOINT_NAMES
 from ._pose import NAMED_POSES
 
-__all__ = ["POSE_SETS", "natural_pose_set", "paper_pose_set", "pose_set"]
+__all__ = ["MAX_POSES", "POSE_SETS", "natural_pose_set", "paper_pose_set", "pose_set"]
 
 #: Entries of one shape's database in the paper's experiment (seed 001 section 3.1,
 #: 20448 entries; SPEC.md section 1, "Paper's experiment").
@@ -52,9 +52,16 @@ def _lim(name: str) -> tuple[float, float]:
     return float(lo), float(hi)
 
 
+#: Most poses one pose set holds: 10 million, 1.6 GB of float64 angles.
+MAX_POSES = 10_000_000
+
+
 def _check_n(n, seed) -> tuple[int, int]:
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
         raise InvalidInputError(f"pose count n must be a positive integer, got {n!r}")
+    if n > MAX_POSES:
+        raise InvalidInputError(f"pose count n must be at most {MAX_POSES:,} (160 bytes a pose "
+                                f"in memory: {n:,} would need {n * 160 / 1e9:,.0f} GB), got {n}")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise InvalidInputError(f"seed must be a non-negative integer, got {seed!r}")
     return int(n), int(seed)

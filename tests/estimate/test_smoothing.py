@@ -107,3 +107,11 @@ def test_smoothed_estimator_filters_answers_and_keeps_the_rest():
     assert cal.estimate(frame).angles[0] == 12.0
     with pytest.raises(InvalidInputError, match="has no estimate"):
         SmoothedEstimator(object(), rate_hz=30.0)
+
+
+def test_one_euro_names_samples_that_are_not_numbers():
+    # one_euro("abc") was numpy's "could not convert string to float"
+    from handsynth.estimate import one_euro
+
+    with pytest.raises(InvalidInputError, match=r"x must be a finite \(N, J\) array of numbers, got str"):
+        one_euro("abc", rate_hz=30)

@@ -587,3 +587,15 @@ def test_a_video_out_that_is_no_name_is_refused_before_any_read(tmp_path, lookup
     with pytest.raises(InvalidInputError, match=re.escape("path must be a file name (str or path), "
                                                           "got None")):
         SideBySideWriter(None, lookup)
+
+
+def test_a_row_file_refuses_a_column_no_row_has(tmp_path):
+    # columns=["zzz"] wrote a column that stayed empty on every row
+    from handsynth.live import live_columns, open_row_writer
+
+    with pytest.raises(InvalidInputError, match=r"columns: no row has a column 'zzz'"):
+        open_row_writer(tmp_path / "r.csv", columns=["frame", "zzz"])
+    with pytest.raises(InvalidInputError, match=r"columns must be a sequence of column names, got str"):
+        open_row_writer(tmp_path / "r.csv", columns="frame")
+    assert not (tmp_path / "r.csv").exists()
+    open_row_writer(tmp_path / "r.csv", columns=live_columns()[:3]).close()  # a subset is fine

@@ -445,3 +445,14 @@ def test_photo_scales_that_are_text_are_refused_before_any_render(call, named):
 
     with pytest.raises(InvalidInputError, match=f"^{re.escape(named)}$"):
         call()
+
+
+def test_write_measurement_file_names_what_is_not_measurements(tmp_path):
+    # measurements=None was an AttributeError ('NoneType' object has no attribute 'as_dict')
+    from handsynth.measure import write_measurement_file
+
+    with pytest.raises(InvalidInputError, match="measurements must be a HandMeasurements, got NoneType"):
+        write_measurement_file(tmp_path / "m.json", None)
+    with pytest.raises(InvalidInputError, match="path must be a file name"):
+        write_measurement_file(None, None)
+    assert list(tmp_path.iterdir()) == []

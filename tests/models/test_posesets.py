@@ -50,3 +50,23 @@ def test_bad_pose_set_arguments():
         pose_set("foo")
     with pytest.raises(InvalidInputError, match="n must be a positive integer, got 0"):
         paper_pose_set(0)
+
+
+@pytest.mark.parametrize("make", [lambda n: pose_set("paper", n), lambda n: natural_pose_set(n),
+                                  lambda n: paper_pose_set(n)])
+def test_a_pose_count_past_memory_is_refused_before_any_work(make):
+    # 10**12 poses was a MemoryError, 10**10 ran for minutes
+    from handsynth.models import MAX_POSES
+
+    with pytest.raises(InvalidInputError, match=r"pose count n must be at most 10,000,000 .* "
+                                                r"160,000 GB\), got 1000000000000"):
+        make(10**12)
+    assert MAX_POSES == 10_000_000
+
+
+def test_complex_angles_are_refused_not_cut_to_their_real_parts():
+    from handsynth.errors import InvalidPoseError
+    from handsynth.models import as_angles
+
+    with pytest.raises(InvalidPoseError, match="angles must be real joint angles, got complex"):
+        as_angles(np.zeros(20) + 1j)

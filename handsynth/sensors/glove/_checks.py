@@ -198,8 +198,19 @@ def check_sensors(sensors: np.ndarray, *, adc_max: float, where: str,
         where `lines` is given), each dead sensor, each sensor saturated in
         more than 1 % of the rows and each sensor with a reading out of the
         converter's range.
+
+    Raises
+    ------
+    RecordingError
+        `sensors` is not an array of numbers of shape (N, 5), naming `where`.
     """
-    s = np.asarray(sensors, dtype=np.float64)
+    try:
+        s = np.asarray(sensors, dtype=np.float64)
+    except (TypeError, ValueError):
+        s = None
+    if s is None or s.ndim != 2 or s.shape[1] != 5:
+        got = f"shape {s.shape}" if s is not None else type(sensors).__name__
+        raise RecordingError(f"{where}: sensors must be readings of shape (N, 5), got {got}")
     nan = np.isnan(s)
     nan_rows = np.flatnonzero(nan.any(axis=1))
     good = s[~nan.any(axis=1)]

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..._checks import check_path
+from ..._checks import check_path, short_repr
 from ..._csv import column_index, names_by_meaning, read_rows, reads_as_number
 from ..._io import atomic_open
 from ...errors import InvalidInputError, RecordingError
@@ -111,7 +111,11 @@ class GloveRecording:
     lines: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        s = np.asarray(self.sensors, dtype=np.float64)
+        try:
+            s = np.asarray(self.sensors, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise RecordingError(f"sensors must be an (N, 5) array of readings, got "
+                                 f"{type(self.sensors).__name__} {short_repr(self.sensors)}") from None
         if s.ndim != 2 or s.shape[1] != 5:
             raise RecordingError(f"sensors must have shape (N, 5), got {s.shape}")
         n = s.shape[0]
@@ -119,7 +123,11 @@ class GloveRecording:
         for name in ("angles", "truth"):
             a = getattr(self, name)
             if a is not None:
-                a = np.asarray(a, dtype=np.float64)
+                try:
+                    a = np.asarray(a, dtype=np.float64)
+                except (TypeError, ValueError):
+                    raise RecordingError(f"{name} must be an ({n}, 20) array of angles, got "
+                                         f"{type(a).__name__} {short_repr(a)}") from None
                 if a.shape != (n, len(JOINT_NAMES)):
                     raise RecordingError(f"{name} must have shape ({n}, 20), got {a.shape}")
                 object.__setattr__(self, name, a)
