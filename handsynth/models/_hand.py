@@ -61,6 +61,14 @@ class HandModel:
         Use this MJCF instead of generating one (it must have the same joint,
         body and site names, e.g. a scene that includes the hand).
 
+    Raises
+    ------
+    InvalidShapeError
+        `shape` is not a HandShape, or `xml` lacks one of the hand's joints or
+        keypoint sites (naming it).
+    RenderError
+        MuJoCo could not compile `xml`.
+
     Attributes
     ----------
     model : mujoco.MjModel
@@ -79,6 +87,13 @@ class HandModel:
         self.side = side
         self.model = compile_mjcf(xml or hand_mjcf(self.shape, side=side, forearm=forearm))
         self.data = mujoco.MjData(self.model)
+        for kind, names, find in (("joint", JOINT_NAMES, mujoco.mjtObj.mjOBJ_JOINT),
+                                  ("site", KEYPOINT_SITES, mujoco.mjtObj.mjOBJ_SITE)):
+            missing = [n for n in names if mujoco.mj_name2id(self.model, find, n) < 0]
+            if missing:  # a model given as `xml` that is not a handsynth hand
+                raise InvalidShapeError(f"xml: the model has no {kind} {missing[0]!r} ({len(missing)} "
+                                        f"of the hand's {len(names)} {kind}s missing); give "
+                                        "hand_mjcf()'s MJCF or one made from it")
         self._qadr = np.array(
             [self.model.joint(n).qposadr[0] for n in JOINT_NAMES], dtype=np.intp
         )

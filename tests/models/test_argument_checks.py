@@ -32,3 +32,10 @@ def test_body_pose_still_names_an_unknown_body(model):
         model.body_pose("palmm")
     pos, rot = model.body_pose("palm")
     assert pos.shape == (3,) and rot.shape == (3, 3)
+
+
+def test_a_model_that_is_not_a_hand_is_named():
+    # HandModel(xml="<mujoco/>") was MuJoCo's KeyError "Invalid name 'thumb_cmc_flex'"
+    with pytest.raises(InvalidShapeError, match=r"^xml: the model has no joint 'thumb_cmc_flex' "
+                                                r"\(20 of the hand's 20 joints missing\)"):
+        HandModel(xml="<mujoco/>")

@@ -854,10 +854,14 @@ def read_polhemus(
     InvalidInputError
         Bad arguments.
     """
-    path = Path(path)
+    path = check_path(path, "path")
     if units != "auto" and units not in _UNITS_M:
         raise InvalidInputError(
             f"units: expected 'auto' or one of {sorted(_UNITS_M)}, got {units!r}")
+    if not (isinstance(euler_order, str) and re.fullmatch(r"[xyz]{3}|[XYZ]{3}", euler_order)
+            and euler_order[0] != euler_order[1] != euler_order[2]):
+        raise InvalidInputError(f"euler_order: expected three axes of 'xyz' (extrinsic) or 'XYZ' "
+                                f"(intrinsic), no axis twice in a row, as 'ZYX', got {euler_order!r}")
     if angles is not None and angles not in ("euler", "quaternion"):
         raise InvalidInputError(f"angles: expected 'euler' or 'quaternion', got {angles!r}")
     if on_invalid not in ("raise", "drop"):

@@ -1,4 +1,4 @@
-"""read_recording names itself and its arguments, not the reader it forwards to."""
+"""The trackers' readers name themselves and their arguments, not the reader they forward to."""
 
 from __future__ import annotations
 
