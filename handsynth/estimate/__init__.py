@@ -62,6 +62,7 @@ from ._ensemble import (
 from ._keypoints import KeypointEstimator
 from ._learned import (
     AUTO_OVERLAP,
+    MIN_HAND_COVERAGE,
     LearnedEstimator,
     LearnedOptions,
     fit_mlp,
@@ -92,6 +93,7 @@ __all__ = [
     "LEARNED_ENSEMBLE",
     "LEARNED_ENSEMBLES",
     "LEARNED_PERCEPTRONS",
+    "MIN_HAND_COVERAGE",
     "SHIPPED_LEARNING_SETS",
     "ApproximateIndex",
     "ApproximateOptions",

@@ -97,8 +97,16 @@ from ._lookup import PoseEstimate, check_frame_ratio
 from ._moved import MoveCheck
 from ._shipped import shipped_path
 
-__all__ = ["LearnedEstimator", "LearnedOptions", "fit_mlp", "learned_estimator", "local_linear",
-           "train_learned"]
+__all__ = ["MIN_HAND_COVERAGE", "LearnedEstimator", "LearnedOptions", "fit_mlp", "learned_estimator",
+           "local_linear", "train_learned"]
+
+#: Least share of the device's view (after the wrist cut) that a hand covers.  The smallest
+#: hand handsynth models (every ratio 0.5) covers at least 7.0 % of the paper's view in the
+#: pose sets' most folded pose, a fist (the standard hand 13.9 %; 300 natural and 300 paper
+#: poses and the named poses; `tests/estimate/test_learned.py` keeps this margin), so a
+#: frame whose bright part covers less than a seventh of that (a lamp in a dark room, one
+#: bright pixel, a speck) shows no hand rather than a confidently read one.
+MIN_HAND_COVERAGE = 0.01
 
 _FORMAT = 2  # 2: novelty_limit
 #: ``segment="auto"`` tells the hand by colour when Otsu's mask and the skin's colour mask
@@ -735,8 +743,10 @@ class LearnedEstimator:
                 out._skin = skin
         out.segment = "colour" if out._skin is not None else "brightness"
         g = out.grid(rest_frame)
-        if not g.any():
-            raise InvalidInputError("rest_frame shows no hand")
+        if g.mean() < MIN_HAND_COVERAGE * 255:
+            raise InvalidInputError(
+                f"rest_frame shows no hand: what stands out covers {g.mean() / 2.55:.2f} % of the "
+                f"view, a hand at least {100 * MIN_HAND_COVERAGE:g} % (MIN_HAND_COVERAGE)")
         out._rest = g.ravel()
         out._move_check = MoveCheck(g, mount, side=side) if check_moved else None
         out._previous = None
@@ -873,7 +883,8 @@ class LearnedEstimator:
             explains); ``low_confidence`` (``"fingers"``) when ``error``
             exceeds what 99 % of frames of hands the estimator did not learn
             from show (:func:`train_learned`), e.g. a cluttered background;
-            ``no_hand`` when the frame shows no hand; ``moved`` when the
+            ``no_hand`` when the frame shows no hand (what stands out covers
+            less than :data:`MIN_HAND_COVERAGE` of the view); ``moved`` when the
             device seems to have moved on the wrist since the rest frame
             (:class:`~handsynth.estimate.MoveCheck`, calibrated estimators).
         """
@@ -895,7 +906,7 @@ class LearnedEstimator:
             raise InvalidInputError(f"grid must be a {self.cells[0]}x{self.cells[1]} uint8 "
                                     f"coverage grid, got {g.dtype} of shape {g.shape}")
         g = g.reshape(1, -1)
-        if not g.any():
+        if g.mean() < MIN_HAND_COVERAGE * 255:  # nothing, or too little to be a hand
             return PoseEstimate(angles=np.full(20, np.nan), keypoints=np.full((21, 3), np.nan,
                                 np.float32), confidence=0.0, entry=-1, error=float("inf"),
                                 low_confidence=True, no_hand=True)

@@ -692,3 +692,30 @@ def test_a_folder_that_cannot_be_written_is_refused_before_the_learning_set(tmp_
                           ("", "folder must name a folder, got ''")):
         with pytest.raises(InvalidInputError, match=re.escape(words)):
             learned_estimator(folder, opts, data=small)
+
+
+def test_the_smallest_hand_covers_far_more_than_the_least_a_hand_covers():
+    # MIN_HAND_COVERAGE's reason: every ratio 0.5, the most folded poses, the paper's view
+    from handsynth.estimate import MIN_HAND_COVERAGE
+    from handsynth.models import HandShape, named_pose
+    from handsynth.render import CameraMount, SilhouetteRasterizer, coverage
+
+    r = SilhouetteRasterizer(HandShape(length=0.5, width=0.5, palm=0.5, thumb=0.5),
+                             CameraMount.paper())
+    least = min(coverage(m, CameraMount.paper()).mean()
+                for m in r.masks(np.array([named_pose(n) for n in ("fist", "grasp", "pinch")])))
+    assert least > 6 * MIN_HAND_COVERAGE, least
+
+
+def test_a_speck_is_no_hand_and_no_rest_frame(data):
+    # one bright pixel in a dark view was read as a hand with confidence 0.66-0.74
+    est = train_learned(data, LearnedOptions(kind="fingers", components=4, k=2, lists=0))
+    speck = np.zeros((480, 720), bool)
+    speck[200:202, 300:340] = True  # 80 pixels, 0.02 % of the view
+    with pytest.raises(InvalidInputError, match=r"^rest_frame shows no hand: what stands out covers "
+                                                r"0\.0\d % of the view, a hand at least 1 %"):
+        est.calibrated(speck)
+    cal = est.calibrated(_frames(data, [0])[0])
+    got = cal.estimate(speck)
+    assert got.no_hand and got.low_confidence and np.isnan(got.angles).all()
+    assert not cal.estimate(_frames(data, [1])[0]).no_hand
