@@ -44,7 +44,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from .._checks import check_side, is_number
+from .._checks import check_side, is_number, short_repr
 from ..db import pack_mask, unpack_mask
 from ..errors import EstimationError, InvalidInputError
 from ..models import HandShape
@@ -277,8 +277,12 @@ def reference_silhouette(database) -> np.ndarray:
     Raises
     ------
     InvalidInputError
-        The database has no entry with all 20 angles 0.
+        `database` lacks those three (not a database), or has no entry with
+        all 20 angles 0.
     """
+    if not all(hasattr(database, a) for a in ("angles", "sil_bits", "path")):
+        raise InvalidInputError(f"database must be a Database (its angles, sil_bits and path), "
+                                f"got {type(database).__name__} {short_repr(database)}")
     angles = np.asarray(database.angles)
     rows = np.flatnonzero(np.all(angles == 0, axis=1))
     if rows.size == 0:

@@ -118,10 +118,19 @@ class MoveCheck:
 
         The smaller of the two halves' changes, each over the rest frame's
         covered share of its cells.
+
+        Raises
+        ------
+        InvalidInputError
+            `grid` is not a uint8 coverage grid of the rest frame's cells.
         """
         if not self.available:
             return float("nan")
-        g = np.asarray(grid).reshape(self._shape)
+        g = np.asarray(grid)
+        if g.dtype != np.uint8 or g.size != self._shape[0] * self._shape[1]:
+            raise InvalidInputError(f"grid must be a {self._shape[0]}x{self._shape[1]} uint8 "
+                                    f"coverage grid, got {g.dtype} of shape {g.shape}")
+        g = g.reshape(self._shape)
         return min(float(np.abs(g[h].astype(np.float32) - r).sum() / a)
                    for h, r, a in zip(self._halves, self._rest, self._area, strict=True))
 

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._checks import check_number
+from .._checks import check_instance, check_number
 from ..errors import InvalidInputError
 from ..models import GRID_LEVELS, JOINT_NAMES, HandShape
 
@@ -116,7 +116,14 @@ def ratio_distance(shape: HandShape, grid: HandShape) -> float:
     -------
     float
         Unitless; 0 when the ratios are equal.
+
+    Raises
+    ------
+    InvalidInputError
+        `shape` or `grid` is not a :class:`HandShape`.
     """
+    check_instance(shape, HandShape, name="shape")
+    check_instance(grid, HandShape, name="grid")
     total = 0.0
     for name, levels in GRID_LEVELS.items():
         step = 0.5 * (levels[-1] - levels[0])

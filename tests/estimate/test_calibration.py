@@ -336,3 +336,12 @@ def test_masked_search_names_a_bad_calibration_and_an_empty_or_narrow_table():
         for search in (masked_search, masked_search_reference):
             with pytest.raises(InvalidInputError, match=r"^sil_bits must have shape \(N, 64\) with N >= 1"):
                 search(sil, bad, cal)
+
+
+def test_reference_silhouette_names_what_is_not_a_database():
+    # reference_silhouette("x") was an AttributeError
+    from handsynth.estimate import reference_silhouette
+
+    with pytest.raises(InvalidInputError, match=r"^database must be a Database \(its angles, sil_bits "
+                                                r"and path\), got str 'x'$"):
+        reference_silhouette("x")

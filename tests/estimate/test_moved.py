@@ -107,3 +107,11 @@ def test_a_left_hand_is_checked_alike():
 
 def _left(mask):
     return np.rint(coverage(mask, PAPER, side="left") * 255).astype(np.uint8)
+
+
+@pytest.mark.parametrize("grid", [None, "x", np.zeros((30, 45)), np.zeros((10, 10), np.uint8)])
+def test_a_grid_that_is_not_the_rest_frames_is_refused_by_name(hand, grid):
+    # update(None) was numpy's reshape error
+    _, rest, _ = hand
+    with pytest.raises(InvalidInputError, match=r"^grid must be a 30x45 uint8 coverage grid, got "):
+        MoveCheck(rest, PAPER).update(grid)

@@ -71,3 +71,15 @@ def test_joint_stats_refuses_no_rows():
     with pytest.raises(InvalidInputError, match=re.escape("errors_deg must have at least one row (frame), "
                                                           "got shape (0, 20)")):
         joint_stats(np.zeros((0, 20)))
+
+
+def test_ratio_distance_names_what_is_not_a_hand_shape():
+    # ratio_distance("a", ...) was an AttributeError
+    from handsynth.eval import ratio_distance
+    from handsynth.models import HandShape
+
+    with pytest.raises(InvalidInputError, match="shape must be a HandShape, got str 'a'"):
+        ratio_distance("a", HandShape())
+    with pytest.raises(InvalidInputError, match="grid must be a HandShape, got NoneType"):
+        ratio_distance(HandShape(), None)
+    assert ratio_distance(HandShape(), HandShape()) == 0.0

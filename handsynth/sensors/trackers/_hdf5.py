@@ -37,6 +37,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
+from ..._checks import check_path
 from ..._io import write_bytes
 from ...errors import InvalidInputError, RecordingError
 from ._recording import GroundTruth, Recording
@@ -157,16 +158,16 @@ def load_recording(path: str | os.PathLike) -> Recording:
     Raises
     ------
     RecordingError
-        Missing or unreadable file, another format or version, missing or
-        damaged data (checksum), attributes that are not the text or JSON
-        written.
+        `path` not a file name (None, a number, ``""``), missing or
+        unreadable file, another format or version, missing or damaged data
+        (checksum), attributes that are not the text or JSON written.
 
     Warns
     -----
     UserWarning
         A version-1 file, which has no checksum to verify.
     """
-    path = Path(path)
+    path = check_path(path, "path", error=RecordingError)
     try:
         f = h5py.File(path, "r")
     except (OSError, ValueError) as exc:

@@ -19,3 +19,11 @@ def test_read_recording_names_a_path_that_is_not_one():
     # before: TypeError from pathlib
     with pytest.raises(InvalidInputError, match=r"^path must be a file name \(str or path\), got None$"):
         read_recording(None)
+
+
+def test_load_recording_names_a_path_that_is_not_one():
+    from handsynth.errors import RecordingError
+    from handsynth.sensors.trackers import load_recording
+
+    with pytest.raises(RecordingError, match=r"^path must be a file name \(str or path\), got None$"):
+        load_recording(None)
