@@ -66,7 +66,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from .._checks import check_number, check_options
+from .._checks import check_integer, check_number, check_options
 from ..db import HLAC_SIZE, popcount64
 from ..errors import InvalidInputError
 from ._score import SURVIVOR, SURVIVOR_ABOVE_BEST, Constants, Query, Rows, score
@@ -866,7 +866,7 @@ def search(features, tables: SearchTables, *, options: SearchOptions | None = No
     """
     opts = _check_search_arguments(tables, options)
     n = len(tables)
-    s = -1 if seed is None else int(seed)
+    s = -1 if seed is None else check_integer(seed, "seed", minimum=0)
     if not -1 <= s < n:
         raise InvalidInputError(f"seed must be an entry index in [0, {n}), got {seed!r}")
     h, sb, rb, area = _query(features)

@@ -363,10 +363,23 @@ def condition_stats(estimates: np.ndarray, truth: np.ndarray, rest: np.ndarray) 
     dict
         ``method`` and ``constant`` (the figures of :func:`_stats`) and
         ``skill`` per joint group: ``1 - MAE / MAE_constant``.
+
+    Raises
+    ------
+    InvalidInputError
+        `estimates` and `truth` not both (N, 20) with the same N, or `rest`
+        neither (20,) nor of their shape.
     """
     truth = np.asarray(truth, float)
-    rest = np.broadcast_to(np.asarray(rest, float), truth.shape)
-    method = _stats(np.asarray(estimates, float), truth, rest)
+    estimates = np.asarray(estimates, float)
+    if truth.ndim != 2 or truth.shape[1] != 20 or estimates.shape != truth.shape:
+        raise InvalidInputError(f"estimates and truth must both have shape (N, 20), got "
+                                f"{estimates.shape} and {truth.shape}")
+    rest = np.asarray(rest, float)
+    if rest.shape not in ((20,), truth.shape):
+        raise InvalidInputError(f"rest must have shape (20,) or {truth.shape}, got {rest.shape}")
+    rest = np.broadcast_to(rest, truth.shape)
+    method = _stats(estimates, truth, rest)
     constant = _stats(np.zeros_like(truth), truth, rest)
     skill = {}
     for g in JOINT_GROUPS:

@@ -128,6 +128,9 @@ def test_options_and_arguments_are_checked(small_rows):
     f = extract_features(small_rows["silhouette"][0])
     with pytest.raises(InvalidInputError, match="seed"):
         search(f, t, seed=len(t))
+    for bad in ("x", 1.5, True, -1):  # "x" was int()'s ValueError
+        with pytest.raises(InvalidInputError, match=r"^seed must be an integer >= 0, got "):
+            search(f, t, seed=bad)
 
 
 def _stack(rows, index):

@@ -83,3 +83,15 @@ def test_ratio_distance_names_what_is_not_a_hand_shape():
     with pytest.raises(InvalidInputError, match="grid must be a HandShape, got NoneType"):
         ratio_distance(HandShape(), None)
     assert ratio_distance(HandShape(), HandShape()) == 0.0
+
+
+def test_condition_stats_refuses_rows_that_do_not_pair():
+    # estimates and truth of different lengths were numpy's broadcast error
+    from handsynth.eval import condition_stats
+
+    with pytest.raises(InvalidInputError, match=r"estimates and truth must both have shape \(N, 20\), "
+                                                r"got \(3, 20\) and \(4, 20\)"):
+        condition_stats(np.zeros((3, 20)), np.zeros((4, 20)), np.zeros(20))
+    with pytest.raises(InvalidInputError, match=r"rest must have shape \(20,\) or \(3, 20\), got \(5,\)"):
+        condition_stats(np.zeros((3, 20)), np.zeros((3, 20)), np.zeros(5))
+    assert condition_stats(np.zeros((3, 20)), np.ones((3, 20)), np.zeros(20))["skill"]["all"] == 0.0
