@@ -29,21 +29,24 @@ __all__ = [
 ROTATION_TOLERANCE = 1e-3
 
 
-def _as_float_array(value, name: str, shape: str, tail: tuple[int, ...]) -> np.ndarray:
-    """`value` as a float64 array whose last axes are `tail`, all finite, else InvalidInputError."""
+def _as_float_array(value, name: str, shape: str, tail: tuple[int, ...], *, finite: bool = True,
+                    error=None) -> np.ndarray:
+    """`value` as a float64 array whose last axes are `tail` (all finite unless not `finite`),
+    else `error` (InvalidInputError by default) naming `name`."""
     from ..._checks import short_repr
     from ...errors import InvalidInputError
 
+    error = error or InvalidInputError
     try:
         a = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError):
-        raise InvalidInputError(f"{name} must be a {shape} array of numbers, got "
-                                f"{type(value).__name__} {short_repr(value)}") from None
+        raise error(f"{name} must be a {shape} array of numbers, got "
+                    f"{type(value).__name__} {short_repr(value)}") from None
     if a.ndim < len(tail) or a.shape[a.ndim - len(tail):] != tail:
-        raise InvalidInputError(f"{name} must have shape {shape}, got shape {a.shape}")
-    if not np.isfinite(a).all():
+        raise error(f"{name} must have shape {shape}, got shape {a.shape}")
+    if finite and not np.isfinite(a).all():
         idx = tuple(int(i) for i in np.argwhere(~np.isfinite(a))[0])
-        raise InvalidInputError(f"{name} must be finite, got {a[idx]} at index {idx}")
+        raise error(f"{name} must be finite, got {a[idx]} at index {idx}")
     return a
 
 
@@ -64,23 +67,8 @@ def rotation_error(rotations: np.ndarray) -> np.ndarray:
     InvalidInputError
         `rotations` not an array of numbers of shape (..., 3, 3).
     """
-    from ...errors import InvalidInputError
-
-    return _rotation_error(_as_matrices(rotations, "rotations", InvalidInputError))
-
-
-def _as_matrices(value, name: str, error) -> np.ndarray:
-    """`value` as a float64 array of shape (..., 3, 3) (NaN allowed), else `error` naming `name`."""
-    from ..._checks import short_repr
-
-    try:
-        r = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise error(f"{name} must be a (..., 3, 3) array of numbers, got "
-                    f"{type(value).__name__} {short_repr(value)}") from None
-    if r.ndim < 2 or r.shape[-2:] != (3, 3):
-        raise error(f"{name} must have shape (..., 3, 3), got shape {r.shape}")
-    return r
+    return _rotation_error(_as_float_array(rotations, "rotations", "(..., 3, 3)", (3, 3),
+                                           finite=False))
 
 
 def _rotation_error(r: np.ndarray) -> np.ndarray:
@@ -107,7 +95,8 @@ def check_rotations(rotations: np.ndarray, *, name: str = "rotations") -> None:
     """
     from ...errors import RecordingError
 
-    err = _rotation_error(_as_matrices(rotations, name, RecordingError))
+    err = _rotation_error(_as_float_array(rotations, name, "(..., 3, 3)", (3, 3), finite=False,
+                                          error=RecordingError))
     bad = ~(err <= ROTATION_TOLERANCE)
     if bad.any():
         idx = tuple(int(i) for i in np.argwhere(bad)[0])
