@@ -746,10 +746,8 @@ def build_database(out_dir, shape: HandShape | str | None = None,
     DatabaseMismatchError, OutputError, DatabaseError
         As in :func:`build_databases`.
     """
-    out_dir = check_path(out_dir, "out_dir", kind="folder")
     shape = check_options(shape, HandShape, name="shape")
-    options = _options_from(option_fields, "build_database")
-    _check_progress(progress)
+    options = _options_from(option_fields, "build_database")  # names this function, not the next
     summary = build_databases(out_dir, [shape], mount, options=options, workers=workers,
                               executor=executor, force=force, progress=progress)
     for reason in summary.rebuilt.values():
