@@ -17,7 +17,10 @@ How a build runs
    mark, checksum, same parameters); otherwise it is rebuilt.  Temporary
    files ``<name>.h5.tmp-<pid>`` left by killed builds are removed.
 2. The pose set is drawn once (``pose_set(name, count, seed=seed)``, the
-   same poses for every shape) and each shape's poses are cut into chunks;
+   same poses for every shape).  Each shape to build is probed: the open
+   hand, a fist and a few poses of the set are rendered, and a shape the
+   mount sees in none of them refuses the whole build before any file is
+   written.  Each shape's poses are then cut into chunks;
    the chunks are the tasks of the executor.  A worker keeps one
    :class:`SilhouetteRasterizer` per shape (one model load for many poses).
 3. When all chunks of a shape are back they are joined in pose order and
@@ -56,6 +59,7 @@ from ..render import CameraMount, as_mount
 from ._entries import DEFAULT_RENDER_SIZE, check_render_size, database_meta, render_entries
 from ._executors import EXECUTORS, run_tasks
 from ._store import LEFT_SUFFIX, verify, write_database
+from ._validation import IMAGE_SIZE
 
 __all__ = [
     "DEFAULT_DATABASE",
@@ -525,6 +529,39 @@ def _check_in_view(sil_bits: np.ndarray, mount: CameraMount, shape: HandShape, s
             "camera where it sees the back of the hand")
 
 
+#: Poses of the pose set that :func:`_probe_in_view` renders for each shape, besides the open
+#: hand and a fist (spread evenly over the set).
+_PROBE_POSES = 8
+
+
+def _probe_in_view(todo, mount: CameraMount, options: BuildOptions, angles: np.ndarray) -> None:
+    """Refuse a build, before anything is rendered or written, when `mount` sees none of a
+    few poses of one of its shapes: the open hand, a fist and :data:`_PROBE_POSES` poses of
+    the set `angles`, rendered as the build renders them (`options`' side and render size).
+
+    A shape it sees in one of them is built; :func:`_check_in_view` still refuses one whose
+    every rendered silhouette is empty.  A few model loads and renders per shape.
+    """
+    from ..models import named_pose
+    from ..render import SilhouetteRasterizer, preprocess
+
+    picks = np.unique(np.linspace(0, len(angles) - 1, min(_PROBE_POSES, len(angles))).astype(int))
+    poses = np.vstack([np.zeros((1, angles.shape[1])), named_pose("fist")[None], angles[picks]])
+    w, h = options.render_size
+    for shape, path, _ in todo:
+        with SilhouetteRasterizer(shape, mount, side=options.side, width_px=w,
+                                  height_px=h) as r:
+            seen = any(preprocess(m, mount, side=options.side, size=IMAGE_SIZE).any()
+                       for m in r.masks(poses))
+        if not seen:
+            raise InvalidCameraError(
+                f"mount {mount!r} never sees the hand: all {len(poses)} probed silhouettes of "
+                f"shape {shape.name} ({options.side} hand; the open hand, a fist and "
+                f"{len(picks)} poses of the set) are empty, so neither {path.name} nor any "
+                "other database of this build is written; place the camera where it sees the "
+                "back of the hand")
+
+
 # --------------------------------------------------------------------------- public
 
 
@@ -585,8 +622,12 @@ def build_databases(out_dir, shapes: Sequence[HandShape | str], mount: CameraMou
         :class:`~handsynth.errors.InvalidShapeError` for a shape with ratios
         finer than 0.001, which its file name would not tell apart.
     InvalidCameraError
-        Every silhouette of a shape is empty: `mount` never sees the hand
-        (the message names the mount); that database is not written.
+        `mount` never sees one of the shapes to build (the message names
+        the mount and the shape): refused before any database of the build
+        is written when a probe of each shape (the open hand, a fist and a
+        few poses of the set) shows no hand; and, should the probe see it
+        but every rendered silhouette be empty, that database is not
+        written.
     DatabaseMismatchError
         An existing file under a shape's name holds another shape or the
         other side (:func:`check_database_hand`); it is left as it is.
@@ -664,6 +705,7 @@ def _build_locked(out: Path, shape_list, mount, options, workers, executor, chun
     report()
     if todo:
         angles = make_pose_set(options.pose_set, options.count, seed=options.seed)
+        _probe_in_view(todo, mount, options, angles)  # every shape, before any file is written
         step = _chunk_size(options.count, len(todo), workers, chunk_size)
         bounds = [(a, min(a + step, options.count)) for a in range(0, options.count, step)]
         tasks, owner = [], []
@@ -741,8 +783,9 @@ def build_database(out_dir, shape: HandShape | str | None = None,
         None nor callable; bad options, shape, workers or executor, as in
         :func:`build_databases`.
     InvalidCameraError
-        Every silhouette is empty: `mount` never sees the hand (the message
-        names the mount); nothing is written.
+        `mount` never sees the hand (the message names the mount): none of
+        the probed poses (:func:`build_databases`) or, should one be seen,
+        none of the rendered silhouettes shows it; nothing is written.
     DatabaseMismatchError, OutputError, DatabaseError
         As in :func:`build_databases`.
     """

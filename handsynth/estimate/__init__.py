@@ -62,7 +62,6 @@ from ._ensemble import (
 from ._keypoints import KeypointEstimator
 from ._learned import (
     AUTO_OVERLAP,
-    MIN_HAND_COVERAGE,
     LearnedEstimator,
     LearnedOptions,
     fit_mlp,
@@ -70,7 +69,7 @@ from ._learned import (
     local_linear,
     train_learned,
 )
-from ._lookup import PoseEstimate, PoseEstimator, PoseLookup
+from ._lookup import MIN_HAND_COVERAGE, PoseEstimate, PoseEstimator, PoseLookup
 from ._masked import (
     MaskedMatch,
     masked_band_areas,

@@ -93,20 +93,12 @@ from ..render import (
     fit_skin_colour,
     skin_mask,
 )
-from ._lookup import PoseEstimate, check_frame_ratio
+from ._lookup import MIN_HAND_COVERAGE, PoseEstimate, check_frame_ratio
 from ._moved import MoveCheck
 from ._shipped import shipped_path
 
-__all__ = ["MIN_HAND_COVERAGE", "LearnedEstimator", "LearnedOptions", "fit_mlp", "learned_estimator",
+__all__ = ["LearnedEstimator", "LearnedOptions", "fit_mlp", "learned_estimator",
            "local_linear", "train_learned"]
-
-#: Least share of the device's view (after the wrist cut) that a hand covers.  The smallest
-#: hand handsynth models (every ratio 0.5) covers at least 7.0 % of the paper's view in the
-#: pose sets' most folded pose, a fist (the standard hand 13.9 %; 300 natural and 300 paper
-#: poses and the named poses; `tests/estimate/test_learned.py` keeps this margin), so a
-#: frame whose bright part covers less than a seventh of that (a lamp in a dark room, one
-#: bright pixel, a speck) shows no hand rather than a confidently read one.
-MIN_HAND_COVERAGE = 0.01
 
 _FORMAT = 2  # 2: novelty_limit
 #: ``segment="auto"`` tells the hand by colour when Otsu's mask and the skin's colour mask

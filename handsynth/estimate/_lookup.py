@@ -38,7 +38,15 @@ from ._masked import masked_band_areas, masked_search
 from ._search import SearchOptions, SearchTables, search
 from ._selection import SelectionOptions, select_shape
 
-__all__ = ["PoseEstimate", "PoseEstimator", "PoseLookup"]
+__all__ = ["MIN_HAND_COVERAGE", "PoseEstimate", "PoseEstimator", "PoseLookup"]
+
+#: Least share of the device's view (after the wrist cut) that a hand covers.  The smallest
+#: hand handsynth models (every ratio 0.5) covers at least 7.0 % of the paper's view in the
+#: pose sets' most folded pose, a fist (the standard hand 13.9 %; 300 natural and 300 paper
+#: poses and the named poses; `tests/estimate/test_learned.py` keeps this margin), so a
+#: frame whose bright part covers less than a seventh of that (a lamp in a dark room, one
+#: bright pixel, a speck) shows no hand rather than a confidently read one.
+MIN_HAND_COVERAGE = 0.01
 
 #: Largest relative difference of a frame's width-to-height ratio from the device's
 #: (:func:`check_frame_ratio`): a frame scaled to another size stays within it.
@@ -46,6 +54,12 @@ FRAME_RATIO_TOLERANCE = 0.01
 
 #: Who needs the device's view, in :func:`check_frame_ratio`'s message for a lookup.
 _LOOKUP_VIEW = "this lookup's database holds"
+
+
+def _no_open_hand(min_coverage: float) -> InvalidInputError:
+    """The error for a calibration frame that shows no hand (:meth:`PoseLookup.calibrated`)."""
+    return InvalidInputError(f"open_frame shows no hand: nothing stands out, or what does covers "
+                             f"less than {100 * min_coverage:g} % of the view (MIN_HAND_COVERAGE)")
 
 
 def check_frame_ratio(frame, mount: CameraMount, *, view: str) -> np.ndarray:
@@ -160,7 +174,9 @@ class PoseEstimate:
         :class:`~handsynth.estimate.LearnedEstimator`, the frame is farther
         from every learning frame than 99 % of new hands' frames are.
     no_hand : bool
-        The frame shows no hand (empty silhouette after preprocessing).
+        The frame shows no hand (empty silhouette after preprocessing, or a
+        hand component covering less than
+        :data:`~handsynth.estimate.MIN_HAND_COVERAGE` of the view).
     moved : bool
         For an estimator calibrated to a rest frame
         (:class:`~handsynth.estimate.LearnedEstimator`), the device seems to
@@ -337,7 +353,7 @@ class PoseLookup:
         _refuse_for_calibration(approximate=self.approximate, **self._requested)
         user = self.silhouette(open_frame)
         if not user.any():
-            raise InvalidInputError("open_frame shows no hand")
+            raise _no_open_hand(MIN_HAND_COVERAGE)
         reference = reference_silhouette(self.database)
         out = copy.copy(self)
         out._last = -1
@@ -533,7 +549,9 @@ class PoseLookup:
         ------
         InvalidInputError
             The frame is not an image, is not of the device's
-            width-to-height ratio (:meth:`silhouette`) or shows no hand, an
+            width-to-height ratio (:meth:`silhouette`) or shows no hand (what
+            stands out covers less than
+            :data:`~handsynth.estimate.MIN_HAND_COVERAGE` of it), an
             option is invalid, or `kwargs` hold an argument
             :class:`PoseLookup` does not take (naming
             ``PoseLookup.from_open_frame``) or an option the calibrated
@@ -549,6 +567,9 @@ class PoseLookup:
         build = check_options(build, BuildOptions, name="build")
         mount = as_mount(mount)
         check_frame_ratio(open_frame, mount, view=_LOOKUP_VIEW)
+        if not preprocess(open_frame, mount, side=build.side,
+                          min_coverage=MIN_HAND_COVERAGE).any():  # as calibrated() reads it
+            raise _no_open_hand(MIN_HAND_COVERAGE)
         chosen = select_shape_from_frame(open_frame, mount=mount, side=build.side,
                                          shapes=shapes).shape
         chosen = HandShape.from_name(chosen.name)  # the ratios its file name gives
@@ -613,6 +634,14 @@ class PoseLookup:
     def silhouette(self, frame: np.ndarray) -> np.ndarray:
         """The 64x64 bool silhouette of `frame` as the database sees it.
 
+        All False when the frame shows no hand: nothing stands out, or the
+        kept hand component (:func:`~handsynth.render.preprocess`, after the
+        wrist cut) covers less than :data:`~handsynth.estimate.MIN_HAND_COVERAGE`
+        (1 %) of the frame's pixels, too little to be a hand (a speck, one
+        bright pixel), as for the learnt estimators.  The smallest modelled
+        hand in a fist covers about 7 % of the paper's view, so no database
+        entry falls under it.
+
         Raises
         ------
         InvalidInputError
@@ -621,7 +650,8 @@ class PoseLookup:
             it would be stretched).
         """
         check_frame_ratio(frame, self.mount, view=_LOOKUP_VIEW)
-        return preprocess(frame, self.mount, side=self.side, size=self.image_size)
+        return preprocess(frame, self.mount, side=self.side, size=self.image_size,
+                          min_coverage=MIN_HAND_COVERAGE)
 
     def estimate(self, frame: np.ndarray) -> PoseEstimate:
         """Pose of the hand in one frame.
@@ -636,7 +666,10 @@ class PoseLookup:
         Returns
         -------
         PoseEstimate
-            ``no_hand=True`` (NaN angles) when the frame shows no hand.
+            ``no_hand=True`` (NaN angles) when the frame shows no hand: its
+            silhouette is empty, or what stands out covers less than
+            :data:`~handsynth.estimate.MIN_HAND_COVERAGE` of the frame
+            (:meth:`silhouette`), with or without a calibration.
 
         Raises
         ------

@@ -10,10 +10,12 @@ and measures its error against their true angles.
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 
 import numpy as np
 
-from .._checks import check_integer
+from .._checks import check_integer, short_repr
+from ..errors import InvalidInputError
 from ..models import JOINT_NAMES
 from ..render import CameraMount, binarize, label_image, skin_mask
 from ..testhands import MeshHandRenderer, shipped_hand_path
@@ -36,10 +38,14 @@ def _tile_height(mount: CameraMount, tile_width_px: int) -> int:
     return round(tile_width_px * mount.height_px / mount.width_px)
 
 
-def _sheet_poses(seed: int, tile_width_px: int, count: int):
+def _sheet_poses(estimator, seed: int, tile_width_px: int, count: int):
     """The sheet's arguments checked; its generator, relaxed rest and `count` natural poses."""
     check_integer(tile_width_px, "tile_width_px", minimum=64)
     check_integer(count, "count", minimum=1)
+    if not callable(getattr(estimator, "calibrated", None)):  # before anything is rendered
+        raise InvalidInputError(f"estimator must have a calibrated() method (a LearnedEstimator "
+                                f"or EnsembleEstimator), got {type(estimator).__name__} "
+                                f"{short_repr(estimator)}")
     rng = np.random.default_rng(seed)
     rest = relaxed_rest_posture(rng)
     return rng, rest, natural_test_poses(rest, count, rng)[0]
@@ -66,8 +72,14 @@ def estimates_sheet(estimator, *, tile_width_px: int = 360, count: int = 4) -> n
     -------
     ndarray, shape (3 H + 4, count W + 4, 3), uint8
         RGB, ``W = tile_width_px`` and ``H`` its height at the device's aspect.
+
+    Raises
+    ------
+    InvalidInputError
+        `tile_width_px` or `count` out of range, or `estimator` without a
+        ``calibrated`` method, naming it, before anything is rendered.
     """
-    _, rest, poses = _sheet_poses(7, tile_width_px, count)
+    _, rest, poses = _sheet_poses(estimator, 7, tile_width_px, count)
     flex = list(JOINT_GROUPS["finger_flexion"])
     mount = CameraMount.paper()
     hand = shipped_hand_path("mrtk")
@@ -110,10 +122,15 @@ def backgrounds_sheet(estimator, *, tile_width_px: int = 360, count: int = 4) ->
     -------
     ndarray, shape (3 H + 4, count W + 4, 3), uint8
         RGB, as :func:`estimates_sheet`.
+
+    Raises
+    ------
+    InvalidInputError
+        As :func:`estimates_sheet`, before anything is rendered.
     """
     import cv2
 
-    rng, rest, poses = _sheet_poses(11, tile_width_px, count)
+    rng, rest, poses = _sheet_poses(estimator, 11, tile_width_px, count)
     flex = list(JOINT_GROUPS["finger_flexion"])
     mount = CameraMount.paper()
     th = _tile_height(mount, tile_width_px)
@@ -149,6 +166,26 @@ def backgrounds_sheet(estimator, *, tile_width_px: int = 360, count: int = 4) ->
     return _bordered(rows)
 
 
+def _check_poses(poses, n: int) -> np.ndarray:
+    """`poses` as float64, refused unless a finite real array of shape ``(n, 20)``."""
+    joints = len(JOINT_NAMES)
+    arr = np.asarray(poses) if isinstance(poses, (np.ndarray, Sequence)) else None
+    if arr is None or arr.dtype.kind not in "iuf":
+        got = (f"dtype {arr.dtype}" if arr is not None
+               else f"{type(poses).__name__} {short_repr(poses)}")
+        raise InvalidInputError(f"poses must be a real array of shape (N, {joints}) (degrees), "
+                                f"got {got}")
+    if arr.shape != (n, joints):
+        raise InvalidInputError(f"poses must have shape (N, {joints}) with N = len(masks) = {n}, "
+                                f"got {arr.shape}")
+    arr = arr.astype(np.float64)
+    if not np.isfinite(arr).all():
+        bad = np.argwhere(~np.isfinite(arr))[0]
+        raise InvalidInputError(f"poses must be finite, got {arr[tuple(bad)]} at row {bad[0]}, "
+                                f"joint {JOINT_NAMES[bad[1]]}")
+    return arr
+
+
 def lookup_errors(lookup, masks, poses) -> dict:
     """Rate and error of `lookup` on rendered frames of known angles.
 
@@ -160,22 +197,43 @@ def lookup_errors(lookup, masks, poses) -> dict:
     lookup : PoseLookup
         Plain or calibrated.
     masks : sequence of ndarray, shape (H, W), bool
-        The frames.
+        The frames, at least one (a sequence, or an array of shape (N, H, W)).
     poses : ndarray, shape (N, 20), deg
-        Their true joint angles, canonical order.
+        Their true joint angles, canonical order, finite; ``N = len(masks)``.
 
     Returns
     -------
     dict
         ``frames_per_s``; ``mae_deg`` over every joint; ``index_pip_mae_deg``
         and ``thumb_cmc_flex_mae_deg``.
+
+    Raises
+    ------
+    InvalidInputError
+        Before any frame is looked up: `lookup` has no ``estimate`` method;
+        `masks` is not a sequence (or array) of frames, or holds none;
+        `poses` is not a finite real array of shape ``(N, 20)`` with ``N =
+        len(masks)``.  Each message names the argument and what it received.
+        Each frame is then checked by ``lookup.estimate``.
     """
-    if len(masks):
-        lookup.estimate(masks[0])
+    if not callable(getattr(lookup, "estimate", None)):
+        raise InvalidInputError(f"lookup must have an estimate() method (a PoseLookup), got "
+                                f"{type(lookup).__name__} {short_repr(lookup)}")
+    if isinstance(masks, (str, bytes)) or not isinstance(masks, (Sequence, np.ndarray)) \
+            or (isinstance(masks, np.ndarray) and masks.ndim < 3):
+        got = (f"an array of shape {masks.shape}" if isinstance(masks, np.ndarray)
+               else f"{type(masks).__name__} {short_repr(masks)}")
+        raise InvalidInputError(f"masks must be a sequence of frames (ndarray, shape (H, W)), "
+                                f"got {got}")
+    n = len(masks)
+    if n == 0:
+        raise InvalidInputError("masks must hold at least one frame, got none")
+    poses = _check_poses(poses, n)
+    lookup.estimate(masks[0])
     t = time.perf_counter()
     est = np.array([lookup.estimate(m).angles for m in masks])
     dt = time.perf_counter() - t
-    err = np.abs(est - np.asarray(poses))
+    err = np.abs(est - poses)
     return {"frames_per_s": len(masks) / dt if dt > 0 else float("inf"),
             "mae_deg": float(err.mean()),
             "index_pip_mae_deg": float(err[:, JOINT_NAMES.index("index_pip_flex")].mean()),

@@ -238,11 +238,16 @@ def first_hand_frame(source: FrameSource, *, mount: CameraMount | None = None,
     The user holds the hand open and flat in front of the device before the
     run (:meth:`PoseLookup.from_open_frame
     <handsynth.estimate.PoseLookup.from_open_frame>`).  Frames are read
-    until one's silhouette (:func:`handsynth.render.preprocess` with `mount`
-    and `side`) is not empty; empty, dropped or unreadable frames are
-    skipped, and so are uint8 frames of almost one grey level (fewer than
-    :data:`~handsynth.render.MIN_CONTRAST` levels: a flat grey or white
-    view, whose silhouette is empty).  The frames read are consumed.
+    until one shows a hand: its silhouette (:func:`handsynth.render.preprocess`
+    with `mount` and `side`) is not empty and its hand component (the
+    largest after the wrist cut) covers at least
+    :data:`~handsynth.estimate.MIN_HAND_COVERAGE` (1 %) of the frame's
+    pixels, as the lookup and the learnt estimators require.  Empty,
+    dropped or unreadable frames are skipped, and so are frames where what
+    stands out covers less (a speck, one bright pixel) and uint8 frames of
+    almost one grey level (fewer than :data:`~handsynth.render.MIN_CONTRAST`
+    levels: a flat grey or white view, whose silhouette is empty).  The
+    frames read are consumed.
 
     Parameters
     ----------
@@ -264,6 +269,7 @@ def first_hand_frame(source: FrameSource, *, mount: CameraMount | None = None,
     EstimationError
         No frame of the first `max_reads` shows a hand, or the source ended.
     """
+    from ..estimate import MIN_HAND_COVERAGE
     from ..render import preprocess
 
     mount = as_mount(mount)
@@ -281,7 +287,7 @@ def first_hand_frame(source: FrameSource, *, mount: CameraMount | None = None,
             time.sleep(delay)
             continue
         try:
-            if preprocess(frame, mount, side=side).any():
+            if preprocess(frame, mount, side=side, min_coverage=MIN_HAND_COVERAGE).any():
                 return frame
         except InvalidInputError:  # this frame is not an image: the arguments were checked above
             continue

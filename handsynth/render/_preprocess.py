@@ -28,6 +28,9 @@ Steps, in order:
    wrist, so database renders (with the model's forearm stub) and live
    frames (with a real forearm) lose the same part.
 3. *Largest connected component* (8-connectivity) is kept as the hand.
+   With ``min_coverage`` (:func:`preprocess`), a component covering less
+   than that share of the frame's pixels is too little to be a hand (a
+   speck) and the silhouette is empty.
 4. *Crop* to its bounding box and *resize* to ``size x size``: the box of
    ``bw x bh`` pixels is scaled by ``s = size / max(bw, bh)`` (the longer
    side becomes `size`) and centred, the shorter side padded with
@@ -54,11 +57,12 @@ mistaken for a fingertip because no step closes or rounds it.
 
 from __future__ import annotations
 
+import math
 from functools import lru_cache
 
 import numpy as np
 
-from .._checks import check_integer, short_repr
+from .._checks import check_integer, check_number, short_repr
 from ..errors import InvalidInputError
 from ..models import DORSUM_Z_MM
 from ._camera import CameraMount, as_mount
@@ -420,8 +424,24 @@ def _check_size(size) -> int:
     return check_integer(size, "size", minimum=MIN_SIZE, maximum=MAX_SIZE)
 
 
+def _min_area(min_coverage, h: int, w: int) -> int:
+    """Fewest pixels of an `h` x `w` frame's kept component that cover `min_coverage` of it.
+
+    Raises
+    ------
+    InvalidInputError
+        `min_coverage` is not a number in [0, 1], naming it and the value.
+    """
+    if type(min_coverage) is not float or not 0.0 <= min_coverage <= 1.0:  # fast path: a float
+        min_coverage = check_number(min_coverage, "min_coverage", minimum=0, maximum=1)
+    # a component of `a` pixels is too small when a < min_coverage * h * w (rounded to 1e-6
+    # so that 0.01 of 720x480 is 3456 pixels, not 3457)
+    return math.ceil(round(min_coverage * h * w, 6))
+
+
 def preprocess(frame: np.ndarray, mount: CameraMount | None = None, *, side: str = "right",
-               size: int = 64, threshold: int | None = None) -> np.ndarray:
+               size: int = 64, threshold: int | None = None,
+               min_coverage: float = 0.0) -> np.ndarray:
     """The silhouette of SPEC.md section 1: binarize, wrist cut, largest component, crop, resize.
 
     Parameters
@@ -437,6 +457,13 @@ def preprocess(frame: np.ndarray, mount: CameraMount | None = None, *, side: str
     threshold : int, keyword-only, optional
         Fixed grey threshold for uint8 frames (``grey > threshold`` is hand);
         Otsu's threshold of the frame's sample by default (see :func:`binarize`).
+    min_coverage : float, keyword-only
+        Least share (0-1) of the frame's pixels that the kept component
+        (step 3) must cover: a smaller one is too little to be a hand (a
+        speck, one bright pixel) and the silhouette is empty.  Its pixel
+        count comes from the same compiled pass, at no extra cost.  0 (the
+        default) keeps any component; the lookup passes
+        :data:`handsynth.estimate.MIN_HAND_COVERAGE`.
 
     Returns
     -------
@@ -447,7 +474,8 @@ def preprocess(frame: np.ndarray, mount: CameraMount | None = None, *, side: str
     ------
     InvalidInputError
         A frame that is not an image (:func:`check_frame`), a `size` that
-        is not an integer in [8, 4096], a `threshold` that is not a finite number, or a `mount` that is
+        is not an integer in [8, 4096], a `threshold` that is not a finite number, a
+        `min_coverage` that is not a number in [0, 1], or a `mount` that is
         not a :class:`CameraMount` (:class:`~handsynth.errors.InvalidCameraError`);
         the message names the argument.
     """
@@ -457,15 +485,17 @@ def preprocess(frame: np.ndarray, mount: CameraMount | None = None, *, side: str
         as_mount(mount)  # refused, naming it
     if threshold is not None:
         _threshold(threshold)  # checked for masks too
-    lo, hi = _rows_kept(mount, side, frame.shape[1], frame.shape[0])
+    h, w = frame.shape[0], frame.shape[1]
+    min_area = _min_area(min_coverage, h, w)
+    lo, hi = _rows_kept(mount, side, w, h)
     if frame.dtype == bool:
-        return silhouette_from_mask(frame, lo, hi, size)
-    return silhouette_from_frame(frame, lo, hi, size, threshold=threshold)
+        return silhouette_from_mask(frame, lo, hi, size, min_area=min_area)
+    return silhouette_from_frame(frame, lo, hi, size, threshold=threshold, min_area=min_area)
 
 
 def preprocess_reference(frame: np.ndarray, mount: CameraMount | None = None, *,
                          side: str = "right", size: int = 64,
-                         threshold: int | None = None) -> np.ndarray:
+                         threshold: int | None = None, min_coverage: float = 0.0) -> np.ndarray:
     """:func:`preprocess` as the plain chain of its steps (slow; the specification).
 
     Parameters, result and errors as :func:`preprocess`, which tests compare
@@ -473,8 +503,12 @@ def preprocess_reference(frame: np.ndarray, mount: CameraMount | None = None, *,
     """
     size = _check_size(size)
     mask = binarize(frame, threshold=threshold)
+    min_area = _min_area(min_coverage, mask.shape[0], mask.shape[1])
     keep = wrist_cut_keep(as_mount(mount), side=side,
                           width_px=mask.shape[1], height_px=mask.shape[0])
     if keep is not None:
         mask = mask & keep
-    return crop_resize(largest_component(mask), size=size)
+    hand = largest_component(mask)
+    if hand.sum() < min_area:  # too little to be a hand
+        hand[:] = False
+    return crop_resize(hand, size=size)

@@ -24,7 +24,9 @@ step after the single scan of the image is cheap.
 2. Union-find over runs joins two runs of adjacent rows when their column
    ranges overlap or touch diagonally (8-connectivity).
 3. The largest component (pixel count; ties: the one whose first pixel
-   comes first in raster order, as OpenCV labels) gives the bounding box.
+   comes first in raster order, as OpenCV labels) gives the bounding box;
+   a component of fewer pixels than the caller's ``min_area`` gives an
+   empty silhouette (too little to be a hand).
 4. Area resampling: the box of ``bw x bh`` pixels is scaled by
    ``s = size / max(bw, bh)`` and centred; output cell ``(i, j)`` gets the
    exact area of the component inside it (in cell units).  Each run adds
@@ -265,12 +267,20 @@ def _add_span(direct, diff, i, a, b, wgt, size):
 
 
 @njit(cache=True, nogil=True)
-def _silhouette(ry, rx0, rx1, size):
-    """Steps 3-4 on the runs: the largest component, cropped and area-resampled."""
+def _silhouette(ry, rx0, rx1, size, min_area):
+    """Steps 3-4 on the runs: the largest component, cropped and area-resampled; all False
+    when that component has fewer than `min_area` pixels."""
     out = np.zeros((size, size), np.bool_)
     if ry.size == 0:
         return out
     keep = _largest_component(ry, rx0, rx1)
+    if min_area > 0:
+        area = 0
+        for r in range(ry.size):
+            if keep[r]:
+                area += rx1[r] - rx0[r]
+        if area < min_area:  # too little to be a hand
+            return out
     xmin = 1 << 30
     xmax = -1
     ymin = 1 << 30
@@ -310,9 +320,9 @@ def _silhouette(ry, rx0, rx1, size):
 
 
 @njit(cache=True, nogil=True)
-def _kernel(mask, words, lo, hi, size):
+def _kernel(mask, words, lo, hi, size, min_area):
     ry, rx0, rx1 = _scan_runs(mask, words, lo, hi)
-    return _silhouette(ry, rx0, rx1, size)
+    return _silhouette(ry, rx0, rx1, size, min_area)
 
 
 # ---------------------------------------------------------------- uint8 frames
@@ -658,9 +668,10 @@ def _bit_runs(words, n, x0, y, ry, rx0, rx1, cnt):
 
 
 @njit(cache=True, nogil=True)
-def _frame_kernel(frame, lo, hi, t, size):
+def _frame_kernel(frame, lo, hi, t, size, min_area):
     """Steps 1-4 of a uint8 frame, one row of bits at a time; ``t == -2``: Otsu's
-    threshold of the sample (:func:`_frame_threshold`), else ``grey > t``."""
+    threshold of the sample (:func:`_frame_threshold`), else ``grey > t``; all False
+    when the largest component has fewer than `min_area` pixels."""
     h, w = frame.shape[0], frame.shape[1]
     if t == -2:
         t = _frame_threshold(frame)
@@ -684,7 +695,7 @@ def _frame_kernel(frame, lo, hi, t, size):
                 _bit_row(src, nch, y * w + x0, x1 - x0, t, bits)
                 n = _bit_runs(words, x1 - x0, x0, y, ry, rx0, rx1, n)
             y += 1
-    return _silhouette(ry[:n], rx0[:n], rx1[:n], size)
+    return _silhouette(ry[:n], rx0[:n], rx1[:n], size, min_area)
 
 
 def _threshold(threshold) -> int:
@@ -720,7 +731,7 @@ def binarize_frame(frame: np.ndarray, *, threshold: int | None = None) -> np.nda
 
 
 def silhouette_from_frame(frame: np.ndarray, lo: np.ndarray, hi: np.ndarray, size: int, *,
-                          threshold: int | None = None) -> np.ndarray:
+                          threshold: int | None = None, min_area: int = 0) -> np.ndarray:
     """:func:`silhouette_from_mask` of ``binarize_frame(frame, threshold=threshold)``,
     without making the mask.
 
@@ -730,17 +741,19 @@ def silhouette_from_frame(frame: np.ndarray, lo: np.ndarray, hi: np.ndarray, siz
     lo, hi : ndarray, shape (H,), int32
     size : int
     threshold : int, keyword-only, optional
+    min_area : int, keyword-only
+        As for :func:`silhouette_from_mask`.
 
     Returns
     -------
     ndarray, shape (size, size), bool
     """
     t = -2 if threshold is None else _threshold(threshold)
-    return _frame_kernel(np.ascontiguousarray(frame), lo, hi, t, int(size))
+    return _frame_kernel(np.ascontiguousarray(frame), lo, hi, t, int(size), int(min_area))
 
 
 def silhouette_from_mask(mask: np.ndarray, lo: np.ndarray, hi: np.ndarray,
-                         size: int) -> np.ndarray:
+                         size: int, *, min_area: int = 0) -> np.ndarray:
     """The ``size x size`` silhouette of a bool mask (steps 2-4 of the preprocessing).
 
     Parameters
@@ -749,6 +762,10 @@ def silhouette_from_mask(mask: np.ndarray, lo: np.ndarray, hi: np.ndarray,
     lo, hi : ndarray, shape (H,), int32
         Kept columns of each row, ``[lo[y], hi[y])`` (the wrist cut).
     size : int
+    min_area : int, keyword-only
+        Fewest pixels of the kept (largest) component: a smaller one gives an
+        all-False silhouette (no hand).  The component's pixel count comes
+        from the same pass over the runs, at no extra cost.
 
     Returns
     -------
@@ -759,4 +776,4 @@ def silhouette_from_mask(mask: np.ndarray, lo: np.ndarray, hi: np.ndarray,
         words = m.view(np.uint64)
     else:
         words = np.empty((m.shape[0], 0), np.uint64)
-    return _kernel(m, words, lo, hi, int(size))
+    return _kernel(m, words, lo, hi, int(size), int(min_area))

@@ -276,11 +276,47 @@ def test_a_mount_that_never_sees_the_hand_writes_no_database(tmp_path):
 
     mount = CameraMount(thumb_offset_mm=1000.0)
     with pytest.raises(InvalidCameraError, match=r"mount CameraMount\(.*thumb_offset_mm=1000.0.* "
+                                                 r"never sees the hand: all 8 probed silhouettes "
+                                                 r"of shape L1.000_W1.000_P1.000_T1.000 \(right "
+                                                 r"hand; the open hand, a fist and 6 poses of the "
+                                                 r"set\) are empty"):
+        build_database(tmp_path, SHAPE, mount, count=6, render_size=(72, 48))
+    assert not list(tmp_path.glob("*.h5*"))
+
+
+def test_the_rendered_silhouettes_are_still_checked_after_the_probe(tmp_path, monkeypatch):
+    # the probe renders a few poses; a shape it sees is still refused when every one of its
+    # rendered silhouettes is empty
+    from handsynth.db import _build
+    from handsynth.errors import InvalidCameraError
+
+    monkeypatch.setattr(_build, "_probe_in_view", lambda *args: None)
+    mount = CameraMount(thumb_offset_mm=1000.0)
+    with pytest.raises(InvalidCameraError, match=r"mount CameraMount\(.*thumb_offset_mm=1000.0.* "
                                                  r"never sees the hand: all 6 silhouettes of "
                                                  r"shape L1.000_W1.000_P1.000_T1.000 \(right "
                                                  r"hand\) are empty"):
         build_database(tmp_path, SHAPE, mount, count=6, render_size=(72, 48))
     assert not list(tmp_path.glob("*.h5*"))
+
+
+def test_a_shape_the_mount_never_sees_refuses_the_build_before_any_file_is_written(tmp_path):
+    # issue: the all-empty check ran per shape after rendering, so the earlier shapes'
+    # databases were written before a later shape was refused
+    from handsynth.errors import InvalidCameraError
+
+    mount = CameraMount(along_mm=250.0, fov_deg=30.0, thumb_offset_mm=0.0)  # past short fingers
+    seen, unseen = HandShape(length=2.0), HandShape(length=0.5)
+    with pytest.raises(InvalidCameraError, match=r"^mount CameraMount\(.*along_mm=250.0.*\) never "
+                                                 r"sees the hand: all 8 probed silhouettes of "
+                                                 r"shape L0.500_W1.000_P1.000_T1.000 \(right "
+                                                 r"hand; .* so neither L0.500_W1.000_P1.000_T1.000"
+                                                 r"\.h5 nor any other database of this build is "
+                                                 r"written"):
+        build_databases(tmp_path, [seen, unseen], mount, count=6, render_size=(72, 48), workers=1)
+    assert not list(tmp_path.glob("*.h5*"))
+    summary = build_databases(tmp_path, [seen], mount, count=6, render_size=(72, 48), workers=1)
+    assert summary.built == (seen.name,)  # the mount does see the long hand
 
 
 @pytest.mark.parametrize("size", ["720x480", (720, 480, 3), (720.5, 480), (8, 480), None])

@@ -61,6 +61,54 @@ def test_no_hand_frame_gives_no_hand(lookup):
         assert est.confidence == 0.0
 
 
+def _specks() -> list[np.ndarray]:
+    """Dark 720x480 views where what stands out covers less than 1 % of the frame."""
+    pixel = np.zeros((480, 720, 3), np.uint8)
+    pixel[200, 300] = 255  # one white pixel, on the Otsu sample's grid: it stands out
+    blob = np.zeros((480, 720, 3), np.uint8)
+    blob[200:204, 300:340] = (120, 160, 210)  # 160 pixels of skin, 0.05 % of the view
+    under = np.zeros((480, 720), bool)
+    under[150:198, 300:372] = True  # 48 x 72 = 3456 pixels: 1 % of the view ...
+    under[150, 300] = False  # ... less one
+    return [pixel, blob, under]
+
+
+@pytest.mark.parametrize("calibrated", [False, True])
+def test_a_speck_is_no_hand(lookup, query_rows, calibrated):
+    # one white pixel in a dark 720x480 view was read as a hand (no_hand=False)
+    from handsynth.estimate import MIN_HAND_COVERAGE
+    from handsynth.render import preprocess
+
+    if calibrated:
+        lookup = lookup.calibrated(_device_frames(query_rows["silhouette"])[-1])
+    for frame in _specks():
+        assert preprocess(frame, lookup.mount).any()  # it stands out, and the wrist cut keeps it
+        est = lookup.estimate(frame)
+        assert est.no_hand and est.entry == -1 and np.isnan(est.angles).all(), frame.dtype
+        assert np.isnan(est.keypoints).all() and est.confidence == 0.0
+        assert not lookup.silhouette(frame).any()
+    at_limit = np.zeros((480, 720), bool)
+    at_limit[150:198, 300:372] = True  # 3456 pixels: exactly MIN_HAND_COVERAGE of the view
+    assert at_limit.sum() == MIN_HAND_COVERAGE * at_limit.size
+    assert not lookup.estimate(at_limit).no_hand
+    if calibrated:
+        with pytest.raises(InvalidInputError, match="open_frame shows no hand"):
+            lookup.calibrated(_specks()[0])
+
+
+def test_the_smallest_hand_in_a_fist_covers_far_more_than_the_lookups_least():
+    # what the lookup keeps of a database entry (its largest component after the wrist cut)
+    # of the smallest modelled hand, every ratio 0.5, in the most folded poses
+    from handsynth.estimate import MIN_HAND_COVERAGE
+    from handsynth.models import named_pose
+    from handsynth.render import SilhouetteRasterizer, preprocess
+
+    mount = CameraMount.paper()
+    r = SilhouetteRasterizer(HandShape(length=0.5, width=0.5, palm=0.5, thumb=0.5), mount)
+    for m in r.masks(np.array([named_pose(n) for n in ("fist", "grasp", "pinch")])):
+        assert preprocess(m, mount, min_coverage=6 * MIN_HAND_COVERAGE).any()
+
+
 @pytest.mark.parametrize(
     "frame, match",
     [
@@ -337,6 +385,16 @@ def test_from_open_frame_refuses_a_frame_of_another_ratio_before_building(tmp_pa
     with pytest.raises(InvalidInputError, match=r"^frame is 160x120 pixels; .* 720x480 view"):
         PoseLookup.from_open_frame(tmp_path / "dbs", _scaled(_open_frame(), 160, 120),
                                    shapes=[HandShape()])
+    assert not (tmp_path / "dbs").exists()  # nothing was built
+
+
+def test_from_open_frame_refuses_a_speck_before_building(tmp_path):
+    # one white pixel was upscaled to a 64x64 block and taken for a hand to choose a shape by
+    for frame in _specks():
+        with pytest.raises(InvalidInputError, match=r"^open_frame shows no hand: nothing stands "
+                                                    r"out, or what does covers less than 1 % of "
+                                                    r"the view \(MIN_HAND_COVERAGE\)$"):
+            PoseLookup.from_open_frame(tmp_path / "dbs", frame, shapes=[HandShape()])
     assert not (tmp_path / "dbs").exists()  # nothing was built
 
 

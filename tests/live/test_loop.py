@@ -382,6 +382,20 @@ def test_first_hand_frame_skips_drops_garbage_and_empty_frames(lookup):
         first_hand_frame(_Frames([hand]), max_reads=0)
 
 
+def test_first_hand_frame_skips_a_speck(lookup):
+    # a frame whose bright part covers less than MIN_HAND_COVERAGE of the view (one white
+    # pixel, a tiny blob) was taken as the open-hand calibration frame
+    hand = _synthetic(lookup, frames=3).open_frame()
+    pixel = np.zeros((H, W, 3), np.uint8)
+    pixel[40, 60] = 255  # one white pixel on the Otsu sample's grid: it stands out
+    blob = np.zeros((H, W), bool)
+    blob[40:44, 60:70] = True  # 40 pixels, 0.2 % of the view
+    src = _Frames([pixel, blob, hand])
+    assert first_hand_frame(src, retry_delay_s=0) is hand and src.reads == 3
+    with pytest.raises(EstimationError, match="ended before a frame showed a hand"):
+        first_hand_frame(_Frames([pixel, blob]), retry_delay_s=0)
+
+
 def test_first_hand_frame_names_a_bad_argument_before_reading(lookup):
     hand = _synthetic(lookup, frames=3).open_frame()
     for kwargs, words in (({"side": "Right"}, r"side must be 'right' or 'left', got 'Right'"),

@@ -1,3 +1,5 @@
+import re
+
 import numpy as np
 import pytest
 
@@ -9,6 +11,8 @@ from handsynth.render import (
     crop_resize,
     largest_component,
     preprocess,
+    preprocess_reference,
+    wrist_cut_keep,
 )
 
 NO_CUT = CameraMount(wrist_cut_mm=None)
@@ -338,3 +342,52 @@ def test_small_masks_and_the_size_bounds_are_accepted():
     assert crop_resize(m, size=8).sum() == 32  # a 1 x 2 bar fills half of 8 x 8
     assert crop_resize(m.astype(np.uint8) * 255, size=8).sum() == 32  # uint8: nonzero is hand
     assert crop_resize(m, size=np.int64(4096)).shape == (4096, 4096)
+
+
+def _speck_and_hand(h: int = 120, w: int = 180):
+    """A mask whose largest component covers 1 % of the view less one pixel, and one of
+    exactly 1 % (``h * w / 100`` pixels), each with a smaller speck beside it."""
+    exact = np.zeros((h, w), bool)
+    exact[10:10 + h // 10, 20:20 + w // 10] = True  # a block of h * w / 100 pixels
+    exact[-3:-1, -3:-1] = True  # a 4-pixel speck, apart
+    under = exact.copy()
+    under[10, 20] = False  # one pixel short
+    return under, exact
+
+
+@pytest.mark.parametrize("as_frame", [False, True])
+def test_min_coverage_empties_a_component_under_that_share_of_the_frame(as_frame):
+    # a speck (one bright pixel) is too little to be a hand; the lookup passes MIN_HAND_COVERAGE
+    under, exact = _speck_and_hand()
+    for mask, hand in ((under, False), (exact, True)):
+        frame = np.where(mask[..., None], np.uint8(220), np.uint8(10)).repeat(3, 2) \
+            if as_frame else mask
+        got = preprocess(frame, NO_CUT, min_coverage=0.01)
+        assert got.any() == hand
+        np.testing.assert_array_equal(got, preprocess_reference(frame, NO_CUT, min_coverage=0.01))
+        if hand:
+            np.testing.assert_array_equal(got, preprocess(frame, NO_CUT))
+        assert preprocess(frame, NO_CUT).any()  # no rule by default
+    one = np.zeros((480, 720, 3), np.uint8)
+    one[200, 300] = 255
+    assert preprocess(one).any() and not preprocess(one, min_coverage=0.01).any()
+    assert preprocess(one, min_coverage=1 / one[..., 0].size).any()
+
+
+def test_min_coverage_counts_what_the_wrist_cut_keeps():
+    r = SilhouetteRenderer(width_px=360, height_px=240)
+    m = r.mask(named_pose("fist"))
+    kept = largest_component(m & wrist_cut_keep(r.mount, width_px=360, height_px=240)).mean()
+    assert preprocess(m, r.mount, min_coverage=kept).any()
+    assert not preprocess(m, r.mount, min_coverage=kept + 1 / m.size).any()
+
+
+@pytest.mark.parametrize("value, got", [
+    (-0.1, "-0.1"), (1.5, "1.5"), (float("nan"), "nan"), ("1%", "'1%' (str)"), (None, "None (NoneType)"),
+])
+def test_min_coverage_is_checked(value, got):
+    words = f"min_coverage must be a finite number >= 0 and <= 1, got {got}"
+    with pytest.raises(InvalidInputError, match=re.escape(words)):
+        preprocess(np.zeros((48, 72), bool), min_coverage=value)
+    with pytest.raises(InvalidInputError, match=re.escape(words)):
+        preprocess_reference(np.zeros((48, 72), bool), min_coverage=value)
