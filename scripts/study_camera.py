@@ -15,6 +15,7 @@ Usage::
     python scripts/study_camera.py --cache DIR sizes
     python scripts/study_camera.py --cache DIR skin
     python scripts/study_camera.py --cache DIR skin_lit
+    python scripts/study_camera.py --cache DIR [--kind perceptrons] novelty
 
 ``backgrounds``
     Two held-out model hands (seed 3, 1.5 times the learning spread) and the
@@ -168,6 +169,22 @@ Usage::
     open-hand answer, the index PIP's error where it moves more than 20 deg
     (paper / natural frames) and the share of frames flagged ``low_confidence``.  Last line:
     ``paper_skill_min=<skill> natural_skill_min=<skill>``.
+``novelty``
+    What ``low_confidence`` flags (the novelty limits, fixed from learning
+    frames before this study): the default ensemble, or with ``--kind
+    perceptrons`` its perceptrons alone.  The three glTF hands and three
+    held-out model hands (seed 3), a relaxed and a near-open rest each
+    (seed 5), 100 paper and 100 natural frames each, painted as skin on a
+    dark ground and over the photographs (the rest frame over one too, so
+    the hand is told by colour); per ground and frame set the share flagged
+    and the finger flexion MAE of the frames flagged and not flagged,
+    beside the constant open-hand answer.  Then frames that show no hand or
+    not as the device sees one, each calibrated on every hand's relaxed
+    rest frame on the dark ground: uniform noise, the upper half of the view
+    white, a white 300x200 rectangle, a white disc (radius 150 px), the left
+    300 columns grey, and a natural frame of the hand shifted 60 and 120 px
+    sideways and turned upside down; per kind the share flagged.  Last line:
+    ``hands_flagged_dark=<share> hands_flagged_photo=<share> nonhand_flagged=<share>``.
 
 The learnt estimator is read from ``--cache`` (or learnt there first).
 """
@@ -836,6 +853,81 @@ def sizes(cache) -> None:
     print(f"paper_skill_min={min(skill['paper']):.2f} natural_skill_min={min(skill['natural']):.2f}")
 
 
+def _no_hand_frames(natural: np.ndarray) -> dict:
+    """Frames of no hand, or of a hand not as the device sees one (720x480, BGR uint8)."""
+    import cv2
+
+    h, w = 480, 720
+    out = {"uniform noise": np.random.default_rng(1).integers(0, 256, (h, w, 3), dtype=np.uint8)}
+    half = np.full((h, w, 3), 20, np.uint8)
+    half[: h // 2] = 255
+    rect = np.full((h, w, 3), 20, np.uint8)
+    rect[140:340, 210:510] = 255
+    disc = np.full((h, w, 3), 20, np.uint8)
+    cv2.circle(disc, (w // 2, h // 2), 150, (255, 255, 255), -1)
+    band = np.full((h, w, 3), 20, np.uint8)
+    band[:, :300] = 200
+    out.update({"upper half white": half, "white rectangle": rect, "white disc": disc,
+                "left band grey": band, "hand shifted 60 px": np.roll(natural, 60, axis=1),
+                "hand shifted 120 px": np.roll(natural, 120, axis=1),
+                "hand upside down": natural[::-1].copy()})
+    return out
+
+
+def novelty(cache, kind: str = "ensemble") -> None:
+    from handsynth.estimate import LEARNED_ENSEMBLES, learned_ensemble
+    from handsynth.eval import paper_protocol_poses
+    from handsynth.eval._testposes import REST_POSTURES
+    from handsynth.testhands import TEST_HANDS
+
+    mount = CameraMount.paper()
+    ens = learned_ensemble(cache, members=LEARNED_ENSEMBLES[kind], mount=mount)
+    photos = background_photos()
+    grounds = {"dark": lambda i: np.full((480, 720, 3), 20, np.uint8),
+               "photo": lambda i: photos[i % len(photos)].copy()}
+    rng = np.random.default_rng(5)
+    rows: dict = {}
+    odd: dict = {}
+    for hand in mesh_test_hands(sorted(TEST_HANDS), mount=mount) + model_test_hands(3, seed=3,
+                                                                                      mount=mount):
+        made = hand.make()
+        for rest_kind in ("relaxed", "open"):
+            rest = REST_POSTURES[rest_kind](rng)
+            sets = {"paper": paper_protocol_poses(rest, 100, rng)[0],
+                    "natural": natural_test_poses(rest, 100, rng)[0]}
+            masks = {k: made.masks(v) for k, v in sets.items()}
+            for g, ground in grounds.items():
+                def frame(mask, i, ground=ground):
+                    f = ground(i)
+                    f[mask] = _SKIN
+                    return f
+
+                cal = ens.calibrated(frame(made.mask(rest), 0))
+                for k, poses in sets.items():
+                    got = [cal.estimate(frame(m, i + 1)) for i, m in enumerate(masks[k])]
+                    e = np.abs(np.stack([x.angles for x in got])[:, _FLEX] - poses[:, _FLEX]).mean(1)
+                    low = np.array([x.low_confidence for x in got])
+                    rows.setdefault((g, k), []).append((e, low, np.abs(poses[:, _FLEX]).mean(1)))
+                if g == "dark" and rest_kind == "relaxed":
+                    for name, f in _no_hand_frames(frame(masks["natural"][0], 1)).items():
+                        odd.setdefault(name, []).append(cal.estimate(f).low_confidence)
+        made.close()
+        print(f"{hand.name} done", flush=True)
+    for (g, k), parts in rows.items():
+        e, low, const = (np.concatenate(x) for x in zip(*parts))
+        kept = e[~low].mean() if (~low).any() else float("nan")
+        flagged = e[low].mean() if low.any() else float("nan")
+        print(f"{g:5s} {k:8s} flagged {low.mean():.3f} ({low.sum()} of {len(low)}); flexion MAE "
+              f"not flagged {kept:6.2f}, flagged {flagged:6.2f}; constant {const.mean():6.2f}")
+    for name, low in odd.items():
+        print(f"{name:22s} flagged {np.mean(low):.2f} ({sum(low)} of {len(low)} calibrations)")
+    share = {g: float(np.mean(np.concatenate([np.concatenate([p[1] for p in parts])
+                                              for (gg, _k), parts in rows.items() if gg == g])))
+             for g in grounds}
+    print(f"hands_flagged_dark={share['dark']:.3f} hands_flagged_photo={share['photo']:.3f} "
+          f"nonhand_flagged={np.mean([np.mean(v) for v in odd.values()]):.3f}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cache", default=None, help="folder of the learnt estimator")
@@ -850,9 +942,11 @@ def main() -> None:
     ap.add_argument("--axis", default=None,
                     choices=["height_mm", "thumb_offset_mm", "along_mm", "tilt_deg", "roll_deg"],
                     help="moved: slip along this field of MountVariation alone")
+    ap.add_argument("--kind", choices=["ensemble", "perceptrons"], default="ensemble",
+                    help="novelty: the default ensemble or its perceptrons alone")
     ap.add_argument("study", choices=["backgrounds", "jitter", "holds", "observability", "bound",
                                       "bound_mcp", "rests", "moved", "imaging", "mounts", "sizes",
-                                      "skin", "skin_lit"])
+                                      "skin", "skin_lit", "novelty"])
     args = ap.parse_args()
     if args.study not in ("observability", "bound_mcp", "moved") and args.cache is None:
         ap.error(f"{args.study} needs --cache DIR")
@@ -864,7 +958,8 @@ def main() -> None:
                "moved": lambda: moved(args.axis),
                "imaging": lambda: imaging(args.cache, args.segment),
                "mounts": lambda: mounts(args.cache), "sizes": lambda: sizes(args.cache),
-               "skin": lambda: skin(args.cache), "skin_lit": lambda: skin_lit(args.cache)}
+               "skin": lambda: skin(args.cache), "skin_lit": lambda: skin_lit(args.cache),
+               "novelty": lambda: novelty(args.cache, args.kind)}
     studies[args.study]()
 
 

@@ -59,6 +59,7 @@ from ._ensemble import (
     shipped_members,
     shipped_perceptrons,
 )
+from ._hand import MIN_HAND_COVERAGE
 from ._keypoints import KeypointEstimator
 from ._learned import (
     AUTO_OVERLAP,
@@ -69,7 +70,7 @@ from ._learned import (
     local_linear,
     train_learned,
 )
-from ._lookup import MIN_HAND_COVERAGE, PoseEstimate, PoseEstimator, PoseLookup
+from ._lookup import PoseEstimate, PoseEstimator, PoseLookup
 from ._masked import (
     MaskedMatch,
     masked_band_areas,

@@ -49,6 +49,7 @@ from ..db import pack_mask, unpack_mask
 from ..errors import EstimationError, InvalidInputError
 from ..models import HandShape
 from ..render import CameraMount, as_mount, preprocess
+from ._hand import MIN_HAND_COVERAGE
 
 __all__ = ["MIN_OPEN_IOU", "Calibration", "FrameSelection", "reference_silhouette",
            "select_shape_from_frame"]
@@ -235,7 +236,8 @@ def select_shape_from_frame(open_frame, *, mount: CameraMount | None = None,
     Raises
     ------
     InvalidInputError
-        The frame is not an image or shows no hand; `shapes` is empty or
+        The frame is not an image or shows no hand (what stands out covers
+        less than :data:`~handsynth.estimate.MIN_HAND_COVERAGE` of it); `shapes` is empty or
         holds something else than HandShape objects; `mount` is not a
         CameraMount or `side` not ``"right"`` or ``"left"``.
     """
@@ -247,9 +249,11 @@ def select_shape_from_frame(open_frame, *, mount: CameraMount | None = None,
         cands = []
     if not cands or not all(isinstance(s, HandShape) for s in cands):
         raise InvalidInputError(f"shapes must be a non-empty sequence of HandShape, got {shapes!r}")
-    user = preprocess(open_frame, mount, side=side)
+    user = preprocess(open_frame, mount, side=side, min_coverage=MIN_HAND_COVERAGE)
     if not user.any():
-        raise InvalidInputError("open_frame shows no hand")
+        raise InvalidInputError(f"open_frame shows no hand: nothing stands out, or what does "
+                                f"covers less than {100 * MIN_HAND_COVERAGE:g} % of the view "
+                                "(MIN_HAND_COVERAGE)")
     h, w = np.shape(open_frame)[:2]
     sils = _open_hand_silhouettes(tuple(cands), mount, side, w, h)
     inter = (sils & user[None]).sum(axis=(1, 2))

@@ -45,6 +45,15 @@ unseen hands"): ``"fingers"`` with ``k = 128`` and the local linear fit on a
 400,000-frame learning set (4,000 hands), alone or averaged with ``"mlp"``
 (:class:`~handsynth.estimate.EnsembleEstimator`).
 
+Each kind learns how unlike the learning frames a frame may be before it is
+flagged ``low_confidence`` (a *novelty limit*, stored as ``novelty_limit``):
+``"fingers"``, the 99th percentile of the distance of learning frames to the
+nearest frame of another hand; ``"mlp"`` and ``"knn"``, the 99th percentile,
+over the learning frames, of the norm of the part of a frame's input that its
+principal components leave out (:func:`_left_out_norms`).  A frame that shows
+no hand, or a hand the device does not see as it was learnt (shifted by a
+slipped mount, upside down), leaves far more out than any learning frame.
+
 Everything learnt is kept in a folder the caller names
 (:func:`learned_estimator`), as one ``.npz`` written to a temporary name and
 renamed when complete; the default ensemble's perceptrons are shipped with
@@ -93,7 +102,8 @@ from ..render import (
     fit_skin_colour,
     skin_mask,
 )
-from ._lookup import MIN_HAND_COVERAGE, PoseEstimate, check_frame_ratio
+from ._hand import MIN_HAND_COVERAGE
+from ._lookup import PoseEstimate, check_frame_ratio
 from ._moved import MoveCheck
 from ._shipped import shipped_path
 
@@ -328,6 +338,23 @@ class _Rows:
             yield sl, self.take(sl)
 
 
+#: The share of learning frames a frame must be more novel than to be flagged
+#: ``low_confidence`` (every kind's novelty limit is this quantile).
+_NOVELTY_QUANTILE = 0.99
+
+
+def _left_out_norms(x: np.ndarray, mean: np.ndarray, components: np.ndarray) -> np.ndarray:
+    """Norm (N,) of the part of inputs `x` (N, D) that the principal `components` leave out.
+
+    ``sqrt(|x - mean|^2 - |(x - mean) components|^2)``: the distance from each
+    input to the subspace the components span through `mean` (the components
+    are orthonormal columns, :func:`_pca`).
+    """
+    d = np.asarray(x, np.float32) - mean
+    c = d @ components
+    return np.sqrt(np.maximum(np.einsum("ij,ij->i", d, d) - np.einsum("ij,ij->i", c, c), 0.0))
+
+
 def _pca(z: _Rows, k: int, rng: np.random.Generator, sample: int = 20000, *,
          cols: np.ndarray | None = None, weight: np.ndarray | None = None
          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -465,7 +492,42 @@ def local_linear(x: np.ndarray, y: np.ndarray, w: np.ndarray, *, ridge: float) -
     Returns
     -------
     ndarray, shape (J,), float64
+
+    Raises
+    ------
+    InvalidInputError
+        `x`, `y` or `w` not finite real arrays of those shapes with one `k`,
+        a weight <= 0, or `ridge` not a finite number >= 0 (naming it).
     """
+    x = _as_real(x, "x", ndim=2)
+    y = _as_real(y, "y", ndim=2)
+    w = _as_real(w, "w", ndim=1)
+    if not len(x) == len(y) == len(w) or len(x) == 0:
+        raise InvalidInputError(f"x, y and w must hold the same number k >= 1 of neighbours, got "
+                                f"shapes {x.shape}, {y.shape} and {w.shape}")
+    if (w <= 0).any():
+        raise InvalidInputError(f"w must be weights > 0, got {float(w.min())!r} at "
+                                f"neighbour {int(np.argmin(w))}")
+    return _local_linear(x, y, w, ridge=check_number(ridge, "ridge", minimum=0))
+
+
+def _as_real(a, name: str, *, ndim: int) -> np.ndarray:
+    """`a` as a finite float64 array of `ndim` dimensions, or InvalidInputError naming `name`."""
+    try:
+        arr = np.asarray(a)
+    except (TypeError, ValueError):
+        arr = None
+    if arr is None or arr.dtype.kind not in "biuf" or arr.ndim != ndim:
+        raise InvalidInputError(f"{name} must be a {ndim}-D array of real numbers, got "
+                                f"{short_repr(a)}")
+    arr = arr.astype(np.float64)
+    if not np.isfinite(arr).all():
+        raise InvalidInputError(f"{name} must be finite, got NaN or infinity")
+    return arr
+
+
+def _local_linear(x: np.ndarray, y: np.ndarray, w: np.ndarray, *, ridge: float) -> np.ndarray:
+    """:func:`local_linear` without its checks (the estimators' inner loop)."""
     x = np.asarray(x, np.float64)
     w = np.asarray(w, np.float64) / np.sum(w)
     design = np.hstack([np.ones((len(x), 1)), x])
@@ -809,7 +871,7 @@ class LearnedEstimator:
         w = 1.0 / (d + d1 + 1e-6)
         y = self._a[prefix + "angles"][idx]
         if self.options.local == "linear" and len(idx) > c.shape[1] + 1:
-            return local_linear(x, y, w, ridge=self.options.ridge), d1
+            return _local_linear(x, y, w, ridge=self.options.ridge), d1
         return (w @ y / w.sum()).astype(np.float64), d1
 
     def _predict(self, prefix: str, c: np.ndarray) -> tuple[np.ndarray, float]:
@@ -872,9 +934,13 @@ class LearnedEstimator:
             unlike any learnt (``"fingers"``: ``1 / (1 + error)``, ``error``
             the mean over the digits of the nearest learning frame's
             distance; otherwise the share of the frame's variance its code
-            explains); ``low_confidence`` (``"fingers"``) when ``error``
-            exceeds what 99 % of frames of hands the estimator did not learn
-            from show (:func:`train_learned`), e.g. a cluttered background;
+            explains, and ``error`` for ``"mlp"`` the norm of the part of
+            its input the code leaves out, ``"knn"`` the nearest learning
+            frame's distance); ``low_confidence`` when the frame is more
+            novel than 99 % of learning frames (the novelty limit, module
+            docstring; ``"fingers"``: learning frames among other hands),
+            e.g. a frame of no hand, a cluttered background, a slipped
+            device (an estimator stored without a limit flags nothing);
             ``no_hand`` when the frame shows no hand (what stands out covers
             less than :data:`MIN_HAND_COVERAGE` of the view); ``moved`` when the
             device seems to have moved on the wrist since the rest frame
@@ -916,8 +982,13 @@ class LearnedEstimator:
             z -= self._a["mean"]
             c = z @ self._a["components"]
             angles, error = self._predict("", c)
-            total = float(np.sum(z * z))
-            conf = float(np.sum(c * c) / total) if total > 0 else 0.0
+            total, kept = float(np.sum(z * z)), float(np.sum(c * c))
+            conf = kept / total if total > 0 else 0.0
+            left_out = float(np.sqrt(max(total - kept, 0.0)))
+            if self.options.kind == "mlp":
+                error = left_out
+            if "novelty_limit" in self._a:
+                low = left_out > float(self._a["novelty_limit"])
         if self._rest_angles is not None:
             angles = angles + self._rest_angles
         angles = np.clip(angles, self._lo, self._hi)
@@ -1031,13 +1102,20 @@ def _stored_description(path: Path, meta: dict):
 
 
 def _check_stored_arrays(path: Path, arrays: dict, options: LearnedOptions) -> None:
-    """Refuse a stored estimator that lacks an array its options need.
+    """Refuse a stored estimator that lacks an array its options need, or holds NaN.
 
     Raises
     ------
     DatabaseCorruptError
-        Naming the first missing array and the file.
+        Naming the first missing array and the file; or the first array of
+        floating-point values holding NaN or infinity (a weight, a mean, a
+        novelty limit: every answer would be NaN, or every frame flagged).
     """
+    for name, arr in arrays.items():
+        if isinstance(arr, np.ndarray) and arr.dtype.kind == "f" and not np.isfinite(arr).all():
+            raise DatabaseCorruptError(
+                f"learnt estimator {path} is damaged: array {name!r} holds "
+                f"{int(np.size(arr) - np.isfinite(arr).sum())} NaN or infinite values")
     if options.kind == "fingers":
         need = [f"d{d}_{k}" for d in range(5)
                 for k in ("cols", "w", "mean", "components", "codes", "angles")]
@@ -1091,7 +1169,8 @@ def train_learned(data: LearningSet, options: LearnedOptions | None = None, *,
         est = LearnedEstimator(arrays, options=opts, mount=data.mount, side=data.side,
                                cells=data.options.cells)
         pick = np.sort(rng.choice(len(y), size=min(1000, len(y)), replace=False))
-        limit = np.array(est._novelty_limit(rows.take(pick), pick, data.hand), np.float32)
+        limit = np.array(est._novelty_limit(rows.take(pick), pick, data.hand,
+                                            quantile=_NOVELTY_QUANTILE), np.float32)
         limit.setflags(write=False)
         est._a["novelty_limit"] = limit
         return est
@@ -1175,10 +1254,13 @@ def _fit(z: _Rows, y: np.ndarray, opts: LearnedOptions, rng: np.random.Generator
     # (model hands, paper frames: flexion skill 0.17 whitened, 0.38 not)
     scale = np.full_like(sd, sd[0])
     codes = np.empty((len(z), comps.shape[1]), np.float32)
+    left_out = np.empty(len(z), np.float32)
     for sl, x in z.blocks(block):
         codes[sl] = (x - mean) @ comps
+        left_out[sl] = _left_out_norms(x, mean, comps)
     y = np.asarray(y, np.float32)
-    arrays: dict = {"mean": mean, "components": comps, "scale": scale}
+    arrays: dict = {"mean": mean, "components": comps, "scale": scale,
+                    "novelty_limit": np.array(np.quantile(left_out, _NOVELTY_QUANTILE), np.float32)}
     if opts.kind == "knn":
         arrays["codes"] = codes
         arrays["angles"] = y

@@ -34,19 +34,12 @@ from ..errors import DatabaseError, InvalidInputError
 from ..models import JOINT_NAMES, HandMeasurements, HandShape
 from ..render import CameraMount, as_mount, check_frame, preprocess
 from ._calibration import Calibration, reference_silhouette, select_shape_from_frame
+from ._hand import MIN_HAND_COVERAGE
 from ._masked import masked_band_areas, masked_search
 from ._search import SearchOptions, SearchTables, search
 from ._selection import SelectionOptions, select_shape
 
-__all__ = ["MIN_HAND_COVERAGE", "PoseEstimate", "PoseEstimator", "PoseLookup"]
-
-#: Least share of the device's view (after the wrist cut) that a hand covers.  The smallest
-#: hand handsynth models (every ratio 0.5) covers at least 7.0 % of the paper's view in the
-#: pose sets' most folded pose, a fist (the standard hand 13.9 %; 300 natural and 300 paper
-#: poses and the named poses; `tests/estimate/test_learned.py` keeps this margin), so a
-#: frame whose bright part covers less than a seventh of that (a lamp in a dark room, one
-#: bright pixel, a speck) shows no hand rather than a confidently read one.
-MIN_HAND_COVERAGE = 0.01
+__all__ = ["PoseEstimate", "PoseEstimator", "PoseLookup"]
 
 #: Largest relative difference of a frame's width-to-height ratio from the device's
 #: (:func:`check_frame_ratio`): a frame scaled to another size stays within it.
@@ -171,8 +164,11 @@ class PoseEstimate:
         difference outside the ignore mask (inf when `no_hand`).
     low_confidence : bool
         No entry passed both pruning stages (SPEC.md section 1); for a
-        :class:`~handsynth.estimate.LearnedEstimator`, the frame is farther
-        from every learning frame than 99 % of new hands' frames are.
+        :class:`~handsynth.estimate.LearnedEstimator`, the frame is more
+        novel than 99 % of learning frames (its novelty limit: for the
+        per-digit kind the distance to the nearest learning frame of another
+        hand, for the perceptron what its principal components leave out of
+        the frame); for an ensemble, any member's.
     no_hand : bool
         The frame shows no hand (empty silhouette after preprocessing, or a
         hand component covering less than

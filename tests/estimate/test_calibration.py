@@ -345,3 +345,11 @@ def test_reference_silhouette_names_what_is_not_a_database():
     with pytest.raises(InvalidInputError, match=r"^database must be a Database \(its angles, sil_bits "
                                                 r"and path\), got str 'x'$"):
         reference_silhouette("x")
+
+
+def test_select_shape_from_frame_refuses_a_speck():
+    frame = np.zeros((480, 720), bool)
+    frame[200:210, 300:310] = True  # 100 pixels: far under 1 % of the view
+    with pytest.raises(InvalidInputError, match=r"open_frame shows no hand: .*less than 1 % of "
+                                                r"the view \(MIN_HAND_COVERAGE\)"):
+        select_shape_from_frame(frame, shapes=[HandShape()])

@@ -182,6 +182,38 @@ def test_frames_unlike_any_hand_are_flagged_low_confidence(data):
     assert odd.error > limit and odd.low_confidence
 
 
+def _rest_mask(data, hand):
+    """A mask whose coverage is hand `hand`'s stored rest grid (cells of 16x16 pixels)."""
+    return np.repeat(np.repeat(data.rest_grids[hand].reshape(30, 45), 16, 0), 16, 1) >= 128
+
+
+@pytest.mark.parametrize("kind", ["mlp", "knn"])
+def test_a_perceptron_flags_frames_whose_input_its_components_leave_out(data, kind):
+    from handsynth.estimate._learned import _inputs, _left_out_norms
+
+    est = train_learned(data, LearnedOptions(kind=kind, components=8, hidden=(8,), epochs=1))
+    limit = float(est._a["novelty_limit"])
+    # the limit is the 99th percentile of what the components leave out of the learning inputs
+    z = _inputs(data.grids, data.rest_grids[data.hand])
+    norms = _left_out_norms(z, est._a["mean"], est._a["components"])
+    assert limit == pytest.approx(float(np.quantile(norms, 0.99)), rel=1e-5)
+    assert 0 < limit < norms.max() + 1e-6
+    rest = _rest_mask(data, 0)
+    cal = est.calibrated(rest)
+    frames = _frames(data, np.flatnonzero(data.hand == 0))
+    ins = _inputs(np.stack([cal.grid(f).ravel() for f in frames]), cal.grid(rest).ravel()[None])
+    left_out = _left_out_norms(ins, est._a["mean"], est._a["components"])
+    got = [cal.estimate(f) for f in frames]
+    assert [g.low_confidence for g in got] == list(left_out > limit)
+    if kind == "mlp":  # its error is what the components leave out
+        assert np.allclose([g.error for g in got], left_out, rtol=1e-4)
+    white = cal.estimate(np.ones((480, 720), bool))  # a bright background filling the view
+    assert white.low_confidence and not white.no_hand
+    # an estimator stored without a limit (learnt by an earlier release) flags nothing
+    del est._a["novelty_limit"]
+    assert not est.calibrated(_rest_mask(data, 0)).estimate(np.ones((480, 720), bool)).low_confidence
+
+
 def test_bad_options_are_refused_by_name():
     with pytest.raises(InvalidInputError, match="kind must be 'mlp', 'knn' or 'fingers'"):
         LearnedOptions(kind="forest")
@@ -229,6 +261,12 @@ def test_a_stored_estimator_missing_a_part_is_refused_on_load(data, tmp_path):
     bad_side = damaged("bad_side.npz", meta=np.array(json.dumps(dict(meta, side="up"))))
     with pytest.raises(DatabaseCorruptError, match=r"bad_side.npz: meta 'side' is unusable"):
         LearnedEstimator.load(bad_side)
+    for name in ("w0", "novelty_limit"):
+        nan = damaged(f"nan_{name}.npz", **{name: np.where(np.arange(parts[name].size).reshape(
+            parts[name].shape) == 0, np.nan, parts[name])})
+        with pytest.raises(DatabaseCorruptError, match=rf"nan_{name}.npz is damaged: array "
+                                                       rf"'{name}' holds 1 NaN or infinite values"):
+            LearnedEstimator.load(nan)
     back = LearnedEstimator.load(damaged("whole.npz"))  # the parts as saved: read as before
     frame = _frames(data, [3])[0]
     rest = _frames(data, [0])[0]
@@ -719,3 +757,19 @@ def test_a_speck_is_no_hand_and_no_rest_frame(data):
     got = cal.estimate(speck)
     assert got.no_hand and got.low_confidence and np.isnan(got.angles).all()
     assert not cal.estimate(_frames(data, [1])[0]).no_hand
+
+
+@pytest.mark.parametrize("args, words", [
+    (dict(x=np.zeros((3, 2)), y=np.zeros((4, 1)), w=np.ones(3)), r"same number k >= 1"),
+    (dict(x=np.zeros((0, 2)), y=np.zeros((0, 1)), w=np.ones(0)), r"same number k >= 1"),
+    (dict(x=np.zeros(3), y=np.zeros((3, 1)), w=np.ones(3)), r"x must be a 2-D array"),
+    (dict(x=np.zeros((3, 2)), y="abc", w=np.ones(3)), r"y must be a 2-D array"),
+    (dict(x=np.zeros((3, 2)), y=np.zeros((3, 1)), w=np.array([1.0, 0.0, 1.0])),
+     r"w must be weights > 0, got 0.0 at neighbour 1"),
+    (dict(x=np.full((3, 2), np.nan), y=np.zeros((3, 1)), w=np.ones(3)), r"x must be finite"),
+])
+def test_local_linear_refuses_arrays_that_do_not_fit_by_name(args, words):
+    with pytest.raises(InvalidInputError, match=words):
+        local_linear(**args, ridge=0.1)
+    with pytest.raises(InvalidInputError, match="ridge"):
+        local_linear(np.zeros((3, 2)), np.zeros((3, 1)), np.ones(3), ridge=-1.0)

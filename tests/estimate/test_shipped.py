@@ -248,3 +248,35 @@ def test_frames_over_a_bright_coloured_ground_read_as_their_masks_by_the_skin_s_
     constant = np.abs(poses[:, flex]).mean()
     assert mae["brightness"] > 0.5 * constant  # the ground taken for hand
     assert mae["colour"] < mae["mask"] + 0.25 * (mae["brightness"] - mae["mask"])
+
+
+def test_the_shipped_perceptrons_flag_frames_of_no_hand_and_not_a_held_out_hand(tmp_path):
+    """Each shipped perceptron keeps a novelty limit (docs/camera_estimator.md, "What
+    `low_confidence` flags"): a held-out model hand's frames stay under it, frames that
+    show no hand or not as the device sees one do not."""
+    import cv2
+
+    from handsynth.eval import model_test_hands, natural_test_poses, relaxed_rest_posture
+
+    for est in shipped_members(members=LEARNED_PERCEPTRONS):
+        limit = float(est._a["novelty_limit"])
+        assert 3.0 < limit < 8.0  # 4.87-4.90 as shipped; learning frames' median about 2.9
+    ens = learned_ensemble(tmp_path, members=LEARNED_PERCEPTRONS)  # shipped: nothing learnt
+    made = model_test_hands(1, seed=47)[0].make()
+    rng = np.random.default_rng(8)
+    rest = relaxed_rest_posture(rng)
+    masks = made.masks(natural_test_poses(rest, 12, rng)[0])
+    cal = ens.calibrated(made.mask(rest))
+    got = [cal.estimate(m) for m in masks]
+    assert not any(g.low_confidence for g in got)
+    rect = np.zeros((480, 720), bool)
+    rect[140:340, 210:510] = True
+    disc = np.zeros((480, 720), np.uint8)
+    cv2.circle(disc, (360, 240), 150, 255, -1)
+    noise = np.random.default_rng(1).integers(0, 256, (480, 720, 3), dtype=np.uint8)
+    for frame in (rect, disc > 0, noise, masks[0][::-1], np.roll(masks[0], 120, axis=1)):
+        e = cal.estimate(frame)
+        assert e.low_confidence and not e.no_hand
+        for member in cal.members:  # each perceptron: what its components leave out
+            m = member.estimate(frame)
+            assert m.low_confidence == (m.error > float(member._a["novelty_limit"]))
