@@ -222,6 +222,13 @@ def _estimator(cache):
     return learned_estimator(cache, LearnedOptions())
 
 
+def _painted(mask: np.ndarray, ground, i: int) -> np.ndarray:
+    """Ground ``ground(i)`` (BGR uint8, a new array) with the hand's `mask` painted as skin."""
+    f = ground(i)
+    f[mask] = _SKIN
+    return f
+
+
 def backgrounds(cache) -> None:
     mount = CameraMount.paper()
     est = _estimator(cache)
@@ -237,13 +244,8 @@ def backgrounds(cache) -> None:
         poses, _ = natural_test_poses(rest, 60, rng)
         masks = [made.mask(p) for p in poses]
         for name, ground in grounds.items():
-            def frame(mask, i, ground=ground):
-                f = ground(i)
-                f[mask] = _SKIN
-                return f
-
-            cal = est.calibrated(frame(made.mask(rest), 0))
-            got = [cal.estimate(frame(m, i + 1)) for i, m in enumerate(masks)]
+            cal = est.calibrated(_painted(made.mask(rest), ground, 0))
+            got = [cal.estimate(_painted(m, ground, i + 1)) for i, m in enumerate(masks)]
             angles = np.stack([g.angles for g in got])
             flagged = np.array([g.low_confidence for g in got])
             err = np.abs(angles[:, _FLEX] - poses[:, _FLEX])
@@ -897,19 +899,14 @@ def novelty(cache, kind: str = "ensemble") -> None:
                     "natural": natural_test_poses(rest, 100, rng)[0]}
             masks = {k: made.masks(v) for k, v in sets.items()}
             for g, ground in grounds.items():
-                def frame(mask, i, ground=ground):
-                    f = ground(i)
-                    f[mask] = _SKIN
-                    return f
-
-                cal = ens.calibrated(frame(made.mask(rest), 0))
+                cal = ens.calibrated(_painted(made.mask(rest), ground, 0))
                 for k, poses in sets.items():
-                    got = [cal.estimate(frame(m, i + 1)) for i, m in enumerate(masks[k])]
+                    got = [cal.estimate(_painted(m, ground, i + 1)) for i, m in enumerate(masks[k])]
                     e = np.abs(np.stack([x.angles for x in got])[:, _FLEX] - poses[:, _FLEX]).mean(1)
                     low = np.array([x.low_confidence for x in got])
                     rows.setdefault((g, k), []).append((e, low, np.abs(poses[:, _FLEX]).mean(1)))
                 if g == "dark" and rest_kind == "relaxed":
-                    for name, f in _no_hand_frames(frame(masks["natural"][0], 1)).items():
+                    for name, f in _no_hand_frames(_painted(masks["natural"][0], ground, 1)).items():
                         odd.setdefault(name, []).append(cal.estimate(f).low_confidence)
         made.close()
         print(f"{hand.name} done", flush=True)
