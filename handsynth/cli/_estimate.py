@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import sys
+import warnings
 from pathlib import Path
 
 import click
@@ -18,8 +19,11 @@ from ._main import cli
 SYNTHETIC_SHAPE = "L1.02_W0.97_P1.01_T1.03"
 #: Frames of a ``--synthetic`` run without ``--frames`` or ``--seconds``.
 SYNTHETIC_FRAMES = 300
-#: Reads ``--calibrate`` waits for a frame showing a hand (10 s at 30 fps).
+#: Reads ``--calibrate`` waits for a frame showing a hand from a camera (10 s at 30 fps).
 CALIBRATION_READS = 300
+#: Reads a ``--video`` is searched for the rest frame: the whole file (it ends), so that a
+#: recording where the hand comes into view after 10 s still calibrates.
+VIDEO_CALIBRATION_READS = 1_000_000_000
 #: Frame rates ``--fps`` accepts, frames per second (a camera reports at most 10,000).
 FPS_RANGE = (0.01, 10_000.0)
 
@@ -155,17 +159,20 @@ def _open_lookup(db_dir, shape_name, measurements, temporal, err, personal=False
         raise _about_measurements(exc, measurements) from None
 
 
-def _calibration_frame(source, image, mount, side, err, *, synthetic: str, prompt: str):
+def _calibration_frame(source, image, mount, side, err, *, synthetic: str, prompt: str,
+                       accept=None):
     """The calibration frame and where it came from: `image`, the synthetic hand, or the
-    source's first frame showing a hand (after telling the user `prompt`)."""
-    from ..live import first_hand_frame
+    source's first frame showing a hand that `accept` (if given) takes (after telling the
+    user `prompt`)."""
+    from ..live import VideoSource, first_hand_frame
 
     if image is not None:
         return image, "the calibration image"
     if hasattr(source, "open_frame"):
         return source.open_frame(), synthetic
     click.echo(f"calibrating: {prompt}", err=err)
-    return (first_hand_frame(source, mount=mount, side=side, max_reads=CALIBRATION_READS),
+    reads = VIDEO_CALIBRATION_READS if isinstance(source, VideoSource) else CALIBRATION_READS
+    return (first_hand_frame(source, mount=mount, side=side, max_reads=reads, accept=accept),
             "the first frame showing a hand")
 
 
@@ -275,14 +282,33 @@ def _open_learned(cache, kind, hands, rest, smoothing, side, err):
     return est
 
 
-def _calibrate_learned(est, source, rest_image, mount, side, err, *, segment: str):
-    """The learnt estimator calibrated to the hand at rest."""
+def _calibrate_learned(est, source, rest_image, mount, side, err, *, segment: str,
+                       rest_name=None):
+    """The learnt estimator calibrated to the hand at rest.
+
+    A frame of the source where something stands out is the rest frame only when the
+    estimator calibrated to it reads the frame itself as a hand (not ``low_confidence``):
+    a video's first frames of half the view bright, of noise or of a hand coming into the
+    view made every later frame low-confidence.  A --calibrate-image that reads so is
+    used as given, with a warning."""
+    def reads_as_a_hand(frame) -> bool:
+        # a frame the estimator refuses (another width-to-height ratio...) is an error, as
+        # before: every frame of the source would be refused alike
+        return not est.calibrated(frame, segment=segment).estimate(frame).low_confidence
+
     rest, where = _calibration_frame(source, rest_image, mount, side, err,
                                      synthetic="the synthetic hand at rest (open)",
-                                     prompt="hold the hand open, not stiff")
+                                     prompt="hold the hand open, not stiff",
+                                     accept=reads_as_a_hand)
+    # calibrated afresh: the trial's estimate above is not a frame of the run (smoothing and
+    # the moved check keep what they saw)
     est = est.calibrated(rest, segment=segment)
     told = "by the skin's colour" if est.segment == "colour" else "by brightness"
     click.echo(f"calibrated to {where}; the hand is told {told}", err=err)
+    if rest_image is not None and est.estimate(rest).low_confidence:
+        warnings.warn(f"--calibrate-image {rest_name}: the image itself reads as unlike any "
+                      "hand learnt (no hand at rest in full view?): every frame may read "
+                      "low-confidence; give a frame of the hand at rest", stacklevel=2)
     return est
 
 
@@ -528,7 +554,8 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
         try:
             if learned:
                 lookup = _calibrate_learned(lookup, source, open_image, mount, side, info_err,
-                                            segment=segment or "auto")
+                                            segment=segment or "auto",
+                                            rest_name=calibrate_image)
             elif calibrate:
                 lookup = _calibrate(lookup, source, open_image, db_dir, mount, side, build,
                                     info_err)

@@ -25,7 +25,7 @@ Rows
 Columns, in this order (:func:`live_columns`): ``frame`` (index of the
 read, counting drops, so gaps show dropped reads), ``timestamp_s`` (the
 source's media time, or seconds since the loop started), ``no_hand``,
-``confidence``, ``low_confidence``, ``entry``, the 20 angles in degrees
+``confidence``, ``low_confidence``, ``moved``, ``entry``, the 20 angles in degrees
 under their :data:`~handsynth.JOINT_NAMES`; optionally the 21 keypoints in
 metres (``<site>_x_m``, ``<site>_y_m``, ``<site>_z_m``, sites of
 :data:`~handsynth.models.KEYPOINT_SITES`) and, for sources that know them,

@@ -232,7 +232,7 @@ def _usable(frame: np.ndarray | None) -> TypeGuard[np.ndarray]:
 
 def first_hand_frame(source: FrameSource, *, mount: CameraMount | None = None,
                      side: str = "right", max_reads: int = 100,
-                     retry_delay_s: float = 0.01) -> np.ndarray:
+                     retry_delay_s: float = 0.01, accept=None) -> np.ndarray:
     """The first frame of `source` that shows a hand: the open-hand frame of a calibration.
 
     The user holds the hand open and flat in front of the device before the
@@ -259,15 +259,22 @@ def first_hand_frame(source: FrameSource, *, mount: CameraMount | None = None,
         Reads before giving up.
     retry_delay_s : float, keyword-only
         Pause after a dropped read, seconds.
+    accept : callable, keyword-only, optional
+        ``accept(frame) -> bool``, asked of each frame that shows a hand: a
+        frame it refuses is skipped too (e.g. a learnt estimator calibrated
+        to the frame finds the frame itself unlike any hand it learnt: half
+        the view white, noise, a hand coming into the view).
 
     Raises
     ------
     InvalidInputError
-        `mount`, `side`, `source`, `max_reads` or `retry_delay_s` is
-        unusable (checked before the first read; only a frame that is not
+        `mount`, `side`, `source`, `max_reads`, `retry_delay_s` or `accept`
+        is unusable (checked before the first read; only a frame that is not
         an image is skipped).
     EstimationError
-        No frame of the first `max_reads` shows a hand, or the source ended.
+        No frame of the first `max_reads` shows a hand (that `accept`
+        takes), or the source ended; the message counts the frames `accept`
+        refused.
     """
     from ..estimate import MIN_HAND_COVERAGE
     from ..render import preprocess
@@ -278,20 +285,33 @@ def first_hand_frame(source: FrameSource, *, mount: CameraMount | None = None,
         raise InvalidInputError(f"source must have a read() method, got {type(source).__name__}")
     max_reads = check_integer(max_reads, "max_reads", minimum=1)
     delay = check_number(retry_delay_s, "retry_delay_s", minimum=0)
+    if accept is not None and not callable(accept):
+        raise InvalidInputError(f"accept must be a function of a frame, got "
+                                f"{type(accept).__name__}")
+    refused = 0
     for _ in range(max_reads):
         frame = source.read()
         if not _usable(frame):
             if getattr(source, "ended", False):
                 raise EstimationError("the source ended before a frame showed a hand to "
-                                      "calibrate with")
+                                      f"calibrate with{_refused_note(refused)}")
             time.sleep(delay)
             continue
         try:
-            if preprocess(frame, mount, side=side, min_coverage=MIN_HAND_COVERAGE).any():
-                return frame
+            if not preprocess(frame, mount, side=side, min_coverage=MIN_HAND_COVERAGE).any():
+                continue
         except InvalidInputError:  # this frame is not an image: the arguments were checked above
             continue
-    raise EstimationError(f"no frame showed a hand to calibrate with in {max_reads} reads")
+        if accept is None or accept(frame):
+            return frame
+        refused += 1
+    raise EstimationError(f"no frame showed a hand to calibrate with in {max_reads} "
+                          f"reads{_refused_note(refused)}")
+
+
+def _refused_note(refused: int) -> str:
+    return (f" ({refused} frames where something stood out read as no hand at rest: half "
+            "the view bright, noise, a hand only partly in view)" if refused else "")
 
 
 def run_live(lookup, source: FrameSource, *, sink=None, video_out=None,

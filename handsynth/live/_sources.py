@@ -150,6 +150,10 @@ class CameraSource(_Source):
             cap.release()
 
 
+#: Damaged frames in a row :class:`VideoSource` looks past before it takes a failed read
+#: for the end of the file.
+MAX_BROKEN_FRAMES = 12
+
 #: Codecs of what FFmpeg opens as a "video" that is not one: ``ansi``, the pictures of a
 #: text file's characters (FFmpeg's tty demuxer takes any ``.txt`` of a few hundred bytes).
 _NOT_VIDEO_CODECS = ("ansi",)
@@ -194,8 +198,13 @@ class VideoSource(_Source):
     Notes
     -----
     The end of the file sets :attr:`ended`.  :attr:`timestamp_s` is the
-    frame's index divided by the file's frame rate (OpenCV's position in
-    milliseconds when the file has no rate).
+    frame's own media time (its presentation time in the file, so that a
+    variable-frame-rate video, as phones record, gets its real times), or
+    the frame's index divided by the file's frame rate where the file gives
+    no increasing times.  A frame that cannot be decoded (a damaged frame
+    in the middle of the file) is a dropped frame (``None``, not the end):
+    the frames after it are read, up to :data:`MAX_BROKEN_FRAMES` damaged
+    frames in a row.
     """
 
     _cap: cv2.VideoCapture | None
@@ -221,26 +230,76 @@ class VideoSource(_Source):
                 f"cannot open video file {str(self.path)!r}: OpenCV cannot decode it{why}")
         self._cap = cap
         self.fps = _capture_fps(cap)
-        self._count = 0
+        self._count = 0  # frames of the file passed, damaged ones included
+        #: Damaged frames skipped (each read as a dropped frame).
+        self.broken = 0
+        self._broken_left = 0
+        self._next: np.ndarray | None = None
+        self._times: list[float] = []  # media times of decoded frames not yet delivered
+        self._media_time = True  # the file's own times are used while they increase
 
     def read(self) -> np.ndarray | None:
+        if self._broken_left:  # damaged frames found while looking past them: drops
+            self._broken_left -= 1
+            return None
+        if self._next is not None:  # the frame after them
+            after, self._next = self._next, None
+            return self._deliver(after)
         if self._cap is None:
             self.ended = True
             return None
+        frame = self._decode()
+        if frame is None:
+            # a damaged frame and the end of the file read alike: look past it
+            for broken in range(1, MAX_BROKEN_FRAMES + 1):
+                later = self._decode()
+                if later is not None:
+                    self.broken += broken
+                    self._count += broken  # the damaged frames' places in the file
+                    self._broken_left, self._next = broken - 1, later
+                    return None
+            if not self.ended:
+                import cv2
+
+                self._check_complete(cv2)
+            self.ended = True
+            return None
+        return self._deliver(frame)
+
+    def _decode(self) -> np.ndarray | None:
+        """The next decoded frame of the file, or None (a damaged frame or the end)."""
         import cv2
 
+        assert self._cap is not None
         try:
             with _quiet_opencv():
                 ok, frame = self._cap.read()
         except cv2.error:
             ok, frame = False, None
         if not ok or frame is None:
-            if not self.ended:
-                self._check_complete(cv2)
-            self.ended = True
             return None
-        self.timestamp_s = (self._count / self.fps if self.fps
-                            else float(self._cap.get(cv2.CAP_PROP_POS_MSEC)) / 1e3)
+        ms = float(self._cap.get(cv2.CAP_PROP_POS_MSEC))
+        self._times.append(ms / 1e3 if math.isfinite(ms) else math.nan)
+        return frame
+
+    def _deliver(self, frame: np.ndarray) -> np.ndarray | None:
+        """`frame`, its :attr:`timestamp_s` set: its media time where the file gives
+        increasing ones, else its index over the frame rate."""
+        import cv2
+
+        media = self._times.pop(0)
+        previous = self.timestamp_s
+        if self._media_time and math.isfinite(media) and media >= 0 and (
+                previous is None or media > previous):
+            self.timestamp_s = media
+        else:
+            if self._count:  # times that stop increasing are not the frames' times
+                self._media_time = False
+            self.timestamp_s = (self._count / self.fps if self.fps else
+                                float(self._cap.get(cv2.CAP_PROP_POS_MSEC)) / 1e3
+                                if self._cap is not None else math.nan)
+            if previous is not None and not self.timestamp_s > previous:
+                self.timestamp_s = previous + (1.0 / self.fps if self.fps else 1e-3)
         self._count += 1
         return frame if frame.size else None
 
@@ -248,7 +307,13 @@ class VideoSource(_Source):
         """Warn when the video ends well before the frame count its header gives."""
         assert self._cap is not None
         declared = self._cap.get(cv2.CAP_PROP_FRAME_COUNT)
-        if declared > 0 and self._count < declared - max(2, 0.02 * declared):
+        short = max(2, 0.02 * declared)
+        if self.fps and self.timestamp_s is not None and self._media_time and \
+                self.timestamp_s >= (declared - short) / self.fps:
+            # the frames reach the duration the header gives: a variable frame rate, whose
+            # count FFmpeg estimates from the duration at the nominal rate, not a cut file
+            return
+        if declared > 0 and self._count < declared - short:
             warnings.warn(f"video file {str(self.path)!r} ended after {self._count} of the "
                           f"{declared:.0f} frames its header gives: is it truncated?",
                           stacklevel=3)

@@ -879,3 +879,74 @@ def test_a_grey_video_is_no_hand_not_a_confident_pose(tmp_path):
     assert res.output.strip().splitlines()[-1] == (
         f"handsynth: error: video {video}: the source ended before a frame showed a hand to "
         "calibrate with")
+
+
+def _bgr(mask):
+    """A mask painted as skin on a dark ground (BGR)."""
+    frame = np.full(mask.shape + (3,), 20, np.uint8)
+    frame[mask] = (120, 150, 210)
+    return frame
+
+
+def test_a_video_starting_on_something_not_a_hand_calibrates_on_the_hand(tmp_path):
+    # the first frame where anything stood out became the rest frame: a video opening on a
+    # half-bright view, noise or a hand coming into the view read every later frame as
+    # low-confidence (13 of 13), told the user to try --segment colour, and exited 0
+    from handsynth.models import named_pose
+
+    with SilhouetteRenderer(HandShape(length=1.02, thumb=1.03), width_px=W,
+                            height_px=H) as r:
+        rest = r.mask(np.zeros(20))
+        posed = [r.mask(named_pose(n)) for n in ("pinch", "grasp", "point", "spread")]
+    half = np.full((H, W, 3), 20, np.uint8)
+    half[:, : W // 2] = 255
+    noise = np.random.default_rng(0).integers(0, 256, (H, W, 3), dtype=np.uint8)
+    coming = np.zeros_like(rest)
+    coming[H // 2:] = rest[: H - H // 2]  # half the hand in view
+    frames = [half, noise, _bgr(coming), _bgr(rest)] + [_bgr(m) for m in posed]
+    video = _write_video(tmp_path / "clip.avi", frames)
+    out = tmp_path / "rows.csv"
+    res = _run("--video", str(video), *LEARNT, "--learned-cache", str(tmp_path / "c"),
+               "--out", str(out), "-q")
+    assert res.exit_code == 0, res.output
+    assert "were unlike any learnt" not in res.output
+    _, rows = _read_csv(out)
+    assert len(rows) == 4 and [r["low_confidence"] for r in rows] == ["0"] * 4
+    assert [r["timestamp_s"] for r in rows] == [str(round(k / 15.0, 6)) for k in range(4, 8)]
+    only_bad = _write_video(tmp_path / "bad.avi", [half, noise])
+    res = _run("--video", str(only_bad), *LEARNT, "--learned-cache", str(tmp_path / "c"), "-q")
+    assert res.exit_code == 2
+    err = res.output.strip().splitlines()[-1]
+    assert err.startswith(f"handsynth: error: video {only_bad}: the source ended before a frame "
+                          "showed a hand to calibrate with (2 frames where something stood out "
+                          "read as no hand at rest"), err
+
+
+def test_a_calibration_image_of_no_hand_at_rest_is_warned_about(tmp_path):
+    import cv2
+
+    half = np.full((H, W, 3), 20, np.uint8)
+    half[:, : W // 2] = 255
+    image = tmp_path / "rest.png"
+    cv2.imwrite(str(image), half)
+    video = _write_video(tmp_path / "clip.avi", [_bgr(_open_mask())] * 2)
+    res = _run("--video", str(video), *LEARNT, "--learned-cache", str(tmp_path / "c"),
+               "--calibrate-image", str(image), "--out", str(tmp_path / "rows.csv"), "-q")
+    assert res.exit_code == 0, res.output
+    assert f"handsynth: warning: --calibrate-image {image}: the image itself reads as unlike " \
+           "any hand learnt" in res.output
+
+
+def test_a_video_whose_hand_comes_into_view_after_ten_seconds_still_calibrates(tmp_path):
+    # the rest frame was looked for in the first 300 frames only, as for a camera: a
+    # recording whose hand came into view after 10 s at 30 fps failed ("no frame showed a
+    # hand to calibrate with in 300 reads") though the file held the hand
+    dark = np.full((H, W, 3), 20, np.uint8)
+    hand = _bgr(_open_mask())
+    video = _write_video(tmp_path / "clip.avi", [dark] * 320 + [hand] * 3)
+    out = tmp_path / "rows.csv"
+    res = _run("--video", str(video), *LEARNT, "--learned-cache", str(tmp_path / "c"),
+               "--out", str(out), "-q")
+    assert res.exit_code == 0, res.output
+    _, rows = _read_csv(out)
+    assert [r["timestamp_s"] for r in rows] == [str(round(k / 15.0, 6)) for k in (321, 322)]

@@ -613,3 +613,129 @@ def test_a_row_file_refuses_a_column_no_row_has(tmp_path):
         open_row_writer(tmp_path / "r.csv", columns="frame")
     assert not (tmp_path / "r.csv").exists()
     open_row_writer(tmp_path / "r.csv", columns=live_columns()[:3]).close()  # a subset is fine
+
+
+def _mjpg_clip(path, frames, fps=15.0):
+    import cv2
+
+    h, w = frames[0].shape[:2]
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), fps, (w, h))
+    for f in frames:
+        writer.write(f)
+    writer.release()
+    return path
+
+
+def _read_all_frames(src):
+    """(frame or None, timestamp) for every read of `src` until it ends."""
+    got = []
+    for _ in range(200):
+        frame = src.read()
+        if frame is None and src.ended:
+            return got
+        got.append((frame, src.timestamp_s))
+    raise AssertionError("the source never ended")
+
+
+def test_a_damaged_frame_mid_video_is_one_drop_and_the_rest_is_read(tmp_path):
+    # one undecodable JPEG in the middle of an MJPG file ended the run there, losing every
+    # later frame, and warned that the whole file was "truncated"
+    import warnings
+
+    rng = np.random.default_rng(3)
+    frames = [np.full((48, 64, 3), 10 * k, np.uint8) + rng.integers(0, 9, (48, 64, 3),
+                                                                    dtype=np.uint8)
+              for k in range(12)]
+    path = _mjpg_clip(tmp_path / "clip.avi", frames)
+    data = bytearray(path.read_bytes())
+    starts = [m.start() for m in re.finditer(b"\xff\xd8\xff", bytes(data))]
+    assert len(starts) == 12
+    data[starts[5]:starts[6] - 8] = bytes(starts[6] - 8 - starts[5])  # frame 5 zeroed
+    damaged = tmp_path / "damaged.avi"
+    damaged.write_bytes(bytes(data))
+    with warnings.catch_warnings(record=True) as said, VideoSource(damaged) as src:
+        warnings.simplefilter("always")
+        got = _read_all_frames(src)
+    assert [str(w.message) for w in said] == []
+    assert [f is None for f, _ in got] == [k == 5 for k in range(12)]
+    means = [float(f.mean()) for f, _ in got if f is not None]
+    assert means == pytest.approx([10 * k + 4 for k in range(12) if k != 5], abs=2)
+    times = [t for f, t in got if f is not None]
+    assert times == pytest.approx([k / 15.0 for k in range(12) if k != 5])
+    assert src.broken == 1
+
+
+def test_a_cut_video_still_ends_after_its_last_whole_frame(tmp_path):
+    frames = [np.full((48, 64, 3), 8 * k, np.uint8) for k in range(30)]
+    path = _mjpg_clip(tmp_path / "clip.avi", frames)
+    cut = tmp_path / "cut.avi"
+    cut.write_bytes(path.read_bytes()[: path.stat().st_size // 2])
+    with pytest.warns(UserWarning, match="truncated"), VideoSource(cut) as src:
+        got = _read_all_frames(src)
+    assert got and all(f is not None for f, _ in got) and len(got) < 20
+
+
+class _VariableRateCapture:
+    """A capture whose frames come at the media times (ms) given, as a phone's video."""
+
+    def __init__(self, times_ms, declared, fps):
+        self.times_ms, self.declared, self.fps, self.k = list(times_ms), declared, fps, 0
+        self.pos_ms = 0.0
+
+    def read(self):
+        if self.k >= len(self.times_ms):
+            return False, None
+        self.pos_ms = self.times_ms[self.k]
+        self.k += 1
+        return True, np.zeros((4, 6, 3), np.uint8)
+
+    def get(self, prop):
+        import cv2
+
+        return {cv2.CAP_PROP_POS_MSEC: self.pos_ms, cv2.CAP_PROP_FRAME_COUNT: self.declared,
+                cv2.CAP_PROP_FPS: self.fps}.get(prop, 0.0)
+
+    def release(self):
+        pass
+
+
+def test_a_variable_frame_rate_video_gets_its_frames_own_times(tmp_path):
+    # the rows' timestamps were the frame's index over the nominal rate: 30 frames over
+    # 30 s of a variable-rate video read as 1 s apart, and its header's frame count
+    # (FFmpeg's estimate from the duration) called the whole file truncated
+    import warnings
+
+    path = _mjpg_clip(tmp_path / "clip.avi", [np.zeros((48, 64, 3), np.uint8)] * 2)
+    times = [1000.0 * k * k / 30 for k in range(31)]
+    with warnings.catch_warnings(record=True) as said, VideoSource(path) as src:
+        warnings.simplefilter("always")
+        src._cap.release()
+        src._cap, src.fps = _VariableRateCapture(times, declared=901, fps=30.0), 30.0
+        got = _read_all_frames(src)
+    assert [t for _, t in got] == pytest.approx([t / 1e3 for t in times])
+    assert [str(w.message) for w in said] == []
+
+
+def test_a_video_whose_times_do_not_increase_is_timed_by_its_frame_rate(tmp_path):
+    path = _mjpg_clip(tmp_path / "clip.avi", [np.zeros((48, 64, 3), np.uint8)] * 2)
+    with VideoSource(path) as src:
+        src._cap.release()
+        src._cap, src.fps = _VariableRateCapture([0.0] * 6, declared=6, fps=25.0), 25.0
+        got = _read_all_frames(src)
+    assert [t for _, t in got] == pytest.approx([k / 25.0 for k in range(6)])
+
+
+def test_first_hand_frame_skips_the_frames_its_accept_refuses(lookup):
+    hand = _synthetic(lookup, frames=3).open_frame()
+    half = np.zeros((H, W), bool)
+    half[:, : W // 2] = True  # stands out, but no hand at rest
+    src = _Frames([half, half, hand])
+    assert first_hand_frame(src, retry_delay_s=0, accept=lambda f: f is hand) is hand
+    assert src.reads == 3
+    with pytest.raises(EstimationError, match=r"ended before a frame showed a hand to calibrate "
+                                              r"with \(2 frames where something stood out"):
+        first_hand_frame(_Frames([half, half]), retry_delay_s=0, accept=lambda f: False)
+    with pytest.raises(EstimationError, match=r"in 2 reads \(2 frames"):
+        first_hand_frame(_Frames([half] * 3), max_reads=2, accept=lambda f: False)
+    with pytest.raises(InvalidInputError, match="accept must be a function"):
+        first_hand_frame(_Frames([hand]), accept="yes")
