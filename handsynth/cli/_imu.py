@@ -287,6 +287,10 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
     t = np.arange(rec.n) / rec.rate_hz
     if calibration_path:
         cal = ImuCalibration.load(calibration_path)
+        try:
+            cal.correct(rec, sensor_calibration=False)  # its sensors, before any work
+        except RecordingError as exc:
+            raise RecordingError(f"{recording} (calibration {calibration_path}): {exc}") from None
         name = filter_name or "filter4"
         res = cal.track(rec, static=static, sensor_calibration=not no_sensor_calibration,
                         options=FILTER4B if name == "filter4b" else None)

@@ -533,3 +533,25 @@ def test_a_filter_option_naming_no_filter_is_refused():
     # "--filter ," ran every filter for minutes
     res = CliRunner().invoke(cli, ["imu", "eval", "--filter", ","])
     assert res.exit_code == 2 and "--filter ',' names no filter" in res.output, res.output
+
+
+def test_track_names_the_files_and_a_sensor_named_differently(tmp_path, sim):
+    # before: "the recording lacks sensor(s) index_middle of the calibration", naming neither
+    # the recording nor the calibration file, nor the column block named otherwise
+    from handsynth.sensors.imu import ImuCalibration, truth_chain_model
+
+    model = truth_chain_model(sim)
+    cal = ImuCalibration(model, {s: np.eye(3) for s in model.own}, np.zeros(20),
+                         tuple(model.own)).save(tmp_path / "cal.json")
+    src, out = tmp_path / "rec.csv", tmp_path / "q.csv"
+    write_imu_csv(sim, src)
+    src.write_text(src.read_text().replace("index_middle_", "index_mid_"))
+    res = CliRunner().invoke(cli, ["imu", "track", str(src), "--calibration", str(cal),
+                                   "--out", str(out)])
+    assert res.exit_code == 2, res.output
+    assert len(res.output.strip().splitlines()) == 1 and "Traceback" not in res.output
+    assert res.output.startswith(f"handsynth: error: {src} (calibration {cal}): the recording "
+                                 "lacks sensor(s) index_middle of the calibration (columns "
+                                 "index_middle_acc_x .. index_middle_mag_z); it has sensor(s) "
+                                 "the calibration does not know: index_mid")
+    assert not out.exists()

@@ -19,7 +19,7 @@ import numpy as np
 
 from ..._checks import check_options, check_side, is_number
 from ..._io import write_text
-from ...errors import InvalidInputError, OutputError, RecordingError
+from ...errors import EstimationError, InvalidInputError, OutputError, RecordingError
 from ._attitude import StaticStart
 from ._ekf import ChainEKF, ChainEKFOptions
 from ._kinematics import (
@@ -291,8 +291,12 @@ class ImuCalibration:
         """
         missing = [s for s in self.sensors if s not in rec.sensors]
         if missing:
-            raise RecordingError(f"the recording lacks sensor(s) {', '.join(missing)} "
-                                 "of the calibration")
+            unknown = [s for s in rec.sensors if s not in self.sensors]
+            raise RecordingError(
+                f"the recording lacks sensor(s) {', '.join(missing)} of the calibration (columns "
+                f"{missing[0]}_acc_x .. {missing[0]}_mag_z)"
+                + (f"; it has sensor(s) the calibration does not know: {', '.join(unknown)} "
+                   "(named differently?)" if unknown else ""))
         sub = rec.subset(self.sensors)
         if self.sensor_calibration is None or not sensor_calibration:
             return sub
@@ -539,7 +543,12 @@ def calibrate(rec: ImuRecording, *, sensor_calibration: bool = True,
                       f"calibration needs {_MIN_POSES} or more, so the readings are used "
                       "uncorrected", UserWarning, stacklevel=2)
     if sensor_calibration and poses >= _MIN_POSES:
-        sensor_cal = fit_sensor_calibration(rec)
+        try:
+            sensor_cal = fit_sensor_calibration(rec)
+        except EstimationError as exc:
+            if source is None:
+                raise
+            raise EstimationError(f"{source}: {exc}") from None
         rec = sensor_cal.apply(rec)
     model = chain_model(rec)
     frames = link_frames(rec, model)

@@ -143,7 +143,12 @@ def link_frames(cal: ImuRecording, model: ChainModel, *, hold_s: float = 0.5) ->
     for s in model.own:
         x, _ = _rotation_axis(cal, s, _FRAME_ROTATION[s], hold_s)
         v = _frame_vector(model, s)
-        if np.dot(np.cross(x, v), [0.0, 0.0, 1.0]) < 0:  # extension positive
+        # extension positive: the frame's z (x cross v) points to the back of the segment,
+        # where the sensor sits above the joint (9-15 mm in the simulated hand). Judged by
+        # the sensor's own vector from its joint, not by the sensor's z axis, so that a
+        # sensor mounted upside down (z toward the palm) gets the same frame; by its z axis
+        # its flexion read 360 deg less the true angle (index PIP: 301 for 59 deg).
+        if np.dot(np.cross(x, v), model.own[s]) < 0:
             x = -x
         out[s] = _frame(x, v)
     return out

@@ -11,6 +11,7 @@ sample, or returns the warnings it found.
 
 from __future__ import annotations
 
+import itertools
 import math
 import re
 import warnings as _warnings
@@ -224,7 +225,10 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
     -------
     list of str
         Warnings: a magnetometer whose field strength departs more than 15 %
-        from the recording's median (a magnetic disturbance), with the time.
+        from the recording's median (a magnetic disturbance), with the time; a gyro
+        far noisier at rest than its accelerometer moves (deg/s given as rad/s with
+        the bias taken off); magnetometer axes that are not the accelerometer's
+        (:func:`_check_mag_axes`).
     """
     check_instance(rec, ImuRecording, name=f"{source}: rec", error=RecordingError)
     rate = check_rate(rec.rate_hz, source=source)
@@ -320,6 +324,22 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
                 f"'deg/s', --gyr-units deg/s)")
     _check_gyro_turns(rec, n0, source)
     warnings: list[str] = []
+    # deg/s read as rad/s where the gyro's bias is small (a logger that takes it off): the
+    # mean stays under 0.5 "rad/s", but the gyro's noise at rest is 57 times too large
+    # (0.18 "rad/s" in the simulated start against 0.003) while the accelerometer, which
+    # a real tremor would move, stays still
+    gyr_spread = np.linalg.norm(rec.gyr[:, :n0].std(axis=1), axis=-1)
+    noisy = [k for k in range(s) if gyr_spread[k] > _GYR_REST_SPREAD
+             and gyr_spread[k] > acc_spread[k] * _GYR_PER_ACC_SPREAD]
+    if noisy and n0 >= 10:
+        k = max(noisy, key=lambda i: gyr_spread[i])
+        warnings.append(
+            f"the gyro of {len(noisy)} sensor(s) ({', '.join(rec.sensors[i] for i in noisy[:4])}"
+            f"{', ...' if len(noisy) > 4 else ''}) varies by up to {gyr_spread[k]:.3g} rad/s "
+            f"RMS during the static start (first {static_s:g} s) while its accelerometer varies "
+            f"by {acc_spread[k]:.3g} m/s^2: {gyr_spread[k] / np.radians(0.1):.3g} times a MEMS "
+            "gyro's noise at rest (about 0.1 deg/s); deg/s given as rad/s? (gyro units "
+            "'deg/s', --gyr-units deg/s)")
     field_norm = np.sqrt(np.einsum("snk,snk->sn", rec.mag, rec.mag))
     per_sensor = np.median(field_norm, axis=1)
     if np.all(per_sensor <= 0):
@@ -336,6 +356,7 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
             f"{source}: the magnetometers read a median field of {med:.4g} uT; the Earth's is "
             f"25-65 uT (indoors {_EARTH_FIELD_UT[0]:g}-{_EARTH_FIELD_UT[1]:g} taken as "
             "possible): check the magnetometer units (--mag-units)")
+    warnings.extend(_check_mag_axes(rec))
     dev = np.abs(field_norm / med - 1.0) > 0.15
     for k in range(s):
         if dev[k].any():
@@ -384,6 +405,66 @@ def _check_gyro_turns(rec: ImuRecording, n0: int, source: str) -> None:
                 f"accelerometer's gravity direction) but its gyro turns {turned[k]:.3g} deg in "
                 "all: the gyro reads far too little; rad/s given as deg/s? (gyro units "
                 "'rad/s': --gyr-units rad/s)")
+
+
+#: A gyro varying by more than this, rad/s RMS over the static start (summed over its axes),
+#: and by more than this many rad/s per m/s^2 of its accelerometer's variation, is warned
+#: about as deg/s read as rad/s: the simulated MPU-9250 varies by 0.002-0.01 rad/s at
+#: 60-1000 Hz (0.14-0.55 in the wrong unit) with its accelerometer at 0.04-0.16 m/s^2;
+#: a hand's tremor that turns a sensor by 0.05 rad/s moves its accelerometer by more.
+_GYR_REST_SPREAD = 0.05
+_GYR_PER_ACC_SPREAD = 1.0
+
+#: Signed permutations of the three axes (the identity first): a magnetometer's axes read
+#: as the accelerometer's.
+_SIGNED_PERMUTATIONS = tuple(
+    (perm, np.array(signs)) for perm in itertools.permutations(range(3))
+    for signs in itertools.product((1.0, -1.0), repeat=3))
+
+
+def _check_mag_axes(rec: ImuRecording) -> list[str]:
+    """Warn about magnetometers whose axes are not their accelerometer's.
+
+    Over 0.5-s means where the sensor moves little, the field keeps one angle to gravity
+    (the dip); read in the wrong axes (an MPU-9250's AK8963: x and y swapped, z reversed)
+    it does not.  A sensor that tilts by 40 deg or more, whose cosine of that angle varies
+    by more than 0.1 (s.d.) and by 3 times as much as with another signed permutation of
+    its axes, is named with that permutation.  Simulated: 0.01-0.06 in the right axes,
+    0.18-0.78 in the AK8963's (0.02-0.06 once turned back); a magnet near the hand 0.19
+    against 0.11.
+    """
+    w = max(1, int(0.5 * rec.rate_hz))
+    m = rec.n // w
+    if m < 4:
+        return []
+    s = len(rec.sensors)
+    acc = rec.acc[:, :m * w].reshape(s, m, w, 3).mean(axis=2)
+    mag = rec.mag[:, :m * w].reshape(s, m, w, 3).mean(axis=2)
+    found = []
+    for k in range(s):
+        na = np.linalg.norm(acc[k], axis=1)
+        nm = np.linalg.norm(mag[k], axis=1)
+        keep = (np.abs(na - GRAVITY_MPS2) < 0.1 * GRAVITY_MPS2) & (nm > 0)
+        if keep.sum() < 4:
+            continue
+        u = acc[k, keep] / na[keep, None]
+        v = mag[k, keep] / nm[keep, None]
+        if np.degrees(np.arccos(np.clip(u @ u[0], -1.0, 1.0))).max() < 40.0:
+            continue
+        spread = [float(np.std(np.sum(v[:, perm] * signs * u, axis=1)))
+                  for perm, signs in _SIGNED_PERMUTATIONS]
+        best = int(np.argmin(spread))
+        if spread[0] > 0.1 and spread[0] > 3.0 * spread[best]:
+            perm, signs = _SIGNED_PERMUTATIONS[best]
+            axes = ", ".join(("-" if sg < 0 else "") + "xyz"[i] for i, sg in zip(perm, signs))
+            found.append(f"{rec.sensors[k]} ({axes})")
+    if not found:
+        return []
+    return [f"the magnetometer of {len(found)} sensor(s) keeps one angle to gravity only with "
+            f"its axes read otherwise: {', '.join(found[:4])}{', ...' if len(found) > 4 else ''}"
+            " of the accelerometer's; its axes are not the accelerometer's (the MPU-9250's "
+            "AK8963 reads (y, x, -z))? Turn its columns into the accelerometer's axes first: "
+            "its headings will be wrong"]
 
 
 #: Largest magnetometer reading taken, uT: above the widest full scale of MEMS
@@ -718,7 +799,8 @@ def read_imu_csv(path, *, acc_units: str = "m/s2", gyr_units: str = "rad/s",
     ------
     RecordingError
         Missing file or columns, a column named twice, non-numeric cells,
-        non-increasing or gapped time stamps, a time column whose rate is
+        time stamps that go back, repeat (unless coarser than the sampling period:
+        integer milliseconds at 1024 Hz) or leave a gap, a time column whose rate is
         not an IMU's (0.5 Hz - 100 kHz: milliseconds under ``time_s``?),
         a rate that is not a finite number > 0, unknown units (see
         :func:`check_recording` for the content checks, which the caller
@@ -757,14 +839,19 @@ def read_imu_csv(path, *, acc_units: str = "m/s2", gyr_units: str = "rad/s",
             raise RecordingError(f"{path}, line {lines[i]}: {time_name} is "
                                  f"{cell(i, col[time_name])!r}, not a number")
         dt = np.diff(t)
-        back = np.nonzero(dt <= 0)[0]
+        step = (t[-1] - t[0]) / (t.size - 1)
+        # stamps coarser than the sampling period (integer milliseconds at 1024 Hz) repeat
+        # where two samples fall in one tick: equal stamps are refused only where the
+        # smallest step between stamps is not longer than the mean step
+        positive = dt[dt > 0]
+        quantised = positive.size > 0 and positive.min() > 1.01 * step
+        back = np.nonzero(dt < 0 if quantised else dt <= 0)[0]
         if back.size:
             i = int(back[0])
             raise RecordingError(
                 f"{path}, line {lines[i + 1]}: time stamps do not increase ({time_name} "
                 f"{cell(i + 1, col[time_name])} after "
                 f"{cell(i, col[time_name])} on line {lines[i]})")
-        step = (t[-1] - t[0]) / (t.size - 1)
         jitter = 1.4826 * np.median(np.abs(dt - np.median(dt)))
         limit = max(max_gap * step, step + 6.0 * jitter)
         gaps = np.nonzero(dt > limit)[0]

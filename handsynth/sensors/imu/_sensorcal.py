@@ -233,6 +233,29 @@ def _fit_mag(mag: np.ndarray, up: np.ndarray, prior: float
             float(np.sqrt(np.mean(residual(sol.x) ** 2))))
 
 
+def _mag_axes_hint(mag: np.ndarray, up: np.ndarray) -> str | None:
+    """The magnetometer's axes in the accelerometer's, as "y, x, -z", where a signed
+    permutation of them, and not the identity, keeps the field's angle to gravity the same
+    in every pose (the dot-product invariant); None otherwise.
+
+    `mag` (K, 3): the poses' mean fields; `up` (K, 3): their unit up directions.
+    """
+    import itertools
+
+    unit = mag / np.linalg.norm(mag, axis=1, keepdims=True)
+    spread = {}
+    for perm in itertools.permutations(range(3)):
+        for signs in itertools.product((1.0, -1.0), repeat=3):
+            dots = np.sum(unit[:, perm] * np.array(signs) * up, axis=1)
+            spread[(perm, signs)] = float(np.std(dots))
+    best = min(spread, key=spread.__getitem__)
+    identity = ((0, 1, 2), (1.0, 1.0, 1.0))
+    if best == identity or not spread[best] * 5.0 < spread[identity]:
+        return None
+    perm, signs = best
+    return ", ".join(("-" if sg < 0 else "") + "xyz"[i] for i, sg in zip(perm, signs))
+
+
 def _fit_gyr(moves: np.ndarray, u0: np.ndarray, u1: np.ndarray, rate_hz: float,
              prior: float) -> tuple[np.ndarray, float]:
     q0 = np.tile([1.0, 0.0, 0.0, 0.0], (len(moves), 1))
@@ -325,9 +348,15 @@ def fit_sensor_calibration(rec: ImuRecording, *, skip_s: float = 0.3, prior: flo
                                  ("magnetometer", d, mag_max_correction)):
             dev = float(np.abs(mat - np.eye(3)).max())
             if not np.isfinite(dev) or dev > most:
+                axes = _mag_axes_hint(mmeans[k], up) if label == "magnetometer" else None
                 raise EstimationError(
                     f"sensor {name!r}: {label} calibration deviates {dev:.3g} from the identity "
-                    f"(limit {most}); poses not still or not varied")
+                    f"(limit {most}); " + (
+                        "poses not still or not varied" if axes is None else
+                        f"the magnetometer's axes are not the accelerometer's: its field keeps "
+                        f"one angle to gravity in every pose read as ({axes}), as the "
+                        "MPU-9250's AK8963 is mounted ((y, x, -z)); turn its columns into the "
+                        "accelerometer's axes first"))
         for key, v in zip(_SHAPES, (c, b, g, rc, rg, d, h, rm)):
             out[key].append(v)
     bad = [f"{name} {r:.1%}" for name, r in zip(rec.sensors, out["mag_residual"]) if r > mag_warn]

@@ -46,6 +46,31 @@ def test_wrong_units_are_caught(free_rec):
         check_recording(_with(free_rec, acc=free_rec.acc / 9.80665))
 
 
+
+def test_deg_per_s_as_rad_per_s_with_the_bias_taken_off_is_warned_about(free_rec):
+    # before: a logger's gyro with its bias taken off, in deg/s read as rad/s, stayed under
+    # the 0.5 rad/s of the static-start check and passed without a word; a still hand read
+    # that way came out with 4.1 deg mean joint-angle error (0.26 in the right unit)
+    still = free_rec.slice(0, 190)                   # the still start of the free motion
+    gyr = still.gyr - still.gyr[:, :100].mean(axis=1, keepdims=True)
+    assert check_recording(_with(still, gyr=gyr)) == []
+    warnings = check_recording(_with(still, gyr=np.degrees(gyr)))
+    assert len(warnings) == 1
+    assert re.search(r"the gyro of 20 sensor\(s\) .* RMS during the static start .*"
+                     r"deg/s given as rad/s\? .*--gyr-units deg/s", warnings[0])
+
+
+def test_magnetometer_axes_other_than_the_accelerometer_s_are_warned_about(free_rec):
+    # before: an MPU-9250 export with the AK8963's own axes (x and y swapped, z reversed)
+    # passed without a word: 7.6 deg mean joint-angle error on a 20-s free motion (0.25 in
+    # the accelerometer's axes), only a forearm-plate warning hinting at it
+    mag = free_rec.mag[..., [1, 0, 2]] * np.array([1.0, 1.0, -1.0])
+    warnings = check_recording(_with(free_rec, mag=mag))
+    assert len(warnings) == 1
+    assert re.search(r"the magnetometer of \d+ sensor\(s\) keeps one angle to gravity only "
+                     r"with its axes read otherwise: \w+ \(y, x, -z\)", warnings[0])
+    assert "index_distal (y, x, -z)" in warnings[0] or ", ..." in warnings[0]
+
 def test_magnetic_disturbance_is_reported(imu_hand):
     rec = simulate_imu(free_motion(20.0, seed=1), hand=imu_hand,
                        noise=dataclasses.replace(EVAL_NOISE), seed=1)
@@ -135,6 +160,23 @@ def test_rate_is_the_mean_step_of_rounded_or_jittered_stamps(tmp_path, free_rec)
     _rewrite_time(p, jit, t)
     assert read_imu_csv(jit).rate_hz == pytest.approx(100.0, rel=1e-3)
 
+
+
+def test_integer_milliseconds_coarser_than_the_sampling_period_are_read(tmp_path, free_rec):
+    # before: at 1024 Hz, integer milliseconds repeat where two samples share a tick, and
+    # the file was refused as "time stamps do not increase", even with --rate
+    p = tmp_path / "rec.csv"
+    rec = dataclasses.replace(free_rec.subset(("forearm_1",)), rate_hz=1024.0)
+    write_imu_csv(rec, p)
+    ms = tmp_path / "ms.csv"
+    _rewrite_time(p, ms, np.round(np.arange(rec.n) * 1000 / 1024), "{:.0f}", "time_ms")
+    assert read_imu_csv(ms).rate_hz == pytest.approx(1024.0, rel=1e-3)
+    # a stamp repeated where the stamps are finer than the sampling period is still refused
+    t = np.arange(rec.n) * 1000 / 1024
+    t[300] = t[299]
+    _rewrite_time(p, ms, t, "{:.3f}", "time_ms")
+    with pytest.raises(RecordingError, match=r"line \d+: time stamps do not increase"):
+        read_imu_csv(ms)
 
 def test_time_column_errors_name_the_line(tmp_path, free_rec):
     p = tmp_path / "rec.csv"

@@ -214,3 +214,27 @@ def test_forearm_plate_accelerometers_are_not_made_worse(device_recs):
         ca = cal.acc_matrix[k] @ m_acc[k]
         shape = np.abs(ca.T @ ca - np.eye(3)).max() / np.abs(m_acc[k].T @ m_acc[k] - np.eye(3)).max()
         assert err < 1.0 and shape < 1.0, (s, err, shape)
+
+
+def test_magnetometer_axes_other_than_the_accelerometer_s_are_named(pose_recs, monkeypatch):
+    # before: an MPU-9250 export with the AK8963's own axes (x and y swapped, z reversed)
+    # was refused as "poses not still or not varied", without the file's name
+    from handsynth.errors import EstimationError
+    from handsynth.sensors.imu import _calibration, calibrate
+
+    noisy, _ = pose_recs
+    one = noisy.subset(("index_middle",))
+    one = dataclasses.replace(one, segments=noisy.labelled())
+    fit_sensor_calibration(one)  # the axes as simulated: fitted
+    mag = one.mag[..., [1, 0, 2]] * np.array([1.0, 1.0, -1.0])
+    with pytest.raises(EstimationError, match=r"'index_middle': magnetometer calibration .*"
+                                              r"axes are not the accelerometer's: .* read as "
+                                              r"\(y, x, -z\)"):
+        fit_sensor_calibration(dataclasses.replace(one, mag=mag))
+
+    def fail(rec):
+        raise EstimationError("sensor 'x': it fails")
+
+    monkeypatch.setattr(_calibration, "fit_sensor_calibration", fail)
+    with pytest.raises(EstimationError, match=r"^cal\.csv: sensor 'x': it fails$"):
+        calibrate(noisy, source="cal.csv")
