@@ -615,7 +615,8 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
                    "if the background is not dark, --segment colour tells the hand by the "
                    "colour of its skin (docs/camera_estimator.md)", err=info_err)
     if sink is not None and not to_stdout:
-        click.echo(f"rows: {Path(out)} ({sink.rows} rows, {sink.format})" if sink.rows else
+        plural = "" if sink.rows == 1 else "s"
+        click.echo(f"rows: {Path(out)} ({sink.rows} row{plural}, {sink.format})" if sink.rows else
                    f"rows: none, so {Path(out)} was not written", err=info_err)
     if video is not None:
         click.echo(f"video: {Path(video_out)} ({video.frames} frames, input | matched entry)",
