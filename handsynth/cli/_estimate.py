@@ -24,6 +24,10 @@ CALIBRATION_READS = 300
 #: Reads a ``--video`` is searched for the rest frame: the whole file (it ends), so that a
 #: recording where the hand comes into view after 10 s still calibrates.
 VIDEO_CALIBRATION_READS = 1_000_000_000
+#: Frames of the source that read as unlike any hand learnt, each skipped as the learnt
+#: estimator's rest frame, before the next is taken anyway (with a warning): a hand at rest
+#: over a cluttered ground can itself read so.  1 s at 30 fps.
+REST_FRAME_PATIENCE = 30
 #: Frame rates ``--fps`` accepts, frames per second (a camera reports at most 10,000).
 FPS_RANGE = (0.01, 10_000.0)
 
@@ -291,24 +295,36 @@ def _calibrate_learned(est, source, rest_image, mount, side, err, *, segment: st
     a video's first frames of half the view bright, of noise or of a hand coming into the
     view made every later frame low-confidence.  A --calibrate-image that reads so is
     used as given, with a warning."""
+    refused = 0
+
     def reads_as_a_hand(frame) -> bool:
         # a frame the estimator refuses (another width-to-height ratio...) is an error, as
         # before: every frame of the source would be refused alike
-        return not est.calibrated(frame, segment=segment).estimate(frame).low_confidence
+        nonlocal refused
+        if not est.calibrated(frame, segment=segment).estimate(frame).low_confidence:
+            return True
+        refused += 1
+        # a hand at rest over a cluttered ground can itself read so (9 of 60 rest frames
+        # over photographs): after REST_FRAME_PATIENCE such frames the next one is taken
+        return refused > REST_FRAME_PATIENCE
 
     rest, where = _calibration_frame(source, rest_image, mount, side, err,
                                      synthetic="the synthetic hand at rest (open)",
                                      prompt="hold the hand open, not stiff",
                                      accept=reads_as_a_hand)
-    # calibrated afresh: the trial's estimate above is not a frame of the run (smoothing and
-    # the moved check keep what they saw)
+    low = est.calibrated(rest, segment=segment).estimate(rest).low_confidence
+    # calibrated afresh: a trial's estimate is not a frame of the run (smoothing and the
+    # moved check keep what they saw)
     est = est.calibrated(rest, segment=segment)
     told = "by the skin's colour" if est.segment == "colour" else "by brightness"
     click.echo(f"calibrated to {where}; the hand is told {told}", err=err)
-    if rest_image is not None and est.estimate(rest).low_confidence:
-        warnings.warn(f"--calibrate-image {rest_name}: the image itself reads as unlike any "
-                      "hand learnt (no hand at rest in full view?): every frame may read "
-                      "low-confidence; give a frame of the hand at rest", stacklevel=2)
+    if low:
+        what = (f"--calibrate-image {rest_name}: the image" if rest_image is not None else
+                f"the rest frame (taken after {refused - 1} frames that read so)" if refused
+                else "the rest frame")
+        warnings.warn(f"{what} itself reads as unlike any hand learnt (no hand at rest in full "
+                      "view, or a cluttered ground?): frames may read low-confidence; give a "
+                      "frame of the hand at rest, over a plain ground if it can be", stacklevel=2)
     return est
 
 

@@ -950,3 +950,24 @@ def test_a_video_whose_hand_comes_into_view_after_ten_seconds_still_calibrates(t
     assert res.exit_code == 0, res.output
     _, rows = _read_csv(out)
     assert [r["timestamp_s"] for r in rows] == [str(round(k / 15.0, 6)) for k in (321, 322)]
+
+
+def test_a_rest_frame_that_keeps_reading_as_no_hand_is_taken_after_a_second_with_a_warning(
+        tmp_path):
+    # a hand at rest over a cluttered ground can itself read as unlike any hand learnt (9 of
+    # 60 rest frames over photographs): waiting for a frame that reads as a hand would never
+    # end on such a scene, so after REST_FRAME_PATIENCE frames the next is taken, with a warning
+    from handsynth.cli._estimate import REST_FRAME_PATIENCE
+
+    half = np.full((H, W, 3), 20, np.uint8)
+    half[:, : W // 2] = 255
+    frames = [half] * (REST_FRAME_PATIENCE + 3)
+    video = _write_video(tmp_path / "clip.avi", frames)
+    out = tmp_path / "rows.csv"
+    res = _run("--video", str(video), *LEARNT, "--learned-cache", str(tmp_path / "c"),
+               "--out", str(out), "-q")
+    assert res.exit_code == 0, res.output
+    assert (f"handsynth: warning: the rest frame (taken after {REST_FRAME_PATIENCE} frames that "
+            "read so) itself reads as unlike any hand learnt") in res.output
+    _, rows = _read_csv(out)
+    assert len(rows) == 2  # the frames after the one taken
