@@ -310,6 +310,12 @@ def test_a_bad_trial_number_is_one_line(files, tmp_path, cell):
     (lambda d: d["range_reference"].update(open=[1, 2, 3]), "field 'open' must have shape (5,)"),
     (lambda d: d["estimators"]["constant"].update(posture=None), "field 'posture'"),
     (lambda d: d.update(kind="cyberglove"), "field 'kind' must be one of dg5, 5dt"),
+    # an inverted z_range clipped every reading to one value: constant angles with exit 0
+    (lambda d: d["estimators"]["model4"]["models"]["standard"].update(
+        z_range=[[1.0] * 5, [-1.0] * 5]), "field 'z_range' must hold [lowest, highest]"),
+    # equal holds were blamed on the readings' file ("5 of 5 sensors go the other way")
+    (lambda d: d["range_reference"].update(open=d["range_reference"]["fist"]),
+     "field 'range_reference': sensor_thumb reads the same open"),
 ])
 def test_a_hand_edited_calibration_is_refused_by_field(files, tmp_path, edit, words):
     # each of these crashed apply with a traceback or gave wrong angles with exit 0
@@ -318,10 +324,24 @@ def test_a_hand_edited_calibration_is_refused_by_field(files, tmp_path, edit, wo
     cal = tmp_path / "edited.json"
     cal.write_text(json.dumps(data))
     res = _run("glove", "apply", cal, files["wear"], "-o", tmp_path / "a.csv",
-               "--model", "constant" if "posture" in words else "model4")
+               "--model", "constant" if "posture" in words else "model4",
+               "--range", files["wear"])
     assert res.exit_code == 2, res.output
     assert "edited.json" in res.output and words in res.output, res.output
     assert "Traceback" not in res.output
+    assert not (tmp_path / "a.csv").exists()
+
+
+def test_a_damaged_estimator_is_named_once(files, tmp_path):
+    # the name stood two or three times: "estimator 'model4': estimator 'model4': ..."
+    data = json.loads(files["cal"].read_text())
+    data["estimators"]["model4"]["models"].pop("tripod")
+    cal = tmp_path / "edited.json"
+    cal.write_text(json.dumps(data))
+    res = _run("glove", "apply", cal, files["wear"], "-o", tmp_path / "a.csv")
+    assert res.exit_code == 2, res.output
+    assert res.output.count("estimator 'model4'") == 1, res.output
+    assert "its mixer weighs motions without a model: tripod" in res.output
 
 
 def test_a_calibration_saved_with_a_byte_order_mark_is_read(files, tmp_path):
@@ -423,6 +443,39 @@ def test_motion_labels_are_read_whatever_their_case(files, tmp_path):
     res = _run("glove", "calibrate", rec, "-o", tmp_path / "c.json", "--kind", "dg5")
     assert res.exit_code == 0, res.output
     assert "range holds (open, fist): stored" in res.output
+
+
+def test_motion_labels_written_with_spaces_are_read(files, tmp_path):
+    # "Range Open" and "Lateral Contact" (a spreadsheet's labels) were taken for motions of
+    # their own: calibrate failed on "motion 'Range Open': point 1 of 20 has 1 ... samples"
+    def spaced(header, rows):
+        k = header.index("motion")
+        return header, [r[:k] + [r[k].replace("_", " ").title()] + r[k + 1:] for r in rows]
+
+    rec = _edit_csv(files["cal_csv"], tmp_path / "spaced.csv", spaced)
+    out = tmp_path / "c.json"
+    res = _run("glove", "calibrate", rec, "-o", out, "--kind", "dg5")
+    assert res.exit_code == 0, res.output
+    assert "range holds (open, fist): stored" in res.output
+    assert set(json.loads(out.read_text())["estimators"]["model4"]["models"]) == {
+        "standard", "lateral_contact", "tripod"}
+
+
+def test_readings_scaled_to_one_with_range_holds_are_named_as_such(files, tmp_path):
+    # readings normalised to 0-1 were refused as "sensor_thumb reads the same for the open
+    # hand and the fist (0.42 counts); is it dead?"
+    def scaled(header, rows):
+        ks = [header.index(n) for n in SENSOR_NAMES]
+        return header, [[f"{float(c) / 4095:.6f}" if i in ks else c for i, c in enumerate(r)]
+                        for r in rows]
+
+    wear = _edit_csv(files["wear"], tmp_path / "scaled.csv", scaled)
+    out = tmp_path / "a.csv"
+    res = _run("glove", "apply", files["cal"], wear, "-o", out, "--range", wear)
+    assert res.exit_code == 2, res.output
+    assert "scaled.csv" in res.output and "less than 1 count" in res.output, res.output
+    assert "instead of the converter's counts" in res.output and "dead" not in res.output
+    assert "Traceback" not in res.output and not out.exists()
 
 
 def test_simulate_trials_are_bounded(tmp_path):

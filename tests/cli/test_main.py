@@ -131,3 +131,10 @@ def test_the_package_names_load_when_used():
     with pytest.raises(AttributeError, match="no attribute 'PoseLookups'"):
         import handsynth
         handsynth.PoseLookups  # noqa: B018
+
+
+def test_python_m_handsynth_runs_the_command_line():
+    res = subprocess.run([sys.executable, "-m", "handsynth", "--version"], capture_output=True,
+                         text=True, timeout=120)
+    assert res.returncode == 0, res.stderr
+    assert res.stdout.startswith("handsynth, version ")

@@ -37,7 +37,8 @@ def apply_calibration(calibration, readings, out, *, model: str = "model4",
         Glove CSV with the readings, counts (time, motion and trial columns
         optional; joint columns ignored).
     out : str or os.PathLike
-        Angles CSV to write: ``time_s`` (s) and the 20 canonical joint
+        Angles CSV to write: ``time_s`` (s; ``sample``, the row index from 0,
+        when `readings` has no time column) and the 20 canonical joint
         columns (deg), one row per row of `readings` (``nan`` where a reading
         is missing).  Never one of the input files.
     model : str, keyword-only
@@ -115,5 +116,7 @@ def apply_calibration(calibration, readings, out, *, model: str = "model4",
             raise EstimationError(f"{range_csv}: {exc}") from None
         sensors = normalizer.apply(sensors)
     angles = est.predict(sensors, motion=motion)  # warns of readings off the calibration's range
-    write_angles_csv(out, angles, time_s=rec.time_s)
+    # a file without a time column gets the row index, not that index written as seconds
+    timed = rec.meta.get("time_column", True)
+    write_angles_csv(out, angles, time_s=rec.time_s if timed else None)
     return angles

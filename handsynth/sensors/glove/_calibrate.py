@@ -250,6 +250,7 @@ def calibrate(rec: GloveRecording, *, options: CalibrationOptions | None = None,
                               "see the warning); only range holds are left")
     if not motions:
         raise EstimationError(f"{where}: no rows labelled with a motion (column 'motion')")
+    _warn_drift(cal, where)
     reading_range = np.stack([rec.sensors.min(axis=0), rec.sensors.max(axis=0)])
     centre = cal.sensors.mean(axis=0)
     scale = cal.sensors.std(axis=0)
@@ -302,6 +303,59 @@ def calibrate(rec: GloveRecording, *, options: CalibrationOptions | None = None,
             out["model4+synergy"] = GatedEstimator(primary=primary, fallback=out["synergy"],
                                                    reading_range=reading_range)
     return out
+
+
+#: Creep of the open-hand reading over a calibration recording, as a share of the sensor's
+#: range there, above which :func:`calibrate` warns of drift (simulated recordings without
+#: drift reach 0.07 on the thumb, whose range is the smallest; 100 counts of drift 0.15-0.6).
+DRIFT_SHARE = 0.15
+#: ... and whose trend is at least this many standard errors from none.
+DRIFT_T = 4.0
+
+
+def _warn_drift(cal: GloveRecording, where: str) -> None:
+    """Warn about sensors whose reading at the start of the trials creeps over the recording.
+
+    Every trial of a representative motion starts from the open hand, so the
+    start readings of a motion's trials are repeats of one posture; their trend
+    over time (fitted within each motion) is drift of the sensor's offset, which
+    the fits would otherwise take for a change of posture.
+    """
+    starts, times, groups = [], [], []
+    for m, k in cal.trials():
+        idx = np.flatnonzero((cal.motion == m) & (cal.trial == k))
+        starts.append(np.median(cal.sensors[idx[:5]], axis=0))
+        times.append(cal.time_s[idx[0]])
+        groups.append(m)
+    if len(starts) < 3:
+        return
+    s, t, g = np.array(starts), np.array(times), np.array(groups, dtype=object)
+    for m in set(groups):  # within each motion: their start postures may differ
+        sel = g == m
+        s[sel] -= s[sel].mean(axis=0)
+        t[sel] -= t[sel].mean()
+    if not (t ** 2).sum() > 0:
+        return
+    slope = (t[:, None] * s).sum(axis=0) / (t ** 2).sum()       # counts per s
+    dof = len(t) - len(set(groups)) - 1
+    if dof < 1:
+        return
+    # a trend that the trials' own spread explains is no drift: a motion's trials packed
+    # into a short stretch of a long recording give a slope of little weight
+    resid = s - t[:, None] * slope
+    se = np.sqrt((resid ** 2).sum(axis=0) / dof / (t ** 2).sum())
+    duration = float(cal.time_s.max() - cal.time_s.min())
+    span = cal.sensors.max(axis=0) - cal.sensors.min(axis=0)
+    creep = slope * duration
+    bad = np.flatnonzero((np.abs(creep) > DRIFT_SHARE * np.maximum(span, 1e-9))
+                         & (np.abs(slope) > DRIFT_T * np.maximum(se, 1e-12)))
+    if bad.size:
+        words = ", ".join(f"{SENSOR_NAMES[k]} {creep[k]:+.0f} counts "
+                          f"({100 * abs(creep[k]) / span[k]:.0f} % of its range)" for k in bad)
+        warnings.warn(f"{where}: the open-hand reading at the start of the trials creeps over "
+                      f"the {duration:.0f} s of the recording ({words}): does the sensor drift? "
+                      "The fits take the drift for posture; record again after the glove has "
+                      "warmed up, or in shorter pieces", GloveWarning, stacklevel=3)
 
 
 def _warn_no_sensor_kept(estimators: dict, t_threshold: float, where: str) -> None:
@@ -520,13 +574,23 @@ def load_calibration(path) -> dict:
             raise InvalidInputError(f"{path}: estimator {name!r} lacks field {exc.args[0]!r}") \
                 from None
         except InvalidInputError as exc:
-            raise InvalidInputError(f"{path}: estimator {name!r}: {exc}") from None
+            text = str(exc)
+            if not text.startswith(f"estimator {name!r}: "):
+                text = f"estimator {name!r}: {text}"
+            raise InvalidInputError(f"{path}: {text}") from None
     try:
         if rr is not None:
             if not isinstance(rr, dict):
                 raise InvalidInputError("field 'range_reference' must be an object with "
                                         f"'open' and 'fist', got {rr!r:.40}")
             rr = (array_field(rr, "open", (5,)), array_field(rr, "fist", (5,)))
+            same = np.flatnonzero(np.abs(rr[1] - rr[0]) < 1.0)
+            if same.size:  # every new wearing would be mapped onto one reading
+                k = int(same[0])
+                raise InvalidInputError(
+                    f"field 'range_reference': {SENSOR_NAMES[k]} reads the same open "
+                    f"({rr[0][k]:g}) and in the fist ({rr[1][k]:g}); the holds of a range "
+                    "calibration differ by at least 1 count")
     except KeyError as exc:
         raise InvalidInputError(f"{path}: field 'range_reference' lacks {exc.args[0]!r}") \
             from None

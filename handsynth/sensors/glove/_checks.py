@@ -314,6 +314,8 @@ def check_reading_range(sensors: np.ndarray, low: np.ndarray, high: np.ndarray, 
         warnings.warn(f"{where}: {100 * share[k]:.0f} % of the {SENSOR_NAMES[k]} readings lie "
                       f"off the calibration's range {low[k]:g}-{high[k]:g} counts (read there "
                       "as its end): the same glove, full scale (--adc-max) and wearing? A new "
-                      "wearing needs a range calibration (--range)", GloveWarning,
+                      "wearing needs a range calibration (--range); a calibration recording "
+                      "that bent the finger less than these readings does needs recording "
+                      "again", GloveWarning,
                       stacklevel=stacklevel)
     return bad

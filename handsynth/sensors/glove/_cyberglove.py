@@ -25,6 +25,7 @@ with a header is read by name, a file without one in that order; pass
 
 from __future__ import annotations
 
+import re
 import warnings
 from pathlib import Path
 
@@ -70,8 +71,9 @@ def read_cyberglove_csv(path, *, units: str = "deg",
     ----------
     path : str or Path
         CSV, comma-separated; an optional header line of the names in
-        :data:`CYBERGLOVE_COLUMNS` (extra columns such as a time stamp are
-        ignored).
+        :data:`CYBERGLOVE_COLUMNS`, in any case, with spaces, dots or dashes
+        for ``_`` and ``pinky`` for ``little`` (``Thumb Rotation``,
+        ``PINKY_MCP``); extra columns such as a time stamp are ignored.
     units : {"deg", "rad"}, keyword-only
         Unit of the angles in the file.
     columns : tuple of str, keyword-only
@@ -93,7 +95,8 @@ def read_cyberglove_csv(path, *, units: str = "deg",
     Warns
     -----
     GloveWarning
-        Rows with an empty or NaN cell (counted, named by file line).
+        Rows with an empty or NaN cell (counted, named by file line); a
+        sensor that reads the same in every complete row (of 30 or more).
     """
     if units not in ("deg", "rad"):
         raise RecordingError(f"units must be 'deg' or 'rad', got {units!r}")
@@ -106,12 +109,14 @@ def read_cyberglove_csv(path, *, units: str = "deg",
     if all(reads_as_number(c) for c in first):
         names = list(columns or CYBERGLOVE_COLUMNS)
         body, lines = rows, content.lines
-    else:
-        names, body, lines = first, rows[1:], content.lines[1:]
+    else:  # an export's own spelling: "Thumb MCP", "INDEX_PIP", "pinky_dip"
+        names, body, lines = [_canonical(c) for c in first], rows[1:], content.lines[1:]
     missing = [c for c in CYBERGLOVE_COLUMNS[:19] if c not in names]
     if missing:
+        got = "" if all(reads_as_number(c) for c in first) else \
+            f" (its header: {', '.join(first[:8])}{', ...' if len(first) > 8 else ''})"
         raise RecordingError(f"{path}: missing column(s) {', '.join(missing)}; expected the "
-                             f"names of CYBERGLOVE_COLUMNS")
+                             f"names of CYBERGLOVE_COLUMNS{got}")
     if not body:
         raise RecordingError(f"{path}: no data rows")
     col = column_index(names, path=path, line=None if body is rows else content.lines[0])
@@ -154,6 +159,7 @@ def read_cyberglove_csv(path, *, units: str = "deg",
     gaps = np.isnan(out).any(axis=1)
     out[gaps] = np.nan
     _check_units(out, path, units)
+    _warn_stuck(raw[~gaps], path)
     if gaps.any():
         idx = np.flatnonzero(gaps)
         at = f"at line {lines[idx[0]]}" if idx.size == 1 else \
@@ -162,6 +168,30 @@ def read_cyberglove_csv(path, *, units: str = "deg",
                       f"({at}); their postures are NaN (left out of synergies)", GloveWarning, stacklevel=2)
     return out
 
+
+
+def _canonical(name: str) -> str:
+    """A header cell as a name of :data:`CYBERGLOVE_COLUMNS` where it spells one in another
+    case, with spaces, dots or dashes for ``_``, or ``pinky`` for ``little``."""
+    loose = re.sub(r"[ .-]+", "_", name.strip().lower())
+    loose = re.sub(r"\bpink(?:y|ie)(?=_|$)", "little", loose)
+    return loose if loose in CYBERGLOVE_COLUMNS else name
+
+
+#: Rows from which a column that never changes is taken for a sensor stuck or unplugged.
+_STUCK_MIN_ROWS = 30
+
+
+def _warn_stuck(raw: np.ndarray, path: Path) -> None:
+    """Warn about sensors that read the same in every complete row: the synergies would
+    learn that the joint never moves."""
+    if len(raw) < _STUCK_MIN_ROWS:
+        return
+    stuck = [CYBERGLOVE_COLUMNS[k] for k in np.flatnonzero(np.ptp(raw, axis=0) == 0)]
+    if stuck:
+        warnings.warn(f"{path}: {', '.join(stuck)} read(s) {raw[0, CYBERGLOVE_COLUMNS.index(stuck[0])]:g}"
+                      f" in all {len(raw)} complete rows (a sensor stuck or unplugged?); the "
+                      "synergies learn that joint as never moving", GloveWarning, stacklevel=3)
 
 
 def _check_units(angles: np.ndarray, path: Path, units: str) -> None:

@@ -471,6 +471,12 @@ class RangeNormalizer:
             object.__setattr__(self, name, v)
         span = np.asarray(self.source_fist) - np.asarray(self.source_open)
         flat = np.flatnonzero(np.abs(span) < 1.0)
+        if flat.size == len(span) and (span != 0).any():
+            # readings scaled to 0-1 (or volts) move by a fraction of a count: not five dead sensors
+            raise EstimationError(
+                "range calibration: every sensor moves by less than 1 count from the open hand "
+                "to the fist (" + ", ".join(f"{SENSOR_NAMES[k]} {span[k]:+.3g}" for k in range(5))
+                + "): are the readings scaled (0-1, volts) instead of the converter's counts?")
         if flat.size:
             raise EstimationError(
                 f"range calibration: {SENSOR_NAMES[flat[0]]} reads the same for the open "
@@ -492,6 +498,12 @@ class RangeNormalizer:
         s = as_sensors(sensors)
         u = (s - self.source_open) / (self.source_fist - self.source_open)
         return self.target_open + u * (self.target_fist - self.target_open)
+
+
+def _named(prefix: str, message: str) -> str:
+    """`message` after `prefix`, unless it already starts with it (a nested entry's error
+    was named once on its way up)."""
+    return message if message.startswith(prefix) else prefix + message
 
 
 def estimator_from_dict(d: dict) -> GloveEstimator:
@@ -557,7 +569,7 @@ def estimator_from_dict(d: dict) -> GloveEstimator:
         raise InvalidInputError(f"estimator entry lacks field {exc.args[0]!r}") from None
     except InvalidInputError as exc:
         name = d.get("name") if isinstance(d, dict) else None
-        raise InvalidInputError(f"estimator {name!r}: {exc}") from None
+        raise InvalidInputError(_named(f"estimator {name!r}: ", str(exc))) from None
     except (TypeError, ValueError, AttributeError, IndexError) as exc:
         raise InvalidInputError(f"estimator entry {d.get('name')!r} is malformed: {exc}") \
             from None

@@ -244,10 +244,16 @@ class MotionModel:
         scale = array_field(d, "scale", (5,))
         if (scale <= 0).any():
             raise InvalidInputError(f"field 'scale' must be positive, got {scale.tolist()}")
+        z_range = None if d.get("z_range") is None else array_field(d, "z_range", (2, 5))
+        if z_range is not None and (z_range[0] > z_range[1]).any():
+            k = int(np.flatnonzero(z_range[0] > z_range[1])[0])
+            # np.clip would read every reading as the lower bound's other end: a constant
+            raise InvalidInputError(f"motion {d.get('motion')!r}: field 'z_range' must hold "
+                                    f"[lowest, highest] standardised readings, got lowest "
+                                    f"{z_range[0, k]:g} above highest {z_range[1, k]:g} for "
+                                    f"sensor {k}")
         return cls(motion=str(d["motion"]), model=str(d["model"]),
-                   centre=array_field(d, "centre", (5,)), scale=scale,
-                   z_range=None if d.get("z_range") is None
-                   else array_field(d, "z_range", (2, 5)),
+                   centre=array_field(d, "centre", (5,)), scale=scale, z_range=z_range,
                    fits={JOINT_NAMES.index(k): JointFit.from_dict(v) for k, v in fits.items()})
 
 

@@ -31,8 +31,8 @@ from ._sensors import GLOVE_KINDS, SENSOR_NAMES
 
 #: Labels of the open-hand and fist holds of a range calibration (column ``motion``).
 RANGE_LABELS = ("range_open", "range_fist")
-#: Labels read whatever their case (``STANDARD`` is ``standard``): the motions and holds
-#: handsynth knows.
+#: Labels read whatever their case, with spaces or dashes for ``_`` (``STANDARD`` is
+#: ``standard``, ``Range Open`` is ``range_open``): the motions and holds handsynth knows.
 _KNOWN_LABELS = {name.lower(): name for name in (*MOTIONS, *RANGE_LABELS)}
 
 __all__ = ["GloveRecording", "read_glove_csv", "write_angles_csv", "write_glove_csv"]
@@ -45,6 +45,17 @@ _LOOSE_SENSOR = re.compile(r"(?:(?:sensor|bend|flex)_)?(?P<finger>thumb|index|mi
 
 #: A time column in seconds as loggers name it: ``Time (s)``, ``time [s]``, ``Time_S``.
 _LOOSE_TIME_S = re.compile(r"(?:time|timestamp)(?:_[(\[]?|[(\[])s[)\]]?")
+
+
+#: A time column in milliseconds: ``time_ms``, ``Time (ms)``, ``timestamp [ms]``.
+_LOOSE_TIME_MS = re.compile(r"(?:time|timestamp)(?:_[(\[]?|[(\[])ms[)\]]?")
+
+
+def _time_ms_column(header: list[str]) -> int | None:
+    """Index of the one column of `header` that names a time in milliseconds, or None."""
+    found = [i for i, h in enumerate(header)
+             if _LOOSE_TIME_MS.fullmatch(re.sub(r"[ .-]+", "_", h.strip().lower()))]
+    return found[0] if len(found) == 1 else None
 
 
 def _meaning(name: str, *, time_given: bool) -> str | None:
@@ -325,7 +336,10 @@ def read_glove_csv(path, *, kind: str = "", adc_max: float = 4095.0) -> GloveRec
     -------
     GloveRecording
         With ``angles`` when all 20 joint columns are present, and ``lines``,
-        each row's line in the file (for messages).
+        each row's line in the file (for messages).  A time column in
+        milliseconds (``time_ms``, ``Time (ms)``) is read as ``time_s`` / 1000
+        with a warning when the file has no ``time_s``; a file with neither
+        gets ``time_s`` = the row index and ``meta["time_column"]`` False.
 
     Raises
     ------
@@ -368,6 +382,10 @@ def read_glove_csv(path, *, kind: str = "", adc_max: float = 4095.0) -> GloveRec
         raise RecordingError(f"{path}: joint columns are incomplete, missing "
                              f"{', '.join(absent)}")
     col = column_index(header, path=path, line=content.lines[0])
+    ms_col = None if "time_s" in col else _time_ms_column(header)
+    if ms_col is not None:
+        warnings.warn(f"{path}: column {header[ms_col]!r} read as time_s (milliseconds / 1000)",
+                      GloveWarning, stacklevel=2)
     body = rows[1:]
     if not body:
         raise RecordingError(f"{path}: no data rows after the header")
@@ -378,6 +396,8 @@ def read_glove_csv(path, *, kind: str = "", adc_max: float = 4095.0) -> GloveRec
     trial = np.zeros(n, dtype=np.int64)
     time_s = np.arange(n, dtype=np.float64)
     for i, (r, line) in enumerate(zip(body, content.lines[1:])):
+        while len(r) > len(header) and r[-1] == "":  # a logger's delimiter after each row
+            r = r[:-1]
         if len(r) != len(header):
             raise RecordingError(f"{path}, line {line}: {len(r)} fields, header has "
                                  f"{len(header)}")
@@ -390,9 +410,11 @@ def read_glove_csv(path, *, kind: str = "", adc_max: float = 4095.0) -> GloveRec
                                     bound=_MAX_ANGLE_DEG)
         if "time_s" in col:
             time_s[i] = _num(r[col["time_s"]], path, line, "time_s", finite=True)
+        elif ms_col is not None:
+            time_s[i] = _num(r[ms_col], path, line, header[ms_col], finite=True) / 1000.0
         if "motion" in col:
             label = r[col["motion"]].strip()
-            motion[i] = _KNOWN_LABELS.get(label.lower(), label)
+            motion[i] = _KNOWN_LABELS.get(re.sub(r"[ -]+", "_", label.lower()), label)
         if "trial" in col:
             v = _num(r[col["trial"]], path, line, "trial", finite=True)
             if v != int(v) or abs(v) >= 2**31:
@@ -401,9 +423,11 @@ def read_glove_csv(path, *, kind: str = "", adc_max: float = 4095.0) -> GloveRec
             trial[i] = int(v)
     if angles is not None:
         _check_degrees(angles, path)
-    _check_trials(time_s, motion, trial, content.lines[1:], path, has_time="time_s" in col)
+    timed = "time_s" in col or ms_col is not None
+    _check_trials(time_s, motion, trial, content.lines[1:], path, has_time=timed)
     return GloveRecording(sensors=sensors, angles=angles, motion=motion, trial=trial,
                           time_s=time_s, kind=kind, adc_max=adc_max,
+                          meta={"time_column": timed},
                           lines=np.asarray(content.lines[1:], dtype=np.int64))
 
 

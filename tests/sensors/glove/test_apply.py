@@ -1,3 +1,5 @@
+import re
+
 import numpy as np
 import pytest
 
@@ -116,3 +118,45 @@ def test_an_empty_file_name_is_refused_by_name(tmp_path, cal_file, wear):
     # --range "" read the current folder as a file: "cannot read glove CSV '.'"
     with pytest.raises(InvalidInputError, match="range_csv must name a file, got ''"):
         apply_calibration(cal_file, wear, tmp_path / "a.csv", range_csv="")
+
+
+def _retimed(wear, path, rename, scale):
+    """`wear` with its time column renamed (None: dropped) and its values times `scale`."""
+    lines = wear.read_text().splitlines()
+    header = lines[0].split(",")
+    k = header.index("time_s")
+    rows = [ln.split(",") for ln in lines[1:]]
+    if rename is None:
+        header.pop(k)
+        [r.pop(k) for r in rows]
+    else:
+        header[k] = rename
+        for r in rows:
+            r[k] = f"{float(r[k]) * scale:.3f}"
+    path.write_text("\n".join(",".join(r) for r in [header, *rows]) + "\n")
+    return path
+
+
+def test_readings_without_a_time_column_give_row_numbers_not_seconds(tmp_path, cal_file, wear):
+    # the row index was written as time_s: 0, 1, 2 ... s for samples 1/60 s apart
+    src = _retimed(wear, tmp_path / "untimed.csv", None, 1.0)
+    out = tmp_path / "a.csv"
+    with pytest.warns(GloveWarning):  # a new wearing without --range: off the calibration
+        apply_calibration(cal_file, src, out, model="model1")
+    lines = out.read_text().splitlines()
+    assert lines[0].split(",")[0] == "sample"
+    assert [ln.split(",")[0] for ln in lines[1:4]] == ["0", "1", "2"]
+
+
+@pytest.mark.parametrize("name", ["time_ms", "Time (ms)", "timestamp [ms]"])
+def test_a_time_column_in_milliseconds_is_read_as_seconds(tmp_path, cal_file, wear, name):
+    # it was ignored: the angles' time_s was then the row index
+    from handsynth.sensors.glove import read_glove_csv
+
+    want = read_glove_csv(wear).time_s
+    src = _retimed(wear, tmp_path / "ms.csv", name, 1000.0)
+    with pytest.warns(GloveWarning, match=re.escape(f"ms.csv: column '{name}' read as "
+                                                    "time_s (milliseconds / 1000)")):
+        got = read_glove_csv(src)
+    np.testing.assert_allclose(got.time_s, want, atol=1e-6)
+    assert got.meta["time_column"]

@@ -286,3 +286,26 @@ def test_a_t_threshold_that_keeps_no_sensor_is_warned_about(cal_rec):
                   options=CalibrationOptions(t_threshold=1e6, synergy_k=0, pooled=False))
     assert any(re.match(r"cal.csv: model4 keeps no sensor \(every \|t\| < 1e\+06, the t "
                         r"threshold\) in 15 of 15 joint-3 fits", str(w.message)) for w in caught)
+
+
+def test_drift_of_the_readings_over_the_calibration_is_warned_about(cal_rec):
+    # an offset creeping by 150 counts over the recording was fitted as posture, unsaid
+    from dataclasses import replace
+
+    ramp = np.linspace(0.0, 150.0, cal_rec.n_samples)[:, None]
+    drifting = replace(cal_rec, sensors=cal_rec.sensors + ramp)
+    opts = CalibrationOptions(models=("model1",), pooled=False, synergy_k=0)
+    with pytest.warns(GloveWarning, match=r"rec.csv: the open-hand reading at the start of the "
+                                          r"trials creeps over the \d+ s of the recording "
+                                          r"\(sensor_thumb \+\d+ counts"):
+        calibrate(drifting, options=opts, where="rec.csv")
+    # none without the drift, also with each motion's trials one after the other (a short
+    # stretch of a long recording, where the trials' own spread looked like a trend)
+    order = sorted(range(cal_rec.n_samples), key=lambda i: (cal_rec.motion[i], cal_rec.trial[i]))
+    grouped = replace(cal_rec, sensors=cal_rec.sensors[order], angles=cal_rec.angles[order],
+                      motion=cal_rec.motion[order], trial=cal_rec.trial[order],
+                      truth=None, time_s=np.arange(cal_rec.n_samples) / 60.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", GloveWarning)
+        calibrate(cal_rec, options=opts)
+        calibrate(grouped, options=opts)

@@ -95,3 +95,15 @@ def test_rows_are_named_by_file_line_when_known():
     with pytest.warns(GloveWarning, match=r"x.csv: 2 of 100 rows have a NaN reading \(first "
                                           r"at lines 5, 52\)"):
         check_sensors(s, adc_max=4095, where="x.csv", lines=np.arange(2, 102))
+
+
+def test_readings_beyond_a_narrow_calibration_name_that_cause_too():
+    # the warning named only another glove, full scale or wearing; a calibration recording
+    # that did not bend the finger this far gives the same clamped angles
+    from handsynth.sensors.glove._checks import check_reading_range
+
+    s = np.tile(np.linspace(1500.0, 2500.0, 100)[:, None], (1, 5))
+    with pytest.warns(GloveWarning, match="a calibration recording that bent the finger less "
+                                          "than these readings does needs recording again"):
+        assert check_reading_range(s, np.full(5, 1500.0), np.full(5, 1800.0), where="w") \
+            == (0, 1, 2, 3, 4)

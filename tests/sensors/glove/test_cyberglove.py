@@ -121,3 +121,41 @@ def test_synergy_errors_name_their_source(poses):
     huge[3, 4] = 1e300
     with pytest.raises(InvalidInputError, match=r"^g.csv: index_mcp_flex is 1e\+300 deg"):
         fit_synergies(huge, k=2, source="g.csv")
+
+
+@pytest.mark.parametrize("spell", [
+    lambda c: c.replace("_", " ").title(),          # "Thumb Rotation", "Index Mcp"
+    lambda c: c.upper(),                            # "THUMB_ROTATION"
+    lambda c: c.replace("little", "pinky"),         # "pinky_mcp"
+])
+def test_a_header_spelt_otherwise_is_read_by_its_names(tmp_path, poses, spell):
+    # each was refused as missing every one of the 19 columns
+    data = _export(poses, np.random.default_rng(4))
+    lines = [",".join(["Time (s)"] + [spell(c) for c in CYBERGLOVE_COLUMNS])]
+    lines += [",".join([f"{k / 100:.2f}"] + [f"{v:.6f}" for v in row]) for k, row in enumerate(data)]
+    p = tmp_path / "glove.csv"
+    p.write_text("\n".join(lines) + "\n")
+    np.testing.assert_allclose(read_cyberglove_csv(p), poses, atol=1e-5)
+
+
+def test_a_sensor_stuck_in_every_row_is_warned_about(tmp_path, poses):
+    # a glove sensor unplugged for the whole export was learnt as a joint that never moves
+    data = _export(poses, np.random.default_rng(5))
+    data[:, CYBERGLOVE_COLUMNS.index("ring_pip")] = 0.0
+    p = tmp_path / "glove.csv"
+    p.write_text("\n".join([",".join(CYBERGLOVE_COLUMNS)]
+                           + [",".join(f"{v:.6f}" for v in row) for row in data]) + "\n")
+    with pytest.warns(GloveWarning, match=r"glove.csv: ring_pip read\(s\) 0 in all 300 complete "
+                                          r"rows \(a sensor stuck or unplugged\?\)"):
+        read_cyberglove_csv(p)
+
+
+def test_a_header_of_other_names_is_shown_when_refused(tmp_path, poses):
+    data = _export(poses, np.random.default_rng(6))
+    names = [f"S{k}" for k in range(len(CYBERGLOVE_COLUMNS))]
+    p = tmp_path / "glove.csv"
+    p.write_text("\n".join([",".join(names)] + [",".join(f"{v:.6f}" for v in row)
+                                                for row in data]) + "\n")
+    with pytest.raises(RecordingError, match=r"\(its header: S0, S1, S2, S3, S4, S5, S6, S7, "
+                                             r"\.\.\.\)"):
+        read_cyberglove_csv(p)

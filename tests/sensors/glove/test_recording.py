@@ -69,6 +69,17 @@ def test_a_byte_order_mark_does_not_hide_the_first_column(tmp_path):
     assert read_glove_csv(p).time_s.tolist() == [0.5, 0.75]
 
 
+def test_a_delimiter_after_every_data_row_is_read(tmp_path):
+    # a serial logger's "0.5,1,2,3,4,5," was refused: "line 2: 7 fields, header has 6"
+    p = tmp_path / "logger.csv"
+    p.write_text("time_s," + ",".join(SENSOR_NAMES) + "\n0.5,1,2,3,4,5,\n0.75,1,2,3,4,6,\n")
+    rec = read_glove_csv(p)
+    assert rec.time_s.tolist() == [0.5, 0.75] and rec.sensors[1].tolist() == [1, 2, 3, 4, 6]
+    p.write_text("time_s," + ",".join(SENSOR_NAMES) + "\n0.5,1,2,3,4,5,7\n")
+    with pytest.raises(RecordingError, match="line 2: 7 fields, header has 6"):
+        read_glove_csv(p)  # a value there is still refused
+
+
 @pytest.mark.parametrize("text, msg", [
     ("a,b\n1,2\n", "missing sensor column"),
     ("time_s," + ",".join(SENSOR_NAMES) + "\n0,1,2,x,4,5\n", r"line 2: sensor_middle is 'x'"),
