@@ -177,6 +177,11 @@ def linear_centre(
     return _linear_centre(q, d, free)
 
 
+#: ``1 - s_k`` below which no rotation turns direction k at all (a spread of about
+#: 1e-4 deg; a finger flexed by 1 deg gives 1e-4).
+_UNTURNED = 1e-12
+
+
 def _linear_centre(q: np.ndarray, d: np.ndarray, free_directions: int) -> tuple[
         np.ndarray, np.ndarray]:
     """:func:`linear_centre` of checked arrays."""
@@ -187,7 +192,10 @@ def _linear_centre(q: np.ndarray, d: np.ndarray, free_directions: int) -> tuple[
         plus = np.concatenate([u[:, k], -vt[k]]) / np.sqrt(2)
         x += (plus @ b) / (1.0 + s[k]) * plus
         minus = np.concatenate([u[:, k], vt[k]]) / np.sqrt(2)
-        if k < free_directions:
+        # a direction no rotation turns at all (rotations identical to rounding, as in a
+        # pure translation) is as free as the weakest ones: dividing by its 1 - s_k of
+        # 1e-16 or 0 overflowed (1e300 in the residual, an overflow warning on the terminal)
+        if k < free_directions or 1.0 - s[k] < _UNTURNED:
             x += (minus @ m) * minus
         else:
             x += (minus @ b) / max(1.0 - s[k], 1e-300) * minus
@@ -223,6 +231,9 @@ def assess_determinability(q: np.ndarray, d: np.ndarray) -> Determinability:
     q, d = _check_relative(q, d)
     u, s, vt, _ = _normal_system(q, d)
     lam = np.clip(1.0 - s, 0.0, None)
+    # a direction no rotation turns (1 - s of rounding, 1e-16) determines nothing: its
+    # expected error is infinite, not 6e7 mm
+    lam[lam < _UNTURNED] = 0.0
     # residual of the fit with the weakest direction fixed: its scale does
     # not depend on how badly that direction is determined
     res = _fit_residual(q, d)

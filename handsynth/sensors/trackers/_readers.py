@@ -44,7 +44,9 @@ finger joint: two sensors on adjacent phalanges are 10-90 mm apart
 (receivers 9.6 mm wide, para. 0094; phalanges up to about 50 mm, Buchholz et
 al. 1992); with ``units="auto"`` the unit that puts the median spacing
 nearest 28 mm is used, and an explicit unit that puts it outside that range
-is warned about when another unit would not.  Glitches -- a sensor position
+is warned about when another unit would not.  Centimetres and inches (2.54 apart) both fit
+many spacings: when they do and the spacing chosen is outside 22.4-35 mm, the
+guess is warned about (a cm file with sensors 15 mm apart reads as inches).  Glitches -- a sensor position
 more than `glitch_mm` from the median of its five-frame neighbourhood, which
 smooth finger motion never is -- are dropped, counted and named (a file where
 half the frames or more would be glitches is refused instead: glitches are
@@ -93,6 +95,8 @@ _NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|[-+]?(?:nan|NaN
 _COMMA_NUMBER = re.compile(r"[-+]?\d+,\d+(?:[eE][-+]?\d+)?")
 _SPACING_MM = (10.0, 90.0)  # plausible distance of two sensors across a finger joint
 _TYPICAL_SPACING_MM = 28.0
+#: A spacing within this factor of the typical one decides between cm and inches.
+_UNIT_DECIDES = 1.25
 _BINARY_MAGIC = {
     b"PK\x03\x04": "a zip archive (an .npz file?)",
     b"\x93NUMPY": "a NumPy .npy file",
@@ -571,12 +575,15 @@ def _pair_stations(station: np.ndarray, frame: np.ndarray | None,
             np.array(key, dtype=np.float64), half, 0)
 
 
-def _choose_units(positions_file: np.ndarray, units: str, path: Path) -> tuple[str, str]:
-    """Unit of the file's positions and a note on how it was chosen."""
+def _choose_units(positions_file: np.ndarray, units: str,
+                  path: Path) -> tuple[str, str, str | None]:
+    """Unit of the file's positions, a note on how it was chosen and a warning to give once
+    the file is known to hold enough frames (None: none), that centimetres and inches both
+    fit and the spacing does not decide."""
     spacing = np.linalg.norm(positions_file[:, 1] - positions_file[:, 0], axis=1)
     spacing = spacing[np.isfinite(spacing)]
     if spacing.size == 0:
-        return (units if units != "auto" else "cm"), "no finite positions"
+        return (units if units != "auto" else "cm"), "no finite positions", None
     med = float(np.median(spacing))
     in_mm = {u: med * f * 1e3 for u, f in _UNITS_M.items()}
     plausible = [u for u, v in in_mm.items() if _SPACING_MM[0] <= v <= _SPACING_MM[1]]
@@ -589,8 +596,24 @@ def _choose_units(positions_file: np.ndarray, units: str, path: Path) -> tuple[s
                 f"finger joint ({_SPACING_MM[0]:g}-{_SPACING_MM[1]:g} mm); using {best!r} "
                 f"({in_mm[best]:.3g} mm); pass units= if that is wrong", stacklevel=4)
         elif len(plausible) > 1:
-            note += f"; {', '.join(u for u in plausible if u != best)} also plausible"
-        return best, note
+            others = [u for u in plausible if u != best]
+            note += f"; {', '.join(others)} also plausible"
+            # centimetres and inches differ by 2.54, less than the 9x of the plausible
+            # spacings: a spacing of 10-35 mm in cm is 25-90 mm in inches. Nothing else in
+            # the data tells them apart (a centre scales with the positions), and the
+            # spacing nearer 28 mm is the wrong unit for sensors closer than 17.6 mm in a
+            # cm file or farther than 44.6 mm in an inch file: the centre 2.54x off. A
+            # spacing outside 22.4-35 mm (28 mm within a factor 1.25) is too far from the
+            # typical one to decide by it, and is warned about.
+            if abs(np.log(in_mm[best] / _TYPICAL_SPACING_MM)) > np.log(_UNIT_DECIDES):
+                return best, note, (
+                    f"{path.name}: the unit is ambiguous: in {best!r} the two sensors are "
+                    f"{in_mm[best]:.3g} mm apart, in "
+                    + " or ".join(f"{u!r} {in_mm[u]:.3g} mm" for u in others)
+                    + f", {'both' if len(others) == 1 else 'all'} plausible across a finger "
+                    f"joint; using {best!r} (nearer the typical {_TYPICAL_SPACING_MM:g} mm); "
+                    f"pass units= (--units) if that is wrong")
+        return best, note, None
     if units not in plausible:
         others = [u for u in plausible if u != units]
         if others:
@@ -599,7 +622,7 @@ def _choose_units(positions_file: np.ndarray, units: str, path: Path) -> tuple[s
                 f"implausible across a finger joint; the data look like "
                 f"{' or '.join(repr(u) for u in others)} ({in_mm[others[0]]:.3g} mm)",
                 stacklevel=4)
-    return units, f"given: sensor spacing {in_mm[units]:.1f} mm"
+    return units, f"given: sensor spacing {in_mm[units]:.1f} mm", None
 
 
 #: Largest fraction of frames taken as glitches.  A five-frame median finds
@@ -985,7 +1008,7 @@ def read_polhemus(
     # a tracker's dropout: a sensor reported at exactly (0, 0, 0)
     dropout = np.any(np.all(pos_file == 0, axis=2), axis=1)
     frozen = _frozen_runs(pos_file, ang, dropout)
-    unit, unit_note = _choose_units(pos_file[~dropout], units, path)
+    unit, unit_note, unit_warning = _choose_units(pos_file[~dropout], units, path)
     positions = pos_file * _UNITS_M[unit]
     rots, flips = zip(*(_rotations(a, lay.angles, euler_order) for a in ang))
     rotations = np.stack(rots, axis=1)
@@ -1052,6 +1075,8 @@ def read_polhemus(
                             "does not advance")
         raise RecordingError(f"{path.name}: only {int(keep.sum())} usable frames of {n}"
                              + (f" ({'; '.join(problems)})" if problems else ""))
+    if unit_warning is not None:  # after the refusals: they say what is wrong themselves
+        warnings.warn(unit_warning, stacklevel=2)
     if problems:
         warnings.warn(msg + "; dropped", stacklevel=2)
     if notes["duplicates"]:

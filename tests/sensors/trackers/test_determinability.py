@@ -132,3 +132,34 @@ def test_both_sensors_still_is_refused(finger_rec):
     for name in ESTIMATORS:
         with pytest.raises(EstimationError, match="range of motion|does not determine"):
             make_estimator(name).estimate(rec)
+
+
+def test_rotations_that_never_turn_give_finite_numbers_without_overflow(finger_rec):
+    """A pure translation (the same relative rotation on every frame) determines nothing:
+    the report says so with finite numbers; dividing by 1 - s of 0 overflowed before."""
+    import dataclasses
+    import warnings
+
+    n = finger_rec.n_frames
+    rot = np.repeat(finger_rec.rotations[:1], n, axis=0)
+    shift = np.linspace(0.0, 0.1, n)[:, None, None] * np.array([1.0, 0.5, 0.2])
+    noise = np.random.default_rng(0).normal(0.0, 5e-4, finger_rec.positions.shape)
+    rec = dataclasses.replace(finger_rec, positions=finger_rec.positions[:1] + shift + noise,
+                              rotations=rot, truth=None)
+    with warnings.catch_warnings(), np.errstate(all="raise"):
+        warnings.simplefilter("error")
+        report = motion_quality(rec)
+        q, d = rec.relative()
+        cu, cl = linear_centre(q, d, free_directions=0)
+    det = report.determinability
+    assert det is not None and np.isfinite(det.residual_mm) and det.residual_mm < 5.0
+    assert np.all(np.isfinite(cu)) and np.all(np.isfinite(cl))
+    assert np.linalg.norm(cu) < 0.2 and np.linalg.norm(cl) < 0.2
+    # the lower sensor sliding without turning: rotations identical, the errors infinite
+    # (6e7 mm across the axis before, from a 1 - s of rounding)
+    p = np.repeat(finger_rec.positions[:1], n, axis=0)
+    p[:, 1] += np.linspace(0.0, 0.03, n)[:, None] * np.array([0.0, 1.0, 0.3])
+    q, d = dataclasses.replace(rec, positions=p).relative()
+    with np.errstate(all="raise"):
+        det = assess_determinability(q, d)
+    assert np.all(np.isinf(det.expected_error_mm)) and np.isfinite(det.residual_mm)

@@ -172,7 +172,7 @@ def test_too_few_usable_frames_refused_with_the_reasons(tmp_path, finger_rec, li
     lines = liberty_lines(finger_rec, scale=100.0, counter=False, quaternion=False)[:60]
     lines[0] = lines[0].split()[0] + " nan" * 6
     with pytest.warns(UserWarning, match=r"1 frames with NaN values .*; dropped"):
-        assert read_polhemus(_write(tmp_path / "one_nan.txt", lines)).n_frames == 29
+        assert read_polhemus(_write(tmp_path / "one_nan.txt", lines), units="cm").n_frames == 29
 
 
 def test_rotations_of_header_csv_with_euler(tmp_path, finger_rec):
@@ -486,3 +486,31 @@ def test_pimgr_sensors_option_chooses_the_upper_sensor(tmp_path, finger_rec, pim
     assert swapped.metadata["sensors"] == [2, 1] and plain.metadata["sensors"] == [1, 2]
     with pytest.raises(InvalidInputError, match=r"holds sensors 1 and 2 .* not 1 and 3"):
         read_polhemus(path, sensors=(1, 3))
+
+
+def test_cm_or_inches_far_from_the_typical_spacing_is_warned(tmp_path, liberty_lines):
+    """Sensors 14.7 mm apart in a cm file read as inches (37.4 mm): the centre 2.54x off.
+    Nothing in the data tells cm from inches, so a spacing far from 28 mm is warned about."""
+    from handsynth.sensors.trackers import FlexionMotion, SensorMount, simulate_recording
+
+    close = simulate_recording(
+        "index_dip", motion=FlexionMotion(duration_s=3.0), seed=3, geometry_source="table",
+        upper_mount=SensorMount(along=0.75, pitch_deg=15.0),
+        lower_mount=SensorMount(along=0.2, pitch_deg=-15.0))
+    path = _write(tmp_path / "close.txt", liberty_lines(close, scale=100.0, counter=False,
+                                                        quaternion=True))
+    with pytest.warns(UserWarning, match=r"unit is ambiguous: in 'in' .* 37\.4 mm .*'cm' 14\.7 mm"):
+        rec = read_polhemus(path)
+    assert rec.metadata["units"] == "in"  # the guess is wrong, and said to be a guess
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert read_polhemus(path, units="cm").metadata["units"] == "cm"
+
+
+def test_cm_at_the_typical_spacing_is_not_warned(tmp_path, finger_rec, liberty_lines):
+    path = _write(tmp_path / "dip.txt", liberty_lines(finger_rec, scale=100.0, counter=False,
+                                                      quaternion=True))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        rec = read_polhemus(path)  # 26 mm in cm (66 mm in inches): decided, no warning
+    assert rec.metadata["units"] == "cm"
