@@ -49,7 +49,7 @@ from ..db import pack_mask, unpack_mask
 from ..errors import EstimationError, InvalidInputError
 from ..models import HandShape
 from ..render import CameraMount, as_mount, preprocess
-from ._hand import MIN_HAND_COVERAGE
+from ._hand import MIN_HAND_COVERAGE, no_hand_error
 
 __all__ = ["MIN_OPEN_IOU", "Calibration", "FrameSelection", "reference_silhouette",
            "select_shape_from_frame"]
@@ -251,9 +251,7 @@ def select_shape_from_frame(open_frame, *, mount: CameraMount | None = None,
         raise InvalidInputError(f"shapes must be a non-empty sequence of HandShape, got {shapes!r}")
     user = preprocess(open_frame, mount, side=side, min_coverage=MIN_HAND_COVERAGE)
     if not user.any():
-        raise InvalidInputError(f"open_frame shows no hand: nothing stands out, or what does "
-                                f"covers less than {100 * MIN_HAND_COVERAGE:g} % of the view "
-                                "(MIN_HAND_COVERAGE)")
+        raise no_hand_error("open_frame")
     h, w = np.shape(open_frame)[:2]
     sils = _open_hand_silhouettes(tuple(cands), mount, side, w, h)
     inter = (sils & user[None]).sum(axis=(1, 2))

@@ -34,7 +34,7 @@ from ..errors import DatabaseError, InvalidInputError
 from ..models import JOINT_NAMES, HandMeasurements, HandShape
 from ..render import CameraMount, as_mount, check_frame, preprocess
 from ._calibration import Calibration, reference_silhouette, select_shape_from_frame
-from ._hand import MIN_HAND_COVERAGE
+from ._hand import MIN_HAND_COVERAGE, no_hand_error
 from ._masked import masked_band_areas, masked_search
 from ._search import SearchOptions, SearchTables, search
 from ._selection import SelectionOptions, select_shape
@@ -47,12 +47,6 @@ FRAME_RATIO_TOLERANCE = 0.01
 
 #: Who needs the device's view, in :func:`check_frame_ratio`'s message for a lookup.
 _LOOKUP_VIEW = "this lookup's database holds"
-
-
-def _no_open_hand(min_coverage: float) -> InvalidInputError:
-    """The error for a calibration frame that shows no hand (:meth:`PoseLookup.calibrated`)."""
-    return InvalidInputError(f"open_frame shows no hand: nothing stands out, or what does covers "
-                             f"less than {100 * min_coverage:g} % of the view (MIN_HAND_COVERAGE)")
 
 
 def check_frame_ratio(frame, mount: CameraMount, *, view: str) -> np.ndarray:
@@ -349,7 +343,7 @@ class PoseLookup:
         _refuse_for_calibration(approximate=self.approximate, **self._requested)
         user = self.silhouette(open_frame)
         if not user.any():
-            raise _no_open_hand(MIN_HAND_COVERAGE)
+            raise no_hand_error("open_frame")
         reference = reference_silhouette(self.database)
         out = copy.copy(self)
         out._last = -1
@@ -563,9 +557,7 @@ class PoseLookup:
         build = check_options(build, BuildOptions, name="build")
         mount = as_mount(mount)
         check_frame_ratio(open_frame, mount, view=_LOOKUP_VIEW)
-        if not preprocess(open_frame, mount, side=build.side,
-                          min_coverage=MIN_HAND_COVERAGE).any():  # as calibrated() reads it
-            raise _no_open_hand(MIN_HAND_COVERAGE)
+        # refuses a frame that shows no hand (a speck) before anything is built
         chosen = select_shape_from_frame(open_frame, mount=mount, side=build.side,
                                          shapes=shapes).shape
         chosen = HandShape.from_name(chosen.name)  # the ratios its file name gives
