@@ -16,7 +16,7 @@ import numpy as np
 
 from .errors import HandsynthError, InvalidInputError
 
-__all__ = ["SIDES", "check_instance", "check_integer", "check_number", "check_options",
+__all__ = ["SIDES", "check_array", "check_instance", "check_integer", "check_number", "check_options",
            "check_path", "check_path_names", "check_side", "is_number", "short_repr"]
 
 _T = TypeVar("_T")
@@ -311,3 +311,46 @@ def check_path(value: Any, name: str, *, kind: str = "file",
         raise error(f"{name} must be a {kind} name (str or path), got {got}")
     check_path_names([(name, value)], kind=kind, error=error)
     return Path(value)
+
+
+def check_array(value: Any, name: str, shape: tuple[int | None, ...], *,
+                min_rows: int = 1, rows: str = "rows") -> np.ndarray:
+    """A finite float64 array of `shape` (``None``: any length along that axis).
+
+    Parameters
+    ----------
+    value : array_like
+    name : str
+        Name of the argument, for the message.
+    shape : tuple of int or None
+        Expected shape (at least one axis); ``None`` for any length.
+    min_rows : int
+        Fewest rows (length of the first axis) accepted.
+    rows : str
+        What a row is, for the message (``"frames"``).
+
+    Raises
+    ------
+    InvalidInputError
+        If `value` is not numeric, has another shape or fewer rows, or holds
+        NaN or inf (naming the first rows that do).
+    """
+    want = "(" + ", ".join("n" if s is None else str(s) for s in shape) + ")"
+    try:
+        a = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InvalidInputError(
+            f"{name}: expected a numeric array of shape {want}, got {type(value).__name__}"
+        ) from None
+    if a.ndim != len(shape) or any(s is not None and s != d for s, d in zip(shape, a.shape)):
+        raise InvalidInputError(f"{name}: expected shape {want}, got {a.shape}")
+    if a.shape[0] < min_rows:
+        raise InvalidInputError(f"{name}: expected at least {min_rows} {rows}, got {a.shape[0]}")
+    bad = ~np.isfinite(a).all(axis=tuple(range(1, a.ndim)))
+    if bad.any():
+        where = np.flatnonzero(bad)
+        raise InvalidInputError(
+            f"{name}: {where.size} of {a.shape[0]} {rows} contain NaN or inf "
+            f"(first {rows} {where[:5].tolist()})"
+        )
+    return a

@@ -53,7 +53,8 @@ def _add_limits(hands: int, mount: CameraMount) -> None:
                                                  side="right")
             ls = sets[data]
             z = _inputs(ls.grids, ls.rest_grids[ls.hand] if opts.use_rest else None)
-            norms = _left_out_norms(z, est._a["mean"], est._a["components"])
+            centred = z - est._a["mean"]
+            norms = _left_out_norms(centred, centred @ est._a["components"])
             limit = np.array(np.quantile(norms, _NOVELTY_QUANTILE), np.float32)
             limit.setflags(write=False)
             est._a["novelty_limit"] = limit

@@ -75,6 +75,7 @@ from pathlib import Path
 import numpy as np
 
 from .._checks import (
+    check_array,
     check_instance,
     check_integer,
     check_number,
@@ -343,16 +344,16 @@ class _Rows:
 _NOVELTY_QUANTILE = 0.99
 
 
-def _left_out_norms(x: np.ndarray, mean: np.ndarray, components: np.ndarray) -> np.ndarray:
-    """Norm (N,) of the part of inputs `x` (N, D) that the principal `components` leave out.
+def _left_out_norms(centred: np.ndarray, codes: np.ndarray) -> np.ndarray:
+    """Norm (N,) of the part of inputs that their principal components leave out.
 
-    ``sqrt(|x - mean|^2 - |(x - mean) components|^2)``: the distance from each
-    input to the subspace the components span through `mean` (the components
-    are orthonormal columns, :func:`_pca`).
+    ``sqrt(|x - mean|^2 - |codes|^2)`` with ``centred = x - mean`` (N, D) and
+    ``codes = centred @ components`` (N, k): the distance from each input to
+    the subspace the components span through the mean (the components are
+    orthonormal columns, :func:`_pca`).
     """
-    d = np.asarray(x, np.float32) - mean
-    c = d @ components
-    return np.sqrt(np.maximum(np.einsum("ij,ij->i", d, d) - np.einsum("ij,ij->i", c, c), 0.0))
+    return np.sqrt(np.maximum(np.einsum("ij,ij->i", centred, centred)
+                              - np.einsum("ij,ij->i", codes, codes), 0.0))
 
 
 def _pca(z: _Rows, k: int, rng: np.random.Generator, sample: int = 20000, *,
@@ -496,34 +497,17 @@ def local_linear(x: np.ndarray, y: np.ndarray, w: np.ndarray, *, ridge: float) -
     Raises
     ------
     InvalidInputError
-        `x`, `y` or `w` not finite real arrays of those shapes with one `k`,
-        a weight <= 0, or `ridge` not a finite number >= 0 (naming it).
+        `x`, `y` or `w` not finite real arrays of those shapes with one
+        `k` >= 1, a weight <= 0, or `ridge` not a finite number >= 0 (naming
+        it).
     """
-    x = _as_real(x, "x", ndim=2)
-    y = _as_real(y, "y", ndim=2)
-    w = _as_real(w, "w", ndim=1)
-    if not len(x) == len(y) == len(w) or len(x) == 0:
-        raise InvalidInputError(f"x, y and w must hold the same number k >= 1 of neighbours, got "
-                                f"shapes {x.shape}, {y.shape} and {w.shape}")
+    x = check_array(x, "x", (None, None), rows="neighbours")
+    y = check_array(y, "y", (len(x), None), rows="neighbours")
+    w = check_array(w, "w", (len(x),), rows="neighbours")
     if (w <= 0).any():
         raise InvalidInputError(f"w must be weights > 0, got {float(w.min())!r} at "
                                 f"neighbour {int(np.argmin(w))}")
     return _local_linear(x, y, w, ridge=check_number(ridge, "ridge", minimum=0))
-
-
-def _as_real(a, name: str, *, ndim: int) -> np.ndarray:
-    """`a` as a finite float64 array of `ndim` dimensions, or InvalidInputError naming `name`."""
-    try:
-        arr = np.asarray(a)
-    except (TypeError, ValueError):
-        arr = None
-    if arr is None or arr.dtype.kind not in "biuf" or arr.ndim != ndim:
-        raise InvalidInputError(f"{name} must be a {ndim}-D array of real numbers, got "
-                                f"{short_repr(a)}")
-    arr = arr.astype(np.float64)
-    if not np.isfinite(arr).all():
-        raise InvalidInputError(f"{name} must be finite, got NaN or infinity")
-    return arr
 
 
 def _local_linear(x: np.ndarray, y: np.ndarray, w: np.ndarray, *, ridge: float) -> np.ndarray:
@@ -1256,8 +1240,9 @@ def _fit(z: _Rows, y: np.ndarray, opts: LearnedOptions, rng: np.random.Generator
     codes = np.empty((len(z), comps.shape[1]), np.float32)
     left_out = np.empty(len(z), np.float32)
     for sl, x in z.blocks(block):
-        codes[sl] = (x - mean) @ comps
-        left_out[sl] = _left_out_norms(x, mean, comps)
+        centred = x - mean
+        codes[sl] = centred @ comps
+        left_out[sl] = _left_out_norms(centred, codes[sl])
     y = np.asarray(y, np.float32)
     arrays: dict = {"mean": mean, "components": comps, "scale": scale,
                     "novelty_limit": np.array(np.quantile(left_out, _NOVELTY_QUANTILE), np.float32)}

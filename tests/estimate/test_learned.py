@@ -195,14 +195,16 @@ def test_a_perceptron_flags_frames_whose_input_its_components_leave_out(data, ki
     limit = float(est._a["novelty_limit"])
     # the limit is the 99th percentile of what the components leave out of the learning inputs
     z = _inputs(data.grids, data.rest_grids[data.hand])
-    norms = _left_out_norms(z, est._a["mean"], est._a["components"])
+    centred = z - est._a["mean"]
+    norms = _left_out_norms(centred, centred @ est._a["components"])
     assert limit == pytest.approx(float(np.quantile(norms, 0.99)), rel=1e-5)
     assert 0 < limit < norms.max() + 1e-6
     rest = _rest_mask(data, 0)
     cal = est.calibrated(rest)
     frames = _frames(data, np.flatnonzero(data.hand == 0))
     ins = _inputs(np.stack([cal.grid(f).ravel() for f in frames]), cal.grid(rest).ravel()[None])
-    left_out = _left_out_norms(ins, est._a["mean"], est._a["components"])
+    centred = ins - est._a["mean"]
+    left_out = _left_out_norms(centred, centred @ est._a["components"])
     got = [cal.estimate(f) for f in frames]
     assert [g.low_confidence for g in got] == list(left_out > limit)
     if kind == "mlp":  # its error is what the components leave out
@@ -760,13 +762,20 @@ def test_a_speck_is_no_hand_and_no_rest_frame(data):
 
 
 @pytest.mark.parametrize("args, words", [
-    (dict(x=np.zeros((3, 2)), y=np.zeros((4, 1)), w=np.ones(3)), r"same number k >= 1"),
-    (dict(x=np.zeros((0, 2)), y=np.zeros((0, 1)), w=np.ones(0)), r"same number k >= 1"),
-    (dict(x=np.zeros(3), y=np.zeros((3, 1)), w=np.ones(3)), r"x must be a 2-D array"),
-    (dict(x=np.zeros((3, 2)), y="abc", w=np.ones(3)), r"y must be a 2-D array"),
+    (dict(x=np.zeros((3, 2)), y=np.zeros((4, 1)), w=np.ones(3)),
+     r"y: expected shape \(3, n\), got \(4, 1\)"),
+    (dict(x=np.zeros((3, 2)), y=np.zeros((3, 1)), w=np.ones(4)),
+     r"w: expected shape \(3\), got \(4,\)"),
+    (dict(x=np.zeros((0, 2)), y=np.zeros((0, 1)), w=np.ones(0)),
+     r"x: expected at least 1 neighbours, got 0"),
+    (dict(x=np.zeros(3), y=np.zeros((3, 1)), w=np.ones(3)),
+     r"x: expected shape \(n, n\), got \(3,\)"),
+    (dict(x=np.zeros((3, 2)), y="abc", w=np.ones(3)),
+     r"y: expected a numeric array of shape \(3, n\), got str"),
     (dict(x=np.zeros((3, 2)), y=np.zeros((3, 1)), w=np.array([1.0, 0.0, 1.0])),
      r"w must be weights > 0, got 0.0 at neighbour 1"),
-    (dict(x=np.full((3, 2), np.nan), y=np.zeros((3, 1)), w=np.ones(3)), r"x must be finite"),
+    (dict(x=np.full((3, 2), np.nan), y=np.zeros((3, 1)), w=np.ones(3)),
+     r"x: 3 of 3 neighbours contain NaN or inf"),
 ])
 def test_local_linear_refuses_arrays_that_do_not_fit_by_name(args, words):
     with pytest.raises(InvalidInputError, match=words):
