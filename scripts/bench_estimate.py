@@ -35,7 +35,8 @@ background (BGR uint8); ``--scene paper`` times paper-protocol poses instead,
 the searches might find slower; the rest frame over one too, so the default
 ``segment="auto"`` tells the hand by the skin's colour, and the parts show
 :func:`handsynth.render.skin_mask` instead of Otsu's threshold).  It is calibrated to each hand's rest frame
-once, not timed.  It also prints the median cost of its parts: binarizing (Otsu),
+once, not timed.  It also prints the median cost of its parts: the lens correction of
+``--intrinsics`` (a wide-angle camera's calibration; not in the frame's time above), binarizing (Otsu),
 the coverage grid (wrist cut, cell averages, made once for every member) and
 each member's estimate from the grid, and how long the estimator took to be
 ready (read from ``FOLDER``, including its search indices; or learnt there
@@ -111,7 +112,7 @@ def _bench_learned(args) -> None:
         paper_protocol_poses,
         relaxed_rest_posture,
     )
-    from handsynth.render import CameraMount, binarize, coverage
+    from handsynth.render import CameraIntrinsics, CameraMount, LensCorrection, binarize, coverage
     from handsynth.testhands import TEST_HANDS, MeshHandRenderer, shipped_hand_path
 
     mount = CameraMount.paper()
@@ -182,7 +183,13 @@ def _bench_learned(args) -> None:
                                                                    frames, n)}
     else:
         told = {"binarize (Otsu) of the BGR frame": _median_ms(binarize, frames, n)}
+    # a wide-angle board camera's calibration (about 100 deg, barrel distortion): the cost of
+    # --intrinsics, paid before every other part
+    lens = LensCorrection(CameraIntrinsics(720, 480, 302.0, 301.0, 367.0, 233.0,
+                                           distortion=(-0.30, 0.09, 0.001, -0.0008, -0.012)),
+                          mount)
     parts = {
+        "lens correction (--intrinsics: remap of the BGR frame)": _median_ms(lens, frames, n),
         **told,
         "coverage grid (wrist cut, cell means)": _median_ms(lambda m: coverage(m, mount), masks, n),
     }

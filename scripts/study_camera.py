@@ -16,6 +16,7 @@ Usage::
     python scripts/study_camera.py --cache DIR skin
     python scripts/study_camera.py --cache DIR skin_lit
     python scripts/study_camera.py --cache DIR [--kind perceptrons] novelty
+    python scripts/study_camera.py --cache DIR [--kind perceptrons] lens
 
 ``backgrounds``
     Two held-out model hands (seed 3, 1.5 times the learning spread) and the
@@ -185,6 +186,22 @@ Usage::
     300 columns grey, and a natural frame of the hand shifted 60 and 120 px
     sideways and turned upside down; per kind the share flagged.  Last line:
     ``hands_flagged_dark=<share> hands_flagged_photo=<share> nonhand_flagged=<share>``.
+``lens``
+    Real cameras at the device's place (same optical centre and axis):
+    the device's lens with mild barrel distortion, wide-angle 3:2 and 4:3
+    board cameras with strong barrel distortion and an off-centre principal
+    point, a 16:9 fisheye (equidistant model) and a narrow 16:9 webcam
+    (about 78 deg).  Each camera's frames are made from a 150-deg pinhole
+    render (2400x2400) sampled along each of its pixels' rays (OpenCV's
+    ``undistortPoints``, the inverse of its forward model), then given to
+    the estimator as :class:`~handsynth.render.LensCorrection` corrects
+    them (``--intrinsics``) and as a user without the calibration would
+    (the middle cut to 3:2, resized to 720x480), beside the device's own
+    renders.  The three glTF hands and two held-out model hands (seed 3), a
+    relaxed rest each (seed 8), 60 paper and 60 natural frames each, skin on
+    a dark ground; the rest frame through the same camera.  Per view the
+    finger flexion MAE beside the constant and the share flagged
+    ``low_confidence``.  Last line: ``<view>_<set>=<mae> ...``.
 
 The learnt estimator is read from ``--cache`` (or learnt there first).
 """
@@ -925,6 +942,124 @@ def novelty(cache, kind: str = "ensemble") -> None:
           f"nonhand_flagged={np.mean([np.mean(v) for v in odd.values()]):.3f}")
 
 
+#: ``lens``: real cameras at the device's place (name: matrix, distortion, model, frame size)
+_LENS_CAMERAS = {
+    "device lens, mild barrel": ([[360.0, 0, 365.5], [0, 360.0, 235.5]], (-0.12, 0.02, 0, 0, 0),
+                                 "pinhole", (720, 480)),
+    "wide 3:2 board camera": ([[302.0, 0, 367.0], [0, 301.0, 233.0]],
+                              (-0.30, 0.09, 0.001, -0.0008, -0.012), "pinhole", (720, 480)),
+    "wide 4:3 board camera": ([[270.0, 0, 325.0], [0, 270.0, 236.0]],
+                              (-0.28, 0.08, 0.001, -0.0008, -0.01), "pinhole", (640, 480)),
+    "fisheye 16:9": ([[420.0, 0, 645.0], [0, 420.0, 355.0]], (0.05, -0.01, 0.003, -0.0005),
+                     "fisheye", (1280, 720)),
+    "narrow 16:9 webcam": ([[395.0, 0, 319.5], [0, 395.0, 179.5]], (-0.05, 0.0, 0, 0, 0),
+                           "pinhole", (640, 360)),
+}
+
+
+def _camera_maps(intr, wide: CameraMount) -> tuple[np.ndarray, np.ndarray]:
+    """For each pixel of the real camera, where its ray meets a render of the `wide` mount.
+
+    Through OpenCV's ``undistortPoints`` / ``fisheye.undistortPoints`` (the inverse of the
+    camera's forward model), not the inverse map :class:`LensCorrection` builds."""
+    import cv2
+
+    w, h = intr.width_px, intr.height_px
+    u, v = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
+    pts = np.column_stack([u.ravel(), v.ravel()])[:, None, :]
+    d = np.asarray(intr.distortion, np.float64)
+    if intr.model == "fisheye":
+        rays = cv2.fisheye.undistortPoints(pts, intr.matrix(), d)
+    else:
+        rays = cv2.undistortPoints(pts, intr.matrix(), d, R=None, P=None,
+                                   criteria=(cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 40,
+                                             1e-9))
+    kw = wide.intrinsics()
+    mx = (rays[:, 0, 0] * kw[0, 0] + kw[0, 2]).reshape(h, w).astype(np.float32)
+    my = (rays[:, 0, 1] * kw[1, 1] + kw[1, 2]).reshape(h, w).astype(np.float32)
+    return mx, my
+
+
+def _as_device_ratio(frame: np.ndarray) -> np.ndarray:
+    """What a user without the calibration gives: the middle cut to 3:2, resized to 720x480."""
+    import cv2
+
+    h, w = frame.shape[:2]
+    if w * 2 > h * 3:
+        c = (w - h * 3 // 2) // 2
+        frame = frame[:, c:c + h * 3 // 2]
+    elif w * 2 < h * 3:
+        c = (h - w * 2 // 3) // 2
+        frame = frame[c:c + w * 2 // 3]
+    return cv2.resize(frame, (720, 480), interpolation=cv2.INTER_AREA)
+
+
+def lens(cache, kind: str = "ensemble") -> None:
+    import cv2
+
+    from handsynth.estimate import LEARNED_ENSEMBLES, learned_ensemble
+    from handsynth.eval import paper_protocol_poses
+    from handsynth.render import CameraIntrinsics, LensCorrection
+    from handsynth.testhands import TEST_HANDS
+
+    mount = CameraMount.paper()
+    wide = mount.replace(fov_deg=150.0, width_px=2400, height_px=2400)
+    ens = learned_ensemble(cache, members=LEARNED_ENSEMBLES[kind], mount=mount)
+    cams = {}
+    for name, (k, dist, model, (w, h)) in _LENS_CAMERAS.items():
+        intr = CameraIntrinsics(w, h, k[0][0], k[1][1], k[0][2], k[1][2], distortion=dist,
+                                model=model)
+        cams[name] = (LensCorrection(intr, mount), _camera_maps(intr, wide))
+        print(f"{name}: {w}x{h}, about {intr.fov_deg:.0f} deg without distortion, device view "
+              f"unseen {cams[name][0].unseen_share:.1%}", flush=True)
+    rng = np.random.default_rng(8)
+    err: dict = {}
+    names = sorted(TEST_HANDS)
+    for device_hand, wide_hand in zip(mesh_test_hands(names, mount=mount) +
+                                      model_test_hands(2, seed=3, mount=mount),
+                                      mesh_test_hands(names, mount=wide) +
+                                      model_test_hands(2, seed=3, mount=wide)):
+        rest = relaxed_rest_posture(rng)
+        sets = {"paper": paper_protocol_poses(rest, 60, rng)[0],
+                "natural": natural_test_poses(rest, 60, rng)[0]}
+        made = device_hand.make()
+        device = {k: [_painted(m, lambda i: np.full((480, 720, 3), 20, np.uint8), 0)
+                      for m in made.masks(np.vstack([rest[None], p]))] for k, p in sets.items()}
+        made.close()
+        made = wide_hand.make()
+        big = {k: [m.view(np.uint8) * np.uint8(255) for m in made.masks(np.vstack([rest[None], p]))]
+               for k, p in sets.items()}
+        made.close()
+        views = {"device's own view": lambda f: f}
+        for k, poses in sets.items():
+            frames = {"device's own view": device[k]}
+            for name, (corr, (mx, my)) in cams.items():
+                real = [_painted(cv2.remap(b, mx, my, cv2.INTER_LINEAR) > 127,
+                                 lambda i, s=(mx.shape + (3,)): np.full(s, 20, np.uint8), 0)
+                        for b in big[k]]
+                frames[f"{name}, corrected"] = [corr(f) for f in real]
+                frames[f"{name}, as given"] = [_as_device_ratio(f) for f in real]
+            for cond, fr in frames.items():
+                cal = ens.calibrated(fr[0])
+                got = [cal.estimate(f) for f in fr[1:]]
+                e = np.abs(np.stack([g.angles for g in got])[:, _FLEX] - poses[:, _FLEX]).mean(1)
+                low = np.array([g.low_confidence for g in got])
+                err.setdefault((cond, k), []).append((e, low, np.abs(poses[:, _FLEX]).mean(1)))
+        del views
+        print(f"{device_hand.name} done", flush=True)
+    print(f"\n{kind}; finger flexion MAE (deg) over {len(names)} glTF hands and 2 model hands, "
+          "relaxed rests, 60 frames each; share flagged low_confidence")
+    summary = []
+    for cond in dict.fromkeys(c for c, _ in err):
+        line = f"{cond:42s}"
+        for k in ("paper", "natural"):
+            e, low, const = (np.concatenate(x) for x in zip(*err[(cond, k)]))
+            line += f"  {k} {e.mean():6.2f} ({low.mean():4.0%} flagged; constant {const.mean():5.2f})"
+            summary.append(f"{cond.replace(' ', '_').replace(',', '')}_{k}={e.mean():.2f}")
+        print(line)
+    print(" ".join(summary))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cache", default=None, help="folder of the learnt estimator")
@@ -940,10 +1075,10 @@ def main() -> None:
                     choices=["height_mm", "thumb_offset_mm", "along_mm", "tilt_deg", "roll_deg"],
                     help="moved: slip along this field of MountVariation alone")
     ap.add_argument("--kind", choices=["ensemble", "perceptrons"], default="ensemble",
-                    help="novelty: the default ensemble or its perceptrons alone")
+                    help="novelty, lens: the default ensemble or its perceptrons alone")
     ap.add_argument("study", choices=["backgrounds", "jitter", "holds", "observability", "bound",
                                       "bound_mcp", "rests", "moved", "imaging", "mounts", "sizes",
-                                      "skin", "skin_lit", "novelty"])
+                                      "skin", "skin_lit", "novelty", "lens"])
     args = ap.parse_args()
     if args.study not in ("observability", "bound_mcp", "moved") and args.cache is None:
         ap.error(f"{args.study} needs --cache DIR")
@@ -956,7 +1091,8 @@ def main() -> None:
                "imaging": lambda: imaging(args.cache, args.segment),
                "mounts": lambda: mounts(args.cache), "sizes": lambda: sizes(args.cache),
                "skin": lambda: skin(args.cache), "skin_lit": lambda: skin_lit(args.cache),
-               "novelty": lambda: novelty(args.cache, args.kind)}
+               "novelty": lambda: novelty(args.cache, args.kind),
+               "lens": lambda: lens(args.cache, args.kind)}
     studies[args.study]()
 
 

@@ -286,6 +286,39 @@ def _open_learned(cache, kind, hands, rest, smoothing, side, err):
     return est
 
 
+def _read_intrinsics(path):
+    """``--intrinsics``: the camera's calibration, or None."""
+    if path is None:
+        return None
+    from ..render import read_intrinsics
+
+    return read_intrinsics(path)
+
+
+def _corrected(source, open_image, optics, mount, path, image_name):
+    """The source and the calibration image through the camera's lens correction.
+
+    Says how much of the device's view the camera does not see (black, read as
+    background) when that is more than 1 %."""
+    from ..live import CorrectedSource
+    from ..render import LensCorrection
+
+    lens = LensCorrection(optics, mount)
+    if lens.unseen_share > 0.01:
+        fold = (f"; its lens model folds back beyond {lens.fold_deg:.0f} deg from the axis"
+                if lens.fold_deg is not None else "")
+        warnings.warn(f"--intrinsics {path}: the camera does not see {lens.unseen_share:.0%} "
+                      f"of the device's {mount.fov_deg:g} deg view (its own about "
+                      f"{optics.fov_deg:.0f} deg{fold}); that part reads as background",
+                      stacklevel=2)
+    if open_image is not None:
+        try:
+            open_image = lens(open_image)
+        except InvalidInputError as exc:
+            raise InvalidInputError(f"--calibrate-image {image_name}: {exc}") from None
+    return CorrectedSource(source, lens), open_image
+
+
 def _calibrate_learned(est, source, rest_image, mount, side, err, *, segment: str,
                        rest_name=None):
     """The learnt estimator calibrated to the hand at rest.
@@ -381,6 +414,12 @@ def _progress(stream):
 @click.option("--calibrate-image", default=None, metavar="FILE",
               help="Calibrate with this image of the open, flat hand through the device "
                    "instead of the first frame (implies --calibrate).")
+@click.option("--intrinsics", default=None, metavar="FILE",
+              help="The real camera's calibration (OpenCV FileStorage YAML/XML/JSON, ROS "
+                   "camera_info or a Kalibr camera chain): every frame, and --calibrate-image, "
+                   "is remapped to the device's pinhole view before the estimate (its lens "
+                   "distortion, focal length and principal point undone; "
+                   "docs/camera_estimator.md).")
 @click.option("--learned", is_flag=True,
               help="Use the estimator learnt from randomised model hands (beyond the paper; "
                    "docs/camera_estimator.md) instead of a database lookup, "
@@ -460,7 +499,8 @@ def _progress(stream):
               help="Stop when N consecutive reads give no usable frame.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress line.")
 def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, personal,
-             build_count, calibrate, calibrate_image, learned, learned_kind, learned_cache,
+             build_count, calibrate, calibrate_image, intrinsics, learned, learned_kind,
+             learned_cache,
              learned_hands, learned_rest, side, smoothing, segment, one_euro, frames, seconds, out, fmt,
              keypoints, video_out, synthetic_shape, synthetic_motion, synthetic_size, fps,
              no_temporal, max_dead, quiet) -> None:
@@ -495,8 +535,8 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
         raise InvalidInputError("give exactly one source: --camera INDEX, --video FILE or "
                                 f"--synthetic (got {', '.join(chosen) or 'none'})")
     check_path_names((("--video", video_in), ("--measurements", measurements),
-                      ("--calibrate-image", calibrate_image), ("--out", out),
-                      ("--video-out", video_out)))
+                      ("--calibrate-image", calibrate_image), ("--intrinsics", intrinsics),
+                      ("--out", out), ("--video-out", video_out)))
     _check_limits(frames, seconds, max_dead, fps)
     to_stdout = out == "-"
     info_err = to_stdout  # keep standard output for the rows
@@ -524,7 +564,11 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
     if one_euro and smoothing is not None:
         raise InvalidInputError("--one-euro and --smoothing are two ways to steady the angles; "
                                 "give one")
-    inputs = [p for p in (video_in, measurements, calibrate_image) if p is not None]
+    if intrinsics is not None and synthetic:
+        raise InvalidInputError("--intrinsics corrects a real camera's frames; --synthetic "
+                                "frames are already the device's view")
+    camera_optics = _read_intrinsics(intrinsics)
+    inputs = [p for p in (video_in, measurements, calibrate_image, intrinsics) if p is not None]
     size = _parse_size(synthetic_size, "--synthetic-size") if synthetic else None
     user_shape = _shape_option(synthetic_shape, "--synthetic-shape") if synthetic else None
     if synthetic and frames is None and seconds is None:
@@ -544,7 +588,9 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
     sink = None
     try:
         if camera is not None:
-            source, what = CameraSource(camera), f"camera {camera}"
+            asked = {} if camera_optics is None else {"width_px": camera_optics.width_px,
+                                                      "height_px": camera_optics.height_px}
+            source, what = CameraSource(camera, **asked), f"camera {camera}"
         elif video_in is not None:
             source, what = VideoSource(video_in), f"video {video_in}"
         lookup = None
@@ -566,6 +612,9 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
             what = f"synthetic hand {user_shape.name} ({synthetic_motion} poses)"
         # exactly one of --camera, --video and --synthetic was given (checked above)
         assert source is not None
+        if camera_optics is not None:
+            source, open_image = _corrected(source, open_image, camera_optics, mount,
+                                            intrinsics, calibrate_image)
         told = None
         try:
             if learned:

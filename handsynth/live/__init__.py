@@ -44,6 +44,7 @@ from ._loop import (
 )
 from ._sources import (
     CameraSource,
+    CorrectedSource,
     FrameSource,
     SyntheticMotion,
     SyntheticSource,
@@ -54,6 +55,7 @@ from ._writers import CsvRowWriter, JsonlRowWriter, live_columns, open_row_write
 
 __all__ = [
     "CameraSource",
+    "CorrectedSource",
     "CsvRowWriter",
     "FrameSource",
     "JsonlRowWriter",

@@ -21,7 +21,8 @@ if TYPE_CHECKING:
 
     from ..render import SilhouetteRenderer
 
-__all__ = ["CameraSource", "FrameSource", "SyntheticMotion", "SyntheticSource", "VideoSource"]
+__all__ = ["CameraSource", "CorrectedSource", "FrameSource", "SyntheticMotion", "SyntheticSource",
+           "VideoSource"]
 
 #: Named poses a ``SyntheticMotion(poses="named")`` cycles through.
 NAMED_CYCLE: tuple[str, ...] = ("open", "spread", "pinch", "grasp", "fist", "point")
@@ -322,6 +323,64 @@ class VideoSource(_Source):
         cap, self._cap = getattr(self, "_cap", None), None
         if cap is not None:
             cap.release()
+
+
+class CorrectedSource:
+    """Frames of another source through a real camera's lens correction.
+
+    Parameters
+    ----------
+    source : FrameSource
+        A camera or video of the real camera.
+    correction : handsynth.render.LensCorrection
+        Its calibration and the device's view
+        (:class:`~handsynth.render.LensCorrection`).
+
+    Notes
+    -----
+    ``read()`` gives the corrected frame (``None`` passes through);
+    ``ended``, ``timestamp_s``, ``fps`` and ``truth_deg`` are the source's.  A
+    frame the correction cannot take (a size of another width-to-height
+    ratio than the calibration's) raises :class:`InvalidInputError` naming
+    both sizes: every frame of a camera or video has the same size.  A
+    frame that is not an image passes unchanged, for the estimator to refuse
+    and the loop to count.
+    """
+
+    def __init__(self, source: FrameSource, correction) -> None:
+        from ..render import LensCorrection
+
+        if not callable(getattr(source, "read", None)):
+            raise InvalidInputError(f"source must have a read() method, got "
+                                    f"{type(source).__name__}")
+        self.source = source
+        self.correction = check_instance(correction, LensCorrection, name="correction")
+
+    def __getattr__(self, name: str):
+        if name in ("ended", "timestamp_s", "fps", "truth_deg"):
+            return getattr(self.source, name, None if name != "ended" else False)
+        raise AttributeError(name)
+
+    def read(self) -> np.ndarray | None:
+        from ..render import check_frame
+
+        frame = self.source.read()
+        if frame is None or (isinstance(frame, np.ndarray) and frame.size == 0):
+            return None
+        try:
+            check_frame(frame)
+        except InvalidInputError:
+            return frame  # not an image: the estimator refuses it and the loop counts it
+        return self.correction(frame)
+
+    def close(self) -> None:
+        self.source.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
 
 
 @dataclass(frozen=True)

@@ -9,13 +9,15 @@ Beyond the paper: :func:`coverage` (the fixed-frame grid of the learned
 estimator), :func:`fit_skin_colour` and :func:`skin_mask` (the hand told
 from an ordinary background by the colour of the user's skin) and
 :class:`VariedRasterizer` with :class:`HandVariation` and :class:`MountVariation`
-(model hands beyond the four ratios, a moved device).
+(model hands beyond the four ratios, a moved device), and :class:`LensCorrection`
+with :func:`read_intrinsics` (a real camera's frames remapped to the device's pinhole view).
 """
 
 from .._gl import backend, ensure_backend
 from ._camera import CameraMount, as_mount
 from ._coverage import DEFAULT_CELLS, coverage
 from ._io import read_image, write_png
+from ._lens import CameraIntrinsics, LensCorrection, read_intrinsics
 from ._masks import MaskMaker
 from ._preprocess import (
     MIN_CONTRAST,
@@ -50,9 +52,11 @@ __all__ = [
     "DEFAULT_CELLS",
     "MIN_CONTRAST",
     "WORK_WIDTH_PX",
+    "CameraIntrinsics",
     "CameraMount",
     "GLContextOwner",
     "HandVariation",
+    "LensCorrection",
     "MaskMaker",
     "MountVariation",
     "SilhouetteRasterizer",
@@ -76,6 +80,7 @@ __all__ = [
     "preprocess",
     "preprocess_reference",
     "read_image",
+    "read_intrinsics",
     "render_rgb",
     "scene_include_mjcf",
     "scene_mjcf",

@@ -971,3 +971,119 @@ def test_a_rest_frame_that_keeps_reading_as_no_hand_is_taken_after_a_second_with
             "read so) itself reads as unlike any hand learnt") in res.output
     _, rows = _read_csv(out)
     assert len(rows) == 2  # the frames after the one taken
+
+
+# --------------------------------------------------------------------------- a real camera's lens
+
+
+def _through_lens(masks, k, dist, size):
+    """BGR frames of a real camera with matrix `k`, Brown-Conrady `dist` and frame `size`,
+    at the device's place: each of its pixels samples a wide pinhole render along its own ray
+    (OpenCV's undistortPoints, not the correction's inverse map)."""
+    import cv2
+
+    wide = CameraMount().replace(fov_deg=140.0, width_px=900, height_px=900)
+    kw = wide.intrinsics()
+    w, h = size
+    u, v = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
+    rays = cv2.undistortPoints(np.column_stack([u.ravel(), v.ravel()])[:, None, :], k,
+                               np.asarray(dist, np.float64), R=None, P=None,
+                               criteria=(cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 40,
+                                         1e-9))
+    mx = (rays[:, 0, 0] * kw[0, 0] + kw[0, 2]).reshape(h, w).astype(np.float32)
+    my = (rays[:, 0, 1] * kw[1, 1] + kw[1, 2]).reshape(h, w).astype(np.float32)
+    with SilhouetteRenderer(HandShape(length=1.02, thumb=1.03), wide) as r:
+        big = [m.astype(np.uint8) * 255 for m in masks(r)]
+    return [_bgr(cv2.remap(b, mx, my, cv2.INTER_LINEAR) > 127) for b in big]
+
+
+def _intrinsics_file(path, k, dist, size):
+    import cv2
+
+    fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_WRITE)
+    fs.write("image_width", size[0])
+    fs.write("image_height", size[1])
+    fs.write("camera_matrix", k)
+    fs.write("distortion_coefficients", np.asarray(dist, np.float64).reshape(1, -1))
+    fs.release()
+    return path
+
+
+def _angles(path):
+    _, rows = _read_csv(path)
+    return np.array([[float(r[n]) for n in JOINT_NAMES] for r in rows])
+
+
+def test_a_wide_angle_cameras_video_reads_as_the_device_once_its_lens_is_undone(tmp_path):
+    # a 4:3 board camera of about 100 deg with barrel distortion, beside the device's own view
+    from handsynth.models import named_pose
+
+    poses = [np.zeros(20)] + [named_pose(n) for n in ("pinch", "grasp", "point", "spread",
+                                                       "fist")]
+    k = np.array([[240.0, 0, 243.0], [0, 240.0, 176.0], [0, 0, 1]])
+    dist = (-0.28, 0.08, 0.001, -0.0008, -0.01)
+    lens_frames = _through_lens(lambda r: r.masks(poses), k, dist, (480, 360))
+    with SilhouetteRenderer(HandShape(length=1.02, thumb=1.03), width_px=720,
+                            height_px=480) as r:
+        device_frames = [_bgr(m) for m in r.masks(poses)]
+    cam = _intrinsics_file(tmp_path / "camera.yaml", k, dist, (480, 360))
+    runs = {}
+    for name, frames, extra in (("device", device_frames, []),
+                                ("corrected", lens_frames, ["--intrinsics", str(cam)])):
+        video = _write_video(tmp_path / f"{name}.avi", frames)
+        out = tmp_path / f"{name}.csv"
+        res = _run("--video", str(video), *LEARNT, "--learned-cache", str(tmp_path / "c"),
+                   "--out", str(out), "-q", *extra)
+        assert res.exit_code == 0, res.output
+        assert "warning" not in res.output
+        runs[name] = _angles(out)
+    assert runs["corrected"].shape == (5, 20)
+    # the same camera's frames stretched to the device's ratio, as a user without the
+    # calibration would give them
+    import cv2
+
+    stretched = _write_video(tmp_path / "raw.avi", [cv2.resize(f, (720, 480)) for f in lens_frames])
+    res = _run("--video", str(stretched), *LEARNT, "--learned-cache", str(tmp_path / "c"),
+               "--out", str(tmp_path / "raw.csv"), "-q")
+    assert res.exit_code == 0, res.output
+    raw = _angles(tmp_path / "raw.csv")
+    off_corrected = np.abs(runs["corrected"] - runs["device"]).mean()
+    off_raw = np.abs(raw - runs["device"]).mean()
+    assert off_corrected < 2.0 and off_corrected < 0.4 * off_raw, (off_corrected, off_raw)
+    # without the calibration the 4:3 video is refused by its ratio, naming its size
+    res = _run("--video", str(tmp_path / "corrected.avi"), *LEARNT, "--learned-cache",
+               str(tmp_path / "c"), "-q")
+    assert res.exit_code != 0 and "480x360" in res.output
+
+
+def test_intrinsics_problems_are_one_line_before_any_work(tmp_path, hand_video):
+    bad = tmp_path / "camera.yaml"
+    bad.write_text("image_width: 640\nimage_height: 480\ndistortion_coefficients: []\n")
+    res = _run("--video", str(hand_video), *LEARNT, "--learned-cache", str(tmp_path / "c"),
+               "--intrinsics", str(bad), "-q")
+    assert res.exit_code == 2
+    assert res.output.strip().splitlines() == [
+        f"handsynth: error: camera intrinsics {bad}: no camera matrix (looked for camera_matrix, "
+        "cameramatrix, k, intrinsic_matrix, intrinsics; found image_width, image_height, "
+        "distortion_coefficients)"]
+    assert not (tmp_path / "c").exists()
+    res = _run("--synthetic", "--intrinsics", str(bad), *SMALL)
+    assert res.exit_code == 2 and "--synthetic frames are already the device's view" in res.output
+    # the video's frames (180x120) against a 4:3 calibration: both sizes named
+    cam = _intrinsics_file(tmp_path / "cam43.yaml", np.array([[300.0, 0, 320], [0, 300, 240],
+                                                              [0, 0, 1]]), (), (640, 480))
+    res = _run("--video", str(hand_video), *LEARNT, "--learned-cache", str(tmp_path / "c"),
+               "--intrinsics", str(cam), "-q")
+    assert res.exit_code != 0
+    assert "frames of 180x120 pixels cannot be corrected with intrinsics calibrated at 640x480" \
+        in res.output.strip().splitlines()[-1]
+
+
+def test_a_camera_narrower_than_the_device_is_warned_about(tmp_path, hand_video):
+    cam = _intrinsics_file(tmp_path / "narrow.yaml", np.array([[150.0, 0, 89.5], [0, 150, 59.5],
+                                                               [0, 0, 1]]), (), (180, 120))
+    res = _run("--video", str(hand_video), *LEARNT, "--learned-cache", str(tmp_path / "c"),
+               "--intrinsics", str(cam), "-q")
+    assert re.search(r"handsynth: warning: --intrinsics \S+narrow.yaml: the camera does not see "
+                     r"\d+% of the device's 90 deg view \(its own about 62 deg\)", res.output), \
+        res.output

@@ -739,3 +739,33 @@ def test_first_hand_frame_skips_the_frames_its_accept_refuses(lookup):
         first_hand_frame(_Frames([half] * 3), max_reads=2, accept=lambda f: False)
     with pytest.raises(InvalidInputError, match="accept must be a function"):
         first_hand_frame(_Frames([hand]), accept="yes")
+
+
+def test_a_corrected_source_is_the_same_run_through_the_lens(tmp_path, lookup):
+    # the device's own optics as the "real" camera: the correction changes nothing, so the
+    # run through CorrectedSource gives the plain run's rows, truth and timestamps included;
+    # the flaky camera's garbage still reaches the loop to be counted
+    from handsynth.live import CorrectedSource
+    from handsynth.render import CameraIntrinsics, LensCorrection
+
+    k = lookup.mount.intrinsics(W, H)
+    lens = LensCorrection(CameraIntrinsics(W, H, k[0, 0], k[1, 1], k[0, 2], k[1, 2]),
+                          lookup.mount.replace(width_px=W, height_px=H))
+    runs = []
+    for wrap in (False, True):
+        with _synthetic(lookup, frames=12) as src:
+            source = CorrectedSource(src, lens) if wrap else src
+            assert source.fps == 8.0 and source.truth_deg is None
+            summary = run_live(lookup, source, options=LiveOptions(max_frames=12))
+            runs.append((summary.mae_deg, summary.truth_frames, summary.frames))
+    assert runs[0] == runs[1] and runs[0][1] == 12
+    with _synthetic(lookup, frames=1) as src:
+        good = src.read()
+    cam = FlakyCamera(good)
+    s = run_live(lookup, CorrectedSource(cam, lens), options=LiveOptions(max_frames=10,
+                                                                         retry_delay_s=0))
+    assert (s.frames, s.dropped, s.invalid, s.no_hand) == (10, 4, 6, 2)
+    with pytest.raises(InvalidInputError, match="correction must be"):
+        CorrectedSource(cam, "lens.yaml")
+    with pytest.raises(InvalidInputError, match="read"):
+        CorrectedSource("camera", lens)
