@@ -67,8 +67,9 @@ PROTOCOL_DEFAULT = "standard,calibrated,fingers,fingers_mean,mlp,ensemble"
                    f"answer beside every figure. --conditions default: {PROTOCOL_DEFAULT}.")
 @click.option("--mesh", default="godot_xr_tools,mrtk", show_default=True,
               help="--protocol: glTF hands to test, comma-separated ('' for none): shipped "
-                   "ones by name (also webxr_generic), or .gltf/.glb files of right hands rigged "
-                   "with OpenXR or WebXR joint names (named by their file's stem).")
+                   "ones by name (also webxr_generic), or .gltf/.glb files of hands rigged "
+                   "with OpenXR, WebXR, Mixamo, Unity/VRM or MANO joint names, in metres "
+                   "(named by their file's stem).")
 @click.option("--mesh-scale", type=float, default=1.0, show_default=True, metavar="F",
               help="--protocol: the glTF hands made larger or smaller about the wrist by this "
                    "factor (0.5-2), for a hand of another size than the file's.")

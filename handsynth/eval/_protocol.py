@@ -230,9 +230,9 @@ def mesh_test_hands(names=None, *, mount: CameraMount | None = None,
         Each a key of :data:`handsynth.testhands.TEST_HANDS` (the hands
         shipped in :mod:`handsynth.testhands`; by default
         :data:`~handsynth.testhands.PROTOCOL_HANDS`) or the
-        path of a ``.gltf`` / ``.glb`` file of a right hand rigged with
-        OpenXR or WebXR joint names (:func:`handsynth.testhands.load_mesh_rig`), named
-        by its file's stem.
+        path of a ``.gltf`` / ``.glb`` file of a hand rigged with OpenXR,
+        WebXR, Mixamo, Unity or VRM humanoid or MANO joint names
+        (:func:`handsynth.testhands.load_mesh_rig`), named by its file's stem.
     mount : CameraMount, keyword-only, optional
         The paper's by default.
     scale : float, keyword-only

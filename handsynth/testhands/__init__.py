@@ -6,8 +6,8 @@ meet.  Three hands ship with the package, with their licences
 (:data:`TEST_HANDS`, :func:`shipped_hand_path`): the Godot XR Tools hand
 (CC0), the MRTK3 hand (BSD-3-Clause / MIT) and the WebXR generic hand (MIT);
 the protocol tests on the first two unless told otherwise
-(:data:`PROTOCOL_HANDS`).  Any rigged glTF 2.0 hand with OpenXR or WebXR
-joint names loads the same way (:func:`load_mesh_rig`).
+(:data:`PROTOCOL_HANDS`).  Any rigged glTF 2.0 hand whose joints are named as in OpenXR, WebXR, Mixamo,
+Unity or VRM humanoids or MANO loads the same way (:func:`load_mesh_rig`).
 """
 
 from ._gltf import (

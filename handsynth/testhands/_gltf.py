@@ -18,17 +18,51 @@ Method
    specification, Khronos): positions, triangles, ``JOINTS_0``/``WEIGHTS_0``,
    the skin's ``inverseBindMatrices`` and the node hierarchy.  The rest-pose
    vertices are the skinned vertices at the nodes' own transforms.
-2. *Bones*: nodes named ``<digit>_<bone>[_R|_L]`` with digit in thumb, index,
-   middle, ring, little and bone in metacarpal, proximal, intermediate, distal,
-   tip (the OpenXR hand-joint naming), or their WebXR Hand Input spellings
-   (``index-finger-phalanx-proximal``, ``pinky-finger-tip``, ...), and
-   ``wrist``.  A node's origin is its joint centre.
+2. *Bones*: the skin's joints by their node names, in one of these namings
+   (case, the separators ``_ . -`` and space, an FBX namespace such as
+   ``mixamorig:`` or ``mixamorig1:`` and a side marker aside: a ``Right`` /
+   ``Left`` prefix, an ``_R`` / ``_L`` / ``.R`` / ``_r`` ... suffix or an
+   ``r_`` / ``l_`` prefix):
+
+   - OpenXR: ``<digit>_<bone>`` with digit in thumb, index, middle, ring,
+     little (or pinky) and bone in metacarpal, proximal, intermediate,
+     distal, tip, their WebXR Hand Input spellings
+     (``index-finger-phalanx-proximal``, ``pinky-finger-tip``) and ``wrist``;
+   - Mixamo and FBX humanoids: ``mixamorig:RightHand`` (the wrist),
+     ``RightHandThumb1`` to ``4`` (CMC, MCP, IP, tip), ``RightHandIndex1``
+     to ``4`` (MCP, PIP, DIP, tip), ``Middle``, ``Ring``, ``Pinky``;
+   - Unity and VRM humanoids: ``RightHand``, ``RightIndexProximal``,
+     ``Intermediate``, ``Distal`` ... ``RightLittle...``; the thumb's
+     ``Proximal``, ``Intermediate``, ``Distal`` (Unity, VRM 0) are its CMC,
+     MCP and IP joints, VRM 1.0's ``rightThumbMetacarpal``, ``Proximal``,
+     ``Distal`` are named as in OpenXR;
+   - MANO: ``wrist`` or ``root``, ``index1`` to ``3`` (MCP, PIP, DIP),
+     ``thumb1`` to ``3`` (CMC, MCP, IP), ``pinky`` or ``little``; Unreal's
+     ``index_01_r`` and Blender Rigify's ``DEF-f_index.01.R`` number the same
+     way.
+
+   The wrist is the joint named ``wrist``, else ``hand``, else ``root``; two
+   joints read as the same bone (a skin of both hands) are refused.  Nodes
+   one joint proximal of their OpenXR names, as in the MRTK hand, are read
+   one joint distal (:func:`_shifted_rig`).  A node's origin is its joint
+   centre.  The metacarpals of the fingers may be missing (they do not
+   move).  A fingertip may be a node that is no skin joint (named as a tip,
+   or the only childless child of the distal node, like an ``_end`` node) or
+   missing: then it is where the skin ends along the distal bone, the
+   farthest of the vertices mostly weighted to that bone along the direction
+   from its joint to their centroid.
 3. *Hand frame* (README "Conventions"): origin at the wrist node, +y toward
    the middle-finger MCP (the ``middle_proximal`` node), the palm plane
    through the index-to-little MCP line, +z out of the back of the hand (the
-   side away from which the rest-pose fingers curl), x = y cross z.  The mesh
-   keeps its own size (metres); :attr:`MeshHandRenderer.hand_length_mm`
-   reports it.
+   side away from which the rest-pose fingers curl), x = y cross z.  Where
+   the rest fingers are flat (a T-pose, MANO's zero pose) the side the node
+   names say decides instead (a right hand's thumb is on -x); flat fingers
+   without a side in the names, or names that say the other side than the
+   curl, are refused.  The mesh keeps its own size (metres);
+   :attr:`MeshHandRenderer.hand_length_mm` reports it.  A hand outside
+   100-300 mm from the wrist to the middle fingertip is refused, with the
+   unit its file is likely in (centimetres, millimetres, inches): it is not
+   rescaled.
 4. *Joint axes from the rest pose*: a finger's flexion axis is perpendicular
    to the finger's direction (MCP to tip node, in the palm plane) and to the
    palm normal.  The thumb's rest pose is nearly straight and pronated, so its
@@ -122,6 +156,11 @@ _THUMB_BONES = ("metacarpal", "proximal", "distal", "tip")
 _THUMB_NAIL_SIDE = np.array([-1.0, 0.0, 1.0]) / np.sqrt(2.0)
 
 _MIRROR = np.diag([-1.0, 1.0, 1.0])
+
+# wrist to the middle fingertip of a child's or an adult's hand, mm, and the units
+# (with their factor to metres) that a file outside it is likely in
+_HAND_LENGTH_MM = (100.0, 300.0)
+_UNITS = (("centimetres", 0.01), ("millimetres", 0.001), ("inches", 0.0254))
 
 # glTF 2.0 accessor component types and element sizes
 _COMPONENT = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16,
@@ -354,8 +393,10 @@ class MeshRig:
     bone_weight : ndarray, shape (V, 4), float64
         Skin weights, rows summing to 1.
     bone_names : tuple of str
-        ``"wrist"``, ``"<digit>_<bone>"`` as in the module docstring, or
-        ``"other:<node name>"`` for bones handsynth does not pose.
+        ``"wrist"``, ``"<digit>_<bone>"`` (OpenXR's names, whatever naming
+        the file used, module docstring), or ``"other:<node name>"`` for
+        bones handsynth does not pose.  A fingertip that is no skin joint is
+        appended and carries no weights.
     joints : dict of str to ndarray, shape (3,)
         Rest-pose joint centre of each named bone, hand frame.
     frames : dict of str to ndarray, shape (3, 3)
@@ -416,19 +457,67 @@ class MeshRig:
                        tip_mm={k: v * f for k, v in self.tip_mm.items()}, to_hand=to_hand)
 
 
-def _canonical_bone(name: str) -> str | None:
-    """``"wrist"``, ``"<digit>_<bone>"`` or None for a glTF node name."""
-    n = name.lower()
-    n = re.sub(r"([._\s-](r|l|right|left))$", "", n)
-    if n == "wrist":
-        return "wrist"
-    n = n.replace("pinky", "little")
-    # WebXR Hand Input names: index-finger-phalanx-proximal, thumb-phalanx-distal, ...
-    n = re.sub(r"[._\s-]finger(?=[._\s-])", "", n)
-    n = re.sub(r"phalanx[._\s-]", "", n)
-    m = re.fullmatch(r"(thumb|index|middle|ring|little)[._\s-]*"
-                     r"(metacarpal|proximal|intermediate|distal|tip)", n)
-    return f"{m.group(1)}_{m.group(2)}" if m else None
+# A side marker in a node name: RightHand / rightIndexProximal, index_proximal_R / hand.L,
+# r_index1 / L_hand.
+_SIDE_PATTERNS = (r"^(right|left)(?=.)", r"[._\s-](r|l|right|left)$", r"^(r|l)[._\s-]")
+# a digit joint once separators are removed: index_proximal, index-finger-phalanx-proximal,
+# IndexProximal, index1 / index_01, f_index.01 (Blender's Rigify)
+_DIGIT_JOINT = re.compile(r"f?(thumb|index|middle|ring|little)(?:finger)?(?:phalanx)?"
+                          r"(metacarpal|proximal|intermediate|distal|tip|0?[1-4])")
+# joints numbered from 1 (Mixamo, MANO, Unreal): the thumb's first is its CMC joint,
+# a finger's first its MCP joint; 4 is the tip
+_NUMBERED = {"thumb": _THUMB_BONES, **dict.fromkeys(FINGERS[1:], _FINGER_BONES[1:])}
+# the names of the wrist joint, in the order they are taken: Mixamo's and Unity's wrist
+# is their "hand", MANO's the "root" of its tree
+_WRIST_WORDS = ("wrist", "hand", "root")
+# the conventions read, for the message that refuses a rig
+_CONVENTIONS = ("OpenXR or WebXR (wrist, index_proximal_R, index-finger-phalanx-proximal), "
+                "Mixamo or FBX humanoid (mixamorig:RightHand, mixamorig:RightHandIndex1), "
+                "Unity or VRM humanoid (RightHand, RightIndexProximal, rightThumbMetacarpal), "
+                "MANO (wrist or root, index1, thumb1)")
+
+
+def _split_side(name: str) -> tuple[str, str | None]:
+    """A node name without its namespace and side marker, and the side it names.
+
+    ``mixamorig:RightHandIndex1`` gives ``("HandIndex1", "right")``; a name
+    without a side marker gives None.  The namespace is what precedes the last
+    colon (``mixamorig:``, ``mixamorig1:``) or a ``mixamorig_`` or ``DEF-`` prefix.
+    """
+    n = re.sub(r"^.*:", "", name.strip())
+    n = re.sub(r"^(mixamorig\d*_|def[-_.])", "", n, flags=re.IGNORECASE)
+    for pattern in _SIDE_PATTERNS:
+        m = re.search(pattern, n, flags=re.IGNORECASE)
+        if m:
+            side = "right" if m.group(1)[0] in "rR" else "left"
+            return n[:m.start()] + n[m.end():], side
+    return n, None
+
+
+def _parse_bone(name: str) -> tuple[str | None, str | None]:
+    """The canonical bone and the side that a glTF node name says (module docstring, step 2).
+
+    Returns
+    -------
+    bone : str or None
+        ``"<digit>_<bone>"``, one of :data:`_WRIST_WORDS` (:func:`_rig_names`
+        takes the first that names a joint as the wrist) or None.  The thumb
+        of Unity's humanoid reads as ``thumb_proximal`` /
+        ``thumb_intermediate`` / ``thumb_distal`` here; :func:`_rig_names`
+        moves it one joint proximal.
+    side : {"right", "left"} or None
+    """
+    core, side = _split_side(name)
+    n = re.sub(r"[._\s-]", "", core.lower()).replace("pinky", "little")
+    if n in _WRIST_WORDS:
+        return n, side
+    m = _DIGIT_JOINT.fullmatch(n.removeprefix("hand"))  # Mixamo: RightHandIndex1
+    if m is None:
+        return None, side
+    digit, bone = m.groups()
+    if bone[-1].isdigit():
+        bone = _NUMBERED[digit][int(bone) - 1]
+    return f"{digit}_{bone}", side
 
 
 def _shifted_rig(g: _Gltf, joints_nodes: list, names: list[str]
@@ -484,6 +573,191 @@ def _shifted_rig(g: _Gltf, joints_nodes: list, names: list[str]
     return out + [n for n, _ in extra], list(joints_nodes) + [i for _, i in extra]
 
 
+def _node_name(g: _Gltf, i: int) -> str:
+    return str(g.field("nodes", i).get("name", ""))
+
+
+def _rig_names(g: _Gltf, joints_nodes: list) -> tuple[list[str], list, str | None]:
+    """Canonical bone names of the skin's joints, and the side their names say.
+
+    Reads the names (:func:`_parse_bone`), the wrist as the joints named
+    ``wrist``, else ``hand``, else ``root``, a rig one joint proximal of its
+    names (:func:`_shifted_rig`) and the thumb of Unity's humanoid
+    (Proximal at the CMC joint, Intermediate at the MCP) where the thumb has
+    an intermediate bone and no metacarpal.  Joints handsynth does not know
+    read as ``"other:<node name>"``.
+
+    Returns
+    -------
+    names : list of str
+    joints_nodes : list of int
+        The skin's joints and any nodes appended for the names appended.
+    side : {"right", "left"} or None
+        The side the names say, None if none says one or they disagree.
+
+    Raises
+    ------
+    InvalidInputError
+        Two joints read as the same bone (a skin of both hands, say).
+    """
+    raw = [_node_name(g, n) for n in joints_nodes]
+    parsed = [_parse_bone(nm) for nm in raw]
+    names = [b if b is not None else f"other:{nm}" for (b, _), nm in zip(parsed, raw)]
+    word = next((w for w in _WRIST_WORDS if w in names), "wrist")
+    names = [("wrist" if n == word else f"other:{nm}") if n in _WRIST_WORDS else n
+             for n, nm in zip(names, raw)]
+    shifted = _shifted_rig(g, joints_nodes, names)
+    if shifted is not None:
+        names, joints_nodes = shifted
+    if "thumb_intermediate" in names and "thumb_metacarpal" not in names:
+        unity = {"thumb_proximal": "thumb_metacarpal", "thumb_intermediate": "thumb_proximal"}
+        names = [unity.get(n, n) for n in names]
+    seen: dict[str, int] = {}
+    for n, k in zip(names, joints_nodes):
+        if n in seen and not n.startswith("other:"):
+            raise InvalidInputError(
+                f"mesh hand {g.path}: the skin's nodes {_node_name(g, seen[n])!r} and "
+                f"{_node_name(g, k)!r} both read as the bone {n}; one hand in one naming is expected")
+        seen[n] = k
+    sides = {s for b, s in parsed if b is not None and s is not None}
+    return names, list(joints_nodes), sides.pop() if len(sides) == 1 else None
+
+
+def _tip_nodes(g: _Gltf, names: list[str], joints_nodes: list, side: str | None
+               ) -> tuple[list[str], list]:
+    """Append the fingertip nodes that are not joints of the skin.
+
+    A digit whose skin has no tip joint takes the one other node named as its
+    tip (on the same side, if named), else the only child of its distal node
+    that is not a skin joint and has no children, mesh or camera (an ``_end``
+    node of an exported armature).  A digit with neither keeps no tip node.
+    """
+    nodes = g.doc.get("nodes", [])
+    joints = set(joints_nodes)
+    named: dict[str, list[int]] = {}
+    for i, nd in enumerate(nodes):
+        if i not in joints and isinstance(nd, dict):
+            bone, s = _parse_bone(str(nd.get("name", "")))
+            if bone is not None and bone.endswith("_tip") and s in (None, side):
+                named.setdefault(bone, []).append(i)
+    names, joints_nodes = list(names), list(joints_nodes)
+    for digit in FINGERS:
+        tip = f"{digit}_tip"
+        if tip in names:
+            continue
+        found = named.get(tip, [])
+        if len(found) != 1:
+            distal = g.field("nodes", joints_nodes[names.index(f"{digit}_distal")])
+            found = [c for c in distal.get("children", []) if c not in joints
+                     and not {"children", "mesh", "camera", "skin"} & set(g.field("nodes", c))]
+        if len(found) == 1:
+            names.append(tip)
+            joints_nodes.append(found[0])
+    return names, joints_nodes
+
+
+def _bone_vertices(v: np.ndarray, dom: np.ndarray, k: int, where: str) -> np.ndarray:
+    """The vertices (n, 3) whose largest skin weight is on bone `k` (`dom`: that bone per vertex).
+
+    Raises
+    ------
+    InvalidInputError
+        None (`where` names the bone).
+    """
+    sel = v[dom == k]
+    if len(sel) == 0:
+        raise InvalidInputError(f"{where}: no vertex of the skin is mostly weighted to it, so "
+                                "the fingertip cannot be placed")
+    return sel
+
+
+def _skin_end(points: np.ndarray, origin: np.ndarray, direction: np.ndarray) -> float:
+    """How far the farthest of `points` lies from `origin` along unit `direction`."""
+    return float(((points - origin) @ direction).max())
+
+
+def _skin_tip(points: np.ndarray, distal: np.ndarray) -> np.ndarray:
+    """A fingertip where the skin ends along the distal bone, for a rig without a tip node.
+
+    `points` are the vertices mostly weighted to the distal bone whose joint
+    is at `distal`; the bone's direction is from its joint to their
+    centroid, the tip the farthest of them along it (:func:`_skin_end`).
+    """
+    ydir = _unit(points.mean(axis=0) - distal)
+    return distal + ydir * _skin_end(points, distal, ydir)
+
+
+def _check_hand_length(pos: dict, path: Path) -> None:
+    """Refuse a hand whose size says the file is not in metres.
+
+    Raises
+    ------
+    InvalidInputError
+        Wrist to middle fingertip outside :data:`_HAND_LENGTH_MM`, naming the
+        length and the unit that would make it a hand's.
+    """
+    length = float(np.linalg.norm(pos["middle_tip"] - pos["wrist"])) * 1e3
+    lo, hi = _HAND_LENGTH_MM
+    if lo <= length <= hi:
+        return
+    likely = [f"the file is likely in {unit} (that would make it {length * f:.0f} mm); export it "
+              f"in metres, as glTF requires, or give its root node the scale {f:g}"
+              for unit, f in _UNITS if lo <= length * f <= hi]
+    cause = likely[0] if likely else ("no common unit explains it; check the scale of the "
+                                      "nodes above the skeleton")
+    raise InvalidInputError(
+        f"mesh hand {path}: the hand is {length:.1f} mm from the wrist to the middle fingertip "
+        f"(the file's lengths read as metres), outside the {lo:.0f}-{hi:.0f} mm of a child's or "
+        f"an adult's hand; {cause}")
+
+
+def _hand_axes(pos: dict, named: str | None, path: Path) -> tuple[np.ndarray, str]:
+    """The hand frame's axes in scene coordinates, and the side of the hand in the file.
+
+    +y toward the middle MCP, the palm plane through the index-to-little
+    MCP line, +z away from the side toward which the rest-pose fingers curl
+    (module docstring, step 3).  A rig whose rest fingers are flat (mean curl
+    under 1 mm) takes the side its node names say (`named`): the thumb is on
+    the hand frame's -x side of a right hand.
+
+    Returns
+    -------
+    rot : ndarray, shape (3, 3)
+        Rows: the hand axes x, y, z.
+    side : {"right", "left"}
+
+    Raises
+    ------
+    InvalidInputError
+        Flat rest fingers and no side in the names, or a curl that makes the
+        hand the other side than its names say.
+    """
+    wrist = pos["wrist"]
+    y = _unit(pos["middle_proximal"] - wrist)
+    across = pos["little_proximal"] - pos["index_proximal"]
+    z = _unit(np.cross(across, y))
+    # the fingers of a relaxed rigged hand curl toward the palm: +z is dorsal
+    curl = np.mean([(pos[f"{f_}_tip"] - pos[f"{f_}_proximal"]) @ z for f_ in FINGERS[1:]])
+    flat = abs(curl) < 1e-3  # metres
+    if flat and named is None:
+        raise InvalidInputError(
+            f"mesh hand {path}: the rest-pose fingers are flat and no node name says right or "
+            "left (as RightHand or index_proximal_R do), so the back of the hand cannot be told "
+            "from the palm")
+    if not flat and curl > 0:
+        z = -z
+    x = np.cross(y, z)
+    side = "right" if x @ (pos["thumb_proximal"] - wrist) < 0 else "left"
+    if flat and side != named:
+        x, z, side = -x, -z, str(named)
+    elif named is not None and side != named:
+        raise InvalidInputError(
+            f"mesh hand {path}: the node names say a {named} hand, but its rest-pose fingers curl "
+            f"toward the palm of a {side} hand ({abs(curl) * 1e3:.1f} mm), so the back of the hand "
+            "cannot be told from the palm; correct the names or the rest pose")
+    return np.stack([x, y, z]), side
+
+
 def _unit(v: np.ndarray) -> np.ndarray:
     n = np.linalg.norm(v)
     if not n > 1e-12:
@@ -519,8 +793,8 @@ def load_mesh_rig(path: str | os.PathLike | None = None) -> MeshRig:
     Parameters
     ----------
     path : str or path-like, optional
-        A ``.gltf`` file (JSON with embedded or external buffers);
-        :func:`default_mesh_path` by default.
+        A ``.gltf`` file (JSON with embedded or external buffers) or a
+        ``.glb``; :func:`default_mesh_path` by default.
 
     Returns
     -------
@@ -530,8 +804,12 @@ def load_mesh_rig(path: str | os.PathLike | None = None) -> MeshRig:
     Raises
     ------
     InvalidInputError
-        A missing file, a malformed glTF (naming the field), or a skeleton
-        without the wrist and the 19 digit bones named in the module docstring.
+        A missing file, a malformed glTF (naming the field), a skeleton
+        without the wrist and the digit joints named as in the module
+        docstring (naming those missing, those found and the namings read),
+        two joints read as the same bone, flat rest-pose fingers without a
+        side in the names or a curl against them, or a hand outside 100-300 mm
+        long (naming its length and likely unit).
     """
     path = Path(path) if path is not None else default_mesh_path()
     if not path.is_file():
@@ -601,37 +879,29 @@ def load_mesh_rig(path: str | os.PathLike | None = None) -> MeshRig:
         raise InvalidInputError(f"mesh hand {path}: meshes[{node['mesh']}] has no primitives")
     v, f, j, w = np.vstack(verts), np.vstack(faces), np.vstack(bidx), np.vstack(bw)
 
-    names = []
-    for _k, n in enumerate(joints_nodes):
-        nm = str(g.field("nodes", n).get("name", ""))
-        names.append(_canonical_bone(nm) or f"other:{nm}")
-    shifted = _shifted_rig(g, joints_nodes, names)
-    if shifted is not None:
-        names, joints_nodes = shifted
-    need = ["wrist", *(f"thumb_{b}" for b in _THUMB_BONES),
-            *(f"{f_}_{b}" for f_ in FINGERS[1:] for b in _FINGER_BONES[1:])]
+    names, joints_nodes, named_side = _rig_names(g, joints_nodes)
+    need = ["wrist", *(f"thumb_{b}" for b in _THUMB_BONES[:3]),
+            *(f"{f_}_{b}" for f_ in FINGERS[1:] for b in _FINGER_BONES[1:4])]
     missing = [n for n in need if n not in names]
     if missing:
         raise InvalidInputError(f"mesh hand {path}: the skin has no bones named like "
-                                f"{', '.join(missing)} (found {', '.join(names)})")
+                                f"{', '.join(missing)} (found {', '.join(names)}); expected the "
+                                f"wrist and the digits' joints named as in {_CONVENTIONS}")
+    names, joints_nodes = _tip_nodes(g, names, joints_nodes, named_side)
     pos = {n: worlds[joints_nodes[k]][:3, 3] for k, n in enumerate(names)}
+    bone_at = {f"{fg}_distal": f"mesh hand {path}: bone {fg}_distal (node "
+             f"{_node_name(g, joints_nodes[names.index(f'{fg}_distal')])!r})" for fg in FINGERS}
+    dom = j[np.arange(len(j)), np.argmax(w, axis=1)]
+    for fg in FINGERS:  # no tip node: where the skin ends along the distal bone
+        if f"{fg}_tip" not in pos:
+            dist = f"{fg}_distal"
+            pos[f"{fg}_tip"] = _skin_tip(_bone_vertices(v, dom, names.index(dist), bone_at[dist]), pos[dist])
+            names.append(f"{fg}_tip")
+    _check_hand_length(pos, path)
 
     # --- hand frame -------------------------------------------------------------
     wrist = pos["wrist"]
-    y = _unit(pos["middle_proximal"] - wrist)
-    across = pos["little_proximal"] - pos["index_proximal"]
-    z = _unit(np.cross(across, y))
-    # the fingers of a relaxed rigged hand curl toward the palm: +z is dorsal
-    curl = np.mean([(pos[f"{f_}_tip"] - pos[f"{f_}_proximal"]) @ z for f_ in FINGERS[1:]])
-    if abs(curl) < 1e-3:  # metres (glTF units)
-        raise InvalidInputError(f"mesh hand {path}: the rest-pose fingers are flat, so the back "
-                                "of the hand cannot be told from the palm")
-    if curl > 0:
-        z = -z
-    x = np.cross(y, z)
-    rot = np.stack([x, y, z])  # rows: hand axes in scene coordinates
-    thumb_x = rot[0] @ (pos["thumb_proximal"] - wrist)
-    side = "right" if thumb_x < 0 else "left"
+    rot, side = _hand_axes(pos, named_side, path)  # rows: hand axes in scene coordinates
     mirror = np.eye(3) if side == "right" else _MIRROR
     to_hand = np.eye(4)
     to_hand[:3, :3] = mirror @ rot
@@ -672,9 +942,8 @@ def load_mesh_rig(path: str | os.PathLike | None = None) -> MeshRig:
     dom = j[np.arange(len(j)), np.argmax(w, axis=1)]
     for fg in FINGERS:
         dist = f"{fg}_distal"
-        sel = dom == names.index(dist)
-        ydir = frames[dist][:, 1]
-        tip_mm[fg] = float(((v[sel] - joints[dist]) @ ydir).max() * 1e3)
+        pts = _bone_vertices(v, dom, names.index(dist), bone_at[dist])
+        tip_mm[fg] = _skin_end(pts, joints[dist], frames[dist][:, 1]) * 1e3
     return MeshRig(v, f.astype(np.int32), j, w, tuple(names), joints, frames, tip_mm,
                    to_hand, side, path)
 
@@ -894,6 +1163,17 @@ def _skin_scene_xml(rig: MeshRig, side: str, mount: CameraMount, w: int, h: int
     return xml, bones
 
 
+def _palm_bones(names: tuple[str, ...]) -> list[int]:
+    """The bones whose vertices make the palm, rows of `names` (:attr:`MeshRig.bone_names`).
+
+    The wrist and the finger metacarpals; in a rig without finger metacarpal
+    bones (Mixamo, Unity, MANO), the wrist and the bones handsynth does not pose.
+    """
+    meta = [n for n in names if n.endswith("metacarpal") and not n.startswith("thumb")]
+    return [k for k, n in enumerate(names)
+            if n == "wrist" or n in meta or (not meta and n.startswith("other:"))]
+
+
 class MeshHandRenderer(GLContextOwner, MaskMaker):
     """Boolean masks of a realistic skinned hand mesh as the device camera sees it.
 
@@ -1030,8 +1310,10 @@ class MeshHandRenderer(GLContextOwner, MaskMaker):
         breadth of the mesh's plane section at mid-segment across the
         segment's flexion axis (as seen from the back of the hand); ``P_width``
         the breadth of the palm without thumb and fingers (vertices mostly on
-        the wrist and metacarpal bones), seen from the back of the hand, at
-        the height midway between the thumb CMC and the mean of the MCPs.
+        the wrist and the finger metacarpals; in a rig without finger
+        metacarpal bones, on the wrist and the bones handsynth does not
+        pose), seen from the back of the hand, at the height midway between
+        the thumb CMC and the mean of the MCPs.
 
         Returns
         -------
@@ -1073,9 +1355,7 @@ class MeshHandRenderer(GLContextOwner, MaskMaker):
             across = frames[bone_of[(f, seg)]][:, 0]
             s = (pts - o) @ across
             widths.append(float(s.max() - s.min()))
-        palm_bones = [rig.bone(n) for n in rig.bone_names
-                      if n == "wrist" or (n.endswith("metacarpal") and not n.startswith("thumb"))]
-        palm = v[np.isin(dom, palm_bones), :2]
+        palm = v[np.isin(dom, _palm_bones(rig.bone_names)), :2]
         cmc = kp[1]
         y_mid = 0.5 * (cmc[1] + kp[[5, 9, 13, 17], 1].mean())
         return HandMeasurements(

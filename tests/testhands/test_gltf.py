@@ -1,5 +1,6 @@
 """The realistic skinned glTF hands shipped in handsynth/testhands/data as test hands."""
 
+import itertools
 import json
 
 import numpy as np
@@ -330,3 +331,408 @@ def test_a_scaled_rig_is_the_same_hand_larger_about_its_wrist():
 def test_a_scale_out_of_range_is_refused_by_value(bad):
     with pytest.raises(InvalidInputError, match=r"scale must be a number in \[0.5, 2\], got"):
         load_mesh_rig().scaled(bad)
+
+
+# ---------------------------------------------------------------------------
+# other rigging conventions: the shipped hands renamed, their tips moved
+# ---------------------------------------------------------------------------
+_THUMB = ("metacarpal", "proximal", "distal", "tip")
+_FINGER = ("proximal", "intermediate", "distal", "tip")
+
+
+def _numbered(bone):
+    """Mixamo's / MANO's joint number of a canonical bone (None for a finger metacarpal)."""
+    digit, _, b = bone.partition("_")
+    order = _THUMB if digit == "thumb" else _FINGER
+    return order.index(b) + 1 if b in order else None
+
+
+def _mixamo(prefix="mixamorig:", side="Right"):
+    """Mixamo's node name of a canonical bone (None where Mixamo has no node)."""
+    def name(bone):
+        if bone == "wrist":
+            return f"{prefix}{side}Hand"
+        k = _numbered(bone)
+        digit = bone.partition("_")[0]
+        return k and f"{prefix}{side}Hand{'Pinky' if digit == 'little' else digit.title()}{k}"
+    return name
+
+
+def _unity(bone):
+    """Unity's humanoid bone name of a canonical bone (no tips, no finger metacarpals)."""
+    if bone == "wrist":
+        return "RightHand"
+    digit, _, b = bone.partition("_")
+    if digit == "thumb":  # Unity's thumb Proximal is the CMC joint
+        b = {"metacarpal": "proximal", "proximal": "intermediate", "distal": "distal"}.get(b, "")
+    return f"Right{digit.title()}{b.title()}" if b in ("proximal", "intermediate", "distal") else None
+
+
+def _vrm1(bone):
+    """VRM 1.0's humanoid bone name of a canonical bone (no tips, no finger metacarpals)."""
+    if bone == "wrist":
+        return "rightHand"
+    digit, _, b = bone.partition("_")
+    ok = ("metacarpal", "proximal", "distal") if digit == "thumb" else ("proximal", "intermediate", "distal")
+    return f"right{digit.title()}{b.title()}" if b in ok else None
+
+
+def _mano(wrist="wrist", little="pinky"):
+    """A MANO-like export's joint name of a canonical bone (no tips, no finger metacarpals)."""
+    def name(bone):
+        if bone == "wrist":
+            return wrist
+        k = _numbered(bone)
+        digit = bone.partition("_")[0]
+        return k and k < 4 and f"{little if digit == 'little' else digit}{k}"
+    return name
+
+
+def _unreal(bone):
+    """The Unreal mannequin's bone name of a canonical bone (no tips)."""
+    if bone == "wrist":
+        return "hand_r"
+    digit = bone.partition("_")[0]
+    k = _numbered(bone)
+    word = "pinky" if digit == "little" else digit
+    return f"{word}_metacarpal_r" if k is None else k < 4 and f"{word}_{k:02d}_r"
+
+
+def _rigify(bone):
+    """Blender Rigify's deforming bone name of a canonical bone (no tips, no finger metacarpals)."""
+    if bone == "wrist":
+        return "DEF-hand.R"
+    digit = bone.partition("_")[0]
+    k = _numbered(bone)
+    word = {"little": "f_pinky", "thumb": "thumb"}.get(digit, f"f_{digit}")
+    return k and k < 4 and f"DEF-{word}.{k:02d}.R"
+
+
+def _read(hand):
+    """The glTF document of a shipped hand (a copy), its GLB binary chunk or None, its node transforms."""
+    from handsynth.testhands._gltf import _Gltf
+
+    g = _Gltf(shipped_hand_path(hand))
+    return json.loads(json.dumps(g.doc)), g._glb_bin, g.node_world()
+
+
+def _write(tmp_path, stem, doc, binary):
+    """`doc` as a .gltf, or as a .glb with `binary` as its BIN chunk."""
+    import struct
+
+    if binary is None:
+        path = tmp_path / f"{stem}.gltf"
+        path.write_text(json.dumps(doc))
+        return path
+    js = json.dumps(doc).encode()
+    js += b" " * (-len(js) % 4)
+    binary += b"\0" * (-len(binary) % 4)
+    path = tmp_path / f"{stem}.glb"
+    path.write_bytes(struct.pack("<4sII", b"glTF", 2, 28 + len(js) + len(binary))
+                     + struct.pack("<I4s", len(js), b"JSON") + js
+                     + struct.pack("<I4s", len(binary), b"BIN\0") + binary)
+    return path
+
+
+def _matrix(m):
+    return [float(x) for x in np.asarray(m).T.ravel()]  # glTF: column-major
+
+
+def _renamed(doc, worlds, name_of, tips):
+    """The nodes of a shipped hand renamed by `name_of(canonical bone)`.
+
+    A bone it gives no name loses its name (as if the convention had no such
+    node: it no longer reads as a bone).  `tips`: "joint" renames the tip joints,
+    "child" hides them and adds a node that is no skin joint at the same place,
+    a child of the distal node, named by `name_of` or ``<distal>_end``;
+    "loose" adds those nodes named by `name_of` at the top of the scene instead;
+    "absent" hides them.
+    """
+    from handsynth.testhands._gltf import _parse_bone
+
+    nodes = doc["nodes"]
+    by_bone = {}
+    for i, nd in enumerate(list(nodes)):
+        bone, _ = _parse_bone(nd.get("name", ""))
+        if bone is None:
+            continue
+        by_bone[bone] = i
+        new = name_of(bone) if tips == "joint" or not bone.endswith("_tip") else None
+        nd["name"] = new or f"helper_{i}"
+    for digit in ("thumb", "index", "middle", "ring", "little") if tips in ("child", "loose") else ():
+        tip, distal = by_bone[f"{digit}_tip"], by_bone[f"{digit}_distal"]
+        if tips == "child":
+            nodes.append({"name": name_of(f"{digit}_tip") or f"{nodes[distal]['name']}_end",
+                          "matrix": _matrix(np.linalg.inv(worlds[distal]) @ worlds[tip])})
+            nodes[distal].setdefault("children", []).append(len(nodes) - 1)
+        else:
+            nodes.append({"name": name_of(f"{digit}_tip"), "matrix": _matrix(worlds[tip])})
+            doc["scenes"][doc.get("scene", 0)]["nodes"].append(len(nodes) - 1)
+    return doc
+
+
+def _under_root(doc, scale):
+    """`doc` with its scene under a new root node of the given scale."""
+    scene = doc["scenes"][doc.get("scene", 0)]
+    doc["nodes"].append({"name": "Root", "scale": list(scale), "children": scene["nodes"]})
+    scene["nodes"] = [len(doc["nodes"]) - 1]
+    return doc
+
+
+def _masks(path, side="right"):
+    poses = np.stack([named_pose(p) for p in ("open", "fist", "pinch", "point", "spread")])
+    with MeshHandRenderer(CameraMount.whole_hand(), width_px=W, height_px=H, path=path,
+                          side=side) as r:
+        m = r.measurements()
+        return r.masks(poses), r.keypoints(named_pose("grasp")), np.r_[m.L, m.W, m.P_width, m.P_height]
+
+
+def _assert_same_hand(got, want, *, tips):
+    """`got` is the rig `want` read from renamed nodes; tips "node" equal, "skin" near."""
+    np.testing.assert_allclose(got.vertices, want.vertices, atol=1e-9)
+    np.testing.assert_array_equal(got.faces, want.faces)
+    np.testing.assert_array_equal(got.bone_weight, want.bone_weight)
+    assert got.source_side == want.source_side
+    for name, p in want.joints.items():
+        if name.endswith("_tip") and tips == "skin":
+            # placed where the skin ends along the distal bone: the rig's fingertip keypoint
+            digit = name.removesuffix("_tip")
+            dist = f"{digit}_distal"
+            end = want.joints[dist] + want.frames[dist][:, 1] * want.tip_mm[digit] * 1e-3
+            assert np.linalg.norm(got.joints[name] - end) < 0.006, name
+            assert got.tip_mm[digit] == pytest.approx(want.tip_mm[digit], abs=0.5)
+        elif name in got.joints:
+            np.testing.assert_allclose(got.joints[name], p, atol=1e-9, err_msg=name)
+        else:
+            assert name.endswith("metacarpal") and not name.startswith("thumb"), name
+    if tips == "node":
+        for name, frame in want.frames.items():
+            np.testing.assert_allclose(got.frames[name], frame, atol=1e-9, err_msg=name)
+
+
+def _assert_same_posed(path, ref_path, *, tips):
+    """Masks, keypoints and measurements of two files equal (tips "node") or near ("skin")."""
+    (got, kp, meas), (want, kp_ref, meas_ref) = _masks(path), _masks(ref_path)
+    if tips == "node":
+        np.testing.assert_array_equal(got, want)
+        np.testing.assert_allclose(kp, kp_ref, atol=1e-9)
+        np.testing.assert_allclose(meas, meas_ref, atol=1e-6)
+    else:
+        for a, b in zip(got, want):
+            assert _iou(a, b) > 0.97
+        assert np.abs(kp - kp_ref).max() < 0.003
+        np.testing.assert_allclose(meas, meas_ref, atol=MEAS_TOL_MM)
+
+
+MEAS_TOL_MM = 0.5  # the distal lengths and widths follow the placed tips
+
+CONVENTIONS = {
+    # name: (shipped hand, node names, tips, how the tips compare)
+    "mixamo": ("godot_xr_tools", _mixamo(), "joint", "node"),
+    "mixamo_tip_children": ("godot_xr_tools", _mixamo(), "child", "node"),
+    "mixamo_unprefixed_loose_tips": ("webxr_generic", _mixamo(""), "loose", "node"),
+    "mixamo1_no_tips": ("webxr_generic", _mixamo("mixamorig1:"), "absent", "skin"),
+    "unity_end_children": ("godot_xr_tools", _unity, "child", "node"),
+    "unity_no_tips": ("webxr_generic", _unity, "absent", "skin"),
+    "vrm1_no_tips": ("godot_xr_tools", _vrm1, "absent", "skin"),
+    "mano_no_tips": ("webxr_generic", _mano(), "absent", "skin"),
+    "mano_root_little_no_tips": ("godot_xr_tools", _mano("root", "little"), "absent", "skin"),
+    "unreal_no_tips": ("godot_xr_tools", _unreal, "absent", "skin"),
+    "rigify_no_tips": ("webxr_generic", _rigify, "absent", "skin"),
+}
+
+
+@pytest.mark.parametrize("convention", sorted(CONVENTIONS))
+def test_other_rigging_conventions_read_as_the_same_hand(tmp_path, convention):
+    hand, name_of, tip_mode, tips = CONVENTIONS[convention]
+    doc, binary, worlds = _read(hand)
+    path = _write(tmp_path, convention, _renamed(doc, worlds, name_of, tip_mode), binary)
+    got, want = load_mesh_rig(path), load_mesh_rig(shipped_hand_path(hand))
+    _assert_same_hand(got, want, tips=tips)
+    _assert_same_posed(path, shipped_hand_path(hand), tips=tips)
+
+
+def test_a_left_hand_named_left_reads_as_the_mirrored_right_hand(tmp_path):
+    doc, binary, worlds = _read("godot_xr_tools")
+    doc = _under_root(_renamed(doc, worlds, _mixamo("mixamorig:", "Left"), "joint"), (-1.0, 1.0, 1.0))
+    path = _write(tmp_path, "left", doc, binary)
+    assert "mixamorig:LeftHandPinky2" in path.read_text()
+    got, want = load_mesh_rig(path), load_mesh_rig(shipped_hand_path("godot_xr_tools"))
+    assert got.source_side == "left"
+    np.testing.assert_allclose(got.vertices, want.vertices, atol=1e-9)
+    for name, p in want.joints.items():
+        if name in got.joints:
+            np.testing.assert_allclose(got.joints[name], p, atol=1e-9, err_msg=name)
+    _assert_same_posed(path, shipped_hand_path("godot_xr_tools"), tips="node")
+
+
+def _straightened(doc, worlds, dorsal_deg=0.0):
+    """The Godot hand with its fingers straight in its palm plane, or bent `dorsal_deg` backward.
+
+    Each finger is turned about its MCP joint into the palm plane and its
+    phalanges in line with the proximal one: the rest pose of a T-pose export.
+    """
+    from handsynth.testhands._gltf import _parse_bone, _swing
+
+    nodes = doc["nodes"]
+    node = {b: i for i, n in enumerate(nodes) if (b := _parse_bone(n.get("name", ""))[0])}
+    parent = {c: i for i, n in enumerate(nodes) for c in n.get("children", [])}
+    pos = {b: worlds[i][:3, 3] for b, i in node.items()}
+    normal = np.cross(pos["little_proximal"] - pos["index_proximal"], pos["middle_proximal"] - pos["wrist"])
+    normal /= np.linalg.norm(normal)
+    palmar = np.sign(np.mean([(pos[f"{f}_tip"] - pos[f"{f}_proximal"]) @ normal
+                              for f in ("index", "middle", "ring", "little")])) * normal
+    new = {}
+    for digit in ("index", "middle", "ring", "little"):
+        chain = [node[f"{digit}_{b}"] for b in ("proximal", "intermediate", "distal", "tip")]
+        first = pos[f"{digit}_intermediate"] - pos[f"{digit}_proximal"]
+        t = first - (first @ normal) * normal
+        t /= np.linalg.norm(t)
+        t = np.cos(np.radians(dorsal_deg)) * t - np.sin(np.radians(dorsal_deg)) * palmar
+        at = worlds[chain[0]][:3, 3]
+        for a, b in itertools.pairwise(chain):
+            step = worlds[b][:3, 3] - worlds[a][:3, 3]
+            m = np.eye(4)
+            m[:3, :3] = _swing(step / np.linalg.norm(step), t) @ worlds[a][:3, :3]
+            m[:3, 3] = at
+            new[a] = m
+            at = at + t * np.linalg.norm(step)
+        new[chain[3]] = new[chain[2]] @ np.linalg.inv(worlds[chain[2]]) @ worlds[chain[3]]
+    for i, m in new.items():
+        up = new.get(parent[i], worlds[parent[i]])
+        for key in ("translation", "rotation", "scale"):
+            nodes[i].pop(key, None)
+        nodes[i]["matrix"] = _matrix(np.linalg.inv(up) @ m)
+    return doc
+
+
+def _without_sides(doc):
+    for n in doc["nodes"]:
+        n["name"] = n.get("name", "").removesuffix("_R")
+    return doc
+
+
+def test_a_flat_rest_pose_takes_its_side_from_the_node_names(tmp_path):
+    import re
+
+    doc, binary, worlds = _read("godot_xr_tools")
+    path = _write(tmp_path, "flat", _straightened(doc, worlds), binary)
+    rig, want = load_mesh_rig(path), load_mesh_rig(shipped_hand_path("godot_xr_tools"))
+    for f in ("index", "middle", "ring", "little"):  # flat: the fingers lie in the palm plane
+        assert abs(rig.joints[f"{f}_tip"][2] - rig.joints[f"{f}_proximal"][2]) < 1e-6
+    assert rig.source_side == "right"
+    for name in ("wrist", "thumb_tip", "index_proximal", "little_proximal"):
+        np.testing.assert_allclose(rig.joints[name], want.joints[name], atol=1e-9)
+    # posed, it is the same hand: its zero pose does not depend on the rest pose
+    (got, kp, _), (ref, kp_ref, _) = _masks(path), _masks(shipped_hand_path("godot_xr_tools"))
+    for a, b in zip(got, ref):
+        assert _iou(a, b) > 0.99
+    np.testing.assert_allclose(kp, kp_ref, atol=1e-9)
+    # its mirror image named as a left hand reads as a left hand: the same rig
+    doc, binary, _ = _read("godot_xr_tools")
+    doc = _renamed(_straightened(doc, worlds), worlds, _mixamo("", "Left"), "joint")
+    left = load_mesh_rig(_write(tmp_path, "flat_left", _under_root(doc, (-1.0, 1.0, 1.0)), binary))
+    assert left.source_side == "left"
+    np.testing.assert_allclose(left.vertices, rig.vertices, atol=1e-9)
+    np.testing.assert_allclose(left.joints["thumb_tip"], rig.joints["thumb_tip"], atol=1e-9)
+    # no side in the names: refused, saying why
+    doc, binary, _ = _read("godot_xr_tools")
+    path = _write(tmp_path, "flat_unnamed", _without_sides(_straightened(doc, worlds)), binary)
+    with pytest.raises(InvalidInputError, match=re.escape(str(path)) + ".*the rest-pose fingers are "
+                       "flat and no node name says right or left"):
+        load_mesh_rig(path)
+
+
+def test_fingers_bent_backward_against_the_names_are_refused(tmp_path):
+    # read by the curl alone, this right hand would load as a left hand, palm and back swapped
+    doc, binary, worlds = _read("godot_xr_tools")
+    path = _write(tmp_path, "bent_back", _straightened(doc, worlds, dorsal_deg=20.0), binary)
+    with pytest.raises(InvalidInputError, match=r"bent_back.gltf: the node names say a right hand, "
+                       r"but its rest-pose fingers curl toward the palm of a left hand \(\d+\.\d mm\)"):
+        load_mesh_rig(path)
+
+
+@pytest.mark.parametrize(("scale", "unit"), [(100.0, "centimetres"), (1000.0, "millimetres"),
+                                             (1 / 0.0254, "inches"), (0.1, None)])
+def test_a_hand_not_in_metres_is_refused_with_its_length(tmp_path, scale, unit):
+    doc, binary, _ = _read("webxr_generic")
+    path = _write(tmp_path, "units", _under_root(doc, (scale,) * 3), binary)
+    length = 1e3 * scale * np.linalg.norm(load_mesh_rig(shipped_hand_path("webxr_generic")).joints[
+        "middle_tip"])
+    cause = (f"the file is likely in {unit} \\(that would make it {length / scale:.0f} mm\\)"
+             if unit else "no common unit explains it")
+    with pytest.raises(InvalidInputError, match=f"units.glb: the hand is {length:.1f} mm from the "
+                       f"wrist to the middle fingertip .*outside the 100-300 mm .*; {cause}"):
+        load_mesh_rig(path)
+    # a root node that keeps metres changes nothing
+    doc, binary, _ = _read("webxr_generic")
+    path = _write(tmp_path, "metres", _under_root(doc, (1.0, 1.0, 1.0)), binary)
+    np.testing.assert_allclose(load_mesh_rig(path).vertices,
+                               load_mesh_rig(shipped_hand_path("webxr_generic")).vertices, atol=1e-12)
+
+
+def test_a_skin_of_both_hands_is_refused_naming_both_nodes(tmp_path):
+    doc = json.loads(shipped_hand_path("godot_xr_tools").read_text())
+    for n in doc["nodes"]:
+        if n.get("name") == "Palm_R":
+            n["name"] = "Wrist_L"
+    path = tmp_path / "two.gltf"
+    path.write_text(json.dumps(doc))
+    with pytest.raises(InvalidInputError, match="two.gltf: the skin's nodes 'Wrist_[LR]' and "
+                       "'Wrist_[LR]' both read as the bone wrist"):
+        load_mesh_rig(path)
+
+
+def test_an_unknown_naming_is_refused_with_the_conventions_read(tmp_path):
+    doc = json.loads(shipped_hand_path("godot_xr_tools").read_text())
+    for n in doc["nodes"]:
+        n["name"] = n.get("name", "").replace("Index", "Pointer")
+    path = tmp_path / "pointer.gltf"
+    path.write_text(json.dumps(doc))
+    with pytest.raises(InvalidInputError, match=r"pointer.gltf: the skin has no bones named like "
+                       r"index_proximal, index_intermediate, index_distal \(found wrist, .*"
+                       r"other:Pointer_Proximal_R.*\); expected .*Mixamo.*Unity.*MANO"):
+        load_mesh_rig(path)
+
+
+# the shipped hands as the loader read them before it read other conventions: rest mesh,
+# joints, frames, fingertips and two posed meshes (micrometres, hashed), the hand's
+# length and the pixels of the open hand and the fist at 360x240
+SHIPPED = {
+    "godot_xr_tools": ("dfa1550df79a4d76", 216.2593, (13693, 7279)),
+    "mrtk": ("cbe3e12827d17033", 195.852, (11444, 6315)),
+    "webxr_generic": ("0869b7259adc8661", 190.9473, (10779, 6095)),
+}
+
+
+@pytest.mark.parametrize("name", sorted(TEST_HANDS))
+def test_the_shipped_hands_are_read_as_before(name):
+    import hashlib
+
+    digest, length, pixels = SHIPPED[name]
+    with MeshHandRenderer(CameraMount.whole_hand(), width_px=W, height_px=H,
+                          path=shipped_hand_path(name)) as r:
+        rig = r.rig
+        h = hashlib.sha256()
+        for a in (rig.vertices, rig.faces, [rig.joints[n] for n in sorted(rig.joints)],
+                  [rig.frames[n] for n in sorted(rig.frames)], [rig.tip_mm[n] for n in sorted(rig.tip_mm)],
+                  r.vertices(named_pose("fist")), r.vertices(named_pose("pinch"))):
+            h.update(np.round(np.asarray(a, dtype=np.float64) * 1e6).astype(np.int64).tobytes())
+        assert h.hexdigest()[:16] == digest
+        assert r.hand_length_mm == pytest.approx(length, abs=1e-4)
+        # the masks, within what another GL rasteriser may change
+        for pose, n in zip(("open", "fist"), pixels):
+            assert r.mask(named_pose(pose)).sum() == pytest.approx(n, rel=0.005)
+
+
+def test_a_distal_bone_without_skin_is_refused_by_name(tmp_path):
+    # before: numpy's "zero-size array to reduction operation maximum" (a traceback)
+    doc = json.loads(shipped_hand_path("godot_xr_tools").read_text())
+    swap = {"Index_Distal_R": "Index_Tip_R", "Index_Tip_R": "Index_Distal_R"}
+    for n in doc["nodes"]:
+        n["name"] = swap.get(n.get("name", ""), n.get("name", ""))
+    path = tmp_path / "swapped.gltf"
+    path.write_text(json.dumps(doc))
+    with pytest.raises(InvalidInputError, match="swapped.gltf: bone index_distal .node 'Index_Distal_R'.: no "
+                       "vertex of the skin is mostly weighted to it"):
+        load_mesh_rig(path)
