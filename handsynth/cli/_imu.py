@@ -38,7 +38,8 @@ def _write_table(path, header, table, *, inputs=()) -> None:
 
     with atomic_open(path, "w", what="CSV file", inputs=inputs) as f:
         f.write(",".join(header) + "\n")
-        np.savetxt(f, table, delimiter=",", fmt="%.8g")
+        # times to the microsecond (epoch stamps keep their fraction), the rest 8 digits
+        np.savetxt(f, table, delimiter=",", fmt=["%.6f"] + ["%.8g"] * (table.shape[1] - 1))
 
 
 def _unique_keys(pairs) -> dict:
@@ -255,6 +256,7 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
         fingertip_positions,
         make_filter,
         read_imu_csv,
+        sample_times,
     )
 
     for flag, given in (("--angles-out", angles_out), ("--tips-out", tips_out),
@@ -284,7 +286,7 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
                              "--static")
     for w in check_recording(rec, static_s=static_s, source=str(recording), **full_scale):
         click.echo(f"handsynth: warning: {w}", err=True)
-    t = np.arange(rec.n) / rec.rate_hz
+    t = sample_times(rec)  # the recording's own times
     if calibration_path:
         cal = ImuCalibration.load(calibration_path)
         try:

@@ -35,6 +35,24 @@ def test_track_csv_writes_quaternions(tmp_path, sim):
     assert np.sqrt(np.mean(err**2)) < 8.0
 
 
+def test_track_stamps_rows_with_the_recordings_own_times(tmp_path, sim):
+    # a logger's epoch stamps: the rows were stamped from 0, so they could not be lined up
+    # with another stream of the same clock; epoch seconds also need more than 8 digits
+    from dataclasses import replace
+
+    rec = replace(sim.subset(("forearm_1",)), start_s=1_764_200_000.25)
+    src, out = tmp_path / "rec.csv", tmp_path / "q.csv"
+    write_imu_csv(rec, src)
+    first = src.read_text().splitlines()[2].split(",")[0]
+    assert first == "1764200000.250000"
+    res = CliRunner().invoke(cli, ["imu", "track", str(src), "--filter", "raw", "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    t = np.loadtxt(out, delimiter=",", skiprows=1)[:, 0]
+    np.testing.assert_allclose(t, 1_764_200_000.25 + np.arange(rec.n) / rec.rate_hz, atol=2e-6)
+    np.testing.assert_allclose(rec.slice(100, 200).start_s, 1_764_200_000.25 + 100 / rec.rate_hz)
+    assert rec.slice(-50, None).start_s == pytest.approx(1_764_200_000.25 + (rec.n - 50) / rec.rate_hz)
+
+
 def test_track_wrong_units_is_one_line(tmp_path, sim):
     src = tmp_path / "rec.csv"
     write_imu_csv(sim.subset(("forearm_1",)), src)

@@ -82,6 +82,7 @@ from ._recording import (
     ImuTruth,
     check_recording,
     read_imu_csv,
+    sample_times,
     write_imu_csv,
 )
 from ._sensorcal import SensorCalibration, fit_sensor_calibration
@@ -194,6 +195,7 @@ __all__ = [
     "read_imu_csv",
     "rotation_vector",
     "run_broad",
+    "sample_times",
     "seel_joint_positions",
     "segments_from_seconds",
     "sensor_tree",

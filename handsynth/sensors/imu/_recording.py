@@ -32,6 +32,7 @@ __all__ = [
     "ImuTruth",
     "check_recording",
     "read_imu_csv",
+    "sample_times",
     "write_imu_csv",
 ]
 
@@ -93,6 +94,10 @@ class ImuRecording:
         Labelled stretches (label, first sample, end sample), e.g. the
         calibration rotations of a real recording; a simulation's are in
         its truth.
+    start_s : float
+        Time of the first sample, s, as the recording's time column gave it
+        (0 for a simulation and a file without one): sample ``i`` is at
+        ``start_s + i / rate_hz``.  Outputs are stamped in these times.
     reported : frozenset of str or None
         The warnings :func:`check_recording` has returned for this object;
         None before it was checked (when made, and for a copy made with
@@ -107,6 +112,7 @@ class ImuRecording:
     mag: np.ndarray
     truth: ImuTruth | None = None
     segments: tuple = ()
+    start_s: float = 0.0
     reported: frozenset | None = field(default=None, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -123,6 +129,8 @@ class ImuRecording:
             estimator's ``run`` applies.
         """
         object.__setattr__(self, "rate_hz", check_rate(self.rate_hz))
+        object.__setattr__(self, "start_s", check_number(self.start_s, "start_s",
+                                                         error=RecordingError))
         sensors = self.sensors
         if isinstance(sensors, str) or not all(isinstance(x, str) for x in sensors):
             raise RecordingError(f"sensors must be a sequence of sensor names (str), got "
@@ -177,12 +185,15 @@ class ImuRecording:
     def subset(self, sensors) -> ImuRecording:
         """The recording of `sensors` only (truth dropped)."""
         idx = [self.index(s) for s in sensors]
-        return ImuRecording(self.rate_hz, tuple(sensors), self.acc[idx], self.gyr[idx], self.mag[idx])
+        return ImuRecording(self.rate_hz, tuple(sensors), self.acc[idx], self.gyr[idx], self.mag[idx],
+                            start_s=self.start_s)
 
     def slice(self, start: int, stop: int) -> ImuRecording:
         """Samples ``start:stop`` (truth dropped)."""
+        first = range(self.n)[start:stop].start if self.n else 0
         return ImuRecording(self.rate_hz, self.sensors, self.acc[:, start:stop],
-                            self.gyr[:, start:stop], self.mag[:, start:stop])
+                            self.gyr[:, start:stop], self.mag[:, start:stop],
+                            start_s=self.start_s + first / self.rate_hz)
 
 
 def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_MPS2,
@@ -586,7 +597,8 @@ def write_imu_csv(rec: ImuRecording, path) -> None:
     Parameters
     ----------
     rec : ImuRecording
-        Its samples are written (``time_s`` = sample index / ``rate_hz``, s;
+        Its samples are written (``time_s`` = ``start_s`` + sample index /
+        ``rate_hz``, s, to the microsecond;
         acc m/s^2, gyr rad/s, mag uT; 9 significant digits) and its rate in the
         comment line (``rate_hz``, 6 significant digits); its truth and
         ``segments`` are not written.
@@ -614,7 +626,7 @@ def write_imu_csv(rec: ImuRecording, path) -> None:
     path = Path(path)
     cols = ["time_s"] + [f"{s}_{c}_{a}" for s in rec.sensors for c in ("acc", "gyr", "mag")
                          for a in _AXES]
-    data = [np.arange(rec.n) / rec.rate_hz]
+    data = [sample_times(rec)]
     for k in range(len(rec.sensors)):
         for arr in (rec.acc, rec.gyr, rec.mag):
             data.extend(arr[k].T)
@@ -622,7 +634,7 @@ def write_imu_csv(rec: ImuRecording, path) -> None:
     with atomic_open(path, "w", what="IMU recording", newline="") as f:
         f.write(f"# handsynth imu recording; acc m/s2, gyr rad/s, mag uT; rate_hz={rec.rate_hz:g}\n")
         f.write(",".join(cols) + "\n")
-        np.savetxt(f, table, delimiter=",", fmt="%.9g")
+        np.savetxt(f, table, delimiter=",", fmt=["%.6f"] + ["%.9g"] * (table.shape[1] - 1))
 
 
 #: A channel column as loggers and spreadsheets name it: a sensor, a channel and an axis
@@ -888,4 +900,10 @@ def read_imu_csv(path, *, acc_units: str = "m/s2", gyr_units: str = "rad/s",
                          for s in sensors]) * f
 
     return ImuRecording(float(rate), tuple(sensors), block("acc", acc_units),
-                        block("gyr", gyr_units), block("mag", mag_units))
+                        block("gyr", gyr_units), block("mag", mag_units),
+                        start_s=float(t[0]) if time_name is not None else 0.0)
+
+
+def sample_times(rec: ImuRecording) -> np.ndarray:
+    """The time of each sample of `rec`, s: ``start_s + i / rate_hz`` (shape (N,), float64)."""
+    return rec.start_s + np.arange(rec.n) / rec.rate_hz
