@@ -14,10 +14,11 @@ with :func:`read_intrinsics` (a real camera's frames remapped to the device's pi
 """
 
 from .._gl import backend, ensure_backend
+from ._calibration_files import read_intrinsics
 from ._camera import CameraMount, as_mount
 from ._coverage import DEFAULT_CELLS, coverage
 from ._io import read_image, write_png
-from ._lens import CameraIntrinsics, LensCorrection, read_intrinsics
+from ._lens import CameraIntrinsics, LensCorrection
 from ._masks import MaskMaker
 from ._preprocess import (
     MIN_CONTRAST,

@@ -22,47 +22,27 @@ polynomial fitted to a calibration's field of view can fold back beyond it
 (the distorted radius stops growing with the ray's angle); rays past the fold
 would sample the wrong part of the frame, so they are counted unseen.
 
-:func:`read_intrinsics` reads a calibration file as the usual tools write it:
-OpenCV's ``FileStorage`` (YAML, XML or JSON: ``camera_matrix``,
-``distortion_coefficients``, ``image_width``, ``image_height``), ROS
-``camera_info`` YAML (``camera_matrix: {rows, cols, data}``,
-``distortion_model``), Kalibr's camera chain (``cam0: {intrinsics: [fu, fv, pu,
-pv], distortion_coeffs, distortion_model, resolution}``) and plain JSON with
-those names.
+The calibration files are read by :func:`~handsynth.render.read_intrinsics`
+(:mod:`handsynth.render._calibration_files`).
 """
 
 from __future__ import annotations
 
-import json
 import math
-import os
-import re
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
-from .._checks import check_instance, check_integer, check_number, check_path, short_repr
+from .._checks import check_instance, check_integer, check_number, short_repr
 from ..errors import InvalidCameraError, InvalidInputError
 from ._camera import MAX_IMAGE_SIDE_PX, CameraMount, as_mount
 from ._preprocess import check_frame
 
-__all__ = ["CameraIntrinsics", "LensCorrection", "read_intrinsics"]
+__all__ = ["CameraIntrinsics", "LensCorrection"]
 
 #: Distortion coefficient counts OpenCV's models take.
 _PINHOLE_COUNTS = (0, 4, 5, 8, 12, 14)
 _MODELS = ("pinhole", "fisheye")
-#: ``distortion_model`` spellings (ROS, Kalibr, OpenCV users) and the model each is.
-_MODEL_NAMES = {"plumb_bob": "pinhole", "rational_polynomial": "pinhole", "radtan": "pinhole",
-                "pinhole": "pinhole", "brown": "pinhole", "brown_conrady": "pinhole",
-                "none": "pinhole", "equidistant": "fisheye", "fisheye": "fisheye",
-                "kannala_brandt": "fisheye", "kb4": "fisheye"}
-#: Field names read by :func:`read_intrinsics` (lower case), in order of preference.
-_MATRIX_KEYS = ("camera_matrix", "cameramatrix", "k", "intrinsic_matrix", "intrinsics")
-_DISTORTION_KEYS = ("distortion_coefficients", "dist_coeffs", "distcoeffs", "distortion_coeffs",
-                    "dist_coeff", "distortion", "d")
-_SIZE_KEYS = (("image_width", "image_height"), ("width", "height"))
-_SIZE_PAIR_KEYS = ("image_size", "imagesize", "resolution", "size")
 #: Relative difference of width-to-height ratios below which a frame of another size is
 #: taken as the calibrated camera's view scaled (a calibration at 1280x720 used at 640x360).
 _RATIO_TOLERANCE = 0.01
@@ -294,195 +274,3 @@ class LensCorrection:
         out = cv2.remap(src, m1, m2, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
                         borderValue=0)
         return out > 127 if frame.dtype == np.bool_ else out
-
-
-# --- calibration files ------------------------------------------------------------------
-
-
-def _load_opencv_xml(path: Path) -> dict:
-    """The top-level fields of an OpenCV ``FileStorage`` XML file."""
-    import cv2
-
-    try:
-        fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
-    except (cv2.error, SystemError) as exc:
-        raise InvalidInputError(f"camera intrinsics {path}: not a readable OpenCV XML file "
-                                f"({str(exc).strip().splitlines()[-1][:120]})") from None
-    out: dict = {}
-    try:
-        names = fs.root().keys()  # a FileNode's keys, not a dict's
-        for key in names:
-            node = fs.getNode(key)
-            if node.isString():
-                out[key] = node.string()
-            elif node.isInt() or node.isReal():
-                out[key] = node.real()
-            elif node.isSeq():
-                out[key] = [node.at(i).real() for i in range(node.size())]
-            else:
-                m = node.mat()
-                out[key] = None if m is None else m.tolist()
-    finally:
-        fs.release()
-    return out
-
-
-def _load_document(path: Path) -> dict:
-    """A calibration file's fields, as a dict (keys as written)."""
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InvalidInputError(f"camera intrinsics {path}: cannot be read as text ({exc})") \
-            from None
-    if text.lstrip().startswith("<"):
-        return _load_opencv_xml(path)
-    if path.suffix.lower() == ".json":
-        try:
-            doc = json.loads(text)
-        except json.JSONDecodeError as exc:
-            raise InvalidInputError(f"camera intrinsics {path}: not valid JSON ({exc})") from None
-    else:
-        import yaml
-
-        # OpenCV's YAML: a "%YAML:1.0" directive PyYAML refuses, and !!opencv-matrix tags
-        text = re.sub(r"^\s*%YAML[: ]?[\d.]*[^\n]*\n", "", text)
-        text = re.sub(r"!!opencv-(matrix|nd-matrix)", "", text)
-        try:
-            doc = yaml.safe_load(text)
-        except yaml.YAMLError as exc:
-            where = getattr(exc, "problem_mark", None)
-            line = f" at line {where.line + 1}" if where is not None else ""
-            raise InvalidInputError(f"camera intrinsics {path}: not valid YAML{line} "
-                                    f"({getattr(exc, 'problem', None) or exc})") from None
-    if not isinstance(doc, dict):
-        raise InvalidInputError(f"camera intrinsics {path}: must be a map of fields "
-                                f"(camera_matrix, distortion_coefficients, image_width, "
-                                f"image_height), got {type(doc).__name__}")
-    return doc
-
-
-def _numbers(value, path: Path, key: str) -> np.ndarray:
-    """A field's numbers, flat: a list, nested lists or a ``{rows, cols, data}`` matrix map."""
-    if isinstance(value, dict):
-        lower = {str(k).lower(): v for k, v in value.items()}
-        if "data" not in lower:
-            raise InvalidInputError(f"camera intrinsics {path}: field {key!r} is a map without "
-                                    f"'data' (got {', '.join(map(str, value))})")
-        value = lower["data"]
-    try:
-        arr = np.asarray(value, dtype=np.float64).reshape(-1)
-    except (TypeError, ValueError):
-        raise InvalidInputError(f"camera intrinsics {path}: field {key!r} must hold numbers, "
-                                f"got {short_repr(value)}") from None
-    if not np.isfinite(arr).all():
-        raise InvalidInputError(f"camera intrinsics {path}: field {key!r} holds NaN or "
-                                f"infinity: {short_repr(value)}")
-    return arr
-
-
-def _find(fields: dict, keys, path: Path, what: str):
-    for k in keys:
-        if k in fields:
-            return k, fields[k]
-    raise InvalidInputError(f"camera intrinsics {path}: no {what} (looked for "
-                            f"{', '.join(keys)}; found {', '.join(fields) or 'nothing'})")
-
-
-def _camera_fields(doc: dict, path: Path) -> dict:
-    """The fields of the one camera a file describes (lower-case keys)."""
-    fields = {str(k).lower(): v for k, v in doc.items()}
-    cameras = [k for k, v in fields.items() if re.fullmatch(r"cam\d+", k) and isinstance(v, dict)]
-    if cameras and not any(k in fields for k in _MATRIX_KEYS):  # a Kalibr camera chain
-        if len(cameras) > 1:
-            raise InvalidInputError(f"camera intrinsics {path}: holds {len(cameras)} cameras "
-                                    f"({', '.join(cameras)}); give a file of the one on the hand")
-        fields = {str(k).lower(): v for k, v in fields[cameras[0]].items()}
-    return fields
-
-
-def read_intrinsics(path: str | os.PathLike) -> CameraIntrinsics:
-    """A camera calibration file as :class:`CameraIntrinsics`.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        OpenCV ``FileStorage`` YAML, XML or JSON, ROS ``camera_info`` YAML,
-        a Kalibr camera chain of one camera, or JSON/YAML with the fields
-        ``camera_matrix`` (3x3, nested or flat, or a ``{rows, cols, data}``
-        map; also ``cameraMatrix``, ``K``, or Kalibr's ``intrinsics: [fu, fv,
-        pu, pv]``), ``distortion_coefficients`` (also ``dist_coeffs``,
-        ``distCoeffs``, ``distortion_coeffs``, ``D``; empty for none), the
-        frame size (``image_width`` and ``image_height``, ``width`` and
-        ``height``, or ``image_size`` / ``resolution`` as ``[w, h]``) and
-        optionally ``distortion_model`` (``plumb_bob``, ``rational_polynomial``,
-        ``radtan``: the pinhole model; ``equidistant``, ``fisheye``: the
-        fisheye model).
-
-    Returns
-    -------
-    CameraIntrinsics
-
-    Raises
-    ------
-    InvalidInputError
-        No such file, a file that cannot be parsed (naming the line where
-        the parser says), a field missing (naming those looked for and
-        those found), a camera matrix that is not 3x3 with a last row
-        ``0 0 1`` and no skew, a distortion model not known, or values out
-        of range (:class:`CameraIntrinsics`), each naming the file.
-    """
-    p = check_path(path, "camera intrinsics", kind="file")
-    if not p.is_file():
-        raise InvalidInputError(f"camera intrinsics {str(p)!r}: no such file")
-    fields = _camera_fields(_load_document(p), p)
-    key, raw = _find(fields, _MATRIX_KEYS, p, "camera matrix")
-    m = _numbers(raw, p, key)
-    if m.size == 4:  # Kalibr: fu, fv, pu, pv
-        fx, fy, cx, cy = m
-    elif m.size == 9:
-        k = m.reshape(3, 3)
-        if not np.allclose(k[2], [0.0, 0.0, 1.0]) or k[1, 0] != 0.0:
-            raise InvalidInputError(f"camera intrinsics {p}: field {key!r} must be a camera "
-                                    f"matrix [[fx, 0, cx], [0, fy, cy], [0, 0, 1]], got "
-                                    f"{k.tolist()}")
-        if abs(k[0, 1]) > 1e-9 * k[0, 0]:
-            raise InvalidInputError(f"camera intrinsics {p}: field {key!r} has a skew of "
-                                    f"{k[0, 1]:g}; only cameras without skew are supported")
-        fx, fy, cx, cy = k[0, 0], k[1, 1], k[0, 2], k[1, 2]
-    else:
-        raise InvalidInputError(f"camera intrinsics {p}: field {key!r} must hold 9 numbers (a "
-                                f"3x3 matrix) or 4 (fu, fv, pu, pv), got {m.size}")
-    dkey, draw = _find(fields, _DISTORTION_KEYS, p, "distortion coefficients")
-    dist = _numbers(draw, p, dkey) if draw is not None else np.zeros(0)
-    size = next(((fields[a], fields[b]) for a, b in _SIZE_KEYS if a in fields and b in fields),
-                None)
-    if size is None:
-        pair = next((fields[k] for k in _SIZE_PAIR_KEYS if k in fields), None)
-        if pair is None:
-            raise InvalidInputError(
-                f"camera intrinsics {p}: no frame size (looked for image_width and image_height, "
-                f"width and height, {', '.join(_SIZE_PAIR_KEYS)}; found {', '.join(fields)})")
-        size = tuple(_numbers(pair, p, "image size"))
-        if len(size) != 2:
-            raise InvalidInputError(f"camera intrinsics {p}: the frame size must be [width, "
-                                    f"height], got {short_repr(pair)}")
-    name = str(fields.get("distortion_model", fields.get("model", "pinhole"))).strip().lower()
-    if name not in _MODEL_NAMES:
-        raise InvalidInputError(f"camera intrinsics {p}: distortion_model {name!r} is not one "
-                                f"handsynth knows ({', '.join(sorted(_MODEL_NAMES))})")
-    model = _MODEL_NAMES[name]
-    if model == "pinhole" and dist.size and not dist.any():
-        dist = np.zeros(0)
-    if model == "pinhole" and dist.size in (1, 2, 3, 6, 7):
-        # ROS and Kalibr write fewer where the rest are zero: k1, k2[, p1, p2]...
-        dist = np.concatenate([dist, np.zeros(next(c for c in _PINHOLE_COUNTS if c >= dist.size)
-                                              - dist.size)])
-    w, h = size
-    if not (float(w).is_integer() and float(h).is_integer()):
-        raise InvalidInputError(f"camera intrinsics {p}: the frame size must be whole pixels, "
-                                f"got {w} x {h}")
-    try:
-        return CameraIntrinsics(int(w), int(h), float(fx), float(fy), float(cx), float(cy),
-                                distortion=tuple(float(v) for v in dist), model=model)
-    except InvalidCameraError as exc:
-        raise InvalidCameraError(f"camera intrinsics {p}: {exc}") from None
