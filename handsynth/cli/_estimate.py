@@ -204,14 +204,14 @@ def _calibrate(lookup, source, open_image, db_dir, mount, side, build, err):
 
 
 def _check_learned_options(db_dir, shape_name, measurements, personal, build_count,
-                           calibrate, video_out, no_temporal, keypoints) -> None:
+                           calibrate, no_temporal, keypoints) -> None:
     """--learned replaces the database lookup: its options do not apply (but for --shape and
     --measurements, which with --keypoints say whose keypoints to report)."""
     given = [flag for flag, on in (("--db", db_dir is not None),
                                    ("--personal", personal),
                                    ("--build-count", build_count is not None),
-                                   ("--calibrate", calibrate), ("--video-out", video_out is not None),
-                                   ("--no-temporal", no_temporal)) if on]
+                                   ("--calibrate", calibrate), ("--no-temporal", no_temporal))
+             if on]
     if given:
         raise InvalidInputError(f"{', '.join(given)} appl{'ies' if len(given) == 1 else 'y'} to "
                                 "the database lookup, not to --learned (the learnt estimator "
@@ -482,7 +482,9 @@ def _progress(stream):
                    "those of the handsynth hand of --shape or --measurements (the standard "
                    "hand by default) posed by the estimated angles.")
 @click.option("--video-out", default=None, metavar="FILE",
-              help="Write input and matched render side by side (.mp4 or .avi).")
+              help="Write each input frame beside the pose read from it (.mp4 or .avi): the "
+                   "matched entry's render, or with --learned the estimated angles on the hand "
+                   "of --shape/--measurements (with --keypoints) or the standard hand.")
 @click.option("--synthetic-shape", default=SYNTHETIC_SHAPE, show_default=True, metavar="NAME",
               help="Hand shape rendered by --synthetic (off the grid by default).")
 @click.option("--synthetic-motion", type=click.Choice(["paper", "natural", "named"]),
@@ -551,7 +553,7 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
     kp_shape = None
     if learned:
         _check_learned_options(db_dir, shape_name, measurements, personal, build_count,
-                               calibrate, video_out, no_temporal, keypoints)
+                               calibrate, no_temporal, keypoints)
         if keypoints:
             kp_shape = _keypoint_shape(shape_name, measurements, info_err)
     elif learned_cache is not None or learned_hands is not None or smoothing is not None or \
@@ -646,7 +648,10 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
         check_outputs([("--out", None if to_stdout else out), ("--video-out", video_out)],
                       inputs=inputs)
         if video_out is not None:  # refuses a bad name before the rows file is touched
-            video = SideBySideWriter(video_out, lookup, fps=source.fps or fps, inputs=inputs)
+            # a lookup draws its matched entries; the learnt estimator its angles on the hand
+            # of --shape or --measurements (with --keypoints) or the standard hand
+            video = SideBySideWriter(video_out, lookup, fps=source.fps or fps, inputs=inputs,
+                                     shape=kp_shape, mount=mount, side=side)
         if out is not None:
             sink = open_row_writer(out, format=fmt, inputs=inputs,
                                    columns=live_columns(keypoints=keypoints, truth=synthetic))

@@ -1,4 +1,4 @@
-"""The side-by-side video of the live loop: the input frame beside the matched entry."""
+"""The side-by-side video of the live loop: the input frame beside the pose read from it."""
 
 from __future__ import annotations
 
@@ -6,10 +6,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .._checks import check_number, check_path
+from .._checks import check_instance, check_number, check_path, check_side
 from .._io import PendingOutput
 from ..errors import InvalidInputError, OutputError
-from ..models import JOINT_LIMITS_DEG
+from ..models import JOINT_LIMITS_DEG, HandShape
+from ..render import as_mount
 from ._checks import _quiet_opencv
 
 if TYPE_CHECKING:
@@ -34,11 +35,14 @@ def _to_bgr(frame: np.ndarray) -> np.ndarray:
 
 
 class SideBySideWriter:
-    """A video of the input frames (left) and the matched entries' renders (right).
+    """A video of the input frames (left) and the poses read from them (right).
 
-    The right half is the database hand (the lookup's shape, mount and
-    side) rendered in the matched entry's pose at the input frame's size,
-    in green; black with "no hand" when the frame showed none.  Every
+    The right half is a hand rendered through the device in the pose read,
+    at the input frame's size, in green; black with "no hand" when the frame
+    showed none.  For a database lookup (an estimator with ``database``,
+    ``mount``, ``side`` and ``shape``: :class:`~handsynth.estimate.PoseLookup`)
+    it is the database hand in the matched entry's pose; for another estimator
+    (the learnt one) the hand `shape` posed by the estimated angles.  Every
     output frame is ``2 W x H`` for input frames of ``W x H`` (the first
     frame's size; later frames of another size are resized).
 
@@ -47,15 +51,26 @@ class SideBySideWriter:
     path : str or os.PathLike
         ``.mp4``/``.m4v``/``.mov`` (codec ``mp4v``) or ``.avi``/``.mkv``
         (``MJPG``).
-    lookup : PoseLookup
-        The lookup whose entries are matched (its database, mount, side).
+    lookup : PoseEstimator
+        The estimator whose results are drawn: a database lookup's matched
+        entries, or any estimator's angles.
     fps : float, keyword-only
     codec : str, keyword-only, optional
         A four-character code overriding the suffix's codec.
     labels : bool, keyword-only
-        Draw frame index, entry and confidence on the frames.
+        Draw the frame index, the entry (a lookup) and the confidence on the
+        frames.
     inputs : iterable of path-like, keyword-only
         Files the run reads; `path` must be none of them.
+    shape : HandShape, keyword-only, optional
+        The hand drawn in the estimated pose (not a lookup's): the standard
+        hand by default.
+    mount : CameraMount, keyword-only, optional
+        The device it is drawn through (not a lookup's): the estimator's
+        ``mount`` if it has one, else the paper's.
+    side : {"right", "left"}, keyword-only, optional
+        The hand drawn (not a lookup's): the estimator's ``side`` if it has
+        one, else right.
 
     Notes
     -----
@@ -68,14 +83,16 @@ class SideBySideWriter:
     ------
     InvalidInputError
         `path` is not a file name (None, a number, ``""``), an unknown
-        suffix or codec, or OpenCV cannot open a writer for the file.
+        suffix or codec, `lookup` not an estimator, `shape`, `mount` or
+        `side` unusable, or OpenCV cannot open a writer for the file.
     OutputError
         `path` is a folder, in a missing folder, or one of `inputs`; or, on
         :meth:`close`, the video could not be written completely.
     """
 
     def __init__(self, path, lookup, *, fps: float = 30.0, codec: str | None = None,
-                 labels: bool = True, inputs=()) -> None:
+                 labels: bool = True, inputs=(), shape: HandShape | None = None,
+                 mount=None, side: str | None = None) -> None:
         self.path = check_path(path, "path", kind="file")
         suffix = self.path.suffix.lower()
         if codec is None:
@@ -86,11 +103,16 @@ class SideBySideWriter:
             codec = _CODECS[suffix]
         if not (isinstance(codec, str) and len(codec) == 4):
             raise InvalidInputError(f"codec must be a four-character code, got {codec!r}")
-        for attr in ("database", "mount", "side"):
-            if not hasattr(lookup, attr):
-                raise InvalidInputError(
-                    f"lookup must be a PoseLookup (renders of its entries), got "
-                    f"{type(lookup).__name__}")
+        self._matched = all(hasattr(lookup, a) for a in ("database", "mount", "side", "shape"))
+        if not self._matched and not callable(getattr(lookup, "estimate", None)):
+            raise InvalidInputError(f"lookup must be a pose estimator (with estimate(frame)), "
+                                    f"got {type(lookup).__name__}")
+        if self._matched:
+            self._hand = (lookup.shape, lookup.mount, lookup.side)
+        else:
+            self._hand = (check_instance(shape or HandShape(), HandShape, name="shape"),
+                          as_mount(mount if mount is not None else getattr(lookup, "mount", None)),
+                          check_side(side or getattr(lookup, "side", None) or "right"))
         self.lookup = lookup
         self.fps = check_number(fps, "fps", above=0)
         self.codec = codec
@@ -120,8 +142,8 @@ class SideBySideWriter:
             raise InvalidInputError(f"OpenCV cannot write video {str(self.path)!r} with codec "
                                     f"{self.codec!r}")
         self._writer, self._size = writer, (w, h)
-        self._renderer = SilhouetteRenderer(self.lookup.shape, self.lookup.mount,
-                                            side=self.lookup.side, width_px=w, height_px=h)
+        shape, mount, side = self._hand
+        self._renderer = SilhouetteRenderer(shape, mount, side=side, width_px=w, height_px=h)
 
     def write(self, frame: np.ndarray, estimate, *, index: int | None = None) -> None:
         """Append one side-by-side frame.
@@ -148,18 +170,22 @@ class SideBySideWriter:
             left = cv2.resize(left, (w, h), interpolation=cv2.INTER_NEAREST)
         right = np.zeros_like(left)
         if not estimate.no_hand:
-            pose = np.clip(np.asarray(self.lookup.database.angles[estimate.entry], np.float64),
-                           JOINT_LIMITS_DEG[:, 0], JOINT_LIMITS_DEG[:, 1])
-            right[renderer.mask(pose)] = _MATCH_BGR
+            read = self.lookup.database.angles[estimate.entry] if self._matched else estimate.angles
+            pose = np.clip(np.asarray(read, np.float64), JOINT_LIMITS_DEG[:, 0],
+                           JOINT_LIMITS_DEG[:, 1])
+            if np.isfinite(pose).all():
+                right[renderer.mask(pose)] = _MATCH_BGR
         if self.labels:
             scale, thick = max(0.35, h / 600), max(1, round(h / 300))
             y = max(12, round(22 * scale * 1.6))
             text = "" if index is None else f"#{index}"
             cv2.putText(left, f"input {text}", (6, y), cv2.FONT_HERSHEY_SIMPLEX, scale,
                         (0, 160, 255), thick, cv2.LINE_AA)
+            read = f"entry {estimate.entry}" if self._matched else "estimate"
             label = ("no hand" if estimate.no_hand else
-                     f"entry {estimate.entry} conf {estimate.confidence:.2f}"
-                     + (" low" if estimate.low_confidence else ""))
+                     f"{read} conf {estimate.confidence:.2f}"
+                     + (" low" if estimate.low_confidence else "")
+                     + (" moved" if getattr(estimate, "moved", False) else ""))
             cv2.putText(right, label, (6, y), cv2.FONT_HERSHEY_SIMPLEX, scale, (0, 160, 255),
                         thick, cv2.LINE_AA)
         writer.write(np.hstack([left, right]))

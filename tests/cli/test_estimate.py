@@ -1087,3 +1087,33 @@ def test_a_camera_narrower_than_the_device_is_warned_about(tmp_path, hand_video)
     assert re.search(r"handsynth: warning: --intrinsics \S+narrow.yaml: the camera does not see "
                      r"\d+% of the device's 90 deg view \(its own about 62 deg\)", res.output), \
         res.output
+
+
+def test_the_learnt_estimators_side_by_side_video_draws_its_angles(tmp_path):
+    # --video-out was refused with --learned: a wearer could not see what was read
+    import cv2
+
+    out, video = tmp_path / "rows.csv", tmp_path / "side.avi"
+    res = _run("--synthetic", *LEARNT, "--learned-cache", str(tmp_path / "c"), "--frames", "6",
+               "--synthetic-motion", "named", "--out", str(out), "--video-out", str(video),
+               *SMALL)
+    assert res.exit_code == 0, res.output
+    assert f"video: {video} (6 frames" in res.output
+    cap = cv2.VideoCapture(str(video))
+    frames = []
+    while True:
+        ok, f = cap.read()
+        if not ok:
+            break
+        frames.append(f)
+    cap.release()
+    assert len(frames) == 6 and frames[0].shape == (H, 2 * W, 3)
+    # the right half is the standard hand posed by each row's angles, drawn through the device
+    _, rows = _read_csv(out)
+    with SilhouetteRenderer(HandShape(), width_px=W, height_px=H) as r:
+        for f, row in zip(frames, rows):
+            drawn = f[:, W:, 1] > 128
+            drawn[:30] = False  # the label
+            want = r.mask(np.array([float(row[n]) for n in JOINT_NAMES]))
+            want[:30] = False
+            assert (drawn & want).sum() / (drawn | want).sum() > 0.9

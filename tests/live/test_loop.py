@@ -769,3 +769,29 @@ def test_a_corrected_source_is_the_same_run_through_the_lens(tmp_path, lookup):
         CorrectedSource(cam, "lens.yaml")
     with pytest.raises(InvalidInputError, match="read"):
         CorrectedSource("camera", lens)
+
+
+def test_side_by_side_of_an_estimator_without_a_database_draws_its_angles(tmp_path, lookup):
+    # any estimator: the right half is the hand posed by the estimated angles
+    import cv2
+
+    class Fixed:
+        def estimate(self, frame):
+            return PoseEstimate(angles=named_pose("fist"), keypoints=np.zeros((21, 3)),
+                                confidence=0.9, entry=-1, error=0.0, low_confidence=False,
+                                no_hand=False)
+
+    with _synthetic(lookup, frames=3) as src:
+        s = run_live(Fixed(), src, video_out=tmp_path / "v.avi", options=LiveOptions(max_frames=3))
+    assert s.frames == 3
+    ok, frame = cv2.VideoCapture(str(tmp_path / "v.avi")).read()
+    assert ok and frame.shape == (H, 2 * W, 3)
+    from handsynth.render import SilhouetteRenderer
+
+    with SilhouetteRenderer(HandShape(), lookup.mount, width_px=W, height_px=H) as r:
+        want = r.mask(named_pose("fist"))
+    drawn = frame[:, W:, 1] > 128
+    drawn[:30], want[:30] = False, False
+    assert (drawn & want).sum() / (drawn | want).sum() > 0.9
+    with pytest.raises(InvalidInputError, match="lookup must be a pose estimator"):
+        SideBySideWriter(tmp_path / "w.avi", "not an estimator")
