@@ -17,6 +17,7 @@ Usage::
     python scripts/study_camera.py --cache DIR skin_lit
     python scripts/study_camera.py --cache DIR [--kind perceptrons] novelty
     python scripts/study_camera.py --cache DIR [--kind perceptrons] lens
+    python scripts/study_camera.py --cache DIR level
 
 ``backgrounds``
     Two held-out model hands (seed 3, 1.5 times the learning spread) and the
@@ -202,6 +203,15 @@ Usage::
     a dark ground; the rest frame through the same camera.  Per view the
     finger flexion MAE beside the constant and the share flagged
     ``low_confidence``.  Last line: ``<view>_<set>=<mae> ...``.
+``level``
+    Whether the device's tilt and roll can be read from the rest frame: the
+    rotation (tilt and roll on a 4-deg grid, +-20 deg) whose level view of the
+    rest frame (a homography: same optical centre) the shipped perceptrons
+    find least unlike their learning frames (mean novelty norm).  Three
+    held-out model hands (seed 41) and the three glTF hands, a relaxed rest
+    each (seed 2), the device tilted and rolled by (0, 0), (+-12, 0), (0,
+    +-12) and (8, -8) deg.  Per kind of hand the error of the angles read.
+    Last line: ``model_tilt_abs=<deg> model_roll_abs=<deg> glTF_tilt_abs=...``.
 
 The learnt estimator is read from ``--cache`` (or learnt there first).
 """
@@ -1060,6 +1070,60 @@ def lens(cache, kind: str = "ensemble") -> None:
     print(" ".join(summary))
 
 
+def level(cache) -> None:
+    """Can the device's tilt and roll be read from the rest frame (not taken; see the docs)?"""
+    import cv2
+
+    from handsynth.estimate import LEARNED_ENSEMBLES, learned_ensemble
+    from handsynth.testhands import TEST_HANDS
+
+    paper = CameraMount.paper()
+    ens = learned_ensemble(cache, members=LEARNED_ENSEMBLES["perceptrons"], mount=paper)
+    k = paper.intrinsics()
+    r0 = paper.pose_in_hand()[:3, :3]
+
+    def levelled(frame, tilt, roll):
+        # the view of the level device from the same centre: a homography of the frame
+        rc = paper.replace(tilt_deg=float(tilt), roll_deg=float(roll)).pose_in_hand()[:3, :3]
+        return cv2.warpPerspective(frame, k @ rc.T @ r0 @ np.linalg.inv(k), (720, 480),
+                                   flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP)
+
+    def novelty(frame):
+        cal = ens.calibrated(frame)
+        return float(np.mean([m.estimate(frame).error for m in cal.members]))
+
+    grid = np.arange(-20, 21, 4)
+    truths = [(0, 0), (12, 0), (-12, 0), (0, 12), (0, -12), (8, -8)]
+    rng = np.random.default_rng(2)
+    dark = lambda i: np.full((480, 720, 3), 20, np.uint8)  # noqa: E731
+    errors: dict = {"model": [], "glTF": []}
+    for name in [h.name for h in model_test_hands(3, seed=41) + mesh_test_hands(sorted(TEST_HANDS))]:
+        rest = relaxed_rest_posture(rng)
+        for tilt, roll in truths:
+            m = paper.replace(tilt_deg=tilt, roll_deg=roll)
+            hand = next(h for h in model_test_hands(3, seed=41, mount=m)
+                        + mesh_test_hands(sorted(TEST_HANDS), mount=m) if h.name == name)
+            made = hand.make()
+            frame = _painted(made.mask(rest), dark, 0)
+            made.close()
+            score = np.array([[novelty(levelled(frame, a, b)) for b in grid] for a in grid])
+            i, j = np.unravel_index(np.argmin(score), score.shape)
+            errors["glTF" if name in TEST_HANDS else "model"].append(
+                (grid[i] - tilt, grid[j] - roll))
+            print(f"{name:15s} tilt {tilt:+3d} roll {roll:+3d} -> read {grid[i]:+3d} {grid[j]:+3d}",
+                  flush=True)
+    out = []
+    for kind, e in errors.items():
+        e = np.array(e)
+        print(f"{kind} hands: tilt error mean {e[:, 0].mean():+.1f}, |error| mean "
+              f"{np.abs(e[:, 0]).mean():.1f}, max {np.abs(e[:, 0]).max()}; roll error mean "
+              f"{e[:, 1].mean():+.1f}, |error| mean {np.abs(e[:, 1]).mean():.1f}, max "
+              f"{np.abs(e[:, 1]).max()}")
+        out.append(f"{kind}_tilt_abs={np.abs(e[:, 0]).mean():.1f} {kind}_roll_abs="
+                   f"{np.abs(e[:, 1]).mean():.1f}")
+    print(" ".join(out))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cache", default=None, help="folder of the learnt estimator")
@@ -1078,7 +1142,7 @@ def main() -> None:
                     help="novelty, lens: the default ensemble or its perceptrons alone")
     ap.add_argument("study", choices=["backgrounds", "jitter", "holds", "observability", "bound",
                                       "bound_mcp", "rests", "moved", "imaging", "mounts", "sizes",
-                                      "skin", "skin_lit", "novelty", "lens"])
+                                      "skin", "skin_lit", "novelty", "lens", "level"])
     args = ap.parse_args()
     if args.study not in ("observability", "bound_mcp", "moved") and args.cache is None:
         ap.error(f"{args.study} needs --cache DIR")
@@ -1092,7 +1156,7 @@ def main() -> None:
                "mounts": lambda: mounts(args.cache), "sizes": lambda: sizes(args.cache),
                "skin": lambda: skin(args.cache), "skin_lit": lambda: skin_lit(args.cache),
                "novelty": lambda: novelty(args.cache, args.kind),
-               "lens": lambda: lens(args.cache, args.kind)}
+               "lens": lambda: lens(args.cache, args.kind), "level": lambda: level(args.cache)}
     studies[args.study]()
 
 

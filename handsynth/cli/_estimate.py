@@ -689,7 +689,8 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
         click.echo(f"rows: {Path(out)} ({sink.rows} row{plural}, {sink.format})" if sink.rows else
                    f"rows: none, so {Path(out)} was not written", err=info_err)
     if video is not None:
-        click.echo(f"video: {Path(video_out)} ({video.frames} frames, input | matched entry)",
+        right = "estimated pose" if learned else "matched entry"
+        click.echo(f"video: {Path(video_out)} ({video.frames} frames, input | {right})",
                    err=info_err)
     why = f" (the first refused: {summary.first_refusal})" if summary.first_refusal else ""
     if summary.stop_reason == "dead":

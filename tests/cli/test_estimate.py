@@ -1098,7 +1098,7 @@ def test_the_learnt_estimators_side_by_side_video_draws_its_angles(tmp_path):
                "--synthetic-motion", "named", "--out", str(out), "--video-out", str(video),
                *SMALL)
     assert res.exit_code == 0, res.output
-    assert f"video: {video} (6 frames" in res.output
+    assert f"video: {video} (6 frames, input | estimated pose)" in res.output
     cap = cv2.VideoCapture(str(video))
     frames = []
     while True:
