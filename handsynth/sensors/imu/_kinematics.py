@@ -72,6 +72,18 @@ JOINT_LINKS = {
 # wrist flexion axis the thesis chose for the hand (section 5.2.1)
 _FRAME_ROTATION = {**FLEX_JOINT, "hand_ulnar": "wrist_flex"}
 
+#: Height above its joint's flexion axis (the part of the sensor's vector from its joint
+#: across the link, m) from which that vector, not the sensor's own z axis, tells the back
+#: of the segment from the palm side.  Phalanx sensors sit 9-15 mm above their joints in the
+#: simulated hand; the vector of ``hand_ulnar`` from its joint is estimated least well (its
+#: height read 18-27 mm on four simulated devices, but -4 mm on one, whose link frame then
+#: came out turned over: ring and little MCP flexions about -170 deg at the zero pose).
+_HEIGHT_DECIDES_M = 0.008
+#: Largest angle any joint may read at the calibration's static start (the anatomical
+#: zero), deg: the offsets that link-vector and axis errors leave are a few degrees (at most
+#: 17 on eight simulated devices); a half-turn means a link frame turned over.
+_MAX_ZERO_OFFSET_DEG = 45.0
+
 # the link whose vector gives each sensor's frame its y direction
 _FRAME_LINK = {
     "hand_radial": ("wrist", "middle_mcp"),
@@ -145,10 +157,13 @@ def link_frames(cal: ImuRecording, model: ChainModel, *, hold_s: float = 0.5) ->
         v = _frame_vector(model, s)
         # extension positive: the frame's z (x cross v) points to the back of the segment,
         # where the sensor sits above the joint (9-15 mm in the simulated hand). Judged by
-        # the sensor's own vector from its joint, not by the sensor's z axis, so that a
-        # sensor mounted upside down (z toward the palm) gets the same frame; by its z axis
-        # its flexion read 360 deg less the true angle (index PIP: 301 for 59 deg).
-        if np.dot(np.cross(x, v), model.own[s]) < 0:
+        # the sensor's own vector from its joint where that vector stands clearly off the
+        # link, so that a sensor mounted upside down (z toward the palm) gets the same
+        # frame (by its z axis its flexion read 360 deg less the true angle: index PIP 301
+        # for 59 deg); by the sensor's z axis, mounted on the back, where it does not.
+        z = np.cross(x, v)
+        height = float(z @ model.own[s]) / float(np.linalg.norm(z) or 1.0)
+        if (height if abs(height) >= _HEIGHT_DECIDES_M else z[2]) < 0:
             x = -x
         out[s] = _frame(x, v)
     return out
@@ -396,7 +411,9 @@ def zero_offsets(cal: ImuRecording, frames: dict, *, side: str = "right",
         `side` not ``"right"`` or ``"left"``; a stretch missing; a sensor or
         frame :func:`joint_angles` needs missing.
     EstimationError
-        From the azimuth alignment (:func:`azimuth_correction`).
+        From the azimuth alignment (:func:`azimuth_correction`); a joint
+        reading more than 45 deg at the static start (link frames half a
+        turn apart).
     """
     from ._attitude import initial_attitude
     from ._vectors import _calibration_static
@@ -404,7 +421,17 @@ def zero_offsets(cal: ImuRecording, frames: dict, *, side: str = "right",
     check_side(side)
     q0 = initial_attitude(cal, static or _calibration_static(cal))
     a, _ = joint_angles(q0[:, None], cal.sensors, frames, side=side)
-    return np.nan_to_num(a[0])
+    zero = np.nan_to_num(a[0])
+    far = np.flatnonzero(np.abs(zero) > _MAX_ZERO_OFFSET_DEG)
+    if far.size:
+        joint = JOINT_NAMES[far[0]]
+        pair = JOINT_LINKS[joint.rsplit("_", 1)[0]]
+        raise EstimationError(
+            f"at the calibration's static start {joint} reads {zero[far[0]]:.1f} deg, not about 0 "
+            f"(the hand should be at the anatomical zero pose): the link frames of {pair[0]} and "
+            f"{pair[1]} disagree by about half a turn; check that hand and fingers were still "
+            f"and flat during the static start, and the labels of the calibration rotations")
+    return zero
 
 
 def fingertip_positions(quats, sensors, model: ChainModel) -> dict:

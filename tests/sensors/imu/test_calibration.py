@@ -4,7 +4,7 @@ import json
 import numpy as np
 import pytest
 
-from handsynth.errors import RecordingError
+from handsynth.errors import EstimationError, RecordingError
 from handsynth.sensors.imu import (
     ImuCalibration,
     ThumbCmcModel,
@@ -428,3 +428,38 @@ def test_a_sensor_mounted_upside_down_gets_the_same_link_frame(calibration_rec):
                                atol=1e-6)
     np.testing.assert_allclose(frames_flipped["index_proximal"], frames["index_proximal"],
                                atol=1e-9)
+
+
+def test_the_ring_little_side_of_the_hand_is_not_turned_over_where_its_vector_is_short():
+    # one simulated device (seed 2) estimated hand_ulnar's height above the wrist's axis at
+    # -4 mm (18-27 mm on the others): the link frame's side came from that sign alone, the
+    # frame came out turned over, the zero pose read ring MCP -170.5 deg, and tracking wrote
+    # ring MCP abduction 359 deg for -1 (4.7 deg RMSE once wrapped, against 0.4)
+    import warnings
+
+    from handsynth.models import JOINT_NAMES
+    from handsynth.sensors.imu import ImuHand, calibrate, calibration_motion, free_motion, simulate_imu
+
+    hand = ImuHand(tip_sensors=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        cal = calibrate(simulate_imu(calibration_motion(), hand=hand, seed=1, device_seed=2))
+        rec = simulate_imu(free_motion(8.0, seed=4), hand=hand, seed=5, device_seed=2)
+    assert np.abs(cal.zero).max() < 20.0
+    got = cal.track(rec)["angles"]
+    truth = rec.truth.angles[:, 9:]
+    for joint in ("ring_mcp_abd", "little_mcp_abd", "ring_mcp_flex", "little_mcp_flex"):
+        j = JOINT_NAMES.index(joint)
+        assert np.abs(got[:, j]).max() < 90.0, joint
+        assert np.sqrt(np.mean((got[:, j] - truth[:, j]) ** 2)) < 1.5, joint
+
+
+def test_link_frames_half_a_turn_apart_are_refused_at_calibration(calibration_rec):
+    from handsynth.sensors.imu import chain_model, link_frames, zero_offsets
+
+    frames = link_frames(calibration_rec, chain_model(calibration_rec))
+    frames["ring_proximal"] = frames["ring_proximal"] * np.array([[-1.0], [1.0], [-1.0]])
+    with pytest.raises(EstimationError, match=r"ring_mcp_flex reads -?1\d\d\.\d deg, not about 0 .*"
+                                              r"hand_ulnar and ring_proximal disagree by about "
+                                              r"half a turn"):
+        zero_offsets(calibration_rec, frames)
