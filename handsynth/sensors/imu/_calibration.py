@@ -31,6 +31,7 @@ from ._kinematics import (
     zero_offsets,
 )
 from ._layout import FLEX_JOINT
+from ._model import TIP_SENSORS
 from ._plate import PLATE_SENSORS, fuse_plate, plate_rotations
 from ._recording import ImuRecording, check_recording
 from ._sensorcal import POSE_PREFIX, SensorCalibration, fit_sensor_calibration
@@ -550,6 +551,13 @@ def calibrate(rec: ImuRecording, *, sensor_calibration: bool = True,
                 raise
             raise EstimationError(f"{source}: {exc}") from None
         rec = sensor_cal.apply(rec)
+    tips = [t for t in TIP_SENSORS if t not in rec.sensors]
+    if tips:
+        where = f"{source}: " if source else ""
+        raise RecordingError(
+            f"{where}the calibration needs the five temporary fingertip sensors "
+            f"({', '.join(TIP_SENSORS)}) for the distal link vectors; missing "
+            f"{', '.join(tips)} (the recording has {', '.join(rec.sensors)})")
     model = chain_model(rec)
     frames = link_frames(rec, model)
     zero = zero_offsets(rec, frames, side=side)

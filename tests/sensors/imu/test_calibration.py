@@ -463,3 +463,18 @@ def test_link_frames_half_a_turn_apart_are_refused_at_calibration(calibration_re
                                               r"hand_ulnar and ring_proximal disagree by about "
                                               r"half a turn"):
         zero_offsets(calibration_rec, frames)
+
+
+def test_a_calibration_without_the_fingertip_sensors_says_so():
+    # before: "no sensor 'thumb_tip' in the recording" from deep inside the vector estimate
+    import warnings
+
+    from handsynth.sensors.imu import ImuHand, calibrate, calibration_motion, simulate_imu
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        rec = simulate_imu(calibration_motion(), hand=ImuHand(), seed=1)
+    with pytest.raises(RecordingError, match=r"^cal.csv: the calibration needs the five temporary "
+                                             r"fingertip sensors \(thumb_tip, .*little_tip\) .*"
+                                             r"missing thumb_tip, index_tip"):
+        calibrate(rec, source="cal.csv")
