@@ -185,11 +185,12 @@ def _bench_learned(args) -> None:
         told = {"binarize (Otsu) of the BGR frame": _median_ms(binarize, frames, n)}
     # a wide-angle board camera's calibration (about 100 deg, barrel distortion): the cost of
     # --intrinsics, paid before every other part
-    lens = LensCorrection(CameraIntrinsics(720, 480, 302.0, 301.0, 367.0, 233.0,
-                                           distortion=(-0.30, 0.09, 0.001, -0.0008, -0.012)),
-                          mount)
+    wide = CameraIntrinsics(720, 480, 302.0, 301.0, 367.0, 233.0,
+                            distortion=(-0.30, 0.09, 0.001, -0.0008, -0.012))
+    lens, half = LensCorrection(wide, mount), LensCorrection(wide, mount, scale=0.5)
     parts = {
-        "lens correction (--intrinsics: remap of the BGR frame)": _median_ms(lens, frames, n),
+        "lens correction (remap of the BGR frame to 720x480)": _median_ms(lens, frames, n),
+        "lens correction to 360x240 (--intrinsics with --learned)": _median_ms(half, frames, n),
         **told,
         "coverage grid (wrist cut, cell means)": _median_ms(lambda m: coverage(m, mount), masks, n),
     }

@@ -196,7 +196,8 @@ Usage::
     render (2400x2400) sampled along each of its pixels' rays (OpenCV's
     ``undistortPoints``, the inverse of its forward model), then given to
     the estimator as :class:`~handsynth.render.LensCorrection` corrects
-    them (``--intrinsics``) and as a user without the calibration would
+    them (``--intrinsics``; at full and at half size, 360x240) and as a user
+    without the calibration would
     (the middle cut to 3:2, resized to 720x480), beside the device's own
     renders.  The three glTF hands and two held-out model hands (seed 3), a
     relaxed rest each (seed 8), 60 paper and 60 natural frames each, skin on
@@ -1019,7 +1020,8 @@ def lens(cache, kind: str = "ensemble") -> None:
     for name, (k, dist, model, (w, h)) in _LENS_CAMERAS.items():
         intr = CameraIntrinsics(w, h, k[0][0], k[1][1], k[0][2], k[1][2], distortion=dist,
                                 model=model)
-        cams[name] = (LensCorrection(intr, mount), _camera_maps(intr, wide))
+        cams[name] = (LensCorrection(intr, mount), _camera_maps(intr, wide),
+                      LensCorrection(intr, mount, scale=0.5))
         print(f"{name}: {w}x{h}, about {intr.fov_deg:.0f} deg without distortion, device view "
               f"unseen {cams[name][0].unseen_share:.1%}", flush=True)
     rng = np.random.default_rng(8)
@@ -1043,11 +1045,12 @@ def lens(cache, kind: str = "ensemble") -> None:
         views = {"device's own view": lambda f: f}
         for k, poses in sets.items():
             frames = {"device's own view": device[k]}
-            for name, (corr, (mx, my)) in cams.items():
+            for name, (corr, (mx, my), half) in cams.items():
                 real = [_painted(cv2.remap(b, mx, my, cv2.INTER_LINEAR) > 127,
                                  lambda i, s=(mx.shape + (3,)): np.full(s, 20, np.uint8), 0)
                         for b in big[k]]
                 frames[f"{name}, corrected"] = [corr(f) for f in real]
+                frames[f"{name}, corrected at half size"] = [half(f) for f in real]
                 frames[f"{name}, as given"] = [_as_device_ratio(f) for f in real]
             for cond, fr in frames.items():
                 cal = ens.calibrated(fr[0])

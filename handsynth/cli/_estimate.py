@@ -295,15 +295,17 @@ def _read_intrinsics(path):
     return read_intrinsics(path)
 
 
-def _corrected(source, open_image, optics, mount, path, image_name):
+def _corrected(source, open_image, optics, mount, path, image_name, *, half: bool):
     """The source and the calibration image through the camera's lens correction.
 
+    `half`: corrected frames at half the device's size (the learnt estimator reads them as
+    well, docs/camera_estimator.md "A real camera's lens", for a quarter of the remap).
     Says how much of the device's view the camera does not see (black, read as
     background) when that is more than 1 %."""
     from ..live import CorrectedSource
     from ..render import LensCorrection
 
-    lens = LensCorrection(optics, mount)
+    lens = LensCorrection(optics, mount, scale=0.5 if half else 1.0)
     if lens.unseen_share > 0.01:
         fold = (f"; its lens model folds back beyond {lens.fold_deg:.0f} deg from the axis"
                 if lens.fold_deg is not None else "")
@@ -616,7 +618,7 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
         assert source is not None
         if camera_optics is not None:
             source, open_image = _corrected(source, open_image, camera_optics, mount,
-                                            intrinsics, calibrate_image)
+                                            intrinsics, calibrate_image, half=learned)
         told = None
         try:
             if learned:

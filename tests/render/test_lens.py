@@ -530,3 +530,24 @@ def test_empty_binary_and_misformatted_files_are_refused_clearly(tmp_path, conte
     with pytest.raises(InvalidInputError, match=match) as info:
         read_intrinsics(path)
     assert str(path) in str(info.value)
+
+
+def test_a_half_size_correction_is_the_device_view_at_half_the_resolution():
+    mount = CameraMount.paper()
+    px, rays = _device_rays(mount, step=90)
+    real = _forward(WIDE, rays)
+    inside = ((real > 5) & (real < [WIDE.width_px - 6, WIDE.height_px - 6])).all(axis=1)
+    half = LensCorrection(WIDE, mount, scale=0.5)
+    assert half.size == (360, 240)
+    out = half(_dots((WIDE.height_px, WIDE.width_px), real[inside]))
+    assert out.shape == (240, 360)
+    for u, v in px[inside]:
+        # pixel centres: (u + 0.5) / 2 - 0.5
+        cu, cv_ = (u + 0.5) / 2 - 0.5, (v + 0.5) / 2 - 0.5
+        patch = out[int(cv_) - 4:int(cv_) + 6, int(cu) - 4:int(cu) + 6].astype(np.float64)
+        assert patch.sum() > 0, (u, v)
+        yy, xx = np.mgrid[int(cv_) - 4:int(cv_) + 6, int(cu) - 4:int(cu) + 6]
+        assert np.hypot((patch * xx).sum() / patch.sum() - cu,
+                        (patch * yy).sum() / patch.sum() - cv_) < 1.0, (u, v)
+    with pytest.raises(InvalidInputError, match="scale"):
+        LensCorrection(WIDE, mount, scale=0)
