@@ -417,8 +417,8 @@ def _progress(stream):
               help="Calibrate with this image of the open, flat hand through the device "
                    "instead of the first frame (implies --calibrate).")
 @click.option("--intrinsics", default=None, metavar="FILE",
-              help="The real camera's calibration (OpenCV FileStorage YAML/XML/JSON, ROS "
-                   "camera_info or a Kalibr camera chain): every frame, and --calibrate-image, "
+              help="The real camera's calibration (as OpenCV, ROS, Kalibr, Basalt or "
+                   "ORB-SLAM write it): every frame, and --calibrate-image, "
                    "is remapped to the device's pinhole view before the estimate (its lens "
                    "distortion, focal length and principal point undone; "
                    "docs/camera_estimator.md).")
@@ -504,8 +504,8 @@ def _progress(stream):
 @click.option("--quiet", "-q", is_flag=True, help="No progress line.")
 def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, personal,
              build_count, calibrate, calibrate_image, intrinsics, learned, learned_kind,
-             learned_cache,
-             learned_hands, learned_rest, side, smoothing, segment, one_euro, frames, seconds, out, fmt,
+             learned_cache, learned_hands, learned_rest, side, smoothing, segment, one_euro,
+             frames, seconds, out, fmt,
              keypoints, video_out, synthetic_shape, synthetic_motion, synthetic_size, fps,
              no_temporal, max_dead, quiet) -> None:
     """Look up the hand pose of every frame of a camera, a video file or a synthetic hand.
