@@ -1042,7 +1042,6 @@ def lens(cache, kind: str = "ensemble") -> None:
         big = {k: [m.view(np.uint8) * np.uint8(255) for m in made.masks(np.vstack([rest[None], p]))]
                for k, p in sets.items()}
         made.close()
-        views = {"device's own view": lambda f: f}
         for k, poses in sets.items():
             frames = {"device's own view": device[k]}
             for name, (corr, (mx, my), half) in cams.items():
@@ -1058,7 +1057,6 @@ def lens(cache, kind: str = "ensemble") -> None:
                 e = np.abs(np.stack([g.angles for g in got])[:, _FLEX] - poses[:, _FLEX]).mean(1)
                 low = np.array([g.low_confidence for g in got])
                 err.setdefault((cond, k), []).append((e, low, np.abs(poses[:, _FLEX]).mean(1)))
-        del views
         print(f"{device_hand.name} done", flush=True)
     print(f"\n{kind}; finger flexion MAE (deg) over {len(names)} glTF hands and 2 model hands, "
           "relaxed rests, 60 frames each; share flagged low_confidence")
