@@ -31,6 +31,7 @@ from ._gated import GatedFilter, GatedOptions, gated_orientation
 from ._kinematics import (
     JOINT_LINKS,
     ThumbCmcModel,
+    angles_beyond_range,
     classify_grasp,
     fingertip_positions,
     joint_angles,
@@ -159,6 +160,7 @@ __all__ = [
     "VQFEstimator",
     "VectorEstimate",
     "allan_deviation",
+    "angles_beyond_range",
     "apply_axis_noise",
     "azimuth_correction",
     "broad_errors",

@@ -24,6 +24,7 @@ from ._attitude import StaticStart
 from ._ekf import ChainEKF, ChainEKFOptions
 from ._kinematics import (
     ThumbCmcModel,
+    angles_beyond_range,
     fingertip_positions,
     joint_angles,
     link_frames,
@@ -35,7 +36,7 @@ from ._model import TIP_SENSORS
 from ._plate import PLATE_SENSORS, fuse_plate, plate_rotations
 from ._recording import ImuRecording, check_recording
 from ._sensorcal import POSE_PREFIX, SensorCalibration, fit_sensor_calibration
-from ._vectors import _MIN_ROTATION_SAMPLES, ChainModel, chain_model
+from ._vectors import ChainModel, _min_rotation_samples, chain_model
 
 __all__ = ["ImuCalibration", "calibrate", "check_stretches", "segments_from_seconds"]
 
@@ -172,7 +173,7 @@ def check_stretches(rec: ImuRecording, *, source: str | None = None) -> list[str
             continue
         gyr = rec.gyr[:, a:b]
         if label in rotations:
-            if b - a < _MIN_ROTATION_SAMPLES:
+            if b - a < _min_rotation_samples(rec.rate_hz):
                 continue  # too short to be still or not: refused as such (chain_model)
             hold = max(3, int(_BIAS_HOLD_S * rec.rate_hz))
             # the hold at the start gives the gyro biases; a stretch too short to begin with
@@ -331,6 +332,13 @@ class ImuCalibration:
             ``quat`` (S, N, 4), ``angles`` (N, 20) degrees, ``tips``
             finger -> (N, 3) metres from the elbow, ``sensor_calibration``
             whether a sensor calibration was applied.
+
+        Warns
+        -----
+        UserWarning
+            Joint angles far beyond the hand's range of motion in a share of the samples,
+            naming the joints and the sensor they point to (:func:`angles_beyond_range`):
+            a sensor turned on its segment since the calibration.
         """
         static = check_options(static, StaticStart, name="static")
         options = check_options(options, ChainEKFOptions)
@@ -344,6 +352,9 @@ class ImuCalibration:
         q = self.fuse(est.run(sub), sub.sensors, plate_fusion=plate_fusion)
         angles, _ = joint_angles(q, sub.sensors, self.frames, side=self.side, zero=self.zero,
                                  cmc=self.cmc)
+        beyond = angles_beyond_range(angles)
+        if beyond is not None:
+            warnings.warn(beyond, UserWarning, stacklevel=2)
         tips = {f: v for f, v in fingertip_positions(q, sub.sensors, self.model).items()
                 if not f.endswith("_joints")}
         return {"quat": q, "angles": angles, "tips": tips, "sensor_calibration": applied}

@@ -33,9 +33,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ..._checks import check_side
+from ..._checks import check_number, check_side
 from ...errors import EstimationError, InvalidInputError
-from ...models import JOINT_NAMES
+from ...models import JOINT_LIMITS_DEG, JOINT_NAMES
 from ._layout import CHAINS, FLEX_JOINT
 from ._quat import check_quats, quat_to_mat
 from ._recording import ImuRecording
@@ -44,6 +44,7 @@ from ._vectors import ChainModel, _segment
 __all__ = [
     "JOINT_LINKS",
     "ThumbCmcModel",
+    "angles_beyond_range",
     "classify_grasp",
     "fingertip_positions",
     "joint_angles",
@@ -432,6 +433,83 @@ def zero_offsets(cal: ImuRecording, frames: dict, *, side: str = "right",
             f"{pair[1]} disagree by about half a turn; check that hand and fingers were still "
             f"and flat during the static start, and the labels of the calibration rotations")
     return zero
+
+
+def angles_beyond_range(angles, *, margin_deg: float = 30.0, min_share: float = 0.05) -> str | None:
+    """Say which sensor a hand's impossible joint angles point to, or None.
+
+    A sensor turned on its segment after the calibration (clipped back the other way
+    round, or a recording whose columns of two sensors are swapped) leaves every later
+    sample's attitudes plausible on their own, but the joints it spans read far beyond
+    what a hand can do: measured on the held-out simulated configuration, a middle
+    phalanx's sensor turned half a turn about its z axis read the index PIP at -66 deg
+    (its own range -5 to 100), about its x axis PIP and DIP near +-180 deg, the
+    hand's radial sensor turned about z read the index and middle MCP abductions
+    near +-180 deg, while untouched sensors stayed within 0.6 deg of
+    :data:`~handsynth.models.JOINT_LIMITS_DEG` (six draws, tuning and held-out
+    configurations, free motions with the elbow fixed and moving, and grasps).
+
+    Parameters
+    ----------
+    angles : ndarray, shape (N, 20), degrees
+        Canonical joint angles (:func:`joint_angles`); NaN entries are ignored.
+    margin_deg : float, keyword-only
+        How far beyond a joint's range (:data:`~handsynth.models.JOINT_LIMITS_DEG`,
+        the AAOS ranges and hyperextension) an angle must be to count: the
+        default 30 deg leaves room for hypermobile joints and estimation error.
+    min_share : float, keyword-only
+        Share of the samples, in (0, 1], in which a joint must count.
+
+    Returns
+    -------
+    str or None
+        One sentence naming each such joint (share of samples, worst angle, its
+        range) and the sensor(s) they share, most likely the one that moved; None
+        when every joint stays within range.
+
+    Raises
+    ------
+    InvalidInputError
+        `angles` not of shape (N, 20), `margin_deg` not a number >= 0, `min_share`
+        not in (0, 1].
+    """
+    angles = np.asarray(angles, dtype=float)
+    if angles.ndim != 2 or angles.shape[1] != len(JOINT_NAMES):
+        raise InvalidInputError(f"angles must have shape (N, {len(JOINT_NAMES)}) (canonical joint "
+                                f"angles, deg), got {angles.shape}")
+    margin_deg = check_number(margin_deg, "margin_deg", minimum=0)
+    min_share = check_number(min_share, "min_share", above=0, maximum=1)
+    if angles.shape[0] == 0:
+        return None
+    lo, hi = JOINT_LIMITS_DEG[:, 0], JOINT_LIMITS_DEG[:, 1]
+    with np.errstate(invalid="ignore"):
+        beyond = (angles < lo - margin_deg) | (angles > hi + margin_deg)
+    share = beyond.mean(axis=0)
+    flagged = [j for j in range(len(JOINT_NAMES)) if share[j] >= min_share]
+    if not flagged:
+        return None
+    parts = []
+    for j in flagged:
+        a = angles[beyond[:, j], j]
+        worst = a[np.argmax(np.maximum(lo[j] - a, a - hi[j]))]
+        parts.append(f"{JOINT_NAMES[j]} in {100 * share[j]:.0f} % of the samples ({worst:.0f} deg; "
+                     f"range {lo[j]:g} to {hi[j]:g})")
+    # each joint (a flexion and abduction of one joint count once) votes for its two sensors
+    joints = list(dict.fromkeys(JOINT_NAMES[j].rsplit("_", 1)[0] for j in flagged))
+    counts: dict[str, int] = {}
+    for joint in joints:
+        for s in JOINT_LINKS[joint]:
+            counts[s] = counts.get(s, 0) + 1
+    top = max(counts.values())
+    suspects = [s for s, c in counts.items() if c == top]
+    if len(suspects) == 1:
+        who = f"sensor {suspects[0]} (a sensor of {top} of those {len(joints)} joints)"
+    else:
+        who = "sensor " + ", ".join(suspects[:-1]) + f" or {suspects[-1]}"
+    return (f"{len(flagged)} joint angle{'s' if len(flagged) > 1 else ''} read more than "
+            f"{margin_deg:g} deg beyond the hand's range of motion: {'; '.join(parts)}. Most "
+            f"likely {who} turned or moved on its segment since the calibration, or its columns "
+            "are another sensor's: put it back as it was when calibrated, or calibrate again")
 
 
 def fingertip_positions(quats, sensors, model: ChainModel) -> dict:

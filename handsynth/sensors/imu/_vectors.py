@@ -122,17 +122,42 @@ def _turning_points(gyr, dgyr, *, frac_w=0.25, frac_dw=0.5):
     return i[loc]
 
 
-#: Samples a labelled rotation needs at least: the Savitzky-Golay window of its gyro.
+#: Samples a labelled rotation needs at least at 100 Hz or less: the Savitzky-Golay window
+#: of its gyro (:func:`_smoothing_windows`; more samples at higher rates).
 _MIN_ROTATION_SAMPLES = 7
+#: Spans of the Savitzky-Golay fits (quadratic) of the gyro and its derivative and of the
+#: accelerometer, s: 7 and 5 samples at 100 Hz, the rate the thesis recorded at.  Fixed in
+#: time, not in samples: the same 7 samples at 1,000 Hz differentiated ten times as much
+#: noise per second (the datasheet noise's s.d. per sample grows with the square root of the
+#: rate) and took the elbow vectors 25-36 mm from the truth (2-11 mm at 100 Hz).
+_GYRO_SPAN_S, _ACC_SPAN_S = 0.07, 0.05
+
+
+def _smoothing_windows(rate_hz: float) -> tuple[int, int]:
+    """Odd Savitzky-Golay windows (gyro, accelerometer), samples, for `rate_hz`.
+
+    ``(7, 5)`` at 100 Hz and below (the thesis' rate), growing with the rate above it so
+    that each covers :data:`_GYRO_SPAN_S` and :data:`_ACC_SPAN_S`.
+    """
+    def odd(n: float, least: int) -> int:
+        return max(least, int(round(n)) // 2 * 2 + 1)
+
+    return odd(_GYRO_SPAN_S * rate_hz, _MIN_ROTATION_SAMPLES), odd(_ACC_SPAN_S * rate_hz, 5)
+
+
+def _min_rotation_samples(rate_hz: float) -> int:
+    """Samples a labelled rotation needs at least at `rate_hz` (its gyro's smoothing window)."""
+    return _smoothing_windows(rate_hz)[0]
 
 
 def _rotation_data(rec: ImuRecording, k: int, a: int, b: int, hold: int):
     """gyro, angular acceleration and rotational acceleration (eq. 3.7) of sensor k on a:b."""
     dt = 1.0 / rec.rate_hz
+    wg, wa = _smoothing_windows(rec.rate_hz)
     gyr = rec.gyr[k, a:b] - rec.gyr[k, a:a + hold].mean(axis=0)
-    gyr_s = savgol_filter(gyr, 7, 2, axis=0)
-    dgyr = savgol_filter(gyr, 7, 2, deriv=1, delta=dt, axis=0)
-    acc = savgol_filter(rec.acc[k, a:b], 5, 2, axis=0)
+    gyr_s = savgol_filter(gyr, wg, 2, axis=0)
+    dgyr = savgol_filter(gyr, wg, 2, deriv=1, delta=dt, axis=0)
+    acc = savgol_filter(rec.acc[k, a:b], wa, 2, axis=0)
     # gravity in the sensor frame: from the still start, carried along by the gyro
     g = rec.acc[k, a:a + hold].mean(axis=0)
     g *= GRAVITY_MPS2 / np.linalg.norm(g)
@@ -226,10 +251,10 @@ def rotation_vector(rec: ImuRecording, sensor: str, point: str, *, hold_s: float
     data = {}
     for lab in dir_rot:
         a, b = _segment(segments, lab)
-        if b - a < _MIN_ROTATION_SAMPLES:
+        if b - a < _min_rotation_samples(rec.rate_hz):
             raise EstimationError(
                 f"rotation {lab!r} spans {b - a} samples ({(b - a) / rec.rate_hz:.3g} s); at least "
-                f"{_MIN_ROTATION_SAMPLES} are needed, and turning points need seconds (rotate "
+                f"{_min_rotation_samples(rec.rate_hz)} are needed, and turning points need seconds (rotate "
                 "longer, or check its span in the segments)")
         data[lab] = _rotation_data(rec, k, a, b, hold)
     pts = {lab: _turning_points(data[lab][0], data[lab][1]) for lab in dir_rot}
@@ -502,12 +527,13 @@ def seel_joint_positions(rec: ImuRecording, s1: str, s2: str, *, iterations: int
     dt = 1.0 / rec.rate_hz
     stop = rec.n if stop is None else stop
     k1, k2 = rec.index(s1), rec.index(s2)
-    g1 = savgol_filter(rec.gyr[k1, start:stop], 7, 2, axis=0)
-    g2 = savgol_filter(rec.gyr[k2, start:stop], 7, 2, axis=0)
-    d1 = savgol_filter(rec.gyr[k1, start:stop], 7, 2, deriv=1, delta=dt, axis=0)
-    d2 = savgol_filter(rec.gyr[k2, start:stop], 7, 2, deriv=1, delta=dt, axis=0)
-    a1 = savgol_filter(rec.acc[k1, start:stop], 5, 2, axis=0)
-    a2 = savgol_filter(rec.acc[k2, start:stop], 5, 2, axis=0)
+    wg, wa = _smoothing_windows(rec.rate_hz)
+    g1 = savgol_filter(rec.gyr[k1, start:stop], wg, 2, axis=0)
+    g2 = savgol_filter(rec.gyr[k2, start:stop], wg, 2, axis=0)
+    d1 = savgol_filter(rec.gyr[k1, start:stop], wg, 2, deriv=1, delta=dt, axis=0)
+    d2 = savgol_filter(rec.gyr[k2, start:stop], wg, 2, deriv=1, delta=dt, axis=0)
+    a1 = savgol_filter(rec.acc[k1, start:stop], wa, 2, axis=0)
+    a2 = savgol_filter(rec.acc[k2, start:stop], wa, 2, axis=0)
 
     def gamma(g, d):
         # K with K o = w x (w x o) + dw x o

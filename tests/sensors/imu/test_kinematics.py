@@ -1,9 +1,12 @@
 import numpy as np
+import pytest
 
-from handsynth.models import JOINT_NAMES
+from handsynth.errors import InvalidInputError
+from handsynth.models import JOINT_LIMITS_DEG, JOINT_NAMES
 from handsynth.sensors.imu import (
     GRASP_POSES,
     POINTS,
+    angles_beyond_range,
     classify_grasp,
     fingertip_positions,
     joint_angles,
@@ -61,3 +64,57 @@ def test_thumb_cmc_axes_learnt_from_the_calibration_give_its_canonical_angles(im
     assert np.all(rmse < 1.5) and np.all(rmse < 0.2 * const), (rmse, const)
     # the flexion and abduction rotations are told apart (not one axis twice)
     assert abs(cmc.axes[0] @ cmc.axes[1]) < 0.5
+
+
+def _within_range(n=200, seed=0):
+    rng = np.random.default_rng(seed)
+    lo, hi = JOINT_LIMITS_DEG[:, 0], JOINT_LIMITS_DEG[:, 1]
+    return lo + (hi - lo) * rng.random((n, len(JOINT_NAMES)))
+
+
+def test_angles_within_the_range_of_motion_say_nothing():
+    angles = _within_range()
+    angles[:, 0] = np.nan  # a thumb CMC not read
+    assert angles_beyond_range(angles) is None
+    # a hypermobile joint 25 deg past its range: within the margin
+    angles[:, JOINT_NAMES.index("index_pip_flex")] = -30.0
+    assert angles_beyond_range(angles) is None
+    assert angles_beyond_range(np.empty((0, 20))) is None
+
+
+def test_angles_beyond_the_range_name_the_joints_and_the_sensor_they_share():
+    angles = _within_range()
+    pip, dip = JOINT_NAMES.index("index_pip_flex"), JOINT_NAMES.index("index_dip_flex")
+    angles[:100, pip] = -170.0       # half the samples
+    angles[:, dip] = -175.0
+    msg = angles_beyond_range(angles)
+    assert msg.startswith("2 joint angles read more than 30 deg beyond the hand's range of motion: "
+                          "index_pip_flex in 50 % of the samples (-170 deg; range -5 to 100); "
+                          "index_dip_flex in 100 % of the samples (-175 deg; range -10 to 90)")
+    # index_middle is a sensor of both joints (PIP: proximal-middle, DIP: middle-distal)
+    assert "Most likely sensor index_middle (a sensor of 2 of those 2 joints)" in msg
+    # one joint: either of its two sensors
+    one = _within_range()
+    one[:, pip] = 150.0
+    assert "Most likely sensor index_proximal or index_middle turned" in angles_beyond_range(one)
+    # a flexion and an abduction of one joint count as one joint
+    cmc = _within_range()
+    cmc[:, 0], cmc[:, 1] = 120.0, -136.0
+    assert "sensor hand_radial or thumb_metacarpal" in angles_beyond_range(cmc)
+    # fewer samples than min_share: nothing said
+    few = _within_range()
+    few[:5, pip] = -170.0
+    assert angles_beyond_range(few) is None
+    assert "index_pip_flex in 2 %" in angles_beyond_range(few, min_share=0.02)
+
+
+@pytest.mark.parametrize(("kwargs", "message"), [
+    ({"angles": np.zeros((10, 19))}, r"angles must have shape \(N, 20\).*got \(10, 19\)"),
+    ({"angles": np.zeros(20)}, r"got \(20,\)"),
+    ({"angles": np.zeros((3, 20)), "margin_deg": -1}, "margin_deg must be a finite number >= 0"),
+    ({"angles": np.zeros((3, 20)), "min_share": 0}, "min_share must be a finite number > 0"),
+    ({"angles": np.zeros((3, 20)), "min_share": "5 %"}, "min_share"),
+])
+def test_angles_beyond_range_refuses_bad_arguments(kwargs, message):
+    with pytest.raises(InvalidInputError, match=message):
+        angles_beyond_range(**kwargs)
