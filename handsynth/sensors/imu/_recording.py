@@ -684,6 +684,11 @@ def _columns(header, col, path) -> tuple[dict[str, int], list[str], str | None, 
                              f"like 'hand1 AccX' or 'hand1.accel.x')")
     channels = [f"{s}_{c}_{a}" for s in sensors for c in ("acc", "gyr", "mag") for a in _AXES]
     missing = [name for name in channels if name not in col]
+    if missing and set(missing) == {f"{s}_mag_{a}" for s in sensors for a in _AXES}:
+        raise RecordingError(
+            f"{path}: no magnetometer column for any of its {len(sensors)} sensor(s) (such as "
+            f"{sensors[0]}_mag_x): the IMU methods here need 9-axis sensors (accelerometer, gyro "
+            "and magnetometer, MPU-9250-like); 6-axis recordings are not read")
     if missing:
         raise RecordingError(f"{path}: missing column(s) {', '.join(missing[:6])}")
     time_name = "time_s" if "time_s" in col else "time_ms" if "time_ms" in col else None

@@ -126,6 +126,29 @@ def test_csv_gap_and_bad_cells(tmp_path, free_rec):
         read_imu_csv(tmp_path / "missing.csv")
 
 
+
+def test_a_recording_without_magnetometers_is_named_as_six_axis(tmp_path, free_rec):
+    p = tmp_path / "rec.csv"
+    write_imu_csv(free_rec.subset(("forearm_1", "index_distal")).slice(0, 50), p)
+    lines = p.read_text().splitlines()
+    start = next(i for i, line in enumerate(lines) if not line.startswith("#"))
+    header = lines[start].split(",")
+    keep = [i for i, h in enumerate(header) if "_mag_" not in h]
+
+    def write(name, cols):
+        out = tmp_path / name
+        out.write_text("\n".join(lines[:start] + [",".join(line.split(",")[i] for i in cols)
+                                                   for line in lines[start:]]) + "\n")
+        return out
+
+    with pytest.raises(RecordingError, match=r"^.*six.csv: no magnetometer column for any of its 2 "
+                                             r"sensor\(s\) \(such as forearm_1_mag_x\): .*9-axis"):
+        read_imu_csv(write("six.csv", keep))
+    # one sensor's magnetometer missing is a missing column, named
+    one = [i for i, h in enumerate(header) if not h.startswith("index_distal_mag_")]
+    with pytest.raises(RecordingError, match=r"one.csv: missing column\(s\) index_distal_mag_x, "):
+        read_imu_csv(write("one.csv", one))
+
 def test_a_recording_is_written_whole_or_not_at_all(tmp_path, free_rec, full_disk):
     # issue 16: every output goes through the atomic writer (a missing folder or a full
     # disk is one clear error; nothing half-written is left)
