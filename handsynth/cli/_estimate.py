@@ -331,6 +331,7 @@ def _calibrate_learned(est, source, rest_image, mount, side, err, *, segment: st
     view made every later frame low-confidence.  A --calibrate-image that reads so is
     used as given, with a warning."""
     refused = 0
+    last_refused = []
 
     def reads_as_a_hand(frame) -> bool:
         # a frame the estimator refuses (another width-to-height ratio...) is an error, as
@@ -339,15 +340,24 @@ def _calibrate_learned(est, source, rest_image, mount, side, err, *, segment: st
         if not est.calibrated(frame, segment=segment).estimate(frame).low_confidence:
             return True
         refused += 1
+        last_refused[:] = [frame]
         # a hand at rest over a cluttered ground can itself read so (9 of 60 rest frames
         # over photographs): after REST_FRAME_PATIENCE such frames the next one is taken
         return refused > REST_FRAME_PATIENCE
 
-    rest, where = _calibration_frame(source, rest_image, mount, side, err,
-                                     synthetic="the synthetic hand at rest (open)",
-                                     prompt="hold the hand open, not stiff",
-                                     accept=reads_as_a_hand)
+    try:
+        rest, where = _calibration_frame(source, rest_image, mount, side, err,
+                                         synthetic="the synthetic hand at rest (open)",
+                                         prompt="hold the hand open, not stiff",
+                                         accept=reads_as_a_hand)
+    except EstimationError as exc:
+        turned = (_turned_view(est, last_refused[0], segment=segment, side=side)
+                  if last_refused else None)
+        if turned is None:
+            raise
+        raise EstimationError(f"{exc}; the last of them {turned}") from None
     low = est.calibrated(rest, segment=segment).estimate(rest).low_confidence
+    turned = _turned_view(est, rest, segment=segment, side=side) if low else None
     # calibrated afresh: a trial's estimate is not a frame of the run (smoothing and the
     # moved check keep what they saw)
     est = est.calibrated(rest, segment=segment)
@@ -357,10 +367,38 @@ def _calibrate_learned(est, source, rest_image, mount, side, err, *, segment: st
         what = (f"--calibrate-image {rest_name}: the image" if rest_image is not None else
                 f"the rest frame (taken after {refused - 1} frames that read so)" if refused
                 else "the rest frame")
-        warnings.warn(f"{what} itself reads as unlike any hand learnt (no hand at rest in full "
-                      "view, or a cluttered ground?): frames may read low-confidence; give a "
-                      "frame of the hand at rest, over a plain ground if it can be", stacklevel=2)
+        if turned is not None:
+            warnings.warn(f"{what} reads as unlike any hand learnt, but {turned}", stacklevel=2)
+        else:
+            warnings.warn(f"{what} itself reads as unlike any hand learnt (no hand at rest in full "
+                          "view, or a cluttered ground?): frames may read low-confidence; give a "
+                          "frame of the hand at rest, over a plain ground if it can be", stacklevel=2)
     return est
+
+
+def _turned_view(est, rest, *, segment: str, side: str) -> str | None:
+    """What a rest frame that reads as no hand shows when turned, if then it reads as one.
+
+    The view of a left hand is the right hand's turned top to bottom, so the other side's
+    hand reads as a hand upside down (every frame low-confidence); a camera mounted turned
+    half a turn shows the hand turned both ways.  Both turned frames may read as a hand (a
+    hand mirrored left to right is not told from one); the one the estimator finds least
+    novel (its ``error``) is said: on the model hands the right turn read 2.0-2.5, the
+    other 3.5-4.5 (the perceptrons' novelty limit about 4.9).  None when neither reads as
+    a hand (no hand at rest in view, a cluttered ground)."""
+    import numpy as np
+
+    other = "left" if side == "right" else "right"
+    best = None
+    for turned, says in ((rest[::-1], f"turned top to bottom it reads as a {other} hand's: is "
+                                      f"the device on the {other} hand? (give --side {other})"),
+                         (rest[::-1, ::-1], "turned half a turn it reads as a hand: is the camera "
+                                            "mounted upside down? (turn it over)")):
+        turned = np.ascontiguousarray(turned)
+        got = est.calibrated(turned, segment=segment).estimate(turned)
+        if not got.low_confidence and (best is None or got.error < best[0]):
+            best = (got.error, says)
+    return None if best is None else best[1]
 
 
 def _build_options(count: int | None, side: str):

@@ -937,6 +937,46 @@ def test_a_calibration_image_of_no_hand_at_rest_is_warned_about(tmp_path):
            "any hand learnt" in res.output
 
 
+
+@pytest.mark.parametrize(("turn", "side", "says"), [
+    # a left hand's view is the right hand's turned top to bottom
+    ("left", None, "turned top to bottom it reads as a left hand's: is the device on the left "
+                   "hand? (give --side left)"),
+    ("right", "left", "turned top to bottom it reads as a right hand's: is the device on the "
+                      "right hand? (give --side right)"),
+    ("half", None, "turned half a turn it reads as a hand: is the camera mounted upside down? "
+                   "(turn it over)"),
+])
+def test_a_rest_frame_of_the_other_hand_or_upside_down_says_so(tmp_path, turn, side, says):
+    # before: "no hand at rest in full view, or a cluttered ground?", and every frame
+    # low-confidence
+    with SilhouetteRenderer(HandShape(length=1.02, thumb=1.03), width_px=W, height_px=H,
+                            side="right" if turn == "half" else turn) as r:
+        mask = r.mask(np.zeros(20))
+    if turn == "half":
+        mask = mask[::-1, ::-1]
+    from handsynth.cli._estimate import REST_FRAME_PATIENCE
+
+    # a clip that ends while the rest frame is looked for: the error says it
+    video = _write_video(tmp_path / "short.avi", [_bgr(mask)] * 2)
+    res = _run("--video", str(video), *LEARNT, *(["--side", side] if side else []),
+               "--learned-cache", str(tmp_path / "c"), "--out", str(tmp_path / "rows.csv"), "-q")
+    assert res.exit_code == 2, res.output
+    assert res.output.strip().splitlines()[-1].endswith(f"; the last of them {says}"), res.output
+    # a longer one: the frame after REST_FRAME_PATIENCE is taken, with the warning
+    video = _write_video(tmp_path / "clip.avi", [_bgr(mask)] * (REST_FRAME_PATIENCE + 3))
+    res = _run("--video", str(video), *LEARNT, *(["--side", side] if side else []),
+               "--learned-cache", str(tmp_path / "c"), "--out", str(tmp_path / "rows.csv"), "-q")
+    assert res.exit_code == 0, res.output
+    assert f"reads as unlike any hand learnt, but {says}" in res.output, res.output
+    # the same hand with the right side and the camera turned back reads as a hand: no warning
+    good = mask[::-1, ::-1] if turn == "half" else mask
+    fixed = ["--side", turn] if turn != "half" else []
+    video = _write_video(tmp_path / "good.avi", [_bgr(good)] * 2)
+    res = _run("--video", str(video), *LEARNT, *fixed, "--learned-cache", str(tmp_path / "c"),
+               "--out", str(tmp_path / "rows2.csv"), "-q")
+    assert res.exit_code == 0 and "unlike any hand" not in res.output, res.output
+
 def test_a_video_whose_hand_comes_into_view_after_ten_seconds_still_calibrates(tmp_path):
     # the rest frame was looked for in the first 300 frames only, as for a camera: a
     # recording whose hand came into view after 10 s at 30 fps failed ("no frame showed a
