@@ -331,7 +331,7 @@ def _calibrate_learned(est, source, rest_image, mount, side, err, *, segment: st
     view made every later frame low-confidence.  A --calibrate-image that reads so is
     used as given, with a warning."""
     refused = 0
-    last_refused = []
+    last_refused: list = []
 
     def reads_as_a_hand(frame) -> bool:
         # a frame the estimator refuses (another width-to-height ratio...) is an error, as

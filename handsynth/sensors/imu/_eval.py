@@ -58,7 +58,7 @@ from ._sensorcal import SensorCalibration
 from ._simulate import SkinMotion, simulate_imu
 from ._vectors import seel_joint_positions, truth_chain_model
 
-__all__ = ["FILTERS", "HELDOUT", "TUNING", "SimConfig", "evaluate", "make_filter"]
+__all__ = ["FILTERS", "HELDOUT", "TUNING", "SimConfig", "evaluate", "evaluate_trial", "make_filter"]
 
 #: Names of the orientation estimators that :func:`evaluate` can run.
 FILTERS: tuple[str, ...] = ("constant", "raw", "filter1", "filter4", "filter4b", "gated", "vqf",
@@ -382,6 +382,43 @@ def evaluate(config: SimConfig = HELDOUT, *, durations=(15.0, 30.0), elbows=("fi
         report["grasps"] = _grasp_report(config, placement, filters, calib,
                                          sensor_cal if sensor_calibration else None, plate_fusion)
     return report
+
+
+def evaluate_trial(rec: ImuRecording, calib: ImuCalibration, *, filters=("filter4",),
+                   plate_fusion: bool = True) -> dict:
+    """Errors of the filters on one simulated recording, summarised as :func:`evaluate` does.
+
+    Parameters
+    ----------
+    rec : ImuRecording
+        A simulated recording (with its truth and an ``align`` stretch), already
+        sensor-corrected if that is wanted (``calib.sensor_calibration.apply(rec)``).
+    calib : ImuCalibration
+        Its calibration (link model, link frames, zero pose).
+    filters : sequence of str, keyword-only
+        Names from :data:`FILTERS`.
+    plate_fusion : bool, keyword-only
+        As :func:`evaluate`.
+
+    Returns
+    -------
+    dict
+        filter -> ``orientation_mean_deg``, ``orientation_worst_segment_deg``,
+        ``orientation_distal_mean_deg``, ``segments_over_2deg``,
+        ``joint_angle_mean_rmse_deg``, ``fingertip_mean_rmse_mm``,
+        ``fingertip_from_wrist_mean_rmse_mm`` (from the end of the ``align`` stretch on).
+
+    Raises
+    ------
+    InvalidInputError
+        An unknown filter; `rec` without its truth.
+    """
+    for f in filters:
+        if f not in FILTERS:
+            raise InvalidInputError(f"unknown filter {f!r}; expected one of {', '.join(FILTERS)}")
+    if rec.truth is None:
+        raise InvalidInputError("evaluate_trial needs a simulated recording (one with its truth)")
+    return _summary([_trial(rec, filters, calib, plate_fusion=plate_fusion)], filters)
 
 
 _DISTAL = tuple(f"{f}_distal" for f in CHAINS)

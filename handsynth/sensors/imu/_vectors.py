@@ -122,27 +122,30 @@ def _turning_points(gyr, dgyr, *, frac_w=0.25, frac_dw=0.5):
     return i[loc]
 
 
-#: Samples a labelled rotation needs at least at 100 Hz or less: the Savitzky-Golay window
-#: of its gyro (:func:`_smoothing_windows`; more samples at higher rates).
-_MIN_ROTATION_SAMPLES = 7
+#: Samples a labelled rotation needs at least: the shortest Savitzky-Golay window of its
+#: gyro (:func:`_smoothing_windows`; more samples at rates above 100 Hz).
+_MIN_ROTATION_SAMPLES = 5
 #: Spans of the Savitzky-Golay fits (quadratic) of the gyro and its derivative and of the
-#: accelerometer, s: 7 and 5 samples at 100 Hz, the rate the thesis recorded at.  Fixed in
-#: time, not in samples: the same 7 samples at 1,000 Hz differentiated ten times as much
-#: noise per second (the datasheet noise's s.d. per sample grows with the square root of the
-#: rate) and took the elbow vectors 25-36 mm from the truth (2-11 mm at 100 Hz).
-_GYRO_SPAN_S, _ACC_SPAN_S = 0.07, 0.05
+#: accelerometer, s: 5 samples each at 100 Hz.  Fixed in time, not in samples: 7 gyro samples
+#: at 1,000 Hz differentiated ten times as much noise per second as at 100 Hz (the
+#: datasheet noise's s.d. per sample grows with the square root of the rate) and took the
+#: held-out elbow vectors 25-36 mm from the truth.  The gyro's 50 ms was chosen on the
+#: tuning configuration at 100 Hz against the 70 ms (7 samples) used before and 90 ms:
+#: sensor-to-joint vectors 0.70-0.85 mm median against 0.77-0.93 and 0.83-1.06 on four
+#: draws (a 30-ms accelerometer span: 1.06-1.17 mm).
+_GYRO_SPAN_S, _ACC_SPAN_S = 0.05, 0.05
 
 
 def _smoothing_windows(rate_hz: float) -> tuple[int, int]:
     """Odd Savitzky-Golay windows (gyro, accelerometer), samples, for `rate_hz`.
 
-    ``(7, 5)`` at 100 Hz and below (the thesis' rate), growing with the rate above it so
-    that each covers :data:`_GYRO_SPAN_S` and :data:`_ACC_SPAN_S`.
+    ``(5, 5)`` at 100 Hz and below, growing with the rate above it so that each covers
+    :data:`_GYRO_SPAN_S` and :data:`_ACC_SPAN_S`.
     """
-    def odd(n: float, least: int) -> int:
-        return max(least, int(round(n)) // 2 * 2 + 1)
+    def odd(n: float) -> int:
+        return max(_MIN_ROTATION_SAMPLES, int(round(n)) // 2 * 2 + 1)
 
-    return odd(_GYRO_SPAN_S * rate_hz, _MIN_ROTATION_SAMPLES), odd(_ACC_SPAN_S * rate_hz, 5)
+    return odd(_GYRO_SPAN_S * rate_hz), odd(_ACC_SPAN_S * rate_hz)
 
 
 def _min_rotation_samples(rate_hz: float) -> int:

@@ -296,12 +296,12 @@ def test_a_rotation_too_short_is_called_too_short_not_still(calibration_rec):
     from handsynth.sensors.imu import calibrate
     from handsynth.sensors.imu._calibration import check_stretches
 
-    segments = tuple((lab, a, a + 5) if lab == "index_pip_flex" else (lab, a, b)
+    segments = tuple((lab, a, a + 4) if lab == "index_pip_flex" else (lab, a, b)
                      for lab, a, b in calibration_rec.truth.segments)
     short = dataclasses.replace(calibration_rec, segments=segments)
     assert check_stretches(short) == []
-    with pytest.raises(EstimationError, match=r"rotation 'index_pip_flex' spans 5 samples .*"
-                                              r"at least 7 are needed"):
+    with pytest.raises(EstimationError, match=r"rotation 'index_pip_flex' spans 4 samples .*"
+                                              r"at least 5 are needed"):
         calibrate(short, source="cal.csv")
 
 

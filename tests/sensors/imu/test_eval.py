@@ -34,6 +34,19 @@ def test_small_evaluation_is_json_and_has_baselines():
     assert np.isfinite(s["filter4"]["fingertip_mean_rmse_mm"])
     v = rep["vectors"]
     assert v["rotation_method"]["median_mm"] < v["baseline_zero_vector"]["median_mm"]
+    # one trial summarised alone gives evaluate's figures for it
+    from handsynth.sensors.imu._eval import _calibrate, evaluate_trial, free_trials
+    from handsynth.sensors.imu._model import ImuHand
+
+    _, calib, sensor_cal = _calibrate(cfg, cfg.placement())
+    (_, _, rec), = free_trials(cfg, ImuHand(cfg.shape, placement=cfg.placement()), durations=(8.0,),
+                               elbows=("fixed",))
+    one = evaluate_trial(sensor_cal.apply(rec), calib, filters=("constant", "raw", "filter4"))
+    assert one == s
+    with pytest.raises(InvalidInputError, match="unknown filter 'kalman9'"):
+        evaluate_trial(rec, calib, filters=("kalman9",))
+    with pytest.raises(InvalidInputError, match="needs a simulated recording"):
+        evaluate_trial(rec.subset(rec.sensors), calib)
 
 
 # --------------------------------------------------------------------------- plots

@@ -94,15 +94,15 @@ def test_a_rotation_of_a_few_samples_is_named_not_a_filter_traceback(cal_rec):
     segments = tuple((lab, a, a + 2) if lab == "index_mcp_flex" else (lab, a, b)
                      for lab, a, b in cal_rec.labelled())
     rec = dataclasses.replace(cal_rec, segments=segments)
-    with pytest.raises(EstimationError, match=r"^rotation 'index_mcp_flex' spans 2 samples .* at least 7"):
+    with pytest.raises(EstimationError, match=r"^rotation 'index_mcp_flex' spans 2 samples .* at least 5"):
         rotation_vector(rec, "index_proximal", "index_mcp")
 
 
 @pytest.mark.slow
 def test_vectors_at_1000_hz_are_as_good_as_at_100_hz():
-    # the gyro's smoothing and derivative span the same 70 ms at every rate: the 7 samples
-    # that suit 100 Hz differentiated ten times the noise at 1,000 Hz (the elbow vectors of
-    # the held-out configuration 25-36 mm off, fingertips from the elbow 47 mm)
+    # the gyro's smoothing and derivative span the same 50 ms at every rate: the 7 samples
+    # used at every rate differentiated ten times the noise at 1,000 Hz (the elbow vectors
+    # of the held-out configuration 25-36 mm off, fingertips from the elbow 47 mm)
     import warnings
 
     from handsynth.errors import EstimationError
@@ -118,11 +118,11 @@ def test_vectors_at_1000_hz_are_as_good_as_at_100_hz():
 
     slow, _ = elbow_errors_mm(100.0)
     fast, rec = elbow_errors_mm(1000.0)
-    assert np.mean(fast) < 1.25 * np.mean(slow), (fast, slow)      # 7.6 against 8.0 mm (14.6 before)
-    # a rotation shorter than the 71-sample window at 1,000 Hz is named as such
+    assert np.mean(fast) < 1.25 * np.mean(slow), (fast, slow)      # 7.5 against 7.9 mm (14.6 before)
+    # a rotation shorter than the 51-sample window at 1,000 Hz is named as such
     segments = tuple((lab, a, a + 40) if lab == "elbow_flex" else (lab, a, b)
                      for lab, a, b in rec.labelled())
     import dataclasses
 
-    with pytest.raises(EstimationError, match=r"^rotation 'elbow_flex' spans 40 samples .* at least 71"):
+    with pytest.raises(EstimationError, match=r"^rotation 'elbow_flex' spans 40 samples .* at least 51"):
         rotation_vector(dataclasses.replace(rec, segments=segments), "forearm_1", "elbow")
