@@ -36,7 +36,7 @@ from ._model import TIP_SENSORS
 from ._plate import PLATE_SENSORS, fuse_plate, plate_rotations
 from ._recording import ImuRecording, check_recording
 from ._sensorcal import POSE_PREFIX, SensorCalibration, fit_sensor_calibration
-from ._vectors import ChainModel, _min_rotation_samples, chain_model
+from ._vectors import ChainModel, _min_rotation_samples, calibrate_vectors, chain_model
 
 __all__ = ["ImuCalibration", "calibrate", "check_stretches", "segments_from_seconds"]
 
@@ -46,6 +46,29 @@ __all__ = ["ImuCalibration", "calibrate", "check_stretches", "segments_from_seco
 _VERSION = 6
 #: Static poses (``acc_pose_<k>``) the sensor calibration needs at least.
 _MIN_POSES = 8
+#: Lower quartile of the sensor-to-joint vectors' R^2 (the fit of their lengths, eqs.
+#: 3.3-3.4) below which a calibration is said to fit poorly.  Simulated calibrations of
+#: :func:`calibration_motion`'s rotations: 0.96-0.97 (tuning configuration) and 0.93-0.94
+#: (held-out), three draws each; with every rotation 0.7 times as large 0.89-0.95, half as
+#: large 0.82-0.91 (vectors 1.6-3.2 mm median, fingertips from the elbow 6-15 mm against
+#: 4-11), 0.3 times 0.05-0.32 (3.2-5.2 mm, 10-24 mm).  Judged only after the sensor
+#: calibration (the static poses), which the figures assume.
+_MIN_VECTOR_R2_Q25 = 0.88
+
+
+def _vector_fit_warning(vectors: dict) -> str | None:
+    """Say that the calibration's sensor-to-joint vectors fit poorly, or None."""
+    r2 = [v.r2 for v in vectors.values()]
+    q25 = float(np.percentile(r2, 25))
+    if q25 >= _MIN_VECTOR_R2_Q25:
+        return None
+    return (f"the sensor-to-joint vectors fit the calibration rotations poorly: a quarter of "
+            f"the {len(r2)} have R^2 {q25:.2f} or less (the fit of their lengths, eqs. 3.3-3.4; "
+            f"{_MIN_VECTOR_R2_Q25:g} or more in simulated calibrations of the default rotations). "
+            "Rotations too small give vectors off by millimetres and fingertips by centimetres "
+            "(half the default rotations: fingertips 12-15 mm from the elbow against 8-11): "
+            "turn each joint through about +-25-35 deg (abductions +-12) at about 1 Hz, and "
+            "calibrate again")
 
 
 def segments_from_seconds(spans: dict, rate_hz: float, n: int, *, source: str | None = None) -> tuple:
@@ -569,7 +592,13 @@ def calibrate(rec: ImuRecording, *, sensor_calibration: bool = True,
             f"{where}the calibration needs the five temporary fingertip sensors "
             f"({', '.join(TIP_SENSORS)}) for the distal link vectors; missing "
             f"{', '.join(tips)} (the recording has {', '.join(rec.sensors)})")
-    model = chain_model(rec)
+    vectors = calibrate_vectors(rec)
+    # judged after the sensor calibration only: the accelerometers' own scale and axis errors
+    # lower the fit of the default rotations to 0.68-0.82 without it (three simulated devices)
+    fit = _vector_fit_warning(vectors) if sensor_cal is not None else None
+    if fit is not None:
+        warnings.warn(f"{source}: {fit}" if source else fit, UserWarning, stacklevel=2)
+    model = chain_model(rec, vectors)
     frames = link_frames(rec, model)
     zero = zero_offsets(rec, frames, side=side)
     plate = plate_rotations(rec) if all(s in rec.sensors for s in PLATE_SENSORS) else None

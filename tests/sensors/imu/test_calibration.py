@@ -478,3 +478,28 @@ def test_a_calibration_without_the_fingertip_sensors_says_so():
                                              r"fingertip sensors \(thumb_tip, .*little_tip\) .*"
                                              r"missing thumb_tip, index_tip"):
         calibrate(rec, source="cal.csv")
+
+
+def test_calibration_rotations_too_small_are_warned_about(calibration_rec):
+    # rotations a third as large as the default gave vectors 3-5 mm off and fingertips
+    # 10-24 mm from the elbow, without a word
+    import warnings
+
+    from handsynth.sensors.imu import CALIBRATION_PLAN, ImuHand, calibrate, calibration_motion, simulate_imu
+
+    def recording(scale):
+        plan = tuple((label, joints, scale * amp, freq) for label, joints, amp, freq in CALIBRATION_PLAN)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return simulate_imu(calibration_motion(plan=plan, acc_poses=True),
+                                hand=ImuHand(tip_sensors=True), seed=1, device_seed=2)
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        calibrate(recording(1.0))
+        calibrate(calibration_rec)  # without the static poses: not judged
+    assert not [w for w in caught if "fit the calibration rotations poorly" in str(w.message)]
+    rec = recording(0.3)
+    with pytest.warns(UserWarning, match=r"^cal.csv: the sensor-to-joint vectors fit the calibration "
+                                         r"rotations poorly: a quarter of the \d+ have R\^2 0\.[0-7]"):
+        calibrate(rec, source="cal.csv")
