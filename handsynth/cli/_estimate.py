@@ -329,7 +329,8 @@ def _calibrate_learned(est, source, rest_image, mount, side, err, *, segment: st
     estimator calibrated to it reads the frame itself as a hand (not ``low_confidence``):
     a video's first frames of half the view bright, of noise or of a hand coming into the
     view made every later frame low-confidence.  A --calibrate-image that reads so is
-    used as given, with a warning."""
+    used as given, with a warning.  Returns the calibrated estimator and, when the rest
+    frame read as a hand only turned, what that turn says (:func:`_turned_view`)."""
     refused = 0
     last_refused: list = []
 
@@ -355,7 +356,7 @@ def _calibrate_learned(est, source, rest_image, mount, side, err, *, segment: st
                   if last_refused else None)
         if turned is None:
             raise
-        raise EstimationError(f"{exc}; the last of them {turned}") from None
+        raise EstimationError(f"{exc}; {turned}") from None
     low = est.calibrated(rest, segment=segment).estimate(rest).low_confidence
     turned = _turned_view(est, rest, segment=segment, side=side) if low else None
     # calibrated afresh: a trial's estimate is not a frame of the run (smoothing and the
@@ -368,12 +369,12 @@ def _calibrate_learned(est, source, rest_image, mount, side, err, *, segment: st
                 f"the rest frame (taken after {refused - 1} frames that read so)" if refused
                 else "the rest frame")
         if turned is not None:
-            warnings.warn(f"{what} reads as unlike any hand learnt, but {turned}", stacklevel=2)
+            warnings.warn(f"{what} reads as unlike any hand learnt; {turned}", stacklevel=2)
         else:
             warnings.warn(f"{what} itself reads as unlike any hand learnt (no hand at rest in full "
                           "view, or a cluttered ground?): frames may read low-confidence; give a "
                           "frame of the hand at rest, over a plain ground if it can be", stacklevel=2)
-    return est
+    return est, turned
 
 
 def _turned_view(est, rest, *, segment: str, side: str) -> str | None:
@@ -390,10 +391,11 @@ def _turned_view(est, rest, *, segment: str, side: str) -> str | None:
 
     other = "left" if side == "right" else "right"
     best = None
-    for turned, says in ((rest[::-1], f"turned top to bottom it reads as a {other} hand's: is "
-                                      f"the device on the {other} hand? (give --side {other})"),
-                         (rest[::-1, ::-1], "turned half a turn it reads as a hand: is the camera "
-                                            "mounted upside down? (turn it over)")):
+    for turned, says in ((rest[::-1], f"read turned top to bottom, the rest frame is a {other} "
+                                      f"hand's: is the device on the {other} hand? (give --side "
+                                      f"{other})"),
+                         (rest[::-1, ::-1], "read turned half a turn, the rest frame is a hand's: is "
+                                            "the camera mounted upside down? (turn it over)")):
         turned = np.ascontiguousarray(turned)
         got = est.calibrated(turned, segment=segment).estimate(turned)
         if not got.low_confidence and (best is None or got.error < best[0]):
@@ -657,12 +659,12 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
         if camera_optics is not None:
             source, open_image = _corrected(source, open_image, camera_optics, mount,
                                             intrinsics, calibrate_image, half=learned)
-        told = None
+        told = turned = None
         try:
             if learned:
-                lookup = _calibrate_learned(lookup, source, open_image, mount, side, info_err,
-                                            segment=segment or "auto",
-                                            rest_name=calibrate_image)
+                lookup, turned = _calibrate_learned(lookup, source, open_image, mount, side,
+                                                    info_err, segment=segment or "auto",
+                                                    rest_name=calibrate_image)
             elif calibrate:
                 lookup = _calibrate(lookup, source, open_image, db_dir, mount, side, build,
                                     info_err)
@@ -720,7 +722,11 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
     if show is not None:
         sys.stderr.write("\n")
     click.echo(summary.format(), err=info_err)
-    if told == "brightness" and summary.frames and summary.low_confidence > 0.25 * summary.frames:
+    if turned is not None and summary.frames and summary.low_confidence > 0.25 * summary.frames:
+        click.echo(f"{summary.low_confidence} of {summary.frames} frames were unlike any learnt; "
+                   f"{turned}", err=info_err)
+    elif told == "brightness" and summary.frames and \
+            summary.low_confidence > 0.25 * summary.frames:
         click.echo(f"{summary.low_confidence} of {summary.frames} frames were unlike any learnt: "
                    "if the background is not dark, --segment colour tells the hand by the "
                    "colour of its skin (docs/camera_estimator.md)", err=info_err)
