@@ -722,11 +722,11 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
     if show is not None:
         sys.stderr.write("\n")
     click.echo(summary.format(), err=info_err)
-    if turned is not None and summary.frames and summary.low_confidence > 0.25 * summary.frames:
+    many_low = summary.frames and summary.low_confidence > 0.25 * summary.frames
+    if many_low and turned is not None:
         click.echo(f"{summary.low_confidence} of {summary.frames} frames were unlike any learnt; "
                    f"{turned}", err=info_err)
-    elif told == "brightness" and summary.frames and \
-            summary.low_confidence > 0.25 * summary.frames:
+    elif many_low and told == "brightness":
         click.echo(f"{summary.low_confidence} of {summary.frames} frames were unlike any learnt: "
                    "if the background is not dark, --segment colour tells the hand by the "
                    "colour of its skin (docs/camera_estimator.md)", err=info_err)

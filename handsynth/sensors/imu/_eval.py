@@ -328,6 +328,13 @@ def free_trials(config: SimConfig, hand: ImuHand, *, durations=(15.0, 30.0),
                 device_seed=_device_seed(config))
 
 
+def _check_filters(filters) -> None:
+    """Refuse a filter name not in :data:`FILTERS`, naming it."""
+    for f in filters:
+        if f not in FILTERS:
+            raise InvalidInputError(f"unknown filter {f!r}; expected one of {', '.join(FILTERS)}")
+
+
 def evaluate(config: SimConfig = HELDOUT, *, durations=(15.0, 30.0), elbows=("fixed", "moving"),
              filters=FILTERS, grasps: bool = True, speed: float = 1.0,
              sensor_calibration: bool = True, plate_fusion: bool = True,
@@ -356,9 +363,7 @@ def evaluate(config: SimConfig = HELDOUT, *, durations=(15.0, 30.0), elbows=("fi
         Filled with the last trial's error time series and a stick-figure
         instant (for :mod:`._plot`).
     """
-    for f in filters:
-        if f not in FILTERS:
-            raise InvalidInputError(f"unknown filter {f!r}; expected one of {', '.join(FILTERS)}")
+    _check_filters(filters)
     placement = config.placement()
     cal, calib, sensor_cal = _calibrate(config, placement)
     hand = ImuHand(config.shape, placement=placement)
@@ -413,9 +418,7 @@ def evaluate_trial(rec: ImuRecording, calib: ImuCalibration, *, filters=("filter
     InvalidInputError
         An unknown filter; `rec` without its truth.
     """
-    for f in filters:
-        if f not in FILTERS:
-            raise InvalidInputError(f"unknown filter {f!r}; expected one of {', '.join(FILTERS)}")
+    _check_filters(filters)
     if rec.truth is None:
         raise InvalidInputError("evaluate_trial needs a simulated recording (one with its truth)")
     return _summary([_trial(rec, filters, calib, plate_fusion=plate_fusion)], filters)
