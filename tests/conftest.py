@@ -19,6 +19,27 @@ N_ENTRIES = 240
 RENDER_SIZE = (180, 120)
 
 
+
+@pytest.fixture(scope="session")
+def read_video():
+    """A function reading a video file whole: ``read_video(path) -> (frames, (width, height))``,
+    its decoded BGR frames and the frame size its container states."""
+    import cv2
+
+    def read(path):
+        cap = cv2.VideoCapture(str(path))
+        size = (cap.get(cv2.CAP_PROP_FRAME_WIDTH), cap.get(cv2.CAP_PROP_FRAME_HEIGHT))
+        frames = []
+        while True:
+            ok, frame = cap.read()
+            if not ok:
+                break
+            frames.append(frame)
+        cap.release()
+        return frames, size
+
+    return read
+
 @pytest.fixture(scope="session")
 def small_rows():
     """Rows of a 240-entry database of the standard hand (paper pose set)."""

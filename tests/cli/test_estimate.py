@@ -106,7 +106,7 @@ def test_jsonl_with_keypoints_to_a_file_and_to_stdout(tmp_path, db):
     assert "whole loop" in res.stderr
 
 
-def test_video_in_and_side_by_side_video_out(tmp_path, db, masks):
+def test_video_in_and_side_by_side_video_out(tmp_path, db, masks, read_video):
     import cv2
 
     video = tmp_path / "hand.avi"
@@ -124,13 +124,8 @@ def test_video_in_and_side_by_side_video_out(tmp_path, db, masks):
     assert [float(r["timestamp_s"]) for r in rows] == pytest.approx(np.arange(8) / 15.0, abs=1e-5)
     assert "stopped: the source has no more frames" in res.stdout
     assert "mean absolute error" not in res.stdout  # no truth for a video
-    cap = cv2.VideoCapture(str(video_out))
-    size = (cap.get(cv2.CAP_PROP_FRAME_WIDTH), cap.get(cv2.CAP_PROP_FRAME_HEIGHT))
-    n = 0
-    while cap.read()[0]:
-        n += 1
-    cap.release()
-    assert size == (2 * W, H) and n == len(masks)
+    frames, size = read_video(video_out)
+    assert size == (2 * W, H) and len(frames) == len(masks)
 
 
 def test_flaky_then_dead_camera_is_counted_and_ends_with_one_error_line(tmp_path, db, masks,
@@ -1132,24 +1127,15 @@ def test_a_camera_narrower_than_the_device_is_warned_about(tmp_path, hand_video)
         res.output
 
 
-def test_the_learnt_estimators_side_by_side_video_draws_its_angles(tmp_path):
+def test_the_learnt_estimators_side_by_side_video_draws_its_angles(tmp_path, read_video):
     # --video-out was refused with --learned: a wearer could not see what was read
-    import cv2
-
     out, video = tmp_path / "rows.csv", tmp_path / "side.avi"
     res = _run("--synthetic", *LEARNT, "--learned-cache", str(tmp_path / "c"), "--frames", "6",
                "--synthetic-motion", "named", "--out", str(out), "--video-out", str(video),
                *SMALL)
     assert res.exit_code == 0, res.output
     assert f"video: {video} (6 frames, input | estimated pose)" in res.output
-    cap = cv2.VideoCapture(str(video))
-    frames = []
-    while True:
-        ok, f = cap.read()
-        if not ok:
-            break
-        frames.append(f)
-    cap.release()
+    frames, _ = read_video(video)
     assert len(frames) == 6 and frames[0].shape == (H, 2 * W, 3)
     # the right half is the standard hand posed by each row's angles, drawn through the device
     _, rows = _read_csv(out)

@@ -196,7 +196,7 @@ def test_ctrl_c_ends_the_run_with_complete_rows(tmp_path, lookup):
     assert [json.loads(line)["frame"] for line in path.read_text().splitlines()] == [0, 1, 2, 3]
 
 
-def test_video_file_in_and_side_by_side_video_out(tmp_path, lookup):
+def test_video_file_in_and_side_by_side_video_out(tmp_path, lookup, read_video):
     import cv2
 
     poses = np.stack([named_pose(n) for n in ("open", "pinch", "grasp", "point", "open")])
@@ -221,15 +221,8 @@ def test_video_file_in_and_side_by_side_video_out(tmp_path, lookup):
     same = sum(int(r["entry"]) == e for r, e in zip(rows, direct, strict=True))
     assert same >= 6, (same, [r["entry"] for r in rows], direct)
 
-    cap = cv2.VideoCapture(str(video_out))
-    assert (cap.get(cv2.CAP_PROP_FRAME_WIDTH), cap.get(cv2.CAP_PROP_FRAME_HEIGHT)) == (2 * W, H)
-    frames = []
-    while True:
-        ok, f = cap.read()
-        if not ok:
-            break
-        frames.append(f)
-    cap.release()
+    frames, size = read_video(video_out)
+    assert size == (2 * W, H)
     assert len(frames) == 8
     # left half: the input; right half: the matched entry's render (database shape), in green
     from handsynth.render import SilhouetteRenderer

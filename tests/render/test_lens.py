@@ -262,8 +262,11 @@ def test_plain_json_with_nested_matrix_and_short_distortion(tmp_path):
      "2 cameras"),
 ])
 def test_bad_calibration_files_name_the_file_and_the_problem(tmp_path, text, match):
-    path = tmp_path / "cam.yaml"
-    path.write_text(text)
+    _assert_refused_naming_the_file(tmp_path / "cam.yaml", text.encode(), match)
+
+
+def _assert_refused_naming_the_file(path, content: bytes, match: str) -> None:
+    path.write_bytes(content)
     with pytest.raises(InvalidInputError, match=match) as info:
         read_intrinsics(path)
     assert str(path) in str(info.value)
@@ -525,11 +528,7 @@ def test_files_as_editors_and_other_systems_save_them(tmp_path):
     (b"# only a comment\n", "must be a map of fields .* got nothing"),
 ])
 def test_empty_binary_and_misformatted_files_are_refused_clearly(tmp_path, content, match):
-    path = tmp_path / "camera.yaml"
-    path.write_bytes(content)
-    with pytest.raises(InvalidInputError, match=match) as info:
-        read_intrinsics(path)
-    assert str(path) in str(info.value)
+    _assert_refused_naming_the_file(tmp_path / "camera.yaml", content, match)
 
 
 def test_a_half_size_correction_is_the_device_view_at_half_the_resolution():

@@ -261,13 +261,18 @@ def test_binary_gltf_with_nodes_one_joint_proximal_of_their_names_loads():
     assert json.loads(json.dumps(rig.tip_mm))  # every digit has a tip length
 
 
-def test_a_rig_without_a_wrist_bone_is_refused_by_name(tmp_path):
+def _godot_renamed(path, rename):
+    """The shipped Godot hand with each node's name passed through `rename`, written to `path`
+    (a node without a name reads as one named "", as the loader reads it)."""
     doc = json.loads(shipped_hand_path("godot_xr_tools").read_text())
     for n in doc["nodes"]:
-        if n.get("name") == "Wrist_R":
-            n["name"] = "Carpus"
-    bad = tmp_path / "no_wrist.gltf"
-    bad.write_text(json.dumps(doc))
+        n["name"] = rename(n.get("name", ""))
+    path.write_text(json.dumps(doc))
+    return path
+
+
+def test_a_rig_without_a_wrist_bone_is_refused_by_name(tmp_path):
+    bad = _godot_renamed(tmp_path / "no_wrist.gltf", lambda name: {"Wrist_R": "Carpus"}.get(name, name))
     with pytest.raises(InvalidInputError, match="no bones named like wrist .*found"):
         load_mesh_rig(bad)
 
@@ -672,23 +677,14 @@ def test_a_hand_not_in_metres_is_refused_with_its_length(tmp_path, scale, unit):
 
 
 def test_a_skin_of_both_hands_is_refused_naming_both_nodes(tmp_path):
-    doc = json.loads(shipped_hand_path("godot_xr_tools").read_text())
-    for n in doc["nodes"]:
-        if n.get("name") == "Palm_R":
-            n["name"] = "Wrist_L"
-    path = tmp_path / "two.gltf"
-    path.write_text(json.dumps(doc))
+    path = _godot_renamed(tmp_path / "two.gltf", lambda name: {"Palm_R": "Wrist_L"}.get(name, name))
     with pytest.raises(InvalidInputError, match="two.gltf: the skin's nodes 'Wrist_[LR]' and "
                        "'Wrist_[LR]' both read as the bone wrist"):
         load_mesh_rig(path)
 
 
 def test_an_unknown_naming_is_refused_with_the_conventions_read(tmp_path):
-    doc = json.loads(shipped_hand_path("godot_xr_tools").read_text())
-    for n in doc["nodes"]:
-        n["name"] = n.get("name", "").replace("Index", "Pointer")
-    path = tmp_path / "pointer.gltf"
-    path.write_text(json.dumps(doc))
+    path = _godot_renamed(tmp_path / "pointer.gltf", lambda name: name.replace("Index", "Pointer"))
     with pytest.raises(InvalidInputError, match=r"pointer.gltf: the skin has no bones named like "
                        r"index_proximal, index_intermediate, index_distal \(found wrist, .*"
                        r"other:Pointer_Proximal_R.*\); expected .*Mixamo.*Unity.*MANO"):
@@ -727,12 +723,8 @@ def test_the_shipped_hands_are_read_as_before(name):
 
 def test_a_distal_bone_without_skin_is_refused_by_name(tmp_path):
     # before: numpy's "zero-size array to reduction operation maximum" (a traceback)
-    doc = json.loads(shipped_hand_path("godot_xr_tools").read_text())
     swap = {"Index_Distal_R": "Index_Tip_R", "Index_Tip_R": "Index_Distal_R"}
-    for n in doc["nodes"]:
-        n["name"] = swap.get(n.get("name", ""), n.get("name", ""))
-    path = tmp_path / "swapped.gltf"
-    path.write_text(json.dumps(doc))
+    path = _godot_renamed(tmp_path / "swapped.gltf", lambda name: swap.get(name, name))
     with pytest.raises(InvalidInputError, match="swapped.gltf: bone index_distal .node 'Index_Distal_R'.: no "
                        "vertex of the skin is mostly weighted to it"):
         load_mesh_rig(path)
