@@ -18,6 +18,7 @@ Usage::
     python scripts/study_camera.py --cache DIR [--kind perceptrons] novelty
     python scripts/study_camera.py --cache DIR [--kind perceptrons] lens
     python scripts/study_camera.py --cache DIR level
+    python scripts/study_camera.py --cache DIR [--kind perceptrons] mirror
 
 ``backgrounds``
     Two held-out model hands (seed 3, 1.5 times the learning spread) and the
@@ -213,6 +214,19 @@ Usage::
     each (seed 2), the device tilted and rolled by (0, 0), (+-12, 0), (0,
     +-12) and (8, -8) deg.  Per kind of hand the error of the angles read.
     Last line: ``model_tilt_abs=<deg> model_roll_abs=<deg> glTF_tilt_abs=...``.
+``mirror``
+    The mirror check (:class:`~handsynth.estimate.MirrorCheck`, shipped) on rest frames
+    as the device sees them and turned left to right: the three glTF hands and six
+    held-out model hands (seed 53, 1.5 times the learning spread), a relaxed and a
+    near-open rest each (seed 11), worn as the paper's device, 40 mm higher, 30 mm lower,
+    tilted and rolled 15 deg; as masks, and with the paper's device also painted over
+    photographs (the hand told by colour).  Each rest frame's scores as seen and turned,
+    whether it reads mirrored, and whether its mirror image does.  With the paper's
+    device, 30 natural frames per rest read as seen and mirrored (calibrated to the
+    mirrored rest frame): the finger flexion MAE and the share flagged
+    ``low_confidence``, beside the open-hand constant; how many mirrored rest frames the
+    estimator itself flags.  Last line:
+    ``mirror_false_alarms=<n> mirrored_caught=<n> rest_frames=<n>``.
 
 The learnt estimator is read from ``--cache`` (or learnt there first).
 """
@@ -1125,6 +1139,72 @@ def level(cache) -> None:
     print(" ".join(out))
 
 
+def mirror(cache, kind: str = "ensemble") -> None:
+    """``mirror``: rest frames read mirrored by :class:`~handsynth.estimate.MirrorCheck`."""
+    from dataclasses import replace
+
+    from handsynth.estimate import LEARNED_ENSEMBLES, learned_ensemble, mirror_check
+    from handsynth.eval._testposes import REST_POSTURES
+    from handsynth.testhands import TEST_HANDS
+
+    paper = CameraMount.paper()
+    ens = learned_ensemble(cache, members=LEARNED_ENSEMBLES[kind], mount=paper)
+    check = mirror_check()
+    photos = background_photos()
+    mounts = {"paper": paper, "40 mm higher": replace(paper, height_mm=160.0),
+              "30 mm lower": replace(paper, height_mm=90.0),
+              "tilted 15 deg": replace(paper, tilt_deg=15.0),
+              "rolled 15 deg": replace(paper, roll_deg=15.0)}
+    rng = np.random.default_rng(11)
+    alarms, caught, total, flagged = 0, 0, 0, 0
+    mae: dict = {}
+    for label, mount in mounts.items():
+        hands = (mesh_test_hands(sorted(TEST_HANDS), mount=mount)
+                 + model_test_hands(6, seed=53, mount=mount, spread=1.5))
+        for hand in hands:
+            made = hand.make()
+            for rest_kind in ("relaxed", "open"):
+                rest = REST_POSTURES[rest_kind](rng)
+                mask = made.mask(rest)
+                grounds = {"dark": mask}
+                if label == "paper":
+                    grounds["photo"] = _painted(mask, lambda i: photos[i % len(photos)].copy(),
+                                                total)
+                for ground, frame in grounds.items():
+                    seen = check.read(ens, frame)
+                    turned = np.ascontiguousarray(frame[:, ::-1])
+                    back = check.read(ens, turned)
+                    alarms += seen.mirrored
+                    caught += back.mirrored
+                    total += 1
+                    flagged += ens.calibrated(turned).estimate(turned).low_confidence
+                    print(f"{label:13s} {hand.name:15s} {rest_kind:7s} {ground:5s} as seen "
+                          f"{seen.seen:5.2f} / turned {seen.turned:5.2f}"
+                          f"{' MIRRORED' if seen.mirrored else '         '}  mirrored frame "
+                          f"{back.seen:5.2f} / {back.turned:5.2f}"
+                          f"{' mirrored' if back.mirrored else ' NOT CAUGHT'}", flush=True)
+                if label == "paper":
+                    poses = natural_test_poses(rest, 30, rng)[0]
+                    masks = made.masks(poses)
+                    for view, turn in (("as seen", False), ("mirrored", True)):
+                        def shown(m, turn=turn):
+                            return np.ascontiguousarray(m[:, ::-1]) if turn else m
+                        cal = ens.calibrated(shown(mask))
+                        got = [cal.estimate(shown(m)) for m in masks]
+                        a = np.stack([g.angles for g in got])
+                        mae.setdefault(view, []).append(
+                            (np.abs(a[:, _FLEX] - poses[:, _FLEX]).mean(),
+                             np.mean([g.low_confidence for g in got])))
+                    mae.setdefault("constant", []).append((np.abs(poses[:, _FLEX]).mean(), 0.0))
+            made.close()
+    for view, rows in mae.items():
+        e, low = np.array(rows).T
+        print(f"natural frames {view:9s}: flexion MAE {e.min():.1f}-{e.max():.1f} deg "
+              f"(mean {e.mean():.1f}), flagged {low.min():.0%}-{low.max():.0%}")
+    print(f"mirrored rest frames flagged low_confidence: {flagged} of {total}")
+    print(f"mirror_false_alarms={alarms} mirrored_caught={caught} rest_frames={total}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cache", default=None, help="folder of the learnt estimator")
@@ -1140,10 +1220,10 @@ def main() -> None:
                     choices=["height_mm", "thumb_offset_mm", "along_mm", "tilt_deg", "roll_deg"],
                     help="moved: slip along this field of MountVariation alone")
     ap.add_argument("--kind", choices=["ensemble", "perceptrons"], default="ensemble",
-                    help="novelty, lens: the default ensemble or its perceptrons alone")
+                    help="novelty, lens, mirror: the default ensemble or its perceptrons alone")
     ap.add_argument("study", choices=["backgrounds", "jitter", "holds", "observability", "bound",
                                       "bound_mcp", "rests", "moved", "imaging", "mounts", "sizes",
-                                      "skin", "skin_lit", "novelty", "lens", "level"])
+                                      "skin", "skin_lit", "novelty", "lens", "level", "mirror"])
     args = ap.parse_args()
     if args.study not in ("observability", "bound_mcp", "moved") and args.cache is None:
         ap.error(f"{args.study} needs --cache DIR")
@@ -1157,7 +1237,8 @@ def main() -> None:
                "mounts": lambda: mounts(args.cache), "sizes": lambda: sizes(args.cache),
                "skin": lambda: skin(args.cache), "skin_lit": lambda: skin_lit(args.cache),
                "novelty": lambda: novelty(args.cache, args.kind),
-               "lens": lambda: lens(args.cache, args.kind), "level": lambda: level(args.cache)}
+               "lens": lambda: lens(args.cache, args.kind), "level": lambda: level(args.cache),
+               "mirror": lambda: mirror(args.cache, args.kind)}
     studies[args.study]()
 
 

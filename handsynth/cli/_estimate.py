@@ -322,15 +322,16 @@ def _corrected(source, open_image, optics, mount, path, image_name, *, half: boo
 
 
 def _calibrate_learned(est, source, rest_image, mount, side, err, *, segment: str,
-                       rest_name=None):
+                       rest_name=None, mirrored_image: bool = False):
     """The learnt estimator calibrated to the hand at rest.
 
     A frame of the source where something stands out is the rest frame only when the
     estimator calibrated to it reads the frame itself as a hand (not ``low_confidence``):
     a video's first frames of half the view bright, of noise or of a hand coming into the
     view made every later frame low-confidence.  A --calibrate-image that reads so is
-    used as given, with a warning.  Returns the calibrated estimator and, when the rest
-    frame read as a hand only turned, what that turn says (:func:`_turned_view`)."""
+    used as given, with a warning, as is a rest frame that reads mirrored left to right
+    (:func:`_mirror_hint`).  Returns the calibrated estimator and, when the rest frame read
+    as a hand only turned, what that turn says (:func:`_turned_view`)."""
     refused = 0
     last_refused: list = []
 
@@ -359,6 +360,9 @@ def _calibrate_learned(est, source, rest_image, mount, side, err, *, segment: st
         raise EstimationError(f"{exc}; {turned}") from None
     low = est.calibrated(rest, segment=segment).estimate(rest).low_confidence
     turned = _turned_view(est, rest, segment=segment, side=side) if low else None
+    # a mirrored view may read as a hand at rest or not: asked unless a turn explained it
+    mirrored = None if turned is not None else \
+        _mirror_hint(est, rest, segment=segment, mirrored_image=mirrored_image)
     # calibrated afresh: a trial's estimate is not a frame of the run (smoothing and the
     # moved check keep what they saw)
     est = est.calibrated(rest, segment=segment)
@@ -370,11 +374,36 @@ def _calibrate_learned(est, source, rest_image, mount, side, err, *, segment: st
                 else "the rest frame")
         if turned is not None:
             warnings.warn(f"{what} reads as unlike any hand learnt; {turned}", stacklevel=2)
+        elif mirrored is not None:
+            warnings.warn(f"{what} reads as unlike any hand learnt, and {mirrored}", stacklevel=2)
         else:
             warnings.warn(f"{what} itself reads as unlike any hand learnt (no hand at rest in full "
                           "view, or a cluttered ground?): frames may read low-confidence; give a "
                           "frame of the hand at rest, over a plain ground if it can be", stacklevel=2)
+    elif mirrored is not None:
+        what = f"--calibrate-image {rest_name}" if rest_image is not None else "the rest frame"
+        warnings.warn(f"{what} {mirrored}", stacklevel=2)
     return est, turned
+
+
+def _mirror_hint(est, rest, *, segment: str, mirrored_image: bool) -> str | None:
+    """What to do when the rest frame reads mirrored left to right, or None when it does not.
+
+    A camera set to mirror its image shows the device's view turned left to right, which
+    the estimators read as a hand with no skill and without flagging it
+    (:class:`~handsynth.estimate.MirrorCheck`)."""
+    from ..estimate import mirror_check
+
+    reading = mirror_check().read(est, rest, segment=segment)
+    if not reading.mirrored:
+        return None
+    scores = f"(mirror check: {reading.seen:.2f} as seen, {reading.turned:.2f} turned)"
+    if mirrored_image:
+        return (f"reads mirrored left to right once turned back by --mirrored-image {scores}: "
+                "the camera does not seem to mirror its image; leave out --mirrored-image")
+    return (f"reads mirrored left to right {scores}: is the camera set to mirror its image? "
+            "give --mirrored-image to turn every frame back (or turn the camera's mirroring "
+            "off); read as they are, mirrored frames have no skill")
 
 
 def _turned_view(est, rest, *, segment: str, side: str) -> str | None:
@@ -462,6 +491,10 @@ def _progress(stream):
                    "is remapped to the device's pinhole view before the estimate (its lens "
                    "distortion, focal length and principal point undone; "
                    "docs/camera_estimator.md).")
+@click.option("--mirrored-image", is_flag=True,
+              help="The camera, or its driver, mirrors its image left to right (as for a "
+                   "video call): every frame, and --calibrate-image, is turned back before "
+                   "the estimate. With --learned the rest frame says when it is needed.")
 @click.option("--learned", is_flag=True,
               help="Use the estimator learnt from randomised model hands (beyond the paper; "
                    "docs/camera_estimator.md) instead of a database lookup, "
@@ -543,7 +576,8 @@ def _progress(stream):
               help="Stop when N consecutive reads give no usable frame.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress line.")
 def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, personal,
-             build_count, calibrate, calibrate_image, intrinsics, learned, learned_kind,
+             build_count, calibrate, calibrate_image, intrinsics, mirrored_image, learned,
+             learned_kind,
              learned_cache, learned_hands, learned_rest, side, smoothing, segment, one_euro,
              frames, seconds, out, fmt,
              keypoints, video_out, synthetic_shape, synthetic_motion, synthetic_size, fps,
@@ -563,6 +597,7 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
     from ..live import (
         CameraSource,
         LiveOptions,
+        MirroredSource,
         SideBySideWriter,
         SyntheticMotion,
         SyntheticSource,
@@ -627,7 +662,7 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
     open_image = read_image(calibrate_image, what="calibration image") \
         if calibrate_image is not None else None
 
-    source: CameraSource | VideoSource | SyntheticSource | None = None
+    source: CameraSource | VideoSource | SyntheticSource | MirroredSource | None = None
     video: SideBySideWriter | None = None
     sink = None
     try:
@@ -659,12 +694,17 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
         if camera_optics is not None:
             source, open_image = _corrected(source, open_image, camera_optics, mount,
                                             intrinsics, calibrate_image, half=learned)
+        if mirrored_image:  # after the lens: a calibration of the mirrored image describes it
+            source = MirroredSource(source)
+            if open_image is not None:
+                open_image = open_image[:, ::-1].copy()
         told = turned = None
         try:
             if learned:
                 lookup, turned = _calibrate_learned(lookup, source, open_image, mount, side,
                                                     info_err, segment=segment or "auto",
-                                                    rest_name=calibrate_image)
+                                                    rest_name=calibrate_image,
+                                                    mirrored_image=mirrored_image)
             elif calibrate:
                 lookup = _calibrate(lookup, source, open_image, db_dir, mount, side, build,
                                     info_err)

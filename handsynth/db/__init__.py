@@ -14,6 +14,11 @@ Databases (one HDF5 file per hand shape): :func:`write_database`,
 
 Building them (resumable, parallel, optionally on Ray): :func:`build_database`,
 :func:`build_databases`, :func:`build_default_database`.
+
+Learning sets for the estimators of unseen hands (coverage grids of randomised model
+hands): :func:`render_learning_set`, :func:`learning_set` (:class:`LearningSetOptions`),
+and the rest frames seen and mirrored that the mirror check learns from,
+:func:`render_mirror_set`.
 """
 
 from ._bits import (
@@ -47,6 +52,7 @@ from ._learning import (
     learning_set,
     random_rest_posture,
     render_learning_set,
+    render_mirror_set,
 )
 from ._store import (
     FORMAT_VERSION,
@@ -112,6 +118,7 @@ __all__ = [
     "random_rest_posture",
     "render_entries",
     "render_learning_set",
+    "render_mirror_set",
     "unpack_mask",
     "verify",
     "write_database",

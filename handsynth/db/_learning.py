@@ -35,7 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._checks import check_number, check_options, check_path
+from .._checks import check_integer, check_number, check_options, check_path
 from .._io import atomic_open, make_folder
 from ..errors import DatabaseCorruptError, DatabaseError, InvalidInputError
 from ..models import GRID_LEVELS, JOINT_LIMITS_DEG, HandShape, natural_pose_set
@@ -50,7 +50,7 @@ from ..render import (
 )
 
 __all__ = ["MAX_LEARNING_HANDS", "LearningSet", "LearningSetOptions", "learning_poses",
-           "learning_set", "random_rest_posture", "render_learning_set"]
+           "learning_set", "random_rest_posture", "render_learning_set", "render_mirror_set"]
 
 _FORMAT = 1
 #: Most hands a learning set may hold: 100,000 hands of 100 frames are about 14 GB of
@@ -343,6 +343,90 @@ def _edge(mask: np.ndarray, px: int) -> np.ndarray:
     return op(mask.view(np.uint8), k).view(bool)
 
 
+def _draw_hand(rng: np.random.Generator, opts: LearningSetOptions, shapes: dict,
+               mount: CameraMount, side: str, *, forearm: bool = True):
+    """One hand of a learning set, worn and at rest: ``(rasteriser, worn mount, edge_px, rest)``.
+
+    The rasteriser (of `shapes`, built once per rounded shape and `forearm`) is varied and
+    moved to the worn mount; `rng` is drawn in the order every learning set was made with.
+    """
+    shape = _random_shape(rng)
+    key = round(shape.length, 1), round(shape.width, 1), forearm
+    if key not in shapes:  # a few built hands; the variation does the rest
+        shapes[key] = VariedRasterizer(HandShape(length=key[0], width=key[1]), mount,
+                                       side=side, forearm=forearm)
+    r = shapes[key]
+    r.vary(HandVariation.random(rng, spread=opts.hand_spread,
+                                segment_width_sd=opts.segment_width_sd,
+                                flesh_offset_sd_mm=opts.flesh_offset_sd_mm))
+    worn = opts.mount_variation.sample(mount, rng)
+    r.set_mount(worn)
+    edge = int(rng.integers(-opts.edge_px, opts.edge_px + 1))
+    near_open = opts.open_rest_share > 0 and rng.uniform() < opts.open_rest_share
+    rest = random_rest_posture(rng, near_open=bool(near_open))
+    return r, worn, edge, rest
+
+
+def render_mirror_set(hands: int, *, seed: int = 0, forearm_share: float = 0.5,
+                      options: LearningSetOptions | None = None,
+                      mount: CameraMount | None = None,
+                      side: str = "right") -> tuple[np.ndarray, np.ndarray]:
+    """Rest frames of random hands as the device sees them and mirrored left to right.
+
+    A camera or its driver set to mirror its image shows the device's view turned left to
+    right; such a view of a hand at rest still looks like a hand to the estimators
+    (docs/camera_estimator.md, "A mirrored camera image").  These pairs teach
+    :class:`~handsynth.estimate.MirrorCheck` to tell the two apart.  Each hand is drawn as
+    a learning set's hand (:class:`LearningSetOptions`: geometry, device placement, outline
+    jitter, rest posture); its forearm stub is left out for a share of the hands, because
+    a hand mesh or a real view may show no forearm behind the wrist, and the check must not
+    lean on it.
+
+    Parameters
+    ----------
+    hands : int
+        How many hands, at least 1 and at most :data:`MAX_LEARNING_HANDS`.
+    seed : int, keyword-only
+        The generator's seed; the set is a pure function of the arguments, and its first
+        hands do not depend on how many it holds.
+    forearm_share : float, keyword-only
+        Share of hands drawn with their forearm stub, in [0, 1].
+    options : LearningSetOptions, keyword-only, optional
+        Spreads of the hands and of the device's placement (its ``hands``,
+        ``poses_per_hand``, ``mix`` and ``seed`` are not used).
+    mount : CameraMount, keyword-only, optional
+        The nominal device (the paper's by default); the grids' wrist cut is its.
+    side : {"right", "left"}, keyword-only
+
+    Returns
+    -------
+    seen, mirrored : ndarray, shape (hands, rows * cols), uint8
+        :func:`~handsynth.render.coverage` grids (255 = covered) of each hand's rest frame
+        and of that frame turned left to right.
+
+    Raises
+    ------
+    InvalidInputError
+        `hands` or `forearm_share` out of range, naming the value.
+    """
+    n = check_integer(hands, "hands", minimum=1, maximum=MAX_LEARNING_HANDS)
+    share = check_number(forearm_share, "forearm_share", minimum=0, maximum=1)
+    opts = check_options(options, LearningSetOptions)
+    mount = as_mount(mount)
+    rng = np.random.default_rng(check_integer(seed, "seed", minimum=0))
+    d = opts.cells[0] * opts.cells[1]
+    seen = np.empty((n, d), np.uint8)
+    mirrored = np.empty((n, d), np.uint8)
+    shapes: dict = {}
+    for h in range(n):
+        forearm = bool(rng.uniform() < share)
+        r, _worn, edge, rest = _draw_hand(rng, opts, shapes, mount, side, forearm=forearm)
+        m = _edge(r.mask(rest), edge)
+        for out, view in ((seen, m), (mirrored, np.ascontiguousarray(m[:, ::-1]))):
+            out[h] = np.rint(coverage(view, mount, side=side, cells=opts.cells) * 255).ravel()
+    return seen, mirrored
+
+
 def render_learning_set(options: LearningSetOptions | None = None, *,
                         mount: CameraMount | None = None, side: str = "right",
                         progress=None) -> LearningSet:
@@ -375,20 +459,7 @@ def render_learning_set(options: LearningSetOptions | None = None, *,
     hand = np.repeat(np.arange(n, dtype=np.int32), per)
     shapes: dict = {}
     for h in range(n):
-        shape = _random_shape(rng)
-        key = round(shape.length, 1), round(shape.width, 1)
-        if key not in shapes:  # a few built hands; the variation does the rest
-            shapes[key] = VariedRasterizer(HandShape(length=key[0], width=key[1]), mount,
-                                           side=side)
-        r = shapes[key]
-        r.vary(HandVariation.random(rng, spread=opts.hand_spread,
-                                    segment_width_sd=opts.segment_width_sd,
-                                    flesh_offset_sd_mm=opts.flesh_offset_sd_mm))
-        worn = opts.mount_variation.sample(mount, rng)
-        r.set_mount(worn)
-        edge = int(rng.integers(-opts.edge_px, opts.edge_px + 1))
-        near_open = opts.open_rest_share > 0 and rng.uniform() < opts.open_rest_share
-        rest = random_rest_posture(rng, near_open=bool(near_open))
+        r, worn, edge, rest = _draw_hand(rng, opts, shapes, mount, side)
         poses = learning_poses(rest, per, rng, mix=opts.mix)
 
         def grid(pose, r=r, edge=edge):

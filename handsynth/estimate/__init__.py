@@ -25,7 +25,10 @@
   :data:`LEARNED_PERCEPTRONS`, those perceptrons alone, learns nothing.
 * Whether the device has moved on the wrist since the rest frame (beyond
   the paper): :class:`MoveCheck` (:class:`MoveCheckOptions`,
-  :class:`MoveCheckState`), which sets :attr:`PoseEstimate.moved`.
+  :class:`MoveCheckState`), which sets :attr:`PoseEstimate.moved`; whether
+  the camera's image is mirrored left to right: :class:`MirrorCheck`
+  (:class:`MirrorCheckOptions`, :class:`MirrorReading`, :func:`mirror_check`),
+  read from the rest frame.
 * Steady angles over time (beyond the paper): the One Euro filter
   (:class:`OneEuroFilter`, :class:`OneEuroOptions`, :func:`one_euro`) and
   :class:`SmoothedEstimator`, which wraps any estimator with it.
@@ -77,6 +80,7 @@ from ._masked import (
     masked_search,
     masked_search_reference,
 )
+from ._mirror import MirrorCheck, MirrorCheckOptions, MirrorReading, mirror_check
 from ._moved import MoveCheck, MoveCheckOptions, MoveCheckState
 from ._search import SearchOptions, SearchResult, SearchTables, search, search_reference
 from ._selection import Selection, SelectionOptions, select_shape, shape_ratios
@@ -104,6 +108,9 @@ __all__ = [
     "LearnedEstimator",
     "LearnedOptions",
     "MaskedMatch",
+    "MirrorCheck",
+    "MirrorCheckOptions",
+    "MirrorReading",
     "MoveCheck",
     "MoveCheckOptions",
     "MoveCheckState",
@@ -127,6 +134,7 @@ __all__ = [
     "masked_search",
     "masked_search_reference",
     "member_learning_set",
+    "mirror_check",
     "one_euro",
     "reference_silhouette",
     "search",

@@ -156,7 +156,8 @@ def ship(sources: dict[str, tuple[Path, LearningSetOptions]], *, mount: CameraMo
     with atomic_open(folder / _MANIFEST, "w", what="manifest", error=DatabaseError) as f:
         f.write(text + "\n")
     keep = {_MANIFEST, *files, *prints}
-    for path in folder.iterdir():
-        if path.is_file() and path.name not in keep:
+    for path in folder.iterdir():  # perceptrons and fingerprints of earlier ships; not the rest
+        if path.is_file() and path.name not in keep and \
+                path.name.startswith(("learned_", "fingerprint_")):
             path.unlink()
     return json.loads(text)

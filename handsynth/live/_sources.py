@@ -325,7 +325,51 @@ class VideoSource(_Source):
             cap.release()
 
 
-class CorrectedSource:
+class _TransformedSource:
+    """Frames of another source, each changed by :meth:`_apply` (the subclasses').
+
+    ``read()`` gives the changed frame (``None``, and an empty frame, as ``None``); a frame
+    that is not an image passes unchanged, for the estimator to refuse and the loop to
+    count.  ``ended``, ``timestamp_s``, ``fps`` and ``truth_deg`` are the source's.
+    """
+
+    def __init__(self, source: FrameSource) -> None:
+        if not callable(getattr(source, "read", None)):
+            raise InvalidInputError(f"source must have a read() method, got "
+                                    f"{type(source).__name__}")
+        self.source = source
+
+    def __getattr__(self, name: str):
+        if name in ("ended", "timestamp_s", "fps", "truth_deg"):
+            return getattr(self.source, name, None if name != "ended" else False)
+        raise AttributeError(name)
+
+    def _apply(self, frame: np.ndarray) -> np.ndarray:
+        raise NotImplementedError
+
+    def read(self) -> np.ndarray | None:
+        from ..render import check_frame
+
+        frame = self.source.read()
+        if frame is None or (isinstance(frame, np.ndarray) and frame.size == 0):
+            return None
+        try:
+            check_frame(frame)
+        except InvalidInputError:
+            return frame  # not an image: the estimator refuses it and the loop counts it
+        return self._apply(frame)
+
+    def close(self) -> None:
+        self.source.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+class CorrectedSource(_TransformedSource):
     """Frames of another source through a real camera's lens correction.
 
     Parameters
@@ -350,37 +394,33 @@ class CorrectedSource:
     def __init__(self, source: FrameSource, correction) -> None:
         from ..render import LensCorrection
 
-        if not callable(getattr(source, "read", None)):
-            raise InvalidInputError(f"source must have a read() method, got "
-                                    f"{type(source).__name__}")
-        self.source = source
+        super().__init__(source)
         self.correction = check_instance(correction, LensCorrection, name="correction")
 
-    def __getattr__(self, name: str):
-        if name in ("ended", "timestamp_s", "fps", "truth_deg"):
-            return getattr(self.source, name, None if name != "ended" else False)
-        raise AttributeError(name)
-
-    def read(self) -> np.ndarray | None:
-        from ..render import check_frame
-
-        frame = self.source.read()
-        if frame is None or (isinstance(frame, np.ndarray) and frame.size == 0):
-            return None
-        try:
-            check_frame(frame)
-        except InvalidInputError:
-            return frame  # not an image: the estimator refuses it and the loop counts it
+    def _apply(self, frame: np.ndarray) -> np.ndarray:
         return self.correction(frame)
 
-    def close(self) -> None:
-        self.source.close()
 
-    def __enter__(self):
-        return self
+class MirroredSource(_TransformedSource):
+    """Frames of another source turned back left to right.
 
-    def __exit__(self, *exc) -> None:
-        self.close()
+    For a camera, or its driver, set to mirror its image (as for a video call): through
+    the device such frames read with no skill, and
+    :class:`~handsynth.estimate.MirrorCheck` tells it from the rest frame.
+
+    Parameters
+    ----------
+    source : FrameSource
+
+    Notes
+    -----
+    ``read()`` gives ``frame[:, ::-1]`` (contiguous); ``None`` and frames that are not
+    images pass as :class:`CorrectedSource` passes them; ``ended``, ``timestamp_s``,
+    ``fps`` and ``truth_deg`` are the source's.
+    """
+
+    def _apply(self, frame: np.ndarray) -> np.ndarray:
+        return np.ascontiguousarray(frame[:, ::-1])
 
 
 @dataclass(frozen=True)

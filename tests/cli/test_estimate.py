@@ -975,6 +975,46 @@ def test_a_rest_frame_of_the_other_hand_or_upside_down_says_so(tmp_path, turn, s
                "--out", str(tmp_path / "rows2.csv"), "-q")
     assert res.exit_code == 0 and "unlike any hand" not in res.output, res.output
 
+def test_a_mirrored_camera_image_is_said_and_turned_back_by_mirrored_image(tmp_path):
+    # a camera set to mirror its image read as a hand at rest, without a word, and every
+    # frame with no skill; the rest frame now says so, and --mirrored-image turns the
+    # frames back
+    from handsynth.eval._testposes import REST_POSTURES
+
+    rest = REST_POSTURES["relaxed"](np.random.default_rng(3))
+    bent = rest.copy()
+    bent[[6, 7, 10, 11]] = [60.0, 40.0, 70.0, 45.0]  # index and middle PIP and DIP
+    with SilhouetteRenderer(HandShape(length=0.97, width=1.04, thumb=1.03), width_px=W,
+                            height_px=H) as r:
+        frames = [_bgr(r.mask(p)) for p in (rest, bent, bent)]
+    mirrored = [np.ascontiguousarray(f[:, ::-1]) for f in frames]
+    rows = {}
+    for name, clip, flag in (("seen", frames, []), ("mirrored", mirrored, []),
+                             ("turned back", mirrored, ["--mirrored-image"]),
+                             ("turned twice", frames, ["--mirrored-image"])):
+        video = _write_video(tmp_path / f"{name}.avi", clip)
+        out = tmp_path / f"{name}.csv"
+        res = _run("--video", str(video), *LEARNT, *flag, "--learned-cache",
+                   str(tmp_path / "c"), "--out", str(out), "-q")
+        assert res.exit_code == 0, res.output
+        rows[name] = (res.output, np.array([[float(r[j]) for j in JOINT_NAMES]
+                                            for r in _read_csv(out)[1]]))
+    assert "reads mirrored" not in rows["seen"][0] + rows["turned back"][0]
+    assert "handsynth: warning: the rest frame reads mirrored left to right (mirror check: " \
+           in rows["mirrored"][0]
+    assert "is the camera set to mirror its image? give --mirrored-image" in rows["mirrored"][0]
+    assert "the camera does not seem to mirror its image; leave out --mirrored-image" \
+           in rows["turned twice"][0]
+    # turned back, the frames read as the camera's own view did (within 1.4 deg: MJPEG
+    # compresses a frame and its mirror image a little differently)
+    np.testing.assert_allclose(rows["turned back"][1], rows["seen"][1], atol=2.0)
+    # read as they were, the bent fingers were not seen bent
+    pip = [JOINT_NAMES.index(j) for j in ("index_pip_flex", "middle_pip_flex")]
+    assert (rows["seen"][1][:, pip] > 30).all()
+    assert np.abs(rows["mirrored"][1][:, pip] - bent[[6, 10]]).mean() > \
+        3 * np.abs(rows["seen"][1][:, pip] - bent[[6, 10]]).mean()
+
+
 def test_a_video_whose_hand_comes_into_view_after_ten_seconds_still_calibrates(tmp_path):
     # the rest frame was looked for in the first 300 frames only, as for a camera: a
     # recording whose hand came into view after 10 s at 30 fps failed ("no frame showed a

@@ -135,10 +135,13 @@ def test_ship_writes_what_shipped_path_then_trusts(tmp_path):
     train_learned(render_learning_set(data), opts).save(src)
     out = tmp_path / "shipped"
     out.mkdir()
-    (out / "stale.npz").write_bytes(b"old")
+    (out / "learned_mlp_stale.npz").write_bytes(b"old")
+    (out / "fingerprint_stale.npz").write_bytes(b"old")
+    (out / "mirror_check.npz").write_bytes(b"not a perceptron's")  # kept: not ship()'s
     manifest = ship({"learned_mlp_x.npz": (src, data)}, folder=out)
     assert sorted(p.name for p in out.iterdir()) == sorted(
-        ["learned_mlp_x.npz", "manifest.json", f"fingerprint_{data.digest()}.npz"])
+        ["learned_mlp_x.npz", "manifest.json", f"fingerprint_{data.digest()}.npz",
+         "mirror_check.npz"])
     assert manifest == read_manifest(out)
     path = shipped_path("learned_mlp_x.npz", folder=out)
     assert path is not None and path.read_bytes() == src.read_bytes()

@@ -764,6 +764,24 @@ def test_a_corrected_source_is_the_same_run_through_the_lens(tmp_path, lookup):
         CorrectedSource("camera", lens)
 
 
+def test_a_mirrored_source_turns_every_frame_back_and_passes_garbage_on(lookup):
+    from handsynth.live import MirroredSource
+
+    with _synthetic(lookup, frames=2) as src:
+        good = src.read()
+    with _synthetic(lookup, frames=2) as src:
+        source = MirroredSource(src)
+        assert source.fps == 8.0 and source.truth_deg is None
+        turned = source.read()
+    np.testing.assert_array_equal(turned, good[:, ::-1])
+    assert turned.flags.c_contiguous
+    s = run_live(lookup, MirroredSource(FlakyCamera(good)),
+                 options=LiveOptions(max_frames=10, retry_delay_s=0))
+    assert (s.frames, s.dropped, s.invalid, s.no_hand) == (10, 4, 6, 2)
+    with pytest.raises(InvalidInputError, match="read"):
+        MirroredSource("camera")
+
+
 def test_side_by_side_of_an_estimator_without_a_database_draws_its_angles(tmp_path, lookup):
     # any estimator: the right half is the hand posed by the estimated angles
     import cv2
