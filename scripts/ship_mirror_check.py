@@ -4,7 +4,7 @@ Learns :class:`handsynth.estimate.MirrorCheck` with its default options for the 
 device (12,000 random model hands, about 40 s on one core) and writes it to
 ``handsynth/estimate/shipped/mirror_check.npz``, with the first hands of its learning set
 as a fingerprint.  Run it when the check's options change, or when
-``tests/estimate/test_mirror.py`` says the fingerprint no longer matches (the hand
+``tests/estimate/test_rest_view.py`` says the fingerprint no longer matches (the hand
 generator or the rasteriser changed).
 
     python scripts/ship_mirror_check.py
@@ -16,7 +16,7 @@ import argparse
 import time
 
 from handsynth.estimate import MirrorCheck
-from handsynth.estimate._mirror import _SHIPPED
+from handsynth.estimate._rest_view import _SHIPPED
 
 
 def main() -> None:

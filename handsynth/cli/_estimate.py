@@ -329,9 +329,11 @@ def _calibrate_learned(est, source, rest_image, mount, side, err, *, segment: st
     estimator calibrated to it reads the frame itself as a hand (not ``low_confidence``):
     a video's first frames of half the view bright, of noise or of a hand coming into the
     view made every later frame low-confidence.  A --calibrate-image that reads so is
-    used as given, with a warning, as is a rest frame that reads mirrored left to right
-    (:func:`_mirror_hint`).  Returns the calibrated estimator and, when the rest frame read
-    as a hand only turned, what that turn says (:func:`_turned_view`)."""
+    used as given, with a warning, as is a rest frame that reads mirrored left to right.
+    Returns the calibrated estimator and, when the rest frame read as a hand only turned
+    top to bottom or half a turn, what that turn says (:func:`_turn_hints`)."""
+    from ..estimate import read_rest_frame
+
     refused = 0
     last_refused: list = []
 
@@ -353,16 +355,17 @@ def _calibrate_learned(est, source, rest_image, mount, side, err, *, segment: st
                                          prompt="hold the hand open, not stiff",
                                          accept=reads_as_a_hand)
     except EstimationError as exc:
-        turned = (_turned_view(est, last_refused[0], segment=segment, side=side)
-                  if last_refused else None)
-        if turned is None:
+        if not last_refused:
             raise
-        raise EstimationError(f"{exc}; {turned}") from None
-    low = est.calibrated(rest, segment=segment).estimate(rest).low_confidence
-    turned = _turned_view(est, rest, segment=segment, side=side) if low else None
-    # a mirrored view may read as a hand at rest or not: asked unless a turn explained it
-    mirrored = None if turned is not None else \
-        _mirror_hint(est, rest, segment=segment, mirrored_image=mirrored_image)
+        turned, mirrored = _turn_hints(read_rest_frame(est, last_refused[0], segment=segment),
+                                       side=side, mirrored_image=mirrored_image)
+        if turned is None and mirrored is None:
+            raise
+        said = turned if turned is not None else f"the last frame {mirrored}"
+        raise EstimationError(f"{exc}; {said}") from None
+    reading = read_rest_frame(est, rest, segment=segment)
+    low = reading.low_confidence
+    turned, mirrored = _turn_hints(reading, side=side, mirrored_image=mirrored_image)
     # calibrated afresh: a trial's estimate is not a frame of the run (smoothing and the
     # moved check keep what they saw)
     est = est.calibrated(rest, segment=segment)
@@ -386,50 +389,33 @@ def _calibrate_learned(est, source, rest_image, mount, side, err, *, segment: st
     return est, turned
 
 
-def _mirror_hint(est, rest, *, segment: str, mirrored_image: bool) -> str | None:
-    """What to do when the rest frame reads mirrored left to right, or None when it does not.
+def _turn_hints(reading, *, side: str, mirrored_image: bool) -> tuple[str | None, str | None]:
+    """What the turn of the rest frame (:func:`~handsynth.estimate.read_rest_frame`) asks of
+    the user: ``(turned, mirrored)``, the advice for a view turned top to bottom or half a
+    turn (it follows "reads as unlike any hand learnt; "), and for a mirrored view (it
+    follows "the rest frame "); None where the reading shows no such turn.
 
-    A camera set to mirror its image shows the device's view turned left to right, which
-    the estimators read as a hand with no skill and without flagging it
-    (:class:`~handsynth.estimate.MirrorCheck`)."""
-    from ..estimate import mirror_check
-
-    reading = mirror_check().read(est, rest, segment=segment)
-    if not reading.mirrored:
-        return None
-    scores = f"(mirror check: {reading.seen:.2f} as seen, {reading.turned:.2f} turned)"
-    if mirrored_image:
-        return (f"reads mirrored left to right once turned back by --mirrored-image {scores}: "
-                "the camera does not seem to mirror its image; leave out --mirrored-image")
-    return (f"reads mirrored left to right {scores}: is the camera set to mirror its image? "
-            "give --mirrored-image to turn every frame back (or turn the camera's mirroring "
-            "off); read as they are, mirrored frames have no skill")
-
-
-def _turned_view(est, rest, *, segment: str, side: str) -> str | None:
-    """What a rest frame that reads as no hand shows when turned, if then it reads as one.
-
-    The view of a left hand is the right hand's turned top to bottom, so the other side's
-    hand reads as a hand upside down (every frame low-confidence); a camera mounted turned
-    half a turn shows the hand turned both ways.  Both turned frames may read as a hand (a
-    hand mirrored left to right is not told from one); the one the estimator finds least
-    novel (its ``error``) is said: on the model hands the right turn read 2.0-2.5, the
-    other 3.5-4.5 (the perceptrons' novelty limit about 4.9).  None when neither reads as
-    a hand (no hand at rest in view, a cluttered ground)."""
-    import numpy as np
-
+    The view of a left hand is the right hand's turned top to bottom; a camera mounted
+    turned half a turn shows the hand turned both ways; a camera set to mirror its image
+    shows it turned left to right, which the estimators read with no skill and without
+    flagging it (:class:`~handsynth.estimate.MirrorCheck`)."""
     other = "left" if side == "right" else "right"
-    best = None
-    for turned, says in ((rest[::-1], f"read turned top to bottom, the rest frame is a {other} "
-                                      f"hand's: is the device on the {other} hand? (give --side "
-                                      f"{other})"),
-                         (rest[::-1, ::-1], "read turned half a turn, the rest frame is a hand's: is "
-                                            "the camera mounted upside down? (turn it over)")):
-        turned = np.ascontiguousarray(turned)
-        got = est.calibrated(turned, segment=segment).estimate(turned)
-        if not got.low_confidence and (best is None or got.error < best[0]):
-            best = (got.error, says)
-    return None if best is None else best[1]
+    if reading.turn == "top to bottom":
+        return (f"read turned top to bottom, the rest frame is a {other} hand's: is the device "
+                f"on the {other} hand? (give --side {other})"), None
+    if reading.turn == "half a turn":
+        return ("read turned half a turn, the rest frame is a hand's: is the camera mounted "
+                "upside down? (turn it over)"), None
+    if reading.turn != "left to right":
+        return None, None
+    scores = f"(mirror check: {reading.mirror.seen:.2f} as seen, {reading.mirror.turned:.2f} turned)"
+    if mirrored_image:
+        return None, (f"reads mirrored left to right once turned back by --mirrored-image "
+                      f"{scores}: the camera does not seem to mirror its image; leave out "
+                      "--mirrored-image")
+    return None, (f"reads mirrored left to right {scores}: is the camera set to mirror its "
+                  "image? give --mirrored-image to turn every frame back (or turn the camera's "
+                  "mirroring off); read as they are, mirrored frames have no skill")
 
 
 def _build_options(count: int | None, side: str):

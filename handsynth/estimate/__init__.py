@@ -26,9 +26,10 @@
 * Whether the device has moved on the wrist since the rest frame (beyond
   the paper): :class:`MoveCheck` (:class:`MoveCheckOptions`,
   :class:`MoveCheckState`), which sets :attr:`PoseEstimate.moved`; whether
-  the camera's image is mirrored left to right: :class:`MirrorCheck`
-  (:class:`MirrorCheckOptions`, :class:`MirrorReading`, :func:`mirror_check`),
-  read from the rest frame.
+  the rest frame is seen as the device sees it or turned (the other hand, a camera
+  upside down, a camera that mirrors its image): :func:`read_rest_frame`
+  (:class:`RestFrameReading`, :data:`TURNS`) and :class:`MirrorCheck`
+  (:class:`MirrorCheckOptions`, :class:`MirrorReading`, :func:`mirror_check`).
 * Steady angles over time (beyond the paper): the One Euro filter
   (:class:`OneEuroFilter`, :class:`OneEuroOptions`, :func:`one_euro`) and
   :class:`SmoothedEstimator`, which wraps any estimator with it.
@@ -80,8 +81,16 @@ from ._masked import (
     masked_search,
     masked_search_reference,
 )
-from ._mirror import MirrorCheck, MirrorCheckOptions, MirrorReading, mirror_check
 from ._moved import MoveCheck, MoveCheckOptions, MoveCheckState
+from ._rest_view import (
+    TURNS,
+    MirrorCheck,
+    MirrorCheckOptions,
+    MirrorReading,
+    RestFrameReading,
+    mirror_check,
+    read_rest_frame,
+)
 from ._search import SearchOptions, SearchResult, SearchTables, search, search_reference
 from ._selection import Selection, SelectionOptions, select_shape, shape_ratios
 from ._smoothing import (
@@ -99,6 +108,7 @@ __all__ = [
     "LEARNED_PERCEPTRONS",
     "MIN_HAND_COVERAGE",
     "SHIPPED_LEARNING_SETS",
+    "TURNS",
     "ApproximateIndex",
     "ApproximateOptions",
     "Calibration",
@@ -120,6 +130,7 @@ __all__ = [
     "PoseEstimate",
     "PoseEstimator",
     "PoseLookup",
+    "RestFrameReading",
     "SearchOptions",
     "SearchResult",
     "SearchTables",
@@ -136,6 +147,7 @@ __all__ = [
     "member_learning_set",
     "mirror_check",
     "one_euro",
+    "read_rest_frame",
     "reference_silhouette",
     "search",
     "search_reference",

@@ -1,14 +1,20 @@
-"""Is the camera's image mirrored left to right?  Read from the rest frame.
+"""Is the rest frame seen as the device sees it, or turned?  Read from the rest frame.
 
-Many webcams, or their drivers, can be set to mirror their image (as for a video
-call).  Through the device, a mirrored image turns the view left to right: the fingers
-point into the wrist cut and the hand that is left looks enough like a hand at rest that
-the learnt estimators do not flag it.  Measured on three glTF hands and six model hands
-the estimators never learnt from (the shipped perceptrons, relaxed and near-open rests,
-30 natural frames each): the rest frame read as a hand every time, and the natural
-frames erred by 29.6-41.5° (as given 5.7-11.7°; the open-hand constant about 40°), with
-0-100 % of them flagged ``low_confidence`` (none on one of the glTF hands)
-(docs/camera_estimator.md, "A mirrored camera image").
+Three mistakes of wearing or wiring turn every frame the learnt estimators read:
+
+* the device on the other hand than the estimator's: the view turned top to bottom;
+* the camera mounted turned half a turn: the view turned both ways;
+* a camera, or its driver, set to mirror its image (as many webcams are for a video
+  call): the view turned left to right.
+
+The first two read as no hand learnt (every frame ``low_confidence``); the estimator
+calibrated to the rest frame turned back reads that as a hand.  A mirrored view does not
+read so: the fingers point into the wrist cut and what is left looks enough like a hand
+at rest that the estimators read it, with no skill and seldom flagged (the default
+ensemble on three glTF hands and six held-out model hands, 30 natural frames per rest:
+finger flexion MAE 27.5-39.6° against 7.0-13.1° as the camera sees them, the open-hand
+constant 34.0-49.5°; docs/camera_estimator.md, "A mirrored camera image").
+:func:`read_rest_frame` says which turn, if any, explains a rest frame.
 
 :class:`MirrorCheck` tells a rest frame as the device sees it from its mirror image.
 A small perceptron learnt from the rest frames of random model hands, as seen and
@@ -41,7 +47,8 @@ from ..errors import DatabaseCorruptError, DatabaseError, InvalidInputError
 from ..render import CameraMount, SkinColour, as_mount
 from ._learned import LearnedEstimator, _relu_forward, fit_mlp
 
-__all__ = ["MirrorCheck", "MirrorCheckOptions", "MirrorReading", "mirror_check"]
+__all__ = ["TURNS", "MirrorCheck", "MirrorCheckOptions", "MirrorReading", "RestFrameReading",
+           "mirror_check", "read_rest_frame"]
 
 _FORMAT = 1
 #: Hands of the learning set kept in the file as its fingerprint.
@@ -159,7 +166,7 @@ class MirrorCheck:
     @classmethod
     def learn(cls, options: MirrorCheckOptions | None = None, *,
               mount: CameraMount | None = None, side: str = "right") -> MirrorCheck:
-        """Learn the check from random model hands (about 30 s for 12,000 hands).
+        """Learn the check from random model hands (about 45 s for 12,000 hands on one core).
 
         Parameters
         ----------
@@ -344,20 +351,15 @@ def mirror_check(options: MirrorCheckOptions | None = None, *,
                  mount: CameraMount | None = None, side: str = "right") -> MirrorCheck:
     """The mirror check of `options` for `mount`: the shipped one, or learnt now.
 
-    Parameters
-    ----------
-    options : MirrorCheckOptions, optional
-    mount : CameraMount, keyword-only, optional
-        The nominal device (the paper's by default).
-    side : {"right", "left"}, keyword-only
-        The hand the estimators learnt (a left-hand estimator made by
-        :meth:`LearnedEstimator.mirrored` reads its frames as the right hand's).
+    Parameters as :meth:`MirrorCheck.learn`'s; `side` is the hand the estimators learnt (a
+    left-hand estimator made by :meth:`LearnedEstimator.mirrored` reads its frames as the
+    right hand's).
 
     Returns
     -------
     MirrorCheck
         The shipped check when it was learnt with these arguments (read at once);
-        otherwise one learnt now (about 30 s for 12,000 hands).
+        otherwise one learnt now (about 45 s for 12,000 hands).
     """
     opts = check_options(options, MirrorCheckOptions)
     mount = as_mount(mount)
@@ -366,3 +368,88 @@ def mirror_check(options: MirrorCheckOptions | None = None, *,
         if (shipped.options, shipped.mount, shipped.side) == (opts, mount, side):
             return shipped
     return MirrorCheck.learn(opts, mount=mount, side=side)
+
+
+#: The turns of a rest frame :func:`read_rest_frame` tries, and what each says.
+TURNS = {"top to bottom": "the view of the other hand than the estimator's",
+         "half a turn": "the camera mounted turned half a turn",
+         "left to right": "a camera set to mirror its image"}
+
+
+@dataclass(frozen=True)
+class RestFrameReading:
+    """What :func:`read_rest_frame` found.
+
+    Attributes
+    ----------
+    low_confidence : bool
+        The estimator calibrated to the frame reads the frame itself as unlike any
+        hand learnt.
+    turn : str or None
+        The turn of the frame that reads as a hand where the frame does not, one of
+        :data:`TURNS` (``"top to bottom"``: the other hand's view; ``"half a turn"``: the
+        camera upside down; ``"left to right"``: a mirrored image); None when no turn
+        explains the frame better than it is.
+    mirror : MirrorReading or None
+        The mirror check's reading, when it was asked (not when a turn top to bottom or
+        half a turn explained the frame, nor for an estimator of another device than the
+        shipped check's with no `check` given).
+    """
+
+    low_confidence: bool
+    turn: str | None
+    mirror: MirrorReading | None
+
+
+def read_rest_frame(estimator, rest_frame: np.ndarray, *, segment: str | SkinColour = "auto",
+                    check: MirrorCheck | None = None) -> RestFrameReading:
+    """Which turn of `rest_frame`, if any, is the view the estimator learnt (module docstring).
+
+    A frame that reads as unlike any hand learnt is read turned top to bottom and turned
+    half a turn, each by the estimator calibrated to it; of those that read as a hand the
+    one it finds least novel (its ``error``) is the turn (measured with the shipped
+    perceptrons on three model hands of other geometry: the right turn's ``error`` 2.0-2.5,
+    the other's 3.5-4.5, novelty limit about 4.9).  Otherwise the mirror check says
+    whether the frame reads mirrored left to right.
+
+    Parameters
+    ----------
+    estimator : LearnedEstimator or EnsembleEstimator
+        The estimator that will read the frames (calibrated or not).
+    rest_frame : ndarray, shape (H, W) or (H, W, 3)
+        The frame of the hand at rest, as the estimator takes it.
+    segment : {"auto", "brightness", "colour"} or SkinColour, keyword-only
+        As :meth:`LearnedEstimator.calibrated`'s.
+    check : MirrorCheck, keyword-only, optional
+        The mirror check; the shipped one (:func:`mirror_check`) when the estimator
+        learnt the paper's device, else none is asked unless given.
+
+    Returns
+    -------
+    RestFrameReading
+
+    Raises
+    ------
+    InvalidInputError
+        A frame the estimator refuses (no hand, another width-to-height ratio), naming
+        it; an estimator of another device than `check`'s.
+    """
+    frame = np.asarray(rest_frame)
+    low = estimator.calibrated(frame, segment=segment).estimate(frame).low_confidence
+    if low:
+        best = None
+        for turn, view in (("top to bottom", frame[::-1]), ("half a turn", frame[::-1, ::-1])):
+            view = np.ascontiguousarray(view)
+            got = estimator.calibrated(view, segment=segment).estimate(view)
+            if not got.low_confidence and (best is None or got.error < best[0]):
+                best = (got.error, turn)
+        if best is not None:
+            return RestFrameReading(low_confidence=True, turn=best[1], mirror=None)
+    if check is None:
+        shipped = mirror_check()
+        if _learnt_member(estimator).view_key[0] == shipped.mount:
+            check = shipped
+    reading = None if check is None else check.read(estimator, frame, segment=segment)
+    mirrored = reading is not None and reading.mirrored
+    return RestFrameReading(low_confidence=low, turn="left to right" if mirrored else None,
+                            mirror=reading)

@@ -7,10 +7,12 @@ from handsynth.db import render_mirror_set
 from handsynth.errors import DatabaseCorruptError, DatabaseError, InvalidInputError
 from handsynth.estimate import (
     LEARNED_PERCEPTRONS,
+    TURNS,
     MirrorCheck,
     MirrorCheckOptions,
     learned_ensemble,
     mirror_check,
+    read_rest_frame,
 )
 from handsynth.eval import model_test_hands
 from handsynth.eval._testposes import REST_POSTURES
@@ -132,3 +134,45 @@ def test_the_mirror_set_is_a_function_of_its_seed_and_its_first_hands_of_nothing
         render_mirror_set(2, forearm_share=-0.5)
     with pytest.raises(InvalidInputError, match="hands"):
         render_mirror_set(0)
+
+
+@pytest.fixture(scope="module")
+def held_out_rest():
+    made = model_test_hands(1, seed=71, spread=1.5)[0].make()
+    try:
+        return made.mask(REST_POSTURES["relaxed"](np.random.default_rng(8)))
+    finally:
+        made.close()
+
+
+def test_each_turn_of_a_rest_frame_is_named(perceptrons, held_out_rest, tmp_path):
+    rest = held_out_rest
+    seen = read_rest_frame(perceptrons, rest)
+    assert (seen.low_confidence, seen.turn) == (False, None) and not seen.mirror.mirrored
+    for turn, view in (("top to bottom", rest[::-1]), ("half a turn", rest[::-1, ::-1]),
+                       ("left to right", rest[:, ::-1])):
+        got = read_rest_frame(perceptrons, np.ascontiguousarray(view))
+        assert got.turn == turn, (turn, got)
+        assert turn in TURNS
+        # the other hand's view and a camera upside down read as no hand learnt; a
+        # mirrored one is told by the mirror check, not by that
+        assert got.low_confidence == (turn != "left to right")
+    # the left hand's estimator reads the left hand's view (the right's turned top to
+    # bottom) as it is, and the right hand's view as turned
+    left = learned_ensemble(tmp_path, members=LEARNED_PERCEPTRONS, side="left")
+    assert read_rest_frame(left, np.ascontiguousarray(rest[::-1])).turn is None
+    assert read_rest_frame(left, rest).turn == "top to bottom"
+
+
+def test_no_mirror_check_is_asked_for_another_device_unless_given(perceptrons, held_out_rest,
+                                                                  small, monkeypatch):
+    from handsynth.estimate import _rest_view
+
+    elsewhere = MirrorCheck(small._a, options=small.options,
+                            mount=replace(CameraMount.paper(), height_mm=140.0), side="right",
+                            cells=small.cells)
+    monkeypatch.setattr(_rest_view, "mirror_check", lambda: elsewhere)
+    got = read_rest_frame(perceptrons, held_out_rest)  # not the estimator's device: not asked
+    assert got.mirror is None and got.turn is None
+    got = read_rest_frame(perceptrons, held_out_rest, check=small)  # given: asked
+    assert got.mirror == small.read(perceptrons, held_out_rest)
