@@ -330,8 +330,8 @@ def _calibrate_learned(est, source, rest_image, mount, side, err, *, segment: st
     a video's first frames of half the view bright, of noise or of a hand coming into the
     view made every later frame low-confidence.  A --calibrate-image that reads so is
     used as given, with a warning, as is a rest frame that reads mirrored left to right.
-    Returns the calibrated estimator and, when the rest frame read as a hand only turned
-    top to bottom or half a turn, what that turn says (:func:`_turn_hints`)."""
+    Returns the calibrated estimator and what :func:`_turn_hints` says of the rest frame
+    (the advice for a view turned top to bottom or half a turn, and for a mirrored one)."""
     from ..estimate import read_rest_frame
 
     refused = 0
@@ -386,7 +386,7 @@ def _calibrate_learned(est, source, rest_image, mount, side, err, *, segment: st
     elif mirrored is not None:
         what = f"--calibrate-image {rest_name}" if rest_image is not None else "the rest frame"
         warnings.warn(f"{what} {mirrored}", stacklevel=2)
-    return est, turned
+    return est, turned, mirrored
 
 
 def _turn_hints(reading, *, side: str, mirrored_image: bool) -> tuple[str | None, str | None]:
@@ -684,13 +684,12 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
             source = MirroredSource(source)
             if open_image is not None:
                 open_image = open_image[:, ::-1].copy()
-        told = turned = None
+        told = turned = mirrored = None
         try:
             if learned:
-                lookup, turned = _calibrate_learned(lookup, source, open_image, mount, side,
-                                                    info_err, segment=segment or "auto",
-                                                    rest_name=calibrate_image,
-                                                    mirrored_image=mirrored_image)
+                lookup, turned, mirrored = _calibrate_learned(
+                    lookup, source, open_image, mount, side, info_err, segment=segment or "auto",
+                    rest_name=calibrate_image, mirrored_image=mirrored_image)
             elif calibrate:
                 lookup = _calibrate(lookup, source, open_image, db_dir, mount, side, build,
                                     info_err)
@@ -756,6 +755,8 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
         click.echo(f"{summary.low_confidence} of {summary.frames} frames were unlike any learnt: "
                    "if the background is not dark, --segment colour tells the hand by the "
                    "colour of its skin (docs/camera_estimator.md)", err=info_err)
+    if mirrored is not None:  # said at the start too; a long run's reader sees this line last
+        click.echo(f"the rest frame {mirrored}", err=info_err)
     if sink is not None and not to_stdout:
         plural = "" if sink.rows == 1 else "s"
         click.echo(f"rows: {Path(out)} ({sink.rows} row{plural}, {sink.format})" if sink.rows else

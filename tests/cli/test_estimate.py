@@ -1003,6 +1003,9 @@ def test_a_mirrored_camera_image_is_said_and_turned_back_by_mirrored_image(tmp_p
     assert "handsynth: warning: the rest frame reads mirrored left to right (mirror check: " \
            in rows["mirrored"][0]
     assert "is the camera set to mirror its image? give --mirrored-image" in rows["mirrored"][0]
+    # and the run's summary, printed last, says it again
+    assert rows["mirrored"][0].strip().splitlines()[-2].startswith(
+        "the rest frame reads mirrored left to right"), rows["mirrored"][0]
     assert "the camera does not seem to mirror its image; leave out --mirrored-image" \
            in rows["turned twice"][0]
     # turned back, the frames read as the camera's own view did (within 1.4 deg: MJPEG
