@@ -20,6 +20,7 @@ Usage::
     python scripts/study_camera.py --cache DIR level
     python scripts/study_camera.py --cache DIR [--kind perceptrons] mirror
     python scripts/study_camera.py --cache DIR tones
+    python scripts/study_camera.py --cache DIR bent_rest
 
 ``backgrounds``
     Two held-out model hands (seed 3, 1.5 times the learning spread) and the
@@ -60,6 +61,15 @@ Usage::
     levels.  Per hand, tone and ground: what ``auto`` chose, the finger flexion MAE and
     the share flagged ``low_confidence``; then per tone and ground the mean over the
     hands beside the constant.  Last line: ``worst_mae=<deg> constant=<deg>``.
+``bent_rest``
+    A rest frame taken with the fingers bent: the three glTF hands and two held-out model
+    hands (seed 53, 1.5 times the spread), a relaxed rest each (seed 5) and 30 natural
+    frames from it, the default ensemble calibrated to a frame of that rest with every
+    finger flexion (MCP, PIP, DIP) bent 0, 20, 40 and 60 deg more (at most 90).  Per hand
+    and bend: the mean finger flexion the ensemble reads in its own rest frame against
+    the truth, whether that frame is flagged, and the natural frames' flexion MAE and
+    share flagged.  Last line: ``mae_rest=<deg> mae_bent20=<deg> mae_bent40=<deg>
+    mae_bent60=<deg>``.
 ``jitter``
     Continuous motions: 8 natural grasps from and back to a relaxed rest,
     each reached in 0.8 s with a minimum-jerk profile at 30 fps, on two
@@ -1264,6 +1274,41 @@ def tones(cache) -> None:
           f"constant={np.mean(const):.2f}")
 
 
+def bent_rest(cache) -> None:
+    """``bent_rest``: the rest frame taken with the fingers bent."""
+    from handsynth.estimate import learned_ensemble
+    from handsynth.testhands import TEST_HANDS
+
+    paper = CameraMount.paper()
+    ens = learned_ensemble(cache, mount=paper)
+    rng = np.random.default_rng(5)
+    mae: dict = {}
+    for hand in (mesh_test_hands(sorted(TEST_HANDS), mount=paper)
+                 + model_test_hands(2, seed=53, mount=paper, spread=1.5)):
+        made = hand.make()
+        rest = relaxed_rest_posture(rng)
+        poses = natural_test_poses(rest, 30, rng)[0]
+        masks = list(made.masks(poses))
+        row = []
+        for bend in (0, 20, 40, 60):
+            taken = rest.copy()
+            taken[_FLEX] = np.minimum(taken[_FLEX] + bend, 90.0)
+            frame = made.mask(taken)
+            cal = ens.calibrated(frame)
+            own = cal.estimate(frame)
+            got = [cal.estimate(m) for m in masks]
+            e = np.abs(np.stack([g.angles for g in got])[:, _FLEX] - poses[:, _FLEX]).mean()
+            mae.setdefault(bend, []).append(e)
+            row.append(f"+{bend}: own {own.angles[_FLEX].mean():4.1f} (true "
+                       f"{taken[_FLEX].mean():4.1f}{', flagged' if own.low_confidence else ''}) "
+                       f"MAE {e:4.1f}, flagged {np.mean([g.low_confidence for g in got]):.2f}")
+        made.close()
+        print(f"{hand.name:15s} " + " | ".join(row) +
+              f" | constant {np.abs(poses[:, _FLEX]).mean():4.1f}", flush=True)
+    print(" ".join(f"mae_{'rest' if b == 0 else f'bent{b}'}={np.mean(v):.2f}"
+                   for b, v in mae.items()))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cache", default=None, help="folder of the learnt estimator")
@@ -1282,7 +1327,8 @@ def main() -> None:
                     help="novelty, lens, mirror: the default ensemble or its perceptrons alone")
     ap.add_argument("study", choices=["backgrounds", "jitter", "holds", "observability", "bound",
                                       "bound_mcp", "rests", "moved", "imaging", "mounts", "sizes",
-                                      "skin", "skin_lit", "novelty", "lens", "level", "mirror", "tones"])
+                                      "skin", "skin_lit", "novelty", "lens", "level", "mirror", "tones",
+                                      "bent_rest"])
     args = ap.parse_args()
     if args.study not in ("observability", "bound_mcp", "moved") and args.cache is None:
         ap.error(f"{args.study} needs --cache DIR")
@@ -1298,7 +1344,8 @@ def main() -> None:
                "novelty": lambda: novelty(args.cache, args.kind),
                "lens": lambda: lens(args.cache, args.kind), "level": lambda: level(args.cache),
                "mirror": lambda: mirror(args.cache, args.kind),
-               "tones": lambda: tones(args.cache)}
+               "tones": lambda: tones(args.cache),
+               "bent_rest": lambda: bent_rest(args.cache)}
     studies[args.study]()
 
 
