@@ -88,6 +88,7 @@ from ._recording import (
 )
 from ._sensorcal import SensorCalibration, fit_sensor_calibration
 from ._simulate import SkinMotion, simulate_imu
+from ._swaps import SWAP_FLOOR_MPS2, SWAP_RATIO, swap_ratios, swapped_sensors
 from ._vectors import (
     ROTATIONS,
     ChainModel,
@@ -97,6 +98,7 @@ from ._vectors import (
     link_vectors,
     rotation_vector,
     seel_joint_positions,
+    smoothed_motion,
     truth_chain_model,
 )
 
@@ -124,6 +126,8 @@ __all__ = [
     "ROTATIONS",
     "SENSOR_BODIES",
     "SENSOR_NAMES",
+    "SWAP_FLOOR_MPS2",
+    "SWAP_RATIO",
     "TIP_SENSORS",
     "TUNING",
     "UNITS",
@@ -203,7 +207,10 @@ __all__ = [
     "segments_from_seconds",
     "sensor_tree",
     "simulate_imu",
+    "smoothed_motion",
     "static_motion",
+    "swap_ratios",
+    "swapped_sensors",
     "thumb_cmc_model",
     "truth_chain_model",
     "truth_link_frames",

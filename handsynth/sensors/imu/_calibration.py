@@ -36,6 +36,7 @@ from ._model import TIP_SENSORS
 from ._plate import PLATE_SENSORS, fuse_plate, plate_rotations
 from ._recording import ImuRecording, check_recording
 from ._sensorcal import POSE_PREFIX, SensorCalibration, fit_sensor_calibration
+from ._swaps import swapped_sensors
 from ._vectors import ChainModel, _min_rotation_samples, calibrate_vectors, chain_model
 
 __all__ = ["ImuCalibration", "calibrate", "check_stretches", "segments_from_seconds"]
@@ -361,7 +362,9 @@ class ImuCalibration:
         UserWarning
             Joint angles far beyond the hand's range of motion in a share of the samples,
             naming the joints and the sensor they point to (:func:`angles_beyond_range`):
-            a sensor turned on its segment since the calibration.
+            a sensor turned on its segment since the calibration.  Pairs of sensors whose
+            joints agree better with the two exchanged (:func:`swapped_sensors`): sensors
+            put back on each other's segments, or columns exchanged.
         """
         static = check_options(static, StaticStart, name="static")
         options = check_options(options, ChainEKFOptions)
@@ -378,6 +381,9 @@ class ImuCalibration:
         beyond = angles_beyond_range(angles)
         if beyond is not None:
             warnings.warn(beyond, UserWarning, stacklevel=2)
+        exchanged = swapped_sensors(sub, self.model)
+        if exchanged is not None:
+            warnings.warn(exchanged, UserWarning, stacklevel=2)
         tips = {f: v for f, v in fingertip_positions(q, sub.sensors, self.model).items()
                 if not f.endswith("_joints")}
         return {"quat": q, "angles": angles, "tips": tips, "sensor_calibration": applied}

@@ -63,6 +63,7 @@ __all__ = [
     "link_vectors",
     "rotation_vector",
     "seel_joint_positions",
+    "smoothed_motion",
     "truth_chain_model",
 ]
 
@@ -527,16 +528,9 @@ def seel_joint_positions(rec: ImuRecording, s1: str, s2: str, *, iterations: int
     o1, o2 : ndarray, shape (3,)
         The joint centre in each sensor's frame (sensor -> joint, i.e. -P).
     """
-    dt = 1.0 / rec.rate_hz
     stop = rec.n if stop is None else stop
-    k1, k2 = rec.index(s1), rec.index(s2)
-    wg, wa = _smoothing_windows(rec.rate_hz)
-    g1 = savgol_filter(rec.gyr[k1, start:stop], wg, 2, axis=0)
-    g2 = savgol_filter(rec.gyr[k2, start:stop], wg, 2, axis=0)
-    d1 = savgol_filter(rec.gyr[k1, start:stop], wg, 2, deriv=1, delta=dt, axis=0)
-    d2 = savgol_filter(rec.gyr[k2, start:stop], wg, 2, deriv=1, delta=dt, axis=0)
-    a1 = savgol_filter(rec.acc[k1, start:stop], wa, 2, axis=0)
-    a2 = savgol_filter(rec.acc[k2, start:stop], wa, 2, axis=0)
+    g1, d1, a1 = smoothed_motion(rec, rec.index(s1), start, stop)
+    g2, d2, a2 = smoothed_motion(rec, rec.index(s2), start, stop)
 
     def gamma(g, d):
         # K with K o = w x (w x o) + dw x o
@@ -584,6 +578,28 @@ def seel_joint_positions(rec: ImuRecording, s1: str, s2: str, *, iterations: int
     null = vec[:, ev < 1e-3 * ev.max()]
     x = x - null @ (null.T @ x)
     return x[:3], x[3:]
+
+
+def smoothed_motion(rec: ImuRecording, k: int, start: int = 0,
+                    stop: int | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Sensor `k`'s angular rate, its derivative and its specific force, smoothed.
+
+    Quadratic Savitzky-Golay filters over a fixed time (:func:`_smoothing_windows`), as
+    eqs. 3.1-3.10 read them.
+
+    Returns
+    -------
+    w : ndarray, shape (N, 3), rad/s
+    dw : ndarray, shape (N, 3), rad/s^2
+    a : ndarray, shape (N, 3), m/s^2
+        Samples `start` to `stop` of the recording.
+    """
+    stop = rec.n if stop is None else stop
+    wg, wa = _smoothing_windows(rec.rate_hz)
+    gyr = rec.gyr[k, start:stop]
+    return (savgol_filter(gyr, wg, 2, axis=0),
+            savgol_filter(gyr, wg, 2, deriv=1, delta=1.0 / rec.rate_hz, axis=0),
+            savgol_filter(rec.acc[k, start:stop], wa, 2, axis=0))
 
 
 def _skew(v):
