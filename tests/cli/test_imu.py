@@ -1,5 +1,6 @@
 import dataclasses
 import json
+import re
 
 import h5py
 import numpy as np
@@ -209,6 +210,20 @@ def test_calibrate_then_track_joint_angles(tmp_path):
                                    "--tips-out", str(tmp_path / "tips.csv")])
     assert res.exit_code == 0, res.output
     assert "sensor calibration applied" in res.output
+    assert "read as exchanged" not in res.output
+    # two sensors put back on each other's phalanges: their columns exchanged by name
+    lines = rec_csv.read_text().split("\n")
+    k = next(i for i, line in enumerate(lines) if line.startswith("time_s,"))  # after a comment
+    lines[k] = lines[k].replace("index_proximal", "@").replace("middle_proximal", "index_proximal")
+    lines[k] = lines[k].replace("@", "middle_proximal")
+    swapped_csv = tmp_path / "swapped.csv"
+    swapped_csv.write_text("\n".join(lines))
+    res = CliRunner().invoke(cli, ["imu", "track", str(swapped_csv), "--calibration", str(model),
+                                   "--align", "2,4", "--out", str(tmp_path / "q2.csv")])
+    assert res.exit_code == 0, res.output
+    assert "handsynth: warning: sensors read as exchanged since the calibration: " in res.output
+    assert re.search(r"(index_proximal and middle_proximal|middle_proximal and index_proximal) "
+                     r"\(their joints agree [0-9.]+ times better exchanged", res.output), res.output
     with open(tmp_path / "tips.csv", encoding="utf-8") as fh:
         header = fh.readline().strip().split(",")
     assert header[:4] == ["time_s", "thumb_tip_x_mm", "thumb_tip_y_mm", "thumb_tip_z_mm"]
