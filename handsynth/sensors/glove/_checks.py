@@ -305,17 +305,29 @@ def check_reading_range(sensors: np.ndarray, low: np.ndarray, high: np.ndarray, 
     s = np.asarray(sensors, dtype=np.float64)
     low, high = np.asarray(low, dtype=np.float64), np.asarray(high, dtype=np.float64)
     margin = 0.25 * (high - low)
-    with np.errstate(invalid="ignore"):
-        off = (s < low - margin) | (s > high + margin)
     valid = max(int((~np.isnan(s).any(axis=1)).sum()), 1)
-    share = off.sum(axis=0) / valid
+
+    def off_share(readings: np.ndarray, k: int) -> float:
+        """Share of `readings` off sensor `k`'s calibrated range (widened by `margin`)."""
+        with np.errstate(invalid="ignore"):
+            return float(((readings < low[k] - margin[k])
+                          | (readings > high[k] + margin[k])).sum() / valid)
+
+    share = np.array([off_share(s[:, k], k) for k in range(s.shape[1])])
     bad = tuple(int(k) for k in np.flatnonzero(share > OFF_RANGE_SHARE))
     for k in bad:
+        # two channels exchanged (cables plugged into each other's inputs): each one's
+        # readings fit the other's range
+        fits = [j for j in range(s.shape[1]) if j != k
+                and off_share(s[:, k], j) <= OFF_RANGE_SHARE
+                and off_share(s[:, j], k) <= OFF_RANGE_SHARE]
+        swap = "".join(f"; its readings fit {SENSOR_NAMES[j]}'s range and {SENSOR_NAMES[j]}'s "
+                       f"fit its: were the two channels exchanged?" for j in fits[:1])
         warnings.warn(f"{where}: {100 * share[k]:.0f} % of the {SENSOR_NAMES[k]} readings lie "
                       f"off the calibration's range {low[k]:g}-{high[k]:g} counts (read there "
-                      "as its end): the same glove, full scale (--adc-max) and wearing? A new "
-                      "wearing needs a range calibration (--range); a calibration recording "
-                      "that bent the finger less than these readings does needs recording "
-                      "again", GloveWarning,
+                      f"as its end){swap}: the same glove, full scale (--adc-max) and wearing? "
+                      "A new wearing needs a range calibration (--range); a calibration "
+                      "recording that bent the finger less than these readings does needs "
+                      "recording again", GloveWarning,
                       stacklevel=stacklevel)
     return bad

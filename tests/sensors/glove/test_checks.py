@@ -107,3 +107,29 @@ def test_readings_beyond_a_narrow_calibration_name_that_cause_too():
                                           "than these readings does needs recording again"):
         assert check_reading_range(s, np.full(5, 1500.0), np.full(5, 1800.0), where="w") \
             == (0, 1, 2, 3, 4)
+
+
+def test_two_channels_exchanged_are_named():
+    # two cables plugged into each other's inputs: each sensor's readings lay off its own
+    # range, and the warning named another glove, full scale or wearing only
+    import warnings
+
+    from handsynth.sensors.glove._checks import check_reading_range
+
+    low = np.array([1400.0, 1250.0, 1550.0, 1600.0, 1300.0])
+    high = np.array([1600.0, 1650.0, 1900.0, 2050.0, 1750.0])
+    rng = np.random.default_rng(0)
+    s = low + (high - low) * rng.random((200, 5))
+    exchanged = s[:, [0, 2, 1, 3, 4]]  # index and middle
+    with warnings.catch_warnings(record=True) as got:
+        warnings.simplefilter("always")
+        assert check_reading_range(exchanged, low, high, where="w") == (1, 2)
+    said = [str(w.message) for w in got]
+    assert "its readings fit sensor_middle's range and sensor_middle's fit its: were the two " \
+           "channels exchanged?" in said[0]
+    assert "its readings fit sensor_index's range and sensor_index's fit its" in said[1]
+    # off range for another cause (a new wearing, all shifted): no exchange is named
+    with warnings.catch_warnings(record=True) as got:
+        warnings.simplefilter("always")
+        check_reading_range(s + 600.0, low, high, where="w")
+    assert got and not any("exchanged" in str(w.message) for w in got)
