@@ -242,6 +242,27 @@ def test_readings_off_the_calibrations_range_are_warned_about(files, tmp_path):
     assert res.exit_code == 0 and "off the calibration" not in res.output, res.output
 
 
+def test_two_channels_exchanged_are_named(files, tmp_path):
+    # the same wearing recorded again with two sensors' cables in each other's inputs: the
+    # warning named only another glove, full scale or wearing
+    again = tmp_path / "again.csv"
+    res = _run("glove", "simulate", again, "--kind", "dg5", "--user", 3, "--seed", 7,
+               "--trials", 1, "--motion", "tripod", "--motion", "fist")
+    assert res.exit_code == 0, res.output
+
+    def exchange(header, rows):
+        names = {"sensor_index": "sensor_middle", "sensor_middle": "sensor_index"}
+        return [names.get(c, c) for c in header], rows
+
+    res = _run("glove", "apply", files["cal"], _edit_csv(again, tmp_path / "x.csv", exchange),
+               "-o", tmp_path / "a.csv")
+    assert res.exit_code == 0, res.output
+    assert "its readings fit sensor_middle's range and sensor_middle's fit its: were the two " \
+           "channels exchanged?" in res.output, res.output
+    res = _run("glove", "apply", files["cal"], again, "-o", tmp_path / "b.csv")
+    assert res.exit_code == 0 and "channels exchanged" not in res.output, res.output
+
+
 def test_the_range_is_on_the_estimators_and_warned_about_once_per_sensor(files, tmp_path):
     data = json.loads(files["cal"].read_text())
     for name, entry in data["estimators"].items():
