@@ -318,11 +318,12 @@ def check_reading_range(sensors: np.ndarray, low: np.ndarray, high: np.ndarray, 
     for k in bad:
         # two channels exchanged (cables plugged into each other's inputs): each one's
         # readings fit the other's range
-        fits = [j for j in range(s.shape[1]) if j != k
-                and off_share(s[:, k], j) <= OFF_RANGE_SHARE
-                and off_share(s[:, j], k) <= OFF_RANGE_SHARE]
-        swap = "".join(f"; its readings fit {SENSOR_NAMES[j]}'s range and {SENSOR_NAMES[j]}'s "
-                       f"fit its: were the two channels exchanged?" for j in fits[:1])
+        other = next((j for j in range(s.shape[1]) if j != k
+                      and off_share(s[:, k], j) <= OFF_RANGE_SHARE
+                      and off_share(s[:, j], k) <= OFF_RANGE_SHARE), None)
+        swap = "" if other is None else (
+            f"; its readings fit {SENSOR_NAMES[other]}'s range and {SENSOR_NAMES[other]}'s fit "
+            "its: were the two channels exchanged?")
         warnings.warn(f"{where}: {100 * share[k]:.0f} % of the {SENSOR_NAMES[k]} readings lie "
                       f"off the calibration's range {low[k]:g}-{high[k]:g} counts (read there "
                       f"as its end){swap}: the same glove, full scale (--adc-max) and wearing? "
