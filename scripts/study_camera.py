@@ -21,6 +21,7 @@ Usage::
     python scripts/study_camera.py --cache DIR [--kind perceptrons] mirror
     python scripts/study_camera.py --cache DIR tones
     python scripts/study_camera.py --cache DIR bent_rest
+    python scripts/study_camera.py --cache DIR held
 
 ``backgrounds``
     Two held-out model hands (seed 3, 1.5 times the learning spread) and the
@@ -70,6 +71,18 @@ Usage::
     the truth, whether that frame is flagged, and the natural frames' flexion MAE and
     share flagged.  Last line: ``mae_rest=<deg> mae_bent20=<deg> mae_bent40=<deg>
     mae_bent60=<deg>``.
+``held``
+    An object in the hand: the three glTF hands (:class:`~handsynth.testhands.MeshHandRenderer`
+    with ``holding=True``), a relaxed rest each (seed 5), 30 natural frames each of
+    grasps whose four fingers close around a cylinder
+    (:func:`~handsynth.testhands.grasped_cylinder`, 200 mm long, across the palm), the
+    default ensemble calibrated on the rest frame without the object.  As masks on a
+    dark ground: no object, a bright object (it joins the hand's pixels) and a dark one
+    (it only hides the fingertips behind it); painted over the photographs (the hand told
+    by colour): no object, a blue one and a wood-coloured one near the skin's colour.
+    Per hand and set the finger flexion MAE beside the constant open-hand answer, the
+    share flagged ``low_confidence`` and the MAE of the frames not flagged; then the
+    means.  Last line: ``<set>=<mae> ...``.
 ``jitter``
     Continuous motions: 8 natural grasps from and back to a relaxed rest,
     each reached in 0.8 s with a minimum-jerk profile at 30 fps, on two
@@ -272,6 +285,9 @@ from handsynth.render import CameraMount
 
 _FLEX = [4, 6, 7, 8, 10, 11, 12, 14, 15, 16, 18, 19]  # the 12 finger flexions
 _SKIN = np.array([120, 150, 210], np.uint8)             # BGR
+#: BGR colours of the ``held`` study's objects over photographs: a blue mug, a wooden
+#: handle near the skin's colour
+_HELD_COLOURS = {"blue": (170, 90, 40), "wood": (90, 140, 190)}
 #: wrist joint to the middle fingertip of the sizes study's hands, mm: around the
 #: 1988 US Army survey's means (women 180.4, men 193.8; handsynth.models._anthropometry)
 #: and well beyond them
@@ -1309,6 +1325,69 @@ def bent_rest(cache) -> None:
                    for b, v in mae.items()))
 
 
+def held(cache) -> None:
+    """``held``: power grasps of a cylinder, bright, dark, blue and wood-coloured."""
+    from dataclasses import replace
+
+    from handsynth.estimate import learned_ensemble
+    from handsynth.testhands import TEST_HANDS, MeshHandRenderer, grasped_cylinder, shipped_hand_path
+
+    paper = CameraMount.paper()
+    ens = learned_ensemble(cache, mount=paper)
+    photos = background_photos()
+    rng = np.random.default_rng(5)
+    rows: dict = {}
+    const = []
+    for name in sorted(TEST_HANDS):
+        r = MeshHandRenderer(paper, path=shipped_hand_path(name), holding=True)
+        rest = relaxed_rest_posture(rng)
+        found: list = []
+        while len(found) < 30:
+            for p in natural_test_poses(rest, 100, rng)[0]:
+                o = grasped_cylinder(r.keypoints(p))
+                if o is not None and len(found) < 30:
+                    found.append((p, o))
+        poses = np.array([p for p, _ in found])
+        hand = [r.mask(p) for p in poses]
+        bright = [r.mask_holding(p, o) for p, o in found]
+        dark = [r.mask_holding(p, replace(o, bright=False)) for p, o in found]
+        rest_mask = r.mask(rest)
+        r.close()
+        const.append(np.abs(poses[:, _FLEX]).mean())
+
+        def photo(i, seen, obj=None, colour=None):
+            f = photos[i % len(photos)].copy()
+            f[seen] = _SKIN
+            if obj is not None:
+                f[obj] = colour
+            return f
+
+        sets = {"dark ground, no object": (rest_mask, hand),
+                "dark ground, bright object": (rest_mask, bright),
+                "dark ground, dark object": (rest_mask, dark),
+                "photographs, no object": (photo(0, rest_mask),
+                                           [photo(i + 1, m) for i, m in enumerate(hand)])}
+        for colour_name, colour in _HELD_COLOURS.items():
+            sets[f"photographs, {colour_name} object"] = (
+                photo(0, rest_mask), [photo(i + 1, d, b & ~d, colour)
+                                      for i, (b, d) in enumerate(zip(bright, dark))])
+        for label, (rest_frame, frames) in sets.items():
+            cal = ens.calibrated(rest_frame)
+            got = [cal.estimate(f) for f in frames]
+            e = np.abs(np.stack([g.angles for g in got])[:, _FLEX] - poses[:, _FLEX]).mean(axis=1)
+            low = np.array([g.low_confidence for g in got])
+            rows.setdefault(label, []).append((e.mean(), low.mean(),
+                                               e[~low].mean() if (~low).any() else np.nan))
+            print(f"{name:15s} {label:32s} flexion MAE {e.mean():5.2f} (constant {const[-1]:5.2f}), "
+                  f"flagged {low.mean():.2f}, MAE not flagged {rows[label][-1][2]:5.2f}", flush=True)
+    for label, v in rows.items():
+        e, low, kept = np.nanmean(np.array(v, float), axis=0)
+        print(f"{label:32s} flexion MAE {e:5.2f} (constant {np.mean(const):5.2f}), flagged "
+              f"{low:.2f}, MAE not flagged {kept:5.2f}")
+    print(" ".join(f"{label.replace(', ', '_').replace(' ', '_')}={np.mean([x[0] for x in v]):.2f}"
+                   for label, v in rows.items()))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cache", default=None, help="folder of the learnt estimator")
@@ -1328,7 +1407,7 @@ def main() -> None:
     ap.add_argument("study", choices=["backgrounds", "jitter", "holds", "observability", "bound",
                                       "bound_mcp", "rests", "moved", "imaging", "mounts", "sizes",
                                       "skin", "skin_lit", "novelty", "lens", "level", "mirror", "tones",
-                                      "bent_rest"])
+                                      "bent_rest", "held"])
     args = ap.parse_args()
     if args.study not in ("observability", "bound_mcp", "moved") and args.cache is None:
         ap.error(f"{args.study} needs --cache DIR")
@@ -1345,7 +1424,8 @@ def main() -> None:
                "lens": lambda: lens(args.cache, args.kind), "level": lambda: level(args.cache),
                "mirror": lambda: mirror(args.cache, args.kind),
                "tones": lambda: tones(args.cache),
-               "bent_rest": lambda: bent_rest(args.cache)}
+               "bent_rest": lambda: bent_rest(args.cache),
+               "held": lambda: held(args.cache)}
     studies[args.study]()
 
 

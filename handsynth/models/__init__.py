@@ -7,7 +7,9 @@ angles in degrees at every public interface.
 """
 
 from ._anthropometry import (
+    DEPTH_TO_BREADTH,
     DORSUM_Z_MM,
+    FINGER_BREADTH_MM,
     HAND_BREADTH_MM,
     HAND_LENGTH_MM,
     SEGMENT_COEFFICIENTS,
@@ -38,8 +40,10 @@ from ._posesets import MAX_POSES, PAPER_SIZE, POSE_SETS, natural_pose_set, paper
 from ._shape import GRID_LEVELS, HandShape
 
 __all__ = [
+    "DEPTH_TO_BREADTH",
     "DORSUM_Z_MM",
     "FINGERS",
+    "FINGER_BREADTH_MM",
     "GRID_LEVELS",
     "HAND_BREADTH_MM",
     "HAND_LENGTH_MM",

@@ -20,13 +20,16 @@ from ._gltf import (
     mesh_hand_sheet,
     shipped_hand_path,
 )
+from ._held import HeldObject, grasped_cylinder
 
 __all__ = [
     "PROTOCOL_HANDS",
     "TEST_HANDS",
+    "HeldObject",
     "MeshHandRenderer",
     "MeshRig",
     "default_mesh_path",
+    "grasped_cylinder",
     "load_mesh_rig",
     "mesh_hand_sheet",
     "shipped_hand_path",

@@ -132,6 +132,7 @@ from ..errors import (
 )
 from ..models import FINGERS, JOINT_NAMES, as_angles, standard_layout_mm
 from ..render import CameraMount, GLContextOwner, MaskMaker, as_mount, ensure_backend
+from ._held import HeldObject
 
 __all__ = [
     "PROTOCOL_HANDS",
@@ -1124,12 +1125,14 @@ def _scene_xml(vertices: np.ndarray, faces: np.ndarray, mount: CameraMount, side
 """
 
 
-def _skin_scene_xml(rig: MeshRig, side: str, mount: CameraMount, w: int, h: int
-                    ) -> tuple[str, list[int]]:
+def _skin_scene_xml(rig: MeshRig, side: str, mount: CameraMount, w: int, h: int,
+                    holding: bool = False) -> tuple[str, list[int]]:
     """The silhouette scene with the rig as a MuJoCo ``<skin>`` on mocap bodies.
 
     Returns the document and the rig bones that carry weights, in the order
     of the mocap bodies ``bone<k>``.  A left hand's skin is the mirrored rest mesh.
+    With `holding`, also a mocap body ``held`` with a cylinder of material ``held``
+    (placed and sized by :meth:`MeshHandRenderer.mask_holding`).
     """
     from ..render import scene_parts
 
@@ -1147,10 +1150,19 @@ def _skin_scene_xml(rig: MeshRig, side: str, mount: CameraMount, w: int, h: int
                      f'vertid="{" ".join(map(str, vid[0]))}" '
                      f'vertweight="{_fmt(rig.bone_weight[vid])}"/>')
     bodies = "".join(f'    <body name="bone{k}" mocap="true"/>\n' for k in bones)
+    held = ""
+    if holding:
+        # out of view behind the camera until placed (a far body would widen the model's
+        # extent, and the near clipping plane with it)
+        bodies += ('    <body name="held" mocap="true" pos="0 0 0.5"><geom name="held" '
+                   'type="cylinder" '
+                   'size="0.01 0.01" material="held" contype="0" conaffinity="0"/></body>\n')
+        held = ('    <material name="held" rgba="1 1 1 1" emission="1" specular="0" '
+                'shininess="0"/>\n')
     xml = f"""<mujoco model="handsynth_mesh_hand_{side}">
 {visual}  <asset>
     <material name="skin" rgba="1 1 1 1" emission="1" specular="0" shininess="0"/>
-  </asset>
+{held}  </asset>
   <worldbody>
 {bodies}{world}  </worldbody>
   <deformable>
@@ -1196,6 +1208,8 @@ class MeshHandRenderer(GLContextOwner, MaskMaker):
     scale : float, keyword-only
         The hand made larger or smaller about its wrist joint
         (:meth:`MeshRig.scaled`); 1 (the default) as in the file.
+    holding : bool, keyword-only
+        Make room in the scene for an object in the hand (:meth:`mask_holding`).
 
     Raises
     ------
@@ -1217,7 +1231,8 @@ class MeshHandRenderer(GLContextOwner, MaskMaker):
 
     def __init__(self, mount: CameraMount | None = None, *, side: str = "right",
                  width_px: int | None = None, height_px: int | None = None,
-                 path: str | os.PathLike | None = None, scale: float = 1.0) -> None:
+                 path: str | os.PathLike | None = None, scale: float = 1.0,
+                 holding: bool = False) -> None:
         check_side(side, error=InvalidCameraError)
         mount = as_mount(mount)
         ensure_backend()
@@ -1235,8 +1250,10 @@ class MeshHandRenderer(GLContextOwner, MaskMaker):
         self.path = self.rig.path
         self._poser = _Poser(self.rig)
         self._faces = self.rig.faces if side == "right" else self.rig.faces[:, ::-1]
+        if not isinstance(holding, bool):
+            raise InvalidCameraError(f"holding must be True or False, got {holding!r}")
         xml, self._bones = _skin_scene_xml(self.rig, side, self.mount, self.width_px,
-                                           self.height_px)
+                                           self.height_px, holding)
         try:
             self.model = mujoco.MjModel.from_xml_string(xml)
         except ValueError as exc:
@@ -1246,6 +1263,7 @@ class MeshHandRenderer(GLContextOwner, MaskMaker):
         self._mocap = np.array([self.model.body_mocapid[self.model.body(f"bone{k}").id]
                                 for k in self._bones], dtype=np.intp)
         self._quat = np.empty(4)
+        self._held = self.model.body_mocapid[self.model.body("held").id] if holding else None
         self._renderer = offscreen_renderer(self.model, self.width_px, self.height_px)
         self._cam = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_CAMERA, "device")
         self._buf = np.empty((self.height_px, self.width_px, 3), dtype=np.uint8)
@@ -1398,6 +1416,48 @@ class MeshHandRenderer(GLContextOwner, MaskMaker):
             return r.render().copy()
         finally:
             r.close()
+
+    def mask_holding(self, angles, held: HeldObject) -> np.ndarray:
+        """The device's view of the posed hand holding an object.
+
+        Parameters
+        ----------
+        angles : array_like, shape (20,), or mapping
+            Degrees, canonical order.
+        held : HeldObject
+            The object, in the hand frame; a bright one joins the hand's pixels, a
+            dark one only hides what lies behind it (as the fingertips behind a cup).
+
+        Returns
+        -------
+        ndarray, shape (height_px, width_px), bool
+            True where the hand, or a bright object, is seen.
+
+        Raises
+        ------
+        InvalidCameraError
+            A renderer made without ``holding=True``; `held` not a
+            :class:`HeldObject`.
+        """
+        if self._held is None:
+            raise InvalidCameraError("mask_holding needs a MeshHandRenderer made with "
+                                     "holding=True")
+        if not isinstance(held, HeldObject):
+            raise InvalidCameraError(f"held must be a HeldObject, got {type(held).__name__}")
+        centre = np.asarray(held.centre_mm) * 1e-3
+        axis_quat = held.quat()
+        if self.side == "left":  # the left hand is the right one mirrored in x
+            centre = centre * [-1.0, 1.0, 1.0]
+            axis_quat = HeldObject(held.centre_mm, (-held.axis[0], *held.axis[1:])).quat()
+        model, g = self.model, self.model.geom("held").id
+        model.geom_size[g, :2] = held.radius_mm * 1e-3, held.length_mm * 0.5e-3
+        model.mat_rgba[model.geom_matid[g], :3] = 1.0 if held.bright else 0.0
+        self.data.mocap_pos[self._held] = centre
+        self.data.mocap_quat[self._held] = axis_quat
+        try:
+            return self._render(self._one(angles)).copy()
+        finally:
+            self.data.mocap_pos[self._held] = (0.0, 0.0, 0.5)  # out of view again
 
     def _one(self, angles) -> np.ndarray:
         a = as_angles(angles)
