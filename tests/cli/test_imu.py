@@ -66,6 +66,29 @@ def test_track_wrong_units_is_one_line(tmp_path, sim):
     assert not (tmp_path / "q.csv").exists()
 
 
+def test_track_refuses_readings_held_by_the_logger_unless_bridged(tmp_path, sim):
+    # a wireless link's dropout, the last reading repeated: before, read without a word
+    rec = sim.subset(("forearm_1", "index_distal"))
+    gyr = rec.gyr.copy()
+    acc, mag = rec.acc.copy(), rec.mag.copy()
+    for a in (acc, gyr, mag):
+        a[1, 500:520] = a[1, 499]
+    src, out = tmp_path / "held.csv", tmp_path / "q.csv"
+    write_imu_csv(dataclasses.replace(rec, acc=acc, gyr=gyr, mag=mag), src)
+    res = CliRunner().invoke(cli, ["imu", "track", str(src), "--filter", "raw", "--out", str(out)])
+    assert res.exit_code == 2 and not out.exists()
+    assert res.output.startswith(f"handsynth: error: {src}: sensor 'index_distal' repeats its "
+                                 "accelerometer and gyro readings bit for bit for 0.2 s "
+                                 "(20 samples) from t=5 s (sample 500)"), res.output
+    assert "--bridge-held" in res.output and res.output.count("\n") == 1
+    res = CliRunner().invoke(cli, ["imu", "track", str(src), "--filter", "raw", "--bridge-held",
+                                   "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    assert f"handsynth: warning: {src}: bridged: sensor 'index_distal' repeats" in res.output
+    q = np.loadtxt(out, delimiter=",", skiprows=1)
+    assert q.shape == (rec.n, 9) and np.isfinite(q).all()
+
+
 def _write_broad(path, rec, sensor, kind):
     k = rec.index(sensor)
     q_enu = qmul(qconj(_Q_NWU_FROM_ENU), rec.truth.quat[k])

@@ -28,6 +28,14 @@ from ._filters import (
     integrate_gyro,
 )
 from ._gated import GatedFilter, GatedOptions, gated_orientation
+from ._held import (
+    HELD_MIN_S,
+    HELD_TURNING_RADPS,
+    MAX_BRIDGE_S,
+    HeldStretch,
+    bridge_held,
+    held_stretches,
+)
 from ._kinematics import (
     JOINT_LINKS,
     ThumbCmcModel,
@@ -116,8 +124,11 @@ __all__ = [
     "GRASP_POSES",
     "GRAVITY_MPS2",
     "HELDOUT",
+    "HELD_MIN_S",
+    "HELD_TURNING_RADPS",
     "JOINT_LINKS",
     "LINKS",
+    "MAX_BRIDGE_S",
     "MAX_MOTION_S",
     "MODEL_JOINTS",
     "MPU9250_DATASHEET",
@@ -141,6 +152,7 @@ __all__ = [
     "Filter1Options",
     "GatedFilter",
     "GatedOptions",
+    "HeldStretch",
     "ImuCalibration",
     "ImuHand",
     "ImuNoise",
@@ -167,6 +179,7 @@ __all__ = [
     "angles_beyond_range",
     "apply_axis_noise",
     "azimuth_correction",
+    "bridge_held",
     "broad_errors",
     "calibrate",
     "calibrate_vectors",
@@ -187,6 +200,7 @@ __all__ = [
     "gated_orientation",
     "grasp_motion",
     "gyro_bias",
+    "held_stretches",
     "imu_hand_mjcf",
     "initial_attitude",
     "integrate_gyro",

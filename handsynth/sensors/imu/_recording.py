@@ -3,8 +3,8 @@
 A recording holds S sensors sampled together at one rate: accelerometer in
 m/s^2 (specific force, +g upward at rest), gyro in rad/s, magnetometer in
 microtesla, each shaped (S, N, 3).  :func:`check_recording` finds what makes
-a recording unusable or suspicious (NaN, gaps in the time stamps, saturated
-channels, wrong units, magnetic disturbances) and either raises
+a recording unusable or suspicious (NaN, gaps in the time stamps, readings held by
+the logger, saturated channels, wrong units, magnetic disturbances) and either raises
 :class:`~handsynth.errors.RecordingError` naming the sensor, channel and
 sample, or returns the warnings it found.
 """
@@ -217,7 +217,10 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
     RecordingError
         `acc_full_scale` or `gyr_full_scale` not a finite number > 0, a
         `static_s` or rate that is not one; non-finite samples; shapes that
-        disagree; fewer than 2 samples; a channel pinned at full
+        disagree; fewer than 2 samples; a sensor's accelerometer and gyro
+        repeating a reading bit for bit for 0.1 s or more while it turns or
+        another sensor's readings change (held by the logger:
+        :func:`~handsynth.sensors.imu.held_stretches`); a channel pinned at full
         scale, or at its own extreme value beyond 1.5 g or 2 rad/s (the flat
         top of a sensor with a smaller range), for 5 or more consecutive
         samples (saturation); values beyond the full scale by far (wrong
@@ -261,6 +264,20 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
                 f"at sample {i} ({bad.sum()} such values); fill or cut the gap first")
     if rec.n < 2:
         raise RecordingError(f"{source}: needs at least 2 samples, got {rec.n}")
+    from ._held import MAX_BRIDGE_S, held_stretches  # _held reads ImuRecording from here
+
+    held = held_stretches(rec)
+    if held:
+        h = max(held, key=lambda x: x.duration_s)
+        more = f" ({len(held)} such stretches, this the longest)" if len(held) > 1 else ""
+        remedy = ("cut the recording there (too long to bridge: a straight line across more "
+                  f"than {MAX_BRIDGE_S:g} s is no estimate of the motion)"
+                  if h.duration_s > MAX_BRIDGE_S else
+                  "fill them in with straight lines across (--bridge-held; library: "
+                  "bridge_held) or cut the recording there")
+        raise RecordingError(
+            f"{source}: {h.describe()}{more}: samples lost and the last one repeated by the "
+            f"logger (a wireless link's dropout?), which no working sensor reads; {remedy}")
     for name, fs, unit, floor, hint in (
             ("acc", acc_full_scale, "m/s^2", 1.5 * GRAVITY_MPS2,
              "acceleration in mg or cm/s^2 read as m/s^2? (acc units 'mg': --acc-units mg)"),

@@ -1,0 +1,109 @@
+import dataclasses
+
+import numpy as np
+import pytest
+
+from handsynth.errors import RecordingError
+from handsynth.sensors.imu import (
+    HELD_MIN_S,
+    MAX_BRIDGE_S,
+    HeldStretch,
+    bridge_held,
+    check_recording,
+    held_stretches,
+)
+
+
+def _held(rec, sensor, start, n):
+    """`rec` with `sensor`'s readings from `start` on replaced by the one before, `n` times."""
+    k = rec.index(sensor)
+    arrays = {name: getattr(rec, name).copy() for name in ("acc", "gyr", "mag")}
+    for a in arrays.values():
+        a[k, start:start + n] = a[k, start - 1]
+    return dataclasses.replace(rec, **arrays)
+
+
+def test_a_recording_as_made_holds_nothing(free_rec, ideal_rec):
+    # the noise-free one repeats every reading of its still start and of sensors that do not
+    # move (gyro exactly 0), which is not a held reading
+    assert held_stretches(free_rec) == []
+    assert held_stretches(ideal_rec) == []
+    assert bridge_held(free_rec) == (free_rec, [])
+
+
+def test_a_sensor_held_is_found_with_its_time_and_turn(free_rec):
+    start = int(6.0 * free_rec.rate_hz)
+    rec = _held(free_rec, "index_proximal", start, 20)
+    (h,) = held_stretches(rec)
+    assert isinstance(h, HeldStretch)
+    assert (h.sensor, h.first, h.count) == ("index_proximal", start, 20)
+    assert h.time_s == pytest.approx(start / rec.rate_hz)
+    assert h.duration_s == pytest.approx(20 / rec.rate_hz)
+    w = np.linalg.norm(free_rec.gyr[rec.index("index_proximal"), start - 1])
+    assert h.turned_deg == pytest.approx(np.degrees(w * h.duration_s))
+    # shorter than HELD_MIN_S: not a hold worth telling (BROAD's real sensors repeat for 35 ms)
+    short = round(HELD_MIN_S * rec.rate_hz) - 1
+    assert held_stretches(_held(free_rec, "index_proximal", start, short)) == []
+
+
+def test_check_recording_refuses_held_readings_naming_sensor_and_time(free_rec):
+    # before: a sensor held 0.5 s put its segment 18-44 deg off without a word
+    rec = _held(free_rec, "middle_middle", 600, 20)
+    with pytest.raises(RecordingError) as e:
+        check_recording(rec, source="rec.csv")
+    msg = str(e.value)
+    assert msg.startswith("rec.csv: sensor 'middle_middle' repeats its accelerometer and gyro")
+    assert "from t=6 s (sample 600)" in msg and "--bridge-held" in msg
+    longer = _held(rec, "index_distal", 900, round((MAX_BRIDGE_S + 0.1) * rec.rate_hz))
+    with pytest.raises(RecordingError, match=r"'index_distal'.*2 such stretches, this the "
+                                             r"longest.*too long to bridge"):
+        check_recording(longer)
+
+
+def test_bridging_draws_straight_lines_across_the_hold(free_rec):
+    rec = _held(free_rec, "ring_middle", 500, 15)
+    out, bridged = bridge_held(rec)
+    assert [(h.sensor, h.first, h.count) for h in bridged] == [("ring_middle", 500, 15)]
+    k = rec.index("ring_middle")
+    for name in ("acc", "gyr", "mag"):
+        a, b = getattr(rec, name)[k, 499], getattr(rec, name)[k, 515]
+        expected = a + (b - a) * (np.arange(1, 16) / 16)[:, None]
+        np.testing.assert_allclose(getattr(out, name)[k, 500:515], expected)
+        # nothing else changed
+        np.testing.assert_array_equal(np.delete(getattr(out, name), np.s_[500:515], axis=1),
+                                      np.delete(getattr(rec, name), np.s_[500:515], axis=1))
+    assert out.truth is rec.truth and out.start_s == rec.start_s
+    assert held_stretches(out) == []
+    check_recording(out)  # accepted once bridged
+
+
+def test_bridging_refuses_what_a_line_cannot_fill(free_rec):
+    too_long = _held(free_rec, "thumb_distal", 400, round(2 * MAX_BRIDGE_S * free_rec.rate_hz))
+    with pytest.raises(RecordingError, match=r"^f.csv: sensor 'thumb_distal'.*longer than the "
+                                             r"0.25 s bridged"):
+        bridge_held(too_long, source="f.csv")
+    assert len(bridge_held(too_long, max_s=1.0)[1]) == 1
+    n = free_rec.n
+    at_end = _held(free_rec, "thumb_distal", n - 15, 15)
+    with pytest.raises(RecordingError, match="to the end of the recording"):
+        bridge_held(at_end)
+
+
+def test_a_hold_on_a_still_sensor_is_told_by_the_others_moving(free_rec):
+    # a held gyro that read almost nothing (the segment still) while the rest move
+    rec = _held(free_rec, "forearm_1", 100, 30)  # in the still start
+    k = rec.index("forearm_1")
+    assert np.linalg.norm(rec.gyr[k, 99]) < 0.05
+    assert [h.sensor for h in held_stretches(rec)] == ["forearm_1"]
+    # ... and not where nothing else moves either (one sensor alone, still)
+    assert held_stretches(rec.subset(("forearm_1",))) == []
+
+
+@pytest.mark.parametrize("bad", [0.0, -1.0, float("nan"), "0.1"])
+def test_arguments_are_checked(free_rec, bad):
+    with pytest.raises(RecordingError, match="min_s"):
+        held_stretches(free_rec, min_s=bad)
+    with pytest.raises(RecordingError, match="max_s"):
+        bridge_held(free_rec, max_s=bad)
+    with pytest.raises(RecordingError, match="rec"):
+        held_stretches(np.zeros((1, 10, 3)))
