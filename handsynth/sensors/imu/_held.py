@@ -5,17 +5,17 @@ the sensor's last reading until the next one arrives.  A gyro held so through a 
 turns its segment by the held rate for as long as the hold lasts.  Measured on the
 held-out configuration (15-s free motion, elbow fixed, Filter 4; docs/imu.md, "Readings
 held by the logger"): one sensor held for 0.2 s put its segment 8-10 deg off at worst, for
-0.5 s 18-44 deg and for 1 s 34-104 deg, and nothing said so.
+0.5 s 18-44 deg and for 1 s 34-104 deg (as recorded 3.2 deg), and nothing said so.
 
 A real sensor's noise moves its accelerometer and gyro between any two samples, so six
 values equal bit for bit over :data:`HELD_MIN_S` are a held reading, not a still sensor.
-In the real recordings of BROAD (Laidig, Caruso, Cereatti & Seel 2021; 26 trials at 286
-Hz, 1.3 million samples) the longest such run is 10 samples (35 ms); magnetometers, which
-many sensors update more slowly than the accelerometer and gyro, repeat routinely and are
-not looked at.  A noise-free simulation of a still hand also repeats every value: a run is
-taken as held only when the gyro held is not exactly 0 (as a noise-free still sensor's
-is) and it was turning (:data:`HELD_TURNING_RADPS`) or another sensor's readings change
-during it.
+In the real recordings of BROAD (Laidig, Caruso, Cereatti & Seel 2021; the 30 trials
+present, 286 Hz, 1.6 million samples) a reading is repeated at most 9 times (31 ms);
+magnetometers, which many sensors update more slowly than the accelerometer and gyro,
+repeat routinely and are not looked at.  A noise-free simulation of a still hand also
+repeats every value: a run is taken as held only when the gyro held is not exactly 0 (as
+a noise-free still sensor's is) and it was turning (:data:`HELD_TURNING_RADPS`) or another
+sensor's readings change during it.
 
 :func:`~handsynth.sensors.imu.check_recording` refuses a recording with readings held;
 :func:`bridge_held` fills them in by straight lines between the last reading before and
@@ -38,7 +38,7 @@ __all__ = ["HELD_MIN_S", "HELD_TURNING_RADPS", "MAX_BRIDGE_S", "HeldStretch", "b
            "held_stretches"]
 
 #: A reading repeated bit for bit (accelerometer and gyro, all six values) for this long,
-#: s, is held.  BROAD's real recordings repeat for at most 35 ms; a hold of 50 ms moved
+#: s, is held.  BROAD's real recordings repeat for at most 31 ms; a hold of 50 ms moved
 #: the held-out configuration's worst segment by 0.3 deg at most, one of 0.2 s by 7 deg.
 HELD_MIN_S = 0.1
 #: ... when the held gyro reads at least this, rad/s (about 3 deg/s: the segment was

@@ -41,7 +41,7 @@ def test_a_sensor_held_is_found_with_its_time_and_turn(free_rec):
     assert h.duration_s == pytest.approx(20 / rec.rate_hz)
     w = np.linalg.norm(free_rec.gyr[rec.index("index_proximal"), start - 1])
     assert h.turned_deg == pytest.approx(np.degrees(w * h.duration_s))
-    # shorter than HELD_MIN_S: not a hold worth telling (BROAD's real sensors repeat for 35 ms)
+    # shorter than HELD_MIN_S: not a hold worth telling (BROAD's real sensors repeat for 31 ms)
     short = round(HELD_MIN_S * rec.rate_hz) - 1
     assert held_stretches(_held(free_rec, "index_proximal", start, short)) == []
 
