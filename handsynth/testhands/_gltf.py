@@ -1425,8 +1425,10 @@ class MeshHandRenderer(GLContextOwner, MaskMaker):
         angles : array_like, shape (20,), or mapping
             Degrees, canonical order.
         held : HeldObject
-            The object, in the hand frame; a bright one joins the hand's pixels, a
-            dark one only hides what lies behind it (as the fingertips behind a cup).
+            The object, in this renderer's hand frame (as :meth:`keypoints` gives
+            it, so a left hand's x is the mirror of a right hand's); a bright one
+            joins the hand's pixels, a dark one only hides what lies behind it (as
+            the fingertips behind a cup).
 
         Returns
         -------
@@ -1446,9 +1448,6 @@ class MeshHandRenderer(GLContextOwner, MaskMaker):
             raise InvalidCameraError(f"held must be a HeldObject, got {type(held).__name__}")
         centre = np.asarray(held.centre_mm) * 1e-3
         axis_quat = held.quat()
-        if self.side == "left":  # the left hand is the right one mirrored in x
-            centre = centre * [-1.0, 1.0, 1.0]
-            axis_quat = HeldObject(held.centre_mm, (-held.axis[0], *held.axis[1:])).quat()
         model, g = self.model, self.model.geom("held").id
         model.geom_size[g, :2] = held.radius_mm * 1e-3, held.length_mm * 0.5e-3
         model.mat_rgba[model.geom_matid[g], :3] = 1.0 if held.bright else 0.0

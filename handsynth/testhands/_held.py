@@ -38,8 +38,9 @@ class HeldObject:
     Parameters
     ----------
     centre_mm : tuple of 3 float
-        The cylinder's centre in the hand frame (x away from the thumb side of a
-        right hand, y toward the fingers, z out of the back of the hand), mm.
+        The cylinder's centre in the hand frame (y toward the fingers, z out of the
+        back of the hand; x across the palm, away from a right hand's thumb and
+        toward a left hand's, as the renderer's ``keypoints`` give it), mm.
     axis : tuple of 3 float
         Its axis (normalised here); across the palm (x) by default.
     radius_mm, length_mm : float

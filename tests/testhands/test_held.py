@@ -58,7 +58,9 @@ def test_a_left_hand_holds_the_mirror_image():
     kw = {"width_px": W, "height_px": H, "holding": True}
     with MeshHandRenderer(**kw) as right, MeshHandRenderer(side="left", **kw) as left:
         held = grasped_cylinder(right.keypoints(pose))
-        a, b = right.mask_holding(pose, held), left.mask_holding(pose, held)
+        theirs = grasped_cylinder(left.keypoints(pose))  # in the left hand's own frame
+        assert theirs.centre_mm[0] == pytest.approx(-held.centre_mm[0])
+        a, b = right.mask_holding(pose, held), left.mask_holding(pose, theirs)
     assert (a & b[::-1]).sum() / (a | b[::-1]).sum() > 0.97
 
 
