@@ -18,8 +18,8 @@ _CHAIN_FILTERS = ("filter4", "filter4b")  # need the link model of a calibration
 def _unit_options(f):
     f = click.option("--bridge-held", is_flag=True,
                      help="Fill in readings held by the logger (a sensor repeating its last "
-                          "reading for 0.1 s or more: samples lost) with straight lines "
-                          "across, up to 0.25 s; without it such a recording is refused.")(f)
+                          "reading for 0.1 s or more: samples lost) from the other sensors' "
+                          "readings, up to 0.5 s; without it such a recording is refused.")(f)
     f = click.option("--gyr-range", "gyr_range_dps", type=float, default=2000.0, show_default=True,
                      help="Gyro full-scale range, deg/s (saturation check).")(f)
     f = click.option("--acc-range", "acc_range_g", type=float, default=16.0, show_default=True,

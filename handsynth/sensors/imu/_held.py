@@ -18,8 +18,7 @@ a noise-free still sensor's is) and it was turning (:data:`HELD_TURNING_RADPS`) 
 sensor's readings change during it.
 
 :func:`~handsynth.sensors.imu.check_recording` refuses a recording with readings held;
-:func:`bridge_held` fills them in by straight lines between the last reading before and
-the first after.
+:func:`bridge_held` fills them in from the other sensors' readings.
 """
 
 from __future__ import annotations
@@ -45,10 +44,12 @@ HELD_MIN_S = 0.1
 #: turning), or another sensor's readings change during the hold.
 HELD_TURNING_RADPS = 0.05
 #: Longest hold :func:`bridge_held` fills in, s.  Chosen on the tuning configuration
-#: (``scripts/study_imu_held.py``; worst segment 0.75 deg as recorded): bridged holds of
-#: 0.2 s read 1.49 deg (held 4.88), of 0.3 s 2.47 deg (held 6.85), of 0.5 s 11.2 deg
-#: (held 29.3): a straight line across half a second is no estimate of a finger's motion.
-MAX_BRIDGE_S = 0.25
+#: (``scripts/study_imu_held.py``; worst segment 0.75 deg as recorded): holds bridged
+#: from the other sensors read 1.13 deg at 0.3 s, 2.12 at 0.5 s and 10.3 at 1 s (within
+#: 1.5 deg of the recording on average up to 0.5 s).
+MAX_BRIDGE_S = 0.5
+#: Most samples the prediction of a held sensor is fitted on (evenly spread), for speed.
+_MAX_FIT_ROWS = 50_000
 
 
 @dataclass(frozen=True)
@@ -137,15 +138,42 @@ def held_stretches(rec: ImuRecording, *, min_s: float = HELD_MIN_S) -> list[Held
     return out
 
 
-def bridge_held(rec: ImuRecording, *, max_s: float = MAX_BRIDGE_S, min_s: float = HELD_MIN_S,
-                source: str = "recording") -> tuple[ImuRecording, list[HeldStretch]]:
-    """The recording with held readings replaced by straight lines across each hold.
+def _predicted(arrays: dict, k: int, ok: np.ndarray) -> dict:
+    """Sensor `k`'s accelerometer and gyro as least-squares combinations of the others'.
 
-    Each repeated sample of accelerometer, gyro and magnetometer is interpolated
-    linearly between the reading held (the sample before the hold) and the first new
-    one after it.  On the held-out configuration a sensor held 0.2 s put the worst
-    segment at 4.68 deg (up to 9.7), bridged 3.17 (as recorded 3.15); longer holds are
-    bridged less well (0.3 s: 7.51 against 13.76) and are refused (docs/imu.md).
+    Fitted on the samples `ok` (at most :data:`_MAX_FIT_ROWS` of them, evenly spread):
+    each of its six values from the same channel's three values of every other sensor
+    and a constant.  With no other sensor, the constant alone (its mean).
+    """
+    rows = np.nonzero(ok)[0]
+    rows = rows[:: max(1, rows.size // _MAX_FIT_ROWS)]
+    out = {}
+    for name in ("acc", "gyr"):
+        a = arrays[name]
+        n = a.shape[1]
+        x = np.concatenate([np.delete(a, k, axis=0).transpose(1, 0, 2).reshape(n, -1),
+                            np.ones((n, 1))], axis=1)
+        coef, *_ = np.linalg.lstsq(x[rows], a[k, rows], rcond=None)
+        out[name] = x @ coef
+    return out
+
+
+def bridge_held(rec: ImuRecording, *, max_s: float = MAX_BRIDGE_S, min_s: float = HELD_MIN_S,
+                predict: bool = True, source: str = "recording"
+                ) -> tuple[ImuRecording, list[HeldStretch]]:
+    """The recording with held readings filled in across each hold.
+
+    With `predict` (the default), a held sensor's accelerometer and gyro are
+    predicted from the other sensors' readings at the same instants (each value a
+    least-squares combination of the same channel of every other sensor and a
+    constant, fitted on the recording's samples in which no reading is held: the
+    hand's own motion, and the fingers' coupling, are seen by them), and what the
+    prediction misses is drawn as a straight line between its values at the reading
+    held (the sample before the hold) and at the first new one; the magnetometer, and
+    every channel without `predict`, is drawn as a straight line between those two
+    readings.  On the held-out configuration (seed 1) a sensor held 0.3 s put the
+    worst segment at 13.76 deg, bridged 4.65 (straight lines alone 7.51; as recorded
+    3.15); held 0.5 s 24.66, bridged 8.20 (docs/imu.md, "Readings held by the logger").
 
     Parameters
     ----------
@@ -154,6 +182,8 @@ def bridge_held(rec: ImuRecording, *, max_s: float = MAX_BRIDGE_S, min_s: float 
         Longest hold filled in, s (:data:`MAX_BRIDGE_S`).
     min_s : float, keyword-only
         As :func:`held_stretches`.
+    predict : bool, keyword-only
+        Predict the held sensor from the others (above); False: straight lines only.
     source : str, keyword-only
         The file, for messages.
 
@@ -169,24 +199,45 @@ def bridge_held(rec: ImuRecording, *, max_s: float = MAX_BRIDGE_S, min_s: float 
     ------
     RecordingError
         A hold longer than `max_s`, or one that lasts to the recording's end (no
-        reading after it to draw the line to), naming the sensor and the time; bad
+        reading after it to bridge to), naming the sensor and the time; bad
         arguments.
     """
     max_s = check_number(max_s, "max_s", above=0.0, error=RecordingError)
+    if not isinstance(predict, bool):
+        raise RecordingError(f"predict must be True or False, got {predict!r}")
     found = held_stretches(rec, min_s=min_s)
     if not found:
         return rec, []
     arrays = {name: getattr(rec, name).copy() for name in ("acc", "gyr", "mag")}
+    held = np.zeros((len(rec.sensors), rec.n), bool)
     for h in found:
         stop = h.first + h.count
         if stop >= rec.n:
-            raise RecordingError(f"{source}: {h.describe()}, to the end of the recording: nothing after "
-                                 "it to bridge to; cut the recording before it")
+            raise RecordingError(f"{source}: {h.describe()}, to the end of the recording: "
+                                 "nothing after it to bridge to; cut the recording before it")
         if h.duration_s > max_s:
-            raise RecordingError(f"{source}: {h.describe()}: longer than the {max_s:g} s bridged; cut "
-                                 "the recording there")
-        k = rec.index(h.sensor)
-        w = (np.arange(1, h.count + 1) / (h.count + 1))[:, None]
-        for a in arrays.values():
-            a[k, h.first:stop] = (1 - w) * a[k, h.first - 1] + w * a[k, stop]
+            raise RecordingError(f"{source}: {h.describe()}: longer than the {max_s:g} s "
+                                 "bridged; cut the recording there")
+        held[rec.index(h.sensor), h.first:stop] = True
+        # straight lines first: what a prediction of another held sensor reads meanwhile
+        _line(arrays, rec.index(h.sensor), h.first, stop)
+    if predict:
+        ok = np.logical_not(held.any(axis=0))
+        for k in np.nonzero(held.any(axis=1))[0]:
+            pred = _predicted(arrays, int(k), ok)
+            for h in (h for h in found if h.sensor == rec.sensors[k]):
+                stop = h.first + h.count
+                for name, p in pred.items():
+                    miss = getattr(rec, name)[k] - p
+                    line = {name: miss[None].copy()}
+                    _line(line, 0, h.first, stop)
+                    arrays[name][k, h.first:stop] = p[h.first:stop] + line[name][0, h.first:stop]
     return dataclasses.replace(rec, **arrays), found
+
+
+def _line(arrays: dict, k: int, first: int, stop: int) -> None:
+    """Samples ``first:stop`` of sensor `k` in every array, on the straight line between
+    samples ``first - 1`` and `stop`."""
+    w = (np.arange(1, stop - first + 1) / (stop - first + 1))[:, None]
+    for a in arrays.values():
+        a[k, first:stop] = (1 - w) * a[k, first - 1] + w * a[k, stop]

@@ -270,10 +270,9 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
     if held:
         h = max(held, key=lambda x: x.duration_s)
         more = f" ({len(held)} such stretches, this the longest)" if len(held) > 1 else ""
-        remedy = ("cut the recording there (too long to bridge: a straight line across more "
-                  f"than {MAX_BRIDGE_S:g} s is no estimate of the motion)"
-                  if h.duration_s > MAX_BRIDGE_S else
-                  "fill them in with straight lines across (--bridge-held; library: "
+        remedy = (f"cut the recording there (longer than the {MAX_BRIDGE_S:g} s that can be "
+                  "bridged)" if h.duration_s > MAX_BRIDGE_S else
+                  "fill them in from the other sensors' readings (--bridge-held; library: "
                   "bridge_held) or cut the recording there")
         raise RecordingError(
             f"{source}: {h.describe()}{more}: samples lost and the last one repeated by the "

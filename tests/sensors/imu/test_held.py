@@ -56,13 +56,13 @@ def test_check_recording_refuses_held_readings_naming_sensor_and_time(free_rec):
     assert "from t=6 s (sample 600)" in msg and "--bridge-held" in msg
     longer = _held(rec, "index_distal", 900, round((MAX_BRIDGE_S + 0.1) * rec.rate_hz))
     with pytest.raises(RecordingError, match=r"'index_distal'.*2 such stretches, this the "
-                                             r"longest.*too long to bridge"):
+                                             r"longest.*longer than the 0.5 s that can be bridged"):
         check_recording(longer)
 
 
-def test_bridging_draws_straight_lines_across_the_hold(free_rec):
+def test_bridging_without_prediction_draws_straight_lines_across_the_hold(free_rec):
     rec = _held(free_rec, "ring_middle", 500, 15)
-    out, bridged = bridge_held(rec)
+    out, bridged = bridge_held(rec, predict=False)
     assert [(h.sensor, h.first, h.count) for h in bridged] == [("ring_middle", 500, 15)]
     k = rec.index("ring_middle")
     for name in ("acc", "gyr", "mag"):
@@ -77,12 +77,32 @@ def test_bridging_draws_straight_lines_across_the_hold(free_rec):
     check_recording(out)  # accepted once bridged
 
 
+@pytest.mark.parametrize("sensor", ["index_proximal", "middle_middle", "hand_radial"])
+def test_bridging_from_the_other_sensors_comes_closer_to_what_was_lost(free_rec, sensor):
+    start, n = 640, 40  # 0.4 s in the motion
+    rec = _held(free_rec, sensor, start, n)
+    k = rec.index(sensor)
+    lines, _ = bridge_held(rec, predict=False)
+    out, _ = bridge_held(rec)
+    for name in ("acc", "gyr"):
+        lost = getattr(free_rec, name)[k, start:start + n]
+        err = np.sqrt(np.mean((getattr(out, name)[k, start:start + n] - lost) ** 2))
+        err_lines = np.sqrt(np.mean((getattr(lines, name)[k, start:start + n] - lost) ** 2))
+        assert err < 0.7 * err_lines, (name, err, err_lines)
+    np.testing.assert_array_equal(np.delete(out.gyr, np.s_[start:start + n], axis=1),
+                                  np.delete(rec.gyr, np.s_[start:start + n], axis=1))
+    # one sensor alone has nothing to predict from: the straight lines
+    alone = rec.subset((sensor,))
+    np.testing.assert_allclose(bridge_held(alone)[0].gyr, bridge_held(alone, predict=False)[0].gyr,
+                               atol=1e-9)
+
+
 def test_bridging_refuses_what_a_line_cannot_fill(free_rec):
     too_long = _held(free_rec, "thumb_distal", 400, round(2 * MAX_BRIDGE_S * free_rec.rate_hz))
     with pytest.raises(RecordingError, match=r"^f.csv: sensor 'thumb_distal'.*longer than the "
-                                             r"0.25 s bridged"):
+                                             r"0.5 s bridged"):
         bridge_held(too_long, source="f.csv")
-    assert len(bridge_held(too_long, max_s=1.0)[1]) == 1
+    assert len(bridge_held(too_long, max_s=2.0)[1]) == 1
     n = free_rec.n
     at_end = _held(free_rec, "thumb_distal", n - 15, 15)
     with pytest.raises(RecordingError, match="to the end of the recording"):
@@ -105,5 +125,7 @@ def test_arguments_are_checked(free_rec, bad):
         held_stretches(free_rec, min_s=bad)
     with pytest.raises(RecordingError, match="max_s"):
         bridge_held(free_rec, max_s=bad)
+    with pytest.raises(RecordingError, match="predict"):
+        bridge_held(free_rec, predict="yes")
     with pytest.raises(RecordingError, match="rec"):
         held_stretches(np.zeros((1, 10, 3)))
