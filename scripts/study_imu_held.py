@@ -12,9 +12,9 @@ elbow fixed and moving, ``--sensors`` random sensors per hold, Filter 4 with the
 calibration of ``handsynth imu eval``.  Per configuration and hold: the joint-angle RMSE
 and the worst segment's orientation RMSE of the recording as it was, read with the held
 readings (the check turned off for this), with them bridged from the other sensors
-(:func:`handsynth.sensors.imu.bridge_held`, beyond its limit for the 1-s holds) and
+(:func:`handsynth.sensors.imu.bridge_lost`, beyond its limit for the 1-s holds) and
 bridged by straight lines alone (``predict=False``).  Then how many held stretches
-:func:`~handsynth.sensors.imu.held_stretches` finds in the recordings as made (none is
+:func:`~handsynth.sensors.imu.lost_stretches` finds in the recordings as made (none is
 right), and with ``--broad DIR`` in BROAD's real trials.  About 10 min for two seeds.
 Last line: ``false_alarms=<n> recordings=<n> broad_trials=<n> broad_flagged=<n>``.
 """
@@ -31,11 +31,11 @@ from handsynth.sensors.imu import (
     HELDOUT,
     TUNING,
     ImuHand,
-    _held,
-    bridge_held,
+    _lost,
+    bridge_lost,
     evaluate_trial,
     find_broad_trials,
-    held_stretches,
+    lost_stretches,
     read_broad_trial,
 )
 from handsynth.sensors.imu._eval import _calibrate, free_trials
@@ -46,12 +46,12 @@ _HOLDS_S = (0.1, 0.2, 0.3, 0.5, 1.0)
 @contextlib.contextmanager
 def _unchecked():
     """Read held readings as a filter did before they were refused."""
-    keep = _held.held_stretches
-    _held.held_stretches = lambda rec, **kw: []
+    keep = _lost.lost_stretches
+    _lost.lost_stretches = lambda rec, **kw: []
     try:
         yield
     finally:
-        _held.held_stretches = keep
+        _lost.lost_stretches = keep
 
 
 def _scores(rec, calib) -> tuple[float, float]:
@@ -82,7 +82,7 @@ def main() -> None:
         for _, elbow, rec in free_trials(config, hand, durations=(15.0,)):
             rec = sensor_cal.apply(rec)
             recordings += 1
-            alarms += len(held_stretches(rec))
+            alarms += len(lost_stretches(rec))
             clean = _scores(rec, calib)
             rng = np.random.default_rng([config.seed, recordings])
             for hold in _HOLDS_S:
@@ -91,8 +91,8 @@ def main() -> None:
                     held = _held_copy(rec, int(k), start, round(hold * rec.rate_hz))
                     with _unchecked():
                         as_read = _scores(held, calib)
-                    bridged = _scores(bridge_held(held, max_s=2.0)[0], calib)
-                    lines = _scores(bridge_held(held, max_s=2.0, predict=False)[0], calib)
+                    bridged = _scores(bridge_lost(held, max_s=2.0)[0], calib)
+                    lines = _scores(bridge_lost(held, max_s=2.0, predict=False)[0], calib)
                     rows.setdefault(hold, []).append((*clean, *as_read, *bridged, *lines))
                     print(f"{config.label} seed {config.seed} elbow {elbow} {rec.sensors[k]:17s} "
                           f"held {hold:.1f} s at {start / rec.rate_hz:5.2f} s: joints / worst "
@@ -112,7 +112,7 @@ def main() -> None:
     if args.broad:
         for path in find_broad_trials(args.broad):
             rec = read_broad_trial(path)[0]
-            found = held_stretches(rec)
+            found = lost_stretches(rec)
             longest = max((h.duration_s for h in found), default=0.0)
             trials, flagged = trials + 1, flagged + bool(found)
             print(f"BROAD {path.name}: {len(found)} held stretches (longest {longest:.3f} s)")

@@ -16,10 +16,11 @@ _CHAIN_FILTERS = ("filter4", "filter4b")  # need the link model of a calibration
 
 
 def _unit_options(f):
-    f = click.option("--bridge-held", is_flag=True,
-                     help="Fill in readings held by the logger (a sensor repeating its last "
-                          "reading for 0.1 s or more: samples lost) from the other sensors' "
-                          "readings, up to 0.5 s; without it such a recording is refused.")(f)
+    f = click.option("--bridge-lost", is_flag=True,
+                     help="Fill in samples the logger lost (a sensor repeating its last "
+                          "reading for 0.1 s or more, zeros, empty cells) from the other "
+                          "sensors' readings, up to 0.5 s; without it such a recording is "
+                          "refused.")(f)
     f = click.option("--gyr-range", "gyr_range_dps", type=float, default=2000.0, show_default=True,
                      help="Gyro full-scale range, deg/s (saturation check).")(f)
     f = click.option("--acc-range", "acc_range_g", type=float, default=16.0, show_default=True,
@@ -35,14 +36,14 @@ def _unit_options(f):
     return f
 
 
-def _read(recording, *, acc_units, gyr_units, mag_units, rate_hz, bridge_held):
-    """The CSV recording read, its held readings filled in when `bridge_held` (with a warning)."""
-    from ..sensors.imu import bridge_held as bridge
+def _read(recording, *, acc_units, gyr_units, mag_units, rate_hz, bridge_lost):
+    """The CSV recording read, the samples it lost filled in when `bridge_lost` (with a warning)."""
+    from ..sensors.imu import bridge_lost as bridge
     from ..sensors.imu import read_imu_csv
 
     rec = read_imu_csv(recording, acc_units=acc_units, gyr_units=gyr_units, mag_units=mag_units,
                        rate_hz=rate_hz)
-    if bridge_held:
+    if bridge_lost:
         rec, bridged = bridge(rec, source=str(recording))
         for h in bridged:
             click.echo(f"handsynth: warning: {recording}: bridged: {h.describe()}", err=True)
@@ -197,7 +198,7 @@ def eval_(config_name, filters, durations, elbows, no_grasps, no_sensor_calibrat
 @click.option("--side", type=click.Choice(("right", "left")), default="right", show_default=True,
               help="The hand the sensors are on; 'track' reads its joint angles as that hand's.")
 def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz, acc_range_g,
-              gyr_range_dps, bridge_held, out_path, side) -> None:
+              gyr_range_dps, bridge_lost, out_path, side) -> None:
     """Sensor-to-joint vectors, link vectors and link frames from a calibration RECORDING."""
     import dataclasses
 
@@ -209,7 +210,7 @@ def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz
     check_outputs([("--out", out_path)], inputs=inputs)
     full_scale = _full_scale(acc_range_g, gyr_range_dps)
     rec = _read(recording, acc_units=acc_units, gyr_units=gyr_units, mag_units=mag_units,
-                rate_hz=rate_hz, bridge_held=bridge_held)
+                rate_hz=rate_hz, bridge_lost=bridge_lost)
     try:
         spans = json.loads(Path(segments_path).read_text(), object_pairs_hook=_unique_keys)
     except (OSError, ValueError) as exc:  # JSON and text decoding errors are ValueErrors
@@ -257,7 +258,7 @@ def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz
               help="Do not apply the calibration file's accelerometer/gyro/magnetometer "
                    "corrections (for readings already corrected).")
 def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_units, rate_hz,
-          acc_range_g, gyr_range_dps, bridge_held, static_s, align, out_path, angles_out, tips_out,
+          acc_range_g, gyr_range_dps, bridge_lost, static_s, align, out_path, angles_out, tips_out,
           no_sensor_calibration) -> None:
     """Orientation of every sensor of a CSV RECORDING (columns <sensor>_acc_x .. _mag_z)."""
     import dataclasses
@@ -296,7 +297,7 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
     static = StaticStart(static_s=static_s, align_start_s=a, align_end_s=b)
     full_scale = _full_scale(acc_range_g, gyr_range_dps)
     rec = _read(recording, acc_units=acc_units, gyr_units=gyr_units, mag_units=mag_units,
-                rate_hz=rate_hz, bridge_held=bridge_held)
+                rate_hz=rate_hz, bridge_lost=bridge_lost)
     if static_s * rec.rate_hz > rec.n + 0.5:  # as check_static_fits, in the option's words
         raise RecordingError(f"{recording}: the static start --static {static_s:g} s is longer than "
                              f"the recording ({rec.n} samples, {rec.duration_s:.3g} s); shorten "

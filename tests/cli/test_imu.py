@@ -80,13 +80,35 @@ def test_track_refuses_readings_held_by_the_logger_unless_bridged(tmp_path, sim)
     assert res.output.startswith(f"handsynth: error: {src}: sensor 'index_distal' repeats its "
                                  "accelerometer and gyro readings bit for bit for 0.2 s "
                                  "(20 samples) from t=5 s (sample 500)"), res.output
-    assert "--bridge-held" in res.output and res.output.count("\n") == 1
-    res = CliRunner().invoke(cli, ["imu", "track", str(src), "--filter", "raw", "--bridge-held",
+    assert "--bridge-lost" in res.output and res.output.count("\n") == 1
+    res = CliRunner().invoke(cli, ["imu", "track", str(src), "--filter", "raw", "--bridge-lost",
                                    "--out", str(out)])
     assert res.exit_code == 0, res.output
     assert f"handsynth: warning: {src}: bridged: sensor 'index_distal' repeats" in res.output
     q = np.loadtxt(out, delimiter=",", skiprows=1)
     assert q.shape == (rec.n, 9) and np.isfinite(q).all()
+
+
+def test_track_reads_empty_cells_as_samples_lost(tmp_path, sim):
+    # before: "line 303: index_distal_acc_x is '', not a number", with no way to fill them
+    rec = sim.subset(("forearm_1", "index_distal"))
+    src, out = tmp_path / "gaps.csv", tmp_path / "q.csv"
+    write_imu_csv(rec, src)
+    lines = src.read_text().split("\n")
+    k = next(i for i, line in enumerate(lines) if line.startswith("time_s,"))
+    for i in range(k + 301, k + 306):
+        cells = lines[i].split(",")
+        lines[i] = ",".join(cells[:10] + [""] * 9)
+    src.write_text("\n".join(lines))
+    res = CliRunner().invoke(cli, ["imu", "track", str(src), "--filter", "raw", "--out", str(out)])
+    assert res.exit_code == 2 and "sensor 'index_distal' acc axis x is not finite at sample 300" \
+        in res.output and "--bridge-lost" in res.output, res.output
+    res = CliRunner().invoke(cli, ["imu", "track", str(src), "--filter", "raw", "--bridge-lost",
+                                   "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    assert "bridged: sensor 'index_distal' has values that are not finite numbers (empty cells, " \
+           "NaN) for 0.05 s (5 samples) from t=3 s (sample 300)" in res.output, res.output
+    assert np.isfinite(np.loadtxt(out, delimiter=",", skiprows=1)).all()
 
 
 def _write_broad(path, rec, sensor, kind):

@@ -28,14 +28,6 @@ from ._filters import (
     integrate_gyro,
 )
 from ._gated import GatedFilter, GatedOptions, gated_orientation
-from ._held import (
-    HELD_MIN_S,
-    HELD_TURNING_RADPS,
-    MAX_BRIDGE_S,
-    HeldStretch,
-    bridge_held,
-    held_stretches,
-)
 from ._kinematics import (
     JOINT_LINKS,
     ThumbCmcModel,
@@ -49,6 +41,14 @@ from ._kinematics import (
     zero_offsets,
 )
 from ._layout import CHAINS, FLEX_JOINT, LINKS, POINTS
+from ._lost import (
+    HELD_MIN_S,
+    HELD_TURNING_RADPS,
+    MAX_BRIDGE_S,
+    LostStretch,
+    bridge_lost,
+    lost_stretches,
+)
 from ._model import (
     ARM_JOINTS,
     EARTH_FIELD_UT,
@@ -152,7 +152,6 @@ __all__ = [
     "Filter1Options",
     "GatedFilter",
     "GatedOptions",
-    "HeldStretch",
     "ImuCalibration",
     "ImuHand",
     "ImuNoise",
@@ -160,6 +159,7 @@ __all__ = [
     "ImuRecording",
     "ImuTruth",
     "KalmanDenoiser",
+    "LostStretch",
     "MadgwickEstimator",
     "MagDisturbance",
     "MagNoise",
@@ -179,7 +179,7 @@ __all__ = [
     "angles_beyond_range",
     "apply_axis_noise",
     "azimuth_correction",
-    "bridge_held",
+    "bridge_lost",
     "broad_errors",
     "calibrate",
     "calibrate_vectors",
@@ -200,13 +200,13 @@ __all__ = [
     "gated_orientation",
     "grasp_motion",
     "gyro_bias",
-    "held_stretches",
     "imu_hand_mjcf",
     "initial_attitude",
     "integrate_gyro",
     "joint_angles",
     "link_frames",
     "link_vectors",
+    "lost_stretches",
     "make_filter",
     "noise_coefficients",
     "plate_rotations",

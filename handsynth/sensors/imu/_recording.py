@@ -3,7 +3,7 @@
 A recording holds S sensors sampled together at one rate: accelerometer in
 m/s^2 (specific force, +g upward at rest), gyro in rad/s, magnetometer in
 microtesla, each shaped (S, N, 3).  :func:`check_recording` finds what makes
-a recording unusable or suspicious (NaN, gaps in the time stamps, readings held by
+a recording unusable or suspicious (NaN, gaps in the time stamps, samples lost by
 the logger, saturated channels, wrong units, magnetic disturbances) and either raises
 :class:`~handsynth.errors.RecordingError` naming the sensor, channel and
 sample, or returns the warnings it found.
@@ -217,10 +217,11 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
     RecordingError
         `acc_full_scale` or `gyr_full_scale` not a finite number > 0, a
         `static_s` or rate that is not one; non-finite samples; shapes that
-        disagree; fewer than 2 samples; a sensor's accelerometer and gyro
-        repeating a reading bit for bit for 0.1 s or more while it turns or
-        another sensor's readings change (held by the logger:
-        :func:`~handsynth.sensors.imu.held_stretches`); a channel pinned at full
+        disagree; fewer than 2 samples; samples lost by the logger
+        (:func:`~handsynth.sensors.imu.lost_stretches`): a sensor's
+        accelerometer and gyro repeating a reading bit for bit for 0.1 s or
+        more while it turns or another sensor's readings change, or reading
+        exactly 0 on all six axes; a channel pinned at full
         scale, or at its own extreme value beyond 1.5 g or 2 rad/s (the flat
         top of a sensor with a smaller range), for 5 or more consecutive
         samples (saturation); values beyond the full scale by far (wrong
@@ -261,22 +262,24 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
             k, i, j = np.argwhere(bad)[0]
             raise RecordingError(
                 f"{source}: sensor {rec.sensors[k]!r} {name} axis {'xyz'[j]} is not finite "
-                f"at sample {i} ({bad.sum()} such values); fill or cut the gap first")
+                f"at sample {i} ({bad.sum()} such values); fill the gap in from the other "
+                "sensors' readings (--bridge-lost; library: bridge_lost) or cut it first")
     if rec.n < 2:
         raise RecordingError(f"{source}: needs at least 2 samples, got {rec.n}")
-    from ._held import MAX_BRIDGE_S, held_stretches  # _held reads ImuRecording from here
+    from ._lost import MAX_BRIDGE_S, lost_stretches  # _lost reads ImuRecording from here
 
-    held = held_stretches(rec)
-    if held:
-        h = max(held, key=lambda x: x.duration_s)
-        more = f" ({len(held)} such stretches, this the longest)" if len(held) > 1 else ""
+    lost = lost_stretches(rec)
+    if lost:
+        h = max(lost, key=lambda x: x.duration_s)
+        more = f" ({len(lost)} such stretches, this the longest)" if len(lost) > 1 else ""
+        how = ("the last one repeated by the logger (a wireless link's dropout?)"
+               if h.kind == "held" else "written as zeros by the logger")
         remedy = (f"cut the recording there (longer than the {MAX_BRIDGE_S:g} s that can be "
                   "bridged)" if h.duration_s > MAX_BRIDGE_S else
-                  "fill them in from the other sensors' readings (--bridge-held; library: "
-                  "bridge_held) or cut the recording there")
-        raise RecordingError(
-            f"{source}: {h.describe()}{more}: samples lost and the last one repeated by the "
-            f"logger (a wireless link's dropout?), which no working sensor reads; {remedy}")
+                  "fill them in from the other sensors' readings (--bridge-lost; library: "
+                  "bridge_lost) or cut the recording there")
+        raise RecordingError(f"{source}: {h.describe()}{more}: samples lost and {how}, which "
+                             f"no working sensor reads; {remedy}")
     for name, fs, unit, floor, hint in (
             ("acc", acc_full_scale, "m/s^2", 1.5 * GRAVITY_MPS2,
              "acceleration in mg or cm/s^2 read as m/s^2? (acc units 'mg': --acc-units mg)"),
@@ -743,8 +746,12 @@ def _read_any_csv(path: Path) -> tuple:
                                  f"{len(header)} columns")
     col, sensors, time_name, needed, renamed = _columns(header, col, path)
     idx = [col[name] for name in needed]
+    # an empty sensor cell is a sample lost (NaN: check_recording names it, bridge_lost fills
+    # it); an empty time cell stays an error
+    data = {i for name, i in zip(needed, idx) if name != time_name}
     try:
-        table = np.array([[row[i] for i in idx] for row in content.rows[1:]], dtype=np.float64)
+        table = np.array([[row[i] if (i not in data or row[i].strip()) else "nan" for i in idx]
+                          for row in content.rows[1:]], dtype=np.float64)
     except ValueError:  # find the cell to name
         for row, line in zip(content.rows[1:], content.lines[1:]):
             for name, i in zip(needed, idx):

@@ -1,7 +1,8 @@
-"""Readings held by the logger: samples lost and the last one repeated in their place.
+"""Samples lost by the logger: held (the last reading repeated), zeros or empty cells.
 
 A wireless IMU whose packets are lost, or a logger that polls a stalled sensor, repeats
-the sensor's last reading until the next one arrives.  A gyro held so through a motion
+the sensor's last reading until the next one arrives; other loggers write zeros, or
+leave the cells empty (NaN).  A gyro held so through a motion
 turns its segment by the held rate for as long as the hold lasts.  Measured on the
 held-out configuration (15-s free motion, elbow fixed, Filter 4; docs/imu.md, "Readings
 held by the logger"): one sensor held for 0.2 s put its segment 8-10 deg off at worst, for
@@ -17,8 +18,14 @@ repeats every value: a run is taken as held only when the gyro held is not exact
 a noise-free still sensor's is) and it was turning (:data:`HELD_TURNING_RADPS`) or another
 sensor's readings change during it.
 
-:func:`~handsynth.sensors.imu.check_recording` refuses a recording with readings held;
-:func:`bridge_held` fills them in from the other sensors' readings.
+Zeros on every accelerometer and gyro axis are no reading either: an accelerometer at
+rest reads gravity and one in free fall its noise and bias, never 0 to the bit on all
+three axes with its gyro.  Zeros for 0.3 s in a free motion read as a magnetic
+disturbance before (the magnetometer's zeros), while the filters took the sensor for
+still and in free fall.
+
+:func:`~handsynth.sensors.imu.check_recording` refuses a recording with samples lost;
+:func:`bridge_lost` fills them in from the other sensors' readings.
 """
 
 from __future__ import annotations
@@ -33,8 +40,8 @@ from ..._checks import check_instance, check_number
 from ...errors import RecordingError
 from ._recording import ImuRecording
 
-__all__ = ["HELD_MIN_S", "HELD_TURNING_RADPS", "MAX_BRIDGE_S", "HeldStretch", "bridge_held",
-           "held_stretches"]
+__all__ = ["HELD_MIN_S", "HELD_TURNING_RADPS", "MAX_BRIDGE_S", "LostStretch", "bridge_lost",
+           "lost_stretches"]
 
 #: A reading repeated bit for bit (accelerometer and gyro, all six values) for this long,
 #: s, is held.  BROAD's real recordings repeat for at most 31 ms; a hold of 50 ms moved
@@ -43,7 +50,7 @@ HELD_MIN_S = 0.1
 #: ... when the held gyro reads at least this, rad/s (about 3 deg/s: the segment was
 #: turning), or another sensor's readings change during the hold.
 HELD_TURNING_RADPS = 0.05
-#: Longest hold :func:`bridge_held` fills in, s.  Chosen on the tuning configuration
+#: Longest hold :func:`bridge_lost` fills in, s.  Chosen on the tuning configuration
 #: (``scripts/study_imu_held.py``; worst segment 0.75 deg as recorded): holds bridged
 #: from the other sensors read 1.13 deg at 0.3 s, 2.12 at 0.5 s and 10.3 at 1 s (within
 #: 1.5 deg of the recording on average up to 0.5 s).
@@ -53,22 +60,26 @@ _MAX_FIT_ROWS = 50_000
 
 
 @dataclass(frozen=True)
-class HeldStretch:
-    """Samples of one sensor that repeat the reading before them.
+class LostStretch:
+    """Samples of one sensor that hold no reading of their own.
 
     Attributes
     ----------
     sensor : str
     first : int
-        The first repeated sample (the reading repeated is sample ``first - 1``).
+        The first sample lost (for a hold, the reading repeated is sample
+        ``first - 1``).
     count : int
-        How many samples repeat it.
+        How many samples are lost.
     time_s : float
         Time of sample `first` in the recording's own time, s.
     duration_s : float
         ``count / rate``, s.
     turned_deg : float
-        What the held gyro turns the sensor by over the hold, deg.
+        What the held gyro turns the sensor by over a hold, deg (0 for the others).
+    kind : {"held", "zeros", "missing"}
+        The last reading repeated, zeros on every accelerometer and gyro axis, or a
+        value that is not a finite number (an empty cell, NaN).
     """
 
     sensor: str
@@ -76,14 +87,18 @@ class HeldStretch:
     count: int
     time_s: float
     duration_s: float
-    turned_deg: float
+    turned_deg: float = 0.0
+    kind: str = "held"
 
     def describe(self) -> str:
-        """One line: sensor, how long, from when, and what the held gyro turns."""
-        return (f"sensor {self.sensor!r} repeats its accelerometer and gyro readings bit for "
-                f"bit for {self.duration_s:.3g} s ({self.count} samples) from t="
-                f"{self.time_s:.4g} s (sample {self.first}), its gyro turning "
-                f"{self.turned_deg:.3g} deg meanwhile")
+        """One line: sensor, what, how long and from when (and what a held gyro turns)."""
+        what = {"held": "repeats its accelerometer and gyro readings bit for bit",
+                "zeros": "reads exactly 0 on every accelerometer and gyro axis",
+                "missing": "has values that are not finite numbers (empty cells, NaN)"}[self.kind]
+        turn = (f", its gyro turning {self.turned_deg:.3g} deg meanwhile"
+                if self.kind == "held" else "")
+        return (f"sensor {self.sensor!r} {what} for {self.duration_s:.3g} s ({self.count} "
+                f"samples) from t={self.time_s:.4g} s (sample {self.first}){turn}")
 
 
 def _runs(same: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -93,21 +108,24 @@ def _runs(same: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return starts, np.nonzero(d == -1)[0] - starts
 
 
-def held_stretches(rec: ImuRecording, *, min_s: float = HELD_MIN_S) -> list[HeldStretch]:
-    """Every stretch in which a sensor's accelerometer and gyro repeat a reading.
+def lost_stretches(rec: ImuRecording, *, min_s: float = HELD_MIN_S) -> list[LostStretch]:
+    """Every stretch of samples a sensor has no reading of its own for.
 
     Parameters
     ----------
     rec : ImuRecording
     min_s : float, keyword-only
-        Shortest hold reported, s (:data:`HELD_MIN_S`); at least two samples.
+        Shortest hold reported, s (:data:`HELD_MIN_S`); at least two samples.  Zeros
+        and values that are not finite are reported from one sample on.
 
     Returns
     -------
-    list of HeldStretch
-        In the order of the sensors, then of time; only holds in which the held gyro
-        is not exactly 0 and reads :data:`HELD_TURNING_RADPS` or more, or another
-        sensor's readings change in half or more of the steps.
+    list of LostStretch
+        In the order of the sensors, then of time: values that are not finite
+        (``"missing"``), zeros on all six accelerometer and gyro axes (``"zeros"``) and
+        holds (``"held"``) in which the held gyro is not exactly 0 and reads
+        :data:`HELD_TURNING_RADPS` or more, or another sensor's readings change in half
+        or more of the steps.
 
     Raises
     ------
@@ -116,12 +134,20 @@ def held_stretches(rec: ImuRecording, *, min_s: float = HELD_MIN_S) -> list[Held
     """
     check_instance(rec, ImuRecording, name="rec", error=RecordingError)
     min_s = check_number(min_s, "min_s", above=0.0, error=RecordingError)
-    if rec.n < 3:
-        return []
     six = np.concatenate([rec.acc, rec.gyr], axis=2)  # (S, N, 6)
+    out = []
+    bad = ~np.isfinite(np.concatenate([six, rec.mag], axis=2)).all(axis=2)
+    zeros = ~six.any(axis=2)
+    for kind, flags in (("missing", bad), ("zeros", zeros & ~bad)):
+        for k in np.nonzero(flags.any(axis=1))[0]:
+            for i, n in zip(*_runs(flags[k])):
+                out.append(LostStretch(rec.sensors[k], int(i), int(n),
+                                       rec.start_s + int(i) / rec.rate_hz, n / rec.rate_hz,
+                                       kind=kind))
+    if rec.n < 3:
+        return sorted(out, key=lambda h: (rec.index(h.sensor), h.first))
     same = np.all(six[:, 1:] == six[:, :-1], axis=2)  # (S, N - 1): sample i + 1 repeats i
     shortest = max(2, math.ceil(min_s * rec.rate_hz - 1e-9))
-    out = []
     for k in np.nonzero(same.sum(axis=1) >= shortest)[0]:
         starts, lengths = _runs(same[k])
         others = np.delete(~same, k, axis=0)
@@ -130,12 +156,13 @@ def held_stretches(rec: ImuRecording, *, min_s: float = HELD_MIN_S) -> list[Held
                 continue
             rate = float(np.linalg.norm(rec.gyr[k, i]))
             moving = others[:, i:i + n].mean(axis=1).max() >= 0.5 if len(others) else False
-            if rate == 0.0 or (rate < HELD_TURNING_RADPS and not moving):
-                continue  # a gyro at exactly 0: a noise-free simulation's still sensor
-            out.append(HeldStretch(rec.sensors[k], int(i) + 1, int(n),
+            if rate == 0.0 or not math.isfinite(rate) or \
+                    (rate < HELD_TURNING_RADPS and not moving):
+                continue  # a gyro at exactly 0: a noise-free simulation's still sensor (or zeros)
+            out.append(LostStretch(rec.sensors[k], int(i) + 1, int(n),
                                    rec.start_s + (int(i) + 1) / rec.rate_hz, n / rec.rate_hz,
                                    math.degrees(rate * n / rec.rate_hz)))
-    return out
+    return sorted(out, key=lambda h: (rec.index(h.sensor), h.first))
 
 
 def _predicted(arrays: dict, k: int, ok: np.ndarray) -> dict:
@@ -158,9 +185,9 @@ def _predicted(arrays: dict, k: int, ok: np.ndarray) -> dict:
     return out
 
 
-def bridge_held(rec: ImuRecording, *, max_s: float = MAX_BRIDGE_S, min_s: float = HELD_MIN_S,
+def bridge_lost(rec: ImuRecording, *, max_s: float = MAX_BRIDGE_S, min_s: float = HELD_MIN_S,
                 predict: bool = True, source: str = "recording"
-                ) -> tuple[ImuRecording, list[HeldStretch]]:
+                ) -> tuple[ImuRecording, list[LostStretch]]:
     """The recording with held readings filled in across each hold.
 
     With `predict` (the default), a held sensor's accelerometer and gyro are
@@ -181,7 +208,7 @@ def bridge_held(rec: ImuRecording, *, max_s: float = MAX_BRIDGE_S, min_s: float 
     max_s : float, keyword-only
         Longest hold filled in, s (:data:`MAX_BRIDGE_S`).
     min_s : float, keyword-only
-        As :func:`held_stretches`.
+        As :func:`lost_stretches`.
     predict : bool, keyword-only
         Predict the held sensor from the others (above); False: straight lines only.
     source : str, keyword-only
@@ -192,7 +219,7 @@ def bridge_held(rec: ImuRecording, *, max_s: float = MAX_BRIDGE_S, min_s: float 
     recording : ImuRecording
         A new recording (its truth, segments and start kept), or `rec` itself when
         nothing is held.
-    bridged : list of HeldStretch
+    bridged : list of LostStretch
         The holds filled in.
 
     Raises
@@ -205,13 +232,16 @@ def bridge_held(rec: ImuRecording, *, max_s: float = MAX_BRIDGE_S, min_s: float 
     max_s = check_number(max_s, "max_s", above=0.0, error=RecordingError)
     if not isinstance(predict, bool):
         raise RecordingError(f"predict must be True or False, got {predict!r}")
-    found = held_stretches(rec, min_s=min_s)
+    found = lost_stretches(rec, min_s=min_s)
     if not found:
         return rec, []
     arrays = {name: getattr(rec, name).copy() for name in ("acc", "gyr", "mag")}
     held = np.zeros((len(rec.sensors), rec.n), bool)
     for h in found:
         stop = h.first + h.count
+        if h.first == 0:
+            raise RecordingError(f"{source}: {h.describe()}, from the start of the recording: "
+                                 "nothing before it to bridge from; cut the recording after it")
         if stop >= rec.n:
             raise RecordingError(f"{source}: {h.describe()}, to the end of the recording: "
                                  "nothing after it to bridge to; cut the recording before it")
