@@ -343,6 +343,12 @@ def _edge(mask: np.ndarray, px: int) -> np.ndarray:
     return op(mask.view(np.uint8), k).view(bool)
 
 
+def _grid_bytes(mask: np.ndarray, mount: CameraMount, side: str, cells) -> np.ndarray:
+    """The :func:`~handsynth.render.coverage` grid of `mask` as a learning set keeps it:
+    uint8, 255 = covered, rounded."""
+    return np.rint(coverage(mask, mount, side=side, cells=cells) * 255).astype(np.uint8)
+
+
 def _draw_hand(rng: np.random.Generator, opts: LearningSetOptions, shapes: dict,
                mount: CameraMount, side: str, *, forearm: bool = True):
     """One hand of a learning set, worn and at rest: ``(rasteriser, worn mount, edge_px, rest)``.
@@ -422,8 +428,8 @@ def render_mirror_set(hands: int, *, seed: int = 0, forearm_share: float = 0.5,
         forearm = bool(rng.uniform() < share)
         r, _worn, edge, rest = _draw_hand(rng, opts, shapes, mount, side, forearm=forearm)
         m = _edge(r.mask(rest), edge)
-        for out, view in ((seen, m), (mirrored, np.ascontiguousarray(m[:, ::-1]))):
-            out[h] = np.rint(coverage(view, mount, side=side, cells=opts.cells) * 255).ravel()
+        seen[h] = _grid_bytes(m, mount, side, opts.cells).ravel()
+        mirrored[h] = _grid_bytes(np.ascontiguousarray(m[:, ::-1]), mount, side, opts.cells).ravel()
     return seen, mirrored
 
 
@@ -463,8 +469,7 @@ def render_learning_set(options: LearningSetOptions | None = None, *,
         poses = learning_poses(rest, per, rng, mix=opts.mix)
 
         def grid(pose, r=r, edge=edge):
-            m = _edge(r.mask(pose), edge)
-            return np.rint(coverage(m, mount, side=side, cells=opts.cells) * 255).astype(np.uint8)
+            return _grid_bytes(_edge(r.mask(pose), edge), mount, side, opts.cells)
 
         rest_grids[h] = grid(rest).ravel()
         rest_angles[h] = rest

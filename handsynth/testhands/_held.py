@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._checks import check_number
+from .._checks import check_array, check_number
 from ..errors import InvalidInputError
 from ..models import DEPTH_TO_BREADTH, FINGER_BREADTH_MM
 
@@ -64,11 +64,7 @@ class HeldObject:
 
     def __post_init__(self) -> None:
         for name in ("centre_mm", "axis"):
-            v = np.asarray(getattr(self, name), dtype=float) if _numbers(getattr(self, name)) \
-                else None
-            if v is None or v.shape != (3,) or not np.isfinite(v).all():
-                raise InvalidInputError(f"{name} must be three finite numbers, got "
-                                        f"{getattr(self, name)!r}")
+            v = check_array(getattr(self, name), name, (3,))
             if name == "axis":
                 n = float(np.linalg.norm(v))
                 if n == 0.0:
@@ -89,14 +85,6 @@ class HeldObject:
         v = np.cross([0.0, 0.0, 1.0], a)  # sin(angle) * unit axis
         q = np.array([1.0 + c, *v])
         return q / np.linalg.norm(q)
-
-
-def _numbers(value) -> bool:
-    try:
-        np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        return False
-    return True
 
 
 def grasped_cylinder(keypoints_m: np.ndarray, *, length_mm: float = 200.0,
@@ -126,10 +114,7 @@ def grasped_cylinder(keypoints_m: np.ndarray, *, length_mm: float = 200.0,
         cylinder reaching above the MCP centres (an open hand's circle), or one too
         large or too small (a fist's leaves no room).
     """
-    kp = np.asarray(keypoints_m, dtype=float)
-    if kp.shape != (21, 3) or not np.isfinite(kp).all():
-        raise InvalidInputError(f"keypoints_m must be 21 finite points (21, 3), got shape "
-                                f"{kp.shape}")
+    kp = check_array(keypoints_m, "keypoints_m", (21, 3), rows="points")
     fingers = kp[5:21] * 1e3
     p = fingers[:, 1:]
     a = np.c_[2 * p, np.ones(len(p))]

@@ -2,8 +2,8 @@
 
 A wireless IMU whose packets are lost, or a logger that polls a stalled sensor, repeats
 the sensor's last reading until the next one arrives; other loggers write zeros, or
-leave the cells empty (NaN).  A gyro held so through a motion
-turns its segment by the held rate for as long as the hold lasts.  Measured on the
+leave the cells empty (NaN).  A gyro held so through a motion turns its segment by the
+held rate for as long as the hold lasts.  Measured on the
 held-out configuration (15-s free motion, elbow fixed, Filter 4; docs/imu.md, "Readings
 held by the logger"): one sensor held for 0.2 s put its segment 8-10 deg off at worst, for
 0.5 s 18-44 deg and for 1 s 34-104 deg (as recorded 3.2 deg), and nothing said so.
@@ -236,7 +236,7 @@ def bridge_lost(rec: ImuRecording, *, max_s: float = MAX_BRIDGE_S, min_s: float 
     if not found:
         return rec, []
     arrays = {name: getattr(rec, name).copy() for name in ("acc", "gyr", "mag")}
-    held = np.zeros((len(rec.sensors), rec.n), bool)
+    lost = np.zeros((len(rec.sensors), rec.n), bool)
     for h in found:
         stop = h.first + h.count
         if h.first == 0:
@@ -248,26 +248,26 @@ def bridge_lost(rec: ImuRecording, *, max_s: float = MAX_BRIDGE_S, min_s: float 
         if h.duration_s > max_s:
             raise RecordingError(f"{source}: {h.describe()}: longer than the {max_s:g} s "
                                  "bridged; cut the recording there")
-        held[rec.index(h.sensor), h.first:stop] = True
-        # straight lines first: what a prediction of another held sensor reads meanwhile
-        _line(arrays, rec.index(h.sensor), h.first, stop)
+        k = rec.index(h.sensor)
+        lost[k, h.first:stop] = True
+        # straight lines first: what a prediction of another lost sensor reads meanwhile
+        for a in arrays.values():
+            a[k, h.first:stop] = _between(a[k, h.first - 1], a[k, stop], h.count)
     if predict:
-        ok = np.logical_not(held.any(axis=0))
-        for k in np.nonzero(held.any(axis=1))[0]:
-            pred = _predicted(arrays, int(k), ok)
+        ok = np.logical_not(lost.any(axis=0))
+        for k in map(int, np.nonzero(lost.any(axis=1))[0]):
+            pred = _predicted(arrays, k, ok)
             for h in (h for h in found if h.sensor == rec.sensors[k]):
-                stop = h.first + h.count
+                first, stop = h.first, h.first + h.count
                 for name, p in pred.items():
-                    miss = getattr(rec, name)[k] - p
-                    line = {name: miss[None].copy()}
-                    _line(line, 0, h.first, stop)
-                    arrays[name][k, h.first:stop] = p[h.first:stop] + line[name][0, h.first:stop]
+                    a = arrays[name]  # the readings themselves at first - 1 and stop
+                    a[k, first:stop] = p[first:stop] + _between(
+                        a[k, first - 1] - p[first - 1], a[k, stop] - p[stop], h.count)
     return dataclasses.replace(rec, **arrays), found
 
 
-def _line(arrays: dict, k: int, first: int, stop: int) -> None:
-    """Samples ``first:stop`` of sensor `k` in every array, on the straight line between
-    samples ``first - 1`` and `stop`."""
-    w = (np.arange(1, stop - first + 1) / (stop - first + 1))[:, None]
-    for a in arrays.values():
-        a[k, first:stop] = (1 - w) * a[k, first - 1] + w * a[k, stop]
+def _between(before: np.ndarray, after: np.ndarray, count: int) -> np.ndarray:
+    """`count` points (count, 3) evenly on the straight line from `before` to `after`,
+    both ends left out."""
+    w = (np.arange(1, count + 1) / (count + 1))[:, None]
+    return (1 - w) * before + w * after
