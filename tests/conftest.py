@@ -19,6 +19,14 @@ N_ENTRIES = 240
 RENDER_SIZE = (180, 120)
 
 
+def pytest_collection_modifyitems(items):
+    """Run the tests marked slow first, so that parallel workers end together.
+
+    The order is stable (the same on every worker, as pytest-xdist needs) and
+    only moves slow tests ahead; tests do not depend on one another's order.
+    """
+    items.sort(key=lambda item: item.get_closest_marker("slow") is None)
+
 
 @pytest.fixture(scope="session")
 def read_video():

@@ -1,12 +1,14 @@
 import re
 
 import cv2
+import pytest
 from click.testing import CliRunner
 
 from handsynth.cli._main import cli
 from handsynth.db import open_database
 
 
+@pytest.mark.slow
 def test_demo_writes_pictures_and_looks_up_frames(tmp_path):
     res = CliRunner().invoke(cli, ["demo", "--out", str(tmp_path), "--tile-width", "96",
                                    "--frames", "20", "--learned-hands", "10"])

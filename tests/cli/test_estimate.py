@@ -483,6 +483,7 @@ def test_learned_estimator_on_a_synthetic_hand_learns_once_then_reads_its_cache(
     assert np.abs(got - est).max() > 0.01
 
 
+@pytest.mark.slow
 def test_learned_estimator_from_relaxed_rests_is_learnt_beside_the_default(tmp_path):
     args = ["--synthetic", "--learned", "--learned-cache", str(tmp_path), "--learned-hands", "6",
             "--learned-kind", "fingers", "--frames", "4", *SMALL]
@@ -557,6 +558,7 @@ def test_learned_keypoint_options_are_checked_by_name(tmp_path, extra, message):
     assert "Traceback" not in res.output and not (tmp_path / "r.csv").exists()
 
 
+@pytest.mark.slow
 def test_learned_estimator_for_the_left_hand(tmp_path):
     res = _run("--synthetic", "--learned", "--side", "left", "--learned-cache", str(tmp_path),
                "--learned-hands", "6", "--learned-kind", "fingers", "--frames", "4", *SMALL)

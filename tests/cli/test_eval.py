@@ -19,6 +19,7 @@ def _run(*args):
     return CliRunner().invoke(cli, ["eval", *args], catch_exceptions=False)
 
 
+@pytest.mark.slow
 def test_eval_prints_table_and_writes_json_and_plots(tmp_path):
     out, js = tmp_path / "plots", tmp_path / "res" / "eval.json"
     js.parent.mkdir()  # the folder of an output file must exist (the plot folder is created)
@@ -114,6 +115,7 @@ def test_a_json_report_never_replaces_a_database_of_the_run(tmp_path):
     assert res.exit_code == 2 and "would be a database file" in res.output, res.output
 
 
+@pytest.mark.slow
 def test_protocol_puts_the_constant_beside_every_method_and_writes_json(tmp_path):
     js = tmp_path / "protocol.json"
     res = _run("--protocol", "--db", str(tmp_path / "cache"), "--hands", "1", "--mesh", "mrtk",

@@ -149,6 +149,7 @@ def test_an_empty_path_is_refused_by_name(photos, args, line):
     assert res.exit_code == 2 and res.output == f"handsynth: error: {line}\n", res.output
 
 
+@pytest.mark.slow
 def test_damaged_photos_are_one_line_on_the_real_stderr(tmp_path, photos):
     # before: libpng printed "libpng error: Read Error" on the process's stderr above the error
     import os

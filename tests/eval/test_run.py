@@ -235,6 +235,7 @@ def test_report_json_schema(report):
     assert len(f0["truth_deg"]) == 20 and len(f0["selected"]["angles_deg"]) == 20
 
 
+@pytest.mark.slow
 def test_plots_are_png_files(report, tmp_path):
     import matplotlib.image
 

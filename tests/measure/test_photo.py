@@ -322,6 +322,7 @@ def test_shape_correction_applies_its_matrix_and_validates():
         c.apply(HandShape(width=1.6))  # 2 * 1.6 - 1 = 2.2: beyond the ratios a hand may have
 
 
+@pytest.mark.slow
 def test_fit_shape_correction_fits_what_it_measures():
     from handsynth.eval import random_hand_shapes
 

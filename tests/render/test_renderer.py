@@ -51,6 +51,7 @@ def test_left_hand_renders_as_the_mirror_image():
         assert _iou(a, b) < 0.9  # and not simply the same picture
 
 
+@pytest.mark.slow
 def test_whole_hand_preset_keeps_the_hand_inside_the_frame():
     mount = CameraMount.whole_hand()
     keep = wrist_cut_keep(mount, width_px=360, height_px=240)

@@ -480,6 +480,7 @@ def test_a_calibration_without_the_fingertip_sensors_says_so():
         calibrate(rec, source="cal.csv")
 
 
+@pytest.mark.slow
 def test_calibration_rotations_too_small_are_warned_about(calibration_rec):
     # rotations a third as large as the default gave vectors 3-5 mm off and fingertips
     # 10-24 mm from the elbow, without a word
