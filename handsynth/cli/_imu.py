@@ -226,12 +226,14 @@ def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz
     click.echo(f"calibrated {len(cal.sensors)} sensors of a {side} hand -> {out_path}; "
                f"index links: {lengths}")
     sc = cal.sensor_calibration
-    click.echo("accelerometer/gyro/magnetometer calibration: " + (
+    what = "accelerometer/gyro/magnetometer" if rec.has_mag else \
+        "accelerometer/gyro (6-axis sensors, no magnetometer)"
+    click.echo(f"{what} calibration: " + (
         "none (fewer than 8 static poses acc_pose_<k> in the segments)" if sc is None else
         f"{len(sc.sensors)} sensors, largest accelerometer residual "
-        f"{float(sc.acc_residual_mps2.max()):.3f} m/s^2, largest magnetometer residual "
-        f"{float(sc.mag_residual.max()) if sc.mag_residual is not None else 0.0:.2%} "
-        "(stored; 'track' applies it)"))
+        f"{float(sc.acc_residual_mps2.max()):.3f} m/s^2" + (
+            f", largest magnetometer residual {float(sc.mag_residual.max()):.2%}"
+            if sc.mag_residual is not None else "") + " (stored; 'track' applies it)"))
 
 
 @imu.command()
@@ -246,7 +248,8 @@ def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz
 @click.option("--static", "static_s", type=float, default=2.0, show_default=True,
               help="Length of the still start, s (gyro bias, initial attitude).")
 @click.option("--align", default=None, metavar="START,END",
-              help="Common rotation for the compass azimuth alignment, s (e.g. 2,4).")
+              help="Common rotation for the compass azimuth alignment, s (e.g. 2,4); "
+                   "6-axis sensors (no magnetometer columns) take their headings from it.")
 @click.option("--out", "out_path", type=click.Path(dir_okay=False), required=True,
               help="CSV of quaternions (time_s, <sensor>_qw .. _qz).")
 @click.option("--angles-out", type=click.Path(dir_okay=False),
@@ -334,6 +337,8 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
     cols = ["time_s"] + [f"{s}_q{c}" for s in sensors for c in "wxyz"]
     _write_table(out_path, cols, np.column_stack([t] + [q[k, :, c] for k in range(q.shape[0])
                                                          for c in range(4)]), inputs=inputs)
+    if not rec.has_mag:
+        name += ", 6-axis: headings from the common rotation"
     click.echo(f"{len(sensors)} sensors, {rec.n} samples ({rec.duration_s:.1f} s) at "
                f"{rec.rate_hz:g} Hz -> {out_path} ({name})")
 

@@ -325,6 +325,29 @@ def test_calibrate_then_track_joint_angles(tmp_path):
     assert warning.startswith("handsynth: warning: 2 joint angles read more than 30 deg beyond")
     assert "index_pip_flex in 100 % of the samples" in warning
     assert "Most likely sensor index_middle (a sensor of 2 of those 2 joints) turned" in warning
+    # the same sensors read as 6-axis ones (no magnetometer columns): calibrated and tracked,
+    # their headings from the common rotation
+    cal6_csv, rec6_csv, model6 = tmp_path / "cal6.csv", tmp_path / "rec6.csv", tmp_path / "cal6.json"
+    write_imu_csv(dataclasses.replace(cal, mag=None), cal6_csv)
+    write_imu_csv(dataclasses.replace(rec, mag=None), rec6_csv)
+    res = CliRunner().invoke(cli, ["imu", "calibrate", str(cal6_csv), "--segments", str(seg_json),
+                                   "--out", str(model6)])
+    assert res.exit_code == 0, res.output
+    assert "accelerometer/gyro (6-axis sensors, no magnetometer) calibration: 25 sensors" in res.output
+    assert "magnetometer residual" not in res.output
+    six_csv = tmp_path / "a6.csv"
+    res = CliRunner().invoke(cli, ["imu", "track", str(rec6_csv), "--calibration", str(model6),
+                                   "--align", "2,4", "--out", str(q_csv), "--angles-out", str(six_csv)])
+    assert res.exit_code == 0, res.output
+    assert "6-axis: headings from the common rotation" in res.output
+    err6 = np.loadtxt(six_csv, delimiter=",", skiprows=1)[400:, 1:] - rec.truth.angles[400:, 9:]
+    assert np.sqrt(np.mean(err6[:, j] ** 2)) < np.sqrt(np.mean(err[:, j] ** 2)) + 0.5
+    # without the common rotation nothing gives them one heading: one line, no traceback
+    res = CliRunner().invoke(cli, ["imu", "track", str(rec6_csv), "--calibration", str(model6),
+                                   "--out", str(q_csv)])
+    assert res.exit_code != 0 and "Traceback" not in res.output
+    assert "6-axis sensors (no magnetometer) takes the sensors' headings from the common rotation" \
+        in res.output
 
 
 @pytest.mark.parametrize(("args", "message"), [

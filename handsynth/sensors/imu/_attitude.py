@@ -8,6 +8,12 @@ with far less spread between sensors than the compass.  The per-sensor
 difference psi_d = psi - psi_wg (eq. 4.20) is compared with its median over
 the sensors, giving the correction psi_cor = median - psi_d (eq. 4.21) that
 is added to each compass heading (eq. 4.22).
+
+Sensors without a magnetometer (6-axis, ``rec.mag`` None) take their
+headings from the common rotation alone: w_g of eq. 4.18 is one horizontal
+direction for every sensor, and each sensor's heading is set so that it
+points along the world's x axis (eq. 4.19 with w_g in the compass's place).
+The world's x axis is then that direction, not magnetic north.
 """
 
 from __future__ import annotations
@@ -210,8 +216,25 @@ def azimuth_correction(rec: ImuRecording, static: StaticStart = StaticStart()) -
         (then g x w_max vanishes and fixes no heading).
     """
     n0 = _static_samples(rec, static)
-    if static.align_start_s is None or static.align_end_s is None:
-        return np.zeros(len(rec.sensors))
+    if static.align_start_s is None or static.align_end_s is None or rec.mag is None:
+        return np.zeros(len(rec.sensors))  # 6-axis: no compass heading to correct
+    g, wg = _common_rotation(rec, static, n0)
+    mag = rec.mag[:, :n0].mean(axis=1)
+    q_m = quat_from_acc_mag(g, mag)
+    q_w = quat_from_acc_mag(g, wg)                                      # eq. 4.19
+    psi = 2 * np.arctan2(q_m[:, 3], q_m[:, 0])
+    psi_wg = 2 * np.arctan2(q_w[:, 3], q_w[:, 0])
+    d = np.angle(np.exp(1j * (psi - psi_wg)))                           # eq. 4.20
+    # median of the angles, unwrapped around the first sensor's
+    dmean = d[0] + np.median(np.angle(np.exp(1j * (d - d[0]))))
+    return np.angle(np.exp(1j * (dmean - d)))                           # eq. 4.21
+
+
+def _common_rotation(rec: ImuRecording, static: StaticStart, n0: int
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """Gravity over the static start and w_g = g x w_max of the common rotation (eq. 4.18),
+    both in each sensor's frame, shape (S, 3); the checks of :func:`azimuth_correction`."""
+    assert static.align_start_s is not None and static.align_end_s is not None
     a, b = _n(rec, static.align_start_s), _n(rec, static.align_end_s)
     if b - a < 2:
         raise InvalidInputError(f"the common rotation {static.align_start_s}-{static.align_end_s} s "
@@ -232,15 +255,7 @@ def azimuth_correction(rec: ImuRecording, static: StaticStart = StaticStart()) -
               * np.linalg.norm(wmax, axis=-1)):
         raise EstimationError("the common rotation is about the vertical; "
                               "g x w_max fixes no heading")
-    mag = rec.mag[:, :n0].mean(axis=1)
-    q_m = quat_from_acc_mag(g, mag)
-    q_w = quat_from_acc_mag(g, wg)                                      # eq. 4.19
-    psi = 2 * np.arctan2(q_m[:, 3], q_m[:, 0])
-    psi_wg = 2 * np.arctan2(q_w[:, 3], q_w[:, 0])
-    d = np.angle(np.exp(1j * (psi - psi_wg)))                           # eq. 4.20
-    # median of the angles, unwrapped around the first sensor's
-    dmean = d[0] + np.median(np.angle(np.exp(1j * (d - d[0]))))
-    return np.angle(np.exp(1j * (dmean - d)))                           # eq. 4.21
+    return g, wg
 
 
 def initial_attitude(rec: ImuRecording, static: StaticStart = StaticStart(), *,
@@ -260,18 +275,29 @@ def initial_attitude(rec: ImuRecording, static: StaticStart = StaticStart(), *,
     Returns
     -------
     ndarray, shape (S, 4), float64
-        Unit quaternions (w, x, y, z), world frame z up, x magnetic north.
+        Unit quaternions (w, x, y, z), world frame z up, x magnetic north;
+        for 6-axis sensors (``rec.mag`` None) x along the common rotation's
+        w_g (module docstring), whatever `align`.
 
     Raises
     ------
     InvalidInputError, EstimationError
-        As :func:`azimuth_correction` (with `align`); `rec` or `static` of the
-        wrong type.
+        As :func:`azimuth_correction` (with `align`, and always for 6-axis
+        sensors); `rec` or `static` of the wrong type; 6-axis sensors with
+        no common rotation in `static` (nothing else gives them a common
+        heading).
     RecordingError
         A static start longer than the recording (:func:`check_static_fits`).
     """
     n0 = _static_samples(rec, static)
     g = rec.acc[:, :n0].mean(axis=1)
+    if rec.mag is None:
+        if static.align_start_s is None:
+            raise EstimationError(
+                "a recording of 6-axis sensors (no magnetometer) takes the sensors' headings "
+                "from the common rotation, and it is off (--align none): give the common "
+                "rotation's seconds (--align START,END)")
+        return quat_from_acc_mag(*_common_rotation(rec, static, n0))   # eqs. 4.18-4.19
     mag = rec.mag[:, :n0].mean(axis=1)
     cor = azimuth_correction(rec, static) if align else 0.0
     return quat_from_acc_mag(g, mag, heading_offset_rad=cor)

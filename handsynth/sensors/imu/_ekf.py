@@ -367,9 +367,13 @@ class ChainEKF:
         q = initial_attitude(rec, self.static)
         cor = azimuth_correction(rec, self.static)
         n0 = max(1, int(self.static.static_s * rec.rate_hz))
-        m_static = np.einsum("sij,sj->si", quat_to_mat(q), rec.mag[:, :n0].mean(axis=1))
+        mag = rec.mag
+        if mag is None:  # 6-axis sensors: a zero field that the gate below never passes, so
+            mag = np.zeros_like(rec.gyr)  # H3 observes nothing (its rows carry zero weight)
+        m_static = np.einsum("sij,sj->si", quat_to_mat(q), mag[:, :n0].mean(axis=1))
         mh = np.hypot(m_static[:, 0], m_static[:, 1])                      # eq. 4.33
-        fnorm0 = np.linalg.norm(rec.mag[:, :n0].mean(axis=1), axis=-1)
+        fnorm0 = np.linalg.norm(mag[:, :n0].mean(axis=1), axis=-1)
+        fnorm0[fnorm0 == 0] = 1.0
         rz = np.zeros((s_n, 2, 3))                                          # eq. 4.35
         c, s_ = np.cos(-cor), np.sin(-cor)
         rz[:, 0, 0], rz[:, 0, 1], rz[:, 1, 0], rz[:, 1, 1] = c, -s_, s_, c
@@ -381,7 +385,7 @@ class ChainEKF:
         if self.fast:
             from ._ekf_numba import run_fast
 
-            return run_fast(tree, q, gyr, dgyr, rec.acc, rec.mag, dt, mh, fnorm0, rz, fast_w, o)
+            return run_fast(tree, q, gyr, dgyr, rec.acc, mag, dt, mh, fnorm0, rz, fast_w, o)
         out = np.empty((s_n, n, 4))
         out[:, 0] = q
         bias = np.zeros((s_n, 3))                          # learnt beyond the static start's
@@ -395,7 +399,7 @@ class ChainEKF:
             p_cov[-3:, -3:] = np.eye(3) * o.elbow_acc_sd**2                 # eq. 4.38
             r = quat_to_mat(q)
             z, hx, h, sd = observe(tree, r, gyr[:, i] - bias, dgyr[:, i], rec.acc[:, i],
-                                   rec.mag[:, i], mh=mh, fnorm0=fnorm0, rz=rz, fast=fast_w[:, i],
+                                   mag[:, i], mh=mh, fnorm0=fnorm0, rz=rz, fast=fast_w[:, i],
                                    options=o)
             vinv = 1.0 / sd**2                                              # eqs. 4.7-4.8
             info = np.linalg.inv(p_cov) + (h.T * vinv) @ h

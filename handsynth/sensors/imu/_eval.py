@@ -52,7 +52,7 @@ from ._layout import CHAINS, LINKS, POINTS
 from ._model import SENSOR_NAMES, ImuHand, ImuPlacement
 from ._motion import GRASP_POSES, calibration_motion, free_motion, grasp_motion, static_motion
 from ._noise import EVAL_NOISE, MPU9250_DATASHEET, ImuNoise
-from ._quat import angle_deg, heading_inclination_deg
+from ._quat import angle_deg, heading_inclination_deg, qconj, qmul
 from ._recording import ImuRecording, ImuTruth, check_recording
 from ._sensorcal import SensorCalibration
 from ._simulate import SkinMotion, simulate_imu
@@ -175,11 +175,13 @@ def _device_seed(config: SimConfig) -> int:
     return config.seed + 900
 
 
-def _calibrate(config: SimConfig, placement: ImuPlacement):
+def _calibrate(config: SimConfig, placement: ImuPlacement, *, six_axis: bool = False):
     hand = ImuHand(config.shape, placement=placement, tip_sensors=True)
     quiet = dataclasses.replace(config.noise, disturbances=())
     cal = simulate_imu(calibration_motion(acc_poses=True), hand=hand, noise=quiet,
                        skin=config.skin, seed=config.seed + 7, device_seed=_device_seed(config))
+    if six_axis:  # the same sensors' accelerometers and gyros only
+        cal = dataclasses.replace(cal, mag=None)
     # accelerometer, gyro and magnetometer corrections from the static poses, kept in
     # the calibration for the later recordings of the same sensors
     calib = calibrate(cal)
@@ -245,6 +247,8 @@ def _trial(rec, filters, calib: ImuCalibration, series: dict | None = None, *,
     for name in filters:
         q = calib.fuse(make_filter(name, calib.model).run(rec), rec.sensors,
                        plate_fusion=plate_fusion)
+        if rec.mag is None:
+            q = _common_heading(q, truth.quat)
         err = angle_deg(q[:, sl], truth.quat[:, sl])
         head, incl = heading_inclination_deg(q[:, sl], truth.quat[:, sl])
         if series is not None:
@@ -279,6 +283,22 @@ def _trial(rec, filters, calib: ImuCalibration, series: dict | None = None, *,
             series["chain_time_s"] = i / rec.rate_hz
         out["fingertip_from_wrist_rmse_mm"][name] = fw
     return out
+
+
+def _common_heading(q: np.ndarray, q_true: np.ndarray) -> np.ndarray:
+    """`q` (S, N, 4) turned about the vertical by one angle, the circular mean over the
+    sensors of their heading error at the first sample.
+
+    Without magnetometers the hand's heading in the world is unobservable: the estimate's
+    world x axis is the common rotation's direction, not north.  One angle for every
+    sensor and the whole recording, fixed at its first sample, takes that out and leaves
+    the sensors' headings relative to one another and their drift in the errors.
+    """
+    d = qmul(q_true[:, 0], qconj(q[:, 0]))  # world-frame error per sensor at the start
+    psi = 2.0 * np.arctan2(d[:, 3], d[:, 0])
+    mean = float(np.angle(np.exp(1j * psi).mean()))
+    turn = np.array([np.cos(mean / 2), 0.0, 0.0, np.sin(mean / 2)])
+    return qmul(turn, q)
 
 
 def _grasp_report(config, placement, filters, calib: ImuCalibration,

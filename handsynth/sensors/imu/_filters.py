@@ -30,7 +30,7 @@ import numpy as np
 from ..._checks import check_number
 from ...errors import EstimationError, InvalidInputError
 from ._attitude import StaticStart, check_run_input, gyro_bias, initial_attitude
-from ._quat import qexp, qmul, qnormalize, quat_from_acc_mag
+from ._quat import qconj, qexp, qmul, qnormalize, quat_from_acc_mag
 from ._quat_numba import _chain
 from ._recording import ImuRecording
 
@@ -186,6 +186,10 @@ class Filter1:
         from ._attitude import azimuth_correction
 
         check_run_input(rec, self.static)
+        if rec.mag is None:
+            raise EstimationError(
+                "filter1 observes each sensor's compass attitude, and a recording of 6-axis "
+                "sensors has no magnetometer: use filter4, gated, raw or vqf")
         o = self.options
         s, n = len(rec.sensors), rec.n
         dt = 1.0 / rec.rate_hz
@@ -238,6 +242,11 @@ def _prepared(rec: ImuRecording, static: StaticStart):
 class VQFEstimator:
     """VQF, 9D (magnetometer on), default parameters of the ``vqf`` package.
 
+    6D (no magnetometer) for a recording of 6-axis sensors: each sensor's
+    heading then drifts on its own, from the heading the common rotation gives
+    it (:func:`initial_attitude`), which its 6D output is turned to at the
+    first sample.
+
     By default the package's offline variant (``offlineVQF``): it is acausal,
     estimating the gyro bias from the whole recording, past and future, so
     it cannot run live.  ``online=True`` runs the causal filter (``VQF``'s
@@ -261,11 +270,20 @@ class VQFEstimator:
         gyr = _prepared(rec, self.static)
         out = np.empty((len(rec.sensors), rec.n, 4))
         ts = 1.0 / rec.rate_hz
+        mag = rec.mag
+        six = mag is None
+        q0 = initial_attitude(rec, self.static) if six else None
         for k in range(len(rec.sensors)):
-            args = (np.ascontiguousarray(gyr[k]), np.ascontiguousarray(rec.acc[k]),
-                    np.ascontiguousarray(rec.mag[k]))
-            res = VQF(ts).updateBatch(*args) if self.online else offlineVQF(*args, ts)
-            out[k] = qmul(_Q_NWU_FROM_ENU, res["quat9D"])
+            args = [np.ascontiguousarray(gyr[k]), np.ascontiguousarray(rec.acc[k])]
+            if mag is not None:
+                args.append(np.ascontiguousarray(mag[k]))
+            if self.online:
+                res = VQF(ts).updateBatch(*args)
+            else:
+                res = offlineVQF(args[0], args[1], args[2] if len(args) > 2 else None, ts)
+            out[k] = qmul(_Q_NWU_FROM_ENU, res["quat6D" if six else "quat9D"])
+            if q0 is not None:  # its own heading turned to the common rotation's at the start
+                out[k] = qmul(_heading_turn(q0[k], out[k, 0]), out[k])
         return out
 
 
@@ -279,6 +297,10 @@ class _AhrsBase:
 
     def run(self, rec: ImuRecording) -> np.ndarray:
         check_run_input(rec, self.static)
+        if rec.mag is None:
+            raise EstimationError(
+                f"{self.name} is run here as a 9-axis baseline, and a recording of 6-axis "
+                "sensors has no magnetometer: use filter4, gated, raw or vqf")
         gyr = _prepared(rec, self.static)
         q0 = initial_attitude(rec, self.static, align=False)
         out = np.empty((len(rec.sensors), rec.n, 4))
@@ -347,6 +369,14 @@ class AhrsEKFEstimator(_AhrsBase):
 
 
 _Q_X180 = np.array([0.0, 1.0, 0.0, 0.0])
+
+
+def _heading_turn(q_to: np.ndarray, q_from: np.ndarray) -> np.ndarray:
+    """The rotation about the world's vertical that turns attitude `q_from`'s heading into
+    `q_to`'s (unit quaternions (4,), sensor to world), as a quaternion (4,)."""
+    d = qmul(q_to, qconj(q_from))  # world-frame rotation from one to the other
+    psi = 2.0 * np.arctan2(d[3], d[0])  # its part about z (twist), the tilt left aside
+    return np.array([np.cos(psi / 2), 0.0, 0.0, np.sin(psi / 2)])
 
 
 def _check_rate(rate_hz) -> float:

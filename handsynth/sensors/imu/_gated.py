@@ -283,14 +283,17 @@ def gated_orientation(rec: ImuRecording, options: GatedOptions | None = None, *,
     dt = 1.0 / rec.rate_hz
     q0 = initial_attitude(rec, static)
     b0 = gyro_bias(rec, static)
-    mag0 = rec.mag[:, : _n(rec, static.static_s)].mean(axis=1)
+    mag = rec.mag
+    if mag is None:  # 6-axis sensors: a zero field, which the field gate never passes (no
+        mag = np.zeros_like(rec.gyr)  # heading correction, no iron learnt)
+    mag0 = mag[:, : _n(rec, static.static_s)].mean(axis=1)
     kernel = _kernel_fast if fast else _kernel
     out = np.empty((len(rec.sensors), rec.n, 4))
     for s in range(len(rec.sensors)):
         out[s] = kernel(np.ascontiguousarray(q0[s], np.float64),
                         np.ascontiguousarray(rec.gyr[s], np.float64),
                         np.ascontiguousarray(rec.acc[s], np.float64),
-                        np.ascontiguousarray(rec.mag[s], np.float64),
+                        np.ascontiguousarray(mag[s], np.float64),
                         np.ascontiguousarray(mag0[s], np.float64),
                         np.ascontiguousarray(b0[s], np.float64), dt, GRAVITY_MPS2,
                         min(dt / o.acc_tau_s, 1.0), min(dt / o.acc_lowpass_s, 1.0),

@@ -136,7 +136,8 @@ def lost_stretches(rec: ImuRecording, *, min_s: float = HELD_MIN_S) -> list[Lost
     min_s = check_number(min_s, "min_s", above=0.0, error=RecordingError)
     six = np.concatenate([rec.acc, rec.gyr], axis=2)  # (S, N, 6)
     out = []
-    bad = ~np.isfinite(np.concatenate([six, rec.mag], axis=2)).all(axis=2)
+    nine = six if rec.mag is None else np.concatenate([six, rec.mag], axis=2)
+    bad = ~np.isfinite(nine).all(axis=2)
     zeros = ~six.any(axis=2)
     for kind, flags in (("missing", bad), ("zeros", zeros & ~bad)):
         for k in np.nonzero(flags.any(axis=1))[0]:
@@ -235,7 +236,8 @@ def bridge_lost(rec: ImuRecording, *, max_s: float = MAX_BRIDGE_S, min_s: float 
     found = lost_stretches(rec, min_s=min_s)
     if not found:
         return rec, []
-    arrays = {name: getattr(rec, name).copy() for name in ("acc", "gyr", "mag")}
+    arrays = {name: getattr(rec, name).copy() for name in ("acc", "gyr", "mag")
+              if getattr(rec, name) is not None}
     lost = np.zeros((len(rec.sensors), rec.n), bool)
     for h in found:
         stop = h.first + h.count

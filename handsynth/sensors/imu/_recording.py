@@ -88,7 +88,11 @@ class ImuRecording:
     sensors : tuple of str, length S
     acc : ndarray, shape (S, N, 3), m/s^2
     gyr : ndarray, shape (S, N, 3), rad/s
-    mag : ndarray, shape (S, N, 3), uT
+    mag : ndarray, shape (S, N, 3), uT, or None
+        None: 6-axis sensors (accelerometer and gyro only, no magnetometer);
+        the sensors' headings then come from the common rotation
+        (:func:`initial_attitude`), and the estimators that need a compass
+        refuse the recording.
     truth : ImuTruth or None
     segments : tuple of (str, int, int)
         Labelled stretches (label, first sample, end sample), e.g. the
@@ -109,7 +113,7 @@ class ImuRecording:
     sensors: tuple
     acc: np.ndarray
     gyr: np.ndarray
-    mag: np.ndarray
+    mag: np.ndarray | None
     truth: ImuTruth | None = None
     segments: tuple = ()
     start_s: float = 0.0
@@ -141,6 +145,8 @@ class ImuRecording:
         s = len(sensors)
         for name in ("acc", "gyr", "mag"):
             value = getattr(self, name)
+            if name == "mag" and value is None:
+                continue
             try:
                 a = np.ascontiguousarray(value, dtype=np.float64)
             except (TypeError, ValueError):
@@ -156,9 +162,15 @@ class ImuRecording:
                 raise RecordingError(f"{name} has shape {a.shape}, expected (S, N, 3) with "
                                      f"S = len(sensors) = {s}{hint}")
             object.__setattr__(self, name, a)
-        if not self.acc.shape[1] == self.gyr.shape[1] == self.mag.shape[1]:
+        mag_shape = self.gyr.shape if self.mag is None else self.mag.shape
+        if not self.acc.shape[1] == self.gyr.shape[1] == mag_shape[1]:
             raise RecordingError(f"acc, gyr and mag must have as many samples, got shapes "
-                                 f"{self.acc.shape}, {self.gyr.shape} and {self.mag.shape}")
+                                 f"{self.acc.shape}, {self.gyr.shape} and {mag_shape}")
+
+    @property
+    def has_mag(self) -> bool:
+        """Whether the sensors read a magnetometer (False: 6-axis sensors)."""
+        return self.mag is not None
 
     def labelled(self) -> tuple:
         """The labelled stretches: `segments`, else the truth's, else ()."""
@@ -185,14 +197,15 @@ class ImuRecording:
     def subset(self, sensors) -> ImuRecording:
         """The recording of `sensors` only (truth dropped)."""
         idx = [self.index(s) for s in sensors]
-        return ImuRecording(self.rate_hz, tuple(sensors), self.acc[idx], self.gyr[idx], self.mag[idx],
-                            start_s=self.start_s)
+        return ImuRecording(self.rate_hz, tuple(sensors), self.acc[idx], self.gyr[idx],
+                            None if self.mag is None else self.mag[idx], start_s=self.start_s)
 
     def slice(self, start: int, stop: int) -> ImuRecording:
         """Samples ``start:stop`` (truth dropped)."""
         first = range(self.n)[start:stop].start if self.n else 0
         return ImuRecording(self.rate_hz, self.sensors, self.acc[:, start:stop],
-                            self.gyr[:, start:stop], self.mag[:, start:stop],
+                            self.gyr[:, start:stop],
+                            None if self.mag is None else self.mag[:, start:stop],
                             start_s=self.start_s + first / self.rate_hz)
 
 
@@ -255,7 +268,7 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
     s = len(rec.sensors)
     for name in ("acc", "gyr", "mag"):  # shapes and names were checked when `rec` was made
         a = getattr(rec, name)
-        if math.isfinite(float(np.sum(a))):  # the quick test; a finite sum needs finite values
+        if a is None or math.isfinite(float(np.sum(a))):  # the quick test; a finite sum needs finite values
             continue
         bad = ~np.isfinite(a)
         if bad.any():
@@ -309,15 +322,8 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
                 f"{source}: sensor {rec.sensors[k]!r} {name} axis {'xyz'[j]} is saturated "
                 f"(|value| {abs(a[k, i, j]):.4g} {unit} held at the full scale) for {run[0]} "
                 f"samples from sample {i}")
-    peak = _per_axis(np.max, np.abs(rec.mag))
-    k, j = np.unravel_index(int(np.argmax(peak)), peak.shape)
-    if peak[k, j] > _MAG_FULL_SCALE_UT:
-        i = int(np.argmax(np.abs(rec.mag[k, :, j])))
-        raise RecordingError(
-            f"{source}: sensor {rec.sensors[k]!r} mag axis {'xyz'[j]} reads {rec.mag[k, i, j]:.4g} "
-            f"uT at sample {i}, beyond any magnetometer's full scale ({_MAG_FULL_SCALE_UT:g} uT; "
-            "the Earth's field is 25-65 uT): a damaged sample, or the magnetometer units "
-            "(--mag-units)")
+    if rec.mag is not None:
+        _check_mag_range(rec, source)
     # a gyro at exactly 0 while its own accelerometer's readings change: the accelerometer
     # shows the sensor alive (noise or motion), the gyro is dead.  A noise-free simulation
     # of a still hand reads 0 and a constant gravity, and is left alone.
@@ -370,6 +376,33 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
             f"by {acc_spread[k]:.3g} m/s^2: {gyr_spread[k] / np.radians(0.1):.3g} times a MEMS "
             "gyro's noise at rest (about 0.1 deg/s); deg/s given as rad/s? (gyro units "
             "'deg/s', --gyr-units deg/s)")
+    if rec.mag is not None:
+        warnings.extend(_check_mag_field(rec, source))
+    # what was reported for this object, so that an estimator's run does not repeat it
+    object.__setattr__(rec, "reported", (rec.reported or frozenset()) | frozenset(warnings))
+    return warnings
+
+
+def _check_mag_range(rec: ImuRecording, source: str) -> None:
+    """Refuse a magnetometer reading beyond any magnetometer's full scale."""
+    assert rec.mag is not None
+    peak = _per_axis(np.max, np.abs(rec.mag))
+    k, j = np.unravel_index(int(np.argmax(peak)), peak.shape)
+    if peak[k, j] > _MAG_FULL_SCALE_UT:
+        i = int(np.argmax(np.abs(rec.mag[k, :, j])))
+        raise RecordingError(
+            f"{source}: sensor {rec.sensors[k]!r} mag axis {'xyz'[j]} reads {rec.mag[k, i, j]:.4g} "
+            f"uT at sample {i}, beyond any magnetometer's full scale ({_MAG_FULL_SCALE_UT:g} uT; "
+            "the Earth's field is 25-65 uT): a damaged sample, or the magnetometer units "
+            "(--mag-units)")
+
+
+def _check_mag_field(rec: ImuRecording, source: str) -> list[str]:
+    """Refuse dead magnetometers and a field of the wrong units; warn about disturbances and
+    magnetometer axes that are not the accelerometer's."""
+    assert rec.mag is not None
+    s, rate = len(rec.sensors), rec.rate_hz
+    warnings: list[str] = []
     field_norm = np.sqrt(np.einsum("snk,snk->sn", rec.mag, rec.mag))
     per_sensor = np.median(field_norm, axis=1)
     if np.all(per_sensor <= 0):
@@ -395,8 +428,6 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
                 f"sensor {rec.sensors[k]!r}: magnetic field strength departs >15 % from "
                 f"{med:.1f} uT during {i.size / rate:.2f} s from t={i[0] / rate:.2f} s "
                 "(magnetic disturbance)")
-    # what was reported for this object, so that an estimator's run does not repeat it
-    object.__setattr__(rec, "reported", (rec.reported or frozenset()) | frozenset(warnings))
     return warnings
 
 
@@ -465,7 +496,7 @@ def _check_mag_axes(rec: ImuRecording) -> list[str]:
     """
     w = max(1, int(0.5 * rec.rate_hz))
     m = rec.n // w
-    if m < 4:
+    if m < 4 or rec.mag is None:
         return []
     s = len(rec.sensors)
     acc = rec.acc[:, :m * w].reshape(s, m, w, 3).mean(axis=2)
@@ -618,7 +649,8 @@ def write_imu_csv(rec: ImuRecording, path) -> None:
     rec : ImuRecording
         Its samples are written (``time_s`` = ``start_s`` + sample index /
         ``rate_hz``, s, to the microsecond;
-        acc m/s^2, gyr rad/s, mag uT; 9 significant digits) and its rate in the
+        acc m/s^2, gyr rad/s, mag uT (none for 6-axis sensors); 9 significant digits)
+        and its rate in the
         comment line (``rate_hz``, 6 significant digits); its truth and
         ``segments`` are not written.
     path : str or os.PathLike
@@ -643,12 +675,12 @@ def write_imu_csv(rec: ImuRecording, path) -> None:
                 "non-empty, without surrounding space and without ',', ';', tab, quotes or "
                 "line breaks")
     path = Path(path)
-    cols = ["time_s"] + [f"{s}_{c}_{a}" for s in rec.sensors for c in ("acc", "gyr", "mag")
-                         for a in _AXES]
+    channels = ("acc", "gyr") if rec.mag is None else ("acc", "gyr", "mag")
+    cols = ["time_s"] + [f"{s}_{c}_{a}" for s in rec.sensors for c in channels for a in _AXES]
     data = [sample_times(rec)]
     for k in range(len(rec.sensors)):
-        for arr in (rec.acc, rec.gyr, rec.mag):
-            data.extend(arr[k].T)
+        for c in channels:
+            data.extend(getattr(rec, c)[k].T)
     table = np.column_stack(data)
     with atomic_open(path, "w", what="IMU recording", newline="") as f:
         f.write(f"# handsynth imu recording; acc m/s2, gyr rad/s, mag uT; rate_hz={rec.rate_hz:g}\n")
@@ -701,13 +733,17 @@ def _columns(header, col, path) -> tuple[dict[str, int], list[str], str | None, 
     if not sensors:
         raise RecordingError(f"{path}: no '<sensor>_acc_x' column found (nor a column named "
                              f"like 'hand1 AccX' or 'hand1.accel.x')")
-    channels = [f"{s}_{c}_{a}" for s in sensors for c in ("acc", "gyr", "mag") for a in _AXES]
+    mags = [f"{s}_mag_{a}" for s in sensors for a in _AXES]
+    six_axis = not any(name in col for name in mags)  # accelerometer and gyro only
+    channels = [f"{s}_{c}_{a}" for s in sensors for c in (("acc", "gyr") if six_axis else
+                                                          ("acc", "gyr", "mag")) for a in _AXES]
     missing = [name for name in channels if name not in col]
-    if missing and set(missing) == {f"{s}_mag_{a}" for s in sensors for a in _AXES}:
+    if missing and all(name.rsplit("_", 2)[-2] == "mag" for name in missing):
+        without = list(dict.fromkeys(name.rsplit("_", 2)[0] for name in missing))
         raise RecordingError(
-            f"{path}: no magnetometer column for any of its {len(sensors)} sensor(s) (such as "
-            f"{sensors[0]}_mag_x): the IMU methods here need 9-axis sensors (accelerometer, gyro "
-            "and magnetometer, MPU-9250-like); 6-axis recordings are not read")
+            f"{path}: no magnetometer column for sensor(s) {', '.join(without[:4])}"
+            f"{', ...' if len(without) > 4 else ''} (such as {missing[0]}) while other sensors "
+            "have them: give every sensor's magnetometer, or none (a 6-axis recording)")
     if missing:
         raise RecordingError(f"{path}: missing column(s) {', '.join(missing[:6])}")
     time_name = "time_s" if "time_s" in col else "time_ms" if "time_ms" in col else None
@@ -804,7 +840,8 @@ def read_imu_csv(path, *, acc_units: str = "m/s2", gyr_units: str = "rad/s",
     """Read a CSV recording with per-sensor columns.
 
     Columns: ``time_s`` (or ``time_ms``) and, for every sensor,
-    ``<sensor>_acc_x`` .. ``<sensor>_mag_z``; other columns (a note, a
+    ``<sensor>_acc_x`` .. ``<sensor>_mag_z``; a file with no magnetometer
+    column at all is a recording of 6-axis sensors (``mag`` None); other columns (a note, a
     date) are ignored; lines starting with ``#`` are
     comments.  A file with none of these names is read by what its names
     mean, with a warning listing them: a sensor, a channel (``acc``,
@@ -838,7 +875,8 @@ def read_imu_csv(path, *, acc_units: str = "m/s2", gyr_units: str = "rad/s",
     Raises
     ------
     RecordingError
-        Missing file or columns, a column named twice, non-numeric cells,
+        Missing file or columns (magnetometer columns for some sensors but
+        not others), a column named twice, non-numeric cells,
         time stamps that go back, repeat (unless coarser than the sampling period:
         integer milliseconds at 1024 Hz) or leave a gap, a time column whose rate is
         not an IMU's (0.5 Hz - 100 kHz: milliseconds under ``time_s``?),
@@ -927,8 +965,9 @@ def read_imu_csv(path, *, acc_units: str = "m/s2", gyr_units: str = "rad/s",
         return np.stack([np.column_stack([table[:, pos[f"{s}_{ch}_{a}"]] for a in _AXES])
                          for s in sensors]) * f
 
+    six_axis = not any(name.endswith("_mag_x") for name in needed)
     return ImuRecording(float(rate), tuple(sensors), block("acc", acc_units),
-                        block("gyr", gyr_units), block("mag", mag_units),
+                        block("gyr", gyr_units), None if six_axis else block("mag", mag_units),
                         start_s=float(t[0]) if time_name is not None else 0.0)
 
 

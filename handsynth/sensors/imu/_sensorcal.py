@@ -134,9 +134,9 @@ class SensorCalibration:
                         rec.acc - self.acc_bias_mps2[idx][:, None, :])
         gyr = np.einsum("sij,snj->sni", self.gyr_matrix[idx], rec.gyr) if gyro else rec.gyr
         mag = rec.mag
-        if self.mag_matrix is not None and self.mag_bias_ut is not None:
+        if mag is not None and self.mag_matrix is not None and self.mag_bias_ut is not None:
             mag = np.einsum("sij,snj->sni", self.mag_matrix[idx],
-                            rec.mag - self.mag_bias_ut[idx][:, None, :])
+                            mag - self.mag_bias_ut[idx][:, None, :])
         return dataclasses.replace(rec, acc=acc, gyr=gyr, mag=mag)
 
 
@@ -275,6 +275,9 @@ def fit_sensor_calibration(rec: ImuRecording, *, skip_s: float = 0.3, prior: flo
                            mag_warn: float = 0.02) -> SensorCalibration:
     """Fit accelerometer, gyro and magnetometer corrections from still poses.
 
+    A recording of 6-axis sensors (``rec.mag`` None) gets the accelerometer
+    and gyro corrections only (the magnetometer fields None).
+
     Parameters
     ----------
     rec : ImuRecording
@@ -330,7 +333,9 @@ def fit_sensor_calibration(rec: ImuRecording, *, skip_s: float = 0.3, prior: flo
     spans = [(first + skip, end) for first, end in poses]
     means = np.stack([rec.acc[:, i:j].mean(axis=1) for i, j in spans], axis=1)   # (S, K, 3)
     wbias = np.stack([rec.gyr[:, i:j].mean(axis=1) for i, j in spans], axis=1)
-    mmeans = np.stack([rec.mag[:, i:j].mean(axis=1) for i, j in spans], axis=1)
+    mags = rec.mag  # None: 6-axis sensors, no magnetometer to calibrate
+    mmeans = (None if mags is None else
+              np.stack([mags[:, i:j].mean(axis=1) for i, j in spans], axis=1))
     length = max(b1 - (b0 - 1) for (_, b0), (_, b1) in zip(poses[:-1], spans[1:]))
     out: dict[str, list] = {k: [] for k in _SHAPES}
     for k, name in enumerate(rec.sensors):
@@ -342,13 +347,15 @@ def fit_sensor_calibration(rec: ImuRecording, *, skip_s: float = 0.3, prior: flo
             w = rec.gyr[k, b0 - 1:a1] - wbias[k, m]
             moves[m, :len(w)] = w                       # zero-padded: no rotation after
         g, rg = _fit_gyr(moves, up[:-1], up[1:], rec.rate_hz, prior)
-        d, h, rm = _fit_mag(mmeans[k], up, mag_prior)
+        d, h, rm = (np.eye(3), np.zeros(3), 0.0) if mmeans is None else \
+            _fit_mag(mmeans[k], up, mag_prior)
         for label, mat, most in (("accelerometer", c, max_correction),
                                  ("gyro", g, max_correction),
                                  ("magnetometer", d, mag_max_correction)):
             dev = float(np.abs(mat - np.eye(3)).max())
             if not np.isfinite(dev) or dev > most:
-                axes = _mag_axes_hint(mmeans[k], up) if label == "magnetometer" else None
+                axes = (_mag_axes_hint(mmeans[k], up) if label == "magnetometer"
+                        and mmeans is not None else None)
                 raise EstimationError(
                     f"sensor {name!r}: {label} calibration deviates {dev:.3g} from the identity "
                     f"(limit {most}); " + (
@@ -365,4 +372,5 @@ def fit_sensor_calibration(rec: ImuRecording, *, skip_s: float = 0.3, prior: flo
                       f"the field's length; limit {mag_warn:.0%}): a magnetic disturbance during "
                       "the poses? Those sensors' headings will be off; calibrate away from iron",
                       UserWarning, stacklevel=2)
-    return SensorCalibration(tuple(rec.sensors), **{k: np.array(v) for k, v in out.items()})
+    fitted = {k: np.array(v) for k, v in out.items() if mmeans is not None or k not in _MAG}
+    return SensorCalibration(tuple(rec.sensors), **fitted)

@@ -127,9 +127,10 @@ def test_csv_gap_and_bad_cells(tmp_path, free_rec):
 
 
 
-def test_a_recording_without_magnetometers_is_named_as_six_axis(tmp_path, free_rec):
+def test_a_recording_without_magnetometers_is_read_as_six_axis(tmp_path, free_rec):
     p = tmp_path / "rec.csv"
-    write_imu_csv(free_rec.subset(("forearm_1", "index_distal")).slice(0, 50), p)
+    rec = free_rec.subset(("forearm_1", "index_distal")).slice(0, 50)
+    write_imu_csv(rec, p)
     lines = p.read_text().splitlines()
     start = next(i for i, line in enumerate(lines) if not line.startswith("#"))
     header = lines[start].split(",")
@@ -141,13 +142,25 @@ def test_a_recording_without_magnetometers_is_named_as_six_axis(tmp_path, free_r
                                                    for line in lines[start:]]) + "\n")
         return out
 
-    with pytest.raises(RecordingError, match=r"^.*six.csv: no magnetometer column for any of its 2 "
-                                             r"sensor\(s\) \(such as forearm_1_mag_x\): .*9-axis"):
-        read_imu_csv(write("six.csv", keep))
-    # one sensor's magnetometer missing is a missing column, named
+    six = read_imu_csv(write("six.csv", keep))
+    assert six.mag is None and not six.has_mag and rec.has_mag
+    assert six.sensors == rec.sensors
+    np.testing.assert_allclose(six.gyr, rec.gyr, rtol=1e-8)
+    np.testing.assert_allclose(six.acc, rec.acc, rtol=1e-8)
+    # written back without magnetometer columns, read back the same
+    write_imu_csv(six, tmp_path / "again.csv")
+    assert "_mag_" not in (tmp_path / "again.csv").read_text()
+    again = read_imu_csv(tmp_path / "again.csv")
+    assert again.mag is None and np.array_equal(again.gyr, six.gyr)
+    # one sensor's magnetometer missing while the other has one: named, not read as 6-axis
     one = [i for i, h in enumerate(header) if not h.startswith("index_distal_mag_")]
-    with pytest.raises(RecordingError, match=r"one.csv: missing column\(s\) index_distal_mag_x, "):
+    with pytest.raises(RecordingError, match=r"one.csv: no magnetometer column for sensor\(s\) "
+                                             r"index_distal \(such as index_distal_mag_x\) while "
+                                             r"other sensors have them"):
         read_imu_csv(write("one.csv", one))
+    # a part of a 6-axis recording stays 6-axis
+    assert six.subset(("index_distal",)).mag is None and six.slice(10, 20).mag is None
+
 
 def test_a_recording_is_written_whole_or_not_at_all(tmp_path, free_rec, full_disk):
     # issue 16: every output goes through the atomic writer (a missing folder or a full
