@@ -5,17 +5,19 @@ Usage::
     python scripts/study_imu_held.py [--seeds 1,2] [--sensors 3] [--broad DIR]
 
 One sensor's readings held (the reading before repeated in its place, as a logger does
-for samples lost on a wireless link) for 0.1, 0.2, 0.3, 0.5 and 1 s from a random time in
+for samples lost on a wireless link) for 0.1, 0.2, 0.3, 0.5, 1 and 2 s from a random time in
 a 15-s free motion: the tuning configuration and the held-out configuration's draws of
 ``--seeds`` (other devices, mounting errors and motions; ``scripts/study_imu_draws.py``),
 elbow fixed and moving, ``--sensors`` random sensors per hold, Filter 4 with the
 calibration of ``handsynth imu eval``.  Per configuration and hold: the joint-angle RMSE
 and the worst segment's orientation RMSE of the recording as it was, read with the held
 readings (the check turned off for this), with them bridged from the other sensors
-(:func:`handsynth.sensors.imu.bridge_lost`, beyond its limit for the 1-s holds) and
-bridged by straight lines alone (``predict=False``).  Then how many held stretches
+(:func:`handsynth.sensors.imu.bridge_lost`, beyond its limit for the 2-s holds), the same
+without Filter 4 loosening the held sensor's attitude over the filled samples (``filled``
+dropped: as before it did) and bridged by straight lines alone (``predict=False``).
+Then how many held stretches
 :func:`~handsynth.sensors.imu.lost_stretches` finds in the recordings as made (none is
-right), and with ``--broad DIR`` in BROAD's real trials.  About 10 min for two seeds.
+right), and with ``--broad DIR`` in BROAD's real trials.  About 15 min for two seeds.
 Last line: ``false_alarms=<n> recordings=<n> broad_trials=<n> broad_flagged=<n>``.
 """
 
@@ -40,7 +42,7 @@ from handsynth.sensors.imu import (
 )
 from handsynth.sensors.imu._eval import _calibrate, free_trials
 
-_HOLDS_S = (0.1, 0.2, 0.3, 0.5, 1.0)
+_HOLDS_S = (0.1, 0.2, 0.3, 0.5, 1.0, 2.0)
 
 
 @contextlib.contextmanager
@@ -91,22 +93,26 @@ def main() -> None:
                     held = _held_copy(rec, int(k), start, round(hold * rec.rate_hz))
                     with _unchecked():
                         as_read = _scores(held, calib)
-                    bridged = _scores(bridge_lost(held, max_s=2.0)[0], calib)
-                    lines = _scores(bridge_lost(held, max_s=2.0, predict=False)[0], calib)
-                    rows.setdefault(hold, []).append((*clean, *as_read, *bridged, *lines))
+                    filled = bridge_lost(held, max_s=3.0)[0]
+                    bridged = _scores(filled, calib)
+                    tight = _scores(dataclasses.replace(filled, filled=None), calib)
+                    lines = _scores(bridge_lost(held, max_s=3.0, predict=False)[0], calib)
+                    rows.setdefault(hold, []).append((*clean, *as_read, *bridged, *lines, *tight))
                     print(f"{config.label} seed {config.seed} elbow {elbow} {rec.sensors[k]:17s} "
                           f"held {hold:.1f} s at {start / rec.rate_hz:5.2f} s: joints / worst "
                           f"segment {clean[0]:.2f} / {clean[1]:.2f} deg as recorded, "
                           f"{as_read[0]:.2f} / {as_read[1]:.2f} held, {bridged[0]:.2f} / "
-                          f"{bridged[1]:.2f} bridged, {lines[0]:.2f} / {lines[1]:.2f} by lines",
-                          flush=True)
+                          f"{bridged[1]:.2f} bridged, {tight[0]:.2f} / {tight[1]:.2f} bridged "
+                          f"not loosened, {lines[0]:.2f} / {lines[1]:.2f} by lines", flush=True)
         for hold, r in rows.items():
             a = np.array(r)
             print(f"{config.label} seed {config.seed}, held {hold:.1f} s ({len(a)}): joints "
                   f"{a[:, 0].mean():.2f} as recorded, {a[:, 2].mean():.2f} held, "
-                  f"{a[:, 4].mean():.2f} bridged, {a[:, 6].mean():.2f} by lines; worst segment "
+                  f"{a[:, 4].mean():.2f} bridged, {a[:, 8].mean():.2f} not loosened, "
+                  f"{a[:, 6].mean():.2f} by lines; worst segment "
                   f"{a[:, 1].mean():.2f}, held {a[:, 3].mean():.2f} (up to {a[:, 3].max():.1f}), "
-                  f"bridged {a[:, 5].mean():.2f} (up to {a[:, 5].max():.1f}), by lines "
+                  f"bridged {a[:, 5].mean():.2f} (up to {a[:, 5].max():.1f}), not loosened "
+                  f"{a[:, 9].mean():.2f} (up to {a[:, 9].max():.1f}), by lines "
                   f"{a[:, 7].mean():.2f} (up to {a[:, 7].max():.1f})", flush=True)
     trials = flagged = 0
     if args.broad:

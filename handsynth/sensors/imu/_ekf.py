@@ -101,6 +101,13 @@ class ChainEKFOptions:
         calibration warns of a disturbed pose, and below the change of about
         12 % that the held-out configuration's magnet makes to the field's
         strength at full strength (docs/imu.md, "Figures").
+    filled_rate : float
+        Process noise of a sensor's attitude, rad/s, over the samples filled
+        in for it (:attr:`ImuRecording.filled`, set by :func:`bridge_lost`),
+        added to `gyro_noise`: its attitude loosens while its readings are
+        made up, and the readings after the gap pull it back (not in the
+        thesis).  Default 1 rad/s: chosen on the tuning configuration
+        (``python scripts/study_imu_held.py``).
     bias_tau_s : float or None
         Time constant (s) of a gyro bias learnt from the filter's own
         corrections (not in the thesis): each step's correction of a sensor's
@@ -119,13 +126,15 @@ class ChainEKFOptions:
     demoted: float = 3.0
     mag_sd: float = 30.0
     mag_gate: float = 0.1
+    filled_rate: float = 1.0
     bias_tau_s: float | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.use_h2, (bool, np.bool_)):
             raise InvalidInputError(f"ChainEKFOptions.use_h2 must be True or False, got "
                                     f"{self.use_h2!r}")
-        for k in ("gyro_noise", "elbow_acc_sd", "acc_sd", "demoted", "mag_sd", "mag_gate"):
+        for k in ("gyro_noise", "elbow_acc_sd", "acc_sd", "demoted", "mag_sd", "mag_gate",
+                  "filled_rate"):
             check_number(getattr(self, k), f"ChainEKFOptions.{k}", above=0)
         for k in ("switch_dps", "bias_tau_s"):
             v = getattr(self, k)
@@ -381,11 +390,13 @@ class ChainEKF:
         p_cov = np.eye(nx) * 1e-4
         p_cov[-3:, -3:] = np.eye(3) * o.elbow_acc_sd**2
         qn = (o.gyro_noise * dt) ** 2
+        qn_filled = qn + (o.filled_rate * dt) ** 2
+        filled = np.zeros((s_n, n), bool) if rec.filled is None else rec.filled
         fast_w = np.degrees(np.linalg.norm(gyr, axis=-1)) >= (o.switch_dps or np.inf)
         if self.fast:
             from ._ekf_numba import run_fast
 
-            return run_fast(tree, q, gyr, dgyr, rec.acc, mag, dt, mh, fnorm0, rz, fast_w, o)
+            return run_fast(tree, q, gyr, dgyr, rec.acc, mag, dt, mh, fnorm0, rz, fast_w, filled, o)
         out = np.empty((s_n, n, 4))
         out[:, 0] = q
         bias = np.zeros((s_n, 3))                          # learnt beyond the static start's
@@ -393,7 +404,7 @@ class ChainEKF:
             w = 0.5 * (gyr[:, i] + gyr[:, i - 1]) - bias
             q = qnormalize(qmul(q, qexp(w * dt)))                           # eq. 5.10
             idx = np.arange(3 * s_n)
-            p_cov[idx, idx] += qn
+            p_cov[idx, idx] += np.where(np.repeat(filled[:, i], 3), qn_filled, qn)
             p_cov[-3:, :] = 0.0
             p_cov[:, -3:] = 0.0
             p_cov[-3:, -3:] = np.eye(3) * o.elbow_acc_sd**2                 # eq. 4.38

@@ -130,8 +130,8 @@ def observe_fast(tree, r, w, dw, a, mag, mh, fnorm0, rz, fast, options):
 
 @njit(cache=True)
 def _loop(q0, gyr, dgyr, acc, mag, dt, parent, order, anc, via, own, vpar, ppar, children, roots,
-          mh, fnorm0, rz, fast, use_h2, switch, acc_sd, demoted, mag_sd, mag_gate, qn, elbow_var,
-          bias_tau):
+          mh, fnorm0, rz, fast, use_h2, switch, acc_sd, demoted, mag_sd, mag_gate, qn, qn_filled,
+          filled, elbow_var, bias_tau):
     s_n, n = gyr.shape[0], gyr.shape[1]
     nx = 3 * s_n + 3
     out = np.empty((s_n, n, 4))
@@ -151,7 +151,7 @@ def _loop(q0, gyr, dgyr, acc, mag, dt, parent, order, anc, via, own, vpar, ppar,
             q[j] = qj / np.sqrt(np.sum(qj * qj))
             r[j] = _qmat(q[j])
         for k in range(3 * s_n):
-            p[k, k] += qn
+            p[k, k] += qn_filled if filled[k // 3, i] else qn
         p[3 * s_n:, :] = 0.0
         p[:, 3 * s_n:] = 0.0
         for k in range(3):
@@ -176,7 +176,7 @@ def _loop(q0, gyr, dgyr, acc, mag, dt, parent, order, anc, via, own, vpar, ppar,
     return out
 
 
-def run_fast(tree, q0, gyr, dgyr, acc, mag, dt, mh, fnorm0, rz, fast, options):
+def run_fast(tree, q0, gyr, dgyr, acc, mag, dt, mh, fnorm0, rz, fast, filled, options):
     """The whole filter loop compiled; the same arithmetic as :meth:`ChainEKF._run` with ``fast=False``."""
     o = options
     return _loop(np.ascontiguousarray(q0), np.ascontiguousarray(gyr), np.ascontiguousarray(dgyr),
@@ -184,4 +184,5 @@ def run_fast(tree, q0, gyr, dgyr, acc, mag, dt, mh, fnorm0, rz, fast, options):
                  tree.anc, tree.via, tree.own, tree.vpar, tree.ppar, tree.children, tree.roots,
                  mh, fnorm0, rz, np.ascontiguousarray(fast), o.use_h2, o.switch_dps is not None,
                  o.acc_sd, o.demoted, o.mag_sd, o.mag_gate, (o.gyro_noise * dt) ** 2,
-                 o.elbow_acc_sd**2, o.bias_tau_s or 0.0)
+                 (o.gyro_noise * dt) ** 2 + (o.filled_rate * dt) ** 2,
+                 np.ascontiguousarray(filled), o.elbow_acc_sd**2, o.bias_tau_s or 0.0)

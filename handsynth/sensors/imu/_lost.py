@@ -53,7 +53,9 @@ HELD_TURNING_RADPS = 0.05
 #: Longest hold :func:`bridge_lost` fills in, s.  Chosen on the tuning configuration
 #: (``scripts/study_imu_held.py``; worst segment 0.75 deg as recorded): holds bridged
 #: from the other sensors read 1.13 deg at 0.3 s, 2.12 at 0.5 s and 10.3 at 1 s (within
-#: 1.5 deg of the recording on average up to 0.5 s).
+#: 1.5 deg of the recording on average up to 0.5 s); with Filter 4 loosening the filled
+#: samples' attitude (:attr:`ChainEKFOptions.filled_rate`) 0.76, 1.21 and 3.04 deg, by
+#: the same rule the same limit.
 MAX_BRIDGE_S = 0.5
 #: Most samples the prediction of a held sensor is fitted on (evenly spread), for speed.
 _MAX_FIT_ROWS = 50_000
@@ -199,9 +201,11 @@ def bridge_lost(rec: ImuRecording, *, max_s: float = MAX_BRIDGE_S, min_s: float 
     prediction misses is drawn as a straight line between its values at the reading
     held (the sample before the hold) and at the first new one; the magnetometer, and
     every channel without `predict`, is drawn as a straight line between those two
-    readings.  On the held-out configuration (seed 1) a sensor held 0.3 s put the
-    worst segment at 13.76 deg, bridged 4.65 (straight lines alone 7.51; as recorded
-    3.15); held 0.5 s 24.66, bridged 8.20 (docs/imu.md, "Readings held by the logger").
+    readings.  The samples filled in are marked (``filled`` of the recording
+    returned), and Filter 4 loosens the sensor's attitude over them.  On the held-out
+    configuration (seed 1) a sensor held 0.3 s put the worst segment at 13.76 deg,
+    bridged 3.16 (straight lines alone 3.55; as recorded 3.15); held 0.5 s 24.66,
+    bridged 3.53 (docs/imu.md, "Readings held by the logger").
 
     Parameters
     ----------
@@ -265,7 +269,8 @@ def bridge_lost(rec: ImuRecording, *, max_s: float = MAX_BRIDGE_S, min_s: float 
                     a = arrays[name]  # the readings themselves at first - 1 and stop
                     a[k, first:stop] = p[first:stop] + _between(
                         a[k, first - 1] - p[first - 1], a[k, stop] - p[stop], h.count)
-    return dataclasses.replace(rec, **arrays), found
+    filled = lost if rec.filled is None else rec.filled | lost
+    return dataclasses.replace(rec, **arrays, filled=filled), found
 
 
 def _between(before: np.ndarray, after: np.ndarray, count: int) -> np.ndarray:

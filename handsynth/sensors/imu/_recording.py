@@ -102,6 +102,10 @@ class ImuRecording:
         Time of the first sample, s, as the recording's time column gave it
         (0 for a simulation and a file without one): sample ``i`` is at
         ``start_s + i / rate_hz``.  Outputs are stamped in these times.
+    filled : ndarray of bool, shape (S, N), or None
+        Samples that were not read but filled in (:func:`bridge_lost` sets
+        it); Filter 4 lets those sensors' attitudes loosen meanwhile, so that
+        the readings after the gap pull them back.  None: every sample read.
     reported : frozenset of str or None
         The warnings :func:`check_recording` has returned for this object;
         None before it was checked (when made, and for a copy made with
@@ -117,6 +121,7 @@ class ImuRecording:
     truth: ImuTruth | None = None
     segments: tuple = ()
     start_s: float = 0.0
+    filled: np.ndarray | None = None
     reported: frozenset | None = field(default=None, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -162,6 +167,12 @@ class ImuRecording:
                 raise RecordingError(f"{name} has shape {a.shape}, expected (S, N, 3) with "
                                      f"S = len(sensors) = {s}{hint}")
             object.__setattr__(self, name, a)
+        if self.filled is not None:
+            f = np.asarray(self.filled)
+            if f.dtype != bool or f.shape != self.gyr.shape[:2]:
+                raise RecordingError(f"filled must be booleans of shape (S, N) = "
+                                     f"{self.gyr.shape[:2]}, got {f.dtype} of shape {f.shape}")
+            object.__setattr__(self, "filled", np.ascontiguousarray(f))
         mag_shape = self.gyr.shape if self.mag is None else self.mag.shape
         if not self.acc.shape[1] == self.gyr.shape[1] == mag_shape[1]:
             raise RecordingError(f"acc, gyr and mag must have as many samples, got shapes "
@@ -198,7 +209,8 @@ class ImuRecording:
         """The recording of `sensors` only (truth dropped)."""
         idx = [self.index(s) for s in sensors]
         return ImuRecording(self.rate_hz, tuple(sensors), self.acc[idx], self.gyr[idx],
-                            None if self.mag is None else self.mag[idx], start_s=self.start_s)
+                            None if self.mag is None else self.mag[idx], start_s=self.start_s,
+                            filled=None if self.filled is None else self.filled[idx])
 
     def slice(self, start: int, stop: int) -> ImuRecording:
         """Samples ``start:stop`` (truth dropped)."""
@@ -206,7 +218,8 @@ class ImuRecording:
         return ImuRecording(self.rate_hz, self.sensors, self.acc[:, start:stop],
                             self.gyr[:, start:stop],
                             None if self.mag is None else self.mag[:, start:stop],
-                            start_s=self.start_s + first / self.rate_hz)
+                            start_s=self.start_s + first / self.rate_hz,
+                            filled=None if self.filled is None else self.filled[:, start:stop])
 
 
 def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_MPS2,

@@ -89,6 +89,46 @@ def test_compiled_loop_equals_reference_loop(moving_rec, bias_tau_s):
     assert angle_deg(fast, ref).max() < 1e-4  # arccos resolution near 0
 
 
+
+def test_compiled_loop_equals_reference_loop_over_filled_samples(moving_rec):
+    import dataclasses
+
+    model = truth_chain_model(moving_rec)
+    filled = np.zeros((20, 450), bool)
+    filled[14, 250:300] = filled[3, 260:280] = True
+    short = dataclasses.replace(moving_rec.slice(0, 450), filled=filled)
+    fast = ChainEKF(model).run(short)
+    ref = ChainEKF(model, fast=False).run(short)
+    assert angle_deg(fast, ref).max() < 1e-4  # arccos resolution near 0
+    # the mark changes the filter only where it loosens: before the first filled sample,
+    # the same attitudes as without it
+    plain = ChainEKF(model).run(moving_rec.slice(0, 450))
+    assert angle_deg(fast[:, :250], plain[:, :250]).max() < 1e-4
+    assert angle_deg(fast[:, 250:], plain[:, 250:]).max() > 1e-3
+
+
+def test_a_sensor_bridged_comes_back_after_the_gap(imu_hand):
+    """A sensor held 0.5 s, bridged: with its attitude loosened over the filled samples the
+    readings after the gap pull it back; held tight (as before) it stays off."""
+    import dataclasses
+
+    from handsynth.sensors.imu import bridge_lost
+
+    rec = simulate_imu(free_motion(9.0, seed=4, elbow="moving"), hand=imu_hand, seed=8)
+    k, start, n = rec.index("index_middle"), 560, 50
+    arrays = {name: getattr(rec, name).copy() for name in ("acc", "gyr", "mag")}
+    for a in arrays.values():
+        a[k, start:start + n] = a[k, start - 1]
+    out, _ = bridge_lost(dataclasses.replace(rec, **arrays))
+    model = truth_chain_model(rec)
+    after = slice(start + n + 100, None)  # from 1 s after the gap on
+    truth = rec.truth.quat[k, after]
+    loose = angle_deg(ChainEKF(model).run(out)[k, after], truth)
+    tight = angle_deg(ChainEKF(model).run(dataclasses.replace(out, filled=None))[k, after], truth)
+    recorded = angle_deg(ChainEKF(model).run(rec)[k, after], truth)
+    rms = [float(np.sqrt(np.mean(e**2))) for e in (loose, tight, recorded)]
+    assert rms[0] < 0.5 * rms[1] and rms[0] < rms[2] + 1.0, rms
+
 @pytest.mark.slow
 def test_filter4b_learns_a_gyro_bias_that_drifts(imu_hand):
     """A gyro bias drifting by up to 1 deg/s per minute: Filter 4 drifts with it, filter4b much less."""

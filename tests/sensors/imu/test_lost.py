@@ -97,6 +97,26 @@ def test_bridging_from_the_other_sensors_comes_closer_to_what_was_lost(free_rec,
                                atol=1e-9)
 
 
+
+def test_the_samples_filled_in_are_marked(free_rec):
+    rec = _held(_held(free_rec, "ring_middle", 500, 15), "thumb_distal", 800, 30)
+    assert rec.filled is None
+    out, _ = bridge_lost(rec)
+    expected = np.zeros((len(rec.sensors), rec.n), bool)
+    expected[rec.index("ring_middle"), 500:515] = True
+    expected[rec.index("thumb_distal"), 800:830] = True
+    np.testing.assert_array_equal(out.filled, expected)
+    # kept by a part of the recording, for the sensors and samples kept
+    part = out.subset(("thumb_distal", "ring_middle")).slice(790, 900)
+    np.testing.assert_array_equal(part.filled, expected[[rec.index("thumb_distal"),
+                                                         rec.index("ring_middle")], 790:900])
+    # a mark of the wrong shape or type is refused when the recording is made
+    with pytest.raises(RecordingError, match=r"filled must be booleans of shape \(S, N\) = "
+                                             r"\(20, 1200\), got bool of shape \(20, 10\)"):
+        dataclasses.replace(out, filled=np.zeros((20, 10), bool))
+    with pytest.raises(RecordingError, match=r"filled must be booleans .* got float64"):
+        dataclasses.replace(out, filled=np.zeros((20, 1200)))
+
 def test_bridging_refuses_what_a_line_cannot_fill(free_rec):
     too_long = _held(free_rec, "thumb_distal", 400, round(2 * MAX_BRIDGE_S * free_rec.rate_hz))
     with pytest.raises(RecordingError, match=r"^f.csv: sensor 'thumb_distal'.*longer than the "
