@@ -664,8 +664,8 @@ def write_imu_csv(rec: ImuRecording, path) -> None:
         ``rate_hz``, s, to the microsecond;
         acc m/s^2, gyr rad/s, mag uT (none for 6-axis sensors); 9 significant digits)
         and its rate in the
-        comment line (``rate_hz``, 6 significant digits); its truth and
-        ``segments`` are not written.
+        comment line (``rate_hz``, 6 significant digits); its truth,
+        ``segments`` and ``filled`` are not written.
     path : str or os.PathLike
         The file written.
 
