@@ -19,8 +19,12 @@ def _unit_options(f):
     f = click.option("--bridge-lost", is_flag=True,
                      help="Fill in samples the logger lost (a sensor repeating its last "
                           "reading for 0.1 s or more, zeros, empty cells) from the other "
-                          "sensors' readings, up to 0.5 s; without it such a recording is "
-                          "refused.")(f)
+                          "sensors' readings, up to 0.5 s (--bridge-max); without it such "
+                          "a recording is refused.")(f)
+    f = click.option("--bridge-max", "bridge_max_s", type=float, default=None, metavar="SECONDS",
+                     help="Longest stretch --bridge-lost fills in, s [default: 0.5]; longer "
+                          "ones read further off (held-out, a sensor's 1-s hold bridged: worst "
+                          "segment 3.6-4.3 deg against 2.8-3.2 as recorded; 2 s: 5.5-8.5).")(f)
     f = click.option("--gyr-range", "gyr_range_dps", type=float, default=2000.0, show_default=True,
                      help="Gyro full-scale range, deg/s (saturation check).")(f)
     f = click.option("--acc-range", "acc_range_g", type=float, default=16.0, show_default=True,
@@ -36,17 +40,30 @@ def _unit_options(f):
     return f
 
 
-def _read(recording, *, acc_units, gyr_units, mag_units, rate_hz, bridge_lost):
+def _read(recording, *, acc_units, gyr_units, mag_units, rate_hz, bridge_lost, bridge_max_s):
     """The CSV recording read, the samples it lost filled in when `bridge_lost` (with a warning)."""
-    from ..sensors.imu import bridge_lost as bridge
-    from ..sensors.imu import read_imu_csv
+    import math
 
+    from ..errors import InvalidInputError
+    from ..sensors.imu import MAX_BRIDGE_S, read_imu_csv
+    from ..sensors.imu import bridge_lost as bridge
+
+    if bridge_max_s is not None:
+        if not bridge_lost:
+            raise InvalidInputError("--bridge-max needs --bridge-lost")
+        if not (math.isfinite(bridge_max_s) and bridge_max_s > 0):
+            raise InvalidInputError(f"--bridge-max must be a number of seconds > 0, got "
+                                    f"{bridge_max_s:g}")
     rec = read_imu_csv(recording, acc_units=acc_units, gyr_units=gyr_units, mag_units=mag_units,
                        rate_hz=rate_hz)
     if bridge_lost:
-        rec, bridged = bridge(rec, source=str(recording))
+        limit = MAX_BRIDGE_S if bridge_max_s is None else bridge_max_s
+        rec, bridged = bridge(rec, max_s=limit, source=str(recording))
         for h in bridged:
-            click.echo(f"handsynth: warning: {recording}: bridged: {h.describe()}", err=True)
+            beyond = (f" (longer than the {MAX_BRIDGE_S:g} s bridged by default: that sensor "
+                      "reads further off)" if h.duration_s > MAX_BRIDGE_S else "")
+            click.echo(f"handsynth: warning: {recording}: bridged: {h.describe()}{beyond}",
+                       err=True)
     return rec
 
 
@@ -198,7 +215,7 @@ def eval_(config_name, filters, durations, elbows, no_grasps, no_sensor_calibrat
 @click.option("--side", type=click.Choice(("right", "left")), default="right", show_default=True,
               help="The hand the sensors are on; 'track' reads its joint angles as that hand's.")
 def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz, acc_range_g,
-              gyr_range_dps, bridge_lost, out_path, side) -> None:
+              gyr_range_dps, bridge_lost, bridge_max_s, out_path, side) -> None:
     """Sensor-to-joint vectors, link vectors and link frames from a calibration RECORDING."""
     import dataclasses
 
@@ -210,7 +227,8 @@ def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz
     check_outputs([("--out", out_path)], inputs=inputs)
     full_scale = _full_scale(acc_range_g, gyr_range_dps)
     rec = _read(recording, acc_units=acc_units, gyr_units=gyr_units, mag_units=mag_units,
-                rate_hz=rate_hz, bridge_lost=bridge_lost)
+                rate_hz=rate_hz, bridge_lost=bridge_lost,
+                bridge_max_s=bridge_max_s)
     try:
         spans = json.loads(Path(segments_path).read_text(), object_pairs_hook=_unique_keys)
     except (OSError, ValueError) as exc:  # JSON and text decoding errors are ValueErrors
@@ -261,7 +279,8 @@ def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz
               help="Do not apply the calibration file's accelerometer/gyro/magnetometer "
                    "corrections (for readings already corrected).")
 def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_units, rate_hz,
-          acc_range_g, gyr_range_dps, bridge_lost, static_s, align, out_path, angles_out, tips_out,
+          acc_range_g, gyr_range_dps, bridge_lost, bridge_max_s, static_s, align, out_path,
+          angles_out, tips_out,
           no_sensor_calibration) -> None:
     """Orientation of every sensor of a CSV RECORDING (columns <sensor>_acc_x .. _mag_z)."""
     import dataclasses
@@ -300,7 +319,8 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
     static = StaticStart(static_s=static_s, align_start_s=a, align_end_s=b)
     full_scale = _full_scale(acc_range_g, gyr_range_dps)
     rec = _read(recording, acc_units=acc_units, gyr_units=gyr_units, mag_units=mag_units,
-                rate_hz=rate_hz, bridge_lost=bridge_lost)
+                rate_hz=rate_hz, bridge_lost=bridge_lost,
+                bridge_max_s=bridge_max_s)
     if static_s * rec.rate_hz > rec.n + 0.5:  # as check_static_fits, in the option's words
         raise RecordingError(f"{recording}: the static start --static {static_s:g} s is longer than "
                              f"the recording ({rec.n} samples, {rec.duration_s:.3g} s); shorten "

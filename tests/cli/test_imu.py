@@ -89,6 +89,37 @@ def test_track_refuses_readings_held_by_the_logger_unless_bridged(tmp_path, sim)
     assert q.shape == (rec.n, 9) and np.isfinite(q).all()
 
 
+
+def test_a_hold_longer_than_the_default_is_bridged_only_when_asked(tmp_path, sim):
+    rec = sim.subset(("forearm_1", "index_distal"))
+    arrays = {name: getattr(rec, name).copy() for name in ("acc", "gyr", "mag")}
+    for a in arrays.values():
+        a[1, 500:580] = a[1, 499]  # 0.8 s
+    src, out = tmp_path / "held.csv", tmp_path / "q.csv"
+    write_imu_csv(dataclasses.replace(rec, **arrays), src)
+    res = CliRunner().invoke(cli, ["imu", "track", str(src), "--filter", "raw", "--out", str(out)])
+    assert res.exit_code == 2 and "cut the recording there (longer than the 0.5 s bridged by " \
+        "default; --bridge-lost --bridge-max SECONDS fills it in, further off)" in res.output
+    res = CliRunner().invoke(cli, ["imu", "track", str(src), "--filter", "raw", "--bridge-lost",
+                                   "--out", str(out)])
+    assert res.exit_code == 2 and "longer than the 0.5 s bridged (--bridge-max; library: max_s)" \
+        in res.output and not out.exists(), res.output
+    res = CliRunner().invoke(cli, ["imu", "track", str(src), "--filter", "raw", "--bridge-lost",
+                                   "--bridge-max", "1", "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    assert "for 0.8 s (80 samples) from t=5 s (sample 500)" in res.output
+    assert "meanwhile (longer than the 0.5 s bridged by default: that sensor reads further off)" \
+        in res.output, res.output
+    assert np.isfinite(np.loadtxt(out, delimiter=",", skiprows=1)).all()
+    for args, message in ((["--bridge-max", "1"], "--bridge-max needs --bridge-lost"),
+                          (["--bridge-lost", "--bridge-max", "0"],
+                           "--bridge-max must be a number of seconds > 0, got 0"),
+                          (["--bridge-lost", "--bridge-max", "nan"],
+                           "--bridge-max must be a number of seconds > 0, got nan")):
+        res = CliRunner().invoke(cli, ["imu", "track", str(src), "--filter", "raw", *args,
+                                       "--out", str(out)])
+        assert res.exit_code == 2 and res.output == f"handsynth: error: {message}\n", res.output
+
 def test_track_reads_empty_cells_as_samples_lost(tmp_path, sim):
     # before: "line 303: index_distal_acc_x is '', not a number", with no way to fill them
     rec = sim.subset(("forearm_1", "index_distal"))

@@ -253,7 +253,8 @@ def bridge_lost(rec: ImuRecording, *, max_s: float = MAX_BRIDGE_S, min_s: float 
                                  "nothing after it to bridge to; cut the recording before it")
         if h.duration_s > max_s:
             raise RecordingError(f"{source}: {h.describe()}: longer than the {max_s:g} s "
-                                 "bridged; cut the recording there")
+                                 "bridged (--bridge-max; library: max_s); cut the recording "
+                                 "there")
         k = rec.index(h.sensor)
         lost[k, h.first:stop] = True
         # straight lines first: what a prediction of another lost sensor reads meanwhile

@@ -300,8 +300,9 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
         more = f" ({len(lost)} such stretches, this the longest)" if len(lost) > 1 else ""
         how = ("the last one repeated by the logger (a wireless link's dropout?)"
                if h.kind == "held" else "written as zeros by the logger")
-        remedy = (f"cut the recording there (longer than the {MAX_BRIDGE_S:g} s that can be "
-                  "bridged)" if h.duration_s > MAX_BRIDGE_S else
+        remedy = (f"cut the recording there (longer than the {MAX_BRIDGE_S:g} s bridged by "
+                  "default; --bridge-lost --bridge-max SECONDS fills it in, further off)"
+                  if h.duration_s > MAX_BRIDGE_S else
                   "fill them in from the other sensors' readings (--bridge-lost; library: "
                   "bridge_lost) or cut the recording there")
         raise RecordingError(f"{source}: {h.describe()}{more}: samples lost and {how}, which "

@@ -56,7 +56,8 @@ def test_check_recording_refuses_held_readings_naming_sensor_and_time(free_rec):
     assert "from t=6 s (sample 600)" in msg and "--bridge-lost" in msg
     longer = _held(rec, "index_distal", 900, round((MAX_BRIDGE_S + 0.1) * rec.rate_hz))
     with pytest.raises(RecordingError, match=r"'index_distal'.*2 such stretches, this the "
-                                             r"longest.*longer than the 0.5 s that can be bridged"):
+                                             r"longest.*longer than the 0.5 s bridged by default; "
+                                             r"--bridge-lost --bridge-max SECONDS fills it in"):
         check_recording(longer)
 
 
