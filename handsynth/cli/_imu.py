@@ -105,7 +105,9 @@ def _full_scale(acc_range_g, gyr_range_dps) -> dict:
             "gyr_full_scale": math.radians(gyr_range_dps)}
 
 
-def _filters(values, allowed):
+def _filters(values, allowed, *, default=None):
+    """The filters named by the --filter values (`default`, else every one `allowed`, when
+    none is given)."""
     from ..errors import InvalidInputError
 
     names = tuple(dict.fromkeys(v.strip() for item in values for v in item.split(",") if v.strip()))
@@ -115,7 +117,7 @@ def _filters(values, allowed):
     for n in names:
         if n not in allowed:
             raise InvalidInputError(f"unknown filter {n!r}; expected one of {', '.join(allowed)}")
-    return names or allowed
+    return names or (allowed if default is None else default)
 
 
 @cli.group()
@@ -140,15 +142,19 @@ def imu() -> None:
 @click.option("--no-plate-fusion", is_flag=True,
               help="Keep each forearm plate sensor's own attitude (by default the three are "
                    "fused into one after every filter).")
+@click.option("--six-axis", is_flag=True,
+              help="Read every recording without its magnetometers (6-axis sensors; the "
+                   "filters that observe the compass are left out).")
 @click.option("--json", "json_out", type=click.Path(dir_okay=False),
               help="Write the full report as JSON.")
 @click.option("--plots", "plot_dir", type=click.Path(file_okay=False),
               help="Write orientation_error.png and stick_figure.png (last trial) here.")
 def eval_(config_name, filters, durations, elbows, no_grasps, no_sensor_calibration,
-          no_plate_fusion, json_out, plot_dir) -> None:
+          no_plate_fusion, six_axis, json_out, plot_dir) -> None:
     """Reproduce the thesis' tables on simulated data, beside trivial baselines."""
     from ..errors import InvalidInputError, OutputError
     from ..sensors.imu import (
+        COMPASS_FILTERS,
         FILTERS,
         HELDOUT,
         TUNING,
@@ -174,9 +180,10 @@ def eval_(config_name, filters, durations, elbows, no_grasps, no_sensor_calibrat
     config = HELDOUT if config_name == "heldout" else TUNING
     series: dict = {}
     rep = evaluate(config, durations=durations or (15.0, 30.0), elbows=elbows or ("fixed", "moving"),
-                   filters=_filters(filters, FILTERS), grasps=not no_grasps,
-                   sensor_calibration=not no_sensor_calibration,
-                   plate_fusion=not no_plate_fusion, series=series)
+                   filters=_filters(filters, FILTERS, default=tuple(
+                       f for f in FILTERS if not (six_axis and f in COMPASS_FILTERS))),
+                   grasps=not no_grasps, sensor_calibration=not no_sensor_calibration,
+                   plate_fusion=not no_plate_fusion, series=series, six_axis=six_axis)
     if json_out:
         write_json(json_out, rep)  # a NaN error becomes null
     if plots:

@@ -213,6 +213,24 @@ def test_eval_prints_its_table_without_a_json_file():
     assert "orientation RMSE per segment" in res.output and "\nraw " in res.output
 
 
+
+@pytest.mark.slow
+def test_eval_of_six_axis_sensors_leaves_the_compass_filters_out(tmp_path):
+    out = tmp_path / "eval6.json"
+    res = CliRunner().invoke(cli, ["imu", "eval", "--six-axis", "--config", "tuning", "--duration",
+                                   "8", "--elbow", "fixed", "--no-grasps", "--json", str(out)])
+    assert res.exit_code == 0, res.output
+    rep = json.loads(out.read_text())
+    assert rep["config"]["six_axis"] is True
+    assert rep["filters"] == ["constant", "raw", "filter4", "filter4b", "gated", "vqf", "vqf_online"]
+    joints = {k: v["joint_angle_mean_rmse_deg"] for k, v in rep["summary"].items()}
+    assert max(v for k, v in joints.items() if k != "constant") < 0.25 * joints["constant"], joints
+    res = CliRunner().invoke(cli, ["imu", "eval", "--six-axis", "--filter", "raw,mahony",
+                                   "--duration", "8", "--no-grasps"])
+    assert res.exit_code == 2 and res.output == (
+        "handsynth: error: filter(s) mahony observe the compass, which 6-axis sensors lack; leave "
+        "them out\n"), res.output
+
 def test_tips_out_needs_the_calibration(tmp_path, sim):
     src = tmp_path / "rec.csv"
     write_imu_csv(sim, src)

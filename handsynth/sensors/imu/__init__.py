@@ -14,7 +14,16 @@ from ._attitude import StaticStart, azimuth_correction, check_static_fits, gyro_
 from ._broad import BROAD_FILTERS, broad_errors, find_broad_trials, read_broad_trial, run_broad
 from ._calibration import ImuCalibration, calibrate, segments_from_seconds
 from ._ekf import FILTER4B, ChainEKF, ChainEKFOptions, sensor_tree
-from ._eval import FILTERS, HELDOUT, TUNING, SimConfig, evaluate, evaluate_trial, make_filter
+from ._eval import (
+    COMPASS_FILTERS,
+    FILTERS,
+    HELDOUT,
+    TUNING,
+    SimConfig,
+    evaluate,
+    evaluate_trial,
+    make_filter,
+)
 from ._filters import (
     AhrsEKFEstimator,
     ConstantEstimator,
@@ -116,6 +125,7 @@ __all__ = [
     "BROAD_FILTERS",
     "CALIBRATION_PLAN",
     "CHAINS",
+    "COMPASS_FILTERS",
     "EARTH_FIELD_UT",
     "EVAL_NOISE",
     "FILTER4B",

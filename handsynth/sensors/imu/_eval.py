@@ -58,11 +58,14 @@ from ._sensorcal import SensorCalibration
 from ._simulate import SkinMotion, simulate_imu
 from ._vectors import seel_joint_positions, truth_chain_model
 
-__all__ = ["FILTERS", "HELDOUT", "TUNING", "SimConfig", "evaluate", "evaluate_trial", "make_filter"]
+__all__ = ["COMPASS_FILTERS", "FILTERS", "HELDOUT", "TUNING", "SimConfig", "evaluate", "evaluate_trial",
+           "make_filter"]
 
 #: Names of the orientation estimators that :func:`evaluate` can run.
 FILTERS: tuple[str, ...] = ("constant", "raw", "filter1", "filter4", "filter4b", "gated", "vqf",
                             "vqf_online", "madgwick", "mahony", "ahrs_ekf")
+#: Those of :data:`FILTERS` that observe the compass, and so refuse 6-axis sensors.
+COMPASS_FILTERS: tuple[str, ...] = ("filter1", "madgwick", "mahony", "ahrs_ekf")
 
 
 @dataclass(frozen=True)
@@ -302,10 +305,13 @@ def _common_heading(q: np.ndarray, q_true: np.ndarray) -> np.ndarray:
 
 
 def _grasp_report(config, placement, filters, calib: ImuCalibration,
-                  sensor_cal: SensorCalibration | None, plate_fusion: bool = True) -> dict:
+                  sensor_cal: SensorCalibration | None, plate_fusion: bool = True, *,
+                  six_axis: bool = False) -> dict:
     hand = ImuHand(config.shape, placement=placement)
     rec = simulate_imu(grasp_motion(), hand=hand, noise=config.noise, skin=config.skin,
                        seed=config.seed + 31, device_seed=_device_seed(config))
+    if six_axis:
+        rec = dataclasses.replace(rec, mag=None)
     if sensor_cal is not None:
         rec = sensor_cal.apply(rec)
     classes = {g: p for g, p in GRASP_POSES.items() if g != "open"}
@@ -358,7 +364,7 @@ def _check_filters(filters) -> None:
 def evaluate(config: SimConfig = HELDOUT, *, durations=(15.0, 30.0), elbows=("fixed", "moving"),
              filters=FILTERS, grasps: bool = True, speed: float = 1.0,
              sensor_calibration: bool = True, plate_fusion: bool = True,
-             series: dict | None = None) -> dict:
+             series: dict | None = None, six_axis: bool = False) -> dict:
     """Run the evaluation and return a JSON-ready dict.
 
     Parameters
@@ -382,15 +388,31 @@ def evaluate(config: SimConfig = HELDOUT, *, durations=(15.0, 30.0), elbows=("fi
     series : dict, keyword-only
         Filled with the last trial's error time series and a stick-figure
         instant (for :mod:`._plot`).
+    six_axis : bool, keyword-only
+        Read every recording, the calibration's too, without its magnetometers
+        (6-axis sensors); the orientation errors are then taken after one turn
+        about the vertical per recording (the hand's heading is unobservable
+        without a compass).  The filters of :data:`COMPASS_FILTERS` refuse it.
+
+    Raises
+    ------
+    InvalidInputError
+        An unknown filter; with `six_axis`, a filter that needs the compass.
     """
     _check_filters(filters)
+    compass = [f for f in filters if f in COMPASS_FILTERS]
+    if six_axis and compass:
+        raise InvalidInputError(f"filter(s) {', '.join(compass)} observe the compass, which "
+                                "6-axis sensors lack; leave them out")
     placement = config.placement()
-    cal, calib, sensor_cal = _calibrate(config, placement)
+    cal, calib, sensor_cal = _calibrate(config, placement, six_axis=six_axis)
     hand = ImuHand(config.shape, placement=placement)
     trials = []
     lsq_rec = None
     runs = list(free_trials(config, hand, durations=durations, elbows=elbows, speed=speed))
     for i, (dur, elbow, rec) in enumerate(runs):
+        if six_axis:
+            rec = dataclasses.replace(rec, mag=None)
         if sensor_calibration:
             rec = sensor_cal.apply(rec)     # keeps the truth
         lsq_rec = lsq_rec or rec
@@ -399,13 +421,14 @@ def evaluate(config: SimConfig = HELDOUT, *, durations=(15.0, 30.0), elbows=("fi
         t.update(duration_s=dur, elbow=elbow)
         trials.append(t)
     report = {"config": {**config.describe(), "sensor_calibration_applied": sensor_calibration,
-                         "plate_fusion": plate_fusion},
+                         "plate_fusion": plate_fusion, "six_axis": six_axis},
               "filters": list(filters),
               "vectors": _vector_report(cal, calib.model, config, placement, lsq_rec),
               "trials": trials, "summary": _summary(trials, filters)}
     if grasps:
         report["grasps"] = _grasp_report(config, placement, filters, calib,
-                                         sensor_cal if sensor_calibration else None, plate_fusion)
+                                         sensor_cal if sensor_calibration else None, plate_fusion,
+                                         six_axis=six_axis)
     return report
 
 
