@@ -13,7 +13,10 @@ Sensors without a magnetometer (6-axis, ``rec.mag`` None) take their
 headings from the common rotation alone: w_g of eq. 4.18 is one horizontal
 direction for every sensor, and each sensor's heading is set so that it
 points along the world's x axis (eq. 4.19 with w_g in the compass's place).
-The world's x axis is then that direction, not magnetic north.
+The world's x axis is then that direction, not magnetic north.  A single
+6-axis sensor shares its heading with none: without a common rotation its
+world x axis is its own x axis made horizontal (its y axis where x is
+within 25 deg of the vertical).
 """
 
 from __future__ import annotations
@@ -283,15 +286,19 @@ def initial_attitude(rec: ImuRecording, static: StaticStart = StaticStart(), *,
     ------
     InvalidInputError, EstimationError
         As :func:`azimuth_correction` (with `align`, and always for 6-axis
-        sensors); `rec` or `static` of the wrong type; 6-axis sensors with
-        no common rotation in `static` (nothing else gives them a common
-        heading).
+        sensors); `rec` or `static` of the wrong type; two or more 6-axis
+        sensors with no common rotation in `static` (nothing else gives them
+        a common heading).
     RecordingError
         A static start longer than the recording (:func:`check_static_fits`).
     """
     n0 = _static_samples(rec, static)
     g = rec.acc[:, :n0].mean(axis=1)
     if rec.mag is None:
+        if static.align_start_s is None and len(rec.sensors) == 1:
+            up = g[0] / np.linalg.norm(g[0])
+            axis = np.eye(3)[0 if abs(up[0]) < np.cos(np.radians(25.0)) else 1]
+            return quat_from_acc_mag(g, axis[None])
         if static.align_start_s is None:
             raise EstimationError(
                 "a recording of 6-axis sensors (no magnetometer) takes the sensors' headings "

@@ -58,6 +58,22 @@ def test_headings_come_from_the_common_rotation(free_rec):
         initial_attitude(six, StaticStart(align_start_s=None))
 
 
+def test_one_sensor_without_a_common_rotation_takes_its_own_x_axis(free_rec):
+    off = StaticStart(align_start_s=None)
+    for name in ("index_proximal", "hand_radial"):
+        one = _six(free_rec.subset((name,)))
+        q = initial_attitude(one, off)
+        truth = free_rec.truth.quat[free_rec.index(name), 0]
+        # its heading is its own (not the truth's), its inclination the accelerometer's
+        err = angle_deg(_turned(q, _headings_deg(q, truth)[0]), truth[None])
+        assert err.max() < 3.0
+        # the world's x is the sensor's x axis made horizontal: x has no sideways part
+        from handsynth.sensors.imu._quat import qrot
+
+        x_world = qrot(q[0], np.array([1.0, 0.0, 0.0]))
+        assert abs(x_world[1]) < 1e-9 and x_world[0] > 0
+        assert GatedFilter(static=off).run(one).shape == (1, one.n, 4)
+
 @pytest.mark.parametrize("est", [RawIntegration(), GatedFilter(), VQFEstimator(),
                                  VQFEstimator(online=True, name="vqf_online")],
                          ids=lambda e: e.name)
