@@ -52,7 +52,7 @@ from ._layout import CHAINS, LINKS, POINTS
 from ._model import SENSOR_NAMES, ImuHand, ImuPlacement
 from ._motion import GRASP_POSES, calibration_motion, free_motion, grasp_motion, static_motion
 from ._noise import EVAL_NOISE, MPU9250_DATASHEET, ImuNoise
-from ._quat import angle_deg, heading_inclination_deg, qconj, qmul
+from ._quat import angle_deg, heading_inclination_deg, heading_rad, qexp, qmul
 from ._recording import ImuRecording, ImuTruth, check_recording
 from ._sensorcal import SensorCalibration
 from ._simulate import SkinMotion, simulate_imu
@@ -297,11 +297,9 @@ def _common_heading(q: np.ndarray, q_true: np.ndarray) -> np.ndarray:
     sensor and the whole recording, fixed at its first sample, takes that out and leaves
     the sensors' headings relative to one another and their drift in the errors.
     """
-    d = qmul(q_true[:, 0], qconj(q[:, 0]))  # world-frame error per sensor at the start
-    psi = 2.0 * np.arctan2(d[:, 3], d[:, 0])
+    psi = heading_rad(q_true[:, 0], q[:, 0])  # each sensor's heading error at the start
     mean = float(np.angle(np.exp(1j * psi).mean()))
-    turn = np.array([np.cos(mean / 2), 0.0, 0.0, np.sin(mean / 2)])
-    return qmul(turn, q)
+    return qmul(qexp(np.array([0.0, 0.0, mean])), q)
 
 
 def _grasp_report(config, placement, filters, calib: ImuCalibration,

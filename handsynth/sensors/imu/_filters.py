@@ -30,7 +30,7 @@ import numpy as np
 from ..._checks import check_number
 from ...errors import EstimationError, InvalidInputError
 from ._attitude import StaticStart, check_run_input, gyro_bias, initial_attitude
-from ._quat import qconj, qexp, qmul, qnormalize, quat_from_acc_mag
+from ._quat import heading_rad, qexp, qmul, qnormalize, quat_from_acc_mag
 from ._quat_numba import _chain
 from ._recording import ImuRecording
 
@@ -271,19 +271,15 @@ class VQFEstimator:
         out = np.empty((len(rec.sensors), rec.n, 4))
         ts = 1.0 / rec.rate_hz
         mag = rec.mag
-        six = mag is None
-        q0 = initial_attitude(rec, self.static) if six else None
+        q0 = initial_attitude(rec, self.static) if mag is None else None
         for k in range(len(rec.sensors)):
-            args = [np.ascontiguousarray(gyr[k]), np.ascontiguousarray(rec.acc[k])]
-            if mag is not None:
-                args.append(np.ascontiguousarray(mag[k]))
-            if self.online:
-                res = VQF(ts).updateBatch(*args)
-            else:
-                res = offlineVQF(args[0], args[1], args[2] if len(args) > 2 else None, ts)
-            out[k] = qmul(_Q_NWU_FROM_ENU, res["quat6D" if six else "quat9D"])
-            if q0 is not None:  # its own heading turned to the common rotation's at the start
-                out[k] = qmul(_heading_turn(q0[k], out[k, 0]), out[k])
+            args = (np.ascontiguousarray(gyr[k]), np.ascontiguousarray(rec.acc[k]),
+                    None if mag is None else np.ascontiguousarray(mag[k]))
+            res = VQF(ts).updateBatch(*args) if self.online else offlineVQF(*args, ts)
+            out[k] = qmul(_Q_NWU_FROM_ENU, res["quat9D" if q0 is None else "quat6D"])
+            if q0 is not None:  # 6D: its own heading turned to the common rotation's at the start
+                turn = heading_rad(q0[k], out[k, 0])
+                out[k] = qmul(qexp(np.array([0.0, 0.0, turn])), out[k])
         return out
 
 
@@ -369,14 +365,6 @@ class AhrsEKFEstimator(_AhrsBase):
 
 
 _Q_X180 = np.array([0.0, 1.0, 0.0, 0.0])
-
-
-def _heading_turn(q_to: np.ndarray, q_from: np.ndarray) -> np.ndarray:
-    """The rotation about the world's vertical that turns attitude `q_from`'s heading into
-    `q_to`'s (unit quaternions (4,), sensor to world), as a quaternion (4,)."""
-    d = qmul(q_to, qconj(q_from))  # world-frame rotation from one to the other
-    psi = 2.0 * np.arctan2(d[3], d[0])  # its part about z (twist), the tilt left aside
-    return np.array([np.cos(psi / 2), 0.0, 0.0, np.sin(psi / 2)])
 
 
 def _check_rate(rate_hz) -> float:

@@ -191,6 +191,18 @@ def angle_deg(q1, q2):
     return np.degrees(2 * np.arccos(np.clip(d, 0.0, 1.0)))
 
 
+def heading_rad(q_to, q_from):
+    """The turn about the world's vertical from attitude `q_from` to attitude `q_to`, rad.
+
+    The twist about z of the world-frame rotation ``q_to q_from^*`` (the tilt
+    between the two left aside); shape (...) of the (..., 4) unit quaternions
+    (sensor to world).  ``qmul(qexp([0, 0, heading_rad(a, b)]), b)`` has
+    `a`'s heading.
+    """
+    d = qmul(q_to, qconj(q_from))
+    return 2.0 * np.arctan2(d[..., 3], d[..., 0])
+
+
 def heading_inclination_deg(q_est, q_true):
     """Split the error of sensor-to-world estimates into heading and inclination.
 
