@@ -519,7 +519,8 @@ class ImuCalibration:
 
 
 def calibrate(rec: ImuRecording, *, sensor_calibration: bool = True,
-              side: str = "right", source: str | None = None) -> ImuCalibration:
+              side: str = "right", source: str | None = None,
+              hinge_plane: bool = True) -> ImuCalibration:
     """Calibrate from a recording with labelled stretches (see :func:`calibration_motion`).
 
     Needs the five fingertip sensors of the calibration (:data:`TIP_SENSORS`)
@@ -548,6 +549,10 @@ def calibrate(rec: ImuRecording, *, sensor_calibration: bool = True,
         one has its abductions turned the other way).
     source : str, keyword-only, optional
         The recording's file, named in the messages of :func:`check_stretches`.
+    hinge_plane : bool, keyword-only
+        As :func:`calibrate_vectors`: each one-axis joint's centre on the plane of
+        the joint its direction is paired with (default), or where eq. 3.2 puts
+        it (False, the thesis).
 
     Returns
     -------
@@ -598,7 +603,7 @@ def calibrate(rec: ImuRecording, *, sensor_calibration: bool = True,
             f"{where}the calibration needs the five temporary fingertip sensors "
             f"({', '.join(TIP_SENSORS)}) for the distal link vectors; missing "
             f"{', '.join(tips)} (the recording has {', '.join(rec.sensors)})")
-    vectors = calibrate_vectors(rec)
+    vectors = calibrate_vectors(rec, hinge_plane=hinge_plane)
     # judged after the sensor calibration only: the accelerometers' own scale and axis errors
     # lower the fit of the default rotations to 0.68-0.82 without it (three simulated devices)
     fit = _vector_fit_warning(vectors) if sensor_cal is not None else None

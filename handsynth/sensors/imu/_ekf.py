@@ -148,7 +148,7 @@ class ChainEKFOptions:
 #: time constant chosen on the tuning configuration with gyro biases drifting
 #: during 120-s recordings (``python scripts/study_imu_drift.py``; docs/imu.md,
 #: "A gyro bias that drifts").
-FILTER4B = ChainEKFOptions(bias_tau_s=5.0)
+FILTER4B = ChainEKFOptions(bias_tau_s=3.0)
 
 
 def sensor_tree(sensors) -> tuple[list[int], list[tuple[str, str]]]:

@@ -56,7 +56,7 @@ from ._quat import angle_deg, heading_inclination_deg, heading_rad, qexp, qmul
 from ._recording import ImuRecording, ImuTruth, check_recording
 from ._sensorcal import SensorCalibration
 from ._simulate import SkinMotion, simulate_imu
-from ._vectors import seel_joint_positions, truth_chain_model
+from ._vectors import link_vectors, seel_joint_positions, truth_chain_model
 
 __all__ = ["COMPASS_FILTERS", "FILTERS", "HELDOUT", "TUNING", "SimConfig", "evaluate", "evaluate_trial",
            "make_filter"]
@@ -202,6 +202,8 @@ def _vector_report(cal, model, config: SimConfig, placement, lsq_rec) -> dict:
     rot = {k: v.vector for k, v in vec.items() if not k[0].endswith("_tip")}
     plain = {k: v.vector for k, v in calibrate_vectors(cal, static_pose=False).items()
              if not k[0].endswith("_tip")}
+    thesis_vec = calibrate_vectors(cal, hinge_plane=False)
+    thesis = {k: v.vector for k, v in thesis_vec.items() if not k[0].endswith("_tip")}
     # baseline 1: the standard hand with sensors where they should be
     std = simulate_imu(static_motion(0.1), hand=ImuHand(tip_sensors=True), noise=None)
     std_vec = _truth(std).joint_vectors
@@ -225,15 +227,20 @@ def _vector_report(cal, model, config: SimConfig, placement, lsq_rec) -> dict:
     link_err = {f"{s}:{a}->{b}": float(np.linalg.norm(v - truth_links[(s, a, b)]) * 1e3)
                 for (s, a, b), v in model.links.items()}
     lv = np.array(list(link_err.values()))
+    lt = np.array([np.linalg.norm(v - truth_links[k]) * 1e3
+                   for k, v in link_vectors(cal, thesis_vec).items()])
     return {
         "rotation_method": _vector_errors(rot, truth),
         "rotation_method_eq310_only": _vector_errors(plain, truth),
+        "rotation_method_without_hinge_plane": _vector_errors(thesis, truth),
         "rotation_method_on_lsq_pairs": _vector_errors(rot_common, truth),
         "least_squares_seel": _vector_errors(lsq, truth),
         "baseline_standard_hand": _vector_errors(nominal, truth),
         "baseline_zero_vector": _vector_errors(zero_vec, truth),
         "link_vectors_mm": {"median_mm": float(np.median(lv)), "max_mm": float(lv.max()),
                             "per_link_mm": link_err},
+        "link_vectors_without_hinge_plane_mm": {"median_mm": float(np.median(lt)),
+                                                "max_mm": float(lt.max())},
     }
 
 

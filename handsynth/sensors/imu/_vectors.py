@@ -25,6 +25,19 @@ its vector at the oscillation's mid-angle, not at the static pose.  With
 to and farther from the static pose separately and extrapolated linearly to
 the static pose's angle.
 
+Hinge centres (an addition to the thesis): a one-axis joint's rotation fixes
+the distance of its centre from the sensor across its axis but not where
+along the axis the centre lies, and eq. 3.2 with the second rotation of
+another joint leaves that component biased (on the exact mounting of the
+tuning configuration, 5-8 mm for the thumb's MCP and IP, 18-27 mm for the
+ring/little carpometacarpal hinge).  Each sensor then names a slightly
+different point on the axis, and a link measured by two sensors does not
+close.  With ``hinge_plane=True`` every sensor takes the point of the axis
+nearest the centre of the joint whose rotation eq. 3.2 pairs it with (the
+wrist for the carpometacarpal hinge, the thumb CMC for the thumb's MCP and
+IP, the finger's MCP for its PIP and DIP), estimated from the same sensor;
+a fingertip sensor, which sits over the tip, takes the point nearest itself.
+
 Link vectors (eq. 3.6, 3.11): the link from J1 to J2 measured by sensor S1 is
 R_S1^T R_S2 (S2 P^J1 - S2 P^J2), S2 being the next link's sensor (the
 temporary fingertip sensor for the distal phalanges, minus its height above
@@ -213,10 +226,14 @@ def _direction_and_length(data: dict, pts: dict, dir_rot, len_rot) -> tuple[np.n
     return length * u_mean, int(len(u)), r2                             # eq. 3.5
 
 
+def _main_axis(gyr_s: np.ndarray) -> np.ndarray:
+    """Unit axis about which the smoothed gyro (N, 3) turns most (its first principal direction)."""
+    return np.linalg.svd(gyr_s, full_matrices=False)[2][0]
+
+
 def _turned_angle(gyr_s: np.ndarray, rate_hz: float) -> np.ndarray:
     """Angle turned since the still start about the rotation's main axis, rad."""
-    axis = np.linalg.svd(gyr_s, full_matrices=False)[2][0]
-    return np.cumsum(gyr_s @ axis) / rate_hz
+    return np.cumsum(gyr_s @ _main_axis(gyr_s)) / rate_hz
 
 
 def rotation_vector(rec: ImuRecording, sensor: str, point: str, *, hold_s: float = 0.5,
@@ -292,8 +309,8 @@ def _child(sensor: str, dist: str) -> str:
     return dist  # e.g. "index_tip" is also the tip sensor's name
 
 
-def calibrate_vectors(rec: ImuRecording, *, hold_s: float = 0.5, static_pose: bool = True
-                      ) -> dict:
+def calibrate_vectors(rec: ImuRecording, *, hold_s: float = 0.5, static_pose: bool = True,
+                      hinge_plane: bool = True) -> dict:
     """Every vector the link model and the EKF need, from a calibration recording.
 
     `hold_s` and `static_pose` as :func:`rotation_vector`.
@@ -308,6 +325,13 @@ def calibrate_vectors(rec: ImuRecording, *, hold_s: float = 0.5, static_pose: bo
     static_pose : bool, keyword-only
         Extrapolate the vectors of sensors whose skin moves with the rotation
         to the static pose (see :func:`rotation_vector`).
+    hinge_plane : bool, keyword-only
+        Place each one-axis joint's centre, which its rotation leaves free
+        along its axis, at the point of the axis nearest the centre of the
+        joint eq. 3.2 pairs it with, as seen by the same sensor (a fingertip
+        sensor: nearest itself), so that every sensor names the same point
+        (an addition to the thesis, see the module's notes).  False: eq.
+        3.2's direction as it falls (the thesis).
 
     Returns
     -------
@@ -340,6 +364,49 @@ def calibrate_vectors(rec: ImuRecording, *, hold_s: float = 0.5, static_pose: bo
         _, j_prox, tip = chain[-1]
         out.setdefault((tip, j_prox), rotation_vector(rec, tip, j_prox, hold_s=hold_s,
                                                       static_pose=static_pose))
+    if hinge_plane:
+        out = _hinge_plane(rec, out, hold_s=hold_s, static_pose=static_pose)
+    return out
+
+
+def _paired_joint(point: str) -> str | None:
+    """The joint whose rotation eq. 3.2 pairs with one-axis `point`'s own; None for two-axis points."""
+    dir_rot, len_rot = ROTATIONS[point]
+    if len(len_rot) > 1:
+        return None
+    return dir_rot[1].rsplit("_", 1)[0]     # "index_mcp_abd" -> "index_mcp", "wrist_dev" -> "wrist"
+
+
+def _hinge_plane(rec: ImuRecording, vectors: dict, *, hold_s: float, static_pose: bool) -> dict:
+    """`vectors` with every one-axis joint's centre moved along its axis to the point nearest
+    the paired joint's centre (fingertip sensors: nearest the sensor), see the module's notes.
+
+    A sensor whose own view of the paired joint cannot be estimated (too few turning
+    points) keeps eq. 3.2's vector."""
+    hold = max(3, int(hold_s * rec.rate_hz))
+    segments = rec.labelled()
+    out = dict(vectors)
+    refs = dict(vectors)    # and the paired joints' vectors computed here, once each
+    for (sensor, point), est in vectors.items():
+        ref = _paired_joint(point)
+        if ref is None:
+            continue
+        a, b = _segment(segments, ROTATIONS[point][1][0])
+        n = _main_axis(_rotation_data(rec, rec.index(sensor), a, b, hold)[0])
+        if sensor.endswith("_tip"):
+            along = 0.0
+        else:
+            if (sensor, ref) not in refs:
+                try:
+                    refs[(sensor, ref)] = rotation_vector(rec, sensor, ref, hold_s=hold_s,
+                                                          static_pose=static_pose)
+                except EstimationError:     # too few turning points seen from here:
+                    refs[(sensor, ref)] = None  # keep eq. 3.2's answer for this sensor
+            if refs[(sensor, ref)] is None:
+                continue
+            along = float(refs[(sensor, ref)].vector @ n)
+        v = est.vector
+        out[(sensor, point)] = VectorEstimate(v + (along - float(v @ n)) * n, est.pairs, est.r2)
     return out
 
 
