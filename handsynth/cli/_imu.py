@@ -221,8 +221,13 @@ def eval_(config_name, filters, durations, elbows, no_grasps, no_sensor_calibrat
               help="Calibration JSON (link model, link frames, zero pose).")
 @click.option("--side", type=click.Choice(("right", "left")), default="right", show_default=True,
               help="The hand the sensors are on; 'track' reads its joint angles as that hand's.")
+@click.option("--hinge-centres", type=click.Choice(("plane", "thesis")), default="plane",
+              show_default=True,
+              help="Where along its axis a one-axis joint's centre is put: nearest the centre of "
+                   "the joint its direction is paired with (plane), or where eq. 3.2 puts it "
+                   "(thesis, for reproduction).")
 def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz, acc_range_g,
-              gyr_range_dps, bridge_lost, bridge_max_s, out_path, side) -> None:
+              gyr_range_dps, bridge_lost, bridge_max_s, out_path, side, hinge_centres) -> None:
     """Sensor-to-joint vectors, link vectors and link frames from a calibration RECORDING."""
     import dataclasses
 
@@ -244,7 +249,8 @@ def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz
                                                                   source=str(segments_path)))
     for w in check_recording(rec, source=str(recording), **full_scale):
         click.echo(f"handsynth: warning: {w}", err=True)
-    cal = run_calibration(rec, side=side, source=str(recording))
+    cal = run_calibration(rec, side=side, source=str(recording),
+                          hinge_plane=hinge_centres == "plane")
     cal.save(out_path, inputs=inputs)
     lengths = ", ".join(f"{a}->{b} {1e3 * float((v @ v) ** 0.5):.0f} mm"
                         for (s, a, b), v in cal.model.links.items() if s.startswith("index"))

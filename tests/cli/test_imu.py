@@ -9,7 +9,7 @@ from click.testing import CliRunner
 from scipy.io import savemat
 
 from handsynth.cli._main import cli
-from handsynth.sensors.imu import free_motion, simulate_imu, write_imu_csv
+from handsynth.sensors.imu import free_motion, simulate_imu, truth_chain_model, write_imu_csv
 from handsynth.sensors.imu._filters import _Q_NWU_FROM_ENU
 from handsynth.sensors.imu._quat import qconj, qmul
 
@@ -296,6 +296,19 @@ def test_calibrate_then_track_joint_angles(tmp_path):
     # sensors 1 and 2 are fitted worst)
     med = {k: float(np.median(v)) for k, v in ratio.items()}
     assert med["acc"] < 0.3 and med["gyr"] < 0.6 and med["bias"] < 0.3, med
+    # the thesis' hinge centres, for reproduction: the thumb's IP link moves along its axis
+    res = CliRunner().invoke(cli, ["imu", "calibrate", str(cal_csv), "--segments", str(seg_json),
+                                   "--out", str(tmp_path / "thesis.json"), "--hinge-centres", "thesis"])
+    assert res.exit_code == 0, res.output
+    thesis = json.loads((tmp_path / "thesis.json").read_text())
+
+    def link(d, sensor):
+        return np.array(next(v for s, _, _, v in d["links_m"] if s == sensor))
+
+    truth = truth_chain_model(cal).links[("thumb_proximal", "thumb_mcp", "thumb_ip")]
+    err_plane = np.linalg.norm(link(stored, "thumb_proximal") - truth) * 1e3
+    err_thesis = np.linalg.norm(link(thesis, "thumb_proximal") - truth) * 1e3
+    assert err_plane < 2.0 < err_thesis, (err_plane, err_thesis)
     rec = simulate_imu(free_motion(10.0, seed=12), seed=13, device_seed=5)
     rec_csv, q_csv, ang_csv = tmp_path / "rec.csv", tmp_path / "q.csv", tmp_path / "a.csv"
     write_imu_csv(rec, rec_csv)
