@@ -53,7 +53,7 @@ from a starting guess; it needs no orientation.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from itertools import pairwise
 from types import MappingProxyType
 
@@ -110,11 +110,15 @@ class VectorEstimate:
         Turning-point pairs that gave a direction (N1 N2 of eq. 3.10).
     r2 : float
         Coefficient of determination of the length fit (eq. 3.8, Fig. 3.7).
+    axis : ndarray, shape (3,), or None
+        For a one-axis joint, its axis in the sensor frame (the main axis of the
+        gyro over the joint's own rotation, unit); None for a two-axis joint.
     """
 
     vector: np.ndarray
     pairs: int
     r2: float
+    axis: np.ndarray | None = None
 
 
 def _segment(rec_segments, label):
@@ -296,7 +300,8 @@ def rotation_vector(rec: ImuRecording, sensor: str, point: str, *, hold_s: float
         (p_near, a_near), (p_far, a_far) = ends
         if abs(a_far - a_near) > np.radians(10.0):
             vector = p_near - a_near / (a_far - a_near) * (p_far - p_near)
-    return VectorEstimate(vector, pairs, r2)
+    axis = _main_axis(data[len_rot[0]][0]) if len(len_rot) == 1 else None
+    return VectorEstimate(vector, pairs, r2, axis)
 
 
 def _child(sensor: str, dist: str) -> str:
@@ -383,16 +388,12 @@ def _hinge_plane(rec: ImuRecording, vectors: dict, *, hold_s: float, static_pose
 
     A sensor whose own view of the paired joint cannot be estimated (too few turning
     points) keeps eq. 3.2's vector."""
-    hold = max(3, int(hold_s * rec.rate_hz))
-    segments = rec.labelled()
     out = dict(vectors)
     refs = dict(vectors)    # and the paired joints' vectors computed here, once each
     for (sensor, point), est in vectors.items():
         ref = _paired_joint(point)
-        if ref is None:
+        if ref is None or est.axis is None:
             continue
-        a, b = _segment(segments, ROTATIONS[point][1][0])
-        n = _main_axis(_rotation_data(rec, rec.index(sensor), a, b, hold)[0])
         if sensor.endswith("_tip"):
             along = 0.0
         else:
@@ -404,9 +405,9 @@ def _hinge_plane(rec: ImuRecording, vectors: dict, *, hold_s: float, static_pose
                     refs[(sensor, ref)] = None  # keep eq. 3.2's answer for this sensor
             if refs[(sensor, ref)] is None:
                 continue
-            along = float(refs[(sensor, ref)].vector @ n)
-        v = est.vector
-        out[(sensor, point)] = VectorEstimate(v + (along - float(v @ n)) * n, est.pairs, est.r2)
+            along = float(refs[(sensor, ref)].vector @ est.axis)
+        v, n = est.vector, est.axis
+        out[(sensor, point)] = replace(est, vector=v + (along - float(v @ n)) * n)
     return out
 
 
