@@ -73,6 +73,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
+from numba import njit
 
 from .._checks import (
     check_array,
@@ -384,6 +385,36 @@ def _pca(z: _Rows, k: int, rng: np.random.Generator, sample: int = 20000, *,
 # ---------------------------------------------------------------------------
 # the perceptron
 # ---------------------------------------------------------------------------
+def _flush_subnormals(arrays: dict) -> dict:
+    """`arrays` with every subnormal float (0 < |x| < the dtype's smallest normal) set to 0.
+
+    Weight decay leaves the weights of hidden units that learnt nothing at
+    1e-45 to 1e-38 (float32 subnormals: 2,300-6,100 of the 147,456 weights
+    of each shipped perceptron's second layer).  Many processors take a
+    microcode path for every product with one (no flush-to-zero in NumPy):
+    on an Intel Xeon here that layer's matrix-vector product took 131 us
+    instead of 8 us.  Each of them adds less than 1e-37 to sums of order 1,
+    so the answers do not change (tested).  Arrays holding none are kept,
+    others are copied (the caller's are not changed).
+
+    Parameters
+    ----------
+    arrays : dict of str to ndarray (or other values, kept)
+
+    Returns
+    -------
+    dict
+    """
+    out = dict(arrays)
+    for k, v in arrays.items():
+        if isinstance(v, np.ndarray) and v.dtype.kind == "f" and v.size:
+            tiny = np.finfo(v.dtype).tiny
+            sub = (np.abs(v) < tiny) & (v != 0)
+            if sub.any():
+                out[k] = np.where(sub, v.dtype.type(0), v)
+    return out
+
+
 def _relu_forward(x, weights, biases):
     acts = [x]
     for i, (w, b) in enumerate(zip(weights, biases)):
@@ -523,6 +554,93 @@ def _local_linear(x: np.ndarray, y: np.ndarray, w: np.ndarray, *, ridge: float) 
     return beta[0]
 
 
+def _local_linear_stack(x: np.ndarray, y: np.ndarray, w: np.ndarray, *,
+                        ridge: float) -> np.ndarray:
+    """:func:`_local_linear` of B fits at once (one frame's digits): the same answers.
+
+    Parameters
+    ----------
+    x : ndarray, shape (B, k, D)
+    y : ndarray, shape (B, k, J)
+    w : ndarray, shape (B, k)
+    ridge : float, keyword-only
+
+    Returns
+    -------
+    ndarray, shape (B, J), float64
+        Row ``b`` is ``_local_linear(x[b], y[b], w[b], ridge=ridge)`` to
+        rounding (tested): one call of each NumPy step instead of B, the
+        normal equations built from their blocks (the intercept's row is
+        the weighted mean of the codes), and solved by Cholesky
+        (:func:`_solve_spd`; NumPy's LU took 60 us per 65x65 system).
+    """
+    x = np.asarray(x, np.float64)
+    y = np.asarray(y, np.float64)
+    w = np.asarray(w, np.float64)
+    w = w / np.sum(w, axis=1, keepdims=True)
+    b, _, dim = x.shape
+    xw = x * w[:, :, None]
+    gram = np.empty((b, dim + 1, dim + 1))
+    gram[:, 0, 0] = 1.0  # the weights sum to 1
+    gram[:, 0, 1:] = gram[:, 1:, 0] = xw.sum(axis=1)
+    np.matmul(x.transpose(0, 2, 1), xw, out=gram[:, 1:, 1:])
+    penalty = ridge * np.trace(gram[:, 1:, 1:], axis1=1, axis2=2) / max(dim, 1)
+    at = np.arange(1, dim + 1)
+    gram[:, at, at] += np.maximum(penalty, 1e-12)[:, None]
+    rhs = np.empty((b, dim + 1, y.shape[2]))
+    rhs[:, 0] = np.einsum("bk,bkj->bj", w, y)
+    np.matmul(xw.transpose(0, 2, 1), y, out=rhs[:, 1:])
+    beta, ok = _solve_spd(gram, rhs)
+    if not ok.all():  # not positive definite to rounding (ridge 0, neighbours in a plane)
+        beta[~ok] = np.linalg.solve(gram[~ok], rhs[~ok])
+    return beta[:, 0]
+
+
+@njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def _solve_spd(a, b):  # pragma: no cover - compiled (tested through _local_linear_stack)
+    """Solve ``a[s] @ x[s] = b[s]`` for symmetric positive definite `a` (S, m, m) by Cholesky.
+
+    Returns `x` (S, m, r) and `ok` (S,) bool: False where a pivot was not
+    positive (that system's `x` is left undefined for the caller to solve
+    otherwise).  Only the lower triangle of each ``a[s]`` is read.
+    """
+    n, m, _ = a.shape
+    r = b.shape[2]
+    x = np.empty_like(b)
+    ok = np.ones(n, np.bool_)
+    lower = np.zeros((m, m))
+    y = np.empty(m)
+    for s in range(n):
+        for j in range(m):
+            d = a[s, j, j]
+            for k in range(j):
+                d -= lower[j, k] * lower[j, k]
+            if not d > 0.0:
+                ok[s] = False
+                break
+            d = np.sqrt(d)
+            lower[j, j] = d
+            for i in range(j + 1, m):
+                v = a[s, i, j]
+                for k in range(j):
+                    v -= lower[i, k] * lower[j, k]
+                lower[i, j] = v / d
+        if not ok[s]:
+            continue
+        for c in range(r):
+            for i in range(m):
+                v = b[s, i, c]
+                for k in range(i):
+                    v -= lower[i, k] * y[k]
+                y[i] = v / lower[i, i]
+            for i in range(m - 1, -1, -1):
+                v = y[i]
+                for k in range(i + 1, m):
+                    v -= lower[k, i] * x[s, k, c]
+                x[s, i, c] = v / lower[i, i]
+    return x, ok
+
+
 # ---------------------------------------------------------------------------
 # the nearest-neighbour search
 # ---------------------------------------------------------------------------
@@ -626,6 +744,7 @@ class LearnedEstimator:
         arrays = dict(arrays)
         # inverted files stored by save(): read below instead of trained, not learnt arrays
         stored = {k: arrays.pop(k) for k in list(arrays) if k.endswith(_INDEX_SUFFIXES)}
+        arrays = _flush_subnormals(arrays)
         self._a = arrays
         for v in arrays.values():
             if isinstance(v, np.ndarray):
@@ -644,6 +763,7 @@ class LearnedEstimator:
                         arrays[prefix + "codes"], options,
                         stored=stored.get(_index_name(prefix, options)))
         self._rest_angles: np.ndarray | None = None
+        self._fold: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         self._lo = JOINT_LIMITS_DEG[:, 0]
         self._hi = JOINT_LIMITS_DEG[:, 1]
 
@@ -786,12 +906,39 @@ class LearnedEstimator:
                 f"rest_frame shows no hand: what stands out covers {g.mean() / 2.55:.2f} % of the "
                 f"view, a hand at least {100 * MIN_HAND_COVERAGE:g} % (MIN_HAND_COVERAGE)")
         out._rest = g.ravel()
+        out._fold = (self._folded_projection(out._rest)
+                     if self.options.kind == "mlp" and self.options.use_rest else None)
         out._move_check = MoveCheck(g, mount, side=side) if check_moved else None
         out._previous = None
         if "abs_mean" in self._a:
             z = _inputs(out._rest[None], None) - self._a["abs_mean"]
             out._rest_angles = self._predict("abs_", z @ self._a["abs_components"])[0]
         return out
+
+    def _folded_projection(self, rest: np.ndarray):
+        """A perceptron's principal-component projection with the rest frame folded in.
+
+        Its input is the frame ``x`` and ``x - rest`` (:func:`_inputs`), so
+        ``(z - mean) @ C == x @ (C1 + C2) - (rest @ C2 + mean @ C)``, ``C1``
+        and ``C2`` the halves of ``C``: half the matrix to read per frame,
+        less the cells that no component weighs (the wrist cut's, about 200
+        of 1,350).  The codes agree with the plain product to float32
+        rounding (tested).
+
+        Returns
+        -------
+        keep : ndarray (K,) int
+            The frame's cells read.
+        projection : ndarray (K, k) float32
+        offset : ndarray (k,) float32
+        """
+        c = self._a["components"]
+        n = len(rest)
+        both = c[:n] + c[n:]
+        keep = np.flatnonzero(np.any(both != 0, axis=1))
+        r = _inputs(rest[None], None)[0]
+        offset = r @ c[n:] + self._a["mean"] @ c
+        return keep, np.ascontiguousarray(both[keep]), offset
 
     def _digit_code(self, d: int, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Digit `d`'s codes (N, k) of inputs `z` and the squared norm (N,) they leave out."""
@@ -810,11 +957,21 @@ class LearnedEstimator:
         """
         angles = np.empty(20)
         novelty = 0.0
-        for d, joints in enumerate(_DIGIT_JOINTS):
+        near = []
+        for d in range(len(_DIGIT_JOINTS)):
             c, left_out = self._digit_code(d, z)
-            got, e = self._knn(f"d{d}_", c)
-            angles[list(joints)] = got
+            x, y, w, e = self._neighbours(f"d{d}_", c)
+            near.append((x, y, w))
             novelty += float(np.sqrt(e * e + left_out[0])) / 5
+        if (self.options.local == "linear" and len({(x.shape, y.shape) for x, y, _ in near}) == 1
+                and len(near[0][0]) > near[0][0].shape[1] + 1):
+            # the usual case: every digit found k neighbours, fitted together (same answers)
+            got = list(_local_linear_stack(*(np.stack(part) for part in zip(*near)),
+                                           ridge=self.options.ridge))
+        else:
+            got = [self._answer(x, y, w) for x, y, w in near]
+        for joints, g in zip(_DIGIT_JOINTS, got, strict=True):
+            angles[list(joints)] = g
         return angles, novelty
 
     def _novelty_limit(self, z: np.ndarray, rows: np.ndarray, hand: np.ndarray, *,
@@ -845,7 +1002,12 @@ class LearnedEstimator:
             total += np.sqrt(near + left_out) / 5
         return float(np.quantile(total, quantile))
 
-    def _knn(self, prefix: str, c: np.ndarray) -> tuple[np.ndarray, float]:
+    def _neighbours(self, prefix: str, c: np.ndarray):
+        """Regressor `prefix`'s nearest learning frames to codes `c` (1, k).
+
+        Returns their codes less `c` (n, k), angles (n, J) and weights (n,),
+        and the nearest one's distance.
+        """
         c32 = np.ascontiguousarray(c, np.float32)
         _, idx = self._index[prefix].search(c32, self.options.k)
         idx = idx[0][idx[0] >= 0]  # the inverted file may hold fewer than k in the cells searched
@@ -853,10 +1015,17 @@ class LearnedEstimator:
         d = np.sqrt(np.einsum("ij,ij->i", x, x))
         d1 = float(d.min())
         w = 1.0 / (d + d1 + 1e-6)
-        y = self._a[prefix + "angles"][idx]
-        if self.options.local == "linear" and len(idx) > c.shape[1] + 1:
-            return _local_linear(x, y, w, ridge=self.options.ridge), d1
-        return (w @ y / w.sum()).astype(np.float64), d1
+        return x, self._a[prefix + "angles"][idx], w, d1
+
+    def _answer(self, x: np.ndarray, y: np.ndarray, w: np.ndarray) -> np.ndarray:
+        """The angles read from neighbours (:meth:`_neighbours`) by ``options.local``."""
+        if self.options.local == "linear" and len(x) > x.shape[1] + 1:
+            return _local_linear(x, y, w, ridge=self.options.ridge)
+        return (w @ y / w.sum()).astype(np.float64)
+
+    def _knn(self, prefix: str, c: np.ndarray) -> tuple[np.ndarray, float]:
+        x, y, w, d1 = self._neighbours(prefix, c)
+        return self._answer(x, y, w), d1
 
     def _predict(self, prefix: str, c: np.ndarray) -> tuple[np.ndarray, float]:
         """Regressor `prefix` on codes `c` (1, k): angles (20,) and the nearest distance."""
@@ -898,7 +1067,21 @@ class LearnedEstimator:
             raise InvalidInputError(_NOT_CALIBRATED)
         z = _inputs(g, self._rest[None] if self._rest is not None and self.options.use_rest
                     else None)
-        return ((z - self._a["mean"]) @ self._a["components"])[0]
+        return self._project(z)[0]
+
+    def _project(self, z: np.ndarray) -> np.ndarray:
+        """Principal-component codes (1, k) of inputs `z` (1, D); takes the mean off `z` in place.
+
+        A calibrated perceptron reads the projection with its rest frame
+        folded in (:meth:`_folded_projection`).
+        """
+        if self._fold is not None:
+            keep, projection, offset = self._fold
+            c = z[:, keep] @ projection - offset
+            z -= self._a["mean"]
+            return c
+        z -= self._a["mean"]
+        return z @ self._a["components"]
 
     def estimate(self, frame: np.ndarray) -> PoseEstimate:
         """Pose of the hand in one frame.
@@ -963,8 +1146,7 @@ class LearnedEstimator:
             if "novelty_limit" in self._a:
                 low = bool(error > float(self._a["novelty_limit"]))
         else:
-            z -= self._a["mean"]
-            c = z @ self._a["components"]
+            c = self._project(z)
             angles, error = self._predict("", c)
             total, kept = float(np.sum(z * z)), float(np.sum(c * c))
             conf = kept / total if total > 0 else 0.0

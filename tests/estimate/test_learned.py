@@ -146,6 +146,65 @@ def test_the_local_linear_fit_reads_a_linear_neighbourhood_exactly_and_shrinks_t
                                             ridge=1e9), mean, atol=1e-4)
 
 
+@pytest.mark.parametrize("ridge", [0.0, 3.0])
+def test_the_digits_fitted_together_read_as_each_fitted_alone(ridge):
+    from handsynth.estimate._learned import _local_linear, _local_linear_stack
+
+    rng = np.random.default_rng(5)
+    x = rng.normal(size=(5, 128, 64)).astype(np.float32)
+    y = rng.normal(20.0, 15.0, size=(5, 128, 4)).astype(np.float32)
+    w = rng.uniform(0.1, 3.0, size=(5, 128))
+    alone = [_local_linear(x[b], y[b], w[b], ridge=ridge) for b in range(5)]
+    np.testing.assert_allclose(_local_linear_stack(x, y, w, ridge=ridge), alone,
+                               rtol=0, atol=1e-9)
+
+
+def test_the_cholesky_solve_says_where_a_system_is_not_positive_definite(monkeypatch):
+    from handsynth.estimate import _learned
+    from handsynth.estimate._learned import _local_linear, _local_linear_stack, _solve_spd
+
+    rng = np.random.default_rng(6)
+    m = rng.normal(size=(3, 9, 9))
+    a = m @ m.transpose(0, 2, 1) + 0.1 * np.eye(9)
+    a[1] -= 50.0 * np.eye(9)  # indefinite
+    b = rng.normal(size=(3, 9, 2))
+    x, ok = _solve_spd(a, b)
+    assert ok.tolist() == [True, False, True]
+    np.testing.assert_allclose(x[[0, 2]], np.linalg.solve(a[[0, 2]], b[[0, 2]]), atol=1e-9)
+    # a fit whose system the Cholesky refuses is solved by LU instead, to the same answer
+    refused = _solve_spd
+
+    def refuse_the_second(gram, rhs):
+        x, ok = refused(gram, rhs)
+        ok[1] = False
+        return x, ok
+
+    monkeypatch.setattr(_learned, "_solve_spd", refuse_the_second)
+    xs = rng.normal(size=(3, 40, 6))
+    ys = rng.normal(size=(3, 40, 4))
+    ws = rng.uniform(0.5, 2.0, size=(3, 40))
+    np.testing.assert_allclose(_local_linear_stack(xs, ys, ws, ridge=1.0),
+                               [_local_linear(xs[i], ys[i], ws[i], ridge=1.0) for i in range(3)],
+                               rtol=0, atol=1e-9)
+
+
+def test_a_fingers_estimator_reads_each_digit_as_its_own_search_and_fit(data):
+    from handsynth.estimate._learned import _inputs
+
+    est = train_learned(data, LearnedOptions(kind="fingers", components=8, k=24, lists=0))
+    cal = est.calibrated(SilhouetteRasterizer().mask(np.full(20, 4.0)))
+    for frame in _frames(data, [3, 17, 42]):
+        got = cal.estimate(frame).angles
+        z = _inputs(cal.grid(frame).reshape(1, -1), cal._rest[None])
+        alone = np.empty(20)
+        for d, joints in enumerate(((0, 1, 2, 3), *(range(4 + 4 * k, 8 + 4 * k)
+                                                     for k in range(4)))):
+            alone[list(joints)] = cal._knn(f"d{d}_", cal._digit_code(d, z)[0])[0]
+        assert cal._rest_angles is None  # angles learnt directly (target "angles")
+        want = np.clip(alone, cal._lo, cal._hi)
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-9)
+
+
 def test_the_linear_fit_falls_back_to_the_mean_with_fewer_neighbours_than_dimensions(data):
     rest = SilhouetteRasterizer().mask(np.full(20, 4.0))
     frame = SilhouetteRasterizer().mask(np.full(20, 20.0))

@@ -283,3 +283,65 @@ def test_the_shipped_perceptrons_flag_frames_of_no_hand_and_not_a_held_out_hand(
         for member in cal.members:  # each perceptron: what its components leave out
             m = member.estimate(frame)
             assert m.low_confidence == (m.error > float(member._a["novelty_limit"]))
+
+
+def test_flush_subnormals_zeroes_those_alone_and_copies_only_what_it_changes():
+    tiny = np.finfo(np.float32).tiny
+    w = np.array([1e-45, -3e-39, tiny, -tiny, 0.0, 0.5, -2.0], np.float32)
+    clean = np.array([0.25, 0.0], np.float32)
+    ints = np.array([0, 1], np.int32)
+    arrays = {"w": w, "clean": clean, "ints": ints, "layers": 3}
+    out = _learned._flush_subnormals(arrays)
+    assert out["w"].dtype == np.float32
+    np.testing.assert_array_equal(out["w"], [0.0, 0.0, tiny, -tiny, 0.0, 0.5, -2.0])
+    assert w[0] != 0 and w[1] != 0  # the caller's array is left as it was
+    assert out["clean"] is clean and out["ints"] is ints and out["layers"] == 3
+    assert out is not arrays
+
+
+def test_shipped_perceptrons_read_without_subnormals_give_the_same_answers(monkeypatch):
+    """Weight decay left thousands of subnormal weights in each shipped perceptron (slow
+    products on many processors); reading them as 0 must not change a single answer."""
+    from handsynth.eval import model_test_hands, natural_test_poses, relaxed_rest_posture
+
+    made = model_test_hands(1, seed=47)[0].make()
+    rng = np.random.default_rng(3)
+    rest = relaxed_rest_posture(rng)
+    masks = made.masks(natural_test_poses(rest, 6, rng)[0])
+    flushed = shipped_members(members=LEARNED_PERCEPTRONS)
+    monkeypatch.setattr(_learned, "_flush_subnormals", dict)
+    raw = shipped_members(members=LEARNED_PERCEPTRONS)
+    for a, b in zip(flushed, raw, strict=True):
+        subnormal = [k for k, v in b._a.items() if isinstance(v, np.ndarray) and v.dtype.kind == "f"
+                     and ((v != 0) & (np.abs(v) < np.finfo(v.dtype).tiny)).any()]
+        assert "w1" in subnormal  # what the flush is for: as shipped, they hold some
+        assert not any(((v != 0) & (np.abs(v) < np.finfo(v.dtype).tiny)).any()
+                       for v in a._a.values() if isinstance(v, np.ndarray) and v.dtype.kind == "f")
+        ca, cb = a.calibrated(made.mask(rest)), b.calibrated(made.mask(rest))
+        for m in masks:
+            ea, eb = ca.estimate(m), cb.estimate(m)
+            np.testing.assert_allclose(ea.angles, eb.angles, rtol=0, atol=1e-9)
+            assert ea.error == pytest.approx(eb.error, rel=1e-9)
+
+
+def test_perceptrons_with_the_rest_frame_folded_in_read_as_with_the_plain_product():
+    """A calibrated perceptron reads half its projection (the rest frame folded in, cells no
+    component weighs left out): its codes and angles must be those of the plain product."""
+    from handsynth.eval import model_test_hands, natural_test_poses, relaxed_rest_posture
+
+    made = model_test_hands(1, seed=48)[0].make()
+    rng = np.random.default_rng(4)
+    rest = relaxed_rest_posture(rng)
+    masks = made.masks(natural_test_poses(rest, 6, rng)[0])
+    for est in shipped_members(members=LEARNED_PERCEPTRONS):
+        cal = est.calibrated(made.mask(rest))
+        plain = est.calibrated(made.mask(rest))
+        plain._fold = None
+        keep = cal._fold[0]
+        assert 1000 < len(keep) < 1350  # the cells no component weighs are left out
+        for m in masks:
+            np.testing.assert_allclose(cal.code(m), plain.code(m), rtol=0, atol=1e-4)
+            a, b = cal.estimate(m), plain.estimate(m)
+            np.testing.assert_allclose(a.angles, b.angles, rtol=0, atol=1e-3)
+            assert a.error == pytest.approx(b.error, rel=1e-5)
+            assert a.confidence == pytest.approx(b.confidence, rel=1e-5)
