@@ -449,6 +449,16 @@ def fit_mlp(x: np.ndarray, y: np.ndarray, *, hidden=(384, 384), epochs: int = 40
     -------
     weights, biases : lists of ndarray
         Layer ``i`` maps ``a @ weights[i] + biases[i]``.
+
+    Notes
+    -----
+    Weight decay drives the weights of hidden units that stop learning toward
+    0, down to subnormal floats, and many processors take a slow path for
+    every product with one (on an Intel Xeon here a training step with the
+    shipped perceptrons' weights took 66 ms instead of 7 ms).  Every 16 steps
+    the weights and Adam's moments that are subnormal are set to 0
+    (:func:`_flush_subnormals`); a subnormal weight adds less than 1e-37 to
+    sums of order 1.
     """
     if loss not in ("squared", "absolute"):
         raise InvalidInputError(f"fit_mlp: loss must be 'squared' or 'absolute', got {loss!r}")
@@ -493,9 +503,23 @@ def fit_mlp(x: np.ndarray, y: np.ndarray, *, hidden=(384, 384), epochs: int = 40
                 bb *= b2
                 bb += (1 - b2) * gp * gp
                 p -= lr * (a / (1 - b1 ** t)) / (np.sqrt(bb / (1 - b2 ** t)) + eps)
+            if t % _FLUSH_EVERY == 0:
+                _flush_in_place(params + m1 + m2)
         if progress is not None:
             progress(ep + 1, total / max(n, 1))
+    _flush_in_place(params)
     return weights, biases
+
+
+#: :func:`fit_mlp` reads the weights and Adam's moments that have decayed to
+#: subnormal floats as 0 every this many steps (:func:`_flush_subnormals`).
+_FLUSH_EVERY = 16
+
+
+def _flush_in_place(arrays) -> None:
+    """Set the subnormal values of each float array in `arrays` to 0, in place."""
+    for a in arrays:
+        np.copyto(a, 0, where=np.abs(a) < np.finfo(a.dtype).tiny)
 
 
 def local_linear(x: np.ndarray, y: np.ndarray, w: np.ndarray, *, ridge: float) -> np.ndarray:

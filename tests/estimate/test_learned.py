@@ -55,6 +55,29 @@ def test_fit_mlp_absolute_loss_answers_the_median_where_squared_answers_the_mean
         fit_mlp(x, y, loss="l1")
 
 
+def test_fit_mlp_reads_weights_decayed_to_subnormal_floats_as_zero(monkeypatch):
+    """Weight decay takes the weights from inputs that never vary down to subnormal floats
+    (slow products on many processors): fit_mlp sets them to 0 and learns the same function."""
+    from handsynth.estimate import _learned
+
+    rng = np.random.default_rng(0)
+    x = rng.normal(size=(512, 6)).astype(np.float32)
+    x[:, 3:] = 0  # their weights feel only the decay
+    y = (x[:, :1] * 2 - x[:, 1:2]).astype(np.float32)
+    tiny = np.finfo(np.float32).tiny
+
+    def subnormal(arrays):
+        return sum(int(((a != 0) & (np.abs(a) < tiny)).sum()) for a in arrays)
+
+    flushed = fit_mlp(x, y, hidden=(16,), epochs=200, batch=64, seed=1)
+    monkeypatch.setattr(_learned, "_flush_in_place", lambda arrays: None)
+    kept = fit_mlp(x, y, hidden=(16,), epochs=200, batch=64, seed=1)
+    assert subnormal(kept[0]) > 0 and subnormal(flushed[0]) == 0
+    test = rng.normal(size=(200, 6)).astype(np.float32)
+    np.testing.assert_allclose(_learned._relu_forward(test, *flushed)[-1],
+                               _learned._relu_forward(test, *kept)[-1], rtol=1e-6, atol=1e-6)
+
+
 def test_the_loss_names_a_new_cache_only_when_not_the_default():
     assert LearnedOptions(kind="mlp").digest() == LearnedOptions(kind="mlp", loss="squared").digest()
     assert LearnedOptions(kind="mlp").digest() != LearnedOptions(kind="mlp", loss="absolute").digest()
