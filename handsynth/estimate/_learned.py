@@ -385,7 +385,7 @@ def _pca(z: _Rows, k: int, rng: np.random.Generator, sample: int = 20000, *,
 # ---------------------------------------------------------------------------
 # the perceptron
 # ---------------------------------------------------------------------------
-def _flush_subnormals(arrays: dict) -> dict:
+def _flush_subnormals(arrays: dict, *, skip: tuple[str, ...] = ()) -> dict:
     """`arrays` with every subnormal float (0 < |x| < the dtype's smallest normal) set to 0.
 
     Weight decay leaves the weights of hidden units that learnt nothing at
@@ -400,6 +400,10 @@ def _flush_subnormals(arrays: dict) -> dict:
     Parameters
     ----------
     arrays : dict of str to ndarray (or other values, kept)
+    skip : tuple of str, keyword-only
+        Keys ending so are kept as they are, unread (the learning frames'
+        codes and angles: 512 MB a per-digit estimator, no weights, half a
+        second to read through at every start).
 
     Returns
     -------
@@ -407,7 +411,8 @@ def _flush_subnormals(arrays: dict) -> dict:
     """
     out = dict(arrays)
     for k, v in arrays.items():
-        if isinstance(v, np.ndarray) and v.dtype.kind == "f" and v.size:
+        if (isinstance(v, np.ndarray) and v.dtype.kind == "f" and v.size
+                and not k.endswith(skip)):
             tiny = np.finfo(v.dtype).tiny
             sub = (np.abs(v) < tiny) & (v != 0)
             if sub.any():
@@ -768,7 +773,7 @@ class LearnedEstimator:
         arrays = dict(arrays)
         # inverted files stored by save(): read below instead of trained, not learnt arrays
         stored = {k: arrays.pop(k) for k in list(arrays) if k.endswith(_INDEX_SUFFIXES)}
-        arrays = _flush_subnormals(arrays)
+        arrays = _flush_subnormals(arrays, skip=("codes", "angles"))
         self._a = arrays
         for v in arrays.values():
             if isinstance(v, np.ndarray):

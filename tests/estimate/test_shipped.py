@@ -297,6 +297,9 @@ def test_flush_subnormals_zeroes_those_alone_and_copies_only_what_it_changes():
     assert w[0] != 0 and w[1] != 0  # the caller's array is left as it was
     assert out["clean"] is clean and out["ints"] is ints and out["layers"] == 3
     assert out is not arrays
+    # the learning frames' codes and angles are left unread when asked
+    kept = _learned._flush_subnormals({"d0_codes": w, "d0_w": w}, skip=("codes", "angles"))
+    assert kept["d0_codes"] is w and kept["d0_w"][0] == 0
 
 
 def test_shipped_perceptrons_read_without_subnormals_give_the_same_answers(monkeypatch):
