@@ -462,8 +462,8 @@ def fit_mlp(x: np.ndarray, y: np.ndarray, *, hidden=(384, 384), epochs: int = 40
     every product with one (on an Intel Xeon here a training step with the
     shipped perceptrons' weights took 66 ms instead of 7 ms).  Every 16 steps
     the weights and Adam's moments that are subnormal are set to 0
-    (:func:`_flush_subnormals`); a subnormal weight adds less than 1e-37 to
-    sums of order 1.
+    (:func:`_flush_in_place`; the returned weights hold none); a subnormal
+    weight adds less than 1e-37 to sums of order 1.
     """
     if loss not in ("squared", "absolute"):
         raise InvalidInputError(f"fit_mlp: loss must be 'squared' or 'absolute', got {loss!r}")
@@ -517,7 +517,7 @@ def fit_mlp(x: np.ndarray, y: np.ndarray, *, hidden=(384, 384), epochs: int = 40
 
 
 #: :func:`fit_mlp` reads the weights and Adam's moments that have decayed to
-#: subnormal floats as 0 every this many steps (:func:`_flush_subnormals`).
+#: subnormal floats as 0 every this many steps (:func:`_flush_in_place`).
 _FLUSH_EVERY = 16
 
 
