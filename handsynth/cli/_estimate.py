@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 import sys
 import warnings
 from pathlib import Path
@@ -273,12 +274,17 @@ def _open_learned(cache, kind, hands, rest, smoothing, side, err):
         if not line.startswith("epoch"):
             click.echo(line, err=err)
 
+    # a learning set the cache lacks is rendered on every core this process may use (at most
+    # 8): the same set, the first run's wait shorter; a few hundred hands take less time
+    # than starting the workers saves
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    workers = max(1, min(cores or 1, 8)) if data.hands >= 400 else 1
     if kind == "fingers":
         est = learned_estimator(folder, LearnedOptions(kind="fingers"), data=data, side=side,
-                                progress=say)
+                                progress=say, workers=workers)
     else:
         est = learned_ensemble(folder, members=LEARNED_ENSEMBLES[kind], data=data, side=side,
-                               progress=say)
+                               progress=say, workers=workers)
     for m in (est.members if kind != "fingers" else [est]):
         m.smoothing = smoothing or 0.0
     click.echo(f"learnt estimator ({kind}, {side} hand) ready in "

@@ -48,6 +48,7 @@ from ..render import (
     as_mount,
     coverage,
 )
+from ._executors import run_tasks
 
 __all__ = ["MAX_LEARNING_HANDS", "LearningSet", "LearningSetOptions", "learning_poses",
            "learning_set", "random_rest_posture", "render_learning_set", "render_mirror_set"]
@@ -349,28 +350,80 @@ def _grid_bytes(mask: np.ndarray, mount: CameraMount, side: str, cells) -> np.nd
     return np.rint(coverage(mask, mount, side=side, cells=cells) * 255).astype(np.uint8)
 
 
+def _hand_plan(rng: np.random.Generator, opts: LearningSetOptions, mount: CameraMount, *,
+               forearm: bool = True):
+    """The draws of one hand of a learning set: ``(shape key, variation, worn mount, edge_px, rest)``.
+
+    `rng` is drawn in the order every learning set was made with; nothing is
+    rendered, so the hands can be rendered apart (:func:`_render_plans`).
+    """
+    shape = _random_shape(rng)
+    key = round(shape.length, 1), round(shape.width, 1), forearm
+    variation = HandVariation.random(rng, spread=opts.hand_spread,
+                                     segment_width_sd=opts.segment_width_sd,
+                                     flesh_offset_sd_mm=opts.flesh_offset_sd_mm)
+    worn = opts.mount_variation.sample(mount, rng)
+    edge = int(rng.integers(-opts.edge_px, opts.edge_px + 1))
+    near_open = opts.open_rest_share > 0 and rng.uniform() < opts.open_rest_share
+    rest = random_rest_posture(rng, near_open=bool(near_open))
+    return key, variation, worn, edge, rest
+
+
+def _rasteriser(shapes: dict, key: tuple, mount: CameraMount, side: str) -> VariedRasterizer:
+    """The rasteriser of rounded shape `key` (length, width, forearm), built once in `shapes`.
+
+    A few built hands; the variation does the rest.
+    """
+    if key not in shapes:
+        shapes[key] = VariedRasterizer(HandShape(length=key[0], width=key[1]), mount,
+                                       side=side, forearm=key[2])
+    return shapes[key]
+
+
 def _draw_hand(rng: np.random.Generator, opts: LearningSetOptions, shapes: dict,
                mount: CameraMount, side: str, *, forearm: bool = True):
     """One hand of a learning set, worn and at rest: ``(rasteriser, worn mount, edge_px, rest)``.
 
     The rasteriser (of `shapes`, built once per rounded shape and `forearm`) is varied and
-    moved to the worn mount; `rng` is drawn in the order every learning set was made with.
+    moved to the worn mount; `rng` is drawn as :func:`_hand_plan` draws it.
     """
-    shape = _random_shape(rng)
-    key = round(shape.length, 1), round(shape.width, 1), forearm
-    if key not in shapes:  # a few built hands; the variation does the rest
-        shapes[key] = VariedRasterizer(HandShape(length=key[0], width=key[1]), mount,
-                                       side=side, forearm=forearm)
-    r = shapes[key]
-    r.vary(HandVariation.random(rng, spread=opts.hand_spread,
-                                segment_width_sd=opts.segment_width_sd,
-                                flesh_offset_sd_mm=opts.flesh_offset_sd_mm))
-    worn = opts.mount_variation.sample(mount, rng)
+    key, variation, worn, edge, rest = _hand_plan(rng, opts, mount, forearm=forearm)
+    r = _rasteriser(shapes, key, mount, side)
+    r.vary(variation)
     r.set_mount(worn)
-    edge = int(rng.integers(-opts.edge_px, opts.edge_px + 1))
-    near_open = opts.open_rest_share > 0 and rng.uniform() < opts.open_rest_share
-    rest = random_rest_posture(rng, near_open=bool(near_open))
     return r, worn, edge, rest
+
+
+#: Rasterisers a worker process of :func:`render_learning_set` keeps between its tasks,
+#: by (shape key, mount, side).
+_WORKER_RASTERISERS: dict = {}
+
+
+def _render_plans(task, shapes: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Render the hands of `task` ``(plans, mount, side, cells)``: rest grids and pose grids.
+
+    Each plan is ``(shape key, variation, worn, edge_px, rest, poses, slip mount or None)``
+    as :func:`render_learning_set` draws them.  `shapes` caches the rasterisers (a worker
+    process keeps its own, :data:`_WORKER_RASTERISERS`).
+    """
+    plans, mount, side, cells = task
+    if shapes is None:
+        shapes = _WORKER_RASTERISERS.setdefault((mount, side), {})
+    d = cells[0] * cells[1]
+    rest_grids = np.empty((len(plans), d), np.uint8)
+    grids = np.empty((sum(len(p[5]) for p in plans), d), np.uint8)
+    row = 0
+    for h, (key, variation, worn, edge, rest, poses, slip) in enumerate(plans):
+        r = _rasteriser(shapes, key, mount, side)
+        r.vary(variation)
+        r.set_mount(worn)
+        rest_grids[h] = _grid_bytes(_edge(r.mask(rest), edge), mount, side, cells).ravel()
+        if slip is not None:
+            r.set_mount(slip)
+        for pose in poses:
+            grids[row] = _grid_bytes(_edge(r.mask(pose), edge), mount, side, cells).ravel()
+            row += 1
+    return rest_grids, grids
 
 
 def render_mirror_set(hands: int, *, seed: int = 0, forearm_share: float = 0.5,
@@ -435,7 +488,7 @@ def render_mirror_set(hands: int, *, seed: int = 0, forearm_share: float = 0.5,
 
 def render_learning_set(options: LearningSetOptions | None = None, *,
                         mount: CameraMount | None = None, side: str = "right",
-                        progress=None) -> LearningSet:
+                        progress=None, workers: int = 1) -> LearningSet:
     """Render a learning set (module docstring).
 
     Parameters
@@ -447,7 +500,13 @@ def render_learning_set(options: LearningSetOptions | None = None, *,
         grids is the nominal device's.
     side : {"right", "left"}, keyword-only
     progress : callable, keyword-only, optional
-        Called with (hands done, hands) after each hand.
+        Called with (hands done, hands) after each chunk of hands rendered.
+    workers : int, keyword-only
+        Processes rendering the hands (default 1: this one).  The set is the
+        same to the byte whatever their number: every random draw is made
+        first, in order.  Worker processes are started afresh ("spawn"), so
+        a script that asks for them keeps its work under
+        ``if __name__ == "__main__":``.
 
     Returns
     -------
@@ -455,6 +514,7 @@ def render_learning_set(options: LearningSetOptions | None = None, *,
     """
     opts = check_options(options, LearningSetOptions)
     mount = as_mount(mount)
+    workers = check_integer(workers, "workers", minimum=1)
     rng = np.random.default_rng(opts.seed)
     n, per = opts.hands, opts.poses_per_hand
     d = opts.cells[0] * opts.cells[1]
@@ -463,30 +523,41 @@ def render_learning_set(options: LearningSetOptions | None = None, *,
     angles = np.empty((n * per, 20), np.float32)
     rest_angles = np.empty((n, 20), np.float32)
     hand = np.repeat(np.arange(n, dtype=np.int32), per)
-    shapes: dict = {}
-    for h in range(n):
-        r, worn, edge, rest = _draw_hand(rng, opts, shapes, mount, side)
+    plans = []
+    for h in range(n):  # every draw first, in the order the sets were always drawn in
+        key, variation, worn, edge, rest = _hand_plan(rng, opts, mount)
         poses = learning_poses(rest, per, rng, mix=opts.mix)
-
-        def grid(pose, r=r, edge=edge):
-            return _grid_bytes(_edge(r.mask(pose), edge), mount, side, opts.cells)
-
-        rest_grids[h] = grid(rest).ravel()
-        rest_angles[h] = rest
+        slip = None
         # drawn only with a slip: the sets made before the option stay the same
         if opts.rest_slip and (opts.rest_slip_share == 1.0 or rng.uniform() < opts.rest_slip_share):
-            r.set_mount(opts.mount_variation.scaled(opts.rest_slip).sample(worn, rng))
-        for i, pose in enumerate(poses):
-            grids[h * per + i] = grid(pose).ravel()
+            slip = opts.mount_variation.scaled(opts.rest_slip).sample(worn, rng)
+        plans.append((key, variation, worn, edge, rest, poses, slip))
+        rest_angles[h] = rest
         angles[h * per:(h + 1) * per] = poses
+    # then the rendering, in chunks of hands (a few per worker and progress line)
+    size = max(1, min(_CHUNK_HANDS, -(-n // (4 * workers))))
+    starts = range(0, n, size)
+    tasks = [(plans[a:a + size], mount, side, opts.cells) for a in starts]
+    done = 0
+    shapes: dict = {}
+    results = (run_tasks(_render_plans, tasks, workers=workers) if workers > 1
+               else ((i, _render_plans(t, shapes)) for i, t in enumerate(tasks)))
+    for i, (rg, g) in results:
+        a = starts[i]
+        rest_grids[a:a + len(rg)] = rg
+        grids[a * per:a * per + len(g)] = g
+        done += len(rg)
         if progress is not None:
-            progress(h + 1, n)
+            progress(done, n)
     return LearningSet(grids, rest_grids, hand, angles, rest_angles, opts, mount, side)
 
 
+#: Hands per rendering task of :func:`render_learning_set` at most.
+_CHUNK_HANDS = 100
+
 def learning_set(folder, options: LearningSetOptions | None = None, *,
                  mount: CameraMount | None = None, side: str = "right",
-                 progress=None) -> LearningSet:
+                 progress=None, workers: int = 1) -> LearningSet:
     """The learning set of `options`, read from `folder` or rendered and kept there.
 
     Parameters
@@ -495,7 +566,7 @@ def learning_set(folder, options: LearningSetOptions | None = None, *,
         A folder the caller chose (created if missing).  The file is
         ``learning_<digest>.npz``; a file that does not read back complete is
         rendered again.
-    options, mount, side, progress
+    options, mount, side, progress, workers
         As :func:`render_learning_set`.
 
     Raises
@@ -520,7 +591,7 @@ def learning_set(folder, options: LearningSetOptions | None = None, *,
             pass
     # checked before the rendering (minutes with the defaults), not after it
     make_folder(folder, what="learning-set folder", writable=True, error=DatabaseError)
-    out = render_learning_set(opts, mount=mount, side=side, progress=progress)
+    out = render_learning_set(opts, mount=mount, side=side, progress=progress, workers=workers)
     with atomic_open(path, "wb", what="learning set", error=DatabaseError) as f:
         np.savez(f, grids=out.grids, rest_grids=out.rest_grids, hand=out.hand,
                  angles=out.angles, rest_angles=out.rest_angles,

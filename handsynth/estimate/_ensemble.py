@@ -296,7 +296,7 @@ def shipped_members(*, members=LEARNED_ENSEMBLE) -> list[LearnedEstimator]:
 
 def learned_ensemble(folder, *, members=LEARNED_ENSEMBLE, data=None, mount=None,
                      side: str = "right", progress=None, learnt=(),
-                     shipped: bool = True) -> EnsembleEstimator:
+                     shipped: bool = True, workers: int = 1) -> EnsembleEstimator:
     """The weighted mean of learnt estimators, each read from `folder` or learnt there first.
 
     Parameters
@@ -307,7 +307,7 @@ def learned_ensemble(folder, *, members=LEARNED_ENSEMBLE, data=None, mount=None,
         Each member's options and weight, and optionally what its learning
         set changes from `data` (:func:`member_learning_set`; default
         :data:`LEARNED_ENSEMBLE`).
-    data, mount, side, progress, shipped
+    data, mount, side, progress, shipped, workers
         As :func:`~handsynth.estimate.learned_estimator`'s, for every member.
     learnt : sequence of LearnedEstimator, keyword-only
         Estimators already read (of the learning set `data`, mount and
@@ -332,7 +332,8 @@ def learned_ensemble(folder, *, members=LEARNED_ENSEMBLE, data=None, mount=None,
         est = None if changes else have.get(opts)
         if est is None:
             est = learned_estimator(folder, opts, data=member_learning_set(data, changes),
-                                    mount=mount, side=side, progress=progress, shipped=shipped)
+                                    mount=mount, side=side, progress=progress, shipped=shipped,
+                                    workers=workers)
         ests.append(est)
         weights.append(weight)
     return EnsembleEstimator(ests, weights=weights)

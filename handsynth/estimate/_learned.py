@@ -1485,7 +1485,8 @@ def _is_colour(frame) -> bool:
 
 def learned_estimator(folder, options: LearnedOptions | None = None, *,
                       data: LearningSetOptions | None = None, mount: CameraMount | None = None,
-                      side: str = "right", progress=None, shipped: bool = True) -> LearnedEstimator:
+                      side: str = "right", progress=None, shipped: bool = True,
+                      workers: int = 1) -> LearnedEstimator:
     """The estimator learnt with `options` from the learning set `data`, cached in `folder`.
 
     Renders the learning set (:func:`~handsynth.db.learning_set`) and learns
@@ -1511,6 +1512,12 @@ def learned_estimator(folder, options: LearnedOptions | None = None, *,
     shipped : bool, keyword-only
         Read a shipped estimator of these options when there is one (default)
         instead of learning it.
+    workers : int, keyword-only
+        Processes rendering a learning set that is not in `folder`
+        (:func:`~handsynth.db.render_learning_set`: the same set whatever
+        their number; default 1).  Worker processes are started afresh, so
+        a script that asks for them keeps its work under
+        ``if __name__ == "__main__":``.
 
     Raises
     ------
@@ -1529,7 +1536,7 @@ def learned_estimator(folder, options: LearnedOptions | None = None, *,
     check_side(side)
     if side == "left":
         return learned_estimator(folder, opts, data=data, mount=mount.mirrored(), side="right",
-                                 progress=progress, shipped=shipped).mirrored()
+                                 progress=progress, shipped=shipped, workers=workers).mirrored()
     path = folder / learned_file_name(opts, data, mount, side)
     say = progress or (lambda _line: None)
     if path.is_file():
@@ -1549,7 +1556,7 @@ def learned_estimator(folder, options: LearnedOptions | None = None, *,
     # checked before minutes of rendering and learning, not when the result is saved
     make_folder(folder, what="learnt-estimator folder", writable=True, error=DatabaseError)
     say(f"learning set: {data.hands} hands x {data.poses_per_hand} frames")
-    ls = learning_set(folder, data, mount=mount, side=side)
+    ls = learning_set(folder, data, mount=mount, side=side, workers=workers)
     say(f"learning {opts.kind}")
     est = train_learned(ls, opts, progress=lambda e, loss: say(f"epoch {e}: loss {loss:.4f}"))
     est.save(path)

@@ -54,7 +54,7 @@ PROTOCOL_METHODS: tuple[str, ...] = ("standard", "selected", "calibrated", *LEAR
 
 
 def protocol_methods(names, folder, *, data: LearningSetOptions | None = None,
-                     mount: CameraMount | None = None, progress=None) -> dict:
+                     mount: CameraMount | None = None, progress=None, workers: int = 1) -> dict:
     """Estimator factories for :func:`~handsynth.eval.run_protocol`.
 
     Parameters
@@ -76,6 +76,8 @@ def protocol_methods(names, folder, *, data: LearningSetOptions | None = None,
         The device (the paper's by default).
     progress : callable, keyword-only, optional
         Called with a line of text at each stage.
+    workers : int, keyword-only
+        Processes rendering a learning set the folder lacks (default 1).
 
     Returns
     -------
@@ -118,7 +120,8 @@ def protocol_methods(names, folder, *, data: LearningSetOptions | None = None,
     for name, opts in LEARNED_METHODS.items():
         if name in needed:
             t0 = time.perf_counter()
-            built[name] = learned_estimator(folder, opts, data=data, mount=mount, progress=say)
+            built[name] = learned_estimator(folder, opts, data=data, mount=mount, progress=say,
+                                            workers=workers)
             say(f"{name}: ready in {time.perf_counter() - t0:.1f} s")
     for name, est in built.items():
         if name in names:
@@ -127,7 +130,7 @@ def protocol_methods(names, folder, *, data: LearningSetOptions | None = None,
     for name, members in LEARNED_ENSEMBLES.items():
         if name in names:
             ens = learned_ensemble(folder, members=members, data=data, mount=mount,
-                                   progress=say, learnt=built.values())
+                                   progress=say, learnt=built.values(), workers=workers)
             out[name] = lambda rest, hand, ens=ens: ens.calibrated(rest)
     return {n: out[n] for n in names}
 

@@ -26,6 +26,21 @@ def test_a_learning_set_is_a_pure_function_of_its_options():
     assert not np.array_equal(a.angles, c.angles)
 
 
+def test_worker_processes_render_the_same_set_to_the_byte():
+    opts = LearningSetOptions(hands=10, poses_per_hand=3, seed=7, rest_slip=1.0,
+                              rest_slip_share=0.5)
+    said = {1: [], 2: []}
+    one = render_learning_set(opts, progress=lambda *a: said[1].append(a))
+    two = render_learning_set(opts, workers=2, progress=lambda *a: said[2].append(a))
+    for k in ("grids", "rest_grids", "hand", "angles", "rest_angles"):
+        assert np.array_equal(getattr(one, k), getattr(two, k)), k
+    for lines in said.values():  # after each chunk of hands, up to all of them
+        done = [d for d, _n in lines]
+        assert len(done) > 1 and done == sorted(done) and lines[-1] == (10, 10)
+    with pytest.raises(InvalidInputError, match="workers"):
+        render_learning_set(SMALL, workers=0)
+
+
 def test_the_set_is_kept_in_the_caller_s_folder_and_a_broken_file_is_rendered_again(tmp_path):
     a = learning_set(tmp_path, SMALL)
     files = list(tmp_path.glob("learning_*.npz"))
