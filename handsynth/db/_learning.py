@@ -555,6 +555,7 @@ def render_learning_set(options: LearningSetOptions | None = None, *,
 #: Hands per rendering task of :func:`render_learning_set` at most.
 _CHUNK_HANDS = 100
 
+
 def learning_set(folder, options: LearningSetOptions | None = None, *,
                  mount: CameraMount | None = None, side: str = "right",
                  progress=None, workers: int = 1) -> LearningSet:
