@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import os
 import sys
 import warnings
 from pathlib import Path
@@ -249,7 +248,7 @@ def _open_learned(cache, kind, hands, rest, smoothing, side, err):
     import dataclasses
     import time
 
-    from ..db import MAX_LEARNING_HANDS, LearningSetOptions
+    from ..db import MAX_LEARNING_HANDS, LearningSetOptions, learning_workers
     from ..estimate import LEARNED_ENSEMBLES, LearnedOptions, learned_ensemble, learned_estimator
     from ..live import default_database_dir
 
@@ -274,11 +273,8 @@ def _open_learned(cache, kind, hands, rest, smoothing, side, err):
         if not line.startswith("epoch"):
             click.echo(line, err=err)
 
-    # a learning set the cache lacks is rendered on every core this process may use (at most
-    # 8): the same set, the first run's wait shorter; a few hundred hands take less time
-    # than starting the workers saves
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-    workers = max(1, min(cores or 1, 8)) if data.hands >= 400 else 1
+    # a learning set the cache lacks is rendered on every core: the same set, sooner
+    workers = learning_workers(data.hands)
     if kind == "fingers":
         est = learned_estimator(folder, LearnedOptions(kind="fingers"), data=data, side=side,
                                 progress=say, workers=workers)

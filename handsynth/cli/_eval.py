@@ -216,7 +216,7 @@ def _protocol(folder, mesh, mesh_scale, learned_hands, hand_spread, json_path, n
 
     from .. import __version__
     from .._io import make_folder, write_json
-    from ..db import LearningSetOptions
+    from ..db import LearningSetOptions, learning_workers
     from ..eval import (
         ProtocolOptions,
         describe_methods,
@@ -251,7 +251,9 @@ def _protocol(folder, mesh, mesh_scale, learned_hands, hand_spread, json_path, n
     data = (LearningSetOptions() if learned_hands is None
             else LearningSetOptions(hands=learned_hands))
     make_folder(folder, what="--db folder")  # before the learning: a file in the way fails now
-    factories = protocol_methods(methods, folder, data=data, mount=mount, progress=say)
+    # a learning set the folder lacks is rendered on every core (the same set, sooner)
+    factories = protocol_methods(methods, folder, data=data, mount=mount, progress=say,
+                                 workers=learning_workers(data.hands))
     t0 = time.perf_counter()
     result = run_protocol(factories, hands, options, progress=say)
     result["seconds"] = round(time.perf_counter() - t0, 1)

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 import zipfile
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -51,7 +52,8 @@ from ..render import (
 from ._executors import run_tasks
 
 __all__ = ["MAX_LEARNING_HANDS", "LearningSet", "LearningSetOptions", "learning_poses",
-           "learning_set", "random_rest_posture", "render_learning_set", "render_mirror_set"]
+           "learning_set", "learning_workers", "random_rest_posture", "render_learning_set",
+           "render_mirror_set"]
 
 _FORMAT = 1
 #: Most hands a learning set may hold: 100,000 hands of 100 frames are about 14 GB of
@@ -554,6 +556,21 @@ def render_learning_set(options: LearningSetOptions | None = None, *,
 
 #: Hands per rendering task of :func:`render_learning_set` at most.
 _CHUNK_HANDS = 100
+
+
+def learning_workers(hands: int) -> int:
+    """Processes the ``handsynth`` commands render a learning set of `hands` hands with.
+
+    Every core this process may use (at most 8) for 400 hands or more; 1 below,
+    where starting the workers takes longer than they save.
+    """
+    if hands < 400:
+        return 1
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        cores = os.cpu_count() or 1
+    return max(1, min(cores, 8))
 
 
 def learning_set(folder, options: LearningSetOptions | None = None, *,

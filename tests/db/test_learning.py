@@ -1,3 +1,5 @@
+import os
+
 import numpy as np
 import pytest
 
@@ -5,6 +7,7 @@ from handsynth.db import (
     LearningSetOptions,
     learning_poses,
     learning_set,
+    learning_workers,
     random_rest_posture,
     render_learning_set,
 )
@@ -39,6 +42,9 @@ def test_worker_processes_render_the_same_set_to_the_byte():
         assert len(done) > 1 and done == sorted(done) and lines[-1] == (10, 10)
     with pytest.raises(InvalidInputError, match="workers"):
         render_learning_set(SMALL, workers=0)
+    # what the commands ask for: one process for small sets, every core (at most 8) for large
+    assert learning_workers(399) == 1
+    assert learning_workers(4000) == min(len(os.sched_getaffinity(0)), 8)
 
 
 def test_the_set_is_kept_in_the_caller_s_folder_and_a_broken_file_is_rendered_again(tmp_path):
