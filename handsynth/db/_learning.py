@@ -371,15 +371,20 @@ def _hand_plan(rng: np.random.Generator, opts: LearningSetOptions, mount: Camera
     return key, variation, worn, edge, rest
 
 
-def _rasteriser(shapes: dict, key: tuple, mount: CameraMount, side: str) -> VariedRasterizer:
-    """The rasteriser of rounded shape `key` (length, width, forearm), built once in `shapes`.
+def _rasteriser(shapes: dict, key: tuple, variation: HandVariation, worn: CameraMount,
+                mount: CameraMount, side: str) -> VariedRasterizer:
+    """The rasteriser of rounded shape `key` (length, width, forearm), varied and worn.
 
-    A few built hands; the variation does the rest.
+    Built once in `shapes` for the nominal `mount` (a few built hands; the variation
+    does the rest), then given `variation` and moved to the `worn` mount.
     """
     if key not in shapes:
         shapes[key] = VariedRasterizer(HandShape(length=key[0], width=key[1]), mount,
                                        side=side, forearm=key[2])
-    return shapes[key]
+    r = shapes[key]
+    r.vary(variation)
+    r.set_mount(worn)
+    return r
 
 
 def _draw_hand(rng: np.random.Generator, opts: LearningSetOptions, shapes: dict,
@@ -390,10 +395,7 @@ def _draw_hand(rng: np.random.Generator, opts: LearningSetOptions, shapes: dict,
     moved to the worn mount; `rng` is drawn as :func:`_hand_plan` draws it.
     """
     key, variation, worn, edge, rest = _hand_plan(rng, opts, mount, forearm=forearm)
-    r = _rasteriser(shapes, key, mount, side)
-    r.vary(variation)
-    r.set_mount(worn)
-    return r, worn, edge, rest
+    return _rasteriser(shapes, key, variation, worn, mount, side), worn, edge, rest
 
 
 #: Rasterisers a worker process of :func:`render_learning_set` keeps between its tasks,
@@ -416,9 +418,7 @@ def _render_plans(task, shapes: dict | None = None) -> tuple[np.ndarray, np.ndar
     grids = np.empty((sum(len(p[5]) for p in plans), d), np.uint8)
     row = 0
     for h, (key, variation, worn, edge, rest, poses, slip) in enumerate(plans):
-        r = _rasteriser(shapes, key, mount, side)
-        r.vary(variation)
-        r.set_mount(worn)
+        r = _rasteriser(shapes, key, variation, worn, mount, side)
         rest_grids[h] = _grid_bytes(_edge(r.mask(rest), edge), mount, side, cells).ravel()
         if slip is not None:
             r.set_mount(slip)
