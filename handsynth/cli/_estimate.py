@@ -249,7 +249,13 @@ def _open_learned(cache, kind, hands, rest, smoothing, side, err):
     import time
 
     from ..db import MAX_LEARNING_HANDS, LearningSetOptions, learning_workers
-    from ..estimate import LEARNED_ENSEMBLES, LearnedOptions, learned_ensemble, learned_estimator
+    from ..estimate import (
+        LEARNED_ENSEMBLES,
+        LearnedOptions,
+        largest_learning_set,
+        learned_ensemble,
+        learned_estimator,
+    )
     from ..live import default_database_dir
 
     if hands is not None and hands < 1:
@@ -274,7 +280,8 @@ def _open_learned(cache, kind, hands, rest, smoothing, side, err):
             click.echo(line, err=err)
 
     # a learning set the cache lacks is rendered on every core: the same set, sooner
-    workers = learning_workers(data.hands)
+    workers = learning_workers(data.hands if kind == "fingers"
+                               else largest_learning_set(data, LEARNED_ENSEMBLES[kind]))
     if kind == "fingers":
         est = learned_estimator(folder, LearnedOptions(kind="fingers"), data=data, side=side,
                                 progress=say, workers=workers)

@@ -217,6 +217,7 @@ def _protocol(folder, mesh, mesh_scale, learned_hands, hand_spread, json_path, n
     from .. import __version__
     from .._io import make_folder, write_json
     from ..db import LearningSetOptions, learning_workers
+    from ..estimate import LEARNED_ENSEMBLES, largest_learning_set
     from ..eval import (
         ProtocolOptions,
         describe_methods,
@@ -252,8 +253,9 @@ def _protocol(folder, mesh, mesh_scale, learned_hands, hand_spread, json_path, n
             else LearningSetOptions(hands=learned_hands))
     make_folder(folder, what="--db folder")  # before the learning: a file in the way fails now
     # a learning set the folder lacks is rendered on every core (the same set, sooner)
+    largest = max(largest_learning_set(data, LEARNED_ENSEMBLES.get(name, ())) for name in methods)
     factories = protocol_methods(methods, folder, data=data, mount=mount, progress=say,
-                                 workers=learning_workers(data.hands))
+                                 workers=learning_workers(largest))
     t0 = time.perf_counter()
     result = run_protocol(factories, hands, options, progress=say)
     result["seconds"] = round(time.perf_counter() - t0, 1)

@@ -559,10 +559,13 @@ _CHUNK_HANDS = 100
 
 
 def learning_workers(hands: int) -> int:
-    """Processes the ``handsynth`` commands render a learning set of `hands` hands with.
+    """Processes the ``handsynth`` commands render learning sets with.
 
-    Every core this process may use (at most 8) for 400 hands or more; 1 below,
-    where starting the workers takes longer than they save.
+    `hands` is the largest set's hands (an ensemble's perceptrons learn from
+    four times the hands of its base set:
+    :func:`~handsynth.estimate.largest_learning_set`).  Every core this
+    process may use (at most 8) for 400 hands or more; 1 below, where
+    starting the workers takes longer than they save.
     """
     if hands < 400:
         return 1

@@ -25,8 +25,8 @@ from ._lookup import PoseEstimate
 from ._shipped import shipped_path
 
 __all__ = ["LEARNED_ENSEMBLE", "LEARNED_ENSEMBLES", "LEARNED_PERCEPTRONS", "SHIPPED_LEARNING_SETS",
-           "EnsembleEstimator", "learned_ensemble", "member_learning_set", "shipped_members",
-           "shipped_perceptrons"]
+           "EnsembleEstimator", "largest_learning_set", "learned_ensemble", "member_learning_set",
+           "shipped_members", "shipped_perceptrons"]
 
 #: The default learnt estimator's members: each member's options, its weight
 #: and what its learning set changes from the one given to
@@ -229,6 +229,24 @@ def member_learning_set(data: LearningSetOptions, changes) -> LearningSetOptions
                                     f"number, got {factor!r}")
         changes["hands"] = max(1, round(data.hands * factor))
     return replace(data, **changes)
+
+
+def largest_learning_set(data: LearningSetOptions, members=LEARNED_ENSEMBLE) -> int:
+    """Hands in the largest of the learning sets `members` learn from.
+
+    What a command that may render the sets judges its worker processes by
+    (:func:`~handsynth.db.learning_workers`): the default ensemble's
+    perceptrons learn from four times the hands of `data`.
+
+    Parameters
+    ----------
+    data : LearningSetOptions
+        The learning set given to :func:`learned_ensemble`.
+    members : sequence of (LearnedOptions, float, changes)
+        As :data:`LEARNED_ENSEMBLE`.
+    """
+    return max([data.hands] + [member_learning_set(data, changes).hands
+                               for _options, _weight, changes in members])
 
 
 def shipped_perceptrons(*, members=LEARNED_ENSEMBLE, bases=SHIPPED_LEARNING_SETS

@@ -563,6 +563,21 @@ def test_a_member_learning_set_may_scale_the_hands():
         member_learning_set(DATA, (("hands_scale", 2),))
 
 
+def test_the_largest_learning_set_is_the_one_the_commands_judge_their_workers_by():
+    from handsynth.db import learning_workers
+    from handsynth.estimate import LEARNED_ENSEMBLES, largest_learning_set
+
+    small = LearningSetOptions(hands=150)
+    # the default ensemble's perceptrons learn from four times the hands
+    assert largest_learning_set(small) == 600
+    assert largest_learning_set(small, LEARNED_ENSEMBLES["perceptrons"]) == 600
+    assert largest_learning_set(small, ()) == 150  # a single estimator learns from the set itself
+    assert largest_learning_set(small, ((LearnedOptions(), 1.0, (("hands_factor", 0.5),)),)) == 150
+    # so a run of 150 hands renders the perceptrons' sets of 600 on every core (at most 8)
+    assert learning_workers(largest_learning_set(small)) == learning_workers(600) >= 1
+    assert learning_workers(small.hands) == 1
+
+
 def test_learned_ensemble_weights_its_members_and_reuses_those_already_read(tmp_path):
     from handsynth.estimate import EnsembleEstimator, learned_ensemble
 
