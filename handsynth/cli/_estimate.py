@@ -280,8 +280,7 @@ def _open_learned(cache, kind, hands, rest, smoothing, side, err):
             click.echo(line, err=err)
 
     # a learning set the cache lacks is rendered on every core: the same set, sooner
-    workers = learning_workers(data.hands if kind == "fingers"
-                               else largest_learning_set(data, LEARNED_ENSEMBLES[kind]))
+    workers = learning_workers(largest_learning_set(data, LEARNED_ENSEMBLES.get(kind, ())))
     if kind == "fingers":
         est = learned_estimator(folder, LearnedOptions(kind="fingers"), data=data, side=side,
                                 progress=say, workers=workers)
