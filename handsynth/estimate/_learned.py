@@ -416,11 +416,15 @@ def _flush_subnormals(arrays: dict, *, skip: tuple[str, ...] = ()) -> dict:
     for k, v in arrays.items():
         if (isinstance(v, np.ndarray) and v.dtype.kind == "f" and v.size
                 and not k.endswith(skip)):
-            tiny = np.finfo(v.dtype).tiny
-            sub = (np.abs(v) < tiny) & (v != 0)
+            sub = _subnormal(v)
             if sub.any():
                 out[k] = np.where(sub, v.dtype.type(0), v)
     return out
+
+
+def _subnormal(a: np.ndarray) -> np.ndarray:
+    """Where float array `a` is subnormal (0 < |a| < its dtype's smallest normal number)."""
+    return (np.abs(a) < np.finfo(a.dtype).tiny) & (a != 0)
 
 
 def _relu_forward(x, weights, biases):
@@ -527,7 +531,7 @@ _FLUSH_EVERY = 16
 def _flush_in_place(arrays) -> None:
     """Set the subnormal values of each float array in `arrays` to 0, in place."""
     for a in arrays:
-        np.copyto(a, 0, where=np.abs(a) < np.finfo(a.dtype).tiny)
+        np.copyto(a, 0, where=_subnormal(a))
 
 
 def local_linear(x: np.ndarray, y: np.ndarray, w: np.ndarray, *, ridge: float) -> np.ndarray:
