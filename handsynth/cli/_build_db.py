@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import os
 import sys
 
 import click
 
 from .._checks import check_path_names
+from .._cores import usable_cores
 from ..errors import InvalidInputError
 from ._main import cli, option_names
 
@@ -120,6 +120,6 @@ def build_db(out_dir, default, shapes, pose_set, count, seed, side, mount, rende
                            else DEFAULT_RENDER_SIZE)
     cam = CameraMount.paper() if mount == "paper" else CameraMount.whole_hand()
     summary = build_databases(out_dir, _parse_shapes(shapes), cam, options=options,
-                              workers=(os.cpu_count() or 1) if workers is None else workers,
+                              workers=usable_cores() if workers is None else workers,
                               executor=executor, force=force, progress=show)
     click.echo(summary.format())

@@ -44,6 +44,7 @@ from pathlib import Path
 import numpy as np
 
 from .._checks import check_integer, check_options, check_path, check_side, short_repr
+from .._cores import usable_cores
 from .._io import make_folder, os_error_reason
 from ..errors import (
     DatabaseError,
@@ -586,7 +587,7 @@ def build_databases(out_dir, shapes: Sequence[HandShape | str], mount: CameraMou
         Side, pose set, count, seed and render size.  Instead, the same
         fields may be given as keywords (``count=3000, seed=1``).
     workers : int, keyword-only, optional
-        Worker processes; all cores (``os.cpu_count()``) by default, and at
+        Worker processes; every core this process may use by default, and at
         most that many with ``executor="process"``.  One worker renders in
         this process.  Workers exit when this process dies and ignore Ctrl-C
         (this process stops them).
@@ -647,14 +648,14 @@ def build_databases(out_dir, shapes: Sequence[HandShape | str], mount: CameraMou
     options = check_options(options, BuildOptions)
     _check_progress(progress)
     if workers is None:
-        workers = os.cpu_count() or 1
+        workers = usable_cores()
     if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1:
         raise InvalidInputError(f"workers must be a positive integer, got {workers!r}")
     workers = int(workers)
-    cores = os.cpu_count() or 1
+    cores = usable_cores()
     if executor == "process" and workers > cores:
         raise InvalidInputError(
-            f"workers must be at most the {cores} CPU cores of this machine (each worker "
+            f"workers must be at most the {cores} CPU cores this process may use (each worker "
             f"process renders on one core and holds its own model), got {workers}")
     if executor not in EXECUTORS:
         raise InvalidInputError(
@@ -820,7 +821,7 @@ def build_default_database(out_dir, *, workers: int | None = None,
     pathlib.Path
     """
     d = DEFAULT_DATABASE
-    workers = (os.cpu_count() or 1) if workers is None else workers
+    workers = usable_cores() if workers is None else workers
     return build_database(out_dir, d["shape"], CameraMount.paper(), workers=workers,
                           progress=progress, pose_set=d["pose_set"],
                           count=d["count"], seed=d["seed"], side=side)

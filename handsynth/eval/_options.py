@@ -7,6 +7,7 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 
 from .._checks import check_integer, check_side
+from .._cores import usable_cores
 from ..db import check_render_size
 from ..errors import InvalidInputError
 from ..models import PAPER_SIZE, HandShape
@@ -125,7 +126,7 @@ class EvalOptions:
         as a live camera delivers them.
     workers : int
         Worker processes for building missing databases, at most the CPU
-        cores (each renders on one core).
+        cores this process may use (each renders on one core).
     side : {"right", "left"}
     ties : {"mean", "first"}
         What the lookups report when several entries match equally well
@@ -172,7 +173,7 @@ class EvalOptions:
                 f"{_field('db_folder')} must be a folder path, got {self.db_folder!r}") from None
         for name, lo, hi in (("n_hands", 1, MAX_HANDS), ("frames_per_hand", 1, MAX_FRAMES),
                              ("seed", 0, None), ("count", 1, None), ("db_seed", 0, None),
-                             ("workers", 1, os.cpu_count() or 1)):
+                             ("workers", 1, usable_cores())):
             object.__setattr__(self, name, _check_int(getattr(self, name), name, lo, hi))
         sets = (self.pose_sets,) if isinstance(self.pose_sets, str) else tuple(self.pose_sets)
         if not sets or any(s not in POSE_SETS for s in sets) or len(set(sets)) != len(sets):

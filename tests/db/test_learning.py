@@ -1,8 +1,7 @@
-import os
-
 import numpy as np
 import pytest
 
+from handsynth._cores import usable_cores
 from handsynth.db import (
     LearningSetOptions,
     learning_poses,
@@ -44,7 +43,7 @@ def test_worker_processes_render_the_same_set_to_the_byte():
         render_learning_set(SMALL, workers=0)
     # what the commands ask for: one process for small sets, every core (at most 8) for large
     assert learning_workers(399) == 1
-    assert learning_workers(4000) == min(len(os.sched_getaffinity(0)), 8)
+    assert learning_workers(4000) == min(usable_cores(), 8)
 
 
 def test_the_set_is_kept_in_the_caller_s_folder_and_a_broken_file_is_rendered_again(tmp_path):
