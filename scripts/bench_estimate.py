@@ -228,6 +228,8 @@ def main() -> None:
                     help="--learned: share of learning hands resting near open "
                          "[default: the library's]")
     args = ap.parse_args()
+    if args.db is not None and not args.db.is_dir():
+        ap.error(f"--db {str(args.db)!r} is not a folder (leave it out to render a database)")
     if args.learned is not None:
         _bench_learned(args)
         return

@@ -1,4 +1,5 @@
-"""``handsynth estimate``: the live pose-lookup loop (camera, video file or a synthetic hand)."""
+"""``handsynth estimate``: the live loop (camera, video file or a synthetic hand) of the learnt
+estimator, or with ``--method paper`` of the paper's database lookup."""
 
 from __future__ import annotations
 
@@ -205,8 +206,9 @@ def _calibrate(lookup, source, open_image, db_dir, mount, side, build, err):
 
 def _check_learned_options(db_dir, shape_name, measurements, personal, build_count,
                            calibrate, no_temporal, keypoints) -> None:
-    """--learned replaces the database lookup: its options do not apply (but for --shape and
-    --measurements, which with --keypoints say whose keypoints to report)."""
+    """The learnt estimator (the default method) replaces the database lookup: its options do
+    not apply (but for --shape and --measurements, which with --keypoints say whose keypoints
+    to report)."""
     given = [flag for flag, on in (("--db", db_dir is not None),
                                    ("--personal", personal),
                                    ("--build-count", build_count is not None),
@@ -214,14 +216,15 @@ def _check_learned_options(db_dir, shape_name, measurements, personal, build_cou
              if on]
     if given:
         raise InvalidInputError(f"{', '.join(given)} appl{'ies' if len(given) == 1 else 'y'} to "
-                                "the database lookup, not to --learned (the learnt estimator "
-                                "is calibrated to the hand at rest; --calibrate-image gives "
-                                "that frame)")
+                                "the paper's database lookup (--method paper), not to the "
+                                "learnt estimator, the default (it is calibrated to the hand "
+                                "at rest; --calibrate-image gives that frame)")
     if not keypoints and (shape_name is not None or measurements is not None):
         flag = "--shape" if shape_name is not None else "--measurements"
-        raise InvalidInputError(f"{flag} with --learned says whose keypoints to report, and "
-                                "--keypoints was not given (the learnt estimator reads angles "
-                                "whatever the hand's size)")
+        raise InvalidInputError(f"{flag} with the learnt estimator (the default method) says "
+                                "whose keypoints to report, and --keypoints was not given (it "
+                                "reads angles whatever the hand's size; --method paper chooses "
+                                "a database by it)")
 
 
 def _keypoint_shape(shape_name, measurements, err):
@@ -454,31 +457,33 @@ def _progress(stream):
 @click.option("--synthetic", is_flag=True,
               help="Render a moving hand of --synthetic-shape (no camera needed).")
 @click.option("--db", "db_dir", default=None, metavar="FOLDER",
-              help="Database folder (<shape>.h5 files) [default: build or verify the embedded "
-                   "default database in ~/.cache/handsynth/db].")
+              help="--method paper: database folder (<shape>.h5 files) [default: build or "
+                   "verify the embedded default database in ~/.cache/handsynth/db].")
 @click.option("--shape", "shape_name", default=None, metavar="NAME",
-              help="Use the database of the grid shape nearest to this hand shape "
-                   "(e.g. L1.050_W0.900_P1.000_T1.000, or 'standard'); with --learned "
-                   "--keypoints, the hand whose keypoints are reported.")
+              help="With --keypoints, the hand whose keypoints are reported (e.g. "
+                   "L1.050_W0.900_P1.000_T1.000, or 'standard'); --method paper: use the "
+                   "database of the grid shape nearest to it.")
 @click.option("--measurements", default=None, metavar="FILE",
-              help="Choose the database from hand measurements in mm (.json or .csv); with "
-                   "--learned --keypoints, the hand whose keypoints are reported.")
+              help="Hand measurements in mm (.json or .csv): with --keypoints, the hand whose "
+                   "keypoints are reported; --method paper: the database chosen by them.")
 @click.option("--personal", is_flag=True,
-              help="Use a database of exactly the --shape or --measurements hand (built in "
-                   "--db when missing, 20,448 paper poses, a few seconds) instead of the "
-                   "nearest grid shape's.")
+              help="--method paper: use a database of exactly the --shape or --measurements "
+                   "hand (built in --db when missing, 20,448 paper poses, a few seconds) "
+                   "instead of the nearest grid shape's.")
 @click.option("--build-count", "--personal-count", "build_count", type=int, default=None,
-              metavar="N", help="Poses of a database built for --personal or --calibrate "
+              metavar="N", help="--method paper: poses of a database built for --personal or --calibrate "
                                 "[default: the paper's 20,448].")
 @click.option("--calibrate", is_flag=True,
-              help="Calibrate to the hand held open and flat (beyond the paper): the first "
+              help="--method paper: calibrate to the hand held open and flat (beyond the "
+                   "paper): the first "
                    f"frame showing a hand within {CALIBRATION_READS} reads (--synthetic: the "
                    "hand rendered open) chooses the grid "
                    "database, built in --db when missing, unless --shape, --measurements or "
                    "--personal chose it, and gives the pixels to ignore.")
 @click.option("--calibrate-image", default=None, metavar="FILE",
-              help="Calibrate with this image of the open, flat hand through the device "
-                   "instead of the first frame (implies --calibrate).")
+              help="The rest frame from this image of the hand at rest (open, not stiff) "
+                   "through the device instead of the first frame showing a hand; --method "
+                   "paper: the open, flat hand's image (implies --calibrate).")
 @click.option("--intrinsics", default=None, metavar="FILE",
               help="The real camera's calibration (as OpenCV, ROS, Kalibr, Basalt or "
                    "ORB-SLAM write it): every frame, and --calibrate-image, "
@@ -488,16 +493,19 @@ def _progress(stream):
 @click.option("--mirrored-image", is_flag=True,
               help="The camera, or its driver, mirrors its image left to right (as for a "
                    "video call): every frame, and --calibrate-image, is turned back before "
-                   "the estimate. With --learned the rest frame says when it is needed.")
-@click.option("--learned", is_flag=True,
-              help="Use the estimator learnt from randomised model hands (beyond the paper; "
-                   "docs/camera_estimator.md) instead of a database lookup, "
-                   "calibrated to the user's hand at rest: --calibrate-image, else the first "
-                   "frame showing a hand (--synthetic: the hand rendered open). Learnt once "
-                   "into --learned-cache (minutes), then read.")
+                   "the estimate. With the learnt estimator the rest frame says when it is needed.")
+@click.option("--method", type=click.Choice(["learned", "paper"]), default=None,
+              help="learned: the estimator learnt from randomised model hands (beyond the "
+                   "paper; docs/camera_estimator.md), calibrated to the user's hand at rest: "
+                   "--calibrate-image, else the first frame showing a hand (--synthetic: the "
+                   "hand rendered open); learnt once into --learned-cache (minutes), then read. "
+                   "paper: the paper's database lookup, kept to reproduce it (on hands whose "
+                   "resting fingers are a few degrees off its open hand it reads no better "
+                   "than a constant answer; docs/lookup.md).  [default: learned]")
+@click.option("--learned", is_flag=True, help="The same as --method learned (the default).")
 @click.option("--learned-kind", type=click.Choice(["ensemble", "perceptrons", "fingers"]),
               default="ensemble", show_default=True,
-              help="With --learned: the weighted mean of the per-digit estimator and three "
+              help="With the learnt estimator: the weighted mean of the per-digit estimator and three "
                    "perceptrons, one of them learnt from hands resting relaxed (the most "
                    "accurate on paper-protocol frames); those three perceptrons alone "
                    "(shipped with handsynth: ready in seconds on a first run, where the "
@@ -510,30 +518,30 @@ def _progress(stream):
               help="Random hands of the learning set [default: 4,000 x 100 frames; the "
                    "ensemble's perceptrons learn from four times as many].")
 @click.option("--learned-rest", type=click.Choice(["open", "relaxed"]), default=None,
-              help="With --learned: the rest postures it learns from: three hands in four "
+              help="With the learnt estimator: the rest postures it learns from: three hands in four "
                    "held open [default], or relaxed only (an earlier release's learning set: "
                    "at relaxed rests the glTF test hands read better with it and the model "
                    "test hands worse, near open both much worse, docs/camera_estimator.md; "
                    "the ensemble's relaxed-rest perceptron is then its seed-0 perceptron "
                    "again).")
 @click.option("--side", type=click.Choice(["right", "left"]), default=None,
-              help="The hand wearing the device [default: right]. With --learned a left "
+              help="The hand wearing the device [default: right]. With the learnt estimator a left "
                    "hand is read by the right hand's estimator mirrored, nothing learnt "
                    "again; the lookups open (or build) the left hand's databases, "
                    "<shape>_left.h5.")
 @click.option("--smoothing", type=float, default=None, metavar="A",
-              help="With --learned: report A * previous + (1 - A) * new angles (0 <= A < 1) "
+              help="With the learnt estimator: report A * previous + (1 - A) * new angles (0 <= A < 1) "
                    "[default: 0, none]. At 30 fps, 0.3 cut the frame-to-frame jitter by a "
                    "third at no cost in accuracy, 0.5 by half at up to 0.3 deg "
                    "(docs/camera_estimator.md).")
 @click.option("--segment", type=click.Choice(["auto", "brightness", "colour"]), default=None,
-              help="With --learned: tell the hand from the background by brightness (Otsu's "
+              help="With the learnt estimator: tell the hand from the background by brightness (Otsu's "
                    "threshold: a dark background), or by the colour of the skin on the back "
                    "of the hand in the rest frame (an ordinary background; colour frames) "
                    "[default: auto, colour where the two disagree on the rest frame] "
                    "(docs/camera_estimator.md, Telling the hand from an ordinary background).")
 @click.option("--one-euro", "one_euro", is_flag=True,
-              help="With --learned: steady the angles with the One Euro filter instead (cut-off "
+              help="With the learnt estimator: steady the angles with the One Euro filter instead (cut-off "
                    "0.5 Hz while still, rising with speed; at the source's frame rate, --fps "
                    "where it reports none); on held-out hands held poses jittered 7 times "
                    "less for 0.02 deg more error (docs/camera_estimator.md).")
@@ -547,13 +555,14 @@ def _progress(stream):
 @click.option("--format", "fmt", type=click.Choice(["csv", "jsonl"]), default=None,
               help="Row format [default: from the --out suffix].")
 @click.option("--keypoints", is_flag=True,
-              help="Add the 21 keypoints (metres, hand frame) to the rows; with --learned, "
-                   "those of the handsynth hand of --shape or --measurements (the standard "
-                   "hand by default) posed by the estimated angles.")
+              help="Add the 21 keypoints (metres, hand frame) to the rows: those of the "
+                   "handsynth hand of --shape or --measurements (the standard hand by default) "
+                   "posed by the estimated angles; --method paper: the matched entry's.")
 @click.option("--video-out", default=None, metavar="FILE",
               help="Write each input frame beside the pose read from it (.mp4 or .avi): the "
-                   "matched entry's render, or with --learned the estimated angles on the hand "
-                   "of --shape/--measurements (with --keypoints) or the standard hand.")
+                   "estimated angles on the hand "
+                   "of --shape/--measurements (with --keypoints) or the standard hand; "
+                   "--method paper: the matched entry's render.")
 @click.option("--synthetic-shape", default=SYNTHETIC_SHAPE, show_default=True, metavar="NAME",
               help="Hand shape rendered by --synthetic (off the grid by default).")
 @click.option("--synthetic-motion", type=click.Choice(["paper", "natural", "named"]),
@@ -565,25 +574,29 @@ def _progress(stream):
               help="Media frame rate of --synthetic (timestamps and speed of the motion), and "
                    "the rate --one-euro assumes for a source that reports none.")
 @click.option("--no-temporal", is_flag=True,
-              help="Do not score the previous frame's answer first.")
+              help="--method paper: do not score the previous frame's answer first.")
 @click.option("--max-dead", type=int, default=100, show_default=True, metavar="N",
               help="Stop when N consecutive reads give no usable frame.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress line.")
 def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, personal,
-             build_count, calibrate, calibrate_image, intrinsics, mirrored_image, learned,
-             learned_kind,
+             build_count, calibrate, calibrate_image, intrinsics, mirrored_image, method,
+             learned, learned_kind,
              learned_cache, learned_hands, learned_rest, side, smoothing, segment, one_euro,
              frames, seconds, out, fmt,
              keypoints, video_out, synthetic_shape, synthetic_motion, synthetic_size, fps,
              no_temporal, max_dead, quiet) -> None:
-    """Look up the hand pose of every frame of a camera, a video file or a synthetic hand.
+    """Estimate the hand pose of every frame of a camera, a video file or a synthetic hand.
 
-    Prints the frame rate of the lookup alone and of the whole loop; with
+    By default with the estimator learnt from randomised model hands,
+    calibrated to the hand at rest (the first frame that shows a hand, or
+    --calibrate-image); --method paper looks each frame up in the paper's
+    pose databases instead.  Prints the frame rate of the estimate alone
+    and of the whole loop; with
     --out writes one row per frame (frame, timestamp_s, no_hand,
     confidence, low_confidence, moved, entry, the 20 joint angles in degrees,
     optionally the keypoints; synthetic runs add the true angles and report
-    the mean absolute error).  With --calibrate the run starts with the
-    hand open and flat; that frame is not a row.  Dropped or unreadable
+    the mean absolute error).  The rest frame (and with --method paper
+    --calibrate, the open and flat hand's) is not a row.  Dropped or unreadable
     frames are counted and skipped; a source that gives nothing usable for
     --max-dead reads in a row ends the run with an error.  Ctrl-C stops the
     run cleanly.
@@ -621,6 +634,9 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
     if keypoints and out is None:
         raise InvalidInputError("--keypoints adds columns to the rows of --out, and no --out "
                                 "was given")
+    if learned and method == "paper":
+        raise InvalidInputError("--learned and --method paper name two methods; give one")
+    learned = method != "paper"
     kp_shape = None
     if learned:
         _check_learned_options(db_dir, shape_name, measurements, personal, build_count,
@@ -633,7 +649,7 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
             == click.core.ParameterSource.COMMANDLINE:
         raise InvalidInputError("--learned-kind, --learned-cache, --learned-hands, "
                                 "--learned-rest, --smoothing, --segment and --one-euro "
-                                "apply with --learned only")
+                                "apply to the learnt estimator, not to --method paper")
     if one_euro and smoothing is not None:
         raise InvalidInputError("--one-euro and --smoothing are two ways to steady the angles; "
                                 "give one")

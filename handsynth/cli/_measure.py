@@ -57,7 +57,8 @@ def _format(result) -> str:
                  f"thumb {q.thumb:.3f}  (formulas (1)-(4))")
     lines.append(f"database: {result.selection.name}")
     lines.append(f"model shape: {result.shape.name} (ratios corrected for the photo method; "
-                 f"its own database: handsynth estimate --shape {result.shape.name} --personal)")
+                 f"its own database: handsynth estimate --method paper --shape {result.shape.name} "
+                 "--personal)")
     return "\n".join(lines)
 
 

@@ -58,6 +58,11 @@ def _run(*args, env=None):
     return CliRunner(env=env).invoke(cli, ["estimate", *args], catch_exceptions=False)
 
 
+def _lookup(*args, env=None):
+    """``handsynth estimate --method paper ARGS``: the paper's database lookup."""
+    return _run("--method", "paper", *args, env=env)
+
+
 def _read_csv(path):
     with open(path, newline="", encoding="utf-8") as f:
         reader = csv.reader(f)
@@ -67,7 +72,7 @@ def _read_csv(path):
 
 def test_synthetic_run_writes_csv_and_prints_rates_and_error(tmp_path, db):
     out = tmp_path / "rows.csv"
-    res = _run("--synthetic", "--db", str(db), "--frames", "24", "--out", str(out), *SMALL)
+    res = _lookup("--synthetic", "--db", str(db), "--frames", "24", "--out", str(out), *SMALL)
     assert res.exit_code == 0, res.output
     header, rows = _read_csv(out)
     assert tuple(header) == live_columns(truth=True)
@@ -89,7 +94,7 @@ def test_synthetic_run_writes_csv_and_prints_rates_and_error(tmp_path, db):
 
 def test_jsonl_with_keypoints_to_a_file_and_to_stdout(tmp_path, db):
     out = tmp_path / "rows.jsonl"
-    res = _run("--synthetic", "--db", str(db), "--frames", "5", "--out", str(out), "--keypoints",
+    res = _lookup("--synthetic", "--db", str(db), "--frames", "5", "--out", str(out), "--keypoints",
                "--synthetic-motion", "named", "--no-temporal", *SMALL)
     assert res.exit_code == 0, res.output
     rows = [json.loads(line) for line in out.read_text().splitlines()]
@@ -98,7 +103,7 @@ def test_jsonl_with_keypoints_to_a_file_and_to_stdout(tmp_path, db):
     assert all(isinstance(r[KEYPOINT_COLUMNS[-1]], float) for r in rows)
     assert rows[0]["frame"] == 0 and rows[-1]["timestamp_s"] == pytest.approx(4 / 8)
 
-    res = _run("--synthetic", "--db", str(db), "--frames", "3", "--out", "-", "--format",
+    res = _lookup("--synthetic", "--db", str(db), "--frames", "3", "--out", "-", "--format",
                "jsonl", *SMALL)
     assert res.exit_code == 0, res.output
     lines = res.stdout.splitlines()
@@ -115,7 +120,7 @@ def test_video_in_and_side_by_side_video_out(tmp_path, db, masks, read_video):
         writer.write(np.repeat(m.view(np.uint8)[:, :, None] * np.uint8(255), 3, axis=2))
     writer.release()
     out, video_out = tmp_path / "rows.csv", tmp_path / "side.mp4"
-    res = _run("--video", str(video), "--db", str(db), "--out", str(out), "--video-out",
+    res = _lookup("--video", str(video), "--db", str(db), "--out", str(out), "--video-out",
                str(video_out), "-q")
     assert res.exit_code == 0, res.output
     _, rows = _read_csv(out)
@@ -147,7 +152,7 @@ def test_flaky_then_dead_camera_is_counted_and_ends_with_one_error_line(tmp_path
 
     monkeypatch.setattr(live, "CameraSource", FakeCamera)
     out = tmp_path / "rows.csv"
-    res = _run("--camera", "0", "--db", str(db), "--out", str(out), "--max-dead", "6", "-q")
+    res = _lookup("--camera", "0", "--db", str(db), "--out", str(out), "--max-dead", "6", "-q")
     assert res.exit_code == 2
     # reads 3, 6, 9, 12 are frames; 1, 2, 4, 5, 7, 8, 10, 11 drops; 13-18 the dead end
     assert "frames 4 (reads 18, dropped 14, invalid 0)" in res.stdout
@@ -159,7 +164,7 @@ def test_flaky_then_dead_camera_is_counted_and_ends_with_one_error_line(tmp_path
 
 
 def test_default_database_is_built_in_the_cache_folder(tmp_path):
-    res = _run("--synthetic", "--frames", "3", *SMALL,
+    res = _lookup("--synthetic", "--frames", "3", *SMALL,
                env={"HANDSYNTH_CACHE_DIR": str(tmp_path)})
     assert res.exit_code == 0, res.output
     path = database_path(tmp_path / "db", HandShape())
@@ -171,7 +176,8 @@ def test_default_database_is_built_in_the_cache_folder(tmp_path):
 def test_killed_run_leaves_complete_lines(tmp_path, db):
     out = tmp_path / "rows.jsonl"
     cmd = [sys.executable, "-c", "from handsynth.cli import main; main()", "estimate",
-           "--synthetic", "--db", str(db), "--frames", "100000", "--out", str(out), *SMALL]
+           "--method", "paper", "--synthetic", "--db", str(db), "--frames", "100000", "--out",
+           str(out), *SMALL]
     proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                             env={**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")})
     deadline = time.monotonic() + 60
@@ -196,7 +202,8 @@ def test_a_damaged_video_file_is_one_error_line_without_ffmpegs_own(tmp_path, db
     bad.write_bytes(b"not a video at all\n" * 20)
     env = {k: v for k, v in os.environ.items() if k != "OPENCV_FFMPEG_LOGLEVEL"}
     proc = subprocess.run([sys.executable, "-c", "from handsynth.cli import main; main()",
-                           "estimate", "--video", str(bad), "--db", str(db), "--frames", "2"],
+                           "estimate", "--method", "paper", "--video", str(bad), "--db", str(db),
+                           "--frames", "2"],
                           capture_output=True, text=True, timeout=120, env=env)
     assert proc.returncode == 2
     assert proc.stderr.strip().splitlines() == [
@@ -222,7 +229,7 @@ def test_a_damaged_video_file_is_one_error_line_without_ffmpegs_own(tmp_path, db
 ])
 def test_bad_options_give_one_line_errors(tmp_path, db, args, word):
     args = [a.replace("{tmp}", str(tmp_path)) for a in args]
-    res = _run("--db", str(db), *SMALL, *args)
+    res = _lookup("--db", str(db), *SMALL, *args)
     assert res.exit_code == 2, res.output
     lines = res.output.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("handsynth: error:"), res.output
@@ -230,7 +237,7 @@ def test_bad_options_give_one_line_errors(tmp_path, db, args, word):
 
 
 def test_missing_database_folder(tmp_path):
-    res = _run("--synthetic", "--db", str(tmp_path / "nowhere"), *SMALL)
+    res = _lookup("--synthetic", "--db", str(tmp_path / "nowhere"), *SMALL)
     assert res.exit_code == 2
     assert res.output.strip() == (f"handsynth: error: database folder "
                                   f"{str(tmp_path / 'nowhere')!r} does not exist")
@@ -238,14 +245,14 @@ def test_missing_database_folder(tmp_path):
 
 def test_personal_database_for_a_shape(tmp_path):
     shape = "L1.020_W0.970_P1.010_T1.030"
-    res = _run("--synthetic", "--frames", "3", "--db", str(tmp_path), "--shape", shape,
+    res = _lookup("--synthetic", "--frames", "3", "--db", str(tmp_path), "--shape", shape,
                "--personal", "--personal-count", "40", *SMALL)
     assert res.exit_code == 0, res.output
     assert f"personal database {tmp_path / (shape + '.h5')} ready" in res.output
     db = open_database(tmp_path / f"{shape}.h5")
     assert len(db) == 40 and HandShape(**db.meta["shape"]).name == shape
     # another count replaces the file, and says so (before: silently)
-    res = _run("--synthetic", "--frames", "3", "--db", str(tmp_path), "--shape", shape,
+    res = _lookup("--synthetic", "--frames", "3", "--db", str(tmp_path), "--shape", shape,
                "--personal", "--personal-count", "30", *SMALL)
     assert res.exit_code == 0, res.output
     assert "warning: built again, replacing an existing file" in res.output
@@ -262,8 +269,7 @@ def test_personal_database_for_a_shape(tmp_path):
 ])
 def test_personal_errors_are_one_line(tmp_path, args, words):
     args = [a.replace("{tmp}", str(tmp_path)) for a in args]
-    res = CliRunner().invoke(cli, ["estimate", "--synthetic", "--frames", "2", "--db",
-                                   str(tmp_path), *args, *SMALL])
+    res = _lookup("--synthetic", "--frames", "2", "--db", str(tmp_path), *args, *SMALL)
     assert res.exit_code != 0 and words in res.output and "Traceback" not in res.output
 
 
@@ -278,7 +284,7 @@ def _open_mask(shape: HandShape | None = None):
 
 def test_calibrate_synthetic_hand_on_a_chosen_database(tmp_path, db):
     out = tmp_path / "rows.csv"
-    res = _run("--synthetic", "--calibrate", "--shape", "standard", "--db", str(db), "--frames",
+    res = _lookup("--synthetic", "--calibrate", "--shape", "standard", "--db", str(db), "--frames",
                "6", "--out", str(out), *SMALL)
     assert res.exit_code == 0, res.output
     line = re.search(r"calibrated to the synthetic hand held open in [\d.]+ s: database "
@@ -301,7 +307,7 @@ def test_calibrate_on_the_first_hand_frame_of_a_video(tmp_path, db, masks):
         writer.write(np.repeat(m.view(np.uint8)[:, :, None] * np.uint8(255), 3, axis=2))
     writer.release()
     out = tmp_path / "rows.csv"
-    res = _run("--video", str(video), "--calibrate", "--shape", "standard", "--db", str(db),
+    res = _lookup("--video", str(video), "--calibrate", "--shape", "standard", "--db", str(db),
                "--out", str(out), "-q")
     assert res.exit_code == 0, res.output
     assert "hold the hand open and flat" in res.stdout
@@ -320,7 +326,7 @@ def test_calibrate_image_chooses_and_builds_the_database(tmp_path):
     cv2.imwrite(str(image), _open_mask(user).view(np.uint8) * np.uint8(255))
     expect = select_shape_from_frame(_open_mask(user)).shape
     dbs = tmp_path / "dbs"
-    res = _run("--synthetic", "--synthetic-shape", user.name, "--calibrate-image", str(image),
+    res = _lookup("--synthetic", "--synthetic-shape", user.name, "--calibrate-image", str(image),
                "--build-count", "30", "--db", str(dbs), "--frames", "4", *SMALL)
     assert res.exit_code == 0, res.output
     assert "calibrated to the calibration image in" in res.stdout
@@ -353,7 +359,7 @@ def test_rows_on_a_full_disk_are_one_error_and_complete_lines(full_disk, db):
     # item 7: a traceback and half a row
     out = full_disk / "rows.csv"
     (full_disk / "filler").write_bytes(b"\0" * (256 * 1024 - 24 * 1024))  # leave ~24 KiB
-    res = _run("--synthetic", "--db", str(db), "--out", str(out), "--keypoints", "--frames",
+    res = _lookup("--synthetic", "--db", str(db), "--out", str(out), "--keypoints", "--frames",
                "400", *SMALL)
     assert res.exit_code == 2, res.output
     assert "Traceback" not in res.output
@@ -368,7 +374,7 @@ def test_rows_on_a_full_disk_are_one_error_and_complete_lines(full_disk, db):
 def test_side_by_side_video_on_a_full_disk_is_an_error_not_a_truncated_file(full_disk, db):
     # item 7: exit 0 and a truncated video reported as complete
     out = full_disk / "side.avi"
-    res = _run("--synthetic", "--db", str(db), "--video-out", str(out), "--frames", "120", *SMALL)
+    res = _lookup("--synthetic", "--db", str(db), "--video-out", str(out), "--frames", "120", *SMALL)
     assert res.exit_code == 2, res.output
     assert "cannot write the video" in res.output and "Traceback" not in res.output
     assert list(full_disk.iterdir()) == []
@@ -382,7 +388,7 @@ def test_an_output_never_replaces_the_input_video(tmp_path, db, hand_video, opti
     link.symlink_to(hand_video)
     for target in (hand_video, link):
         args = [option, str(target)] + (["--format", "csv"] if option == "--out" else [])
-        res = _run("--video", str(hand_video), "--db", str(db), *args, "-q")
+        res = _lookup("--video", str(hand_video), "--db", str(db), *args, "-q")
         assert res.exit_code == 2 and "never replaces an input" in res.output, res.output
     assert hand_video.read_bytes() == before
 
@@ -390,7 +396,7 @@ def test_an_output_never_replaces_the_input_video(tmp_path, db, hand_video, opti
 def test_rows_never_replace_the_database(tmp_path, db):
     path = database_path(db, HandShape())
     before = path.read_bytes()
-    res = _run("--synthetic", "--db", str(db), "--out", str(path), "--format", "csv", *SMALL)
+    res = _lookup("--synthetic", "--db", str(db), "--out", str(path), "--format", "csv", *SMALL)
     assert res.exit_code == 2 and "never replaces an input" in res.output, res.output
     assert path.read_bytes() == before
 
@@ -399,7 +405,7 @@ def test_a_video_whose_every_frame_is_refused_is_an_error(tmp_path, db):
     # item 12: exit 0 with 0 rows
     tiny = _write_video(tmp_path / "tiny.avi", [np.full((6, 6, 3), 200, np.uint8)] * 5)
     out = tmp_path / "rows.csv"
-    res = _run("--video", str(tiny), "--db", str(db), "--out", str(out), "-q")
+    res = _lookup("--video", str(tiny), "--db", str(db), "--out", str(out), "-q")
     assert res.exit_code == 2, res.output
     assert "no frame could be used" in res.output and "5 refused" in res.output
 
@@ -416,7 +422,7 @@ def test_misleading_or_silent_options_give_clear_errors(tmp_path, db, args, word
     args = [a.format(tmp=tmp_path, db_file=db_file) for a in args]
     if "--db" not in args:
         args += ["--db", str(db)]
-    res = _run("--synthetic", *args, *SMALL)
+    res = _lookup("--synthetic", *args, *SMALL)
     assert res.exit_code == 2, res.output
     assert res.output.count("\n") == 1 and all(w in res.output for w in words), res.output
 
@@ -429,7 +435,7 @@ def test_a_folder_or_dangling_link_named_like_a_database_is_named(tmp_path, kind
         name.mkdir()
     else:
         name.symlink_to(tmp_path / "gone.h5")
-    res = _run("--synthetic", "--db", str(tmp_path), *SMALL)
+    res = _lookup("--synthetic", "--db", str(tmp_path), *SMALL)
     assert res.exit_code == 2
     assert ("is a folder, not a file" if kind == "folder" else "which does not exist") \
         in res.output, res.output
@@ -445,7 +451,7 @@ def test_a_read_only_database_folder_names_the_real_reason(read_only_folder, whe
                  "--build-count", "50"]
     else:
         env = {"HANDSYNTH_CACHE_DIR": str(read_only_folder)}
-    res = _run(*args, env=env)
+    res = _lookup(*args, env=env)
     assert res.exit_code == 2, res.output
     assert "read-only" in res.output and "Traceback" not in res.output
 
@@ -492,6 +498,16 @@ def test_learned_estimator_from_relaxed_rests_is_learnt_beside_the_default(tmp_p
         assert res.exit_code == 0, res.output
         assert "learning set: 6 hands x 100 frames" in res.output  # each learns its own
     assert len(list(tmp_path.glob("learning_*.npz"))) == 2
+
+
+def test_the_learnt_estimator_is_the_default_method_and_the_paper_s_lookup_is_named(tmp_path, db):
+    res = _run("--synthetic", "--learned-kind", "perceptrons", "--learned-cache", str(tmp_path),
+               "--frames", "3", *SMALL)
+    assert res.exit_code == 0, res.output
+    assert "with the learnt estimator (perceptrons)" in res.output
+    res = _run("--synthetic", "--method", "paper", "--db", str(db), "--frames", "3", *SMALL)
+    assert res.exit_code == 0, res.output
+    assert f"against {database_path(db, HandShape()).name} (200 entries)" in res.output
 
 
 @pytest.mark.parametrize("side", ["right", "left"])  # a left hand: the right's perceptrons mirrored
@@ -541,13 +557,14 @@ def test_learned_keypoints_are_the_named_hand_posed_by_the_written_angles(tmp_pa
 
 
 @pytest.mark.parametrize(("extra", "message"), [
-    (["--shape", "standard"], "--shape with --learned says whose keypoints to report, and "
-                              "--keypoints was not given"),
-    (["--measurements", "m.json"], "--measurements with --learned says whose keypoints"),
+    (["--shape", "standard"], "--shape with the learnt estimator (the default method) says "
+                              "whose keypoints to report, and --keypoints was not given"),
+    (["--measurements", "m.json"],
+     "--measurements with the learnt estimator (the default method) says whose"),
     (["--keypoints", "--shape", "standard", "--measurements", "m.json"],
      "give --shape or --measurements, not both"),
     (["--keypoints", "--shape", "L9"], "hand-shape name 'L9' is not of the form"),
-    (["--personal", "--shape", "standard"], "--personal applies to the database lookup"),
+    (["--personal", "--shape", "standard"], "--personal applies to the paper's database lookup"),
 ])
 def test_learned_keypoint_options_are_checked_by_name(tmp_path, extra, message):
     res = CliRunner().invoke(cli, ["estimate", "--synthetic", "--learned", "--learned-cache",
@@ -568,15 +585,21 @@ def test_learned_estimator_for_the_left_hand(tmp_path):
 
 
 @pytest.mark.parametrize(("extra", "message"), [
-    (["--learned", "--db", "dbs"], "--db applies to the database lookup, not to --learned"),
+    (["--learned", "--db", "dbs"],
+     "--db applies to the paper's database lookup (--method paper), not to the learnt estimator"),
+    # the learnt estimator is the default: a lookup's option alone names the method to give
+    (["--db", "dbs"], "--db applies to the paper's database lookup (--method paper)"),
+    (["--shape", "standard"], "--method paper chooses a database by it"),
     (["--learned", "--calibrate", "--no-temporal"],
-     "--calibrate, --no-temporal apply to the database lookup"),
-    (["--learned-hands", "5"], "apply with --learned only"),
-    (["--learned-kind", "ensemble"], "apply with --learned only"),
-    (["--smoothing", "0.3"], "apply with --learned only"),
-    (["--learned-rest", "relaxed"], "apply with --learned only"),
-    (["--one-euro"], "--segment and --one-euro apply with --learned only"),
-    (["--segment", "colour"], "--segment and --one-euro apply with --learned only"),
+     "--calibrate, --no-temporal apply to the paper's database lookup (--method paper)"),
+    (["--learned", "--method", "paper"], "--learned and --method paper name two methods"),
+    (["--method", "paper", "--learned-hands", "5"], "apply to the learnt estimator, not to "
+                                                     "--method paper"),
+    (["--method", "paper", "--learned-kind", "ensemble"], "not to --method paper"),
+    (["--method", "paper", "--smoothing", "0.3"], "not to --method paper"),
+    (["--method", "paper", "--learned-rest", "relaxed"], "not to --method paper"),
+    (["--method", "paper", "--one-euro"], "--segment and --one-euro apply to the learnt"),
+    (["--method", "paper", "--segment", "colour"], "--segment and --one-euro apply to the learnt"),
     (["--learned", "--one-euro", "--smoothing", "0.3"],
      "--one-euro and --smoothing are two ways to steady the angles; give one"),
     (["--learned", "--smoothing", "1"], "--smoothing must be in [0, 1), got 1.0"),
@@ -603,10 +626,9 @@ def test_a_left_hands_lookup_opens_its_own_database(tmp_path):
                                            "ridge_area", "keypoints")},
                    meta=database_meta(shape, mount, side="left", pose_set="paper", count=60,
                                       seed=1, render_size=(W, H)))
-    res = _run("--synthetic", "--side", "left", "--db", str(tmp_path), "--frames", "3", *SMALL)
+    res = _lookup("--synthetic", "--side", "left", "--db", str(tmp_path), "--frames", "3", *SMALL)
     assert res.exit_code == 0 and "reached 3 frames" in res.output, res.output
-    res = CliRunner().invoke(cli, ["estimate", "--synthetic", "--db", str(tmp_path), "--frames", "3",
-                                   *SMALL])
+    res = _lookup("--synthetic", "--db", str(tmp_path), "--frames", "3", *SMALL)
     assert res.exit_code == 2 and "no database for the right hand" in res.output, res.output
     assert "_left" in res.output
 
@@ -623,9 +645,8 @@ def test_a_measurement_file_chooses_the_database_measure_printed(tmp_path):
     (tmp_path / "m.json").write_text(json.dumps(meas.as_dict()))
     want = select_shape(meas, options=SelectionOptions(normalize="none")).name
     (tmp_path / "dbs").mkdir()
-    res = CliRunner().invoke(cli, ["estimate", "--synthetic", "--db", str(tmp_path / "dbs"),
-                                   "--measurements", str(tmp_path / "m.json"), "--frames", "1",
-                                   *SMALL])
+    res = _lookup("--synthetic", "--db", str(tmp_path / "dbs"), "--measurements",
+                  str(tmp_path / "m.json"), "--frames", "1", *SMALL)
     assert res.exit_code == 2 and f"no database for the right hand of shape {want}" in res.output, \
         res.output
 
@@ -701,7 +722,7 @@ def test_a_failed_run_leaves_an_earlier_rows_file_as_it_was(tmp_path, db, hand_v
     # the rows file was opened (its header written over the earlier rows) before a bad
     # --video-out or --seconds was refused, or before the run found no usable frame
     out = tmp_path / "keep.csv"
-    res = _run("--video", str(hand_video), "--db", str(db), "--out", str(out), "-q")
+    res = _lookup("--video", str(hand_video), "--db", str(db), "--out", str(out), "-q")
     assert res.exit_code == 0, res.output
     before = out.read_bytes()
     tiny = _write_video(tmp_path / "tiny.avi", [np.full((6, 6, 3), 200, np.uint8)] * 3)
@@ -709,18 +730,18 @@ def test_a_failed_run_leaves_an_earlier_rows_file_as_it_was(tmp_path, db, hand_v
                  ["--video", str(hand_video), "--video-out", str(tmp_path / "no" / "v.avi")],
                  ["--video", str(hand_video), "--seconds", "inf"],
                  ["--video", str(tiny)]):
-        res = _run(*args, "--db", str(db), "--out", str(out), "-q")
+        res = _lookup(*args, "--db", str(db), "--out", str(out), "-q")
         assert res.exit_code == 2, (args, res.output)
         assert out.read_bytes() == before, args
     fresh = tmp_path / "fresh.csv"
-    res = _run("--video", str(tiny), "--db", str(db), "--out", str(fresh), "-q")
+    res = _lookup("--video", str(tiny), "--db", str(db), "--out", str(fresh), "-q")
     assert res.exit_code == 2 and not fresh.exists()  # no header-only file either
 
 
 def test_refused_frames_say_why(tmp_path, db):
     # "no frame could be used (... 5 refused)" and rates of nan, without the reason
     tiny = _write_video(tmp_path / "tiny.avi", [np.full((6, 6, 3), 200, np.uint8)] * 5)
-    res = _run("--video", str(tiny), "--db", str(db), "-q")
+    res = _lookup("--video", str(tiny), "--db", str(db), "-q")
     assert res.exit_code == 2
     assert "(the first refused: " in res.output and "nan" not in res.output, res.output
 
@@ -734,7 +755,7 @@ def test_refused_frames_say_why(tmp_path, db):
 ])
 def test_out_of_range_sizes_rates_and_names_are_named(tmp_path, db, args, words):
     args = [a.replace("{tmp}", str(tmp_path)) for a in args]
-    res = _run(*args, "--db", str(db), "-q")
+    res = _lookup(*args, "--db", str(db), "-q")
     assert res.exit_code == 2 and words in res.output, res.output
 
 
@@ -773,7 +794,7 @@ def test_a_damaged_measurement_file_is_one_line_naming_the_option_and_the_file(t
     for name, words in _measurement_files(tmp_path).items():
         path = tmp_path / name
         args = ([*LEARNT, "--learned-cache", str(tmp_path / "c"), "--keypoints", "--out",
-                 str(tmp_path / "r.csv")] if learned else ["--db", str(db)])
+                 str(tmp_path / "r.csv")] if learned else ["--method", "paper", "--db", str(db)])
         res = _run("--synthetic", *args, "--measurements", str(path), "--frames", "2", *SMALL)
         assert res.exit_code == 2, (name, res.output)
         errors = [line for line in res.output.splitlines() if "error" in line]
@@ -789,7 +810,7 @@ def test_measurements_that_give_no_hand_fail_before_the_default_database_is_buil
     # (5 s; a first run's cache did not exist yet)
     _measurement_files(tmp_path)
     monkeypatch.setenv("HANDSYNTH_CACHE_DIR", str(tmp_path / "cache"))
-    res = _run("--synthetic", "--measurements", str(tmp_path / "cm.json"), "--frames", "2")
+    res = _lookup("--synthetic", "--measurements", str(tmp_path / "cm.json"), "--frames", "2")
     assert res.exit_code == 2, res.output
     assert res.output.splitlines()[-1].startswith("handsynth: error: --measurements"), res.output
     assert "millimetres" in res.output  # the warning says why
@@ -803,7 +824,7 @@ def test_an_empty_file_name_is_refused_by_option_not_read_as_the_current_folder(
     # --video '' said "video file '.' is a folder", --calibrate-image '' "cannot read the
     # calibration image '.'", --measurements '' "cannot read measurement file .: Is a directory"
     source = ["--video", str(tmp_path / "v.avi")] if option != "--video" else []
-    res = _run(*source, "--db", str(db), option, "", "-q")
+    res = _lookup(*source, "--db", str(db), option, "", "-q")
     assert res.exit_code == 2
     assert res.output.strip() == f"handsynth: error: {option} must name a file, got ''"
 
@@ -812,7 +833,7 @@ def test_an_empty_file_name_is_refused_by_option_not_read_as_the_current_folder(
 def test_a_frame_rate_far_outside_any_camera_is_refused(tmp_path, db, fps):
     # 1e-310: an OverflowError traceback (infinite media time); 1e-300: rows with timestamps
     # of 1e300 s written as valid; 1e9: every timestamp 0.0
-    res = _run("--synthetic", "--db", str(db), "--frames", "3", "--out",
+    res = _lookup("--synthetic", "--db", str(db), "--frames", "3", "--out",
                str(tmp_path / "r.jsonl"), "--synthetic-size", f"{W}x{H}", "--fps", fps, "-q")
     assert res.exit_code == 2
     assert res.output.strip() == ("handsynth: error: --fps must be within [0.01, 10000] frames "
@@ -823,12 +844,12 @@ def test_a_frame_rate_far_outside_any_camera_is_refused(tmp_path, db, fps):
 def test_hand_shape_options_name_themselves_and_take_standard_alike(tmp_path, db):
     # --shape standard was taken and --synthetic-shape standard refused; a bad name did not
     # say which of the two options it came from
-    res = _run("--synthetic", "--db", str(db), "--synthetic-shape", "standard", "--frames", "2",
+    res = _lookup("--synthetic", "--db", str(db), "--synthetic-shape", "standard", "--frames", "2",
                *SMALL)
     assert res.exit_code == 0 and "synthetic hand L1.000_W1.000_P1.000_T1.000" in res.output, \
         res.output
     for option in ("--synthetic-shape", "--shape"):
-        res = _run("--synthetic", "--db", str(db), option, "L9", "--frames", "2", *SMALL)
+        res = _lookup("--synthetic", "--db", str(db), option, "L9", "--frames", "2", *SMALL)
         assert res.exit_code == 2
         assert res.output.startswith(f"handsynth: error: {option} 'L9': hand-shape name 'L9' is "
                                      "not of the form"), res.output
@@ -1150,7 +1171,7 @@ def test_intrinsics_problems_are_one_line_before_any_work(tmp_path, hand_video):
         "cameramatrix, k, intrinsic_matrix, intrinsics; found image_width, image_height, "
         "distortion_coefficients)"]
     assert not (tmp_path / "c").exists()
-    res = _run("--synthetic", "--intrinsics", str(bad), *SMALL)
+    res = _lookup("--synthetic", "--intrinsics", str(bad), *SMALL)
     assert res.exit_code == 2 and "--synthetic frames are already the device's view" in res.output
     # the video's frames (180x120) against a 4:3 calibration: both sizes named
     cam = _intrinsics_file(tmp_path / "cam43.yaml", np.array([[300.0, 0, 320], [0, 300, 240],
