@@ -1515,7 +1515,8 @@ def learned_estimator(folder, options: LearnedOptions | None = None, *,
         the mirrored device), so both hands share one learning set and the
         shipped perceptrons.
     progress : callable, keyword-only, optional
-        Called with a line of text at each stage.
+        Called with a line of text at each stage, and after each chunk of
+        learning hands rendered (minutes in all on a first run).
     shipped : bool, keyword-only
         Read a shipped estimator of these options when there is one (default)
         instead of learning it.
@@ -1563,7 +1564,8 @@ def learned_estimator(folder, options: LearnedOptions | None = None, *,
     # checked before minutes of rendering and learning, not when the result is saved
     make_folder(folder, what="learnt-estimator folder", writable=True, error=DatabaseError)
     say(f"learning set: {data.hands} hands x {data.poses_per_hand} frames")
-    ls = learning_set(folder, data, mount=mount, side=side, workers=workers)
+    ls = learning_set(folder, data, mount=mount, side=side, workers=workers,
+                      progress=lambda done, n: say(f"learning set: {done} of {n} hands rendered"))
     say(f"learning {opts.kind}")
     est = train_learned(ls, opts, progress=lambda e, loss: say(f"epoch {e}: loss {loss:.4f}"))
     est.save(path)
