@@ -631,9 +631,12 @@ def _bounds(qb, ix, k, cap, s):
     ``key[u] = C3 lb1 + C4 lb2`` (-1 when a penalty bound already fails a
     pruning stage); ``lb[u] = key[u] + HLAC bound``, a lower bound of E (inf
     when the row fails pruning or the bound exceeds `cap`).  ``top``
-    receives the rows with the smallest ``lb``, ascending.  The tables are
-    column-major (word or dimension first) so that the loops over rows
-    vectorize.
+    receives the rows with the smallest ``lb``, ascending (ties: the first
+    row first).  The tables are column-major (word or dimension first) so
+    that the loops over rows vectorize; ``key`` and ``lb`` are written in a
+    pass without branches, which vectorizes too, and the top rows found in a
+    second pass where a row seldom enters (measured with the two in one
+    branching pass: the whole lookup of a paper frame 6-15 % slower).
     """
     sil_coarse_t, ridge_coarse_t, proj_t = ix.sil_coarse_t, ix.ridge_coarse_t, ix.proj_t
     key, lb, top, lb1, lb2, hb = s.key, s.lb, s.top, s.lb1, s.lb2, s.hb
@@ -667,24 +670,21 @@ def _bounds(qb, ix, k, cap, s):
         hb[u] += t * t
     ridge_area = ix.ridge_area
     th1, c1, c2, c3, c4, prune = k.th1, k.c1, k.c2, k.c3, k.c4, k.prune
-    ntop = 0
-    ntop_max = top.shape[0]
-    for u in range(n):
-        key[u] = -1.0
-        lb[u] = np.inf
-        if prune and lb1[u] > th1:
-            continue
+    for u in range(n):  # without branches, so that it vectorizes
         a = ridge_area[u]
-        if prune and lb2[u] > c1 * a * a + c2 * a:
-            continue
+        ok = not prune or (lb1[u] <= th1 and lb2[u] <= c1 * a * a + c2 * a)
         kk = c3 * lb1[u] + c4 * lb2[u]
-        key[u] = kk
         d = np.float64(hb[u])
         b = kk + max(d - _BOUND_MARGIN * (1.0 + d), 0.0)
-        if b > cap:
-            continue
-        lb[u] = b
-        if ntop < ntop_max or b < lb[top[ntop - 1]]:
+        key[u] = kk if ok else -1.0
+        lb[u] = b if ok and b <= cap else np.inf
+    # the rows with the smallest bounds, in row order (ties: the first row first)
+    ntop = 0
+    ntop_max = top.shape[0]
+    last = np.inf  # the largest bound in a full top, else inf: any finite bound enters
+    for u in range(n):
+        b = lb[u]
+        if b < last or (ntop < ntop_max and b != np.inf):
             pos = ntop if ntop < ntop_max else ntop_max - 1
             while pos > 0 and lb[top[pos - 1]] > b:
                 top[pos] = top[pos - 1]
@@ -692,6 +692,8 @@ def _bounds(qb, ix, k, cap, s):
             top[pos] = u
             if ntop < ntop_max:
                 ntop += 1
+            if ntop == ntop_max:
+                last = lb[top[ntop_max - 1]]
     return ntop
 
 

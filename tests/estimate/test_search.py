@@ -229,10 +229,17 @@ def test_hlac_lower_bound_never_exceeds_the_distance(small_rows, kind):
         qp, qr = _query_projection(q, ix.mean, ix.basis)
         qb = _QueryBounds(planes=np.zeros((5, 4), np.uint64), sil_coarse=np.zeros(4, np.uint64),
                           proj=qp, resid=qr)
-        _bounds(qb, _IndexArrays(*ix.arrays), no_penalty, np.inf, s)
-        key, lb = s.key, s.lb
+        ntop = _bounds(qb, _IndexArrays(*ix.arrays), no_penalty, np.inf, s)
+        key, lb = s.key.copy(), s.lb.copy()
         d = ((hl[ix.rows].astype(np.int64) - q.astype(np.int64)) ** 2).sum(axis=1)
         assert np.all(key == 0.0) and np.all(lb <= d)
+        # the rows scored first: the 8 smallest bounds, ascending, ties in row order
+        assert list(s.top[:ntop]) == list(np.argsort(lb, kind="stable")[:8])
+        cap = float(np.sort(lb)[3])  # a known E: rows above it are left out of both
+        ntop = _bounds(qb, _IndexArrays(*ix.arrays), no_penalty, cap, s)
+        kept = lb <= cap
+        assert np.array_equal(s.lb[kept], lb[kept]) and np.all(s.lb[~kept] == np.inf)
+        assert list(s.top[:ntop]) == list(np.argsort(lb, kind="stable")[:kept.sum()][:8])
         if kind == "rendered":  # and it is tight enough to prune: most rows above half
             assert np.mean(lb >= 0.5 * d) > 0.5
 
