@@ -635,8 +635,11 @@ def _bounds(qb, ix, k, cap, s):
     row first).  The tables are column-major (word or dimension first) so
     that the loops over rows vectorize; ``key`` and ``lb`` are written in a
     pass without branches, which vectorizes too, and the top rows found in a
-    second pass where a row seldom enters (measured with the two in one
-    branching pass: the whole lookup of a paper frame 6-15 % slower).
+    second pass where a row seldom enters (the two in one branching pass,
+    measured on 2026-11-27: this pass 0.077 against 0.063-0.067 ms and the
+    search 0.18-0.19 against 0.16-0.17 ms for 11,434 distinct rows, one
+    process; in alternating runs of the whole lookup its part after
+    preprocessing 0.28-0.38 against 0.24-0.32 ms).
     """
     sil_coarse_t, ridge_coarse_t, proj_t = ix.sil_coarse_t, ix.ridge_coarse_t, ix.proj_t
     key, lb, top, lb1, lb2, hb = s.key, s.lb, s.top, s.lb1, s.lb2, s.hb
