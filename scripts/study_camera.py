@@ -22,6 +22,7 @@ Usage::
     python scripts/study_camera.py --cache DIR tones
     python scripts/study_camera.py --cache DIR bent_rest
     python scripts/study_camera.py --cache DIR held
+    python scripts/study_camera.py --cache DIR still
 
 ``backgrounds``
     Two held-out model hands (seed 3, 1.5 times the learning spread) and the
@@ -260,6 +261,16 @@ Usage::
     ``low_confidence``, beside the open-hand constant; how many mirrored rest frames the
     estimator itself flags.  Last line:
     ``mirror_false_alarms=<n> mirrored_caught=<n> rest_frames=<n>``.
+``still``
+    Where the paper frames' error lies: the default ensemble on four held-out
+    model hands (seed 13, 1.5 times the learning spread) and the three glTF
+    hands, three rests of each kind per hand (near open and relaxed, seeds
+    ``[99, hand]``), 100 paper-protocol frames per rest.  Per hand and kind
+    of rest: the finger flexion MAE beside the constant, the MAE and mean
+    signed error (reading minus truth) of the flexions that do not move, the
+    MAE of those that do, the share of the error on the still ones, and the
+    error of the rest frame read by itself.  Last line:
+    ``<rest>_still_bias=<mean over hands> ...``.
 
 The learnt estimator is read from ``--cache`` (or learnt there first).
 """
@@ -1388,6 +1399,45 @@ def held(cache) -> None:
                    for label, v in rows.items()))
 
 
+def still(cache) -> None:
+    """``still``: the paper frames' error on the flexions that do not move and on the one that does."""
+    from handsynth.estimate import learned_ensemble
+    from handsynth.eval import paper_protocol_poses
+    from handsynth.eval._testposes import REST_POSTURES
+
+    est = learned_ensemble(cache)
+    hands = model_test_hands(4, seed=13, spread=1.5) + mesh_test_hands(
+        ["godot_xr_tools", "mrtk", "webxr_generic"])
+    last = []
+    for rest_kind in ("open", "relaxed"):
+        biases = []
+        for i, hand in enumerate(hands):
+            rng = np.random.default_rng([99, i])
+            made = hand.make()
+            err, still, const, rest_err = [], [], [], []
+            for _ in range(3):
+                rest = REST_POSTURES[rest_kind](rng)
+                poses, _motion = paper_protocol_poses(rest, 100, rng)
+                rest_mask = made.mask(rest)
+                cal = est.calibrated(rest_mask)
+                got = np.array([cal.estimate(made.mask(p)).angles for p in poses])
+                err.append((got - poses)[:, _FLEX])
+                still.append(np.abs(poses - rest)[:, _FLEX] < 1e-9)
+                const.append(np.abs(poses[:, _FLEX]))
+                rest_err.append(np.abs(cal.estimate(rest_mask).angles - rest)[_FLEX])
+            e, st = np.concatenate(err), np.concatenate(still)
+            mae, c = np.abs(e).mean(), np.concatenate(const).mean()
+            biases.append(e[st].mean())
+            print(f"{rest_kind:7s} {hand.name:15s} flexion MAE {mae:5.2f} (constant {c:5.2f}, skill "
+                  f"{1 - mae / c:+.2f}); still {np.abs(e[st]).mean():5.2f} (mean error "
+                  f"{e[st].mean():+5.2f}, n={st.sum()}), moving {np.abs(e[~st]).mean():5.2f} "
+                  f"(n={(~st).sum()}); share of the error on the still "
+                  f"{np.abs(e[st]).sum() / np.abs(e).sum():.2f}; rest frame read "
+                  f"{np.concatenate(rest_err).mean():5.2f}", flush=True)
+        last.append(f"{rest_kind}_still_bias={np.mean(biases):+.2f}")
+    print(" ".join(last))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cache", default=None, help="folder of the learnt estimator")
@@ -1407,7 +1457,7 @@ def main() -> None:
     ap.add_argument("study", choices=["backgrounds", "jitter", "holds", "observability", "bound",
                                       "bound_mcp", "rests", "moved", "imaging", "mounts", "sizes",
                                       "skin", "skin_lit", "novelty", "lens", "level", "mirror", "tones",
-                                      "bent_rest", "held"])
+                                      "bent_rest", "held", "still"])
     args = ap.parse_args()
     if args.study not in ("observability", "bound_mcp", "moved") and args.cache is None:
         ap.error(f"{args.study} needs --cache DIR")
@@ -1425,7 +1475,7 @@ def main() -> None:
                "mirror": lambda: mirror(args.cache, args.kind),
                "tones": lambda: tones(args.cache),
                "bent_rest": lambda: bent_rest(args.cache),
-               "held": lambda: held(args.cache)}
+               "held": lambda: held(args.cache), "still": lambda: still(args.cache)}
     studies[args.study]()
 
 
