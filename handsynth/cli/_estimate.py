@@ -279,8 +279,12 @@ def _open_learned(cache, kind, hands, rest, smoothing, side, err):
     t = time.perf_counter()
 
     def say(line: str) -> None:
-        if not line.startswith("epoch"):
-            click.echo(line, err=err)
+        if line.startswith("epoch"):
+            return
+        if line.startswith("learning set:") and " hands x " in line:  # a first run
+            line += (" (once, minutes; then read from the cache; --learned-kind perceptrons "
+                     "learns nothing)" if kind != "perceptrons" else " (once, minutes)")
+        click.echo(line, err=err)
 
     # a learning set the cache lacks is rendered on every core: the same set, sooner
     workers = learning_workers(largest_learning_set(data, LEARNED_ENSEMBLES.get(kind, ())))

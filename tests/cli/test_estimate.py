@@ -465,6 +465,8 @@ def test_learned_estimator_on_a_synthetic_hand_learns_once_then_reads_its_cache(
     assert res.exit_code == 0, res.output
     assert "learning set: 6 hands x 100 frames" in res.output
     assert "learning set: 6 of 6 hands rendered" in res.output  # what a first run waits for
+    assert "(once, minutes; then read from the cache; --learned-kind perceptrons learns " \
+        "nothing)" in res.output
     assert "with the learnt estimator (fingers)" in res.output
     assert "calibrated to the synthetic hand at rest (open)" in res.output
     header, rows = _read_csv(out)
