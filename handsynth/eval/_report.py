@@ -27,6 +27,17 @@ from ._stats import JointStats, _num, joint_stats
 __all__ = ["EvalReport"]
 
 
+#: The name of the constant answer beside the conditions (:meth:`EvalReport.errors`).
+CONSTANT = "constant"
+_CONSTANT_TEXT = ("the open hand (every angle 0) answered on every frame: the trivial baseline "
+                  "on the same frames")
+#: The first line of :meth:`EvalReport.format`: what the paper's experiment measures.
+_PAPER_NOTE = ("The paper's experiment: test poses from the databases' own pose generators,\n"
+               "every joint that does not move at exactly the databases' open hand. It flatters\n"
+               "the lookups: on hands whose resting fingers are a few degrees off it they read\n"
+               "no better than the constant answer (handsynth eval --protocol).")
+
+
 @dataclass(frozen=True, eq=False)
 class EvalReport:
     """Outcome of :func:`evaluate`: per-frame records and per-joint figures.
@@ -76,11 +87,18 @@ class EvalReport:
         return tuple(self.estimates_deg)
 
     def errors(self, condition: str, *, pose_set: str | None = None) -> np.ndarray:
-        """Signed errors ``estimate - truth`` (F, 20) in degrees, optionally one pose set's frames."""
-        if condition not in self.estimates_deg:
+        """Signed errors ``estimate - truth`` (F, 20) in degrees, optionally one pose set's frames.
+
+        `condition` is one of :attr:`conditions`, or ``"constant"``: the open hand (every
+        angle 0) answered on every frame, the trivial baseline beside them.
+        """
+        if condition == CONSTANT:
+            e = -self.truth_deg
+        elif condition not in self.estimates_deg:
             raise InvalidInputError(
-                f"condition must be one of {self.conditions}, got {condition!r}")
-        e = self.estimates_deg[condition] - self.truth_deg
+                f"condition must be one of {(*self.conditions, CONSTANT)}, got {condition!r}")
+        else:
+            e = self.estimates_deg[condition] - self.truth_deg
         return e if pose_set is None else e[self._set_rows(pose_set)]
 
     def _set_rows(self, pose_set: str) -> np.ndarray:
@@ -179,6 +197,16 @@ class EvalReport:
                             for ps in (None, *self.options.pose_sets)}}
         return out
 
+    def _constant_dict(self) -> dict:
+        def block(pose_set) -> dict:
+            s = self.stats(CONSTANT, pose_set=pose_set)
+            return {"overall_mae_deg": _num(s.overall_mae_deg), "joints": s.as_dict()}
+
+        return {"description": _CONSTANT_TEXT, "all": block(None),
+                **{ps: block(ps) for ps in self.options.pose_sets},
+                "moving": {ps or "all": self.stats(CONSTANT, pose_set=ps, moving=True).as_dict()
+                           for ps in (None, *self.options.pose_sets)}}
+
     def to_dict(self, *, frames: bool = False) -> dict:
         """The report as plain JSON values.
 
@@ -196,7 +224,9 @@ class EvalReport:
             ``no_hand``, ``low_confidence``, ``overall_mae_deg`` and
             ``joints`` -> name -> ``mean_deg, sd_deg, mae_deg, n``; and
             ``moving``: the same per-joint figures over the frames where the
-            joint moves, for all frames and each pose set),
+            joint moves, for all frames and each pose set), ``constant`` (the same
+            per-joint figures of the open hand answered on every frame, the trivial
+            baseline: ``description``, ``all``, each pose set and ``moving``),
             ``targets`` (for ``all`` frames and each pose set; ``targets_personal``
             and ``targets_calibrated`` the same on those conditions), ``paper``, ``timing_s``,
             ``ambiguity`` (:func:`silhouette_ambiguity` per database) and optionally ``frames``.
@@ -207,6 +237,7 @@ class EvalReport:
             "joint_names": list(JOINT_NAMES),
             "hands": list(self.hands),
             "conditions": {c: self._condition_dict(c) for c in self.conditions},
+            "constant": self._constant_dict(),
             "targets": self._targets_by_set("selected"),
             "targets_personal": self._targets_by_set("personal"),
             "targets_calibrated": self._targets_by_set("calibrated"),
@@ -272,10 +303,11 @@ class EvalReport:
                 _plot_joint_mae(self, folder / f"{prefix}joint_mae.png")]
 
     def format(self) -> str:
-        """A plain-text table: per joint mean +- s.d. (MAE) per condition, then the targets."""
-        conds = self.conditions
+        """A plain-text table: per joint mean +- s.d. (MAE) per condition and of the constant
+        answer, then the targets."""
+        conds = (*self.conditions, CONSTANT)
         width = 24
-        lines = [f"{'joint':<16}" + "".join(f"{c:>{width}}" for c in conds)]
+        lines = [_PAPER_NOTE, f"{'joint':<16}" + "".join(f"{c:>{width}}" for c in conds)]
         stats = {c: self.stats(c) for c in conds}
         for j, name in enumerate(JOINT_NAMES):
             cells = []
@@ -289,7 +321,8 @@ class EvalReport:
             lines.append(f"{ps + ' poses MAE':<16}" + "".join(
                 f"{self.stats(c, pose_set=ps).overall_mae_deg:>{width}.2f}" for c in conds))
         lines.append("mean ± s.d. (MAE) of estimate - truth, degrees; "
-                     f"{len(self.truth_deg)} frames of {len(self.hands)} hand(s)")
+                     f"{len(self.truth_deg)} frames of {len(self.hands)} hand(s); {CONSTANT}: "
+                     "the open hand answered on every frame")
         for ps in self.options.pose_sets:
             moving = {c: self.stats(c, pose_set=ps, moving=True) for c in conds}
             for name in ("index_pip_flex", "thumb_cmc_flex"):

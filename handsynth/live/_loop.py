@@ -125,6 +125,9 @@ class LiveSummary:
         Mean absolute error over joints and `truth_frames`, degrees.
     mae_per_joint_deg : tuple of 20 float, or None
         Mean absolute error per joint, canonical order, degrees.
+    constant_mae_deg : float or None
+        The same of the constant answer, the open hand (every angle 0), on the
+        same frames: the trivial baseline beside `mae_deg`.
     """
 
     reads: int
@@ -145,6 +148,7 @@ class LiveSummary:
     truth_frames: int = 0
     mae_deg: float | None = None
     mae_per_joint_deg: tuple[float, ...] | None = None
+    constant_mae_deg: float | None = None
     moved: int = 0
     first_refusal: str | None = None
 
@@ -189,7 +193,8 @@ class LiveSummary:
             lines.append(
                 f"mean absolute error vs truth {self.mae_deg:.2f} deg over {self.truth_frames} "
                 f"frames (index PIP {j[JOINT_NAMES.index('index_pip_flex')]:.2f}, thumb CMC "
-                f"flex {j[JOINT_NAMES.index('thumb_cmc_flex')]:.2f})")
+                f"flex {j[JOINT_NAMES.index('thumb_cmc_flex')]:.2f}); the open hand answered on "
+                f"every frame: {self.constant_mae_deg:.2f} deg")
         if self.first_refusal is not None:
             lines.append(f"first frame refused: {self.first_refusal}")
         lines.append(f"stopped: {self.message}")
@@ -202,6 +207,7 @@ class _Tally:
         self.no_hand = self.low_confidence = self.truth_frames = self.moved = 0
         self.latencies = array("d")
         self.abs_err = np.zeros(len(JOINT_NAMES))
+        self.abs_truth = np.zeros(len(JOINT_NAMES))  # the open hand's error
         self.first_done_s: float | None = None  # loop time when the first frame was done
         self.read_s = 0.0  # time in read() after the first frame
         self.first_refusal: str | None = None
@@ -213,17 +219,19 @@ class _Tally:
         med, p99 = ((float(np.median(lat)) * 1e3, float(np.percentile(lat, 99)) * 1e3)
                     if lat.size else (float("nan"), float("nan")))
         steady = wall_s - self.first_done_s if self.first_done_s is not None else 0.0
-        per_joint = mae = None
+        per_joint = mae = constant = None
         if self.truth_frames:
             pj = self.abs_err / self.truth_frames
             per_joint, mae = tuple(float(v) for v in pj), float(pj.mean())
+            constant = float(self.abs_truth.mean() / self.truth_frames)
         return LiveSummary(
             reads=self.reads, frames=self.frames, dropped=self.dropped, invalid=self.invalid,
             no_hand=self.no_hand, low_confidence=self.low_confidence,
             lookup_s=float(lat.sum()), wall_s=wall_s, steady_wall_s=steady, read_s=self.read_s,
             first_lookup_ms=first_ms, lookup_ms_median=med, lookup_ms_p99=p99, stop_reason=stop_reason,
             message=message, truth_frames=self.truth_frames, mae_deg=mae,
-            mae_per_joint_deg=per_joint, moved=self.moved, first_refusal=self.first_refusal)
+            mae_per_joint_deg=per_joint, constant_mae_deg=constant, moved=self.moved,
+            first_refusal=self.first_refusal)
 
 
 def _usable(frame: np.ndarray | None) -> TypeGuard[np.ndarray]:
@@ -494,6 +502,7 @@ def _run(lookup, source: FrameSource, sink, video_out, opts: LiveOptions,
                 truth = getattr(source, "truth_deg", None)
                 if truth is not None and not est.no_hand:
                     tally.abs_err += np.abs(np.asarray(est.angles, np.float64) - truth)
+                    tally.abs_truth += np.abs(truth)
                     tally.truth_frames += 1
                 if sink is not None:
                     ts = getattr(source, "timestamp_s", None)

@@ -87,6 +87,8 @@ def test_synthetic_run_writes_csv_and_prints_rates_and_error(tmp_path, db):
     assert mae, text
     assert float(mae[1]) == pytest.approx(np.abs(est - truth).mean(), abs=0.01)
     assert float(mae[1]) < 6.0  # measured 2.1 deg (200 paper entries, default off-grid hand)
+    const = re.search(r"the open hand answered on every frame: ([\d.]+) deg", text)
+    assert const and float(const[1]) == pytest.approx(np.abs(truth).mean(), abs=0.01), text
     assert "stopped: reached 24 frames" in text
     assert f"rows: {out} (24 rows, csv)" in text
     assert "L1.020_W0.970_P1.010_T1.030" in text  # the off-grid default hand

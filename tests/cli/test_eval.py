@@ -29,6 +29,8 @@ def test_eval_prints_table_and_writes_json_and_plots(tmp_path):
     table = res.stdout
     assert "index_pip_flex" in table and "standard" in table and "selected" in table
     assert "selected beats standard" in table and res.stderr == ""
+    assert table.startswith("The paper's experiment: test poses from the databases' own")
+    assert "no better than the constant answer (handsynth eval --protocol)" in table
     d = json.loads(js.read_text())
     assert js.stat().st_mode & 0o044  # readable by others, as an ordinary file
     assert d["options"]["count"] == 120 and d["options"]["frame_size"] == [360, 240]

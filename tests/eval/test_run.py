@@ -216,6 +216,19 @@ def test_report_json_schema(report):
                 exp.mae_deg[JOINT_NAMES.index("index_pip_flex")], abs=1e-4)
         assert set(block["moving"]) == {"note", "all", "paper", "natural"}
         assert list(block["moving"]["paper"]) == list(JOINT_NAMES)
+    # the constant answer (the open hand) on the same frames, beside every condition
+    const = d["constant"]
+    assert set(const) == {"description", "all", "paper", "natural", "moving"}
+    truth = report.truth_deg
+    assert const["all"]["overall_mae_deg"] == pytest.approx(np.abs(truth).mean(), abs=1e-3)
+    paper = truth[report.pose_set == "paper"]
+    j = JOINT_NAMES.index("index_pip_flex")
+    assert const["paper"]["joints"]["index_pip_flex"]["mean_deg"] == pytest.approx(
+        -paper[:, j].mean(), abs=1e-3)
+    moved = np.abs(truth[:, j]) > 1.0
+    assert const["moving"]["all"]["index_pip_flex"]["mae_deg"] == pytest.approx(
+        np.abs(truth[moved, j]).mean(), abs=1e-3)
+    assert "constant" in report.format().splitlines()[4]  # the table's header, after the note
     t = d["targets"]["all"]
     assert set(t) == {"index_pip_abs_mean_deg", "index_pip_sd_deg", "thumb_cmc_sd_deg",
                       "selected_beats_standard"}

@@ -81,6 +81,7 @@ def test_synthetic_run_writes_rows_with_sane_angles(tmp_path, lookup, small_rows
     mae = np.abs(est - truth).mean()
     assert s.mae_deg == pytest.approx(mae, abs=1e-3)
     assert s.truth_frames == 40
+    assert s.constant_mae_deg == pytest.approx(np.abs(truth).mean(), abs=1e-3)
     assert s.mae_deg < MAE_BOUND_DEG
     assert s.mae_deg < 0.5 * np.abs(truth - db.mean(axis=0)).mean()
     assert s.fps_lookup > s.fps_loop > 0
