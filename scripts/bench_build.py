@@ -56,7 +56,8 @@ def _iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--render-size", default=None, help="WIDTHxHEIGHT (build default if unset)")
-    ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    ap.add_argument("--workers", type=int, default=len(os.sched_getaffinity(0)),
+                    help="worker processes [default: the cores this process may use]")
     ap.add_argument("--iou-poses", type=int, default=300)
     a = ap.parse_args()
     os.environ.setdefault("MUJOCO_GL", "egl")
@@ -65,7 +66,8 @@ def main() -> None:
 
     size = tuple(int(v) for v in a.render_size.split("x")) if a.render_size \
         else DEFAULT_RENDER_SIZE
-    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+    print(f"machine: {platform.processor() or platform.machine()}, "
+          f"{len(os.sched_getaffinity(0))} cores (of the machine's {os.cpu_count()}), "
           f"MUJOCO_GL={os.environ['MUJOCO_GL']}, {a.workers} worker(s), "
           f"render size {size[0]}x{size[1]}")
 

@@ -36,7 +36,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--size", type=int, default=128)
     ap.add_argument("--count", type=int, default=3000)
-    ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    ap.add_argument("--workers", type=int, default=len(os.sched_getaffinity(0)),
+                    help="worker processes [default: the cores this process may use]")
     a = ap.parse_args()
     os.environ.setdefault("MUJOCO_GL", "egl")
     with ProcessPoolExecutor(a.workers) as ex:
@@ -47,7 +48,8 @@ def main() -> None:
     one = single[0] / single[1]
     per_worker = [n / t for n, t in res]
     per_core = sum(per_worker) / a.workers
-    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+    print(f"machine: {platform.processor() or platform.machine()}, "
+          f"{len(os.sched_getaffinity(0))} cores (of the machine's {os.cpu_count()}), "
           f"MUJOCO_GL={os.environ['MUJOCO_GL']}")
     print(f"{a.size}x{a.size} masks, {a.count} poses per worker")
     print(f"one worker alone: {one:.0f} masks/s")
