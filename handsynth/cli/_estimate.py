@@ -447,7 +447,7 @@ def _build_options(count: int | None, side: str):
 def _progress(stream):
     def show(s) -> None:
         moved = f", DEVICE MOVED ({s.moved} frames): take the rest frame again" if s.moved else ""
-        stream.write(f"\r{s.frames} frames, dropped {s.dropped}, lookup {s.fps_lookup:.0f} fps, "
+        stream.write(f"\r{s.frames} frames, dropped {s.dropped}, estimate {s.fps_lookup:.0f} fps, "
                      f"loop {s.fps_loop:.0f} fps{moved}   ")
         stream.flush()
 

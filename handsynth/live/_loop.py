@@ -176,12 +176,12 @@ class LiveSummary:
             lines.append("no rates: fewer than two frames were looked up")
         else:
             lines += [
-                (f"lookup {self.fps_lookup:.1f} fps alone (median {self.lookup_ms_median:.2f} "
+                (f"estimate {self.fps_lookup:.1f} fps alone (median {self.lookup_ms_median:.2f} "
                  f"ms, p99 {self.lookup_ms_p99:.2f} ms); whole loop {self.fps_loop:.1f} fps "
                  f"({self.wall_s:.2f} s; first frame {self.first_lookup_ms:.1f} ms, not "
                  "counted)"),
                 (f"per frame after the first: reading the source "
-                 f"{self._per_frame_ms(self.read_s):.2f} ms, lookup "
+                 f"{self._per_frame_ms(self.read_s):.2f} ms, estimate "
                  f"{self._per_frame_ms(self.lookup_s):.2f} ms, whole loop "
                  f"{self._per_frame_ms(self.steady_wall_s):.2f} ms"),
             ]

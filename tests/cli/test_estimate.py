@@ -81,7 +81,7 @@ def test_synthetic_run_writes_csv_and_prints_rates_and_error(tmp_path, db):
     truth = np.array([[float(r[c]) for c in TRUTH_COLUMNS] for r in rows])
     assert ((est >= JOINT_LIMITS_DEG[:, 0] - 1e-3) & (est <= JOINT_LIMITS_DEG[:, 1] + 1e-3)).all()
     text = res.stdout
-    fps = re.search(r"lookup ([\d.]+) fps alone .* whole loop ([\d.]+) fps", text)
+    fps = re.search(r"estimate ([\d.]+) fps alone .* whole loop ([\d.]+) fps", text)
     assert fps and float(fps[1]) > float(fps[2]) > 0, text
     mae = re.search(r"mean absolute error vs truth ([\d.]+) deg over 24 frames", text)
     assert mae, text
