@@ -460,6 +460,15 @@ def _progress(stream):
 @click.option("--video", "video_in", default=None, metavar="FILE", help="Read a video file.")
 @click.option("--synthetic", is_flag=True,
               help="Render a moving hand of --synthetic-shape (no camera needed).")
+@click.option("--method", type=click.Choice(["learned", "paper"]), default=None,
+              help="learned: the estimator learnt from randomised model hands (beyond the "
+                   "paper; docs/camera_estimator.md), calibrated to the user's hand at rest: "
+                   "--calibrate-image, else the first frame showing a hand (--synthetic: the "
+                   "hand rendered open); learnt once into --learned-cache (minutes), then read. "
+                   "paper: the paper's database lookup, kept to reproduce it (on hands whose "
+                   "resting fingers are a few degrees off its open hand it reads no better "
+                   "than a constant answer; docs/lookup.md).  [default: learned]")
+@click.option("--learned", is_flag=True, help="The same as --method learned (the default).")
 @click.option("--db", "db_dir", default=None, metavar="FOLDER",
               help="--method paper: database folder (<shape>.h5 files) [default: build or "
                    "verify the embedded default database in ~/.cache/handsynth/db].")
@@ -498,15 +507,6 @@ def _progress(stream):
               help="The camera, or its driver, mirrors its image left to right (as for a "
                    "video call): every frame, and --calibrate-image, is turned back before "
                    "the estimate. With the learnt estimator the rest frame says when it is needed.")
-@click.option("--method", type=click.Choice(["learned", "paper"]), default=None,
-              help="learned: the estimator learnt from randomised model hands (beyond the "
-                   "paper; docs/camera_estimator.md), calibrated to the user's hand at rest: "
-                   "--calibrate-image, else the first frame showing a hand (--synthetic: the "
-                   "hand rendered open); learnt once into --learned-cache (minutes), then read. "
-                   "paper: the paper's database lookup, kept to reproduce it (on hands whose "
-                   "resting fingers are a few degrees off its open hand it reads no better "
-                   "than a constant answer; docs/lookup.md).  [default: learned]")
-@click.option("--learned", is_flag=True, help="The same as --method learned (the default).")
 @click.option("--learned-kind", type=click.Choice(["ensemble", "perceptrons", "fingers"]),
               default="ensemble", show_default=True,
               help="With the learnt estimator: the weighted mean of the per-digit estimator and three "
