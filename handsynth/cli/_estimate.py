@@ -484,15 +484,14 @@ def _progress(stream):
                    "hand (built in --db when missing, 20,448 paper poses, a few seconds) "
                    "instead of the nearest grid shape's.")
 @click.option("--build-count", "--personal-count", "build_count", type=int, default=None,
-              metavar="N", help="--method paper: poses of a database built for --personal or --calibrate "
-                                "[default: the paper's 20,448].")
+              metavar="N", help="--method paper: poses of a database built for --personal or "
+                                "--calibrate [default: the paper's 20,448].")
 @click.option("--calibrate", is_flag=True,
               help="--method paper: calibrate to the hand held open and flat (beyond the "
-                   "paper): the first "
-                   f"frame showing a hand within {CALIBRATION_READS} reads (--synthetic: the "
-                   "hand rendered open) chooses the grid "
-                   "database, built in --db when missing, unless --shape, --measurements or "
-                   "--personal chose it, and gives the pixels to ignore.")
+                   f"paper): the first frame showing a hand within {CALIBRATION_READS} reads "
+                   "(--synthetic: the hand rendered open) chooses the grid database, built in "
+                   "--db when missing, unless --shape, --measurements or --personal chose it, "
+                   "and gives the pixels to ignore.")
 @click.option("--calibrate-image", default=None, metavar="FILE",
               help="The rest frame from this image of the hand at rest (open, not stiff) "
                    "through the device instead of the first frame showing a hand; --method "
@@ -564,9 +563,8 @@ def _progress(stream):
                    "posed by the estimated angles; --method paper: the matched entry's.")
 @click.option("--video-out", default=None, metavar="FILE",
               help="Write each input frame beside the pose read from it (.mp4 or .avi): the "
-                   "estimated angles on the hand "
-                   "of --shape/--measurements (with --keypoints) or the standard hand; "
-                   "--method paper: the matched entry's render.")
+                   "estimated angles on the hand of --shape/--measurements (with --keypoints) "
+                   "or the standard hand; --method paper: the matched entry's render.")
 @click.option("--synthetic-shape", default=SYNTHETIC_SHAPE, show_default=True, metavar="NAME",
               help="Hand shape rendered by --synthetic (off the grid by default).")
 @click.option("--synthetic-motion", type=click.Choice(["paper", "natural", "named"]),

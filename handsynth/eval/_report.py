@@ -31,7 +31,7 @@ __all__ = ["EvalReport"]
 CONSTANT = "constant"
 _CONSTANT_TEXT = ("the open hand (every angle 0) answered on every frame: the trivial baseline "
                   "on the same frames")
-#: The first line of :meth:`EvalReport.format`: what the paper's experiment measures.
+#: The first lines of :meth:`EvalReport.format`: what the paper's experiment measures.
 _PAPER_NOTE = ("The paper's experiment: test poses from the databases' own pose generators,\n"
                "every joint that does not move at exactly the databases' open hand. It flatters\n"
                "the lookups: on hands whose resting fingers are a few degrees off it they read\n"

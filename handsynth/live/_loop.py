@@ -193,8 +193,9 @@ class LiveSummary:
             lines.append(
                 f"mean absolute error vs truth {self.mae_deg:.2f} deg over {self.truth_frames} "
                 f"frames (index PIP {j[JOINT_NAMES.index('index_pip_flex')]:.2f}, thumb CMC "
-                f"flex {j[JOINT_NAMES.index('thumb_cmc_flex')]:.2f}); the open hand answered on "
-                f"every frame: {self.constant_mae_deg:.2f} deg")
+                f"flex {j[JOINT_NAMES.index('thumb_cmc_flex')]:.2f})"
+                + ("" if self.constant_mae_deg is None else
+                   f"; the open hand answered on every frame: {self.constant_mae_deg:.2f} deg"))
         if self.first_refusal is not None:
             lines.append(f"first frame refused: {self.first_refusal}")
         lines.append(f"stopped: {self.message}")
