@@ -34,6 +34,8 @@ import time
 
 import numpy as np
 
+from handsynth._cores import usable_cores
+
 GRID_SHAPES = 81
 PAPER_COUNT = 20_448
 
@@ -56,7 +58,7 @@ def _iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--render-size", default=None, help="WIDTHxHEIGHT (build default if unset)")
-    ap.add_argument("--workers", type=int, default=len(os.sched_getaffinity(0)),
+    ap.add_argument("--workers", type=int, default=usable_cores(),
                     help="worker processes [default: the cores this process may use]")
     ap.add_argument("--iou-poses", type=int, default=300)
     a = ap.parse_args()
@@ -67,7 +69,7 @@ def main() -> None:
     size = tuple(int(v) for v in a.render_size.split("x")) if a.render_size \
         else DEFAULT_RENDER_SIZE
     print(f"machine: {platform.processor() or platform.machine()}, "
-          f"{len(os.sched_getaffinity(0))} cores (of the machine's {os.cpu_count()}), "
+          f"{usable_cores()} cores (of the machine's {os.cpu_count()}), "
           f"MUJOCO_GL={os.environ['MUJOCO_GL']}, {a.workers} worker(s), "
           f"render size {size[0]}x{size[1]}")
 

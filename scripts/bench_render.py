@@ -17,6 +17,8 @@ import platform
 import time
 from concurrent.futures import ProcessPoolExecutor
 
+from handsynth._cores import usable_cores
+
 
 def _worker(args: tuple[int, int]) -> tuple[int, float]:
     size, count = args
@@ -36,7 +38,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--size", type=int, default=128)
     ap.add_argument("--count", type=int, default=3000)
-    ap.add_argument("--workers", type=int, default=len(os.sched_getaffinity(0)),
+    ap.add_argument("--workers", type=int, default=usable_cores(),
                     help="worker processes [default: the cores this process may use]")
     a = ap.parse_args()
     os.environ.setdefault("MUJOCO_GL", "egl")
@@ -49,7 +51,7 @@ def main() -> None:
     per_worker = [n / t for n, t in res]
     per_core = sum(per_worker) / a.workers
     print(f"machine: {platform.processor() or platform.machine()}, "
-          f"{len(os.sched_getaffinity(0))} cores (of the machine's {os.cpu_count()}), "
+          f"{usable_cores()} cores (of the machine's {os.cpu_count()}), "
           f"MUJOCO_GL={os.environ['MUJOCO_GL']}")
     print(f"{a.size}x{a.size} masks, {a.count} poses per worker")
     print(f"one worker alone: {one:.0f} masks/s")
