@@ -193,9 +193,12 @@ def estimate(recording, methods, frames, lateral_axis, lateral_frame, bins, unit
               help="Simulated trial length, s.")
 @click.option("--seeds", type=int, default=3, show_default=True,
               help="Number of simulated trials per row (averaged).")
+@click.option("--seed", "first_seed", type=int, default=0, show_default=True,
+              help="Seed of the first trial; the others follow it (--seeds 3 --seed 10: "
+                   "10, 11, 12).")
 @click.option("--rom-sweep", is_flag=True,
               help="Instead: every method at 10-70 deg range of motion, ok / warned / refused.")
-def eval_(configs, json_out, duration_s, seeds, rom_sweep) -> None:
+def eval_(configs, json_out, duration_s, seeds, first_seed, rom_sweep) -> None:
     """The patent's table (mock vs finger, all vs filtered) on two simulator configurations."""
     from .._io import check_output, write_json
     from ..errors import InvalidInputError
@@ -204,6 +207,9 @@ def eval_(configs, json_out, duration_s, seeds, rom_sweep) -> None:
 
     if not 1 <= seeds <= _MAX_SEEDS:
         raise InvalidInputError(f"--seeds must be between 1 and {_MAX_SEEDS}, got {seeds}")
+    if first_seed < 0:
+        raise InvalidInputError(f"--seed must be a seed >= 0, got {first_seed}")
+    trial_seeds = tuple(range(first_seed, first_seed + seeds))
     if not _MIN_DURATION_S <= duration_s <= _MAX_DURATION_S:
         raise InvalidInputError(
             f"--duration must be between {_MIN_DURATION_S:g} and {_MAX_DURATION_S:g} s (a trial "
@@ -212,7 +218,7 @@ def eval_(configs, json_out, duration_s, seeds, rom_sweep) -> None:
         check_output(json_out)
     names = ("project", "independent") if configs == "both" else (configs,)
     if rom_sweep:
-        rows = sweep(configs=names, duration_s=min(duration_s, 20.0), seeds=tuple(range(seeds)))
+        rows = sweep(configs=names, duration_s=min(duration_s, 20.0), seeds=trial_seeds)
         click.echo("largest of the P_U/P_L errors in mm; W = answered with a warning, "
                    "R = refused; baseline = midpoint of the two sensors")
         click.echo(f"{'config':<12}{'scenario':<9}{'rom':>4} {'method':<11}{'frames':<9}"
@@ -223,10 +229,10 @@ def eval_(configs, json_out, duration_s, seeds, rom_sweep) -> None:
                        f"{r['baseline_mm']:9.2f}")
         if json_out:
             write_json(json_out, {"duration_s": min(duration_s, 20.0), "seeds": seeds,
-                                  "rows": rows})
+                                  "first_seed": first_seed, "rows": rows})
         return
     rows = [r for c in names for r in evaluate(config=c, duration_s=duration_s,
-                                               seeds=tuple(range(seeds)))]
+                                               seeds=trial_seeds)]
     click.echo("errors in mm against the simulated centre (mean over answered trials); axis = "
                "distance of the true centre from the estimated axis; |PU-PL| as in the patent "
                "(mock ~2 mm; finger DIP 7.09 -> 4.21 mm); midpoint = the trivial baseline")
@@ -242,4 +248,5 @@ def eval_(configs, json_out, duration_s, seeds, rom_sweep) -> None:
                    f"{r['time_ms']:7.1f}")
     if json_out:
         # a row whose every trial was refused has NaN errors: written as null
-        write_json(json_out, {"duration_s": duration_s, "seeds": seeds, "rows": rows})
+        write_json(json_out, {"duration_s": duration_s, "seeds": seeds,
+                              "first_seed": first_seed, "rows": rows})

@@ -146,6 +146,24 @@ def test_eval_json_both_configurations(tmp_path):
     assert all(r["error_mm"] < base[(r["config"], r["scenario"], r["noise"])] / 2 for r in obrien)
 
 
+def test_eval_seed_sets_the_first_trial(tmp_path):
+    from handsynth.sensors.trackers import evaluate
+
+    out = tmp_path / "eval.json"
+    res = _run("eval", "--config", "independent", "--duration", "6", "--seeds", "1",
+               "--seed", "4", "--json", out)
+    assert res.exit_code == 0, res.output
+    doc = json.loads(out.read_text())
+    assert doc["first_seed"] == 4 and doc["seeds"] == 1
+    errors = [r["error_mm"] for r in doc["rows"]]
+    assert errors == pytest.approx(
+        [r["error_mm"] for r in evaluate(config="independent", duration_s=6.0, seeds=(4,))],
+        nan_ok=True)
+    assert errors != pytest.approx(
+        [r["error_mm"] for r in evaluate(config="independent", duration_s=6.0, seeds=(0,))],
+        nan_ok=True)
+
+
 # --------------------------------------------------------------------------- faults (issue 16)
 
 
@@ -184,6 +202,7 @@ def test_json_never_replaces_the_recording(rec_path):
     (["--duration", "0.01"], ["--duration must be between 2 and 3600 s", "got 0.01"]),  # 15
     (["--duration", "1e9"], ["--duration must be between 2 and 3600 s"]),                # 16
     (["--seeds", "100000"], ["--seeds must be between 1 and 100"]),
+    (["--seed", "-1"], ["--seed must be a seed >= 0", "got -1"]),
 ])
 def test_eval_bounds_name_the_option(args, words):
     res = CliRunner().invoke(cli, ["joints", "eval", *args])
