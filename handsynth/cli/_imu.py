@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 
@@ -129,6 +130,10 @@ def imu() -> None:
 @click.option("--config", "config_name", type=click.Choice(("heldout", "tuning")),
               default="heldout", show_default=True,
               help="Simulator configuration (heldout: not used for tuning).")
+@click.option("--seed", type=int, default=None,
+              help="Another draw of the configuration: its devices, mounting errors and "
+                   "motions from this seed [default: the configuration's own, heldout 1, "
+                   "tuning 0].")
 @click.option("--filter", "filters", multiple=True,
               help="Filter(s) to run, comma-separated or repeated (default: all).")
 @click.option("--duration", "durations", type=float, multiple=True,
@@ -149,7 +154,7 @@ def imu() -> None:
               help="Write the full report as JSON.")
 @click.option("--plots", "plot_dir", type=click.Path(file_okay=False),
               help="Write orientation_error.png and stick_figure.png (last trial) here.")
-def eval_(config_name, filters, durations, elbows, no_grasps, no_sensor_calibration,
+def eval_(config_name, seed, filters, durations, elbows, no_grasps, no_sensor_calibration,
           no_plate_fusion, six_axis, json_out, plot_dir) -> None:
     """Reproduce the thesis' tables on simulated data, beside trivial baselines."""
     from ..errors import InvalidInputError, OutputError
@@ -173,11 +178,15 @@ def eval_(config_name, filters, durations, elbows, no_grasps, no_sensor_calibrat
     check_outputs([("--json", json_out),
                    *((("--plots", plots / name) for name in ("orientation_error.png",
                                                                "stick_figure.png")) if plots else ())])
+    if seed is not None and seed < 0:
+        raise InvalidInputError(f"--seed must be a seed >= 0, got {seed}")
     for d in durations:
         if not 6.0 <= d <= 600.0:  # nan fails too
             raise InvalidInputError(f"--duration must be within [6, 600] s (2 s still, 2 s of "
                                     f"the aligning rotation, then the motion), got {d}")
     config = HELDOUT if config_name == "heldout" else TUNING
+    if seed is not None:
+        config = dataclasses.replace(config, seed=seed)
     series: dict = {}
     rep = evaluate(config, durations=durations or (15.0, 30.0), elbows=elbows or ("fixed", "moving"),
                    filters=_filters(filters, FILTERS, default=tuple(
@@ -229,8 +238,6 @@ def eval_(config_name, filters, durations, elbows, no_grasps, no_sensor_calibrat
 def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz, acc_range_g,
               gyr_range_dps, bridge_lost, bridge_max_s, out_path, side, hinge_centres) -> None:
     """Sensor-to-joint vectors, link vectors and link frames from a calibration RECORDING."""
-    import dataclasses
-
     from ..errors import RecordingError
     from ..sensors.imu import calibrate as run_calibration
     from ..sensors.imu import check_recording, segments_from_seconds
@@ -296,8 +303,6 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
           angles_out, tips_out,
           no_sensor_calibration) -> None:
     """Orientation of every sensor of a CSV RECORDING (columns <sensor>_acc_x .. _mag_z)."""
-    import dataclasses
-
     import numpy as np
 
     from ..errors import InvalidInputError, RecordingError

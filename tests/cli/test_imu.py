@@ -205,6 +205,22 @@ def test_eval_writes_json_with_baselines(tmp_path):
     assert "rotation_method" in res.output
 
 
+def test_eval_seed_draws_the_configuration_again(tmp_path):
+    runs = {}
+    for seed in (None, "1", "5"):
+        out = tmp_path / f"eval{seed}.json"
+        args = ["imu", "eval", "--config", "tuning", "--duration", "8", "--elbow", "fixed",
+                "--filter", "raw", "--no-grasps", "--json", str(out)]
+        res = CliRunner().invoke(cli, args + (["--seed", seed] if seed else []))
+        assert res.exit_code == 0, res.output
+        rep = json.loads(out.read_text())
+        runs[seed] = (rep["config"]["seed"], rep["summary"]["raw"]["orientation_mean_deg"])
+    assert [runs[k][0] for k in (None, "1", "5")] == [0, 1, 5]
+    assert runs["5"][1] != runs["1"][1] != runs[None][1]
+    res = CliRunner().invoke(cli, ["imu", "eval", "--seed", "-2"])
+    assert res.exit_code == 2 and "--seed must be a seed >= 0, got -2" in res.output
+
+
 def test_eval_prints_its_table_without_a_json_file():
     # the README's `handsynth imu eval` failed: --json was required
     res = CliRunner().invoke(cli, ["imu", "eval", "--config", "tuning", "--duration", "8",
