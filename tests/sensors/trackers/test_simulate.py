@@ -93,9 +93,7 @@ def test_recording_rejects_bad_arrays(finger_rec):
 
 
 def test_geometry_from_mujoco_hand_matches_its_keypoints():
-    models = pytest.importorskip("handsynth.models")
-    if not hasattr(models, "HandModel"):
-        pytest.skip("HandModel not available")
+    from handsynth import models
     from handsynth.sensors.trackers import joint_geometry
 
     hand = models.HandModel(models.HandShape())
