@@ -85,6 +85,12 @@ class LearningSetOptions:
     flesh_offset_sd_mm : float
         ``flesh_offset_sd_mm`` of :meth:`HandVariation.random`: where each
         segment's surface sits on its joints (0: as the model's).
+    breadth_follows_scale : float
+        ``breadth_follows_scale`` of :meth:`HandVariation.random`: the power
+        of a hand's common length scale that its breadths take (0: breadths
+        independent of the lengths).  1 read small hands resting near open
+        better with the per-digit estimator (docs/camera_estimator.md, "Hands
+        smaller and larger"); not the default.
     mount_variation : MountVariation
         How the device moves between wearers.
     edge_px : int
@@ -134,6 +140,7 @@ class LearningSetOptions:
     open_rest_share: float = 0.75
     rest_slip: float = 0.0
     rest_slip_share: float = 1.0
+    breadth_follows_scale: float = 0.0
 
     def __post_init__(self) -> None:
         for name in ("hands", "poses_per_hand"):
@@ -171,7 +178,8 @@ class LearningSetOptions:
             raise InvalidInputError(f"LearningSetOptions.cells must be (rows, cols), two positive "
                                     f"integers, got {cells!r}")
         object.__setattr__(self, "cells", tuple(int(c) for c in cells))
-        for name, top in (("segment_width_sd", 1), ("flesh_offset_sd_mm", 10)):
+        for name, top in (("segment_width_sd", 1), ("flesh_offset_sd_mm", 10),
+                          ("breadth_follows_scale", 2)):
             sd = getattr(self, name)
             if isinstance(sd, bool) or not isinstance(sd, (int, float)) or not 0 <= sd <= top:
                 raise InvalidInputError(f"LearningSetOptions.{name} must be in [0, {top}], "
@@ -191,7 +199,8 @@ class LearningSetOptions:
     def digest(self) -> str:
         """A short digest of the options (names the cached file)."""
         d = asdict(self)
-        for name in ("open_rest_share", "segment_width_sd", "flesh_offset_sd_mm", "rest_slip"):
+        for name in ("open_rest_share", "segment_width_sd", "flesh_offset_sd_mm", "rest_slip",
+                     "breadth_follows_scale"):
             if not d[name]:
                 del d[name]  # the sets made before the option keep their names
         if d["rest_slip_share"] == 1.0:
@@ -363,7 +372,8 @@ def _hand_plan(rng: np.random.Generator, opts: LearningSetOptions, mount: Camera
     key = round(shape.length, 1), round(shape.width, 1), forearm
     variation = HandVariation.random(rng, spread=opts.hand_spread,
                                      segment_width_sd=opts.segment_width_sd,
-                                     flesh_offset_sd_mm=opts.flesh_offset_sd_mm)
+                                     flesh_offset_sd_mm=opts.flesh_offset_sd_mm,
+                                     breadth_follows_scale=opts.breadth_follows_scale)
     worn = opts.mount_variation.sample(mount, rng)
     edge = int(rng.integers(-opts.edge_px, opts.edge_px + 1))
     near_open = opts.open_rest_share > 0 and rng.uniform() < opts.open_rest_share

@@ -118,7 +118,8 @@ class HandVariation:
 
     @classmethod
     def random(cls, rng: np.random.Generator, *, spread: float = 1.0,
-               segment_width_sd: float = 0.0, flesh_offset_sd_mm: float = 0.0) -> HandVariation:
+               segment_width_sd: float = 0.0, flesh_offset_sd_mm: float = 0.0,
+               breadth_follows_scale: float = 0.0) -> HandVariation:
         """A random hand: independent log-normal factors and normal offsets.
 
         The s.d.s (at ``spread=1``) are wide on purpose, wider than adult
@@ -144,21 +145,30 @@ class HandVariation:
         flesh_offset_sd_mm : float, keyword-only
             S.d. of each ``flesh_offset_mm`` (times `spread`), drawn after the
             widths; 0 (the default) draws nothing.
+        breadth_follows_scale : float, keyword-only
+            Power (0-2) of the common scale that the digits' breadths, the
+            palm's breadth and its depth take on top of their own factors: 1
+            makes a hand uniformly smaller or larger, as a child's is; 0 (the
+            default) varies breadths independently of the lengths.  It draws
+            nothing, so a seed gives the same lengths whatever its value.
 
         Raises
         ------
         InvalidShapeError
-            `spread` not a finite number >= 0, or an s.d. out of range
+            `spread` not a finite number >= 0, `breadth_follows_scale` not a
+            number in [0, 2], or an s.d. out of range
             (:meth:`with_random_surface`), naming it.
         """
         s = check_number(spread, "spread", minimum=0, error=InvalidShapeError)
+        k = check_number(breadth_follows_scale, "breadth_follows_scale", minimum=0, maximum=2,
+                         error=InvalidShapeError)
         common = rng.normal(0.0, 0.07 * s)
         out = cls(
             segment_length=tuple(np.exp(common + rng.normal(0.0, 0.15 * s, 15))),
-            digit_width=tuple(np.exp(rng.normal(0.0, 0.10 * s, 5))),
+            digit_width=tuple(np.exp(k * common + rng.normal(0.0, 0.10 * s, 5))),
             palm_length=float(np.exp(common + rng.normal(0.0, 0.12 * s))),
-            palm_width=float(np.exp(rng.normal(0.0, 0.06 * s))),
-            palm_depth=float(np.exp(rng.normal(0.0, 0.10 * s))),
+            palm_width=float(np.exp(k * common + rng.normal(0.0, 0.06 * s))),
+            palm_depth=float(np.exp(k * common + rng.normal(0.0, 0.10 * s))),
             mcp_offset_mm=tuple(rng.normal(0.0, 3.0 * s, 8)),
             thumb_offset_mm=tuple(rng.normal(0.0, 5.0 * s, 3)),
         )

@@ -103,6 +103,8 @@ def test_bad_options_are_refused_by_name():
         LearningSetOptions(segment_width_sd=-0.1)
     with pytest.raises(InvalidInputError, match="flesh_offset_sd_mm"):
         LearningSetOptions(flesh_offset_sd_mm=11)
+    with pytest.raises(InvalidInputError, match=r"breadth_follows_scale must be in \[0, 2\], got 3"):
+        LearningSetOptions(breadth_follows_scale=3)
 
 
 @pytest.mark.parametrize("kwargs, words", [
@@ -146,6 +148,16 @@ def test_segment_widths_vary_the_learning_hands_and_name_their_own_set():
     assert LearningSetOptions(flesh_offset_sd_mm=0).digest() == LearningSetOptions().digest()
     assert LearningSetOptions(flesh_offset_sd_mm=1.5).digest() not in (
         LearningSetOptions().digest(), LearningSetOptions(segment_width_sd=0.1).digest())
+
+
+def test_breadths_that_follow_the_scale_name_their_own_set():
+    opts = dict(hands=3, poses_per_hand=2, seed=2)
+    same = render_learning_set(LearningSetOptions(**opts))
+    scaled = render_learning_set(LearningSetOptions(**opts, breadth_follows_scale=1.0))
+    assert not np.array_equal(scaled.grids, same.grids)
+    np.testing.assert_array_equal(scaled.angles, same.angles)  # the same draws otherwise
+    assert LearningSetOptions(breadth_follows_scale=0).digest() == LearningSetOptions().digest()
+    assert LearningSetOptions(breadth_follows_scale=1).digest() != LearningSetOptions().digest()
 
 
 def test_a_rest_slip_moves_the_device_between_a_hand_s_rest_frame_and_its_other_frames():

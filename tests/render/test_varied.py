@@ -155,6 +155,24 @@ def test_a_random_hand_refuses_a_spread_that_is_not_a_finite_number_at_least_0(s
                                             segment_width_sd=0.1)
 
 
+def test_breadths_that_follow_the_scale_leave_the_lengths_and_scale_every_breadth_alike():
+    plain = HandVariation.random(np.random.default_rng(4), spread=1.5)
+    full = HandVariation.random(np.random.default_rng(4), spread=1.5, breadth_follows_scale=1.0)
+    half = HandVariation.random(np.random.default_rng(4), spread=1.5, breadth_follows_scale=0.5)
+    assert full.segment_length == plain.segment_length == half.segment_length
+    assert full.palm_length == plain.palm_length and full.mcp_offset_mm == plain.mcp_offset_mm
+    # every breadth takes the same factor, the common scale, which the segment lengths share:
+    # their ratios to the plain hand's are exp(common) (1) and its square root (0.5)
+    ratio = np.r_[full.digit_width, full.palm_width, full.palm_depth] / np.r_[
+        plain.digit_width, plain.palm_width, plain.palm_depth]
+    assert np.allclose(ratio, ratio[0]) and abs(np.log(ratio[0])) > 1e-3
+    np.testing.assert_allclose(np.r_[half.digit_width, half.palm_width] / np.r_[
+        plain.digit_width, plain.palm_width], np.sqrt(ratio[0]))
+    for bad in (-0.1, 2.5, float("nan")):
+        with pytest.raises(InvalidShapeError, match="breadth_follows_scale"):
+            HandVariation.random(np.random.default_rng(4), breadth_follows_scale=bad)
+
+
 def test_a_random_hand_of_spread_0_is_the_built_hand():
     rng = np.random.default_rng(5)
     assert HandVariation.random(rng, spread=0, segment_width_sd=0.1,
