@@ -48,6 +48,7 @@ _OPTION_NAMES = {
     "LearningSetOptions.hand_spread": "--hand-spread",
     "methods": "--conditions",          # protocol_methods
     "n": "--hands", "spread": "--hand-spread",  # model_test_hands
+    "breadth_follows_scale": "--breadth-follows-scale",
     "scale": "--mesh-scale",            # mesh_test_hands
     "workers": "--workers",             # build_databases
 }
@@ -79,6 +80,10 @@ PROTOCOL_DEFAULT = "standard,calibrated,fingers,fingers_mean,mlp,ensemble"
                    "four times as many].")
 @click.option("--hand-spread", type=float, default=1.5, show_default=True,
               help="--protocol: variation of the model hands' geometry (the learning set's is 1).")
+@click.option("--breadth-follows-scale", type=float, default=0.0, show_default=True, metavar="K",
+              help="--protocol: the model hands' breadths take their common length scale to "
+                   "the power K (1: a hand uniformly smaller or larger, as a child's; 0: "
+                   "breadths independent of the lengths, as the learning hands').")
 @click.option("--rest", type=click.Choice(["relaxed", "open"]), default="relaxed",
               show_default=True,
               help="--protocol: the test hands' rest postures: relaxed (flexion growing toward "
@@ -130,7 +135,8 @@ PROTOCOL_DEFAULT = "standard,calibrated,fingers,fingers_mean,mlp,ensemble"
 @click.option("--quiet", "-q", is_flag=True, help="No progress lines.")
 @click.pass_context
 @option_names(_OPTION_NAMES)
-def eval_(ctx, db_folder, protocol, mesh, mesh_scale, learned_hands, hand_spread, rest, slip, out_dir, prefix,
+def eval_(ctx, db_folder, protocol, mesh, mesh_scale, learned_hands, hand_spread,
+          breadth_follows_scale, rest, slip, out_dir, prefix,
           json_path, json_frames, n_hands, frames, pose_sets, hand, conditions, count,
           db_pose_set, seed, ratio_margin, mount, frame_size, render_size, workers, ties,
           photo_mm_per_px, quiet) -> None:
@@ -174,9 +180,10 @@ def eval_(ctx, db_folder, protocol, mesh, mesh_scale, learned_hands, hand_spread
         _protocol(db_folder, mesh, mesh_scale, learned_hands, hand_spread, json_path, n_hands, frames,
                   _parse_list(pose_sets, "--pose-sets"),
                   _parse_list(PROTOCOL_DEFAULT if conditions is None else conditions, "--conditions"),
-                  seed, rest, slip, say)
+                  seed, rest, slip, say, breadth_follows_scale=breadth_follows_scale)
         return
-    for n in ("mesh", "mesh_scale", "learned_hands", "hand_spread", "rest", "slip"):
+    for n in ("mesh", "mesh_scale", "learned_hands", "hand_spread", "breadth_follows_scale", "rest",
+              "slip"):
         if ctx.get_parameter_source(n) == click.core.ParameterSource.COMMANDLINE:
             raise InvalidInputError(f"--{n.replace('_', '-')} applies with --protocol only")
     if conditions is None:
@@ -211,7 +218,7 @@ def eval_(ctx, db_folder, protocol, mesh, mesh_scale, learned_hands, hand_spread
 
 
 def _protocol(folder, mesh, mesh_scale, learned_hands, hand_spread, json_path, n_hands, frames, pose_sets,
-              methods, seed, rest, slip, say) -> None:
+              methods, seed, rest, slip, say, *, breadth_follows_scale=0.0) -> None:
     import time
 
     from .. import __version__
@@ -240,7 +247,8 @@ def _protocol(folder, mesh, mesh_scale, learned_hands, hand_spread, json_path, n
     options = ProtocolOptions(frames=frames, pose_sets=pose_sets, seed=seed, rest=rest, slip=slip)
     mount = CameraMount.paper()
     meshes = [m.strip() for m in mesh.split(",") if m.strip()]
-    hands = model_test_hands(n_hands, seed=seed + 1, mount=mount, spread=hand_spread)
+    hands = model_test_hands(n_hands, seed=seed + 1, mount=mount, spread=hand_spread,
+                             breadth_follows_scale=breadth_follows_scale)
     hands += mesh_test_hands(meshes, mount=mount, scale=mesh_scale) if meshes else []
     if not hands:
         raise InvalidInputError("no test hands: give --hands N > 0 or --mesh NAMES")

@@ -151,7 +151,8 @@ class TestHand:
 
 def model_test_hands(n: int, *, seed: int = 0, mount: CameraMount | None = None,
                      spread: float = 1.0, segment_width_sd: float = 0.0,
-                     flesh_offset_sd_mm: float = 0.0) -> list[TestHand]:
+                     flesh_offset_sd_mm: float = 0.0,
+                     breadth_follows_scale: float = 0.0) -> list[TestHand]:
     """`n` model hands with random geometry beyond the four ratios.
 
     Each hand is a random :class:`HandShape` (each ratio uniform over the
@@ -177,6 +178,10 @@ def model_test_hands(n: int, *, seed: int = 0, mount: CameraMount | None = None,
         its random :class:`HandShape` unvaried).
     segment_width_sd, flesh_offset_sd_mm : float, keyword-only
         As :meth:`HandVariation.with_random_surface` takes them.
+    breadth_follows_scale : float, keyword-only
+        As :meth:`HandVariation.random` takes it: the power of each hand's
+        common length scale that its breadths take (0: independent of it;
+        the hands' lengths are those of the same seed whatever its value).
 
     Returns
     -------
@@ -187,7 +192,8 @@ def model_test_hands(n: int, *, seed: int = 0, mount: CameraMount | None = None,
     ------
     InvalidInputError
         `n` not an integer >= 0, `seed` not an integer >= 0, `spread` not a
-        finite number >= 0 (each named with the value received); a `mount`
+        finite number >= 0, `breadth_follows_scale` not in [0, 2] (each named
+        with the value received); a `mount`
         that is not a :class:`CameraMount` (:class:`InvalidCameraError`); an
         s.d. out of range (:class:`InvalidShapeError`).
     """
@@ -196,6 +202,8 @@ def model_test_hands(n: int, *, seed: int = 0, mount: CameraMount | None = None,
     n = check_integer(n, "n", minimum=0, maximum=MAX_HANDS)
     seed = check_integer(seed, "seed", minimum=0)
     spread = check_number(spread, "spread", minimum=0)
+    breadth_follows_scale = check_number(breadth_follows_scale, "breadth_follows_scale",
+                                         minimum=0, maximum=2)
     mount = as_mount(mount)
     rng = np.random.default_rng(np.random.SeedSequence([seed, 0x7E57]))
     surface_rng = np.random.default_rng(np.random.SeedSequence([seed, 0x7E57, 0x5E6]))
@@ -204,7 +212,8 @@ def model_test_hands(n: int, *, seed: int = 0, mount: CameraMount | None = None,
         ratios = {k: float(rng.uniform(lo - (mid - lo), hi + (hi - mid)))
                   for k, (lo, mid, hi) in GRID_LEVELS.items()}
         shape = HandShape(**ratios)
-        var = HandVariation.random(rng, spread=spread).with_random_surface(
+        var = HandVariation.random(rng, spread=spread,
+                                   breadth_follows_scale=breadth_follows_scale).with_random_surface(
             surface_rng, spread=spread, segment_width_sd=segment_width_sd,
             flesh_offset_sd_mm=flesh_offset_sd_mm)
 

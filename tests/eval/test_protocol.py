@@ -237,6 +237,19 @@ def test_model_test_hands_with_segment_widths_and_flesh_offsets_are_the_same_han
         assert pv["flesh_offset_mm"] == [0.0] * 30 and len(set(wv["flesh_offset_mm"])) == 30
 
 
+def test_model_test_hands_whose_breadths_follow_their_scale_are_the_same_hands_otherwise():
+    plain = model_test_hands(3, seed=6, spread=1.5)
+    scaled = model_test_hands(3, seed=6, spread=1.5, breadth_follows_scale=1.0)
+    for p, w in zip(plain, scaled):
+        pv, wv = p.info["variation"], w.info["variation"]
+        breadths = ("digit_width", "palm_width", "palm_depth")
+        assert {k: v for k, v in pv.items() if k not in breadths} == \
+            {k: v for k, v in wv.items() if k not in breadths}
+        ratio = np.r_[wv["digit_width"], wv["palm_width"], wv["palm_depth"]] / \
+            np.r_[pv["digit_width"], pv["palm_width"], pv["palm_depth"]]
+        assert np.allclose(ratio, ratio[0]) and ratio[0] != pytest.approx(1.0)
+
+
 def test_describe_methods_names_every_learnt_option_and_refuses_unknown_names():
     from dataclasses import asdict
 
@@ -346,6 +359,8 @@ def test_two_glTF_hands_of_one_name_are_refused_before_any_work(tmp_path):
     ((1,), {"spread": None}, "spread must be a finite number >= 0, got None (NoneType)"),
     ((1,), {"seed": -1}, "seed must be an integer >= 0, got -1"),
     ((10**6,), {}, "n must be an integer >= 0 and <= 1000, got 1000000"),
+    ((0,), {"breadth_follows_scale": 3}, "breadth_follows_scale must be a finite number >= 0 and "
+                                         "<= 2, got 3"),
 ])
 def test_model_test_hands_refuses_a_bad_count_spread_or_seed_by_name(args, kwargs, named):
     # once numpy's "scale < 0", an error about an internal field, or [] for n < 0
