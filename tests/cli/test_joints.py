@@ -162,6 +162,20 @@ def test_eval_seed_sets_the_first_trial(tmp_path):
     assert errors != pytest.approx(
         [r["error_mm"] for r in evaluate(config="independent", duration_s=6.0, seeds=(0,))],
         nan_ok=True)
+    # one trial: its worst is its mean; two: the larger of the two trials' means
+    one = [r for r in doc["rows"] if r["answered"]]
+    assert [r["worst_error_mm"] for r in one] == pytest.approx([r["error_mm"] for r in one],
+                                                               abs=2e-3)
+    both = {(r["scenario"], r["method"], r["frames"]): r
+            for r in evaluate(config="independent", duration_s=6.0, seeds=(0, 4))}
+    zero = {(r["scenario"], r["method"], r["frames"]): r
+            for r in evaluate(config="independent", duration_s=6.0, seeds=(0,))}
+    four = {(r["scenario"], r["method"], r["frames"]): r for r in doc["rows"]}
+    for key, r in both.items():
+        if r["answered"] == 2:
+            assert r["worst_error_mm"] == pytest.approx(
+                max(zero[key]["error_mm"], four[key]["error_mm"]), abs=2e-3)
+            assert r["worst_error_mm"] >= r["error_mm"] - 1e-9
 
 
 # --------------------------------------------------------------------------- faults (issue 16)
@@ -300,7 +314,8 @@ def test_eval_json_writes_refused_rows_as_null_not_nan(tmp_path, monkeypatch):
     # distance): json.dumps wrote bare NaN tokens, which strict JSON readers refuse
     row = {"config": "project", "scenario": "mock", "noise": "datasheet", "method": "obrien",
            "frames": "all", "n_frames_used": 0, "error_upper_mm": float("nan"),
-           "error_lower_mm": np.nan, "error_mm": np.float64("nan"), "distance_mm": float("inf"),
+           "error_lower_mm": np.nan, "error_mm": np.float64("nan"), "worst_error_mm": np.nan,
+           "distance_mm": float("inf"),
            "axis_error_mm": np.nan, "answered": 0, "warned": 0, "refused": 1, "time_ms": 1.0}
     monkeypatch.setattr("handsynth.sensors.trackers.evaluate", lambda **kw: [dict(row)])
     out = tmp_path / "eval.json"
@@ -313,6 +328,7 @@ def test_eval_json_writes_refused_rows_as_null_not_nan(tmp_path, monkeypatch):
 
     (got,) = json.loads(out.read_text(), parse_constant=refuse)["rows"]
     assert got["error_upper_mm"] is None and got["error_mm"] is None
+    assert got["worst_error_mm"] is None
     assert got["distance_mm"] is None and got["refused"] == 1 and got["method"] == "obrien"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["eval.json"]
 

@@ -276,8 +276,9 @@ def evaluate(
         ``"midpoint"`` baseline row per scenario x noise, with keys
         ``config, scenario, noise, method, frames, n_frames_used,
         error_upper_mm, error_lower_mm, error_mm`` (mean of the two),
-        ``distance_mm`` (|P_U - P_L|), ``axis_error_mm`` (distance of the true
-        centre from the estimated joint axis, mean of U and L: what a
+        ``worst_error_mm`` (the largest of the answered trials' mean of the
+        two), ``distance_mm`` (|P_U - P_L|), ``axis_error_mm`` (distance of
+        the true centre from the estimated joint axis, mean of U and L: what a
         single-axis motion determines), ``answered``, ``warned``,
         ``refused`` (counts over seeds) and ``time_ms``.  Errors are NaN
         when every trial was refused.
@@ -316,6 +317,7 @@ def evaluate(
                 status = [v[0] for v in vals]
                 ans = np.array([v[1:] for v in vals if v[0] != "refused"], dtype=np.float64)
                 m = ans.mean(axis=0) if ans.size else np.full(6, np.nan)
+                worst = float(np.max(0.5 * (ans[:, 0] + ans[:, 1]))) if ans.size else np.nan
                 rows.append(
                     {
                         "config": config,
@@ -327,6 +329,7 @@ def evaluate(
                         "error_upper_mm": round(float(m[0]), 3),
                         "error_lower_mm": round(float(m[1]), 3),
                         "error_mm": round(float(0.5 * (m[0] + m[1])), 3),
+                        "worst_error_mm": round(worst, 3),
                         "distance_mm": round(float(m[2]), 3),
                         "axis_error_mm": round(float(m[5]), 3),
                         "answered": len(vals) - status.count("refused"),
