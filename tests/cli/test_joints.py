@@ -159,17 +159,15 @@ def test_eval_seed_sets_the_first_trial(tmp_path):
     assert errors == pytest.approx(
         [r["error_mm"] for r in evaluate(config="independent", duration_s=6.0, seeds=(4,))],
         nan_ok=True)
-    assert errors != pytest.approx(
-        [r["error_mm"] for r in evaluate(config="independent", duration_s=6.0, seeds=(0,))],
-        nan_ok=True)
+    seed0 = evaluate(config="independent", duration_s=6.0, seeds=(0,))
+    assert errors != pytest.approx([r["error_mm"] for r in seed0], nan_ok=True)
     # one trial: its worst is its mean; two: the larger of the two trials' means
     one = [r for r in doc["rows"] if r["answered"]]
     assert [r["worst_error_mm"] for r in one] == pytest.approx([r["error_mm"] for r in one],
                                                                abs=2e-3)
     both = {(r["scenario"], r["method"], r["frames"]): r
             for r in evaluate(config="independent", duration_s=6.0, seeds=(0, 4))}
-    zero = {(r["scenario"], r["method"], r["frames"]): r
-            for r in evaluate(config="independent", duration_s=6.0, seeds=(0,))}
+    zero = {(r["scenario"], r["method"], r["frames"]): r for r in seed0}
     four = {(r["scenario"], r["method"], r["frames"]): r for r in doc["rows"]}
     for key, r in both.items():
         if r["answered"] == 2:
