@@ -11,7 +11,6 @@ sample, or returns the warnings it found.
 
 from __future__ import annotations
 
-import itertools
 import math
 import re
 import warnings as _warnings
@@ -24,6 +23,7 @@ from ..._checks import check_instance, check_number, check_path, is_number
 from ..._csv import column_index, names_by_meaning, read_number_table, read_rows, read_text, reads_as_number
 from ..._io import atomic_open
 from ...errors import InvalidInputError, RecordingError
+from ._axes import SIGNED_PERMUTATIONS, axes_label, gyro_axes_errors
 from ._model import GRAVITY_MPS2
 
 __all__ = [
@@ -373,7 +373,7 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
                 f"start while its accelerometer is still; deg/s given as rad/s? (use gyro units "
                 f"'deg/s', --gyr-units deg/s)")
     _check_gyro_turns(rec, n0, source)
-    warnings: list[str] = []
+    warnings: list[str] = _check_gyro_axes(rec, n0)
     # deg/s read as rad/s where the gyro's bias is small (a logger that takes it off): the
     # mean stays under 0.5 "rad/s", but the gyro's noise at rest is 57 times too large
     # (0.18 "rad/s" in the simulated start against 0.003) while the accelerometer, which
@@ -490,11 +490,49 @@ def _check_gyro_turns(rec: ImuRecording, n0: int, source: str) -> None:
 _GYR_REST_SPREAD = 0.05
 _GYR_PER_ACC_SPREAD = 1.0
 
-#: Signed permutations of the three axes (the identity first): a magnetometer's axes read
-#: as the accelerometer's.
-_SIGNED_PERMUTATIONS = tuple(
-    (perm, np.array(signs)) for perm in itertools.permutations(range(3))
-    for signs in itertools.product((1.0, -1.0), repeat=3))
+#: A gyro is named when its axes as read carry gravity's direction this many times farther
+#: off (RMS angle) than another signed permutation of them does
+#: (:func:`~handsynth.sensors.imu._axes.gyro_axes_errors`); pooled over the sensors of a
+#: recording of `_POOLED_SENSORS` or more judged sensors, `_POOLED_RATIO` (the same
+#: permutation for all, as a logger's convention is).  Measured (``python
+#: scripts/study_imu_axes.py``): axes as read 0.07-1.52 on BROAD's single sensors (over 1.0
+#: only on its translations and the trials with a magnet beside the sensor, which tell
+#: little), 1.53 at most per sensor and 0.95 pooled on 21 simulated recordings; one axis
+#: with the other sign pooled 1.68 or more, two axes exchanged 2.87 or more.
+_AXES_RATIO = 2.0
+_POOLED_RATIO = 1.5
+_POOLED_SENSORS = 5
+#: Fewest directions compared (0.02-s steps) for a sensor to be judged.
+_AXES_MIN_COUNT = 20
+
+
+def _check_gyro_axes(rec: ImuRecording, n0: int) -> list[str]:
+    """Warn about gyros whose axes are not their accelerometer's (a logger's convention)."""
+    sq_err, count = gyro_axes_errors(rec.acc, rec.gyr, rec.rate_hz, static_n=n0)
+    judged = count >= _AXES_MIN_COUNT
+    if not judged.any():
+        return []
+    rms = np.sqrt(sq_err[judged] / count[judged, None])
+    ratio = rms[:, 0] / np.maximum(rms[:, 1:].min(axis=1), 1e-12)
+    best = 1 + np.argmin(rms[:, 1:], axis=1)
+    names = [s for s, j in zip(rec.sensors, judged) if j]
+    pooled = np.sqrt(sq_err[judged].sum(axis=0) / count[judged].sum())
+    p_best = 1 + int(np.argmin(pooled[1:]))
+    p_ratio = pooled[0] / max(pooled[p_best], 1e-12)
+    hint = ("Turn the gyro's columns into the accelerometer's axes first, or every attitude "
+            "and angle will be wrong")
+    if len(names) >= _POOLED_SENSORS and p_ratio >= _POOLED_RATIO:
+        return [f"the gyros carry gravity's direction as their accelerometers read it only with "
+                f"their axes read as ({axes_label(*SIGNED_PERMUTATIONS[p_best])}): "
+                f"{p_ratio:.3g} times closer than as read, pooled over {len(names)} sensors; "
+                f"does the logger write the gyros' axes otherwise than the accelerometers'? {hint}"]
+    found = [f"{n} ({axes_label(*SIGNED_PERMUTATIONS[b])}, {r:.3g} times closer)"
+             for n, b, r in zip(names, best, ratio) if r >= _AXES_RATIO]
+    if not found:
+        return []
+    return [f"the gyro of {len(found)} sensor(s) carries gravity's direction as its "
+            f"accelerometer reads it only with its axes read otherwise: {', '.join(found[:4])}"
+            f"{', ...' if len(found) > 4 else ''}; are its axes not the accelerometer's? {hint}"]
 
 
 def _check_mag_axes(rec: ImuRecording) -> list[str]:
@@ -527,12 +565,10 @@ def _check_mag_axes(rec: ImuRecording) -> list[str]:
         if np.degrees(np.arccos(np.clip(u @ u[0], -1.0, 1.0))).max() < 40.0:
             continue
         spread = [float(np.std(np.sum(v[:, perm] * signs * u, axis=1)))
-                  for perm, signs in _SIGNED_PERMUTATIONS]
+                  for perm, signs in SIGNED_PERMUTATIONS]
         best = int(np.argmin(spread))
         if spread[0] > 0.1 and spread[0] > 3.0 * spread[best]:
-            perm, signs = _SIGNED_PERMUTATIONS[best]
-            axes = ", ".join(("-" if sg < 0 else "") + "xyz"[i] for i, sg in zip(perm, signs))
-            found.append(f"{rec.sensors[k]} ({axes})")
+            found.append(f"{rec.sensors[k]} ({axes_label(*SIGNED_PERMUTATIONS[best])})")
     if not found:
         return []
     return [f"the magnetometer of {len(found)} sensor(s) keeps one angle to gravity only with "

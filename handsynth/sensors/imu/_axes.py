@@ -1,0 +1,131 @@
+"""Sensor axes read in another convention: a gyro's or a magnetometer's against the accelerometer's.
+
+A logger that writes one gyro axis with the other sign, or two axes exchanged, leaves every
+reading plausible and every attitude wrong.  The accelerometer tells: where the sensor moves
+little it reads gravity, and the gyro, integrated over a few seconds, must carry gravity's
+direction from one such moment to the next.  :func:`gyro_axes_errors` integrates the gyro
+read in each of the 48 signed permutations of its axes and measures how far the carried
+direction lands from the one read.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+
+from ._model import GRAVITY_MPS2
+
+__all__ = ["SIGNED_PERMUTATIONS", "axes_label", "gyro_axes_errors"]
+
+#: Signed permutations of the three axes, the identity first: ``(perm, signs)`` reads
+#: ``v[:, perm] * signs`` for the axes ``v``.
+SIGNED_PERMUTATIONS = tuple(
+    (perm, np.array(signs)) for perm in itertools.permutations(range(3))
+    for signs in itertools.product((1.0, -1.0), repeat=3))
+
+#: Rate the gyro is integrated at, Hz (block means of faster recordings); the window
+#: gravity's direction is carried over, s; the moving mean that gives gravity's direction,
+#: s; the share of 1 g by which that mean may differ from 1 g where the sensor counts as
+#: moving little; the most windows judged per sensor (those whose gravity direction tilts
+#: most); the least tilt within a window that is judged, deg.
+_RATE_HZ = 50.0
+_WINDOW_S = 2.0
+_MEAN_S = 0.25
+_QUASI_TOL = 0.05
+_MAX_WINDOWS = 32
+_MIN_TILT_DEG = 5.0
+
+
+def axes_label(perm, signs) -> str:
+    """The axes a signed permutation reads, as ``"y, x, -z"``."""
+    return ", ".join(("-" if sg < 0 else "") + "xyz"[i] for i, sg in zip(perm, signs))
+
+
+def gyro_axes_errors(acc: np.ndarray, gyr: np.ndarray, rate_hz: float, *,
+                     static_n: int) -> tuple[np.ndarray, np.ndarray]:
+    """How far each signed permutation of the gyro's axes carries gravity's direction off.
+
+    The gyro, its mean over the still start taken off, is integrated over windows of
+    2 s from the first moment in each where the accelerometer's 0.25-s mean is within
+    5 % of 1 g; at every later such moment of the window the direction carried
+    (that first direction turned by the integrated rotation) is compared with the one
+    read.  Windows whose directions read tilt by less than 5 deg tell nothing and are
+    left out; of the rest, the 32 that tilt most are judged.
+
+    Parameters
+    ----------
+    acc, gyr : ndarray, shape (S, N, 3), float
+        Accelerometer (m/s^2) and gyro (rad/s) readings of `S` sensors.
+    rate_hz : float
+        Sampling rate, Hz.
+    static_n : int, keyword-only
+        Samples of the still start (the gyro's bias).
+
+    Returns
+    -------
+    sq_err : ndarray, shape (S, 48), float
+        Sum of the squared angles, rad^2, between carried and read directions, per
+        sensor and permutation (:data:`SIGNED_PERMUTATIONS`' order; the identity first).
+    count : ndarray, shape (S,), int
+        Directions compared per sensor (0: nothing judged).
+    """
+    from ._quat import qexp, qmul, quat_to_mat  # _quat reads _recording, which reads this module
+
+    s_n, n, _ = acc.shape
+    gyr = gyr - gyr[:, :max(1, static_n)].mean(axis=1, keepdims=True)
+    b = max(1, int(round(rate_hz / _RATE_HZ)))
+    nb = n // b
+    acc_b = acc[:, :nb * b].reshape(s_n, nb, b, 3).mean(axis=2)
+    gyr_b = gyr[:, :nb * b].reshape(s_n, nb, b, 3).mean(axis=2)
+    rate = rate_hz / b
+    w = max(1, int(round(_MEAN_S * rate)))
+    big_l = max(2, int(round(_WINDOW_S * rate)))
+    m = nb // big_l
+    sq_err = np.zeros((s_n, len(SIGNED_PERMUTATIONS)))
+    count = np.zeros(s_n, int)
+    if m == 0 or nb < w:
+        return sq_err, count
+    c = np.concatenate([np.zeros((s_n, 1, 3)), np.cumsum(acc_b, axis=1)], axis=1)
+    mean = np.full_like(acc_b, np.nan)
+    mean[:, w // 2:w // 2 + nb - w + 1] = (c[:, w:] - c[:, :-w]) / w
+    norm = np.linalg.norm(mean, axis=-1)
+    quasi = np.abs(norm - GRAVITY_MPS2) < _QUASI_TOL * GRAVITY_MPS2  # NaN compares False
+    up = mean / np.where(quasi, norm, 1.0)[..., None]
+    quasi = quasi[:, :m * big_l].reshape(s_n, m, big_l)
+    up = up[:, :m * big_l].reshape(s_n, m, big_l, 3)
+    om = gyr_b[:, :m * big_l].reshape(s_n, m, big_l, 3)
+    # the windows to judge: the most tilted, per sensor
+    first = np.argmax(quasi, axis=2)  # (S, m); 0 where none is quasi-static (masked below)
+    ref = np.take_along_axis(up, first[..., None, None], axis=2)[:, :, 0]
+    cos = np.einsum("smli,smi->sml", up, ref)
+    tilt = np.where(quasi, np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))), 0.0).max(axis=2)
+    k = min(m, _MAX_WINDOWS)
+    pick = np.argsort(-tilt, axis=1)[:, :k]  # (S, k)
+    judged = np.take_along_axis(tilt, pick, axis=1) >= _MIN_TILT_DEG
+
+    def take(a):
+        return np.take_along_axis(a, pick.reshape(s_n, k, *([1] * (a.ndim - 2))), axis=1)
+
+    quasi, up, om, first = take(quasi) & judged[..., None], take(up), take(om), take(first)
+    # The gyro read as P (a signed permutation) is sigma Q with Q = sigma P a rotation,
+    # sigma = det P; integrating Q (sigma w) gives Q R_sigma Q^T, where R_sigma integrates
+    # sigma w.  So two integrations serve all 48, and the angle between carried and read
+    # directions is the one between R_sigma Q^T v at the two moments.
+    q = np.zeros((2, s_n, k, 4))
+    q[..., 0] = 1.0
+    rot = np.empty((2, s_n, k, big_l, 3, 3))
+    step = qexp(np.stack([om, -om]) / rate)  # (2, S, k, L, 4)
+    for l in range(big_l):
+        rot[:, :, :, l] = quat_to_mat(q)
+        q = qmul(q, step[:, :, :, l])
+    later = quasi & (np.arange(big_l) > first[..., None])  # (S, k, L)
+    count += later.sum(axis=(1, 2))
+    for j, (perm, signs) in enumerate(SIGNED_PERMUTATIONS):
+        p_mat = np.eye(3)[list(perm)] * signs[:, None]
+        sigma = round(float(np.linalg.det(p_mat)))
+        carried = np.einsum("smlij,smlj->smli", rot[(1 - sigma) // 2], up @ (sigma * p_mat))
+        ref = np.take_along_axis(carried, first[..., None, None], axis=2)
+        d = np.clip(np.einsum("smli,smli->sml", carried, ref), -1.0, 1.0)
+        sq_err[:, j] = np.where(later, np.arccos(d) ** 2, 0.0).sum(axis=(1, 2))
+    return sq_err, count
