@@ -985,10 +985,14 @@ def read_imu_csv(path, *, acc_units: str = "m/s2", gyr_units: str = "rad/s",
         gaps = np.nonzero(dt > limit)[0]
         if gaps.size:
             i = int(gaps[0])
+            # the mean step counts the gaps (one damaged stamp of 1e300 s makes it 1e297 s):
+            # the stamps' usual step is their median one
+            usual = float(np.median(dt)) if np.median(dt) > 0 else step
             raise RecordingError(
                 f"{path}, line {lines[i + 1]}: {gaps.size} gap(s) in the time stamps, the first "
-                f"{dt[i]:.4g} s long after t={t[i]:.4g} s (expected {step:.4g} s): "
-                "missing samples")
+                f"{dt[i]:.4g} s long after t={t[i]:.4g} s (the stamps step {usual:.4g} s "
+                f"elsewhere): missing samples, or a damaged stamp ({time_name} "
+                f"{cell(i + 1, col[time_name])})")
         file_rate = 1.0 / step
         seconds_as_ms = time_name == "time_ms" and file_rate > _MS_COLUMN_MAX_HZ
         if seconds_as_ms or not 0.5 <= file_rate <= _MAX_RATE_HZ:

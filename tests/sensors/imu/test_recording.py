@@ -116,6 +116,14 @@ def test_csv_gap_and_bad_cells(tmp_path, free_rec):
     gapped.write_text("\n".join(lines[:20] + lines[25:]) + "\n")
     with pytest.raises(RecordingError, match="gap.*missing samples"):
         read_imu_csv(gapped)
+    # before: a damaged last stamp was a gap "expected 1.25e+297 s", the mean step it made
+    damaged = tmp_path / "damaged.csv"
+    last = lines[-1].split(",")
+    damaged.write_text("\n".join(lines[:-1] + [",".join(["1e300", *last[1:]])]) + "\n")
+    with pytest.raises(RecordingError, match=r"damaged.csv, line \d+: 1 gap\(s\) .* 1e\+300 s long "
+                       r"after t=0.48 s \(the stamps step 0.01 s elsewhere\): missing samples, "
+                       r"or a damaged stamp \(time_s 1e300\)"):
+        read_imu_csv(damaged)
     bad = tmp_path / "bad.csv"
     bad.write_text("\n".join(lines[:5] + [lines[5].replace(",", ",x", 1)] + lines[6:]) + "\n")
     with pytest.raises(RecordingError, match=r"bad.csv, line 6: forearm_1_acc_x is 'x.*not a number"):
