@@ -532,6 +532,17 @@ def test_track_bad_numbers_are_one_line(tmp_path, base, args, message):
     assert res.output.startswith("handsynth: error:") and not (tmp_path / "q.csv").exists()
 
 
+def test_track_warns_of_gyro_axes_in_another_convention(tmp_path, sim):
+    # before: a logger writing every gyro's x and y axes exchanged was tracked without a word
+    src, out = tmp_path / "rec.csv", tmp_path / "q.csv"
+    write_imu_csv(dataclasses.replace(sim, truth=None, gyr=sim.gyr[..., [1, 0, 2]]), src)
+    res = CliRunner().invoke(cli, ["imu", "track", str(src), "--filter", "raw", "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    assert re.search(r"handsynth: warning: the gyros carry gravity's direction .* only with their "
+                     r"axes read as \(y, x, z\): .* pooled over 20 sensors", res.output)
+    assert out.exists()
+
+
 def test_track_rate_contradicting_the_time_column_warns(tmp_path, base):
     res = CliRunner().invoke(cli, ["imu", "track", str(base), "--filter", "raw", "--rate", "120",
                                    "--out", str(tmp_path / "q.csv")])
