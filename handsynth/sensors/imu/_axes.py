@@ -1,11 +1,14 @@
 """Sensor axes read in another convention: a gyro's or a magnetometer's against the accelerometer's.
 
 A logger that writes one gyro axis with the other sign, or two axes exchanged, leaves every
-reading plausible and every attitude wrong.  The accelerometer tells: where the sensor moves
-little it reads gravity, and the gyro, integrated over a few seconds, must carry gravity's
-direction from one such moment to the next.  :func:`gyro_axes_errors` integrates the gyro
-read in each of the 48 signed permutations of its axes and measures how far the carried
-direction lands from the one read.
+reading plausible and every attitude wrong; an MPU-9250's magnetometer (the AK8963) has axes
+of its own.  The directions of two fields fixed in the world tell: where the sensor moves
+little its accelerometer reads gravity, and its magnetometer reads the Earth's field always;
+the gyro, integrated over a few seconds, must carry both from one moment to the next.
+:func:`gyro_axes_errors` integrates the gyro read in each of the 48 signed permutations of
+its axes and measures how far gravity's carried direction lands from the one read;
+:func:`mag_axes_errors` does the same for the magnetometer's direction read in each
+permutation of its axes, the gyro as read.
 """
 
 from __future__ import annotations
@@ -16,7 +19,7 @@ import numpy as np
 
 from ._model import GRAVITY_MPS2
 
-__all__ = ["SIGNED_PERMUTATIONS", "axes_label", "gyro_axes_errors"]
+__all__ = ["REVERSED", "SIGNED_PERMUTATIONS", "axes_label", "gyro_axes_errors", "mag_axes_errors"]
 
 #: Signed permutations of the three axes, the identity first: ``(perm, signs)`` reads
 #: ``v[:, perm] * signs`` for the axes ``v``.
@@ -35,6 +38,20 @@ _MEAN_S = 0.25
 _QUASI_TOL = 0.05
 _MAX_WINDOWS = 32
 _MIN_TILT_DEG = 5.0
+#: The least a window of the gyro turns, deg, for the magnetometer's direction in it to be
+#: judged.
+_MIN_TURN_DEG = 5.0
+
+#: The permutations as matrices: ``v @ P.T`` reads ``v[:, perm] * signs``.
+_MATRICES = np.stack([np.eye(3)[list(perm)] * signs[:, None]
+                      for perm, signs in SIGNED_PERMUTATIONS])
+#: The index of (-x, -y, -z): a direction reversed in every reading keeps every angle
+#: between readings, so it cannot be told from the axes as read.
+REVERSED = next(j for j, (perm, signs) in enumerate(SIGNED_PERMUTATIONS)
+                if perm == (0, 1, 2) and (signs < 0).all())
+#: The index of each permutation's reverse (every sign changed).
+_NEGATED = tuple(next(i for i, q in enumerate(_MATRICES) if np.array_equal(q, -p))
+                 for p in _MATRICES)
 
 
 def axes_label(perm, signs) -> str:
@@ -70,15 +87,9 @@ def gyro_axes_errors(acc: np.ndarray, gyr: np.ndarray, rate_hz: float, *,
     count : ndarray, shape (S,), int
         Directions compared per sensor (0: nothing judged).
     """
-    from ._quat import qexp, qmul, quat_to_mat  # _quat reads _recording, which reads this module
-
-    s_n, n, _ = acc.shape
-    gyr = gyr - gyr[:, :max(1, static_n)].mean(axis=1, keepdims=True)
-    b = max(1, int(round(rate_hz / _RATE_HZ)))
-    nb = n // b
-    acc_b = acc[:, :nb * b].reshape(s_n, nb, b, 3).mean(axis=2)
-    gyr_b = gyr[:, :nb * b].reshape(s_n, nb, b, 3).mean(axis=2)
-    rate = rate_hz / b
+    s_n = acc.shape[0]
+    (acc_b, gyr_b), rate = _block_means(acc, _unbiased(gyr, static_n), rate_hz=rate_hz)
+    nb = acc_b.shape[1]
     w = max(1, int(round(_MEAN_S * rate)))
     big_l = max(2, int(round(_WINDOW_S * rate)))
     m = nb // big_l
@@ -112,20 +123,109 @@ def gyro_axes_errors(acc: np.ndarray, gyr: np.ndarray, rate_hz: float, *,
     # sigma = det P; integrating Q (sigma w) gives Q R_sigma Q^T, where R_sigma integrates
     # sigma w.  So two integrations serve all 48, and the angle between carried and read
     # directions is the one between R_sigma Q^T v at the two moments.
-    q = np.zeros((2, s_n, k, 4))
-    q[..., 0] = 1.0
-    rot = np.empty((2, s_n, k, big_l, 3, 3))
-    step = qexp(np.stack([om, -om]) / rate)  # (2, S, k, L, 4)
-    for l in range(big_l):
-        rot[:, :, :, l] = quat_to_mat(q)
-        q = qmul(q, step[:, :, :, l])
+    rot = _integrate(np.stack([om, -om]), rate)
     later = quasi & (np.arange(big_l) > first[..., None])  # (S, k, L)
     count += later.sum(axis=(1, 2))
-    for j, (perm, signs) in enumerate(SIGNED_PERMUTATIONS):
-        p_mat = np.eye(3)[list(perm)] * signs[:, None]
+    for j, p_mat in enumerate(_MATRICES):
         sigma = round(float(np.linalg.det(p_mat)))
         carried = np.einsum("smlij,smlj->smli", rot[(1 - sigma) // 2], up @ (sigma * p_mat))
         ref = np.take_along_axis(carried, first[..., None, None], axis=2)
         d = np.clip(np.einsum("smli,smli->sml", carried, ref), -1.0, 1.0)
         sq_err[:, j] = np.where(later, np.arccos(d) ** 2, 0.0).sum(axis=(1, 2))
     return sq_err, count
+
+
+def mag_axes_errors(gyr: np.ndarray, mag: np.ndarray, rate_hz: float, *,
+                    static_n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """How far the gyro carries the magnetometer's direction, read in each permutation.
+
+    The gyro, its mean over the still start taken off, is integrated over windows of 2 s;
+    at every moment of a window the magnetometer's direction, read in one of the 48 signed
+    permutations of its axes, is carried back to the window's start and compared with the
+    direction read there.  The Earth's field is fixed in the world, so the axes as read
+    carry it exactly but for noise, iron and disturbances; no accelerometer is needed, so
+    the hand's accelerations do not matter.  Of the windows whose gyro turns 5 deg or more,
+    the 32 that turn most are judged.  The gyro's own axes are taken as read (judge them
+    first, :func:`gyro_axes_errors`).
+
+    Parameters
+    ----------
+    gyr, mag : ndarray, shape (S, N, 3), float
+        Gyro (rad/s) and magnetometer (any unit) readings of `S` sensors.
+    rate_hz : float
+        Sampling rate, Hz.
+    static_n : int, keyword-only
+        Samples of the still start (the gyro's bias).
+
+    Returns
+    -------
+    sq_err : ndarray, shape (S, 48), float
+        Sum of the squared angles, rad^2, per sensor and permutation
+        (:data:`SIGNED_PERMUTATIONS`' order; the identity first, its reverse,
+        :data:`REVERSED`, alike by construction).
+    count : ndarray, shape (S,), int
+        Directions compared per sensor (0: nothing judged).
+    sq_fixed : ndarray, shape (S,), float
+        The same sum for a field that turns with the sensor (each direction read compared
+        with the window's first, not carried): a magnetometer that reads a magnet fixed to
+        the sensor, or one that is stuck, fits this better than any reading of its axes.
+    """
+    s_n = gyr.shape[0]
+    (gyr_b, mag_b), rate = _block_means(_unbiased(gyr, static_n), mag, rate_hz=rate_hz)
+    big_l = max(2, int(round(_WINDOW_S * rate)))
+    m = gyr_b.shape[1] // big_l
+    sq_err = np.zeros((s_n, len(SIGNED_PERMUTATIONS)))
+    count = np.zeros(s_n, int)
+    if m == 0:
+        return sq_err, count, np.zeros(s_n)
+    om = gyr_b[:, :m * big_l].reshape(s_n, m, big_l, 3)
+    field = mag_b[:, :m * big_l].reshape(s_n, m, big_l, 3)
+    norm = np.linalg.norm(field, axis=-1, keepdims=True)
+    field = field / np.where(norm > 0, norm, 1.0)
+    turn = np.degrees(np.linalg.norm(om, axis=-1).sum(axis=2) / rate)  # (S, m)
+    k = min(m, _MAX_WINDOWS)
+    pick = np.argsort(-turn, axis=1)[:, :k]
+    judged = (np.take_along_axis(turn, pick, axis=1) >= _MIN_TURN_DEG)[..., None] \
+        & (np.take_along_axis(norm[..., 0], pick[..., None], axis=1) > 0)
+    om = np.take_along_axis(om, pick[..., None, None], axis=1)
+    field = np.take_along_axis(field, pick[..., None, None], axis=1)
+    rot = _integrate(om, rate)  # (S, k, L, 3, 3)
+    later = judged & (np.arange(big_l) > 0)
+    count += later.sum(axis=(1, 2))
+    d = np.clip(np.einsum("smli,smi->sml", field, field[:, :, 0]), -1.0, 1.0)
+    sq_fixed = np.where(later, np.arccos(d) ** 2, 0.0).sum(axis=(1, 2))
+    for j, p_mat in enumerate(_MATRICES):
+        if _NEGATED[j] < j:  # a reading and its reverse keep the same angles
+            sq_err[:, j] = sq_err[:, _NEGATED[j]]
+            continue
+        carried = np.einsum("smlij,smlj->smli", rot, field @ p_mat.T)
+        d = np.clip(np.einsum("smli,smi->sml", carried, carried[:, :, 0]), -1.0, 1.0)
+        sq_err[:, j] = np.where(later, np.arccos(d) ** 2, 0.0).sum(axis=(1, 2))
+    return sq_err, count, sq_fixed
+
+
+def _unbiased(gyr: np.ndarray, static_n: int) -> np.ndarray:
+    """The gyro less its mean over the still start."""
+    return gyr - gyr[:, :max(1, static_n)].mean(axis=1, keepdims=True)
+
+
+def _block_means(*arrays: np.ndarray, rate_hz: float) -> tuple[list[np.ndarray], float]:
+    """(S, N, 3) arrays as means of blocks of samples, at about :data:`_RATE_HZ`, and that rate."""
+    b = max(1, int(round(rate_hz / _RATE_HZ)))
+    s_n, n, _ = arrays[0].shape
+    nb = n // b
+    return [a[:, :nb * b].reshape(s_n, nb, b, 3).mean(axis=2) for a in arrays], rate_hz / b
+
+
+def _integrate(om: np.ndarray, rate: float) -> np.ndarray:
+    """Rotation matrices from each window's start, shape (..., L, 3, 3), of (..., L, 3) rates."""
+    from ._quat import qexp, qmul, quat_to_mat  # _quat reads _recording, which reads this module
+
+    q = np.zeros((*om.shape[:-2], 4))
+    q[..., 0] = 1.0
+    rot = np.empty((*om.shape, 3))
+    step = qexp(om / rate)
+    for l in range(om.shape[-2]):
+        rot[..., l, :, :] = quat_to_mat(q)
+        q = qmul(q, step[..., l, :])
+    return rot

@@ -23,7 +23,7 @@ from ..._checks import check_instance, check_number, check_path, is_number
 from ..._csv import column_index, names_by_meaning, read_number_table, read_rows, read_text, reads_as_number
 from ..._io import atomic_open
 from ...errors import InvalidInputError, RecordingError
-from ._axes import SIGNED_PERMUTATIONS, axes_label, gyro_axes_errors
+from ._axes import REVERSED, SIGNED_PERMUTATIONS, axes_label, gyro_axes_errors, mag_axes_errors
 from ._model import GRAVITY_MPS2
 
 __all__ = [
@@ -373,7 +373,7 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
                 f"start while its accelerometer is still; deg/s given as rad/s? (use gyro units "
                 f"'deg/s', --gyr-units deg/s)")
     _check_gyro_turns(rec, n0, source)
-    warnings: list[str] = _check_gyro_axes(rec, n0)
+    warnings, gyro_off = _check_gyro_axes(rec, n0)
     # deg/s read as rad/s where the gyro's bias is small (a logger that takes it off): the
     # mean stays under 0.5 "rad/s", but the gyro's noise at rest is 57 times too large
     # (0.18 "rad/s" in the simulated start against 0.003) while the accelerometer, which
@@ -391,7 +391,7 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
             "gyro's noise at rest (about 0.1 deg/s); deg/s given as rad/s? (gyro units "
             "'deg/s', --gyr-units deg/s)")
     if rec.mag is not None:
-        warnings.extend(_check_mag_field(rec, source))
+        warnings.extend(_check_mag_field(rec, source, n0=n0, gyro_off=gyro_off))
     # what was reported for this object, so that an estimator's run does not repeat it
     object.__setattr__(rec, "reported", (rec.reported or frozenset()) | frozenset(warnings))
     return warnings
@@ -411,9 +411,10 @@ def _check_mag_range(rec: ImuRecording, source: str) -> None:
             "(--mag-units)")
 
 
-def _check_mag_field(rec: ImuRecording, source: str) -> list[str]:
+def _check_mag_field(rec: ImuRecording, source: str, *, n0: int,
+                     gyro_off: frozenset[str]) -> list[str]:
     """Refuse dead magnetometers and a field of the wrong units; warn about disturbances and
-    magnetometer axes that are not the accelerometer's."""
+    magnetometer axes that are not the gyro's (of the sensors not in `gyro_off`)."""
     assert rec.mag is not None
     s, rate = len(rec.sensors), rec.rate_hz
     warnings: list[str] = []
@@ -433,7 +434,7 @@ def _check_mag_field(rec: ImuRecording, source: str) -> list[str]:
             f"{source}: the magnetometers read a median field of {med:.4g} uT; the Earth's is "
             f"25-65 uT (indoors {_EARTH_FIELD_UT[0]:g}-{_EARTH_FIELD_UT[1]:g} taken as "
             "possible): check the magnetometer units (--mag-units)")
-    warnings.extend(_check_mag_axes(rec))
+    warnings.extend(_check_mag_axes(rec, n0, gyro_off))
     dev = np.abs(field_norm / med - 1.0) > 0.15
     for k in range(s):
         if dev[k].any():
@@ -506,12 +507,15 @@ _POOLED_SENSORS = 5
 _AXES_MIN_COUNT = 20
 
 
-def _check_gyro_axes(rec: ImuRecording, n0: int) -> list[str]:
-    """Warn about gyros whose axes are not their accelerometer's (a logger's convention)."""
+def _check_gyro_axes(rec: ImuRecording, n0: int) -> tuple[list[str], frozenset[str]]:
+    """Warn about gyros whose axes are not their accelerometer's (a logger's convention).
+
+    Returns the warnings and the sensors whose gyros they name (every sensor where the
+    warning is pooled)."""
     sq_err, count = gyro_axes_errors(rec.acc, rec.gyr, rec.rate_hz, static_n=n0)
     judged = count >= _AXES_MIN_COUNT
     if not judged.any():
-        return []
+        return [], frozenset()
     rms = np.sqrt(sq_err[judged] / count[judged, None])
     ratio = rms[:, 0] / np.maximum(rms[:, 1:].min(axis=1), 1e-12)
     best = 1 + np.argmin(rms[:, 1:], axis=1)
@@ -525,57 +529,60 @@ def _check_gyro_axes(rec: ImuRecording, n0: int) -> list[str]:
         return [f"the gyros carry gravity's direction as their accelerometers read it only with "
                 f"their axes read as ({axes_label(*SIGNED_PERMUTATIONS[p_best])}): "
                 f"{p_ratio:.3g} times closer than as read, pooled over {len(names)} sensors; "
-                f"does the logger write the gyros' axes otherwise than the accelerometers'? {hint}"]
-    found = [f"{n} ({axes_label(*SIGNED_PERMUTATIONS[b])}, {r:.3g} times closer)"
-             for n, b, r in zip(names, best, ratio) if r >= _AXES_RATIO]
+                f"does the logger write the gyros' axes otherwise than the accelerometers'? {hint}"
+                ], frozenset(rec.sensors)
+    off = [(n, b, r) for n, b, r in zip(names, best, ratio) if r >= _AXES_RATIO]
+    found = [f"{n} ({axes_label(*SIGNED_PERMUTATIONS[b])}, {r:.3g} times closer)" for n, b, r in off]
     if not found:
-        return []
+        return [], frozenset()
     return [f"the gyro of {len(found)} sensor(s) carries gravity's direction as its "
             f"accelerometer reads it only with its axes read otherwise: {', '.join(found[:4])}"
-            f"{', ...' if len(found) > 4 else ''}; are its axes not the accelerometer's? {hint}"]
+            f"{', ...' if len(found) > 4 else ''}; are its axes not the accelerometer's? {hint}"
+            ], frozenset(n for n, _, _ in off)
 
 
-def _check_mag_axes(rec: ImuRecording) -> list[str]:
-    """Warn about magnetometers whose axes are not their accelerometer's.
+#: A magnetometer is named when its axes as read let the gyro carry its field's direction
+#: this many times farther off (RMS angle) than another signed permutation of them does
+#: (:func:`~handsynth.sensors.imu._axes.mag_axes_errors`; the reverse of every axis cannot
+#: be told and is not counted).  Measured (``python scripts/study_imu_axes.py``): axes as
+#: read 0.03-1.25 on BROAD's sensors (the highest with a magnet fixed 1 cm from the sensor,
+#: a field that hardly turns with it), 0.63 at most on 21 simulated recordings; the
+#: AK8963's axes (y, x, -z) 3.03 or more on BROAD but with that magnet (1.59), 4.59 or
+#: more simulated.
+_MAG_AXES_RATIO = 2.0
 
-    Over 0.5-s means where the sensor moves little, the field keeps one angle to gravity
-    (the dip); read in the wrong axes (an MPU-9250's AK8963: x and y swapped, z reversed)
-    it does not.  A sensor that tilts by 40 deg or more, whose cosine of that angle varies
-    by more than 0.1 (s.d.) and by 3 times as much as with another signed permutation of
-    its axes, is named with that permutation.  Simulated: 0.01-0.06 in the right axes,
-    0.18-0.78 in the AK8963's (0.02-0.06 once turned back); a magnet near the hand 0.19
-    against 0.11.
+
+def _check_mag_axes(rec: ImuRecording, n0: int, gyro_off: frozenset[str]) -> list[str]:
+    """Warn about magnetometers whose axes are not their gyro's (and accelerometer's).
+
+    The gyro, integrated over 2-s windows, carries the Earth's field as the magnetometer
+    reads it (:func:`~handsynth.sensors.imu._axes.mag_axes_errors`); read in the wrong axes
+    (an MPU-9250's AK8963: x and y swapped, z reversed) it does not.  A sensor is named when
+    another reading of its axes carries the field 2 times closer than the axes as read, and 2
+    times closer than a field that stays put in the sensor; sensors whose gyro is itself
+    warned about (`gyro_off`) are not judged.
     """
-    w = max(1, int(0.5 * rec.rate_hz))
-    m = rec.n // w
-    if m < 4 or rec.mag is None:
-        return []
-    s = len(rec.sensors)
-    acc = rec.acc[:, :m * w].reshape(s, m, w, 3).mean(axis=2)
-    mag = rec.mag[:, :m * w].reshape(s, m, w, 3).mean(axis=2)
+    assert rec.mag is not None
+    sq_err, count, sq_fixed = mag_axes_errors(rec.gyr, rec.mag, rec.rate_hz, static_n=n0)
+    others = [j for j in range(len(SIGNED_PERMUTATIONS)) if j not in (0, REVERSED)]
     found = []
-    for k in range(s):
-        na = np.linalg.norm(acc[k], axis=1)
-        nm = np.linalg.norm(mag[k], axis=1)
-        keep = (np.abs(na - GRAVITY_MPS2) < 0.1 * GRAVITY_MPS2) & (nm > 0)
-        if keep.sum() < 4:
+    for k, name in enumerate(rec.sensors):
+        if count[k] < _AXES_MIN_COUNT or name in gyro_off:
             continue
-        u = acc[k, keep] / na[keep, None]
-        v = mag[k, keep] / nm[keep, None]
-        if np.degrees(np.arccos(np.clip(u @ u[0], -1.0, 1.0))).max() < 40.0:
-            continue
-        spread = [float(np.std(np.sum(v[:, perm] * signs * u, axis=1)))
-                  for perm, signs in SIGNED_PERMUTATIONS]
-        best = int(np.argmin(spread))
-        if spread[0] > 0.1 and spread[0] > 3.0 * spread[best]:
-            found.append(f"{rec.sensors[k]} ({axes_label(*SIGNED_PERMUTATIONS[best])})")
+        rms = np.sqrt(sq_err[k] / count[k])
+        best = others[int(np.argmin(rms[others]))]
+        # and the field must turn with the gyro under that reading better than it stays put
+        # (a magnet fixed to the sensor, a stuck magnetometer: no reading of its axes holds)
+        fixed = np.sqrt(sq_fixed[k] / count[k])
+        if rms[0] >= _MAG_AXES_RATIO * rms[best] and fixed >= _MAG_AXES_RATIO * rms[best]:
+            found.append(f"{name} ({axes_label(*SIGNED_PERMUTATIONS[best])})")
     if not found:
         return []
-    return [f"the magnetometer of {len(found)} sensor(s) keeps one angle to gravity only with "
-            f"its axes read otherwise: {', '.join(found[:4])}{', ...' if len(found) > 4 else ''}"
-            " of the accelerometer's; its axes are not the accelerometer's (the MPU-9250's "
-            "AK8963 reads (y, x, -z))? Turn its columns into the accelerometer's axes first: "
-            "its headings will be wrong"]
+    return [f"the magnetometer of {len(found)} sensor(s) turns with its gyro only with its axes "
+            f"read otherwise: {', '.join(found[:4])}{', ...' if len(found) > 4 else ''} of the "
+            "accelerometer's; its axes are not the accelerometer's (the MPU-9250's AK8963 reads "
+            "(y, x, -z))? Turn its columns into the accelerometer's axes first: its headings "
+            "will be wrong"]
 
 
 #: Largest magnetometer reading taken, uT: above the widest full scale of MEMS

@@ -5,21 +5,28 @@ import numpy as np
 import pytest
 
 from handsynth.sensors.imu import check_recording
-from handsynth.sensors.imu._axes import SIGNED_PERMUTATIONS, axes_label, gyro_axes_errors
+from handsynth.sensors.imu._axes import (
+    REVERSED,
+    SIGNED_PERMUTATIONS,
+    axes_label,
+    gyro_axes_errors,
+    mag_axes_errors,
+)
 from handsynth.sensors.imu._model import GRAVITY_MPS2
 
 
-def _turning_sensor(rate_hz=100.0, seconds=12.0):
-    """A sensor still for 1 s, then turning at 1 rad/s about a horizontal body axis
-    (x + y) / sqrt(2); its accelerometer reads gravity alone."""
+def _turning_sensor(rate_hz=100.0, seconds=12.0, world=(0.0, 0.0, 1.0), axis=(1.0, 1.0, 0.0)):
+    """A sensor still for 1 s, then turning at 1 rad/s about a body axis, by default the
+    horizontal (x + y) / sqrt(2); its accelerometer reads gravity alone (or the field
+    `world`, times g, as it turns in the sensor)."""
     n = int(rate_hz * seconds)
     t = np.arange(n) / rate_hz
-    axis = np.array([1.0, 1.0, 0.0]) / np.sqrt(2.0)
+    axis = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
     angle = np.clip(t - 1.0, 0.0, None)
     gyr = np.where((t >= 1.0)[:, None], axis, 0.0)
     # gravity's direction (up, as the accelerometer reads it) in the body turning about
     # `axis`: Rodrigues' formula with the inverse rotation
-    up = np.array([0.0, 0.0, 1.0])
+    up = np.asarray(world, dtype=float)
     c, s = np.cos(angle)[:, None], np.sin(angle)[:, None]
     body_up = up * c - np.cross(axis, up) * s + axis * (axis @ up) * (1 - c)
     return GRAVITY_MPS2 * body_up[None], gyr[None]
@@ -80,3 +87,33 @@ def test_one_gyro_in_other_axes_is_named(free_rec):
     assert len(warnings) == 1
     assert re.search(r"the gyro of 1 sensor\(s\) .* index_middle \(y, x, z, [\d.]+ times closer\)",
                      warnings[0])
+
+
+def test_mag_axes_errors_tell_the_axes_of_an_ideal_magnetometer():
+    # the Earth's field dipping 53 deg; turning about x, as the AK8963's axes (a half turn
+    # about x + y) do not commute with
+    field, gyr = _turning_sensor(world=(0.6, 0.0, -0.8), axis=(1.0, 0.0, 0.0))
+    sq, n, fixed = mag_axes_errors(gyr, field, 100.0, static_n=100)
+    assert n[0] > 300
+    rms = np.degrees(np.sqrt(sq[0] / n[0]))
+    assert rms[0] < 0.5 and rms[REVERSED] == rms[0]       # a reading and its reverse alike
+    assert np.degrees(np.sqrt(fixed[0] / n[0])) > 10.0     # the field turns in the sensor
+    ak = field[..., [1, 0, 2]] * np.array([1.0, 1.0, -1.0])
+    sq, n, _ = mag_axes_errors(gyr, ak, 100.0, static_n=100)
+    others = [j for j in range(48) if j not in (0, REVERSED)]
+    best = others[int(np.argmin(sq[0, others]))]
+    assert axes_label(*SIGNED_PERMUTATIONS[best]) in ("y, x, -z", "-y, -x, z")
+    assert sq[0, best] / n[0] < 1e-4 < sq[0, 0] / n[0]
+
+
+def test_a_field_fixed_to_the_sensor_is_not_called_other_axes(free_rec):
+    # a magnet on the sensor: its field does not turn with the gyro in any reading of the axes
+    fixed = np.broadcast_to(free_rec.mag[:, :1], free_rec.mag.shape).copy()
+    warnings = check_recording(dataclasses.replace(free_rec, truth=None, mag=fixed))
+    assert not [w for w in warnings if "turns with its gyro" in w]
+
+
+def test_magnetometers_are_not_judged_by_gyros_in_other_axes(free_rec):
+    gyr = free_rec.gyr[..., [1, 0, 2]]
+    warnings = check_recording(dataclasses.replace(free_rec, truth=None, gyr=gyr))
+    assert len(warnings) == 1 and "gravity's direction" in warnings[0]

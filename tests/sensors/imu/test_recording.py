@@ -67,7 +67,7 @@ def test_magnetometer_axes_other_than_the_accelerometer_s_are_warned_about(free_
     mag = free_rec.mag[..., [1, 0, 2]] * np.array([1.0, 1.0, -1.0])
     warnings = check_recording(_with(free_rec, mag=mag))
     assert len(warnings) == 1
-    assert re.search(r"the magnetometer of \d+ sensor\(s\) keeps one angle to gravity only "
+    assert re.search(r"the magnetometer of \d+ sensor\(s\) turns with its gyro only "
                      r"with its axes read otherwise: \w+ \(y, x, -z\)", warnings[0])
     assert "index_distal (y, x, -z)" in warnings[0] or ", ..." in warnings[0]
 
