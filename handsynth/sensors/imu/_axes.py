@@ -152,10 +152,8 @@ def mag_axes_errors(gyr: np.ndarray, mag: np.ndarray, rate_hz: float, *,
     ----------
     gyr, mag : ndarray, shape (S, N, 3), float
         Gyro (rad/s) and magnetometer (any unit) readings of `S` sensors.
-    rate_hz : float
-        Sampling rate, Hz.
-    static_n : int, keyword-only
-        Samples of the still start (the gyro's bias).
+    rate_hz, static_n
+        As for :func:`gyro_axes_errors`.
 
     Returns
     -------
