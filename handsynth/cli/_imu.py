@@ -17,6 +17,13 @@ _CHAIN_FILTERS = ("filter4", "filter4b")  # need the link model of a calibration
 
 
 def _unit_options(f):
+    f = click.option("--mag-axes", metavar="AXES", default=None,
+                     help="The accelerometer's axes the magnetometer columns x, y, z hold, as "
+                          "a warning names them: y,x,-z for an MPU-9250's AK8963 [default: "
+                          "x,y,z].")(f)
+    f = click.option("--gyr-axes", metavar="AXES", default=None,
+                     help="The accelerometer's axes the gyro columns x, y, z hold (a logger's "
+                          "convention), as a warning names them, e.g. x,-y,z [default: x,y,z].")(f)
     f = click.option("--bridge-lost", is_flag=True,
                      help="Fill in samples the logger lost (a sensor repeating its last "
                           "reading for 0.1 s or more, zeros, empty cells) from the other "
@@ -41,12 +48,15 @@ def _unit_options(f):
     return f
 
 
-def _read(recording, *, acc_units, gyr_units, mag_units, rate_hz, bridge_lost, bridge_max_s):
-    """The CSV recording read, the samples it lost filled in when `bridge_lost` (with a warning)."""
+def _read(recording, *, acc_units, gyr_units, mag_units, rate_hz, bridge_lost, bridge_max_s,
+          gyr_axes, mag_axes):
+    """The CSV recording read, its gyro and magnetometer axes read as `gyr_axes`, `mag_axes`
+    (``--gyr-axes``, ``--mag-axes``), the samples it lost filled in when `bridge_lost` (with
+    a warning)."""
     import math
 
     from ..errors import InvalidInputError
-    from ..sensors.imu import MAX_BRIDGE_S, read_imu_csv
+    from ..sensors.imu import MAX_BRIDGE_S, parse_axes, read_imu_csv, with_axes
     from ..sensors.imu import bridge_lost as bridge
 
     if bridge_max_s is not None:
@@ -55,8 +65,15 @@ def _read(recording, *, acc_units, gyr_units, mag_units, rate_hz, bridge_lost, b
         if not (math.isfinite(bridge_max_s) and bridge_max_s > 0):
             raise InvalidInputError(f"--bridge-max must be a number of seconds > 0, got "
                                     f"{bridge_max_s:g}")
+    for flag, axes in (("--gyr-axes", gyr_axes), ("--mag-axes", mag_axes)):
+        if axes is not None:
+            parse_axes(axes, name=flag)
     rec = read_imu_csv(recording, acc_units=acc_units, gyr_units=gyr_units, mag_units=mag_units,
                        rate_hz=rate_hz)
+    if mag_axes is not None and rec.mag is None:
+        raise InvalidInputError(f"--mag-axes {mag_axes} given for {recording}, which has no "
+                                "magnetometer columns")
+    rec = with_axes(rec, gyr=gyr_axes, mag=mag_axes)
     if bridge_lost:
         limit = MAX_BRIDGE_S if bridge_max_s is None else bridge_max_s
         rec, bridged = bridge(rec, max_s=limit, source=str(recording))
@@ -236,7 +253,8 @@ def eval_(config_name, seed, filters, durations, elbows, no_grasps, no_sensor_ca
                    "the joint its direction is paired with (plane), or where eq. 3.2 puts it "
                    "(thesis, for reproduction).")
 def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz, acc_range_g,
-              gyr_range_dps, bridge_lost, bridge_max_s, out_path, side, hinge_centres) -> None:
+              gyr_range_dps, bridge_lost, bridge_max_s, gyr_axes, mag_axes, out_path, side,
+              hinge_centres) -> None:
     """Sensor-to-joint vectors, link vectors and link frames from a calibration RECORDING."""
     from ..errors import RecordingError
     from ..sensors.imu import calibrate as run_calibration
@@ -246,8 +264,8 @@ def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz
     check_outputs([("--out", out_path)], inputs=inputs)
     full_scale = _full_scale(acc_range_g, gyr_range_dps)
     rec = _read(recording, acc_units=acc_units, gyr_units=gyr_units, mag_units=mag_units,
-                rate_hz=rate_hz, bridge_lost=bridge_lost,
-                bridge_max_s=bridge_max_s)
+                rate_hz=rate_hz, bridge_lost=bridge_lost, bridge_max_s=bridge_max_s,
+                gyr_axes=gyr_axes, mag_axes=mag_axes)
     try:
         spans = json.loads(Path(segments_path).read_text(), object_pairs_hook=_unique_keys)
     except (OSError, ValueError) as exc:  # JSON and text decoding errors are ValueErrors
@@ -299,9 +317,8 @@ def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz
               help="Do not apply the calibration file's accelerometer/gyro/magnetometer "
                    "corrections (for readings already corrected).")
 def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_units, rate_hz,
-          acc_range_g, gyr_range_dps, bridge_lost, bridge_max_s, static_s, align, out_path,
-          angles_out, tips_out,
-          no_sensor_calibration) -> None:
+          acc_range_g, gyr_range_dps, bridge_lost, bridge_max_s, gyr_axes, mag_axes, static_s,
+          align, out_path, angles_out, tips_out, no_sensor_calibration) -> None:
     """Orientation of every sensor of a CSV RECORDING (columns <sensor>_acc_x .. _mag_z)."""
     import numpy as np
 
@@ -337,8 +354,8 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
     static = StaticStart(static_s=static_s, align_start_s=a, align_end_s=b)
     full_scale = _full_scale(acc_range_g, gyr_range_dps)
     rec = _read(recording, acc_units=acc_units, gyr_units=gyr_units, mag_units=mag_units,
-                rate_hz=rate_hz, bridge_lost=bridge_lost,
-                bridge_max_s=bridge_max_s)
+                rate_hz=rate_hz, bridge_lost=bridge_lost, bridge_max_s=bridge_max_s,
+                gyr_axes=gyr_axes, mag_axes=mag_axes)
     if static_s * rec.rate_hz > rec.n + 0.5:  # as check_static_fits, in the option's words
         raise RecordingError(f"{recording}: the static start --static {static_s:g} s is longer than "
                              f"the recording ({rec.n} samples, {rec.duration_s:.3g} s); shorten "

@@ -543,6 +543,45 @@ def test_track_warns_of_gyro_axes_in_another_convention(tmp_path, sim):
     assert out.exists()
 
 
+def test_track_reads_axes_as_the_warning_names_them(tmp_path, sim):
+    # an MPU-9250 logger writing the magnetometer in the AK8963's axes: warned of, with the
+    # option that reads it; with the option, no warning and the attitudes of the right axes
+    src = tmp_path / "rec.csv"
+    ak = sim.mag[..., [1, 0, 2]] * np.array([1.0, 1.0, -1.0])
+    write_imu_csv(dataclasses.replace(sim, truth=None, mag=ak), src)
+    res = CliRunner().invoke(cli, ["imu", "track", str(src), "--out", str(tmp_path / "a.csv")])
+    assert res.exit_code == 0 and "(--mag-axes y,x,-z; library: with_axes)" in res.output, res.output
+    res = CliRunner().invoke(cli, ["imu", "track", str(src), "--mag-axes", "y,x,-z",
+                                   "--out", str(tmp_path / "b.csv")])
+    assert res.exit_code == 0 and "turns with its gyro" not in res.output, res.output
+    plain = tmp_path / "plain.csv"
+    write_imu_csv(sim, plain)
+    res = CliRunner().invoke(cli, ["imu", "track", str(plain), "--out", str(tmp_path / "c.csv")])
+    assert res.exit_code == 0, res.output
+    b, c = (np.loadtxt(tmp_path / f, delimiter=",", skiprows=1) for f in ("b.csv", "c.csv"))
+    assert np.array_equal(b, c)
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--gyr-axes", "x,y"], "--gyr-axes must name the axes x, y and z once each"),
+    (["--mag-axes", "y,y,z"], "--mag-axes must name the axes x, y and z once each"),
+])
+def test_track_refuses_axes_that_are_not_three(tmp_path, sim, args, message):
+    src = tmp_path / "rec.csv"
+    write_imu_csv(sim.subset(("forearm_1", "index_distal")), src)
+    res = CliRunner().invoke(cli, ["imu", "track", str(src), *args, "--out", str(tmp_path / "q.csv")])
+    assert res.exit_code == 2 and res.output.startswith("handsynth: error:") and message in res.output
+
+
+def test_track_refuses_mag_axes_without_magnetometers(tmp_path, sim):
+    src = tmp_path / "rec.csv"
+    write_imu_csv(dataclasses.replace(sim.subset(("forearm_1", "index_distal")), truth=None,
+                                      mag=None), src)
+    res = CliRunner().invoke(cli, ["imu", "track", str(src), "--mag-axes", "y,x,-z",
+                                   "--out", str(tmp_path / "q.csv")])
+    assert res.exit_code == 2 and "has no magnetometer columns" in res.output, res.output
+
+
 def test_track_rate_contradicting_the_time_column_warns(tmp_path, base):
     res = CliRunner().invoke(cli, ["imu", "track", str(base), "--filter", "raw", "--rate", "120",
                                    "--out", str(tmp_path / "q.csv")])

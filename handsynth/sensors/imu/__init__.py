@@ -11,6 +11,7 @@ into one attitude; joint angles and fingertip positions.
 
 from ._allan import KalmanDenoiser, NoiseCoefficients, allan_deviation, noise_coefficients
 from ._attitude import StaticStart, azimuth_correction, check_static_fits, gyro_bias, initial_attitude
+from ._axes import parse_axes
 from ._broad import BROAD_FILTERS, broad_errors, find_broad_trials, read_broad_trial, run_broad
 from ._calibration import ImuCalibration, calibrate, segments_from_seconds
 from ._ekf import FILTER4B, ChainEKF, ChainEKFOptions, sensor_tree
@@ -101,6 +102,7 @@ from ._recording import (
     check_recording,
     read_imu_csv,
     sample_times,
+    with_axes,
     write_imu_csv,
 )
 from ._sensorcal import SensorCalibration, fit_sensor_calibration
@@ -219,6 +221,7 @@ __all__ = [
     "lost_stretches",
     "make_filter",
     "noise_coefficients",
+    "parse_axes",
     "plate_rotations",
     "plot_orientation_error",
     "plot_stick_figure",
@@ -238,6 +241,7 @@ __all__ = [
     "thumb_cmc_model",
     "truth_chain_model",
     "truth_link_frames",
+    "with_axes",
     "write_imu_csv",
     "zero_offsets",
 ]

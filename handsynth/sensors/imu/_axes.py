@@ -19,7 +19,8 @@ import numpy as np
 
 from ._model import GRAVITY_MPS2
 
-__all__ = ["REVERSED", "SIGNED_PERMUTATIONS", "axes_label", "gyro_axes_errors", "mag_axes_errors"]
+__all__ = ["REVERSED", "SIGNED_PERMUTATIONS", "axes_label", "gyro_axes_errors", "mag_axes_errors",
+           "parse_axes"]
 
 #: Signed permutations of the three axes, the identity first: ``(perm, signs)`` reads
 #: ``v[:, perm] * signs`` for the axes ``v``.
@@ -57,6 +58,42 @@ _NEGATED = tuple(next(i for i, q in enumerate(_MATRICES) if np.array_equal(q, -p
 def axes_label(perm, signs) -> str:
     """The axes a signed permutation reads, as ``"y, x, -z"``."""
     return ", ".join(("-" if sg < 0 else "") + "xyz"[i] for i, sg in zip(perm, signs))
+
+
+def parse_axes(text, *, name: str = "axes") -> tuple[tuple[int, ...], np.ndarray]:
+    """The signed permutation a text such as ``"y,x,-z"`` names (:func:`axes_label`'s inverse).
+
+    Parameters
+    ----------
+    text : str
+        Three axes, each ``x``, ``y`` or ``z`` once, with ``-`` for the other sign,
+        separated by commas (spaces and enclosing parentheses allowed, as a warning
+        prints them: ``"(y, x, -z)"``).
+    name : str, keyword-only
+        The argument, for the message.
+
+    Returns
+    -------
+    perm : tuple of int
+    signs : ndarray, shape (3,), float
+        Axes ``v`` read so are ``v[..., perm] * signs``.
+
+    Raises
+    ------
+    InvalidInputError
+        Not three axes naming x, y and z once each.
+    """
+    from ...errors import InvalidInputError
+
+    parts = str(text).strip().strip("()").split(",") if isinstance(text, str) else []
+    parts = [p.strip().lower() for p in parts]
+    ok = len(parts) == 3 and all(p.lstrip("-") in ("x", "y", "z") and p.count("-") <= 1
+                                 and not p.endswith("-") for p in parts)
+    perm = tuple("xyz".index(p.lstrip("-")) for p in parts) if ok else ()
+    if not ok or sorted(perm) != [0, 1, 2]:
+        raise InvalidInputError(f"{name} must name the axes x, y and z once each, with - for the "
+                                f"other sign, as 'y,x,-z'; got {text!r}")
+    return perm, np.array([-1.0 if p.startswith("-") else 1.0 for p in parts])
 
 
 def gyro_axes_errors(acc: np.ndarray, gyr: np.ndarray, rate_hz: float, *,

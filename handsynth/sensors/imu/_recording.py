@@ -11,6 +11,7 @@ sample, or returns the warnings it found.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 import warnings as _warnings
@@ -23,7 +24,14 @@ from ..._checks import check_instance, check_number, check_path, is_number
 from ..._csv import column_index, names_by_meaning, read_number_table, read_rows, read_text, reads_as_number
 from ..._io import atomic_open
 from ...errors import InvalidInputError, RecordingError
-from ._axes import REVERSED, SIGNED_PERMUTATIONS, axes_label, gyro_axes_errors, mag_axes_errors
+from ._axes import (
+    REVERSED,
+    SIGNED_PERMUTATIONS,
+    axes_label,
+    gyro_axes_errors,
+    mag_axes_errors,
+    parse_axes,
+)
 from ._model import GRAVITY_MPS2
 
 __all__ = [
@@ -33,6 +41,7 @@ __all__ = [
     "check_recording",
     "read_imu_csv",
     "sample_times",
+    "with_axes",
     "write_imu_csv",
 ]
 
@@ -523,13 +532,13 @@ def _check_gyro_axes(rec: ImuRecording, n0: int) -> tuple[list[str], frozenset[s
     pooled = np.sqrt(sq_err[judged].sum(axis=0) / count[judged].sum())
     p_best = 1 + int(np.argmin(pooled[1:]))
     p_ratio = pooled[0] / max(pooled[p_best], 1e-12)
-    hint = ("Turn the gyro's columns into the accelerometer's axes first, or every attitude "
-            "and angle will be wrong")
     if len(names) >= _POOLED_SENSORS and p_ratio >= _POOLED_RATIO:
+        label = axes_label(*SIGNED_PERMUTATIONS[p_best])
         return [f"the gyros carry gravity's direction as their accelerometers read it only with "
-                f"their axes read as ({axes_label(*SIGNED_PERMUTATIONS[p_best])}): "
-                f"{p_ratio:.3g} times closer than as read, pooled over {len(names)} sensors; "
-                f"does the logger write the gyros' axes otherwise than the accelerometers'? {hint}"
+                f"their axes read as ({label}): {p_ratio:.3g} times closer than as read, pooled "
+                f"over {len(names)} sensors; does the logger write the gyros' axes otherwise "
+                f"than the accelerometers'? Read them so (--gyr-axes {label.replace(' ', '')}; "
+                "library: with_axes), or every attitude and angle will be wrong"
                 ], frozenset(rec.sensors)
     off = [(n, b, r) for n, b, r in zip(names, best, ratio) if r >= _AXES_RATIO]
     found = [f"{n} ({axes_label(*SIGNED_PERMUTATIONS[b])}, {r:.3g} times closer)" for n, b, r in off]
@@ -537,7 +546,9 @@ def _check_gyro_axes(rec: ImuRecording, n0: int) -> tuple[list[str], frozenset[s
         return [], frozenset()
     return [f"the gyro of {len(found)} sensor(s) carries gravity's direction as its "
             f"accelerometer reads it only with its axes read otherwise: {', '.join(found[:4])}"
-            f"{', ...' if len(found) > 4 else ''}; are its axes not the accelerometer's? {hint}"
+            f"{', ...' if len(found) > 4 else ''}; are its axes not the accelerometer's? Turn "
+            "its gyro's columns into the accelerometer's axes first (--gyr-axes turns every "
+            "sensor's), or every attitude and angle will be wrong"
             ], frozenset(n for n, _, _ in off)
 
 
@@ -565,7 +576,7 @@ def _check_mag_axes(rec: ImuRecording, n0: int, gyro_off: frozenset[str]) -> lis
     assert rec.mag is not None
     sq_err, count, sq_fixed = mag_axes_errors(rec.gyr, rec.mag, rec.rate_hz, static_n=n0)
     others = [j for j in range(len(SIGNED_PERMUTATIONS)) if j not in (0, REVERSED)]
-    found = []
+    found, labels = [], set()
     for k, name in enumerate(rec.sensors):
         if count[k] < _AXES_MIN_COUNT or name in gyro_off:
             continue
@@ -575,14 +586,16 @@ def _check_mag_axes(rec: ImuRecording, n0: int, gyro_off: frozenset[str]) -> lis
         # (a magnet fixed to the sensor, a stuck magnetometer: no reading of its axes holds)
         fixed = np.sqrt(sq_fixed[k] / count[k])
         if rms[0] >= _MAG_AXES_RATIO * rms[best] and fixed >= _MAG_AXES_RATIO * rms[best]:
+            labels.add(axes_label(*SIGNED_PERMUTATIONS[best]))
             found.append(f"{name} ({axes_label(*SIGNED_PERMUTATIONS[best])})")
     if not found:
         return []
+    how = (f"Read them so (--mag-axes {labels.pop().replace(' ', '')}; library: with_axes)"
+           if len(labels) == 1 else "Turn its columns into the accelerometer's axes first")
     return [f"the magnetometer of {len(found)} sensor(s) turns with its gyro only with its axes "
             f"read otherwise: {', '.join(found[:4])}{', ...' if len(found) > 4 else ''} of the "
             "accelerometer's; its axes are not the accelerometer's (the MPU-9250's AK8963 reads "
-            "(y, x, -z))? Turn its columns into the accelerometer's axes first: its headings "
-            "will be wrong"]
+            f"(y, x, -z))? {how}, or its headings will be wrong"]
 
 
 #: Largest magnetometer reading taken, uT: above the widest full scale of MEMS
@@ -889,6 +902,44 @@ def _read_plain_csv(path: Path) -> tuple | None:
 
     return (picked["col"], picked["sensors"], picked["time_name"], picked["needed"], got.lines,
             got.table, cell, picked["renamed"])
+
+
+def with_axes(rec: ImuRecording, *, gyr: str | None = None, mag: str | None = None) -> ImuRecording:
+    """`rec` with its gyros' or magnetometers' axes read otherwise (a logger's convention).
+
+    Parameters
+    ----------
+    rec : ImuRecording
+    gyr, mag : str, optional, keyword-only
+        The axes of the accelerometer that the file's gyro (magnetometer) columns x, y,
+        z hold, as the axes warnings of :func:`check_recording` name them: ``"y,x,-z"``
+        (an MPU-9250's AK8963 magnetometer) makes the gyro (magnetometer) reading
+        ``(y, x, -z)`` of each sample (:func:`parse_axes`).
+        None leaves the channel as it is.
+
+    Returns
+    -------
+    ImuRecording
+        A new recording (truth dropped: it belongs to the readings as simulated).
+
+    Raises
+    ------
+    InvalidInputError
+        `rec` not an ImuRecording; axes that do not name x, y and z once each; `mag` for
+        a recording without magnetometers.
+    """
+    check_instance(rec, ImuRecording, name="rec")
+    changes = {}
+    for name, text in (("gyr", gyr), ("mag", mag)):
+        if text is None:
+            continue
+        a = getattr(rec, name)
+        if a is None:
+            raise InvalidInputError(f"{name} axes given ({text!r}) for a recording without "
+                                    "magnetometers")
+        perm, signs = parse_axes(text, name=f"{name} axes")
+        changes[name] = a[..., list(perm)] * signs
+    return dataclasses.replace(rec, truth=None, **changes) if changes else rec
 
 
 def read_imu_csv(path, *, acc_units: str = "m/s2", gyr_units: str = "rad/s",

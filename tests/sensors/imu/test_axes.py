@@ -4,7 +4,8 @@ import re
 import numpy as np
 import pytest
 
-from handsynth.sensors.imu import check_recording
+from handsynth.errors import InvalidInputError
+from handsynth.sensors.imu import check_recording, parse_axes, with_axes
 from handsynth.sensors.imu._axes import (
     REVERSED,
     SIGNED_PERMUTATIONS,
@@ -117,3 +118,31 @@ def test_magnetometers_are_not_judged_by_gyros_in_other_axes(free_rec):
     gyr = free_rec.gyr[..., [1, 0, 2]]
     warnings = check_recording(dataclasses.replace(free_rec, truth=None, gyr=gyr))
     assert len(warnings) == 1 and "gravity's direction" in warnings[0]
+
+
+@pytest.mark.parametrize("text, perm, signs", [
+    ("x,y,z", (0, 1, 2), (1, 1, 1)), ("y,x,-z", (1, 0, 2), (1, 1, -1)),
+    ("(x, -y, z)", (0, 1, 2), (1, -1, 1)), (" -Z,X,y ", (2, 0, 1), (-1, 1, 1))])
+def test_parse_axes_reads_what_axes_label_writes(text, perm, signs):
+    got_perm, got_signs = parse_axes(text)
+    assert got_perm == perm and list(got_signs) == list(signs)
+    assert parse_axes(axes_label(got_perm, got_signs)) == (got_perm, pytest.approx(got_signs))
+
+
+@pytest.mark.parametrize("text", ["x,y", "x,y,y", "x,y,w", "x,--y,z", "x-,y,z", "", None, 3, "xyz"])
+def test_parse_axes_refuses_what_is_not_three_axes(text):
+    with pytest.raises(InvalidInputError, match=r"--gyr-axes must name the axes x, y and z once each"):
+        parse_axes(text, name="--gyr-axes")
+
+
+def test_with_axes_turns_a_logger_s_convention_back(free_rec):
+    flipped = dataclasses.replace(free_rec, truth=None, gyr=free_rec.gyr * np.array([1.0, -1.0, 1.0]),
+                                  mag=free_rec.mag[..., [1, 0, 2]] * np.array([1.0, 1.0, -1.0]))
+    warnings = check_recording(flipped)
+    assert "--gyr-axes x,-y,z" in warnings[0]
+    back = with_axes(flipped, gyr="x,-y,z", mag="y,x,-z")
+    assert np.array_equal(back.gyr, free_rec.gyr) and np.array_equal(back.mag, free_rec.mag)
+    assert back.truth is None and not [w for w in check_recording(back) if "axes" in w]
+    assert with_axes(free_rec) is free_rec
+    with pytest.raises(InvalidInputError, match="without magnetometers"):
+        with_axes(dataclasses.replace(free_rec, mag=None), mag="y,x,-z")
