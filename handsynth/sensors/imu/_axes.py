@@ -125,7 +125,8 @@ def gyro_axes_errors(acc: np.ndarray, gyr: np.ndarray, rate_hz: float, *,
         Directions compared per sensor (0: nothing judged).
     """
     s_n = acc.shape[0]
-    (acc_b, gyr_b), rate = _block_means(acc, _unbiased(gyr, static_n), rate_hz=rate_hz)
+    (acc_b, gyr_b), rate = _block_means(acc, gyr, rate_hz=rate_hz)
+    gyr_b -= _bias(gyr, static_n)
     nb = acc_b.shape[1]
     w = max(1, int(round(_MEAN_S * rate)))
     big_l = max(2, int(round(_WINDOW_S * rate)))
@@ -206,7 +207,8 @@ def mag_axes_errors(gyr: np.ndarray, mag: np.ndarray, rate_hz: float, *,
         the sensor, or one that is stuck, fits this better than any reading of its axes.
     """
     s_n = gyr.shape[0]
-    (gyr_b, mag_b), rate = _block_means(_unbiased(gyr, static_n), mag, rate_hz=rate_hz)
+    (gyr_b, mag_b), rate = _block_means(gyr, mag, rate_hz=rate_hz)
+    gyr_b -= _bias(gyr, static_n)
     big_l = max(2, int(round(_WINDOW_S * rate)))
     m = gyr_b.shape[1] // big_l
     sq_err = np.zeros((s_n, len(SIGNED_PERMUTATIONS)))
@@ -239,9 +241,10 @@ def mag_axes_errors(gyr: np.ndarray, mag: np.ndarray, rate_hz: float, *,
     return sq_err, count, sq_fixed
 
 
-def _unbiased(gyr: np.ndarray, static_n: int) -> np.ndarray:
-    """The gyro less its mean over the still start."""
-    return gyr - gyr[:, :max(1, static_n)].mean(axis=1, keepdims=True)
+def _bias(gyr: np.ndarray, static_n: int) -> np.ndarray:
+    """The gyro's mean over the still start, shape (S, 1, 3) (taken off the block means: no
+    copy of a long recording is made)."""
+    return gyr[:, :max(1, static_n)].mean(axis=1, keepdims=True)
 
 
 def _block_means(*arrays: np.ndarray, rate_hz: float) -> tuple[list[np.ndarray], float]:
