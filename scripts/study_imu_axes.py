@@ -54,7 +54,7 @@ _GYRO, _MAG = "gravity's direction", "turns with its gyro"
 
 def _ratios(rec) -> tuple[float, float]:
     """The gyro's ratio pooled over the sensors and the largest per sensor."""
-    sq, n = gyro_axes_errors(rec.acc, rec.gyr, rec.rate_hz, static_n=int(rec.rate_hz))
+    sq, n, _ = gyro_axes_errors(rec.acc, rec.gyr, rec.rate_hz, static_n=int(rec.rate_hz))
     keep = n > 0
     rms = np.sqrt(sq[keep] / n[keep, None])
     pooled = np.sqrt(sq[keep].sum(axis=0) / n[keep].sum())

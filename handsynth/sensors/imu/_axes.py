@@ -97,7 +97,7 @@ def parse_axes(text, *, name: str = "axes") -> tuple[tuple[int, ...], np.ndarray
 
 
 def gyro_axes_errors(acc: np.ndarray, gyr: np.ndarray, rate_hz: float, *,
-                     static_n: int) -> tuple[np.ndarray, np.ndarray]:
+                     static_n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """How far each signed permutation of the gyro's axes carries gravity's direction off.
 
     The gyro, its mean over the still start taken off, is integrated over windows of
@@ -123,6 +123,9 @@ def gyro_axes_errors(acc: np.ndarray, gyr: np.ndarray, rate_hz: float, *,
         sensor and permutation (:data:`SIGNED_PERMUTATIONS`' order; the identity first).
     count : ndarray, shape (S,), int
         Directions compared per sensor (0: nothing judged).
+    sq_fixed : ndarray, shape (S,), float
+        The same sum for a direction that stays put in the sensor (each direction read
+        compared with the first, not carried): how far the directions read move at all.
     """
     s_n = acc.shape[0]
     (acc_b, gyr_b), rate = _block_means(acc, gyr, rate_hz=rate_hz)
@@ -134,7 +137,7 @@ def gyro_axes_errors(acc: np.ndarray, gyr: np.ndarray, rate_hz: float, *,
     sq_err = np.zeros((s_n, len(SIGNED_PERMUTATIONS)))
     count = np.zeros(s_n, int)
     if m == 0 or nb < w:
-        return sq_err, count
+        return sq_err, count, np.zeros(s_n)
     c = np.concatenate([np.zeros((s_n, 1, 3)), np.cumsum(acc_b, axis=1)], axis=1)
     mean = np.full_like(acc_b, np.nan)
     mean[:, w // 2:w // 2 + nb - w + 1] = (c[:, w:] - c[:, :-w]) / w
@@ -164,13 +167,16 @@ def gyro_axes_errors(acc: np.ndarray, gyr: np.ndarray, rate_hz: float, *,
     rot = _integrate(np.stack([om, -om]), rate)
     later = quasi & (np.arange(big_l) > first[..., None])  # (S, k, L)
     count += later.sum(axis=(1, 2))
+    start = np.take_along_axis(up, first[..., None, None], axis=2)
+    d = np.clip(np.einsum("smli,smli->sml", up, start), -1.0, 1.0)
+    sq_fixed = np.where(later, np.arccos(d) ** 2, 0.0).sum(axis=(1, 2))
     for j, p_mat in enumerate(_MATRICES):
         sigma = round(float(np.linalg.det(p_mat)))
         carried = np.einsum("smlij,smlj->smli", rot[(1 - sigma) // 2], up @ (sigma * p_mat))
         ref = np.take_along_axis(carried, first[..., None, None], axis=2)
         d = np.clip(np.einsum("smli,smli->sml", carried, ref), -1.0, 1.0)
         sq_err[:, j] = np.where(later, np.arccos(d) ** 2, 0.0).sum(axis=(1, 2))
-    return sq_err, count
+    return sq_err, count, sq_fixed
 
 
 def mag_axes_errors(gyr: np.ndarray, mag: np.ndarray, rate_hz: float, *,

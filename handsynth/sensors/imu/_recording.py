@@ -512,6 +512,13 @@ _GYR_PER_ACC_SPREAD = 1.0
 _AXES_RATIO = 2.0
 _POOLED_RATIO = 1.5
 _POOLED_SENSORS = 5
+#: ... and only where the directions read move at least this many times farther (RMS angle
+#: from each window's first) than the best reading leaves them off: a recording of
+#: translations, where the accelerometer reads the hand's accelerations more than gravity,
+#: has its directions move about as far as any reading of the axes misses them (BROAD's
+#: translations and magnet trials 0.94-1.43), a turning one farther (as read 1.45-3.97 on
+#: BROAD's other trials, 1.54-2.76 simulated; the gyro's y reversed 1.87-31.8 and 3.07-7.12).
+_MOVES_RATIO = 1.5
 #: Fewest directions compared (0.02-s steps) for a sensor to be judged.
 _AXES_MIN_COUNT = 20
 
@@ -521,18 +528,21 @@ def _check_gyro_axes(rec: ImuRecording, n0: int) -> tuple[list[str], frozenset[s
 
     Returns the warnings and the sensors whose gyros they name (every sensor where the
     warning is pooled)."""
-    sq_err, count = gyro_axes_errors(rec.acc, rec.gyr, rec.rate_hz, static_n=n0)
+    sq_err, count, sq_fixed = gyro_axes_errors(rec.acc, rec.gyr, rec.rate_hz, static_n=n0)
     judged = count >= _AXES_MIN_COUNT
     if not judged.any():
         return [], frozenset()
     rms = np.sqrt(sq_err[judged] / count[judged, None])
-    ratio = rms[:, 0] / np.maximum(rms[:, 1:].min(axis=1), 1e-12)
     best = 1 + np.argmin(rms[:, 1:], axis=1)
+    best_rms = np.maximum(rms[np.arange(len(best)), best], 1e-12)
+    ratio = np.where(np.sqrt(sq_fixed[judged] / count[judged]) >= _MOVES_RATIO * best_rms,
+                     rms[:, 0] / best_rms, 0.0)  # 0: the directions hardly move, not judged
     names = [s for s, j in zip(rec.sensors, judged) if j]
     pooled = np.sqrt(sq_err[judged].sum(axis=0) / count[judged].sum())
     p_best = 1 + int(np.argmin(pooled[1:]))
     p_ratio = pooled[0] / max(pooled[p_best], 1e-12)
-    if len(names) >= _POOLED_SENSORS and p_ratio >= _POOLED_RATIO:
+    moves = np.sqrt(sq_fixed[judged].sum() / count[judged].sum()) >= _MOVES_RATIO * pooled[p_best]
+    if len(names) >= _POOLED_SENSORS and p_ratio >= _POOLED_RATIO and moves:
         label = axes_label(*SIGNED_PERMUTATIONS[p_best])
         return [f"the gyros carry gravity's direction as their accelerometers read it only with "
                 f"their axes read as ({label}): {p_ratio:.3g} times closer than as read, pooled "

@@ -35,7 +35,7 @@ def _turning_sensor(rate_hz=100.0, seconds=12.0, world=(0.0, 0.0, 1.0), axis=(1.
 
 def test_gyro_axes_errors_tell_the_axes_of_an_ideal_turning_sensor():
     acc, gyr = _turning_sensor()
-    sq, n = gyro_axes_errors(acc, gyr, 100.0, static_n=100)
+    sq, n, _ = gyro_axes_errors(acc, gyr, 100.0, static_n=100)
     assert n[0] > 300
     rms = np.degrees(np.sqrt(sq[0] / n[0]))
     assert rms[0] < 0.5                        # the axes as read carry gravity exactly
@@ -47,7 +47,7 @@ def test_gyro_axes_errors_tell_the_axes_of_an_ideal_turning_sensor():
     assert rms[moved].min() > 10.0
     assert rms[np.logical_not(moved)].max() < 0.5
     flipped = gyr * np.array([1.0, -1.0, 1.0])
-    sq, n = gyro_axes_errors(acc, flipped, 100.0, static_n=100)
+    sq, n, _ = gyro_axes_errors(acc, flipped, 100.0, static_n=100)
     best = int(np.argmin(sq[0]))
     assert axes_label(*SIGNED_PERMUTATIONS[best]) == "x, -y, z"
     assert sq[0, best] / n[0] < 1e-4
@@ -58,7 +58,7 @@ def test_a_sensor_that_never_tilts_is_not_judged():
     acc = np.broadcast_to([0.0, 0.0, GRAVITY_MPS2], acc.shape).copy()
     gyr = np.zeros_like(gyr)
     gyr[0, 100:, 2] = 1.0                       # turning about the vertical only
-    sq, n = gyro_axes_errors(acc, gyr, 100.0, static_n=100)
+    sq, n, _ = gyro_axes_errors(acc, gyr, 100.0, static_n=100)
     assert n[0] == 0 and not sq.any()
 
 
@@ -146,3 +146,22 @@ def test_with_axes_turns_a_logger_s_convention_back(free_rec):
     assert with_axes(free_rec) is free_rec
     with pytest.raises(InvalidInputError, match="without magnetometers"):
         with_axes(dataclasses.replace(free_rec, mag=None), mag="y,x,-z")
+
+
+@pytest.mark.parametrize("moves_deg, warned", [(5.0, False), (30.0, True)])
+def test_gyro_axes_are_judged_only_where_the_directions_move(monkeypatch, free_rec, moves_deg,
+                                                             warned):
+    # a recording of translations: the accelerometer's directions move about as far as any
+    # reading of the gyro's axes misses them, and one reading missing least tells nothing
+    from handsynth.sensors.imu import _recording
+
+    def errors(acc, gyr, rate_hz, *, static_n):
+        s = acc.shape[0]
+        rms = np.full((s, 48), np.radians(12.0))
+        rms[:, 0], rms[:, 5] = np.radians(20.0), np.radians(5.0)   # as read 4 times the best
+        n = np.full(s, 100)
+        return rms**2 * n[:, None], n, np.radians(moves_deg) ** 2 * n
+
+    monkeypatch.setattr(_recording, "gyro_axes_errors", errors)
+    warnings = [w for w in check_recording(free_rec) if "gravity's direction" in w]
+    assert bool(warnings) is warned
