@@ -165,3 +165,17 @@ def test_gyro_axes_are_judged_only_where_the_directions_move(monkeypatch, free_r
     monkeypatch.setattr(_recording, "gyro_axes_errors", errors)
     warnings = [w for w in check_recording(free_rec) if "gravity's direction" in w]
     assert bool(warnings) is warned
+
+
+def test_the_conjugated_integrations_equal_integrating_each_reading(free_rec):
+    # gyro_axes_errors integrates the gyro twice (+w, -w) and conjugates for the other 46
+    # readings; the gyro given already read as P, integrated as it comes, must give the same
+    # as the reading P of the gyro as recorded
+    rec = free_rec.subset(("index_middle", "hand_radial", "forearm_2"))
+    sq, n, fixed = gyro_axes_errors(rec.acc, rec.gyr, rec.rate_hz, static_n=100)
+    assert (n > 30).all()
+    for j, (perm, signs) in enumerate(SIGNED_PERMUTATIONS):
+        sq_p, n_p, fixed_p = gyro_axes_errors(rec.acc, rec.gyr[..., list(perm)] * signs,
+                                              rec.rate_hz, static_n=100)
+        assert np.array_equal(n_p, n) and np.array_equal(fixed_p, fixed)
+        np.testing.assert_allclose(sq_p[:, 0], sq[:, j], rtol=1e-6, atol=1e-9)
