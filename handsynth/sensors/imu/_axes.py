@@ -20,7 +20,7 @@ import numpy as np
 from ._model import GRAVITY_MPS2
 
 __all__ = ["REVERSED", "SIGNED_PERMUTATIONS", "axes_label", "gyro_axes_errors", "mag_axes_errors",
-           "parse_axes"]
+           "moving_mean", "parse_axes"]
 
 #: Signed permutations of the three axes, the identity first: ``(perm, signs)`` reads
 #: ``v[:, perm] * signs`` for the axes ``v``.
@@ -138,9 +138,8 @@ def gyro_axes_errors(acc: np.ndarray, gyr: np.ndarray, rate_hz: float, *,
     count = np.zeros(s_n, int)
     if m == 0 or nb < w:
         return sq_err, count, np.zeros(s_n)
-    c = np.concatenate([np.zeros((s_n, 1, 3)), np.cumsum(acc_b, axis=1)], axis=1)
     mean = np.full_like(acc_b, np.nan)
-    mean[:, w // 2:w // 2 + nb - w + 1] = (c[:, w:] - c[:, :-w]) / w
+    mean[:, w // 2:w // 2 + nb - w + 1] = moving_mean(acc_b, w)
     norm = np.linalg.norm(mean, axis=-1)
     quasi = np.abs(norm - GRAVITY_MPS2) < _QUASI_TOL * GRAVITY_MPS2  # NaN compares False
     up = mean / np.where(quasi, norm, 1.0)[..., None]
@@ -245,6 +244,12 @@ def mag_axes_errors(gyr: np.ndarray, mag: np.ndarray, rate_hz: float, *,
         d = np.clip(np.einsum("smli,smi->sml", carried, carried[:, :, 0]), -1.0, 1.0)
         sq_err[:, j] = np.where(later, np.arccos(d) ** 2, 0.0).sum(axis=(1, 2))
     return sq_err, count, sq_fixed
+
+
+def moving_mean(a: np.ndarray, w: int) -> np.ndarray:
+    """Means of `w` consecutive samples of (S, N, 3) `a`, shape (S, N - w + 1, 3)."""
+    c = np.concatenate([np.zeros((a.shape[0], 1, 3)), np.cumsum(a, axis=1)], axis=1)
+    return (c[:, w:] - c[:, :-w]) / w
 
 
 def _bias(gyr: np.ndarray, static_n: int) -> np.ndarray:

@@ -30,6 +30,7 @@ from ._axes import (
     axes_label,
     gyro_axes_errors,
     mag_axes_errors,
+    moving_mean,
     parse_axes,
 )
 from ._model import GRAVITY_MPS2
@@ -475,8 +476,7 @@ def _check_gyro_turns(rec: ImuRecording, n0: int, source: str) -> None:
     w = max(1, min(rec.n, int(0.5 * rec.rate_hz)))
     if rec.n < 2 * w:
         return
-    c = np.cumsum(rec.acc, axis=1)
-    lp = (c[:, w - 1:] - np.concatenate([np.zeros((len(rec.sensors), 1, 3)), c[:, :-w]], axis=1)) / w
+    lp = moving_mean(rec.acc, w)
     g0 = rec.acc[:, :n0].mean(axis=1)
     norm = np.linalg.norm(lp, axis=-1)
     quasi = np.abs(norm - GRAVITY_MPS2) < 0.2 * GRAVITY_MPS2
