@@ -50,6 +50,7 @@ from ._kinematics import (
     truth_link_frames,
     zero_offsets,
 )
+from ._lags import HINGES, LATE_S, late_sensors, sensor_lags
 from ._layout import CHAINS, FLEX_JOINT, LINKS, POINTS
 from ._lost import (
     HELD_MIN_S,
@@ -138,7 +139,9 @@ __all__ = [
     "HELDOUT",
     "HELD_MIN_S",
     "HELD_TURNING_RADPS",
+    "HINGES",
     "JOINT_LINKS",
+    "LATE_S",
     "LINKS",
     "MAX_BRIDGE_S",
     "MAX_MOTION_S",
@@ -216,6 +219,7 @@ __all__ = [
     "initial_attitude",
     "integrate_gyro",
     "joint_angles",
+    "late_sensors",
     "link_frames",
     "link_vectors",
     "lost_stretches",
@@ -232,6 +236,7 @@ __all__ = [
     "sample_times",
     "seel_joint_positions",
     "segments_from_seconds",
+    "sensor_lags",
     "sensor_tree",
     "simulate_imu",
     "smoothed_motion",

@@ -31,6 +31,7 @@ from ._kinematics import (
     thumb_cmc_model,
     zero_offsets,
 )
+from ._lags import late_sensors
 from ._layout import FLEX_JOINT
 from ._model import TIP_SENSORS
 from ._plate import PLATE_SENSORS, fuse_plate, plate_rotations
@@ -364,7 +365,9 @@ class ImuCalibration:
             naming the joints and the sensor they point to (:func:`angles_beyond_range`):
             a sensor turned on its segment since the calibration.  Pairs of sensors whose
             joints agree better with the two exchanged (:func:`swapped_sensors`): sensors
-            put back on each other's segments, or columns exchanged.
+            put back on each other's segments, or columns exchanged.  Sensors whose streams
+            are 15 ms or more out of step with their neighbours' across a finger's hinge
+            joint (:func:`late_sensors`).
         """
         static = check_options(static, StaticStart, name="static")
         options = check_options(options, ChainEKFOptions)
@@ -384,6 +387,9 @@ class ImuCalibration:
         exchanged = swapped_sensors(sub, self.model)
         if exchanged is not None:
             warnings.warn(exchanged, UserWarning, stacklevel=2)
+        late = late_sensors(sub, self.frames, static_n=int(static.static_s * sub.rate_hz))
+        if late is not None:
+            warnings.warn(late, UserWarning, stacklevel=2)
         tips = {f: v for f, v in fingertip_positions(q, sub.sensors, self.model).items()
                 if not f.endswith("_joints")}
         return {"quat": q, "angles": angles, "tips": tips, "sensor_calibration": applied}

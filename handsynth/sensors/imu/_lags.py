@@ -1,0 +1,109 @@
+"""Sensors whose clocks disagree: one stream late against its neighbours on the finger.
+
+Across a hinge (a finger's PIP or DIP, the thumb's IP) the two phalanges turn alike but for
+the joint's own rotation about its axis, so the part of each gyro's rate perpendicular to
+that axis has the same magnitude in both sensors at every instant: a rotation about the
+axis keeps the perpendicular part's length.  A sensor whose stream is late (a wireless
+logger's latency or buffering) shows as a shift between the two series, found by their
+cross-correlation.  The axis in each sensor's frame is its link frame's x axis (the flexion
+axis the calibration rotations gave, :func:`~handsynth.sensors.imu.link_frames`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["HINGES", "LATE_S", "late_sensors", "sensor_lags"]
+
+#: The sensor pairs either side of a one-axis joint (proximal, distal).
+HINGES: tuple[tuple[str, str], ...] = (
+    *((f"{f}_proximal", f"{f}_middle") for f in ("index", "middle", "ring", "little")),
+    *((f"{f}_middle", f"{f}_distal") for f in ("index", "middle", "ring", "little")),
+    ("thumb_proximal", "thumb_distal"),
+)
+#: A lag warned about, s: 20 ms late put the worst joint at 2.4-3.1 deg against 1.65-2.06
+#: as recorded (``python scripts/study_imu_lag.py``).
+LATE_S = 0.015
+#: Largest lag searched, s; least peak correlation for a pair to be judged (the hand's own
+#: turning must show in both series).
+_MAX_LAG_S = 0.2
+_MIN_CORRELATION = 0.8
+
+
+def sensor_lags(rec, frames: dict, *, static_n: int) -> dict:
+    """How late each hinge's distal sensor reads against its proximal one.
+
+    Parameters
+    ----------
+    rec : ImuRecording
+    frames : dict
+        Sensor -> (3, 3) rotation from sensor frame to link frame (a calibration's
+        ``frames``).
+    static_n : int, keyword-only
+        Samples of the still start (the gyros' bias).
+
+    Returns
+    -------
+    dict
+        ``(proximal, distal)`` -> ``(lag_s, correlation)`` for every pair of :data:`HINGES`
+        both of whose sensors `rec` and `frames` hold: the shift, s, of the distal sensor's
+        series that best matches the proximal one's (positive: the distal sensor late; to a
+        fraction of a sample, by a parabola through the peak) and the peak's correlation.
+    """
+    n = rec.n
+    max_lag = max(1, int(round(_MAX_LAG_S * rec.rate_hz)))
+    out: dict[tuple[str, str], tuple[float, float]] = {}
+    if n < 4 * max_lag:
+        return out
+    speed = {}
+    for name in {s for pair in HINGES for s in pair}:
+        if name not in rec.sensors or name not in frames:
+            continue
+        k = rec.sensors.index(name)
+        w = rec.gyr[k] - rec.gyr[k, :max(1, static_n)].mean(axis=0)
+        axis = np.asarray(frames[name])[0]  # the link frame's x axis in the sensor frame
+        s = np.linalg.norm(w - np.outer(w @ axis, axis), axis=1)
+        speed[name] = s - s.mean()
+    for prox, dist in HINGES:
+        if prox not in speed or dist not in speed:
+            continue
+        a, b = speed[prox], speed[dist]
+        cor = np.empty(2 * max_lag + 1)
+        for i, lag in enumerate(range(-max_lag, max_lag + 1)):
+            x, y = (a[:n - lag], b[lag:]) if lag >= 0 else (a[-lag:], b[:n + lag])
+            cor[i] = x @ y / max(np.sqrt((x @ x) * (y @ y)), 1e-300)
+        i = int(np.argmax(cor))
+        shift = 0.0
+        if 0 < i < len(cor) - 1:
+            den = cor[i - 1] - 2 * cor[i] + cor[i + 1]
+            shift = 0.5 * (cor[i - 1] - cor[i + 1]) / den if den < 0 else 0.0
+        out[(prox, dist)] = ((i - max_lag + shift) / rec.rate_hz, float(cor[i]))
+    return out
+
+
+def late_sensors(rec, frames: dict, *, static_n: int) -> str | None:
+    """A warning naming the sensors whose streams are late or early, or None.
+
+    Pairs whose correlation peaks under 0.8 are not judged (the hand did not turn enough);
+    a lag of :data:`LATE_S` or more is named.  A sensor in two such pairs (a middle
+    phalanx, between its PIP and DIP) is named as the one off.
+    """
+    lags = sensor_lags(rec, frames, static_n=static_n)
+    off = {pair: lag for pair, (lag, cor) in lags.items()
+           if cor >= _MIN_CORRELATION and abs(lag) >= LATE_S}
+    if not off:
+        return None
+    count: dict[str, int] = {}
+    for pair in off:
+        for s in pair:
+            count[s] = count.get(s, 0) + 1
+    parts = []
+    for (prox, dist), lag in off.items():
+        late, early = (dist, prox) if lag > 0 else (prox, dist)
+        parts.append(f"{late} {abs(lag) * 1e3:.0f} ms behind {early}")
+    shared = sorted(s for s, c in count.items() if c > 1)
+    which = f" ({', '.join(shared)} in two pairs: that sensor's clock)" if shared else ""
+    return (f"sensor streams out of step: {'; '.join(parts)}{which}, judged by the turn of the "
+            "phalanges either side of a finger's hinge joint; a late stream reads its joints "
+            "several degrees off (20 ms: 2-3 deg, 100 ms: 9-13 deg at the joint): keep the "
+            "sensors' clocks within about 15 ms of each other")

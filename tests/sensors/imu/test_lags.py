@@ -1,0 +1,93 @@
+import dataclasses
+import re
+import warnings
+
+import pytest
+
+from handsynth.sensors.imu import (
+    HINGES,
+    ImuHand,
+    SkinMotion,
+    calibrate,
+    calibration_motion,
+    free_motion,
+    late_sensors,
+    sensor_lags,
+    simulate_imu,
+    truth_chain_model,
+    truth_link_frames,
+)
+
+
+@pytest.fixture(scope="module")
+def frames(free_rec, imu_hand):
+    return truth_link_frames(free_rec, truth_chain_model(free_rec), imu_hand)
+
+
+def _late(rec, name, lag):
+    """`rec` with sensor `name`'s readings `lag` samples late (its first samples those that
+    follow them in the still start, not repeats)."""
+    k = rec.sensors.index(name)
+    out = {}
+    for ch in ("acc", "gyr", "mag"):
+        a = getattr(rec, ch).copy()
+        a[k, lag:] = getattr(rec, ch)[k, :-lag]
+        a[k, :lag] = getattr(rec, ch)[k, lag:2 * lag]
+        out[ch] = a
+    return dataclasses.replace(rec, truth=None, **out)
+
+
+def test_sensors_in_step_read_no_lag(free_rec, frames):
+    lags = sensor_lags(free_rec, frames, static_n=100)
+    assert set(lags) == set(HINGES)
+    for lag_s, cor in lags.values():
+        assert abs(lag_s) < 0.005 and cor > 0.9
+    assert late_sensors(free_rec, frames, static_n=100) is None
+
+
+@pytest.mark.parametrize("name, lag", [("index_middle", 3), ("ring_distal", 2),
+                                       ("little_proximal", 5)])
+def test_a_late_stream_is_named(free_rec, frames, name, lag):
+    # before: a sensor 20-100 ms late read its joints 2-13 deg off without a word
+    lags = sensor_lags(_late(free_rec, name, lag), frames, static_n=100)
+    off = {pair: lag_s for pair, (lag_s, cor) in lags.items() if abs(lag_s) > 0.005}
+    assert off and all(name in pair for pair in off)
+    for (_, dist), lag_s in off.items():
+        assert lag_s == pytest.approx(lag / 100 if dist == name else -lag / 100, abs=0.004)
+    warning = late_sensors(_late(free_rec, name, lag), frames, static_n=100)
+    m = re.search(rf"{name} (\d+) ms behind", warning or "")
+    assert m and abs(int(m[1]) - lag * 10) <= 3, warning
+    if name.endswith("_middle"):
+        assert f"({name} in two pairs: that sensor's clock)" in warning
+
+
+def test_a_lag_under_the_limit_is_not_named(free_rec, frames):
+    assert late_sensors(_late(free_rec, "index_middle", 1), frames, static_n=100) is None
+
+
+def test_a_short_or_still_recording_is_not_judged(free_rec, frames):
+    assert sensor_lags(free_rec.slice(0, 50), frames, static_n=10) == {}
+    still = free_rec.slice(0, 150)   # the still start: no turn to correlate
+    assert late_sensors(still, frames, static_n=100) is None
+
+
+def test_pairs_without_both_sensors_are_left_out(free_rec, frames):
+    sub = free_rec.subset(("index_proximal", "index_middle", "hand_radial"))
+    assert set(sensor_lags(sub, frames, static_n=100)) == {("index_proximal", "index_middle")}
+    partial = {k: v for k, v in frames.items() if k != "index_middle"}
+    assert ("index_proximal", "index_middle") not in sensor_lags(free_rec, partial, static_n=100)
+
+
+def test_track_with_a_calibration_warns_of_a_late_stream():
+    # the calibration's own link frames (not the simulator's axes) judge the hinges
+    skin = SkinMotion(2.0, 4.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the simulated disturbance and still-start notes
+        cal = calibrate(simulate_imu(calibration_motion(), hand=ImuHand(tip_sensors=True),
+                                     skin=skin, seed=1, device_seed=2), sensor_calibration=False)
+        rec = simulate_imu(free_motion(12.0, seed=3), hand=ImuHand(), skin=skin, seed=4,
+                           device_seed=2)
+    assert late_sensors(rec, cal.frames, static_n=100) is None
+    with pytest.warns(UserWarning, match=r"sensor streams out of step: index_distal \d+ ms behind "
+                                         r"index_middle"):
+        cal.track(_late(rec, "index_distal", 3), sensor_calibration=False)
