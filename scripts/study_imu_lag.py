@@ -35,6 +35,7 @@ from handsynth.sensors.imu import (
     HINGES,
     TUNING,
     ImuHand,
+    delayed,
     grasp_motion,
     late_sensors,
     simulate_imu,
@@ -42,18 +43,6 @@ from handsynth.sensors.imu import (
 from handsynth.sensors.imu._eval import _calibrate, _trial, free_trials
 
 _SENSORS = ("index_proximal", "index_middle", "hand_radial")
-
-
-def _lagged(rec, k: int, lag: int):
-    """`rec` with sensor `k`'s readings `lag` samples late; its first `lag` samples are those
-    that follow them in the still start (not repeats, which read as samples lost)."""
-    out = {}
-    for name in ("acc", "gyr", "mag"):
-        a = getattr(rec, name).copy()
-        a[k, lag:] = getattr(rec, name)[k, :-lag]
-        a[k, :lag] = getattr(rec, name)[k, lag:2 * lag]
-        out[name] = a
-    return dataclasses.replace(rec, **out)
 
 
 def _errors(rec, calib) -> tuple[float, str, float, float]:
@@ -85,7 +74,7 @@ def _cost(seed: int, lags_ms) -> tuple[float, float]:
     for name in _SENSORS:
         for ms in lags_ms:
             lag = max(1, round(ms * 1e-3 * rec.rate_hz))
-            late = _lagged(rec, rec.sensors.index(name), lag)
+            late = delayed(rec, name, lag)
             r = _errors(late, calib)
             worst = max(worst, r[2])
             print(f"{name} {lag / rec.rate_hz * 1e3:.0f} ms late: joints {r[0]:.2f} deg (worst "
@@ -112,8 +101,7 @@ def _told(seeds) -> dict:
                 n["late"] += 1
                 for ms in (10, 20, 50):
                     lag = round(ms * 1e-3 * rec.rate_hz)
-                    n[f"named_{ms}ms"] += _named(_lagged(rec, rec.sensors.index(name), lag),
-                                                 calib, name)
+                    n[f"named_{ms}ms"] += _named(delayed(rec, name, lag), calib, name)
         print(f"{config.label} {config.seed}: " + ", ".join(f"{k} {v}" for k, v in n.items()),
               flush=True)
     return n

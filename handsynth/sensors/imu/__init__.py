@@ -50,7 +50,7 @@ from ._kinematics import (
     truth_link_frames,
     zero_offsets,
 )
-from ._lags import HINGES, LATE_S, late_sensors, sensor_lags
+from ._lags import HINGES, LATE_S, delayed, late_sensors, sensor_lags
 from ._layout import CHAINS, FLEX_JOINT, LINKS, POINTS
 from ._lost import (
     HELD_MIN_S,
@@ -204,6 +204,7 @@ __all__ = [
     "check_static_fits",
     "classify_grasp",
     "concat_motions",
+    "delayed",
     "draw_fixed_errors",
     "evaluate",
     "evaluate_trial",

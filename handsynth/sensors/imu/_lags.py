@@ -11,9 +11,14 @@ axis the calibration rotations gave, :func:`~handsynth.sensors.imu.link_frames`)
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
-__all__ = ["HINGES", "LATE_S", "late_sensors", "sensor_lags"]
+from ..._checks import check_integer
+from ...errors import InvalidInputError
+
+__all__ = ["HINGES", "LATE_S", "delayed", "late_sensors", "sensor_lags"]
 
 #: The sensor pairs either side of a one-axis joint (proximal, distal).
 HINGES: tuple[tuple[str, str], ...] = (
@@ -107,3 +112,45 @@ def late_sensors(rec, frames: dict, *, static_n: int) -> str | None:
             "phalanges either side of a finger's hinge joint; a late stream reads its joints "
             "several degrees off (20 ms: 2-3 deg, 100 ms: 9-13 deg at the joint): keep the "
             "sensors' clocks within about 15 ms of each other")
+
+
+def delayed(rec, sensor: str, samples: int):
+    """`rec` with one sensor's stream `samples` late, as a wireless logger may deliver it.
+
+    For trying :func:`late_sensors` and measuring what a lag costs.  The sensor's first
+    `samples` readings are the ones that follow them (in a recording's still start, readings
+    alike but not repeated bit for bit, which would read as samples lost).
+
+    Parameters
+    ----------
+    rec : ImuRecording
+    sensor : str
+        One of ``rec.sensors``.
+    samples : int
+        The delay, samples, from 1 to half the recording.
+
+    Returns
+    -------
+    ImuRecording
+        A new recording (truth kept: it is the motion's, which the delay does not change).
+
+    Raises
+    ------
+    InvalidInputError
+        A sensor `rec` does not hold; `samples` out of range.
+    """
+    if sensor not in rec.sensors:
+        raise InvalidInputError(f"sensor {sensor!r} is not in the recording "
+                                f"({', '.join(rec.sensors)})")
+    lag = check_integer(samples, "samples", minimum=1, maximum=max(1, rec.n // 2))
+    k = rec.sensors.index(sensor)
+    out = {}
+    for name in ("acc", "gyr", "mag"):
+        a = getattr(rec, name)
+        if a is None:
+            continue
+        b = a.copy()
+        b[k, lag:] = a[k, :-lag]
+        b[k, :lag] = a[k, lag:2 * lag]
+        out[name] = b
+    return dataclasses.replace(rec, **out)

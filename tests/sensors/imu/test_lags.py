@@ -1,19 +1,13 @@
 import dataclasses
 import re
-import warnings
 
 import pytest
 
 from handsynth.sensors.imu import (
     HINGES,
-    ImuHand,
-    SkinMotion,
-    calibrate,
-    calibration_motion,
-    free_motion,
+    delayed,
     late_sensors,
     sensor_lags,
-    simulate_imu,
     truth_chain_model,
     truth_link_frames,
 )
@@ -25,16 +19,7 @@ def frames(free_rec, imu_hand):
 
 
 def _late(rec, name, lag):
-    """`rec` with sensor `name`'s readings `lag` samples late (its first samples those that
-    follow them in the still start, not repeats)."""
-    k = rec.sensors.index(name)
-    out = {}
-    for ch in ("acc", "gyr", "mag"):
-        a = getattr(rec, ch).copy()
-        a[k, lag:] = getattr(rec, ch)[k, :-lag]
-        a[k, :lag] = getattr(rec, ch)[k, lag:2 * lag]
-        out[ch] = a
-    return dataclasses.replace(rec, truth=None, **out)
+    return dataclasses.replace(delayed(rec, name, lag), truth=None)
 
 
 def test_sensors_in_step_read_no_lag(free_rec, frames):
@@ -78,16 +63,21 @@ def test_pairs_without_both_sensors_are_left_out(free_rec, frames):
     assert ("index_proximal", "index_middle") not in sensor_lags(free_rec, partial, static_n=100)
 
 
-def test_track_with_a_calibration_warns_of_a_late_stream():
+def test_track_with_a_calibration_warns_of_a_late_stream(worn):
     # the calibration's own link frames (not the simulator's axes) judge the hinges
-    skin = SkinMotion(2.0, 4.0)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the simulated disturbance and still-start notes
-        cal = calibrate(simulate_imu(calibration_motion(), hand=ImuHand(tip_sensors=True),
-                                     skin=skin, seed=1, device_seed=2), sensor_calibration=False)
-        rec = simulate_imu(free_motion(12.0, seed=3), hand=ImuHand(), skin=skin, seed=4,
-                           device_seed=2)
+    cal, rec = worn
     assert late_sensors(rec, cal.frames, static_n=100) is None
     with pytest.warns(UserWarning, match=r"sensor streams out of step: index_distal \d+ ms behind "
                                          r"index_middle"):
         cal.track(_late(rec, "index_distal", 3), sensor_calibration=False)
+
+
+def test_delayed_refuses_what_it_cannot_delay(free_rec):
+    from handsynth.errors import InvalidInputError
+
+    with pytest.raises(InvalidInputError, match="sensor 'wrist' is not in the recording"):
+        delayed(free_rec, "wrist", 2)
+    with pytest.raises(InvalidInputError, match="samples"):
+        delayed(free_rec, "index_distal", 0)
+    with pytest.raises(InvalidInputError, match="samples"):
+        delayed(free_rec, "index_distal", free_rec.n)

@@ -7,10 +7,6 @@ import pytest
 from handsynth.sensors.imu import (
     SWAP_RATIO,
     ImuHand,
-    SkinMotion,
-    calibrate,
-    calibration_motion,
-    free_motion,
     simulate_imu,
     static_motion,
     swap_ratios,
@@ -23,19 +19,6 @@ def _exchanged(rec, a, b):
     order = list(range(len(rec.sensors)))
     order[i], order[j] = j, i
     return dataclasses.replace(rec, acc=rec.acc[order], gyr=rec.gyr[order], mag=rec.mag[order])
-
-
-@pytest.fixture(scope="module")
-def worn():
-    """A calibration and a free motion of the same sensors, with skin motion."""
-    skin = SkinMotion(2.0, 4.0)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the simulated disturbance and still-start notes
-        cal = calibrate(simulate_imu(calibration_motion(), hand=ImuHand(tip_sensors=True),
-                                     skin=skin, seed=1, device_seed=2), sensor_calibration=False)
-        rec = simulate_imu(free_motion(12.0, seed=3), hand=ImuHand(), skin=skin, seed=4,
-                           device_seed=2)
-    return cal, rec
 
 
 def test_sensors_as_calibrated_are_not_called_exchanged(worn):
