@@ -9,7 +9,13 @@ from click.testing import CliRunner
 from scipy.io import savemat
 
 from handsynth.cli._main import cli
-from handsynth.sensors.imu import free_motion, simulate_imu, truth_chain_model, write_imu_csv
+from handsynth.sensors.imu import (
+    delayed,
+    free_motion,
+    simulate_imu,
+    truth_chain_model,
+    write_imu_csv,
+)
 from handsynth.sensors.imu._filters import _Q_NWU_FROM_ENU
 from handsynth.sensors.imu._quat import qconj, qmul
 
@@ -333,7 +339,7 @@ def test_calibrate_then_track_joint_angles(tmp_path):
                                    "--tips-out", str(tmp_path / "tips.csv")])
     assert res.exit_code == 0, res.output
     assert "sensor calibration applied" in res.output
-    assert "read as exchanged" not in res.output
+    assert "read as exchanged" not in res.output and "out of step" not in res.output
     # two sensors put back on each other's phalanges: their columns exchanged by name
     lines = rec_csv.read_text().split("\n")
     k = next(i for i, line in enumerate(lines) if line.startswith("time_s,"))  # after a comment
@@ -347,6 +353,15 @@ def test_calibrate_then_track_joint_angles(tmp_path):
     assert "handsynth: warning: sensors read as exchanged since the calibration: " in res.output
     assert re.search(r"(index_proximal and middle_proximal|middle_proximal and index_proximal) "
                      r"\(their joints agree [0-9.]+ times better exchanged", res.output), res.output
+    assert "out of step" not in res.output
+    # one sensor's stream 30 ms late (a wireless logger's latency): named
+    late_csv = tmp_path / "late.csv"
+    write_imu_csv(delayed(rec, "ring_middle", 3), late_csv)
+    res = CliRunner().invoke(cli, ["imu", "track", str(late_csv), "--calibration", str(model),
+                                   "--align", "2,4", "--out", str(tmp_path / "q3.csv")])
+    assert res.exit_code == 0, res.output
+    assert re.search(r"handsynth: warning: sensor streams out of step: ring_middle \d+ ms behind "
+                     r"ring_(proximal|distal).*\(ring_middle in two pairs", res.output), res.output
     with open(tmp_path / "tips.csv", encoding="utf-8") as fh:
         header = fh.readline().strip().split(",")
     assert header[:4] == ["time_s", "thumb_tip_x_mm", "thumb_tip_y_mm", "thumb_tip_z_mm"]
