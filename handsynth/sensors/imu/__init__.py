@@ -50,7 +50,7 @@ from ._kinematics import (
     truth_link_frames,
     zero_offsets,
 )
-from ._lags import HINGES, LATE_S, delayed, late_sensors, sensor_lags
+from ._lags import HINGES, LATE_S, RIGID, delayed, late_sensors, sensor_lags
 from ._layout import CHAINS, FLEX_JOINT, LINKS, POINTS
 from ._lost import (
     HELD_MIN_S,
@@ -149,6 +149,7 @@ __all__ = [
     "MPU9250_DATASHEET",
     "PLATE_SENSORS",
     "POINTS",
+    "RIGID",
     "ROTATIONS",
     "SENSOR_BODIES",
     "SENSOR_NAMES",

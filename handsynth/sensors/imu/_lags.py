@@ -18,7 +18,7 @@ import numpy as np
 from ..._checks import check_integer
 from ...errors import InvalidInputError
 
-__all__ = ["HINGES", "LATE_S", "delayed", "late_sensors", "sensor_lags"]
+__all__ = ["HINGES", "LATE_S", "RIGID", "delayed", "late_sensors", "sensor_lags"]
 
 #: The sensor pairs either side of a one-axis joint (proximal, distal).
 HINGES: tuple[tuple[str, str], ...] = (
@@ -26,6 +26,9 @@ HINGES: tuple[tuple[str, str], ...] = (
     *((f"{f}_middle", f"{f}_distal") for f in ("index", "middle", "ring", "little")),
     ("thumb_proximal", "thumb_distal"),
 )
+#: Sensor pairs on one rigid segment (the forearm plate): their whole rates have the same
+#: length at every instant, whatever the axes.
+RIGID: tuple[tuple[str, str], ...] = (("forearm_1", "forearm_2"), ("forearm_1", "forearm_3"))
 #: A lag warned about, s: 20 ms late put the worst joint at 2.4-3.1 deg against 1.65-2.06
 #: as recorded (``python scripts/study_imu_lag.py``).
 LATE_S = 0.015
@@ -36,7 +39,8 @@ _MIN_CORRELATION = 0.8
 
 
 def sensor_lags(rec, frames: dict, *, static_n: int) -> dict:
-    """How late each hinge's distal sensor reads against its proximal one.
+    """How late each hinge's distal sensor reads against its proximal one, and each forearm
+    plate sensor against ``forearm_1``.
 
     Parameters
     ----------
@@ -51,7 +55,8 @@ def sensor_lags(rec, frames: dict, *, static_n: int) -> dict:
     -------
     dict
         ``(proximal, distal)`` -> ``(lag_s, correlation)`` for every pair of :data:`HINGES`
-        both of whose sensors `rec` and `frames` hold: the shift, s, of the distal sensor's
+        both of whose sensors `rec` and `frames` hold, and of :data:`RIGID` both of whose
+        sensors `rec` holds (their whole rates compared): the shift, s, of the distal sensor's
         series that best matches the proximal one's (positive: the distal sensor late; to a
         fraction of a sample, by a parabola through the peak) and the peak's correlation.
     """
@@ -60,19 +65,22 @@ def sensor_lags(rec, frames: dict, *, static_n: int) -> dict:
     out: dict[tuple[str, str], tuple[float, float]] = {}
     if n < 4 * max_lag:
         return out
-    speed = {}
-    for name in {s for pair in HINGES for s in pair}:
-        if name not in rec.sensors or name not in frames:
+    speed: dict[tuple[str, bool], np.ndarray] = {}  # (sensor, about a hinge axis) -> series
+    for pairs, hinge in ((HINGES, True), (RIGID, False)):
+        for name in {s for pair in pairs for s in pair}:
+            if name not in rec.sensors or (hinge and name not in frames):
+                continue
+            k = rec.sensors.index(name)
+            w = rec.gyr[k] - rec.gyr[k, :max(1, static_n)].mean(axis=0)
+            if hinge:  # the part perpendicular to the link frame's x axis (the flexion axis)
+                axis = np.asarray(frames[name])[0]
+                w = w - np.outer(w @ axis, axis)
+            v = np.linalg.norm(w, axis=1)
+            speed[name, hinge] = v - v.mean()
+    for prox, dist, hinge in [(*p, True) for p in HINGES] + [(*p, False) for p in RIGID]:
+        if (prox, hinge) not in speed or (dist, hinge) not in speed:
             continue
-        k = rec.sensors.index(name)
-        w = rec.gyr[k] - rec.gyr[k, :max(1, static_n)].mean(axis=0)
-        axis = np.asarray(frames[name])[0]  # the link frame's x axis in the sensor frame
-        s = np.linalg.norm(w - np.outer(w @ axis, axis), axis=1)
-        speed[name] = s - s.mean()
-    for prox, dist in HINGES:
-        if prox not in speed or dist not in speed:
-            continue
-        a, b = speed[prox], speed[dist]
+        a, b = speed[prox, hinge], speed[dist, hinge]
         cor = np.empty(2 * max_lag + 1)
         for i, lag in enumerate(range(-max_lag, max_lag + 1)):
             x, y = (a[:n - lag], b[lag:]) if lag >= 0 else (a[-lag:], b[:n + lag])
@@ -109,7 +117,8 @@ def late_sensors(rec, frames: dict, *, static_n: int) -> str | None:
     shared = sorted(s for s, c in count.items() if c > 1)
     which = f" ({', '.join(shared)} in two pairs: that sensor's clock)" if shared else ""
     return (f"sensor streams out of step: {'; '.join(parts)}{which}, judged by the turn of the "
-            "phalanges either side of a finger's hinge joint; a late stream reads its joints "
+            "phalanges either side of a finger's hinge joint (of the forearm plate's sensors, by "
+            "their common turn); a late stream reads its joints "
             "several degrees off (20 ms: 2-3 deg, 100 ms: 9-13 deg at the joint): keep the "
             "sensors' clocks within about 15 ms of each other")
 
