@@ -6,7 +6,8 @@ that axis has the same magnitude in both sensors at every instant: a rotation ab
 axis keeps the perpendicular part's length.  A sensor whose stream is late (a wireless
 logger's latency or buffering) shows as a shift between the two series, found by their
 cross-correlation.  The axis in each sensor's frame is its link frame's x axis (the flexion
-axis the calibration rotations gave, :func:`~handsynth.sensors.imu.link_frames`).
+axis the calibration rotations gave, :func:`~handsynth.sensors.imu.link_frames`).  The
+forearm plate's sensors share one rigid segment: the lengths of their whole rates agree.
 """
 
 from __future__ import annotations
