@@ -596,8 +596,9 @@ def _check_mag_axes(rec: ImuRecording, n0: int, gyro_off: frozenset[str]) -> lis
         # (a magnet fixed to the sensor, a stuck magnetometer: no reading of its axes holds)
         fixed = np.sqrt(sq_fixed[k] / count[k])
         if rms[0] >= _MAG_AXES_RATIO * rms[best] and fixed >= _MAG_AXES_RATIO * rms[best]:
-            labels.add(axes_label(*SIGNED_PERMUTATIONS[best]))
-            found.append(f"{name} ({axes_label(*SIGNED_PERMUTATIONS[best])})")
+            label = axes_label(*SIGNED_PERMUTATIONS[best])
+            labels.add(label)
+            found.append(f"{name} ({label})")
     if not found:
         return []
     how = (f"Read them so (--mag-axes {labels.pop().replace(' ', '')}; library: with_axes)"
