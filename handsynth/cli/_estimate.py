@@ -14,6 +14,7 @@ from .._checks import check_path_names
 from .._io import check_outputs
 from ..errors import EstimationError, InvalidInputError, InvalidShapeError
 from ..render import read_image
+from ._hand import about_measurements, hand_options, hand_shape, shape_option
 from ._main import cli
 
 #: Off-grid hand rendered by ``--synthetic`` unless ``--synthetic-shape`` says otherwise.
@@ -44,50 +45,6 @@ def _parse_size(text: str, flag: str) -> tuple[int, int]:
     if w > 4096 or h > 4096:
         raise InvalidInputError(f"{flag} must be at most 4096x4096 pixels, got {text!r}")
     return w, h
-
-
-def _shape_option(name: str, flag: str):
-    """The hand of a hand-shape option: ``standard`` or a name such as L1.000_W1.000_P1.000_T1.000.
-
-    Raises
-    ------
-    InvalidShapeError
-        A name of another form or outside the supported ratios, naming `flag`.
-    """
-    from ..models import HandShape
-
-    if name.strip().lower() == "standard":
-        return HandShape()
-    try:
-        return HandShape.from_name(name.strip())
-    except InvalidShapeError as exc:
-        raise InvalidShapeError(f"{flag} {name!r}: {exc}") from None
-
-
-def _read_measurements(path):
-    """The measurements of ``--measurements`` FILE, every error naming the option and the file."""
-    from ..models import HandMeasurements
-
-    try:
-        return HandMeasurements.from_file(path)
-    except InvalidInputError as exc:
-        raise _about_measurements(exc, path) from None
-
-
-def _hand_options(shape_name, measurements):
-    """The hand of ``--shape`` NAME or ``--measurements`` FILE (at most one of them):
-    ``(HandShape or None, HandMeasurements or None)``."""
-    if shape_name is not None and measurements is not None:
-        raise InvalidInputError("give --shape or --measurements, not both")
-    return (None if shape_name is None else _shape_option(shape_name, "--shape"),
-            None if measurements is None else _read_measurements(measurements))
-
-
-def _about_measurements(exc: InvalidInputError, path) -> InvalidInputError:
-    """`exc` (an error about the measurements of `path`) with the option and the file named."""
-    text = str(exc)
-    where = "--measurements" if str(path) in text else f"--measurements {str(path)!r}"
-    return type(exc)(f"{where}: {text}")
 
 
 def _check_limits(frames, seconds, max_dead, fps) -> None:
@@ -123,7 +80,7 @@ def _open_lookup(db_dir, shape_name, measurements, temporal, err, personal=False
     from ..estimate import PoseLookup, SelectionOptions, select_shape
     from ..live import default_database_dir
 
-    shape, meas = _hand_options(shape_name, measurements)
+    shape, meas = hand_options(shape_name, measurements)
     if personal:
         if shape is None and meas is None:
             raise InvalidInputError("--personal needs --shape NAME or --measurements FILE")
@@ -134,7 +91,7 @@ def _open_lookup(db_dir, shape_name, measurements, temporal, err, personal=False
         except InvalidShapeError as exc:
             if measurements is None:
                 raise
-            raise _about_measurements(exc, measurements) from None
+            raise about_measurements(exc, measurements) from None
         click.echo(f"personal database {lookup.database.path} ready in "
                    f"{time.perf_counter() - t:.1f} s", err=err)
         return lookup
@@ -145,7 +102,7 @@ def _open_lookup(db_dir, shape_name, measurements, temporal, err, personal=False
         try:
             select_shape(meas, options=selection)
         except InvalidShapeError as exc:
-            raise _about_measurements(exc, measurements) from None
+            raise about_measurements(exc, measurements) from None
     if db_dir is None:
         from ..db import build_default_database
 
@@ -161,7 +118,7 @@ def _open_lookup(db_dir, shape_name, measurements, temporal, err, personal=False
     except InvalidShapeError as exc:  # values that give no hand (centimetres read as mm)
         if measurements is None:
             raise
-        raise _about_measurements(exc, measurements) from None
+        raise about_measurements(exc, measurements) from None
 
 
 def _calibration_frame(source, image, mount, side, err, *, synthetic: str, prompt: str,
@@ -229,18 +186,7 @@ def _check_learned_options(db_dir, shape_name, measurements, personal, build_cou
 
 def _keypoint_shape(shape_name, measurements, err):
     """The hand whose keypoints a learnt run reports: --shape, --measurements or the standard."""
-    from ..estimate import SelectionOptions, select_shape
-    from ..models import HandShape
-
-    shape, meas = _hand_options(shape_name, measurements)
-    if meas is not None:
-        try:  # values that give no hand of the supported ratios (centimetres read as mm)
-            ratios = select_shape(meas, options=SelectionOptions(normalize="none")).ratios
-            shape = HandShape.from_name(ratios.name)
-        except InvalidInputError as exc:
-            raise _about_measurements(exc, measurements) from None
-    elif shape is None:
-        shape = HandShape()
+    shape = hand_shape(shape_name, measurements)
     click.echo(f"keypoints of the handsynth hand {shape.name} posed by the estimated angles",
                err=err)
     return shape
@@ -661,7 +607,7 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
     camera_optics = _read_intrinsics(intrinsics)
     inputs = [p for p in (video_in, measurements, calibrate_image, intrinsics) if p is not None]
     size = _parse_size(synthetic_size, "--synthetic-size") if synthetic else None
-    user_shape = _shape_option(synthetic_shape, "--synthetic-shape") if synthetic else None
+    user_shape = shape_option(synthetic_shape, "--synthetic-shape") if synthetic else None
     if synthetic and frames is None and seconds is None:
         frames = SYNTHETIC_FRAMES
     calibrate = calibrate or calibrate_image is not None

@@ -33,7 +33,7 @@ from ..errors import HandsynthError
 
 #: The sub-command modules (``handsynth/cli/_<name>.py``), each adding itself to ``cli``.
 COMMAND_MODULES: tuple[str, ...] = ("demo", "build_db", "estimate", "eval", "measure", "joints", "glove",
-                                    "imu")
+                                    "imu", "bvh")
 
 
 def _error_line(message: str) -> None:

@@ -6,6 +6,7 @@ back of the hand, x = y cross z.  Lengths in metres inside the model,
 angles in degrees at every public interface.
 """
 
+from ._angle_files import TIME_COLUMNS, AngleTable, read_angle_table
 from ._anthropometry import (
     DEPTH_TO_BREADTH,
     DORSUM_Z_MM,
@@ -16,6 +17,7 @@ from ._anthropometry import (
     StandardLayout,
     standard_layout_mm,
 )
+from ._bvh import BVH_CHANNELS, BVH_UNITS, bvh_text, write_bvh
 from ._hand import HandModel, compile_mjcf
 from ._joints import FINGERS, JOINT_LIMITS_DEG, JOINT_NAMES, joint_index
 from ._measurements import (
@@ -40,6 +42,8 @@ from ._posesets import MAX_POSES, PAPER_SIZE, POSE_SETS, natural_pose_set, paper
 from ._shape import GRID_LEVELS, HandShape
 
 __all__ = [
+    "BVH_CHANNELS",
+    "BVH_UNITS",
     "DEPTH_TO_BREADTH",
     "DORSUM_Z_MM",
     "FINGERS",
@@ -60,12 +64,15 @@ __all__ = [
     "SEGMENT_COEFFICIENTS",
     "THUMB_PITCH_DEG",
     "THUMB_YAW_DEG",
+    "TIME_COLUMNS",
+    "AngleTable",
     "HandMeasurements",
     "HandModel",
     "HandShape",
     "HandSpec",
     "StandardLayout",
     "as_angles",
+    "bvh_text",
     "compile_mjcf",
     "formula_ratios",
     "hand_mjcf",
@@ -77,5 +84,7 @@ __all__ = [
     "natural_pose_set",
     "paper_pose_set",
     "pose_set",
+    "read_angle_table",
     "standard_layout_mm",
+    "write_bvh",
 ]
