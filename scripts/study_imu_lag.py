@@ -17,8 +17,8 @@ orientation RMSE, and whether :func:`~handsynth.sensors.imu.late_sensors` (which
 *Told*: the tuning configuration and the held-out draws ``--seeds``, each a 15-s free motion
 with the elbow fixed and one with it moving and the grasp reaches, with the draw's own
 calibration: warned of as recorded (false alarms), and with each sensor of a finger's hinge
-(:data:`~handsynth.sensors.imu.HINGES`) and of the forearm plate
-(:data:`~handsynth.sensors.imu.RIGID`) in turn 10, 20 and 50 ms late, named.  About 2 min.
+(:data:`~handsynth.sensors.imu.HINGES`), of the forearm plate and of the hand
+(:data:`~handsynth.sensors.imu.RIGID`) in turn 10, 20 and 50 ms late, named.  About 1 min.
 Last line: ``as_recorded_joints_deg=<x> worst_joint_deg=<x> false_alarms=<n> recordings=<n>
 named_10ms=<n> named_20ms=<n> named_50ms=<n> late=<n>``.
 """

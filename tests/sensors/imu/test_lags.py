@@ -33,7 +33,8 @@ def test_sensors_in_step_read_no_lag(free_rec, frames):
 
 @pytest.mark.parametrize("name, lag", [("index_middle", 3), ("ring_distal", 2),
                                        ("little_proximal", 5), ("forearm_1", 2),
-                                       ("forearm_3", 2)])
+                                       ("forearm_3", 2), ("hand_radial", 2),
+                                       ("hand_ulnar", 3)])
 def test_a_late_stream_is_named(free_rec, frames, name, lag):
     # before: a sensor 20-100 ms late read its joints 2-13 deg off without a word
     lags = sensor_lags(_late(free_rec, name, lag), frames, static_n=100)
