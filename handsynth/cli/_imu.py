@@ -9,6 +9,7 @@ from pathlib import Path
 import click
 
 from .._io import check_outputs, make_folder, write_json
+from ._hand import shape_option
 from ._main import cli
 
 _TRACK_FILTERS = ("raw", "filter1", "gated", "vqf", "vqf_online", "madgwick", "mahony", "ahrs_ekf",
@@ -292,6 +293,23 @@ def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz
             if sc.mag_residual is not None else "") + " (stored; 'track' applies it)"))
 
 
+def _write_track_bvh(path, angles, quats, sensors, cal, tips, rate_hz, shape, inputs) -> None:
+    """The BVH file of ``track --bvh-out``: the hand's joint angles, attitude and wrist."""
+    import numpy as np
+
+    from ..models import JOINT_NAMES, write_bvh
+    from ..sensors.imu import hand_attitude
+
+    unknown = [n for n, bad in zip(JOINT_NAMES, np.isnan(angles).any(axis=0)) if bad]
+    if unknown:  # the thumb's CMC of a calibration without its two rotations
+        click.echo(f"handsynth: warning: --bvh-out: {', '.join(unknown)} not measured by this "
+                   "calibration, written as 0", err=True)
+    wrist_mm = 1e3 * tips["index_joints"][:, 0]
+    write_bvh(path, np.nan_to_num(angles), rate_hz=rate_hz, shape=shape, side=cal.side,
+              root_quat=hand_attitude(quats, sensors, cal.frames), root_position_mm=wrist_mm,
+              inputs=inputs)
+
+
 @imu.command()
 @click.argument("recording", type=click.Path(dir_okay=False))
 @click.option("--filter", "filter_name", type=click.Choice(_TRACK_FILTERS + _CHAIN_FILTERS),
@@ -313,12 +331,20 @@ def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz
 @click.option("--tips-out", type=click.Path(dir_okay=False),
               help="CSV of fingertip positions from the elbow centre, mm, in the world frame "
                    "of the initial attitude (eq. 3.12; needs --calibration).")
+@click.option("--bvh-out", type=click.Path(dir_okay=False),
+              help="BVH motion file: the handsynth hand of --bvh-shape posed by the joint "
+                   "angles, turned as the hand sensor's attitude says and placed at the "
+                   "wrist's place from the elbow centre, in the world frame of the initial "
+                   "attitude (needs --calibration).")
+@click.option("--bvh-shape", default=None, metavar="NAME",
+              help="With --bvh-out, the hand whose skeleton the file carries (e.g. "
+                   "L1.050_W0.900_P1.000_T1.000) [default: standard].")
 @click.option("--no-sensor-calibration", is_flag=True,
               help="Do not apply the calibration file's accelerometer/gyro/magnetometer "
                    "corrections (for readings already corrected).")
 def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_units, rate_hz,
           acc_range_g, gyr_range_dps, bridge_lost, bridge_max_s, gyr_axes, mag_axes, static_s,
-          align, out_path, angles_out, tips_out, no_sensor_calibration) -> None:
+          align, out_path, angles_out, tips_out, bvh_out, bvh_shape, no_sensor_calibration) -> None:
     """Orientation of every sensor of a CSV RECORDING (columns <sensor>_acc_x .. _mag_z)."""
     import numpy as np
 
@@ -335,6 +361,7 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
     )
 
     for flag, given in (("--angles-out", angles_out), ("--tips-out", tips_out),
+                        ("--bvh-out", bvh_out),
                         ("--no-sensor-calibration", no_sensor_calibration),
                         (f"--filter {filter_name}", filter_name in _CHAIN_FILTERS)):
         if given and not calibration_path:
@@ -343,8 +370,12 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
         raise InvalidInputError(f"with --calibration the filter is one of {', '.join(_CHAIN_FILTERS)}, "
                                 f"got {filter_name}")
     inputs = (recording, calibration_path)
-    check_outputs([("--out", out_path), ("--angles-out", angles_out), ("--tips-out", tips_out)],
-                  inputs=inputs)
+    if bvh_shape is not None and not bvh_out:
+        raise InvalidInputError("--bvh-shape says whose skeleton --bvh-out carries, and "
+                                "--bvh-out was not given")
+    check_outputs([("--out", out_path), ("--angles-out", angles_out), ("--tips-out", tips_out),
+                   ("--bvh-out", bvh_out)], inputs=inputs)
+    skeleton = shape_option(bvh_shape, "--bvh-shape") if bvh_shape is not None else None
     a = b = None
     if align:
         try:
@@ -380,11 +411,15 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
         if angles_out:
             _write_table(angles_out, ["time_s", *JOINT_NAMES], np.column_stack([t, res["angles"]]),
                          inputs=inputs)
-        if tips_out:
+        if tips_out or bvh_out:
             tips = fingertip_positions(q, sensors, cal.model)
+        if tips_out:
             fingers = [f for f in tips if not f.endswith("_joints")]
             _write_table(tips_out, ["time_s", *(f"{f}_tip_{c}_mm" for f in fingers for c in "xyz")],
                          np.column_stack([t, *(1e3 * tips[f] for f in fingers)]), inputs=inputs)
+        if bvh_out:
+            _write_track_bvh(bvh_out, res["angles"], q, sensors, cal, tips, rec.rate_hz,
+                             skeleton, inputs)
     else:
         name = filter_name or "vqf"
         est = dataclasses.replace(make_filter(name), static=static)

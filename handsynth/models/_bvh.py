@@ -6,7 +6,8 @@ BVH (Biovision Hierarchy) is the motion format animation and motion-capture tool
 
 * the root ``palm`` at the wrist joint centre, in the hand frame (+y toward the middle
   finger's MCP joint, +z out of the back of the hand); its six channels are zero in every
-  frame, so the file's frame is the hand frame;
+  frame, so the file's frame is the hand frame, unless the hand's place and attitude in
+  a world frame are given (``root_position_mm``, ``root_quat``: an IMU recording's);
 * one joint per segment (``thumb_metacarpal``, ``thumb_proximal``, ``thumb_distal``,
   ``<finger>_proximal``, ``<finger>_middle``, ``<finger>_distal``) whose ``OFFSET`` is its
   joint centre in its parent's frame, and an ``End Site`` at each fingertip.
@@ -16,7 +17,9 @@ axes, composed as MuJoCo composes the hand model's (so the joint centres of the 
 model's keypoints, which a test checks).  It is written as the channels ``Zrotation
 Yrotation Xrotation`` (R = Rz Ry Rx, intrinsic, degrees): over every joint's range the
 middle angle of this order stays within 49 deg (the thumb's metacarpal), where the other
-five orders reach 57-90 deg, so no pose is near gimbal lock.
+five orders reach 57-90 deg, so no pose is near gimbal lock.  Each channel is unwrapped
+over the frames (no jump of 360 deg between two frames, which animation tools would
+interpolate as a turn).
 """
 
 from __future__ import annotations
@@ -88,16 +91,61 @@ def _local_rotations(body, angles_deg: np.ndarray) -> np.ndarray:
 
 
 def _euler_zyx_deg(matrices: np.ndarray) -> np.ndarray:
-    """(z, y, x) angles, degrees, with R = Rz(z) Ry(y) Rx(x), of (N, 3, 3) rotations."""
-    # closed form (no gimbal lock within the hand's ranges, module docstring)
-    y = np.arcsin(np.clip(-matrices[:, 2, 0], -1.0, 1.0))
-    z = np.arctan2(matrices[:, 1, 0], matrices[:, 0, 0])
-    x = np.arctan2(matrices[:, 2, 1], matrices[:, 2, 2])
-    return np.degrees(np.column_stack([z, y, x]))
+    """(z, y, x) angles, degrees, with R = Rz(z) Ry(y) Rx(x), of (N, 3, 3) rotations, each
+    unwrapped over the N frames."""
+    import warnings
+
+    from scipy.spatial.transform import Rotation
+
+    with warnings.catch_warnings():  # gimbal lock (a root turned so): one of many triples
+        warnings.simplefilter("ignore", UserWarning)
+        zyx = Rotation.from_matrix(matrices).as_euler("ZYX", degrees=True)
+    return np.unwrap(zyx, period=360.0, axis=0)
+
+
+def _root_motion(n: int, root_quat, root_position_mm, scale: float) -> np.ndarray:
+    """The root's six channels for `n` frames: zero, or the given place and attitude."""
+    out = np.zeros((n, 6))
+    if root_position_mm is not None:
+        p = np.asarray(root_position_mm, dtype=np.float64)
+        if p.shape != (n, 3) or not np.isfinite(p).all():
+            raise InvalidInputError(f"root_position_mm must be finite, of shape ({n}, 3) (one "
+                                    f"place per frame), got shape {p.shape}")
+        out[:, :3] = p * scale
+    if root_quat is not None:
+        q = np.asarray(root_quat, dtype=np.float64)
+        norm = np.linalg.norm(q, axis=-1) if q.ndim == 2 else None
+        if (q.shape != (n, 4) or norm is None or not np.isfinite(q).all()
+                or not (norm > 0.5).all()):
+            raise InvalidInputError(f"root_quat must be finite unit quaternions (w, x, y, z) "
+                                    f"of shape ({n}, 4), one per frame, got shape {q.shape}")
+        from scipy.spatial.transform import Rotation
+
+        turn = Rotation.from_quat(q[:, [1, 2, 3, 0]] / norm[:, None])
+        out[:, 3:] = _continuous(_euler_zyx_deg(turn.as_matrix()))
+    return out
+
+
+def _continuous(zyx: np.ndarray) -> np.ndarray:
+    """Each frame's (z, y, x) angles, deg, as the one of the two triples of its rotation,
+    (z, y, x) and (z + 180, 180 - y, x + 180), each to within whole turns, nearest the frame
+    before's: a root that turns freely passes y = +-90 deg, where the triple of the range
+    [-90, 90] jumps by 180 deg in z and x."""
+    out = np.array(zyx, dtype=np.float64)
+    for i in range(1, len(out)):
+        prev = out[i - 1]
+        best = None
+        z, y, x = out[i]
+        for cand in (np.array([z, y, x]), np.array([z + 180.0, 180.0 - y, x + 180.0])):
+            near = cand + 360.0 * np.round((prev - cand) / 360.0)
+            if best is None or np.abs(near - prev).sum() < np.abs(best - prev).sum():
+                best = near
+        out[i] = best
+    return out
 
 
 def bvh_text(angles, *, rate_hz: float, shape: HandShape | None = None, side: str = "right",
-             units: str = "cm") -> str:
+             units: str = "cm", root_quat=None, root_position_mm=None) -> str:
     """The BVH text of joint angles on the handsynth hand (module docstring).
 
     Parameters
@@ -112,6 +160,12 @@ def bvh_text(angles, *, rate_hz: float, shape: HandShape | None = None, side: st
     side : {"right", "left"}, keyword-only
     units : {"cm", "mm", "m"}, keyword-only
         Unit of the offsets (centimetres by default, as most motion files are written).
+    root_quat : array_like, shape (N, 4), keyword-only, optional
+        The hand frame's attitude in a world frame in each frame (hand-to-world unit
+        quaternions, w, x, y, z); the root's rotation channels.  Zero by default.
+    root_position_mm : array_like, shape (N, 3), keyword-only, optional
+        The wrist joint centre's place in that world frame, mm; the root's position
+        channels.  Zero by default.
 
     Returns
     -------
@@ -122,7 +176,8 @@ def bvh_text(angles, *, rate_hz: float, shape: HandShape | None = None, side: st
     InvalidPoseError
         Angles of another shape, or not finite (naming the row and the joint).
     InvalidInputError
-        `rate_hz` not a positive finite number up to 100 kHz, `units` or `side` unknown.
+        `rate_hz` not a positive finite number up to 100 kHz, `units` or `side` unknown,
+        `root_quat` or `root_position_mm` of another shape or not finite.
     InvalidShapeError
         `shape` not a HandShape.
     """
@@ -161,7 +216,7 @@ def bvh_text(angles, *, rate_hz: float, shape: HandShape | None = None, side: st
 
     emit(spec.root, 0)
     bodies = _segments(spec.root)
-    columns = [np.zeros((len(a), 6))]
+    columns = [_root_motion(len(a), root_quat, root_position_mm, scale)]
     columns += [_euler_zyx_deg(_local_rotations(b, a)) for b in bodies[1:]]
     motion = np.round(np.hstack(columns), 6) + 0.0  # + 0.0: no "-0.000000"
     out.write(f"MOTION\nFrames: {len(a)}\nFrame Time: {1.0 / rate:.9f}\n")
@@ -170,14 +225,15 @@ def bvh_text(angles, *, rate_hz: float, shape: HandShape | None = None, side: st
 
 
 def write_bvh(path, angles, *, rate_hz: float, shape: HandShape | None = None,
-              side: str = "right", units: str = "cm", inputs=()) -> Path:
+              side: str = "right", units: str = "cm", root_quat=None, root_position_mm=None,
+              inputs=()) -> Path:
     """Write joint angles as a BVH file on the handsynth hand, complete or not at all.
 
     Parameters
     ----------
     path : str or os.PathLike
         The ``.bvh`` file; it appears only when written whole.
-    angles, rate_hz, shape, side, units
+    angles, rate_hz, shape, side, units, root_quat, root_position_mm
         As :func:`bvh_text`'s.
     inputs : iterable of path, keyword-only
         Files the angles were read from: `path` may not be one of them.
@@ -193,7 +249,8 @@ def write_bvh(path, angles, *, rate_hz: float, shape: HandShape | None = None,
     OutputError
         `path` cannot be written (naming it and why), or is one of `inputs`.
     """
-    text = bvh_text(angles, rate_hz=rate_hz, shape=shape, side=side, units=units)
+    text = bvh_text(angles, rate_hz=rate_hz, shape=shape, side=side, units=units,
+                    root_quat=root_quat, root_position_mm=root_position_mm)
     with atomic_open(Path(path), "w", what="BVH file", inputs=inputs, newline="\n") as f:
         f.write(text)
     return Path(path)

@@ -259,6 +259,13 @@ def test_tips_out_needs_the_calibration(tmp_path, sim):
     res = CliRunner().invoke(cli, ["imu", "track", str(src), "--out", str(tmp_path / "q.csv"),
                                    "--tips-out", str(tmp_path / "t.csv")])
     assert res.exit_code == 2 and "--tips-out needs --calibration" in res.output
+    res = CliRunner().invoke(cli, ["imu", "track", str(src), "--out", str(tmp_path / "q.csv"),
+                                   "--bvh-out", str(tmp_path / "h.bvh")])
+    assert res.exit_code == 2 and "--bvh-out needs --calibration" in res.output
+    res = CliRunner().invoke(cli, ["imu", "track", str(src), "--out", str(tmp_path / "q.csv"),
+                                   "--bvh-shape", "standard"])
+    assert res.exit_code == 2 and "--bvh-out was not given" in res.output
+    assert not any(tmp_path.glob("*.bvh")) and not (tmp_path / "q.csv").exists()
 
 
 def test_eval_unknown_filter_is_one_line(tmp_path):
@@ -280,6 +287,37 @@ def test_eval_plots_folder_is_checked_before_the_evaluation(tmp_path):
     res = CliRunner().invoke(cli, ["imu", "eval", "--json", same, "--plots", same])
     assert res.exit_code == 2 and "--json and --plots name the same path" in res.output
     assert not (tmp_path / "s.json").exists()
+
+
+def _check_track_bvh(path, rec) -> None:
+    """``track --bvh-out``: read by an independent BVH parser and posed, the index fingertip
+    is where the simulated one was (from the elbow), far nearer than the first pose held."""
+    import bvh
+    from scipy.spatial.transform import Rotation
+
+    from handsynth.sensors.imu import POINTS
+
+    mocap = bvh.Bvh(path.read_text())
+    assert mocap.nframes == rec.n and mocap.frame_time == pytest.approx(1 / rec.rate_hz)
+    chain = ["palm", "index_proximal", "index_middle", "index_distal"]
+    end = next(c for c in mocap.get_joint(chain[-1]).children if c.value[:2] == ["End", "Site"])
+    kp = rec.truth.keypoints
+    got, true = [], []
+    for frame in range(400, rec.n, 20):
+        place = np.array(mocap.frame_joint_channels(frame, "palm",
+                                                    ["Xposition", "Yposition", "Zposition"]))
+        turn = Rotation.identity()
+        for k, name in enumerate(chain):
+            if k:
+                place = place + turn.apply(np.array(mocap.joint_offset(name), float))
+            zyx = mocap.frame_joint_channels(frame, name, ["Zrotation", "Yrotation", "Xrotation"])
+            turn = turn * Rotation.from_euler("ZYX", zyx, degrees=True)
+        got.append(place + turn.apply(np.array([float(v) for v in end["OFFSET"]])))
+        true.append(1e2 * (kp[frame, POINTS.index("index_tip")] - kp[frame, POINTS.index("elbow")]))
+    err = np.linalg.norm(np.array(got) - np.array(true), axis=1)
+    held = np.linalg.norm(np.array(got[:1]) - np.array(true), axis=1)
+    rms, held_rms = np.sqrt(np.mean(err ** 2)), np.sqrt(np.mean(held ** 2))
+    assert rms < 2.0 and rms < 0.3 * held_rms, (rms, held_rms)  # cm
 
 
 @pytest.mark.slow
@@ -336,9 +374,11 @@ def test_calibrate_then_track_joint_angles(tmp_path):
     write_imu_csv(rec, rec_csv)
     res = CliRunner().invoke(cli, ["imu", "track", str(rec_csv), "--calibration", str(model),
                                    "--align", "2,4", "--out", str(q_csv), "--angles-out", str(ang_csv),
-                                   "--tips-out", str(tmp_path / "tips.csv")])
+                                   "--tips-out", str(tmp_path / "tips.csv"),
+                                   "--bvh-out", str(tmp_path / "hand.bvh")])
     assert res.exit_code == 0, res.output
     assert "sensor calibration applied" in res.output
+    _check_track_bvh(tmp_path / "hand.bvh", rec)
     assert "read as exchanged" not in res.output and "out of step" not in res.output
     # two sensors put back on each other's phalanges: their columns exchanged by name
     lines = rec_csv.read_text().split("\n")

@@ -123,6 +123,42 @@ def test_one_pose_and_the_open_hand():
     assert np.abs(mocap.frame_joint_channels(0, "thumb_metacarpal", list(BVH_CHANNELS))).max() > 10
 
 
+def test_the_root_carries_the_hands_place_and_attitude():
+    """World keypoints = place + attitude applied to the hand-frame keypoints, through a
+    root turned far (channels unwrapped: no 360-deg jump between frames)."""
+    n = 90
+    angles = np.tile(_poses(1, seed=5)[-1], (n, 1))
+    turn = Rotation.from_rotvec(np.linspace(0, 4 * np.pi, n)[:, None] * np.array([0.3, 0.9, 0.3]))
+    quat = turn.as_quat()[:, [3, 0, 1, 2]]
+    place = np.column_stack([np.linspace(0, 300, n), np.zeros(n), 50 * np.ones(n)])
+    mocap = bvh.Bvh(bvh_text(angles, rate_hz=30.0, units="mm", root_quat=quat,
+                             root_position_mm=place))
+    model = HandModel(forearm=False)
+    model.set_pose(angles[0])
+    hand_mm = 1e3 * model.keypoints()
+    for frame in (0, 17, 45, 89):
+        root = mocap.frame_joint_channels(frame, "palm", ["Xposition", "Yposition", "Zposition"])
+        np.testing.assert_allclose(root, place[frame], atol=1e-6)
+        got = _points(mocap, frame)
+        # _points starts the root at its offset: add the position channels
+        world = turn[frame].apply(hand_mm) + place[frame]
+        for body, site in _ORIGIN.items():
+            np.testing.assert_allclose(got[body] + place[frame], world[KEYPOINT_SITES.index(site)],
+                                       atol=1e-4, err_msg=f"{body}, frame {frame}")
+    root_angles = np.array(mocap.frames, float)[:, 3:6]
+    assert np.abs(np.diff(root_angles, axis=0)).max() < 90.0
+
+
+@pytest.mark.parametrize("kwargs", [{"root_quat": np.zeros((2, 4))},
+                                    {"root_quat": np.ones((3, 4))},
+                                    {"root_quat": np.full((2, 4), np.nan)},
+                                    {"root_position_mm": np.zeros((2, 2))},
+                                    {"root_position_mm": np.full((2, 3), np.inf)}])
+def test_refuses_a_root_motion_of_another_shape(kwargs):
+    with pytest.raises(InvalidInputError, match="root_"):
+        bvh_text(np.zeros((2, 20)), rate_hz=30.0, **kwargs)
+
+
 @pytest.mark.parametrize(("kwargs", "error", "match"), [
     ({"angles": np.zeros((2, 19))}, InvalidPoseError, r"shape \(N, 20\).*\(2, 19\)"),
     ({"angles": np.zeros((0, 20))}, InvalidPoseError, r"\(0, 20\)"),

@@ -65,8 +65,9 @@ class ImuTruth:
         times the sensor's mounting (skin motion not included).
     sensor_pos : ndarray, shape (S, N, 3)
         Where each sensor actually is.
-    keypoints : ndarray, shape (N, 21, 3)
-        Wrist, joint centres and fingertips in :data:`KEYPOINT_SITES` order.
+    keypoints : ndarray, shape (N, 23, 3)
+        The elbow, wrist and ulnar CM centres, the joint centres and the fingertips, in
+        :data:`~handsynth.sensors.imu.POINTS` order.
     elbow : ndarray, shape (N, 3)
         Elbow joint centre.
     angles : ndarray, shape (N, 29)

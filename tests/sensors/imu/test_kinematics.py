@@ -2,13 +2,14 @@ import numpy as np
 import pytest
 
 from handsynth.errors import InvalidInputError
-from handsynth.models import JOINT_LIMITS_DEG, JOINT_NAMES
+from handsynth.models import JOINT_LIMITS_DEG, JOINT_NAMES, KEYPOINT_SITES, HandModel
 from handsynth.sensors.imu import (
     GRASP_POSES,
     POINTS,
     angles_beyond_range,
     classify_grasp,
     fingertip_positions,
+    hand_attitude,
     joint_angles,
     simulate_imu,
     truth_chain_model,
@@ -118,3 +119,40 @@ def test_angles_beyond_the_range_name_the_joints_and_the_sensor_they_share():
 def test_angles_beyond_range_refuses_bad_arguments(kwargs, message):
     with pytest.raises(InvalidInputError, match=message):
         angles_beyond_range(**kwargs)
+
+
+def _palm_attitudes(rec) -> np.ndarray:
+    """The hand frame's true attitudes, (N, 3, 3): the rigid fit of the model hand's palm
+    points (wrist, index and middle MCP, thumb CMC) onto the simulation's."""
+    names = ("wrist", "index_mcp", "middle_mcp", "thumb_cmc")
+    model = HandModel(forearm=False)
+    model.set_pose(np.zeros(len(JOINT_NAMES)))
+    a = model.keypoints()[[KEYPOINT_SITES.index(n) for n in names]]
+    a = a - a.mean(axis=0)
+    out = []
+    for pts in rec.truth.keypoints[:, [POINTS.index(n) for n in names]]:
+        u, _, vt = np.linalg.svd((pts - pts.mean(axis=0)).T @ a)
+        out.append(u @ np.diag([1.0, 1.0, np.linalg.det(u @ vt)]) @ vt)
+    return np.array(out)
+
+
+def test_hand_attitude_is_the_hand_frames(worn):
+    from handsynth.sensors.imu._quat import quat_to_mat
+
+    cal, rec = worn
+    res = cal.track(rec)
+    est = quat_to_mat(hand_attitude(res["quat"], cal.sensors, cal.frames))
+    true = _palm_attitudes(rec)
+
+    def angle(a, b):
+        cos = (np.einsum("nij,nij->n", a, b) - 1.0) / 2.0
+        return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
+
+    err = angle(est, true)
+    held = angle(np.broadcast_to(est[:1], est.shape), true)  # the first attitude held
+    # about 1.9 deg, nearly constant: the link frame's axes as the calibration found them
+    rms = np.sqrt(np.mean(err ** 2))
+    assert rms < 3.0 and rms < 0.3 * np.sqrt(np.mean(held ** 2)), rms
+    with pytest.raises(InvalidInputError, match="hand_radial"):
+        keep = [i for i, name in enumerate(cal.sensors) if name != "hand_radial"]
+        hand_attitude(res["quat"][keep], [cal.sensors[i] for i in keep], cal.frames)
