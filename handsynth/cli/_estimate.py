@@ -47,6 +47,32 @@ def _parse_size(text: str, flag: str) -> tuple[int, int]:
     return w, h
 
 
+def _replayed_angles(path, fps):
+    """The joint angles of ``--synthetic-angles`` FILE at ``--fps``, each frame's pose."""
+    import numpy as np
+
+    from ..models import JOINT_LIMITS_DEG, JOINT_NAMES, TIME_COLUMNS, read_angle_table
+
+    table = read_angle_table(path)
+    if not 0 < fps < math.inf:
+        raise InvalidInputError(f"--fps must be a positive finite number, got {fps}")
+    if table.times_s is None:
+        click.echo(f"{path}: no time column ({' or '.join(TIME_COLUMNS)}): one row per frame "
+                   f"at --fps {fps:g}", err=True)
+    angles, _ = table.resampled(fps)
+    if len(angles) < 2:
+        raise InvalidInputError(f"--synthetic-angles {path}: {len(angles)} frame at --fps "
+                                f"{fps:g}; a replay needs 2 or more")
+    lo, hi = JOINT_LIMITS_DEG[:, 0], JOINT_LIMITS_DEG[:, 1]
+    beyond = (angles < lo) | (angles > hi)
+    if beyond.any():  # another system's readings may pass the model's ranges of motion
+        names = [JOINT_NAMES[j] for j in np.flatnonzero(beyond.any(axis=0))]
+        click.echo(f"handsynth: warning: --synthetic-angles {path}: {int(beyond.any(axis=1).sum())}"
+                   f" of {len(angles)} frames beyond the hand's range of motion "
+                   f"({', '.join(names)}); shown at the range's end", err=True)
+    return np.clip(angles, lo, hi)
+
+
 def _check_limits(frames, seconds, max_dead, fps) -> None:
     if frames is not None and frames < 0:
         raise InvalidInputError(f"--frames must be a non-negative integer, got {frames}")
@@ -516,6 +542,11 @@ def _progress(stream):
 @click.option("--synthetic-motion", type=click.Choice(["paper", "natural", "named"]),
               default="paper", show_default=True,
               help="Key poses the synthetic hand moves through.")
+@click.option("--synthetic-angles", default=None, metavar="FILE",
+              help="Instead of --synthetic-motion: joint angles the synthetic hand replays once, "
+                   "at --fps (a CSV or JSON Lines table with the 20 joint columns, as 'handsynth "
+                   "bvh' reads: another system's recording, e.g. 'imu track --angles-out' or "
+                   "'glove apply'); their truth is the rows'.")
 @click.option("--synthetic-size", default="720x480", show_default=True, metavar="WxH",
               help="Frame size of --synthetic.")
 @click.option("--fps", type=float, default=30.0, show_default=True,
@@ -531,8 +562,8 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
              learned, learned_kind,
              learned_cache, learned_hands, learned_rest, side, smoothing, segment, one_euro,
              frames, seconds, out, fmt,
-             keypoints, video_out, synthetic_shape, synthetic_motion, synthetic_size, fps,
-             no_temporal, max_dead, quiet) -> None:
+             keypoints, video_out, synthetic_shape, synthetic_motion, synthetic_angles,
+             synthetic_size, fps, no_temporal, max_dead, quiet) -> None:
     """Estimate the hand pose of every frame of a camera, a video file or a synthetic hand.
 
     By default with the estimator learnt from randomised model hands,
@@ -605,7 +636,12 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
         raise InvalidInputError("--intrinsics corrects a real camera's frames; --synthetic "
                                 "frames are already the device's view")
     camera_optics = _read_intrinsics(intrinsics)
-    inputs = [p for p in (video_in, measurements, calibrate_image, intrinsics) if p is not None]
+    if synthetic_angles is not None and not synthetic:
+        raise InvalidInputError("--synthetic-angles is the motion of --synthetic, which was not "
+                                "given")
+    inputs = [p for p in (video_in, measurements, calibrate_image, intrinsics, synthetic_angles)
+              if p is not None]
+    replay = _replayed_angles(synthetic_angles, fps) if synthetic_angles is not None else None
     size = _parse_size(synthetic_size, "--synthetic-size") if synthetic else None
     user_shape = shape_option(synthetic_shape, "--synthetic-shape") if synthetic else None
     if synthetic and frames is None and seconds is None:
@@ -643,10 +679,17 @@ def estimate(camera, video_in, synthetic, db_dir, shape_name, measurements, pers
         if synthetic:
             # --synthetic parsed its frame size and hand shape above
             assert size is not None and user_shape is not None
-            source = SyntheticSource(user_shape, mount, side=side,
-                                     motion=SyntheticMotion(poses=synthetic_motion), fps=fps,
-                                     width_px=size[0], height_px=size[1])
-            what = f"synthetic hand {user_shape.name} ({synthetic_motion} poses)"
+            if replay is None:
+                source = SyntheticSource(user_shape, mount, side=side,
+                                         motion=SyntheticMotion(poses=synthetic_motion), fps=fps,
+                                         width_px=size[0], height_px=size[1])
+                what = f"synthetic hand {user_shape.name} ({synthetic_motion} poses)"
+            else:
+                source = SyntheticSource(user_shape, mount, side=side, motion=replay, fps=fps,
+                                         seconds_per_pose=1.0 / fps, loop=False,
+                                         width_px=size[0], height_px=size[1])
+                what = (f"synthetic hand {user_shape.name} (replaying {len(replay)} frames of "
+                        f"{synthetic_angles})")
         # exactly one of --camera, --video and --synthetic was given (checked above)
         assert source is not None
         if camera_optics is not None:

@@ -521,7 +521,12 @@ class SyntheticSource(_Source):
         The camera (must be the database's; the paper's by default).
     motion : SyntheticMotion or array_like of shape (K, 20), keyword-only
         How the hand moves: a :class:`SyntheticMotion` or key poses in
-        degrees (passed through at one second per pose).
+        degrees (passed through at `seconds_per_pose`).
+    seconds_per_pose : float, keyword-only, optional
+        With key poses, the time from one to the next (1 s by default; ``1 / fps`` shows
+        pose ``i`` in frame ``i``: a recorded motion replayed).
+    loop : bool, keyword-only
+        With key poses, start again after the last (True, the default), or end there.
     fps : float, keyword-only
         Frame rate of the media time (the loop itself runs as fast as it can).
     frames : int, keyword-only, optional
@@ -544,7 +549,8 @@ class SyntheticSource(_Source):
     def __init__(self, shape: HandShape | None = None, mount: CameraMount | None = None, *,
                  motion: SyntheticMotion | np.ndarray | None = None, fps: float = 30.0,
                  frames: int | None = None, side: str = "right", width_px: int | None = None,
-                 height_px: int | None = None) -> None:
+                 height_px: int | None = None, seconds_per_pose: float | None = None,
+                 loop: bool = True) -> None:
         from ..render import SilhouetteRenderer
 
         if shape is not None:
@@ -552,7 +558,11 @@ class SyntheticSource(_Source):
         as_mount(mount)  # None is the paper's device
         self.fps = check_number(fps, "fps", above=0)
         self.frames = check_integer(frames, "frames", minimum=0, allow_none=True)
+        self._last_frame: int | None = None  # the last frame of a motion that does not loop
         if motion is None or isinstance(motion, SyntheticMotion):
+            if seconds_per_pose is not None or not loop:
+                raise InvalidInputError("seconds_per_pose and loop apply to key poses given as "
+                                        "an array; a SyntheticMotion has its own")
             self.motion = SyntheticMotion() if motion is None else motion
             self._keys = self.motion.keyframes()
             self._period_s = self.motion.seconds_per_pose
@@ -561,7 +571,12 @@ class SyntheticSource(_Source):
             if keys.ndim != 2 or len(keys) < 2:
                 raise InvalidInputError(
                     f"motion key poses must have shape (K, 20) with K >= 2, got {keys.shape}")
-            self.motion, self._keys, self._period_s = None, keys, 1.0
+            period = 1.0 if seconds_per_pose is None else check_number(
+                seconds_per_pose, "seconds_per_pose", above=0)
+            self.motion, self._keys, self._period_s = None, keys, float(period)
+            if not loop:
+                # frames up to the last pose's time (a tolerance for 1/fps steps in floats)
+                self._last_frame = int(math.floor((len(keys) - 1) * period * self.fps + 1e-6))
         self.shape = HandShape() if shape is None else shape
         self._renderer = SilhouetteRenderer(self.shape, mount, side=side, width_px=width_px,
                                             height_px=height_px)
@@ -573,7 +588,8 @@ class SyntheticSource(_Source):
         return interpolate_keyframes(self._keys, index / self.fps, self._period_s)
 
     def read(self) -> np.ndarray | None:
-        if self._renderer is None or (self.frames is not None and self._count >= self.frames):
+        if self._renderer is None or (self.frames is not None and self._count >= self.frames) \
+                or (self._last_frame is not None and self._count > self._last_frame):
             self.ended = True
             return None
         truth = np.clip(self.pose_at(self._count), JOINT_LIMITS_DEG[:, 0], JOINT_LIMITS_DEG[:, 1])

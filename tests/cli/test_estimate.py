@@ -26,7 +26,7 @@ from handsynth.db import (
 from handsynth.estimate import one_euro
 from handsynth.live import live_columns
 from handsynth.live._writers import KEYPOINT_COLUMNS, TRUTH_COLUMNS
-from handsynth.models import JOINT_LIMITS_DEG, JOINT_NAMES, HandShape, paper_pose_set
+from handsynth.models import JOINT_LIMITS_DEG, JOINT_NAMES, HandShape, paper_pose_set, read_angle_table
 from handsynth.render import CameraMount, SilhouetteRenderer
 
 W, H = 180, 120
@@ -236,6 +236,34 @@ def test_bad_options_give_one_line_errors(tmp_path, db, args, word):
     lines = res.output.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("handsynth: error:"), res.output
     assert word in lines[0]
+
+
+def test_synthetic_angles_are_replayed_once_as_the_truth(tmp_path, db):
+    """Another system's recording (uneven times, a joint beyond the model's range) shown
+    frame by frame at --fps; the rows' truth is the recording's."""
+    rng = np.random.default_rng(8)
+    t = np.cumsum(rng.uniform(0.03, 0.06, 30))
+    lo, hi = JOINT_LIMITS_DEG.T
+    angles = rng.uniform(lo, hi, (30, 20))
+    angles[5, JOINT_NAMES.index("index_mcp_abd")] = 30.0
+    table = tmp_path / "imu_angles.csv"
+    table.write_text("time_s," + ",".join(JOINT_NAMES) + "\n" + "".join(
+        f"{ti:.6f}," + ",".join(f"{v:.4f}" for v in a) + "\n" for ti, a in zip(t, angles)))
+    out = tmp_path / "rows.csv"
+    res = _lookup("--synthetic", "--db", str(db), "--synthetic-angles", str(table),
+                  "--out", str(out), *SMALL)  # at SMALL's --fps 8
+    assert res.exit_code == 0, res.output
+    assert "1 of" in res.output and "(index_mcp_abd); shown at the range's end" in res.output
+    assert "stopped: the source has no more frames" in res.output
+    _, rows = _read_csv(out)
+    expected, rate = read_angle_table(table).resampled(8.0)
+    assert rate == 8.0 and len(rows) == len(expected) == int((t[-1] - t[0]) * 8 + 1e-6) + 1
+    truth = np.array([[float(r[c]) for c in TRUTH_COLUMNS] for r in rows])
+    np.testing.assert_allclose(truth, np.clip(expected, lo, hi), atol=1e-3)
+    res = _lookup("--camera", "0", "--db", str(db), "--synthetic-angles", str(table))
+    assert res.exit_code == 2 and "--synthetic-angles is the motion of --synthetic" in res.output
+    res = _lookup("--synthetic", "--db", str(db), "--synthetic-angles", str(tmp_path / "no.csv"))
+    assert res.exit_code == 2 and "no such file" in res.output
 
 
 def test_missing_database_folder(tmp_path):

@@ -309,6 +309,24 @@ def test_synthetic_motion_passes_through_its_key_poses_smoothly():
     src.close()
 
 
+def test_a_recorded_motion_is_replayed_once_frame_by_frame():
+    lo, hi = JOINT_LIMITS_DEG.T
+    keys = np.random.default_rng(2).uniform(lo, hi, (7, 20))
+    src = SyntheticSource(width_px=48, height_px=32, fps=25.0, motion=keys,
+                          seconds_per_pose=1 / 25, loop=False)
+    shown = []
+    while (frame := src.read()) is not None:
+        assert frame.shape == (32, 48)
+        shown.append(src.truth_deg)
+    assert src.ended and len(shown) == len(keys)
+    np.testing.assert_allclose(shown, keys, atol=1e-9)
+    src.close()
+    looped = SyntheticSource(width_px=48, height_px=32, fps=25.0, motion=keys,
+                             seconds_per_pose=1 / 25, frames=10)
+    assert sum(looped.read() is not None for _ in range(12)) == 10  # it starts again
+    looped.close()
+
+
 @pytest.mark.parametrize("make, word", [
     (lambda: LiveOptions(max_frames=-1), "max_frames"),
     (lambda: LiveOptions(max_seconds=0), "max_seconds"),
@@ -320,6 +338,9 @@ def test_synthetic_motion_passes_through_its_key_poses_smoothly():
     (lambda: SyntheticMotion(count=1), "count"),
     (lambda: SyntheticSource(fps=0), "fps"),
     (lambda: SyntheticSource(motion=np.zeros((1, 20))), "K >= 2"),
+    (lambda: SyntheticSource(motion=np.zeros((3, 20)), seconds_per_pose=0), "seconds_per_pose"),
+    (lambda: SyntheticSource(seconds_per_pose=0.1), "apply to key poses"),
+    (lambda: SyntheticSource(loop=False), "apply to key poses"),
 ])
 def test_bad_options_name_the_field(make, word):
     with pytest.raises(InvalidInputError, match=word):
