@@ -23,6 +23,7 @@ Usage::
     python scripts/study_camera.py --cache DIR bent_rest
     python scripts/study_camera.py --cache DIR held
     python scripts/study_camera.py --cache DIR still
+    python scripts/study_camera.py --cache DIR imu_motions
 
 ``backgrounds``
     Two held-out model hands (seed 3, 1.5 times the learning spread) and the
@@ -271,6 +272,17 @@ Usage::
     MAE of those that do, the share of the error on the still ones, and the
     error of the rest frame read by itself.  Last line:
     ``<rest>_still_bias=<mean over hands> ...``.
+``imu_motions``
+    Motions of another generator than every camera test pose's: the IMU simulator's free
+    motion (30 s, every joint swinging with its own frequency and phase; seed 11) and its
+    reaches into the five grasps with holds (seed 12), every joint clipped to the hand's
+    range and shown at 10 frames a second (300 and 205 frames).  The three glTF hands and
+    two held-out model hands (seed 61, 1.5 times the spread), the default ensemble
+    calibrated on a relaxed rest of each hand (seed 9; the motions start from the open
+    hand, not from that rest).  Per hand and motion: the finger flexion MAE beside the
+    constant open-hand answer and the rest posture held, the index PIP where it moves
+    more than 20 deg from the rest, and the share flagged ``low_confidence``.  Last
+    line: ``free_mae=<deg> free_constant=<deg> grasps_mae=<deg> grasps_constant=<deg>``.
 
 The learnt estimator is read from ``--cache`` (or learnt there first).
 """
@@ -1438,6 +1450,46 @@ def still(cache) -> None:
     print(" ".join(last))
 
 
+def imu_motions(cache) -> None:
+    """``imu_motions``: the IMU simulator's motions through the camera."""
+    from handsynth.estimate import learned_ensemble
+    from handsynth.models import JOINT_LIMITS_DEG, JOINT_NAMES
+    from handsynth.sensors.imu import MODEL_JOINTS, free_motion, grasp_motion
+    from handsynth.testhands import TEST_HANDS
+
+    paper = CameraMount.paper()
+    ens = learned_ensemble(cache, mount=paper)
+    cols = [MODEL_JOINTS.index(n) for n in JOINT_NAMES]
+    motions = {}
+    for name, m in (("free", free_motion(30.0, seed=11)), ("grasps", grasp_motion(seed=12))):
+        step = int(round(m.rate_hz / 10))
+        motions[name] = np.clip(np.asarray(m.q)[::step, cols], JOINT_LIMITS_DEG[:, 0],
+                                JOINT_LIMITS_DEG[:, 1])
+    pip = JOINT_NAMES.index("index_pip_flex")
+    rng = np.random.default_rng(9)
+    out: dict = {}
+    for hand in (mesh_test_hands(sorted(TEST_HANDS), mount=paper)
+                 + model_test_hands(2, seed=61, mount=paper, spread=1.5)):
+        made = hand.make()
+        rest = relaxed_rest_posture(rng)
+        cal = ens.calibrated(made.mask(rest))
+        for name, poses in motions.items():
+            got = [cal.estimate(m) for m in made.masks(poses)]
+            angles = np.stack([g.angles for g in got])
+            mae = np.abs(angles[:, _FLEX] - poses[:, _FLEX]).mean()
+            const = np.abs(poses[:, _FLEX]).mean()
+            held = np.abs(rest[_FLEX] - poses[:, _FLEX]).mean()
+            moving = np.abs(poses[:, pip] - rest[pip]) > 20
+            pip_mae = np.abs(angles[moving, pip] - poses[moving, pip]).mean()
+            out.setdefault(name, []).append((mae, const))
+            print(f"{hand.name:15s} {name:6s} flexion MAE {mae:5.2f} (open hand {const:5.2f}, "
+                  f"rest held {held:5.2f}); index PIP moving {pip_mae:5.2f} (n={moving.sum()}); "
+                  f"flagged {np.mean([g.low_confidence for g in got]):.2f}", flush=True)
+        made.close()
+    print(" ".join(f"{k}_mae={np.mean([a for a, _ in v]):.2f} "
+                   f"{k}_constant={np.mean([b for _, b in v]):.2f}" for k, v in out.items()))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cache", default=None, help="folder of the learnt estimator")
@@ -1457,7 +1509,7 @@ def main() -> None:
     ap.add_argument("study", choices=["backgrounds", "jitter", "holds", "observability", "bound",
                                       "bound_mcp", "rests", "moved", "imaging", "mounts", "sizes",
                                       "skin", "skin_lit", "novelty", "lens", "level", "mirror", "tones",
-                                      "bent_rest", "held", "still"])
+                                      "bent_rest", "held", "still", "imu_motions"])
     args = ap.parse_args()
     if args.study not in ("observability", "bound_mcp", "moved") and args.cache is None:
         ap.error(f"{args.study} needs --cache DIR")
@@ -1475,7 +1527,8 @@ def main() -> None:
                "mirror": lambda: mirror(args.cache, args.kind),
                "tones": lambda: tones(args.cache),
                "bent_rest": lambda: bent_rest(args.cache),
-               "held": lambda: held(args.cache), "still": lambda: still(args.cache)}
+               "held": lambda: held(args.cache), "still": lambda: still(args.cache),
+               "imu_motions": lambda: imu_motions(args.cache)}
     studies[args.study]()
 
 
