@@ -83,6 +83,7 @@ from ._motion import (
     concat_motions,
     free_motion,
     grasp_motion,
+    pose_motion,
     static_motion,
 )
 from ._noise import (
@@ -233,6 +234,7 @@ __all__ = [
     "plate_rotations",
     "plot_orientation_error",
     "plot_stick_figure",
+    "pose_motion",
     "read_broad_trial",
     "read_imu_csv",
     "rotation_vector",

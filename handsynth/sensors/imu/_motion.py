@@ -33,6 +33,7 @@ __all__ = [
     "concat_motions",
     "free_motion",
     "grasp_motion",
+    "pose_motion",
     "static_motion",
 ]
 
@@ -516,14 +517,57 @@ def grasp_motion(grasps=("power_sphere", "medium_wrap", "lateral_pinch", "tip_pi
         An unknown grasp or `elbow`; `rate_hz` outside [10, 1000]; a motion
         that leaves a joint's range.
     """
-    if elbow not in ("fixed", "moving"):
-        raise InvalidInputError(f"elbow must be 'fixed' or 'moving', got {elbow!r}")
     for g in grasps:
         if g not in GRASP_POSES:
             raise InvalidInputError(f"unknown grasp {g!r}; expected one of {', '.join(GRASP_POSES)}")
+    return pose_motion([GRASP_POSES[g] for g in grasps], names=[f"grasp:{g}" for g in grasps],
+                       rate_hz=rate_hz, hold_s=hold_s, move_s=move_s, static_s=static_s,
+                       elbow=elbow, seed=seed, align_rotation=align_rotation, label="grasps")
+
+
+def pose_motion(poses, *, names=None, rate_hz: float = 100.0, hold_s: float = 2.0,
+                move_s: float = 1.0, static_s: float = 2.0, elbow: str = "fixed", seed: int = 0,
+                align_rotation: bool = True, label: str = "poses") -> Motion:
+    """Open hand, then each pose in turn: reach it (min-jerk), hold, release.
+
+    :func:`grasp_motion` with poses of any source (another system's test poses, a
+    recording's key poses).
+
+    Parameters
+    ----------
+    poses : array_like, shape (K, 20)
+        Hand poses, canonical joint order, degrees; each joint is held within its range.
+    names : sequence of str, keyword-only, optional
+        The hold segments' names (``pose:<k>`` by default).
+    rate_hz, hold_s, move_s, static_s, elbow, seed, align_rotation
+        As :func:`grasp_motion`'s.
+    label : str, keyword-only
+        The motion's label.
+
+    Returns
+    -------
+    Motion
+        ``static_s + 2 (with align_rotation) + K * (2 * move_s + hold_s) + 0.5`` s long.
+
+    Raises
+    ------
+    InvalidInputError
+        `poses` not a finite (K, 20) array with K >= 1, `names` not one per pose,
+        `elbow` unknown, `rate_hz` outside [10, 1000], a motion longer than
+        :data:`MAX_MOTION_S`.
+    """
+    if elbow not in ("fixed", "moving"):
+        raise InvalidInputError(f"elbow must be 'fixed' or 'moving', got {elbow!r}")
+    p = np.asarray(poses, dtype=np.float64)
+    if p.ndim != 2 or p.shape[1] != len(JOINT_NAMES) or len(p) == 0 or not np.isfinite(p).all():
+        raise InvalidInputError(f"poses must be a finite array of shape (K, {len(JOINT_NAMES)}) "
+                                f"with K >= 1, degrees, got shape {p.shape}")
+    names = [f"pose:{k}" for k in range(len(p))] if names is None else list(names)
+    if len(names) != len(p):
+        raise InvalidInputError(f"names must name each of the {len(p)} poses, got {len(names)}")
     lead = static_s + (2.0 if align_rotation else 0.0)
-    dur = lead + len(grasps) * (2 * move_s + hold_s) + 0.5
-    t = _grid(dur, rate_hz, "length of the grasp motion")
+    dur = lead + len(p) * (2 * move_s + hold_s) + 0.5
+    t = _grid(dur, rate_hz, f"length of the {label} motion")
     rest = _full_pose(arm={"elbow_flex": 35.0})
     q, qd, qdd = _base(t.size, rest)
     segs: list[tuple[str, int, int]] = [("static", 0, int(static_s * rate_hz))]
@@ -532,20 +576,20 @@ def grasp_motion(grasps=("power_sphere", "medium_wrap", "lateral_pinch", "tip_pi
         segs.append(("align", int(static_s * rate_hz), int(lead * rate_hz)))
     t0 = lead
     off = len(ARM_JOINTS)
-    for g in grasps:
-        pose = GRASP_POSES[g]
+    lo, hi = JOINT_LIMITS_DEG[:, 0], JOINT_LIMITS_DEG[:, 1]
+    for name, pose in zip(names, np.clip(p, lo, hi)):
         for k in range(len(JOINT_NAMES)):
             if pose[k]:
                 _minjerk_add(t, q, qd, qdd, off + k, pose[k], t0, t0 + move_s)
                 _minjerk_add(t, q, qd, qdd, off + k, -pose[k], t0 + move_s + hold_s,
                              t0 + 2 * move_s + hold_s)
-        segs.append((f"grasp:{g}", int((t0 + move_s) * rate_hz), int((t0 + move_s + hold_s) * rate_hz)))
+        segs.append((name, int((t0 + move_s) * rate_hz), int((t0 + move_s + hold_s) * rate_hz)))
         t0 += 2 * move_s + hold_s
     if elbow == "moving":
         rng = np.random.default_rng(seed)
-        for name in ("elbow_x", "elbow_y", "elbow_z", "wrist_flex", "humeral_rot"):
-            a = 0.04 if name.startswith("elbow_") else 10.0
-            _oscillate(t, q, qd, qdd, name, a, rng.uniform(0.2, 0.6), lead, t[-1] + 1 / rate_hz,
+        for j in ("elbow_x", "elbow_y", "elbow_z", "wrist_flex", "humeral_rot"):
+            a = 0.04 if j.startswith("elbow_") else 10.0
+            _oscillate(t, q, qd, qdd, j, a, rng.uniform(0.2, 0.6), lead, t[-1] + 1 / rate_hz,
                        ramp=0.8, phase=rng.uniform(0, 2 * np.pi))
     _clip_limits(q)
-    return Motion(rate_hz, q, qd, qdd, "grasps", tuple(segs))
+    return Motion(rate_hz, q, qd, qdd, label, tuple(segs))

@@ -7,6 +7,7 @@ from handsynth.sensors.imu import (
     calibration_motion,
     free_motion,
     grasp_motion,
+    pose_motion,
 )
 
 
@@ -14,6 +15,7 @@ from handsynth.sensors.imu import (
     lambda: free_motion(8.0, seed=1),
     lambda: free_motion(8.0, seed=2, elbow="moving", speed=1.5),
     lambda: grasp_motion(("power_sphere",)),
+    lambda: pose_motion(np.full((2, 20), 10.0), elbow="moving", seed=3),
 ])
 def test_derivatives_are_consistent(make):
     m = make()
@@ -61,3 +63,30 @@ def test_grasp_motion_names_an_elbow_it_does_not_know():
 
     with pytest.raises(InvalidInputError, match=r"^elbow must be 'fixed' or 'moving', got 'Moving'$"):
         grasp_motion(elbow="Moving")
+
+
+def test_pose_motion_holds_each_pose_within_the_range():
+    from handsynth.models import JOINT_LIMITS_DEG, JOINT_NAMES
+
+    poses = np.array([np.full(20, 10.0), np.full(20, 30.0)])
+    poses[1, JOINT_NAMES.index("index_mcp_abd")] = 35.0  # beyond its 20-deg range
+    m = pose_motion(poses, names=["ten", "thirty"], move_s=0.5, hold_s=1.0)
+    assert m.label == "poses" and [s for s, _, _ in m.segments] == ["static", "align", "ten",
+                                                                   "thirty"]
+    hand = [MODEL_JOINTS.index(n) for n in JOINT_NAMES]
+    for (name, a, b), pose in zip(m.segments[2:], np.clip(poses, *JOINT_LIMITS_DEG.T)):
+        np.testing.assert_allclose(m.q[a:b, hand], np.broadcast_to(pose, (b - a, 20)), atol=1e-9,
+                                   err_msg=name)
+    np.testing.assert_allclose(m.q[-1, hand], 0.0, atol=1e-9)  # released to the open hand
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"poses": np.zeros((0, 20))}, r"shape \(K, 20\)"),
+    ({"poses": np.zeros((2, 19))}, r"shape \(K, 20\)"),
+    ({"poses": np.full((1, 20), np.nan)}, "finite"),
+    ({"poses": np.zeros((2, 20)), "names": ["a"]}, "name each of the 2 poses"),
+    ({"poses": np.zeros((1, 20)), "elbow": "swaying"}, "elbow"),
+])
+def test_pose_motion_refuses_what_it_cannot_move_through(kwargs, message):
+    with pytest.raises(InvalidInputError, match=message):
+        pose_motion(**kwargs)
