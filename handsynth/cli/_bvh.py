@@ -40,7 +40,7 @@ def bvh_command(angles, out_path, rate_hz, shape_name, measurements, side, units
     ``estimate --out``, ``imu track --angles-out`` and ``glove apply`` write them. Frames
     without angles (no hand in view) take the angles of the frames either side, with a
     warning. The root is the hand frame (+y toward the middle finger, +z out of the back of
-    the hand); Blender, MotionBuilder and other animation tools read the file.
+    the hand); BVH is the motion format of animation and motion-capture tools.
     """
     from ..models import TIME_COLUMNS, read_angle_table, write_bvh
 

@@ -1,7 +1,7 @@
 """Joint angles as a BVH motion file: the handsynth hand's skeleton, posed frame by frame.
 
-BVH (Biovision Hierarchy) is the motion format animation and motion-capture tools read
-(Blender's importer among them).  The skeleton is the handsynth hand of one shape and side
+BVH (Biovision Hierarchy) is the motion format of animation and motion-capture tools.  The
+skeleton is the handsynth hand of one shape and side
 (:func:`~handsynth.models.hand_spec`):
 
 * the root ``palm`` at the wrist joint centre, in the hand frame (+y toward the middle
