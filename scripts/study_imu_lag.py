@@ -17,8 +17,9 @@ orientation RMSE, and whether :func:`~handsynth.sensors.imu.late_sensors` (which
 *Told*: the tuning configuration and the held-out draws ``--seeds``, each a 15-s free motion
 with the elbow fixed and one with it moving and the grasp reaches, with the draw's own
 calibration: warned of as recorded (false alarms), and with each sensor of a finger's hinge
-(:data:`~handsynth.sensors.imu.HINGES`), of the forearm plate and of the hand
-(:data:`~handsynth.sensors.imu.RIGID`) in turn 10, 20 and 50 ms late, named.  About 1 min.
+(:data:`~handsynth.sensors.imu.HINGES`, :data:`~handsynth.sensors.imu.CARRIED`), of the
+forearm plate and of the hand (:data:`~handsynth.sensors.imu.RIGID`) in turn 10, 20 and
+50 ms late, named.  About 1 min.
 Last line: ``as_recorded_joints_deg=<x> worst_joint_deg=<x> false_alarms=<n> recordings=<n>
 named_10ms=<n> named_20ms=<n> named_50ms=<n> late=<n>``.
 """
@@ -32,6 +33,7 @@ import warnings
 import numpy as np
 
 from handsynth.sensors.imu import (
+    CARRIED,
     HELDOUT,
     HINGES,
     RIGID,
@@ -99,7 +101,7 @@ def _told(seeds) -> dict:
             said = late_sensors(rec, calib.frames, static_n=int(rec.rate_hz))
             n["false_alarms"] += said is not None
             n["recordings"] += 1
-            for name in dict.fromkeys(s for pair in HINGES + RIGID for s in pair):
+            for name in dict.fromkeys(s for pair in HINGES + CARRIED + RIGID for s in pair):
                 n["late"] += 1
                 for ms in (10, 20, 50):
                     lag = round(ms * 1e-3 * rec.rate_hz)

@@ -51,7 +51,7 @@ from ._kinematics import (
     truth_link_frames,
     zero_offsets,
 )
-from ._lags import HINGES, LATE_S, RIGID, delayed, late_sensors, sensor_lags
+from ._lags import CARRIED, HINGES, LATE_S, RIGID, delayed, late_sensors, sensor_lags
 from ._layout import CHAINS, FLEX_JOINT, LINKS, POINTS
 from ._lost import (
     HELD_MIN_S,
@@ -129,6 +129,7 @@ __all__ = [
     "ARM_JOINTS",
     "BROAD_FILTERS",
     "CALIBRATION_PLAN",
+    "CARRIED",
     "CHAINS",
     "COMPASS_FILTERS",
     "EARTH_FIELD_UT",

@@ -11,9 +11,12 @@ forearm plate's sensors share one rigid segment: the lengths of their whole rate
 So, nearly, do the hand's two sensors: the ring and little fingers' CM joint between them
 turns little (palm cupping), and their rates compared whole put them 8.7 ms apart at most
 on the 21 simulated recordings of ``python scripts/study_imu_lag.py`` as recorded (either
-of them 20 ms late was named on 40 of 42).  The thumb's metacarpal sensor, whose
-neighbours lie across the thumb's CMC (two axes) and an MCP whose axis its frame does not
-hold, is not judged.
+of them 20 ms late was named on 40 of 42).  The thumb's metacarpal sensor lies across the
+thumb's MCP hinge from its proximal phalanx, but its link frame holds the CMC's flexion
+axis, not the MCP's: the MCP's axis (the proximal sensor's link-frame x) is turned into the
+metacarpal sensor's frame by the two sensors' relative attitude over the still start, from
+the gravity and the magnetic field each reads (TRIAD); a recording without magnetometers
+leaves that pair out.
 """
 
 from __future__ import annotations
@@ -25,7 +28,7 @@ import numpy as np
 from ..._checks import check_integer
 from ...errors import InvalidInputError
 
-__all__ = ["HINGES", "LATE_S", "RIGID", "delayed", "late_sensors", "sensor_lags"]
+__all__ = ["CARRIED", "HINGES", "LATE_S", "RIGID", "delayed", "late_sensors", "sensor_lags"]
 
 #: The sensor pairs either side of a one-axis joint (proximal, distal).
 HINGES: tuple[tuple[str, str], ...] = (
@@ -37,6 +40,9 @@ HINGES: tuple[tuple[str, str], ...] = (
 #: their whole rates have the same length at every instant, whatever the axes.
 RIGID: tuple[tuple[str, str], ...] = (("forearm_1", "forearm_2"), ("forearm_1", "forearm_3"),
                                       ("hand_radial", "hand_ulnar"))
+#: Sensor pairs either side of a one-axis joint whose axis only the distal sensor's link
+#: frame holds (proximal, distal): the proximal sensor's is carried over by the still start.
+CARRIED: tuple[tuple[str, str], ...] = (("thumb_metacarpal", "thumb_proximal"),)
 #: A lag warned about, s: 20 ms late put the worst joint at 2.4-3.1 deg against 1.65-2.06
 #: as recorded (``python scripts/study_imu_lag.py``).
 LATE_S = 0.015
@@ -63,8 +69,9 @@ def sensor_lags(rec, frames: dict, *, static_n: int) -> dict:
     -------
     dict
         ``(proximal, distal)`` -> ``(lag_s, correlation)`` for every pair of :data:`HINGES`
-        both of whose sensors `rec` and `frames` hold, and of :data:`RIGID` both of whose
-        sensors `rec` holds (their whole rates compared): the shift, s, of the distal sensor's
+        both of whose sensors `rec` and `frames` hold, of :data:`CARRIED` whose sensors `rec`
+        holds with magnetometers and whose distal one `frames` holds, and of :data:`RIGID`
+        both of whose sensors `rec` holds (their whole rates compared): the shift, s, of the distal sensor's
         series that best matches the proximal one's (positive: the distal sensor late; to a
         fraction of a sample, by a parabola through the peak) and the peak's correlation.
     """
@@ -73,22 +80,36 @@ def sensor_lags(rec, frames: dict, *, static_n: int) -> dict:
     out: dict[tuple[str, str], tuple[float, float]] = {}
     if n < 4 * max_lag:
         return out
-    speed: dict[tuple[str, bool], np.ndarray] = {}  # (sensor, about a hinge axis) -> series
-    for pairs, hinge in ((HINGES, True), (RIGID, False)):
-        for name in {s for pair in pairs for s in pair}:
-            if name not in rec.sensors or (hinge and name not in frames):
-                continue
-            k = rec.sensors.index(name)
-            w = rec.gyr[k] - rec.gyr[k, :max(1, static_n)].mean(axis=0)
-            if hinge:  # the part perpendicular to the link frame's x axis (the flexion axis)
-                axis = np.asarray(frames[name])[0]
-                w = w - np.outer(w @ axis, axis)
-            v = np.linalg.norm(w, axis=1)
-            speed[name, hinge] = v - v.mean()
-    for prox, dist, hinge in [(*p, True) for p in HINGES] + [(*p, False) for p in RIGID]:
-        if (prox, hinge) not in speed or (dist, hinge) not in speed:
+
+    def speed(name: str, axis: np.ndarray | None) -> np.ndarray:
+        """The length of the sensor's rate, less its part about `axis` (its own frame),
+        centred."""
+        k = rec.sensors.index(name)
+        w = rec.gyr[k] - rec.gyr[k, :max(1, static_n)].mean(axis=0)
+        if axis is not None:
+            w = w - np.outer(w @ axis, axis)
+        v = np.linalg.norm(w, axis=1)
+        return v - v.mean()
+
+    series = []  # (proximal, distal, proximal's series, distal's series)
+    for prox, dist in HINGES + CARRIED:
+        if not {prox, dist} <= set(rec.sensors) or dist not in frames:
             continue
-        a, b = speed[prox, hinge], speed[dist, hinge]
+        axis = np.asarray(frames[dist], float)[0]  # the link frame's x: the flexion axis
+        if (prox, dist) in CARRIED:
+            turn = _still_turn(rec, prox, dist, static_n)
+            if turn is None:
+                continue
+            prox_axis = turn @ axis
+        elif prox in frames:
+            prox_axis = np.asarray(frames[prox], float)[0]
+        else:
+            continue
+        series.append((prox, dist, speed(prox, prox_axis), speed(dist, axis)))
+    for prox, dist in RIGID:
+        if {prox, dist} <= set(rec.sensors):
+            series.append((prox, dist, speed(prox, None), speed(dist, None)))
+    for prox, dist, a, b in series:
         cor = np.empty(2 * max_lag + 1)
         for i, lag in enumerate(range(-max_lag, max_lag + 1)):
             x, y = (a[:n - lag], b[lag:]) if lag >= 0 else (a[-lag:], b[:n + lag])
@@ -100,6 +121,26 @@ def sensor_lags(rec, frames: dict, *, static_n: int) -> dict:
             shift = 0.5 * (cor[i - 1] - cor[i + 1]) / den if den < 0 else 0.0
         out[(prox, dist)] = ((i - max_lag + shift) / rec.rate_hz, float(cor[i]))
     return out
+
+
+def _still_turn(rec, a: str, b: str, static_n: int) -> np.ndarray | None:
+    """Rotation from sensor `b`'s frame to sensor `a`'s over the still start, from gravity and
+    the magnetic field each reads (TRIAD), or None without magnetometers or where the two
+    vectors nearly align."""
+    if rec.mag is None:
+        return None
+    n = max(1, static_n)
+
+    def triad(k: int) -> np.ndarray | None:
+        g, m = rec.acc[k, :n].mean(axis=0), rec.mag[k, :n].mean(axis=0)
+        c = np.cross(g, m)
+        if not np.linalg.norm(c) > 0.1 * np.linalg.norm(g) * np.linalg.norm(m):
+            return None
+        t1, t2 = g / np.linalg.norm(g), c / np.linalg.norm(c)
+        return np.column_stack([t1, t2, np.cross(t1, t2)])
+
+    ta, tb = triad(rec.sensors.index(a)), triad(rec.sensors.index(b))
+    return None if ta is None or tb is None else ta @ tb.T
 
 
 def late_sensors(rec, frames: dict, *, static_n: int) -> str | None:
