@@ -29,23 +29,16 @@ import bvh
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from handsynth.models import JOINT_NAMES, KEYPOINT_SITES, HandModel, bvh_text
-from handsynth.sensors.imu import HELDOUT, POINTS, ImuHand, fingertip_positions, hand_attitude
+from handsynth.models import bvh_text
+from handsynth.sensors.imu import (
+    HELDOUT,
+    POINTS,
+    ImuHand,
+    fingertip_positions,
+    hand_attitude,
+    truth_hand_attitude,
+)
 from handsynth.sensors.imu._eval import _calibrate, free_trials
-
-_PALM = ("wrist", "index_mcp", "middle_mcp", "thumb_cmc")
-
-
-def _true_attitudes(rec, shape) -> Rotation:
-    model = HandModel(shape, forearm=False)
-    model.set_pose(np.zeros(len(JOINT_NAMES)))
-    a = model.keypoints()[[KEYPOINT_SITES.index(n) for n in _PALM]]
-    a = a - a.mean(axis=0)
-    out = []
-    for pts in rec.truth.keypoints[:, [POINTS.index(n) for n in _PALM]]:
-        u, _, vt = np.linalg.svd((pts - pts.mean(axis=0)).T @ a)
-        out.append(u @ np.diag([1.0, 1.0, np.linalg.det(u @ vt)]) @ vt)
-    return Rotation.from_matrix(np.array(out))
 
 
 def _bvh_tips(mocap: bvh.Bvh, frame: int) -> dict[str, np.ndarray]:
@@ -81,7 +74,7 @@ def _draw(seed: int) -> tuple[float, float, float, float]:
     res = calib.track(rec)
     q = hand_attitude(res["quat"], calib.sensors, calib.frames)
     est = Rotation.from_quat(q[:, [1, 2, 3, 0]])
-    true_att = _true_attitudes(rec, config.shape)
+    true_att = Rotation.from_matrix(truth_hand_attitude(rec, hand))
     err = np.degrees((est.inv() * true_att).magnitude())
     held_att = np.degrees((est[0].inv() * true_att).magnitude())  # the first attitude held
     wrist = fingertip_positions(res["quat"], calib.sensors, calib.model)["index_joints"][:, 0]

@@ -48,6 +48,7 @@ from ._kinematics import (
     joint_angles,
     link_frames,
     thumb_cmc_model,
+    truth_hand_attitude,
     truth_link_frames,
     zero_offsets,
 )
@@ -252,6 +253,7 @@ __all__ = [
     "swapped_sensors",
     "thumb_cmc_model",
     "truth_chain_model",
+    "truth_hand_attitude",
     "truth_link_frames",
     "with_axes",
     "write_imu_csv",

@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from handsynth.errors import InvalidInputError
-from handsynth.models import JOINT_LIMITS_DEG, JOINT_NAMES, KEYPOINT_SITES, HandModel
+from handsynth.models import JOINT_LIMITS_DEG, JOINT_NAMES
 from handsynth.sensors.imu import (
     GRASP_POSES,
     POINTS,
@@ -13,6 +13,7 @@ from handsynth.sensors.imu import (
     joint_angles,
     simulate_imu,
     truth_chain_model,
+    truth_hand_attitude,
     truth_link_frames,
 )
 
@@ -121,19 +122,13 @@ def test_angles_beyond_range_refuses_bad_arguments(kwargs, message):
         angles_beyond_range(**kwargs)
 
 
-def _palm_attitudes(rec, side: str = "right") -> np.ndarray:
-    """The hand frame's true attitudes, (N, 3, 3): the rigid fit of the model hand's palm
-    points (wrist, index and middle MCP, thumb CMC) onto the simulation's."""
-    names = ("wrist", "index_mcp", "middle_mcp", "thumb_cmc")
-    model = HandModel(side=side, forearm=False)
-    model.set_pose(np.zeros(len(JOINT_NAMES)))
-    a = model.keypoints()[[KEYPOINT_SITES.index(n) for n in names]]
-    a = a - a.mean(axis=0)
-    out = []
-    for pts in rec.truth.keypoints[:, [POINTS.index(n) for n in names]]:
-        u, _, vt = np.linalg.svd((pts - pts.mean(axis=0)).T @ a)
-        out.append(u @ np.diag([1.0, 1.0, np.linalg.det(u @ vt)]) @ vt)
-    return np.array(out)
+def test_truth_attitudes_give_the_true_hand_attitude(imu_hand, ideal_rec):
+    """The hand sensor's true attitude turned by its true link frame is the palm's."""
+    from handsynth.sensors.imu._quat import quat_to_mat
+
+    frames = truth_link_frames(ideal_rec, truth_chain_model(ideal_rec), imu_hand)
+    got = quat_to_mat(hand_attitude(ideal_rec.truth.quat, ideal_rec.sensors, frames))
+    np.testing.assert_allclose(got, truth_hand_attitude(ideal_rec, imu_hand), atol=1e-6)
 
 
 @pytest.mark.parametrize("side", ["right", "left"])
@@ -144,17 +139,17 @@ def test_hand_attitude_is_the_hand_frames(worn, side):
     from handsynth.sensors.imu._quat import quat_to_mat
 
     cal, rec = worn
+    hand = ImuHand(side=side)
     if side == "left":
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # the simulated disturbance and still-start notes
             cal = calibrate(simulate_imu(calibration_motion(),
                                          hand=ImuHand(side="left", tip_sensors=True), seed=1,
                                          device_seed=2), sensor_calibration=False, side="left")
-            rec = simulate_imu(free_motion(12.0, seed=3), hand=ImuHand(side="left"), seed=4,
-                               device_seed=2)
+            rec = simulate_imu(free_motion(12.0, seed=3), hand=hand, seed=4, device_seed=2)
     res = cal.track(rec)
     est = quat_to_mat(hand_attitude(res["quat"], cal.sensors, cal.frames))
-    true = _palm_attitudes(rec, side)
+    true = truth_hand_attitude(rec, hand)
 
     def angle(a, b):
         cos = (np.einsum("nij,nij->n", a, b) - 1.0) / 2.0
