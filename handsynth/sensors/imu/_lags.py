@@ -15,7 +15,8 @@ of them 20 ms late was named on 40 of 42).  The thumb's metacarpal sensor lies a
 thumb's MCP hinge from its proximal phalanx, but its link frame holds the CMC's flexion
 axis, not the MCP's: the MCP's axis (the proximal sensor's link-frame x) is turned into the
 metacarpal sensor's frame by the two sensors' relative attitude over the still start, from
-the gravity and the magnetic field each reads (TRIAD); a recording without magnetometers
+the gravity and the magnetic field each reads (TRIAD); a recording without magnetometers,
+or whose two sensors read the field at angles to gravity :data:`_FIELD_ANGLE_DEG` apart,
 leaves that pair out.
 """
 
@@ -50,6 +51,13 @@ LATE_S = 0.015
 #: turning must show in both series).
 _MAX_LAG_S = 0.2
 _MIN_CORRELATION = 0.8
+#: Largest difference of the field's angle to gravity, deg, between the two sensors of a
+#: :data:`CARRIED` pair for the still start to carry the axis.  Uncorrected, a field offset of
+#: 30 uT on one sensor (a magnet) turned the axis enough to read a recording in step 19 ms
+#: late; with the sensor calibration the two sensors read the angle within 0.2-3.5 deg on the
+#: tuning configuration's and six held-out draws' free motions (1.6-13.6 deg uncorrected), and
+#: offsets of 5-60 uT that passed read within 12 ms (``docs/imu.md``).
+_FIELD_ANGLE_DEG = 5.0
 
 
 def sensor_lags(rec, frames: dict, *, static_n: int) -> dict:
@@ -125,22 +133,24 @@ def sensor_lags(rec, frames: dict, *, static_n: int) -> dict:
 
 def _still_turn(rec, a: str, b: str, static_n: int) -> np.ndarray | None:
     """Rotation from sensor `b`'s frame to sensor `a`'s over the still start, from gravity and
-    the magnetic field each reads (TRIAD), or None without magnetometers or where the two
-    vectors nearly align."""
+    the magnetic field each reads (TRIAD), or None: without magnetometers, where the two
+    vectors nearly align, or where the two sensors do not read one field (its angle to
+    gravity :data:`_FIELD_ANGLE_DEG` apart: a magnet or an iron part near one of them, which
+    would turn the carried axis)."""
     if rec.mag is None:
         return None
     n = max(1, static_n)
-
-    def triad(k: int) -> np.ndarray | None:
+    read = []
+    for k in (rec.sensors.index(a), rec.sensors.index(b)):
         g, m = rec.acc[k, :n].mean(axis=0), rec.mag[k, :n].mean(axis=0)
         c = np.cross(g, m)
         if not np.linalg.norm(c) > 0.1 * np.linalg.norm(g) * np.linalg.norm(m):
             return None
         t1, t2 = g / np.linalg.norm(g), c / np.linalg.norm(c)
-        return np.column_stack([t1, t2, np.cross(t1, t2)])
-
-    ta, tb = triad(rec.sensors.index(a)), triad(rec.sensors.index(b))
-    return None if ta is None or tb is None else ta @ tb.T
+        dip = np.degrees(np.arccos(np.clip(t1 @ m / np.linalg.norm(m), -1.0, 1.0)))
+        read.append((np.column_stack([t1, t2, np.cross(t1, t2)]), dip))
+    (ta, dip_a), (tb, dip_b) = read
+    return None if abs(dip_a - dip_b) > _FIELD_ANGLE_DEG else ta @ tb.T
 
 
 def late_sensors(rec, frames: dict, *, static_n: int) -> str | None:
