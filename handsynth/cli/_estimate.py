@@ -53,9 +53,7 @@ def _replayed_angles(path, fps):
 
     from ..models import JOINT_LIMITS_DEG, JOINT_NAMES, TIME_COLUMNS, read_angle_table
 
-    table = read_angle_table(path)
-    if not 0 < fps < math.inf:
-        raise InvalidInputError(f"--fps must be a positive finite number, got {fps}")
+    table = read_angle_table(path)  # --fps was checked with the other limits
     if table.times_s is None:
         click.echo(f"{path}: no time column ({' or '.join(TIME_COLUMNS)}): one row per frame "
                    f"at --fps {fps:g}", err=True)

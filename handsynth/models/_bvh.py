@@ -31,7 +31,7 @@ import numpy as np
 
 from .._checks import check_instance, check_number, check_side
 from .._io import atomic_open
-from ..errors import InvalidInputError, InvalidPoseError
+from ..errors import InvalidInputError, InvalidPoseError, InvalidShapeError
 from ._joints import JOINT_NAMES
 from ._mjcf import hand_spec
 from ._shape import HandShape
@@ -186,8 +186,6 @@ def bvh_text(angles, *, rate_hz: float, shape: HandShape | None = None, side: st
     if units not in BVH_UNITS:
         raise InvalidInputError(f"units must be one of {', '.join(BVH_UNITS)}, got {units!r}")
     shape = HandShape() if shape is None else shape
-    from ..errors import InvalidShapeError
-
     check_instance(shape, HandShape, name="shape", error=InvalidShapeError)
     check_side(side)
     spec = hand_spec(shape, side=side)

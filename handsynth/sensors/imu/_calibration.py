@@ -367,7 +367,8 @@ class ImuCalibration:
             joints agree better with the two exchanged (:func:`swapped_sensors`): sensors
             put back on each other's segments, or columns exchanged.  Sensors whose streams
             are 15 ms or more out of step with their neighbours' across a finger's hinge
-            joint, or on the forearm plate (:func:`late_sensors`).
+            joint (the thumb's MCP included), on the forearm plate or on the hand
+            (:func:`late_sensors`).
         """
         static = check_options(static, StaticStart, name="static")
         options = check_options(options, ChainEKFOptions)

@@ -305,10 +305,15 @@ def _euler_zyx(r):
     return phi, theta, psi
 
 
+def _world_link(quats, sensors, frames, sensor):
+    """Rotation G_R_L from `sensor`'s link frame to the world, (N, 3, 3)."""
+    return quat_to_mat(quats[sensors.index(sensor)]) @ np.asarray(frames[sensor], float).T
+
+
 def _relative(quats, sensors, frames, prox, dist):
     """Rotation Lj_R_L(j+1) from the proximal to the distal link frame (eq. 5.4)."""
-    rp = quat_to_mat(quats[sensors.index(prox)]) @ frames[prox].T           # G_R_Lj
-    rd = quat_to_mat(quats[sensors.index(dist)]) @ frames[dist].T
+    rp = _world_link(quats, sensors, frames, prox)                           # G_R_Lj
+    rd = _world_link(quats, sensors, frames, dist)
     return np.einsum("nji,njk->nik", rp, rd)                                 # Lj_R_L(j+1), eq. 5.4
 
 
@@ -418,9 +423,7 @@ def hand_attitude(quats, sensors, frames: dict) -> np.ndarray:
     if "hand_radial" not in sensors or "hand_radial" not in frames:
         raise InvalidInputError("the hand's attitude needs sensor 'hand_radial' in sensors and "
                                 "its link frame in frames (see link_frames)")
-    world_link = quat_to_mat(quats[sensors.index("hand_radial")]) @ np.asarray(
-        frames["hand_radial"], float).T
-    return mat_to_quat(world_link)
+    return mat_to_quat(_world_link(quats, sensors, frames, "hand_radial"))
 
 
 def truth_hand_attitude(rec: ImuRecording, hand) -> np.ndarray:
