@@ -29,11 +29,12 @@ import bvh
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from handsynth.models import bvh_text
+from handsynth.models import BVH_BONE_STARTS, BVH_BONES, KEYPOINT_SITES, HandModel, HandShape, bvh_text
 from handsynth.sensors.imu import (
     HELDOUT,
     POINTS,
     ImuHand,
+    bone_lengths_mm,
     fingertip_positions,
     hand_attitude,
     truth_hand_attitude,
@@ -65,8 +66,38 @@ def _bvh_tips(mocap: bvh.Bvh, frame: int) -> dict[str, np.ndarray]:
     return tips
 
 
-def _draw(seed: int) -> tuple[float, float, float, float]:
-    config = dataclasses.replace(HELDOUT, seed=seed)
+def _shape(seed: int, random_shape: bool) -> HandShape:
+    """The held-out configuration's hand, or one drawn for `seed` (ratios 0.9-1.1)."""
+    if not random_shape:
+        return HELDOUT.shape
+    rng = np.random.default_rng(seed + 4000)
+    return HandShape(*(float(v) for v in rng.uniform(0.9, 1.1, 4)))
+
+
+def _tip_errors(angles, q, wrist, kp, elbow, rate_hz, **skeleton) -> tuple[float, float]:
+    """RMS distance of the BVH file's fingertips from the simulated ones, and of the first
+    frame's held, mm (every 25th sample)."""
+    mocap = bvh.Bvh(bvh_text(angles, rate_hz=rate_hz, units="mm", root_quat=q,
+                             root_position_mm=1e3 * wrist, **skeleton))
+    tip_err, held_tips = [], []
+    first = _bvh_tips(mocap, 0)
+    for frame in range(0, len(angles), 25):
+        for finger, tip in _bvh_tips(mocap, frame).items():
+            true = 1e3 * (kp[frame, POINTS.index(f"{finger}_tip")] - elbow[frame])
+            tip_err.append(np.linalg.norm(tip - true))
+            held_tips.append(np.linalg.norm(first[finger] - true))  # the first frame held
+    return float(np.sqrt(np.mean(np.square(tip_err)))), float(np.sqrt(np.mean(np.square(held_tips))))
+
+
+def _bones_mm(points, names) -> dict[str, float]:
+    """Each BVH bone's length, mm, between two of `points` ((P, 3) m, named by `names`)."""
+    where = dict(zip(names, points))
+    return {bone: float(np.linalg.norm(where[bone] - where[start]) * 1e3)
+            for bone, start in BVH_BONE_STARTS.items()}
+
+
+def _draw(seed: int, random_shape: bool) -> dict[str, float]:
+    config = dataclasses.replace(HELDOUT, seed=seed, shape=_shape(seed, random_shape))
     placement = config.placement()
     _, calib, _ = _calibrate(config, placement)
     hand = ImuHand(config.shape, placement=placement)
@@ -81,40 +112,54 @@ def _draw(seed: int) -> tuple[float, float, float, float]:
     kp = rec.truth.keypoints
     elbow = kp[:, POINTS.index("elbow")]
     wrist_err = np.linalg.norm(wrist - (kp[:, POINTS.index("wrist")] - elbow), axis=1) * 1e3
-    mocap = bvh.Bvh(bvh_text(res["angles"], rate_hz=rec.rate_hz, shape=config.shape,
-                             units="mm", root_quat=q, root_position_mm=1e3 * wrist))
-    tip_err, held_tips = [], []
-    first = _bvh_tips(mocap, 0)
-    for frame in range(0, rec.n, 25):
-        for finger, tip in _bvh_tips(mocap, frame).items():
-            true = 1e3 * (kp[frame, POINTS.index(f"{finger}_tip")] - elbow[frame])
-            tip_err.append(np.linalg.norm(tip - true))
-            held_tips.append(np.linalg.norm(first[finger] - true))  # the first frame held
-    rms = [float(np.sqrt(np.mean(np.square(e))))
-           for e in (err, wrist_err, tip_err, held_att, held_tips)]
-    return rms[0], float(err.max()), rms[1], rms[2], rms[3], rms[4]
+    args = (res["angles"], q, wrist, kp, elbow, rec.rate_hz)
+    lengths = bone_lengths_mm(res["quat"], calib.sensors, calib.model)
+    true_bones = _bones_mm(kp[0], POINTS)
+    standard = HandModel(HandShape(), forearm=False)
+    standard_bones = _bones_mm(standard.keypoints(), KEYPOINT_SITES)  # the open hand
+    tips_measured, held_tips = _tip_errors(*args, bone_lengths_mm=lengths)
+    return {"attitude": float(np.sqrt(np.mean(err ** 2))), "worst": float(err.max()),
+            "held_attitude": float(np.sqrt(np.mean(held_att ** 2))),
+            "wrist": float(np.sqrt(np.mean(wrist_err ** 2))),
+            "tips": tips_measured, "held_tips": held_tips,
+            "tips_standard": _tip_errors(*args)[0],
+            "tips_true_shape": _tip_errors(*args, shape=config.shape)[0],
+            "bones": float(np.mean([abs(lengths[b] - true_bones[b]) for b in BVH_BONES])),
+            "bones_standard": float(np.mean([abs(standard_bones[b] - true_bones[b])
+                                             for b in BVH_BONES]))}
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", default="1,2,3,4,5,6", help="held-out draws, comma-separated")
+    ap.add_argument("--random-shapes", action="store_true",
+                    help="each draw's hand of its own random shape (ratios 0.9-1.1) instead of "
+                         "the held-out configuration's")
     args = ap.parse_args()
     rows = []
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the configuration's magnet and still-start notes
         for seed in (int(s) for s in args.seeds.split(",")):
-            rows.append(_draw(seed))
-            att, worst, wrist, tips, held_att, held_tips = rows[-1]
-            print(f"held-out draw {seed}: hand attitude {att:.2f} deg RMSE (at most {worst:.1f}; "
-                  f"the first held {held_att:.1f}), wrist {wrist:.1f} mm, BVH fingertips from "
-                  f"the elbow {tips:.1f} mm RMS (the first frame held {held_tips:.0f})",
+            r = _draw(seed, args.random_shapes)
+            rows.append(r)
+            print(f"held-out draw {seed} ({_shape(seed, args.random_shapes).name}): hand attitude "
+                  f"{r['attitude']:.2f} deg RMSE (at most {r['worst']:.1f}; the first held "
+                  f"{r['held_attitude']:.1f}), wrist {r['wrist']:.1f} mm, BVH fingertips from the "
+                  f"elbow {r['tips']:.1f} mm RMS with the bones measured (standard hand "
+                  f"{r['tips_standard']:.1f}, the hand's true shape {r['tips_true_shape']:.1f}; "
+                  f"the first frame held {r['held_tips']:.0f}); bones measured within "
+                  f"{r['bones']:.1f} mm mean (the standard hand's {r['bones_standard']:.1f})",
                   flush=True)
-    r = np.array(rows)
-    print(f"attitude_rmse_deg={r[:, 0].min():.2f}-{r[:, 0].max():.2f} "
-          f"wrist_mm={r[:, 2].min():.1f}-{r[:, 2].max():.1f} "
-          f"tips_mm={r[:, 3].min():.1f}-{r[:, 3].max():.1f} "
-          f"held_attitude_deg={r[:, 4].min():.1f}-{r[:, 4].max():.1f} "
-          f"held_tips_mm={r[:, 5].min():.0f}-{r[:, 5].max():.0f} draws={len(r)}")
+
+    def span(key: str, digits: int = 1) -> str:
+        v = [r[key] for r in rows]
+        return f"{min(v):.{digits}f}-{max(v):.{digits}f}"
+
+    print(f"attitude_rmse_deg={span('attitude', 2)} wrist_mm={span('wrist')} tips_mm={span('tips')} "
+          f"tips_standard_mm={span('tips_standard')} tips_true_shape_mm={span('tips_true_shape')} "
+          f"held_attitude_deg={span('held_attitude')} held_tips_mm={span('held_tips', 0)} "
+          f"bones_mm={span('bones')} bones_standard_mm={span('bones_standard')} "
+          f"draws={len(rows)}")
 
 
 if __name__ == "__main__":

@@ -28,7 +28,8 @@ from handsynth.sensors.imu import HELDOUT, evaluate
 _KEYS = {"orientation_mean_deg": "orientation mean", "orientation_worst_segment_deg": "worst segment",
          "orientation_distal_mean_deg": "distal", "joint_angle_mean_rmse_deg": "joints",
          "fingertip_mean_rmse_mm": "tips (mm)"}
-_SHAPES = (HandShape(), HandShape(length=0.9, width=0.92, palm=0.9, thumb=0.95),
+#: The three hand sizes of the IMU studies of other draws (also study_imu_swaps, study_imu_ulnar).
+SHAPES = (HandShape(), HandShape(length=0.9, width=0.92, palm=0.9, thumb=0.95),
            HandShape(length=1.1, width=1.08, palm=1.1, thumb=1.05))
 
 
@@ -38,7 +39,7 @@ def main() -> None:
     args = ap.parse_args()
     rows = []
     for seed in (int(s) for s in args.seeds.split(",")):
-        for shape in _SHAPES:
+        for shape in SHAPES:
             config = dataclasses.replace(HELDOUT, seed=seed, shape=shape)
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")  # the disturbance and still-start warnings

@@ -23,6 +23,7 @@ import argparse
 import dataclasses
 
 import numpy as np
+from study_imu_draws import SHAPES  # the same three hand sizes
 
 from handsynth.models import HandShape
 from handsynth.sensors.imu import (
@@ -38,9 +39,6 @@ from handsynth.sensors.imu import (
 )
 from handsynth.sensors.imu._eval import _calibrate, _device_seed, free_trials
 
-_SHAPES = (HandShape(), HandShape(length=0.9, width=0.92, palm=0.9, thumb=0.95),
-           HandShape(length=1.1, width=1.08, palm=1.1, thumb=1.05))
-
 
 def _exchanged(rec, a: str, b: str):
     i, j = rec.index(a), rec.index(b)
@@ -55,7 +53,7 @@ def main() -> None:
     ap.add_argument("--exchanges", type=int, default=8, help="random pairs per recording")
     args = ap.parse_args()
     configs = [TUNING] + [dataclasses.replace(HELDOUT, seed=int(s), shape=shape)
-                          for s in args.seeds.split(",") for shape in _SHAPES]
+                          for s in args.seeds.split(",") for shape in SHAPES]
     alarms = recordings = caught = named = exchanged = 0
     for config in configs:
         placement = config.placement()

@@ -294,20 +294,22 @@ def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz
 
 
 def _write_track_bvh(path, angles, quats, sensors, cal, tips, rate_hz, shape, inputs) -> None:
-    """The BVH file of ``track --bvh-out``: the hand's joint angles, attitude and wrist."""
+    """The BVH file of ``track --bvh-out``: the hand's joint angles, attitude and wrist, on the
+    skeleton of `shape`, or (None) the standard hand's with the bones the link model measures."""
     import numpy as np
 
     from ..models import JOINT_NAMES, write_bvh
-    from ..sensors.imu import hand_attitude
+    from ..sensors.imu import bone_lengths_mm, hand_attitude
 
     unknown = [n for n, bad in zip(JOINT_NAMES, np.isnan(angles).any(axis=0)) if bad]
     if unknown:  # the thumb's CMC of a calibration without its two rotations
         click.echo(f"handsynth: warning: --bvh-out: {', '.join(unknown)} not measured by this "
                    "calibration, written as 0", err=True)
     wrist_mm = 1e3 * tips["index_joints"][:, 0]
+    bones = bone_lengths_mm(quats, sensors, cal.model) if shape is None else None
     write_bvh(path, np.nan_to_num(angles), rate_hz=rate_hz, shape=shape, side=cal.side,
               root_quat=hand_attitude(quats, sensors, cal.frames), root_position_mm=wrist_mm,
-              inputs=inputs)
+              bone_lengths_mm=bones, inputs=inputs)
 
 
 @imu.command()
@@ -332,13 +334,14 @@ def _write_track_bvh(path, angles, quats, sensors, cal, tips, rate_hz, shape, in
               help="CSV of fingertip positions from the elbow centre, mm, in the world frame "
                    "of the initial attitude (eq. 3.12; needs --calibration).")
 @click.option("--bvh-out", type=click.Path(dir_okay=False),
-              help="BVH motion file: the handsynth hand of --bvh-shape posed by the joint "
-                   "angles, turned as the hand sensor's attitude says and placed at the "
-                   "wrist's place from the elbow centre, in the world frame of the initial "
-                   "attitude (needs --calibration).")
+              help="BVH motion file: the handsynth hand posed by the joint angles, its bones "
+                   "as long as the calibration's link model measures them, turned as the hand "
+                   "sensor's attitude says and placed at the wrist's place from the elbow "
+                   "centre, in the world frame of the initial attitude (needs --calibration).")
 @click.option("--bvh-shape", default=None, metavar="NAME",
-              help="With --bvh-out, the hand whose skeleton the file carries (e.g. "
-                   "L1.050_W0.900_P1.000_T1.000) [default: standard].")
+              help="With --bvh-out, the handsynth hand whose skeleton, bones included, the "
+                   "file carries instead (e.g. L1.050_W0.900_P1.000_T1.000, standard) "
+                   "[default: the standard hand's directions, the bones measured].")
 @click.option("--no-sensor-calibration", is_flag=True,
               help="Do not apply the calibration file's accelerometer/gyro/magnetometer "
                    "corrections (for readings already corrected).")

@@ -17,7 +17,7 @@ from ._anthropometry import (
     StandardLayout,
     standard_layout_mm,
 )
-from ._bvh import BVH_CHANNELS, BVH_UNITS, bvh_text, write_bvh
+from ._bvh import BVH_BONE_STARTS, BVH_BONES, BVH_CHANNELS, BVH_UNITS, bvh_text, write_bvh
 from ._hand import HandModel, compile_mjcf
 from ._joints import FINGERS, JOINT_LIMITS_DEG, JOINT_NAMES, joint_index
 from ._measurements import (
@@ -42,6 +42,8 @@ from ._posesets import MAX_POSES, PAPER_SIZE, POSE_SETS, natural_pose_set, paper
 from ._shape import GRID_LEVELS, HandShape
 
 __all__ = [
+    "BVH_BONES",
+    "BVH_BONE_STARTS",
     "BVH_CHANNELS",
     "BVH_UNITS",
     "DEPTH_TO_BREADTH",

@@ -12,6 +12,12 @@ skeleton is the handsynth hand of one shape and side
   ``<finger>_proximal``, ``<finger>_middle``, ``<finger>_distal``) whose ``OFFSET`` is its
   joint centre in its parent's frame, and an ``End Site`` at each fingertip.
 
+Each of those 20 offsets is a bone, named by the point at its end (:data:`BVH_BONES`: the
+thumb's CMC, MCP, IP and tip, each finger's MCP, PIP, DIP and tip, as the model's keypoints
+are named).  ``bone_lengths_mm`` sets any of them to another hand's length (an IMU
+calibration's, :func:`~handsynth.sensors.imu.bone_lengths_mm`), each along the handsynth
+hand's own direction.
+
 A segment's rotation is its rest orientation followed by its joints' rotations about their
 axes, composed as MuJoCo composes the hand model's (so the joint centres of the file are the
 model's keypoints, which a test checks).  It is written as the channels ``Zrotation
@@ -36,13 +42,27 @@ from ._joints import JOINT_NAMES
 from ._mjcf import hand_spec
 from ._shape import HandShape
 
-__all__ = ["BVH_CHANNELS", "BVH_UNITS", "bvh_text", "write_bvh"]
+__all__ = ["BVH_BONES", "BVH_BONE_STARTS", "BVH_CHANNELS", "BVH_UNITS", "bvh_text", "write_bvh"]
 
 #: Length units a file may be written in, and the factor from millimetres.
 BVH_UNITS: dict[str, float] = {"cm": 0.1, "mm": 1.0, "m": 1e-3}
 #: Rotation channels of every joint, in the order written (R = Rz Ry Rx).
 BVH_CHANNELS: tuple[str, ...] = ("Zrotation", "Yrotation", "Xrotation")
 _ROOT_CHANNELS = ("Xposition", "Yposition", "Zposition", *BVH_CHANNELS)
+#: The skeleton's bones, each named by the point at its end (its proximal end is the joint
+#: centre before it, the wrist for the thumb's CMC and each finger's MCP), in file order.
+BVH_BONES: tuple[str, ...] = (
+    "thumb_cmc", "thumb_mcp", "thumb_ip", "thumb_tip",
+    *(f"{f}_{p}" for f in ("index", "middle", "ring", "little") for p in ("mcp", "pip", "dip", "tip")),
+)
+#: Each bone of :data:`BVH_BONES` -> the point it starts at (keypoint names).
+BVH_BONE_STARTS: dict[str, str] = {
+    bone: "wrist" if bone in ("thumb_cmc", *(f"{f}_mcp" for f in ("index", "middle", "ring", "little")))
+    else BVH_BONES[BVH_BONES.index(bone) - 1]
+    for bone in BVH_BONES
+}
+#: Longest bone taken, mm.
+_MAX_BONE_MM = 500.0
 #: Highest frame rate taken, Hz.
 _MAX_RATE_HZ = 100_000.0
 
@@ -126,6 +146,23 @@ def _root_motion(n: int, root_quat, root_position_mm, scale: float) -> np.ndarra
     return out
 
 
+def _bone_lengths(lengths) -> dict[str, float]:
+    """`lengths` as a dict of bone name -> length, mm, refusing unknown bones and bad lengths."""
+    if lengths is None:
+        return {}
+    if not hasattr(lengths, "items"):
+        raise InvalidInputError(f"bone_lengths_mm must be a mapping of bone name -> length in mm, "
+                                f"got {type(lengths).__name__}")
+    out = {}
+    for name, value in lengths.items():
+        if name not in BVH_BONES:
+            raise InvalidInputError(f"bone_lengths_mm: unknown bone {name!r}; bones are "
+                                    f"{', '.join(BVH_BONES)}")
+        out[name] = check_number(value, f"bone_lengths_mm[{name!r}]", above=0,
+                                 maximum=_MAX_BONE_MM)
+    return out
+
+
 def _continuous(zyx: np.ndarray) -> np.ndarray:
     """Each frame's (z, y, x) angles, deg, as the one of the two triples of its rotation,
     (z, y, x) and (z + 180, 180 - y, x + 180), each to within whole turns, nearest the frame
@@ -145,7 +182,8 @@ def _continuous(zyx: np.ndarray) -> np.ndarray:
 
 
 def bvh_text(angles, *, rate_hz: float, shape: HandShape | None = None, side: str = "right",
-             units: str = "cm", root_quat=None, root_position_mm=None) -> str:
+             units: str = "cm", root_quat=None, root_position_mm=None,
+             bone_lengths_mm=None) -> str:
     """The BVH text of joint angles on the handsynth hand (module docstring).
 
     Parameters
@@ -166,6 +204,9 @@ def bvh_text(angles, *, rate_hz: float, shape: HandShape | None = None, side: st
     root_position_mm : array_like, shape (N, 3), keyword-only, optional
         The wrist joint centre's place in that world frame, mm; the root's position
         channels.  Zero by default.
+    bone_lengths_mm : mapping of str to float, keyword-only, optional
+        Lengths of any of the bones (:data:`BVH_BONES`), mm, each along the direction the
+        handsynth hand of `shape` gives it; the others keep that hand's.
 
     Returns
     -------
@@ -177,11 +218,13 @@ def bvh_text(angles, *, rate_hz: float, shape: HandShape | None = None, side: st
         Angles of another shape, or not finite (naming the row and the joint).
     InvalidInputError
         `rate_hz` not a positive finite number up to 100 kHz, `units` or `side` unknown,
-        `root_quat` or `root_position_mm` of another shape or not finite.
+        `root_quat` or `root_position_mm` of another shape or not finite; a bone of
+        `bone_lengths_mm` unknown, or its length not a finite number in (0, 500] mm.
     InvalidShapeError
         `shape` not a HandShape.
     """
     a = _angles(angles)
+    lengths = _bone_lengths(bone_lengths_mm)
     rate = check_number(rate_hz, "rate_hz", above=0, maximum=_MAX_RATE_HZ)
     if units not in BVH_UNITS:
         raise InvalidInputError(f"units must be one of {', '.join(BVH_UNITS)}, got {units!r}")
@@ -193,9 +236,11 @@ def bvh_text(angles, *, rate_hz: float, shape: HandShape | None = None, side: st
     out = io.StringIO()
     out.write("HIERARCHY\n")
 
-    def offset(p_mm) -> str:
-        v = np.asarray(p_mm, float) * scale + 0.0
-        return " ".join(f"{x:.6f}" for x in v)
+    def offset(p_mm, bone: str) -> str:
+        v = np.asarray(p_mm, float)
+        if bone in lengths:
+            v = v * (lengths[bone] / np.linalg.norm(v))
+        return " ".join(f"{x:.6f}" for x in v * scale + 0.0)
 
     def emit(body, depth: int) -> None:
         ind = "\t" * depth
@@ -203,13 +248,15 @@ def bvh_text(angles, *, rate_hz: float, shape: HandShape | None = None, side: st
             out.write(f"ROOT {body.name}\n{{\n\tOFFSET 0.000000 0.000000 0.000000\n"
                       f"\tCHANNELS 6 {' '.join(_ROOT_CHANNELS)}\n")
         else:
-            out.write(f"{ind}JOINT {body.name}\n{ind}{{\n{ind}\tOFFSET {offset(body.pos_mm)}\n"
+            bone = offset(body.pos_mm, body.sites[0][0])
+            out.write(f"{ind}JOINT {body.name}\n{ind}{{\n{ind}\tOFFSET {bone}\n"
                       f"{ind}\tCHANNELS 3 {' '.join(BVH_CHANNELS)}\n")
         for child in body.children:
             emit(child, depth + 1)
         if not body.children:  # the fingertip: the body's last site
-            tip = body.sites[-1][1]
-            out.write(f"{ind}\tEnd Site\n{ind}\t{{\n{ind}\t\tOFFSET {offset(tip)}\n{ind}\t}}\n")
+            name, tip = body.sites[-1]
+            out.write(f"{ind}\tEnd Site\n{ind}\t{{\n{ind}\t\tOFFSET {offset(tip, name)}\n"
+                      f"{ind}\t}}\n")
         out.write(f"{ind}}}\n")
 
     emit(spec.root, 0)
@@ -224,14 +271,14 @@ def bvh_text(angles, *, rate_hz: float, shape: HandShape | None = None, side: st
 
 def write_bvh(path, angles, *, rate_hz: float, shape: HandShape | None = None,
               side: str = "right", units: str = "cm", root_quat=None, root_position_mm=None,
-              inputs=()) -> Path:
+              bone_lengths_mm=None, inputs=()) -> Path:
     """Write joint angles as a BVH file on the handsynth hand, complete or not at all.
 
     Parameters
     ----------
     path : str or os.PathLike
         The ``.bvh`` file; it appears only when written whole.
-    angles, rate_hz, shape, side, units, root_quat, root_position_mm
+    angles, rate_hz, shape, side, units, root_quat, root_position_mm, bone_lengths_mm
         As :func:`bvh_text`'s.
     inputs : iterable of path, keyword-only
         Files the angles were read from: `path` may not be one of them.
@@ -248,7 +295,8 @@ def write_bvh(path, angles, *, rate_hz: float, shape: HandShape | None = None,
         `path` cannot be written (naming it and why), or is one of `inputs`.
     """
     text = bvh_text(angles, rate_hz=rate_hz, shape=shape, side=side, units=units,
-                    root_quat=root_quat, root_position_mm=root_position_mm)
+                    root_quat=root_quat, root_position_mm=root_position_mm,
+                    bone_lengths_mm=bone_lengths_mm)
     with atomic_open(Path(path), "w", what="BVH file", inputs=inputs, newline="\n") as f:
         f.write(text)
     return Path(path)

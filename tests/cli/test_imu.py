@@ -320,6 +320,47 @@ def _check_track_bvh(path, rec) -> None:
     assert rms < 2.0 and rms < 0.3 * held_rms, (rms, held_rms)  # cm
 
 
+def _bvh_bones_mm(path) -> dict[str, float]:
+    """Each bone's length in a BVH file of centimetres, mm, by the point it ends at."""
+    import bvh
+
+    mocap = bvh.Bvh(path.read_text())
+    ends = {"thumb_metacarpal": "thumb_cmc", "thumb_proximal": "thumb_mcp", "thumb_distal": "thumb_ip",
+            **{f"{f}_{s}": f"{f}_{j}" for f in ("index", "middle", "ring", "little")
+               for s, j in (("proximal", "mcp"), ("middle", "pip"), ("distal", "dip"))}}
+    out = {}
+    for name, bone in ends.items():
+        out[bone] = 10.0 * float(np.linalg.norm(mocap.joint_offset(name)))
+        for child in mocap.get_joint(name).children:
+            if child.value[:2] == ["End", "Site"]:
+                tip = np.array([float(v) for v in child["OFFSET"]])
+                out[bone.rsplit("_", 1)[0] + "_tip"] = 10.0 * float(np.linalg.norm(tip))
+    return out
+
+
+def _check_track_bvh_bones(tmp_path, q_csv, model) -> dict[str, float]:
+    """``track --bvh-out``'s bones are the calibration's measure of them (from the attitudes
+    it wrote), near the standard hand's, on which it was simulated; returns the standard
+    hand's bones, mm."""
+    from handsynth.models import BVH_BONE_STARTS, BVH_BONES, KEYPOINT_SITES, HandModel, HandShape
+    from handsynth.sensors.imu import ImuCalibration, bone_lengths_mm
+
+    cal = ImuCalibration.load(model)
+    table = np.genfromtxt(q_csv, delimiter=",", names=True)
+    quats = np.stack([np.column_stack([table[f"{s}_q{c}"] for c in "wxyz"]) for s in cal.sensors])
+    want = bone_lengths_mm(quats, cal.sensors, cal.model)
+    got = _bvh_bones_mm(tmp_path / "hand.bvh")
+    np.testing.assert_allclose([got[b] for b in BVH_BONES], [want[b] for b in BVH_BONES],
+                               atol=1e-3)
+    kp, names = HandModel(HandShape(), forearm=False).keypoints(), list(KEYPOINT_SITES)
+    standard = {b: 1e3 * float(np.linalg.norm(kp[names.index(b)] - kp[names.index(a)]))
+                for b, a in BVH_BONE_STARTS.items()}
+    # measured on the standard hand here: near its bones, not its exact numbers
+    diff = np.abs([want[b] - standard[b] for b in BVH_BONES])
+    assert diff.max() < 5.0 and diff.max() > 0.1, diff
+    return standard
+
+
 @pytest.mark.slow
 def test_calibrate_then_track_joint_angles(tmp_path):
     from handsynth.models import JOINT_NAMES
@@ -379,6 +420,14 @@ def test_calibrate_then_track_joint_angles(tmp_path):
     assert res.exit_code == 0, res.output
     assert "sensor calibration applied" in res.output
     _check_track_bvh(tmp_path / "hand.bvh", rec)
+    standard = _check_track_bvh_bones(tmp_path, q_csv, model)
+    res = CliRunner().invoke(cli, ["imu", "track", str(rec_csv), "--calibration", str(model),
+                                   "--align", "2,4", "--out", str(tmp_path / "q2.csv"),
+                                   "--bvh-out", str(tmp_path / "standard.bvh"),
+                                   "--bvh-shape", "standard"])
+    assert res.exit_code == 0, res.output
+    got = _bvh_bones_mm(tmp_path / "standard.bvh")
+    assert all(abs(got[b] - v) < 1e-3 for b, v in standard.items())
     assert "read as exchanged" not in res.output and "out of step" not in res.output
     # two sensors put back on each other's phalanges: their columns exchanged by name
     lines = rec_csv.read_text().split("\n")

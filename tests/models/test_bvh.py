@@ -11,6 +11,8 @@ from scipy.spatial.transform import Rotation
 
 from handsynth.errors import InvalidInputError, InvalidPoseError, InvalidShapeError, OutputError
 from handsynth.models import (
+    BVH_BONE_STARTS,
+    BVH_BONES,
     BVH_CHANNELS,
     JOINT_LIMITS_DEG,
     JOINT_NAMES,
@@ -78,6 +80,61 @@ def test_joint_centres_and_tips_are_the_models_keypoints(side, shape):
         for body, site in _TIP.items():
             np.testing.assert_allclose(got[f"{body}/end"], truth_mm[KEYPOINT_SITES.index(site)],
                                        atol=1e-4, err_msg=f"{site}, frame {frame}")
+
+
+# each bone: (the joint whose OFFSET it is, or the End Site of that joint) -> its parent point
+_BONE_ENDS = {**{site: body for body, site in _ORIGIN.items()},
+              **{site: f"{body}/end" for body, site in _TIP.items()}}
+
+
+def _bones(place: dict[str, np.ndarray]) -> dict[str, float]:
+    """Each bone's length from the posed points (mm), by the chain's point names."""
+    where = {site: place[key] for site, key in _BONE_ENDS.items()}
+    where["wrist"] = place["palm"]
+    return {bone: float(np.linalg.norm(where[bone] - where[start]))
+            for bone, start in BVH_BONE_STARTS.items()}
+
+
+@pytest.mark.parametrize("side", ["right", "left"])
+def test_bone_lengths_set_each_bone_along_the_hands_direction(side):
+    shape = HandShape(length=0.93, palm=1.04)
+    angles = _poses(4, seed=5)
+    plain = bvh.Bvh(bvh_text(angles, rate_hz=30.0, shape=shape, side=side, units="mm"))
+    own = _bones(_points(plain, 0))
+    assert sorted(own) == sorted(BVH_BONES) and min(own.values()) > 10.0
+    # the hand's own lengths give the same file
+    assert bvh_text(angles, rate_hz=30.0, shape=shape, side=side, bone_lengths_mm=own) == \
+        bvh_text(angles, rate_hz=30.0, shape=shape, side=side)
+    lengths = dict(zip(BVH_BONES[::2], np.random.default_rng(1).uniform(12.0, 95.0, 10)))
+    mocap = bvh.Bvh(bvh_text(angles, rate_hz=30.0, shape=shape, side=side, units="mm",
+                             bone_lengths_mm=lengths))
+    for frame in range(mocap.nframes):
+        got, plain_pts = _bones(_points(mocap, frame)), _points(plain, frame)
+        want = {**own, **lengths}  # the bones not given keep the hand's
+        np.testing.assert_allclose([got[b] for b in BVH_BONES], [want[b] for b in BVH_BONES],
+                                   atol=2e-5)
+        # each bone along the direction the hand gives it in this pose
+        scaled = _points(mocap, frame)
+        for bone in ("index_pip", "thumb_cmc", "little_tip"):
+            key = _BONE_ENDS[bone]
+            prev = {"index_pip": "index_proximal", "thumb_cmc": "palm",
+                    "little_tip": "little_distal"}[bone]
+            d_plain = plain_pts[key] - plain_pts[prev]
+            d_scaled = scaled[key] - scaled[prev]
+            np.testing.assert_allclose(d_scaled / np.linalg.norm(d_scaled),
+                                       d_plain / np.linalg.norm(d_plain), atol=1e-6)
+
+
+@pytest.mark.parametrize(("lengths", "match"), [
+    ({"index_nail": 10.0}, "unknown bone 'index_nail'"),
+    ({"index_pip": 0.0}, r"bone_lengths_mm\['index_pip'\]"),
+    ({"thumb_tip": float("nan")}, r"bone_lengths_mm\['thumb_tip'\]"),
+    ({"ring_mcp": 900.0}, r"bone_lengths_mm\['ring_mcp'\]"),
+    ([40.0] * 20, "mapping of bone name"),
+])
+def test_refuses_bone_lengths_it_cannot_use(lengths, match):
+    with pytest.raises(InvalidInputError, match=match):
+        bvh_text(np.zeros((1, 20)), rate_hz=30.0, bone_lengths_mm=lengths)
 
 
 def test_frame_time_units_and_channels():

@@ -48,6 +48,14 @@ __all__ = ["ImuCalibration", "calibrate", "check_stretches", "segments_from_seco
 _VERSION = 6
 #: Static poses (``acc_pose_<k>``) the sensor calibration needs at least.
 _MIN_POSES = 8
+#: What a calibration without static poses costs (scripts/study_imu_ulnar.py; simulated
+#: sensors of the held-out configuration, EVAL_NOISE: scale 2 % and cross-axis 1 % s.d., within
+#: the MPU-9250 datasheet's tolerances of 3 % and 2 %).
+_UNCORRECTED = ("the accelerometers and gyros are used uncorrected: on simulated sensors "
+                "within the MPU-9250 datasheet's tolerances 12 of 18 such calibrations were "
+                "refused and the others read fingertips 22-28 mm from the elbow (mean of the "
+                "five), against 3-9 mm with the static poses; record them "
+                f"(13 still postures after the static start, labelled {POSE_PREFIX}<k>)")
 #: Lower quartile of the sensor-to-joint vectors' R^2 (the fit of their lengths, eqs.
 #: 3.3-3.4) below which a calibration is said to fit poorly.  Simulated calibrations of
 #: :func:`calibration_motion`'s rotations: 0.96-0.97 (tuning configuration) and 0.93-0.94
@@ -578,12 +586,15 @@ def calibrate(rec: ImuRecording, *, sensor_calibration: bool = True,
     EstimationError
         A calibration rotation too short, slow or badly shaped to estimate
         from (see :func:`calibrate_vectors`, :func:`link_frames`,
-        :func:`azimuth_correction`).
+        :func:`azimuth_correction`); link frames half a turn apart at the static
+        start (:func:`zero_offsets`; without static poses, saying that uncorrected
+        sensors are the likelier cause).
 
     Warns
     -----
     UserWarning
-        1-7 static poses labelled (too few for the sensor calibration); a still stretch
+        No static poses labelled (the readings used uncorrected, with what that cost on
+        simulated sensors), or 1-7 (too few for the sensor calibration); a still stretch
         (``static``, ``acc_pose_<k>``) in which a gyro moves (:func:`check_stretches`).
     """
     check_side(side)
@@ -595,6 +606,10 @@ def calibrate(rec: ImuRecording, *, sensor_calibration: bool = True,
         warnings.warn(f"{poses} static pose(s) labelled {POSE_PREFIX}<k>: the accelerometer and gyro "
                       f"calibration needs {_MIN_POSES} or more, so the readings are used "
                       "uncorrected", UserWarning, stacklevel=2)
+    if sensor_calibration and poses == 0:
+        where = f"{source}: " if source else ""
+        warnings.warn(f"{where}no static poses labelled {POSE_PREFIX}<k>: {_UNCORRECTED}",
+                      UserWarning, stacklevel=2)
     if sensor_calibration and poses >= _MIN_POSES:
         try:
             sensor_cal = fit_sensor_calibration(rec)
@@ -618,7 +633,14 @@ def calibrate(rec: ImuRecording, *, sensor_calibration: bool = True,
         warnings.warn(f"{source}: {fit}" if source else fit, UserWarning, stacklevel=2)
     model = chain_model(rec, vectors)
     frames = link_frames(rec, model)
-    zero = zero_offsets(rec, frames, side=side)
+    try:
+        zero = zero_offsets(rec, frames, side=side)
+    except EstimationError as exc:
+        if sensor_cal is None and sensor_calibration:  # the likelier cause, said first
+            exc = EstimationError(f"{exc}; or, more likely here, {_UNCORRECTED}")
+        if source is not None:
+            exc = EstimationError(f"{source}: {exc}")
+        raise exc from None
     plate = plate_rotations(rec) if all(s in rec.sensors for s in PLATE_SENSORS) else None
     return ImuCalibration(model, frames, zero, tuple(model.own), thumb_cmc_model(rec, frames),
                           sensor_cal, plate, side)

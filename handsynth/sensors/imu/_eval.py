@@ -199,10 +199,12 @@ def _vector_report(cal, model, config: SimConfig, placement, lsq_rec) -> dict:
 
     truth = _truth(cal).joint_vectors
     vec = calibrate_vectors(cal)
-    rot = {k: v.vector for k, v in vec.items() if not k[0].endswith("_tip")}
-    plain = {k: v.vector for k, v in calibrate_vectors(cal, static_pose=False).items()
-             if not k[0].endswith("_tip")}
     thesis_vec = calibrate_vectors(cal, hinge_plane=False)
+    # each sensor to its own segment's joints (not the ulnar fingers' views of the wrist,
+    # which only close the links across the hand's hinge)
+    rot = {k: v.vector for k, v in vec.items() if not k[0].endswith("_tip") and k in thesis_vec}
+    plain = {k: v.vector for k, v in calibrate_vectors(cal, static_pose=False).items()
+             if not k[0].endswith("_tip") and k in thesis_vec}
     thesis = {k: v.vector for k, v in thesis_vec.items() if not k[0].endswith("_tip")}
     # baseline 1: the standard hand with sensors where they should be
     std = simulate_imu(static_motion(0.1), hand=ImuHand(tip_sensors=True), noise=None)

@@ -35,7 +35,7 @@ from scipy.spatial.transform import Rotation
 
 from ..._checks import check_number, check_side
 from ...errors import EstimationError, InvalidInputError
-from ...models import JOINT_LIMITS_DEG, JOINT_NAMES
+from ...models import BVH_BONE_STARTS, JOINT_LIMITS_DEG, JOINT_NAMES
 from ._layout import CHAINS, FLEX_JOINT
 from ._quat import check_quats, mat_to_quat, quat_to_mat
 from ._recording import ImuRecording
@@ -45,6 +45,7 @@ __all__ = [
     "JOINT_LINKS",
     "ThumbCmcModel",
     "angles_beyond_range",
+    "bone_lengths_mm",
     "classify_grasp",
     "fingertip_positions",
     "hand_attitude",
@@ -303,6 +304,42 @@ def _euler_zyx(r):
     phi = np.arctan2(r[..., 2, 1], r[..., 2, 2])
     psi = np.arctan2(r[..., 1, 0], r[..., 0, 0])
     return phi, theta, psi
+
+
+def bone_lengths_mm(quats, sensors, model: ChainModel) -> dict[str, float]:
+    """The hand's bone lengths as the link model measures them, mm (a BVH skeleton's).
+
+    Each bone of :data:`~handsynth.models.BVH_BONES` runs from its proximal joint centre
+    (the wrist for the thumb's CMC and each finger's MCP) to the point it is named by; its
+    length is the distance of the two points of eq. 3.12's chain, median over the samples
+    (only the ring and little fingers' MCPs, two links from the wrist across the hand's
+    ulnar CM joint, change with the pose; every other bone is one link vector's length).
+
+    Parameters
+    ----------
+    quats : ndarray, shape (S, N, 4)
+        Sensor-to-world unit quaternions (w, x, y, z), as :func:`fingertip_positions`.
+    sensors : sequence of str, length S
+    model : ChainModel
+
+    Returns
+    -------
+    dict
+        bone name -> length, mm, for the 20 bones, as
+        :func:`~handsynth.models.bvh_text` takes them (``bone_lengths_mm``).
+
+    Raises
+    ------
+    InvalidInputError
+        As :func:`fingertip_positions`.
+    """
+    chains = fingertip_positions(quats, sensors, model)
+    where = {}
+    for f, chain in CHAINS.items():
+        joints = chains[f"{f}_joints"]
+        where.update({b: joints[:, i] for i, (_, _, b) in enumerate(chain)})
+    return {bone: float(np.median(np.linalg.norm(where[bone] - where[start], axis=1)) * 1e3)
+            for bone, start in BVH_BONE_STARTS.items()}
 
 
 def _world_link(quats, sensors, frames, sensor):

@@ -43,6 +43,21 @@ R_S1^T R_S2 (S2 P^J1 - S2 P^J2), S2 being the next link's sensor (the
 temporary fingertip sensor for the distal phalanges, minus its height above
 the tip, the thesis' "offset").
 
+The hand's ulnar side (an addition to the thesis): the ring and little fingers' MCPs
+are two links from the wrist, across the carpometacarpal hinge, whose centre each link
+takes from another sensor (eq. 3.6: the ulnar hand sensor's view for the first link,
+the proximal phalanx's for the second).  The hinge's small rotation (10 deg in
+:data:`~handsynth.sensors.imu.CALIBRATION_PLAN`) sets that centre's distance from the
+sensor by accelerations of a few hundredths of m/s^2, so with uncorrected sensors
+(accelerometer scale and axes off by a few per cent) the two views of it parted by about
+20 mm across the axis and the two links did not close: ring and little fingertips 18-32
+mm from the truth where the other fingers' were 4-7 mm (standard hand, no skin motion, no
+static poses).  The proximal phalanx's sensor sees the wrist and its own MCP through the
+wrist's and MCP's large two-axis rotations; with its vector to the wrist in the vectors
+(``calibrate_vectors`` adds it where ``hinge_plane``), the second link is that view of
+wrist-to-MCP less the first link, so the two links close on it and the hinge's centre only
+says how the hinge turns them.
+
 Baseline: the least-squares joint position of Seel, Schauer & Raisch,
 "Joint axis and position estimation from inertial measurement data by
 exploiting kinematic constraints", IEEE CCA 2012: for two sensors on either
@@ -81,6 +96,9 @@ __all__ = [
 ]
 
 _FINGERS4 = ("index", "middle", "ring", "little")
+#: The links across the hand's ulnar hinge -> the sensor that closes them on the wrist.
+_ACROSS_HINGE = MappingProxyType({
+    ("hand_ulnar", "ulnar_cm", f"{f}_mcp"): f"{f}_proximal" for f in ("ring", "little")})
 
 #: point -> (rotations giving the direction, rotations giving the length),
 #: the calibration segments of :func:`calibration_motion` (seed 003 Table 3.5).
@@ -342,7 +360,10 @@ def calibrate_vectors(rec: ImuRecording, *, hold_s: float = 0.5, static_pose: bo
     -------
     dict
         ``(sensor, point) -> VectorEstimate`` for each link's own sensor to
-        its proximal point and the next link's sensor to both ends.
+        its proximal point and the next link's sensor to both ends; where
+        `hinge_plane`, also the ring and little fingers' proximal phalanx
+        sensors to the wrist (the links across the hand's ulnar hinge close
+        on them, see the module's notes).
 
     Raises
     ------
@@ -371,6 +392,9 @@ def calibrate_vectors(rec: ImuRecording, *, hold_s: float = 0.5, static_pose: bo
                                                       static_pose=static_pose))
     if hinge_plane:
         out = _hinge_plane(rec, out, hold_s=hold_s, static_pose=static_pose)
+        for sensor in _ACROSS_HINGE.values():  # the ulnar fingers' view of the wrist (notes)
+            out.setdefault((sensor, "wrist"), rotation_vector(rec, sensor, "wrist", hold_s=hold_s,
+                                                              static_pose=static_pose))
     return out
 
 
@@ -446,6 +470,14 @@ def link_vectors(rec: ImuRecording, vectors: dict, *, static: StaticStart | None
             out[(s1, j1, j2)] = r12 @ tip
         else:
             out[(s1, j1, j2)] = r12 @ (vec[(s2, j1)] - vec[(s2, j2)])     # eq. 3.6
+    for link, s2 in _ACROSS_HINGE.items():  # closed on the wrist (the module's notes)
+        if (s2, "wrist") not in vec:
+            continue
+        s1, _, mcp = link
+        first = next(k for k in LINKS if k[0] == "hand_radial" and k[2] == link[1])
+        to_s1 = r[rec.index(s1)].T
+        wrist_to_mcp = to_s1 @ r[rec.index(s2)] @ (vec[(s2, "wrist")] - vec[(s2, mcp)])
+        out[link] = wrist_to_mcp - to_s1 @ r[rec.index(first[0])] @ out[first]
     return out
 
 

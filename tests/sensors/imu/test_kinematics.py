@@ -7,6 +7,7 @@ from handsynth.sensors.imu import (
     GRASP_POSES,
     POINTS,
     angles_beyond_range,
+    bone_lengths_mm,
     classify_grasp,
     fingertip_positions,
     hand_attitude,
@@ -39,6 +40,67 @@ def test_fingertips_by_chaining_exact_links(ideal_rec):
     for f in ("thumb", "index", "little"):
         true = kp[:, POINTS.index(f"{f}_tip")] - kp[:, POINTS.index("elbow")]
         assert np.abs(tips[f] - true).max() < 1e-6
+
+
+def _true_bones_mm(keypoints, names) -> dict[str, np.ndarray]:
+    """Each BVH bone's true length, mm, from (..., P, 3) keypoints (m) named by `names`."""
+    from handsynth.models import BVH_BONE_STARTS
+
+    return {bone: 1e3 * np.linalg.norm(keypoints[..., names.index(bone), :]
+                                       - keypoints[..., names.index(start), :], axis=-1)
+            for bone, start in BVH_BONE_STARTS.items()}
+
+
+def test_bone_lengths_of_exact_links_are_the_hands(ideal_rec):
+    model = truth_chain_model(ideal_rec)
+    got = bone_lengths_mm(ideal_rec.truth.quat, ideal_rec.sensors, model)
+    true = _true_bones_mm(ideal_rec.truth.keypoints, POINTS)
+    assert sorted(got) == sorted(true)
+    for bone, lengths in true.items():
+        assert got[bone] == pytest.approx(float(np.median(lengths)), abs=1e-6), bone
+    # only the ring and little MCPs, across the hand's ulnar CM joint, change with the pose
+    moving = {b for b, v in true.items() if np.ptp(v) > 1e-6}
+    assert moving <= {"ring_mcp", "little_mcp"}
+
+
+@pytest.mark.slow
+def test_bone_lengths_measured_by_a_calibration_of_a_short_hand():
+    """A calibration of a hand with short fingers and a narrow palm measures its bones far
+    nearer than the standard hand's are (skin motion, mounting errors, noise)."""
+    import warnings
+
+    from handsynth.models import KEYPOINT_SITES, HandModel, HandShape
+    from handsynth.sensors.imu import (
+        ImuHand,
+        ImuPlacement,
+        SkinMotion,
+        calibrate,
+        calibration_motion,
+        free_motion,
+    )
+
+    shape = HandShape(length=0.9, palm=0.93, thumb=1.08)
+    rng = np.random.default_rng(3)
+    placement = ImuPlacement(tilts_deg={s: tuple(rng.normal(0, 4, 3)) for s in ImuHand().sensors})
+    skin = SkinMotion(2.0, 4.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the simulated disturbance and still-start notes
+        cal = calibrate(simulate_imu(calibration_motion(acc_poses=True),
+                                     hand=ImuHand(shape, placement=placement, tip_sensors=True),
+                                     skin=skin, seed=21, device_seed=22))
+        rec = simulate_imu(free_motion(6.0, seed=23), hand=ImuHand(shape, placement=placement),
+                           skin=skin, seed=24, device_seed=22)
+    res = cal.track(rec)
+    got = bone_lengths_mm(res["quat"], cal.sensors, cal.model)
+    true = {b: float(np.median(v))
+            for b, v in _true_bones_mm(rec.truth.keypoints, POINTS).items()}
+    standard = _true_bones_mm(HandModel(HandShape(), forearm=False).keypoints(),
+                              list(KEYPOINT_SITES))  # the open hand
+    err = np.array([got[b] - true[b] for b in true])
+    err_std = np.array([standard[b] - true[b] for b in true])
+    assert np.abs(err).max() < 5.0, str({b: round(float(e), 1) for b, e in zip(true, err)})
+    assert np.abs(err).mean() < 0.6 * np.abs(err_std).mean(), (np.abs(err).mean(),
+                                                                np.abs(err_std).mean())
 
 
 def test_grasp_classifier_recovers_perturbed_postures():
