@@ -273,9 +273,14 @@ def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz
         raise RecordingError(f"{segments_path}: cannot read the segments JSON ({exc})") from None
     rec = dataclasses.replace(rec, segments=segments_from_seconds(spans, rec.rate_hz, rec.n,
                                                                   source=str(segments_path)))
-    for w in check_recording(rec, source=str(recording), **full_scale):
+    # the static poses' sensor calibration first: the magnetometers' field strength is
+    # judged as it corrects them (their own hard and soft iron are no disturbance)
+    sensor_cal = _static_pose_calibration(rec)
+    for w in check_recording(rec, source=str(recording), sensor_calibration=sensor_cal,
+                             **full_scale):
         click.echo(f"handsynth: warning: {w}", err=True)
     cal = run_calibration(rec, side=side, source=str(recording),
+                          sensor_calibration=True if sensor_cal is None else sensor_cal,
                           hinge_plane=hinge_centres == "plane")
     cal.save(out_path, inputs=inputs)
     lengths = ", ".join(f"{a}->{b} {1e3 * float((v @ v) ** 0.5):.0f} mm"
@@ -291,6 +296,18 @@ def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz
         f"{float(sc.acc_residual_mps2.max()):.3f} m/s^2" + (
             f", largest magnetometer residual {float(sc.mag_residual.max()):.2%}"
             if sc.mag_residual is not None else "") + " (stored; 'track' applies it)"))
+
+
+def _static_pose_calibration(rec):
+    """The sensor calibration of `rec`'s static poses (``acc_pose_<k>``), or None with too
+    few of them or where its fit fails (``calibrate`` then says so, naming the file)."""
+    from ..errors import EstimationError, InvalidInputError
+    from ..sensors.imu import fit_sensor_calibration
+
+    try:
+        return fit_sensor_calibration(rec)
+    except (EstimationError, InvalidInputError):
+        return None
 
 
 def _write_track_bvh(path, angles, quats, sensors, cal, tips, rate_hz, shape, inputs) -> None:
@@ -394,15 +411,19 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
         raise RecordingError(f"{recording}: the static start --static {static_s:g} s is longer than "
                              f"the recording ({rec.n} samples, {rec.duration_s:.3g} s); shorten "
                              "--static")
-    for w in check_recording(rec, static_s=static_s, source=str(recording), **full_scale):
-        click.echo(f"handsynth: warning: {w}", err=True)
-    t = sample_times(rec)  # the recording's own times
-    if calibration_path:
-        cal = ImuCalibration.load(calibration_path)
+    cal = ImuCalibration.load(calibration_path) if calibration_path else None
+    if cal is not None:
         try:
             cal.correct(rec, sensor_calibration=False)  # its sensors, before any work
         except RecordingError as exc:
             raise RecordingError(f"{recording} (calibration {calibration_path}): {exc}") from None
+    # the magnetometers' field strength judged as the calibration corrects them
+    corrects = None if cal is None or no_sensor_calibration else cal.sensor_calibration
+    for w in check_recording(rec, static_s=static_s, source=str(recording),
+                             sensor_calibration=corrects, **full_scale):
+        click.echo(f"handsynth: warning: {w}", err=True)
+    t = sample_times(rec)  # the recording's own times
+    if cal is not None:
         name = filter_name or "filter4"
         res = cal.track(rec, static=static, sensor_calibration=not no_sensor_calibration,
                         options=FILTER4B if name == "filter4b" else None)

@@ -17,6 +17,7 @@ import itertools
 
 import numpy as np
 
+from ...errors import InvalidInputError
 from ._model import GRAVITY_MPS2
 
 __all__ = ["REVERSED", "SIGNED_PERMUTATIONS", "axes_label", "gyro_axes_errors", "mag_axes_errors",
@@ -97,7 +98,8 @@ def parse_axes(text, *, name: str = "axes") -> tuple[tuple[int, ...], np.ndarray
 
 
 def gyro_axes_errors(acc: np.ndarray, gyr: np.ndarray, rate_hz: float, *,
-                     static_n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                     static_n: int, keep: np.ndarray | None = None
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """How far each signed permutation of the gyro's axes carries gravity's direction off.
 
     The gyro, its mean over the still start taken off, is integrated over windows of
@@ -115,6 +117,11 @@ def gyro_axes_errors(acc: np.ndarray, gyr: np.ndarray, rate_hz: float, *,
         Sampling rate, Hz.
     static_n : int, keyword-only
         Samples of the still start (the gyro's bias).
+    keep : ndarray, shape (N,), bool, keyword-only, optional
+        Samples where the accelerometer may be read as gravity's direction; the others
+        (a calibration's fast oscillations about one joint, whose tangential acceleration
+        swings the direction read against the turn) are integrated over but not read.
+        Every sample by default.
 
     Returns
     -------
@@ -128,6 +135,11 @@ def gyro_axes_errors(acc: np.ndarray, gyr: np.ndarray, rate_hz: float, *,
         compared with the first, not carried): how far the directions read move at all.
     """
     s_n = acc.shape[0]
+    if keep is not None:
+        keep = np.asarray(keep)
+        if keep.dtype != bool or keep.shape != acc.shape[1:2]:
+            raise InvalidInputError(f"keep must be a bool array of shape ({acc.shape[1]},), one "
+                                    f"flag per sample, got {keep.dtype} of shape {keep.shape}")
     (acc_b, gyr_b), rate = _block_means(acc, gyr, rate_hz=rate_hz)
     gyr_b -= _bias(gyr, static_n)
     nb = acc_b.shape[1]
@@ -142,6 +154,12 @@ def gyro_axes_errors(acc: np.ndarray, gyr: np.ndarray, rate_hz: float, *,
     mean[:, w // 2:w // 2 + nb - w + 1] = moving_mean(acc_b, w)
     norm = np.linalg.norm(mean, axis=-1)
     quasi = np.abs(norm - GRAVITY_MPS2) < _QUASI_TOL * GRAVITY_MPS2  # NaN compares False
+    if keep is not None:  # every sample of every block of the mean's window kept
+        b = int(round(rate_hz / rate))
+        dropped = np.concatenate([[0], np.cumsum(~keep[:nb * b].reshape(nb, b).all(axis=1))])
+        whole = np.zeros(nb, bool)
+        whole[w // 2:w // 2 + nb - w + 1] = dropped[w:] == dropped[:-w]
+        quasi &= whole
     up = mean / np.where(quasi, norm, 1.0)[..., None]
     quasi = quasi[:, :m * big_l].reshape(s_n, m, big_l)
     up = up[:, :m * big_l].reshape(s_n, m, big_l, 3)

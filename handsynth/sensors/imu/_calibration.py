@@ -533,7 +533,7 @@ class ImuCalibration:
         return cls(model, frames, zero, tuple(d["sensors"]), cmc, sensor_cal, plate, side)
 
 
-def calibrate(rec: ImuRecording, *, sensor_calibration: bool = True,
+def calibrate(rec: ImuRecording, *, sensor_calibration: bool | SensorCalibration = True,
               side: str = "right", source: str | None = None,
               hinge_plane: bool = True) -> ImuCalibration:
     """Calibrate from a recording with labelled stretches (see :func:`calibration_motion`).
@@ -554,10 +554,13 @@ def calibrate(rec: ImuRecording, *, sensor_calibration: bool = True,
         The calibration recording: the labelled stretches of
         :func:`calibration_motion` (in ``segments`` or its truth's), the link
         sensors and the fingertip sensors.
-    sensor_calibration : bool, keyword-only
+    sensor_calibration : bool or SensorCalibration, keyword-only
         Fit and apply :func:`fit_sensor_calibration` when the recording has at
         least 8 stretches labelled ``acc_pose_<k>``; with none it is skipped,
-        with 1-7 skipped with a warning.  False skips it always.
+        with 1-7 skipped with a warning.  False skips it always; a
+        :class:`SensorCalibration` (fitted on this recording already, as
+        ``handsynth imu calibrate`` does to check the recording's magnetometers
+        with it) is applied and kept as it is.
     side : {"right", "left"}, keyword-only
         The hand the sensors are on: the zero offsets and every tracked
         joint angle are measured as that hand's (a left hand read as a right
@@ -602,6 +605,12 @@ def calibrate(rec: ImuRecording, *, sensor_calibration: bool = True,
         warnings.warn(message, UserWarning, stacklevel=2)
     sensor_cal = None
     poses = sum(name.startswith(POSE_PREFIX) for name, _, _ in rec.labelled())
+    if isinstance(sensor_calibration, SensorCalibration):
+        sensor_cal, sensor_calibration = sensor_calibration, False
+        rec = sensor_cal.apply(rec)
+    elif not isinstance(sensor_calibration, bool):
+        raise InvalidInputError(f"sensor_calibration must be True, False or a SensorCalibration, "
+                                f"got {type(sensor_calibration).__name__}")
     if sensor_calibration and 0 < poses < _MIN_POSES:
         warnings.warn(f"{poses} static pose(s) labelled {POSE_PREFIX}<k>: the accelerometer and gyro "
                       f"calibration needs {_MIN_POSES} or more, so the readings are used "

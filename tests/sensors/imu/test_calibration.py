@@ -537,3 +537,35 @@ def test_calibration_rotations_too_small_are_warned_about(calibration_rec):
     with pytest.warns(UserWarning, match=r"^cal.csv: the sensor-to-joint vectors fit the calibration "
                                          r"rotations poorly: a quarter of the \d+ have R\^2 0\.[0-7]"):
         calibrate(rec, source="cal.csv")
+
+
+@pytest.mark.slow
+def test_a_sensor_calibration_fitted_already_is_applied_as_given():
+    """``handsynth imu calibrate`` fits the static poses' sensor calibration first (to judge
+    the magnetometers with it); handed to ``calibrate`` it gives what fitting there gives."""
+    import warnings
+
+    from handsynth.errors import InvalidInputError
+    from handsynth.sensors.imu import (
+        ImuHand,
+        calibrate,
+        calibration_motion,
+        fit_sensor_calibration,
+        simulate_imu,
+    )
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        rec = simulate_imu(calibration_motion(acc_poses=True), hand=ImuHand(tip_sensors=True),
+                           seed=3, device_seed=4)
+    fitted = calibrate(rec)
+    given = calibrate(rec, sensor_calibration=fit_sensor_calibration(rec))
+    assert given.sensor_calibration is not None
+    np.testing.assert_array_equal(given.sensor_calibration.acc_matrix,
+                                  fitted.sensor_calibration.acc_matrix)
+    for key, link in fitted.model.links.items():
+        np.testing.assert_array_equal(given.model.links[key], link)
+    np.testing.assert_array_equal(given.zero, fitted.zero)
+    with pytest.raises(InvalidInputError, match="sensor_calibration must be True, False or a "
+                                                "SensorCalibration, got str"):
+        calibrate(rec, sensor_calibration="yes")
