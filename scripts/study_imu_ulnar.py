@@ -47,9 +47,9 @@ from handsynth.sensors.imu import (
     simulate_imu,
 )
 from handsynth.sensors.imu._eval import _device_seed, free_trials
+from handsynth.sensors.imu._vectors import CLOSING_VECTORS
 
 _FINGERS = ("thumb", "index", "middle", "ring", "little")
-_CLOSING = {("ring_proximal", "wrist"), ("little_proximal", "wrist")}
 
 
 def _tips_mm(quats, sensors, model, kp) -> np.ndarray:
@@ -81,7 +81,7 @@ def _draw(seed: int, shape: HandShape, static_poses: bool) -> dict[str, np.ndarr
     kp = rec.truth.keypoints
     out = {}
     for name, vec in (("closed", vectors),
-                      ("open", {k: v for k, v in vectors.items() if k not in _CLOSING})):
+                      ("open", {k: v for k, v in vectors.items() if k not in CLOSING_VECTORS})):
         model = chain_model(used, vec)
         this = dataclasses.replace(cal, model=model)  # the attitudes and tips read only the model
         res = this.track(rec)

@@ -38,7 +38,7 @@ from ._plate import PLATE_SENSORS, fuse_plate, plate_rotations
 from ._recording import ImuRecording, check_recording
 from ._sensorcal import POSE_PREFIX, SensorCalibration, fit_sensor_calibration
 from ._swaps import swapped_sensors
-from ._vectors import ChainModel, _min_rotation_samples, calibrate_vectors, chain_model
+from ._vectors import CLOSING_VECTORS, ChainModel, _min_rotation_samples, calibrate_vectors, chain_model
 
 __all__ = ["ImuCalibration", "calibrate", "check_stretches", "segments_from_seconds"]
 
@@ -68,7 +68,7 @@ _MIN_VECTOR_R2_Q25 = 0.88
 
 def _vector_fit_warning(vectors: dict) -> str | None:
     """Say that the calibration's sensor-to-joint vectors fit poorly, or None."""
-    r2 = [v.r2 for v in vectors.values()]
+    r2 = [v.r2 for k, v in vectors.items() if k not in CLOSING_VECTORS]  # as chosen, below
     q25 = float(np.percentile(r2, 25))
     if q25 >= _MIN_VECTOR_R2_Q25:
         return None

@@ -56,7 +56,7 @@ from ._quat import angle_deg, heading_inclination_deg, heading_rad, qexp, qmul
 from ._recording import ImuRecording, ImuTruth, check_recording
 from ._sensorcal import SensorCalibration
 from ._simulate import SkinMotion, simulate_imu
-from ._vectors import link_vectors, seel_joint_positions, truth_chain_model
+from ._vectors import CLOSING_VECTORS, link_vectors, seel_joint_positions, truth_chain_model
 
 __all__ = ["COMPASS_FILTERS", "FILTERS", "HELDOUT", "TUNING", "SimConfig", "evaluate", "evaluate_trial",
            "make_filter"]
@@ -200,12 +200,15 @@ def _vector_report(cal, model, config: SimConfig, placement, lsq_rec) -> dict:
     truth = _truth(cal).joint_vectors
     vec = calibrate_vectors(cal)
     thesis_vec = calibrate_vectors(cal, hinge_plane=False)
-    # each sensor to its own segment's joints (not the ulnar fingers' views of the wrist,
-    # which only close the links across the hand's hinge)
-    rot = {k: v.vector for k, v in vec.items() if not k[0].endswith("_tip") and k in thesis_vec}
-    plain = {k: v.vector for k, v in calibrate_vectors(cal, static_pose=False).items()
-             if not k[0].endswith("_tip") and k in thesis_vec}
-    thesis = {k: v.vector for k, v in thesis_vec.items() if not k[0].endswith("_tip")}
+
+    def own(vectors: dict) -> dict:
+        """Each sensor's to its own segment's joints (not the ulnar fingers' views of the
+        wrist, which only close the links across the hand's hinge)."""
+        return {k: v.vector for k, v in vectors.items()
+                if not k[0].endswith("_tip") and k not in CLOSING_VECTORS}
+
+    rot, plain = own(vec), own(calibrate_vectors(cal, static_pose=False))
+    thesis = own(thesis_vec)
     # baseline 1: the standard hand with sensors where they should be
     std = simulate_imu(static_motion(0.1), hand=ImuHand(tip_sensors=True), noise=None)
     std_vec = _truth(std).joint_vectors

@@ -99,6 +99,8 @@ _FINGERS4 = ("index", "middle", "ring", "little")
 #: The links across the hand's ulnar hinge -> the sensor that closes them on the wrist.
 _ACROSS_HINGE = MappingProxyType({
     ("hand_ulnar", "ulnar_cm", f"{f}_mcp"): f"{f}_proximal" for f in ("ring", "little")})
+#: The vectors that close them (not sensor-to-joint vectors of the sensor's own segment).
+CLOSING_VECTORS = frozenset((sensor, "wrist") for sensor in _ACROSS_HINGE.values())
 
 #: point -> (rotations giving the direction, rotations giving the length),
 #: the calibration segments of :func:`calibration_motion` (seed 003 Table 3.5).
@@ -392,9 +394,9 @@ def calibrate_vectors(rec: ImuRecording, *, hold_s: float = 0.5, static_pose: bo
                                                       static_pose=static_pose))
     if hinge_plane:
         out = _hinge_plane(rec, out, hold_s=hold_s, static_pose=static_pose)
-        for sensor in _ACROSS_HINGE.values():  # the ulnar fingers' view of the wrist (notes)
-            out.setdefault((sensor, "wrist"), rotation_vector(rec, sensor, "wrist", hold_s=hold_s,
-                                                              static_pose=static_pose))
+        for sensor, point in CLOSING_VECTORS:  # the ulnar fingers' view of the wrist (notes)
+            out.setdefault((sensor, point), rotation_vector(rec, sensor, point, hold_s=hold_s,
+                                                            static_pose=static_pose))
     return out
 
 

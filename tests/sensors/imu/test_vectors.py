@@ -13,6 +13,7 @@ from handsynth.sensors.imu import (
 )
 from handsynth.sensors.imu._layout import POINTS
 from handsynth.sensors.imu._vectors import (
+    CLOSING_VECTORS,
     _paired_joint,
     calibrate_vectors,
     chain_model,
@@ -185,7 +186,8 @@ def test_the_links_across_the_ulnar_hinge_close_on_the_wrist(corrected_cal):
     rec = corrected_cal
     kp = rec.truth.keypoints[:100]
     vectors = calibrate_vectors(rec)
-    closing = {("ring_proximal", "wrist"), ("little_proximal", "wrist")}
+    closing = CLOSING_VECTORS
+    assert closing == {("ring_proximal", "wrist"), ("little_proximal", "wrist")}
     assert closing <= set(vectors)
     assert not closing & set(calibrate_vectors(rec, hinge_plane=False))
 
