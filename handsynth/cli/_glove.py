@@ -186,12 +186,19 @@ def apply(calibration, readings, out, name, motion, range_csv, adc_max):
 @click.option("--seed", type=int, default=0, show_default=True, help="First seed.")
 @click.option("--seeds", type=int, default=1, show_default=True,
               help="Independent repetitions (new users, glove, sessions); tables hold means.")
+@click.option("--config", "config_name", type=click.Choice(("tuning", "heldout")),
+              default="tuning", show_default=True,
+              help="Simulator configuration: the spreads the estimators' options were chosen "
+                   "on, or other figures for each (larger play, noise, nonlinearity, slip, "
+                   "gain and offset spreads).")
 @click.option("--json", "json_out", type=click.Path(dir_okay=False),
               help="Write every table as JSON.")
-def eval_(kind, trials, test_trials, seed, seeds, json_out):
+def eval_(kind, trials, test_trials, seed, seeds, config_name, json_out):
     """The seed's tables (per finger, motion, model: MCP error, R^2) on simulated data."""
     from .._io import check_output, write_json
-    from ..sensors.glove import EvalOptions, evaluate
+    from ..sensors.glove import GLOVE_HELDOUT, GLOVE_TUNING, EvalOptions, evaluate
+
+    config = GLOVE_HELDOUT if config_name == "heldout" else GLOVE_TUNING
 
     if json_out:
         check_output(json_out, what="JSON file")  # before the evaluation, not after it
@@ -199,7 +206,7 @@ def eval_(kind, trials, test_trials, seed, seeds, json_out):
     results = {}
     for k in kinds:
         results[k] = evaluate(EvalOptions(kind=k, trials=trials, test_trials=test_trials,
-                                          seed=seed, seeds=seeds))
+                                          seed=seed, seeds=seeds, config=config))
     for k, res in results.items():
         _print_eval(k, res)
     if json_out:
@@ -208,7 +215,8 @@ def eval_(kind, trials, test_trials, seed, seeds, json_out):
 
 
 def _print_eval(kind: str, res: dict) -> None:
-    click.echo(f"== {kind}: mean joint-3 (MCP) error, deg, against the simulated truth; "
+    click.echo(f"== {kind} ({res['config']['simulator']['label']} simulator configuration): "
+               "mean joint-3 (MCP) error, deg, against the simulated truth; "
                "'const' is the constant answer (mean calibration posture) on the same samples")
     loto = res["conditions"]["loto"]["representative"]
     fingers = ("thumb", "index", "middle", "ring", "little")

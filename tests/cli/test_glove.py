@@ -409,6 +409,18 @@ def test_a_bad_full_scale_is_refused(files, tmp_path, value):
     assert res.exit_code == 2 and "--adc-max" in res.output, res.output
 
 
+def test_eval_on_the_held_out_simulator_configuration(tmp_path):
+    out = tmp_path / "eval.json"
+    res = _run("glove", "eval", "--kind", "dg5", "--trials", 3, "--test-trials", 1,
+               "--config", "heldout", "--json", out)
+    assert res.exit_code == 0, res.output
+    assert "== dg5 (heldout simulator configuration)" in res.output
+    sim = json.loads(out.read_text())["results"]["dg5"]["config"]["simulator"]
+    assert sim["label"] == "heldout" and sim["hysteresis_deg"] == [4.0, 8.0]
+    res = _run("glove", "eval", "--config", "other")
+    assert res.exit_code == 2 and "'other' is not one of 'tuning', 'heldout'" in res.output
+
+
 def test_eval_checks_its_json_path_before_evaluating(tmp_path):
     res = _run("glove", "eval", "--json", tmp_path / "nodir" / "x.json")
     assert res.exit_code == 2 and "does not exist" in res.output

@@ -77,6 +77,9 @@ from ._sensors import (
     simulate_sensors,
 )
 from ._simulate import (
+    GLOVE_HELDOUT,
+    GLOVE_TUNING,
+    GloveConfig,
     GloveUser,
     don_glove,
     make_user,
@@ -90,7 +93,9 @@ __all__ = [
     "CONDITIONS",
     "CYBERGLOVE_COLUMNS",
     "DIP_PIP_RATIO",
+    "GLOVE_HELDOUT",
     "GLOVE_KINDS",
+    "GLOVE_TUNING",
     "LATER_CONDITIONS",
     "MODELS",
     "MOTIONS",
@@ -106,6 +111,7 @@ __all__ = [
     "EvalSetup",
     "EvalTestData",
     "GatedEstimator",
+    "GloveConfig",
     "GloveEstimator",
     "GloveRecording",
     "GloveUser",

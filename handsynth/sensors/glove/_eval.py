@@ -30,6 +30,7 @@ simulator's noise-free truth; calibration used the noisy reference glove.
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
 from dataclasses import dataclass, field
 
@@ -44,7 +45,15 @@ from ._models import MODELS, GloveWarning, finger_joints
 from ._motions import OTHER_MOTIONS, motions_for
 from ._recording import GloveRecording
 from ._sensors import SensorParams
-from ._simulate import GloveUser, don_glove, make_user, simulate_range_holds, simulate_session
+from ._simulate import (
+    GLOVE_TUNING,
+    GloveConfig,
+    GloveUser,
+    don_glove,
+    make_user,
+    simulate_range_holds,
+    simulate_session,
+)
 
 __all__ = [
     "CONDITIONS",
@@ -84,12 +93,16 @@ class EvalOptions:
         Independent repetitions (seeds ``seed`` .. ``seed + seeds - 1``: new
         users, gloves and sessions each time); the tables hold their means.
     calibration : CalibrationOptions
+    config : GloveConfig
+        The spreads the gloves and donnings are drawn from (:data:`GLOVE_TUNING`, on
+        which the estimators' options were chosen; :data:`GLOVE_HELDOUT` sets others).
 
     Raises
     ------
     InvalidInputError
         An unknown kind, a count out of its range, or a `calibration` that is
-        no :class:`CalibrationOptions` (named in the message).
+        no :class:`CalibrationOptions`, a `config` no :class:`GloveConfig` (named in
+        the message).
     """
 
     kind: str = "dg5"
@@ -98,6 +111,7 @@ class EvalOptions:
     seed: int = 0
     seeds: int = 1
     calibration: CalibrationOptions = field(default_factory=CalibrationOptions)
+    config: GloveConfig = GLOVE_TUNING
 
     def __post_init__(self) -> None:
         motions_for(self.kind)  # validates the kind
@@ -111,6 +125,10 @@ class EvalOptions:
         if not isinstance(self.calibration, CalibrationOptions):
             raise InvalidInputError(f"EvalOptions.calibration must be CalibrationOptions, got "
                                     f"{type(self.calibration).__name__} {self.calibration!r:.40}")
+        if not isinstance(self.config, GloveConfig):
+            raise InvalidInputError(f"EvalOptions.config must be a GloveConfig (GLOVE_TUNING, "
+                                    f"GLOVE_HELDOUT), got {type(self.config).__name__} "
+                                    f"{self.config!r:.40}")
 
 
 
@@ -388,9 +406,9 @@ def eval_setup(options: EvalOptions | None = None, seed: int | None = None) -> E
     seed = o.seed if seed is None else int(seed)
     user_a = make_user(seed, name="calibration user", hand_length=1.04)
     user_b = make_user(seed + 1000, name="second user", hand_length=0.94)
-    don_a1 = don_glove(user_a, o.kind, seed=seed + 1, glove_seed=seed)
-    don_a2 = don_glove(user_a, o.kind, seed=seed + 2, glove_seed=seed)
-    don_b = don_glove(user_b, o.kind, seed=seed + 3, glove_seed=seed)
+    don_a1 = don_glove(user_a, o.kind, seed=seed + 1, glove_seed=seed, config=o.config)
+    don_a2 = don_glove(user_a, o.kind, seed=seed + 2, glove_seed=seed, config=o.config)
+    don_b = don_glove(user_b, o.kind, seed=seed + 3, glove_seed=seed, config=o.config)
     cal = simulate_session(user_a, don_a1, motions_for(o.kind), trials=o.trials, seed=seed + 10)
     ref = range_readings(simulate_range_holds(user_a, don_a1, seed=seed + 11))
     assert ref is not None  # _range_holds labels both holds
@@ -441,7 +459,8 @@ def _evaluate_one(o: EvalOptions, seed: int) -> dict:
         fit_r2[name] = {m: {f: round(est.models[m].fits[j].r2, 4) for f, j in zip(FINGERS, _MCP)}
                         for m in est.motions}
     return {
-        "config": {"kind": kind, "trials": o.trials, "test_trials": o.test_trials,
+        "config": {"kind": kind, "simulator": dataclasses.asdict(o.config),
+                   "trials": o.trials, "test_trials": o.test_trials,
                    "seed": seed, "rate_hz": 60.0, "models": list(o.calibration.models),
                    "t_threshold": o.calibration.t_threshold,
                    "n_points": o.calibration.n_points,

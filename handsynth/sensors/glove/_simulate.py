@@ -24,6 +24,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..._checks import check_options
 from ...errors import InvalidInputError
 from ...models import JOINT_LIMITS_DEG, JOINT_NAMES, NAMED_POSES
 from ._fields import as_array, as_number
@@ -31,14 +32,98 @@ from ._motions import MOTIONS, grasp_posture
 from ._recording import RANGE_LABELS, GloveRecording
 from ._sensors import SensorParams, simulate_sensors
 
-__all__ = ["GloveUser", "don_glove", "make_user", "simulate_poses", "simulate_range_holds",
-           "simulate_session"]
+__all__ = ["GLOVE_HELDOUT", "GLOVE_TUNING", "GloveConfig", "GloveUser", "don_glove", "make_user",
+           "simulate_poses", "simulate_range_holds", "simulate_session"]
 
 _MCP = np.array([JOINT_NAMES.index(n) for n in JOINT_NAMES if n.endswith("mcp_flex")
                  or n == "thumb_cmc_flex"])
 #: Hand lengths (ratio to the standard hand) a user may have: a hand half or twice the
 #: standard's length is no hand a glove of the standard's size fits.
 HAND_LENGTH_RANGE = (0.5, 2.0)
+
+
+@dataclass(frozen=True)
+class GloveConfig:
+    """The spreads a glove and its donnings are drawn from (:func:`don_glove`), frozen.
+
+    Every figure is an assumption (no datasheet gives them; see :func:`don_glove`).
+    :data:`GLOVE_TUNING` is the configuration every estimator's options were chosen on;
+    :data:`GLOVE_HELDOUT` sets other figures for each, so that no estimator is scored on
+    the spreads it was tuned with.
+
+    Parameters
+    ----------
+    label : str
+    gain_counts_per_deg : (float, float)
+        Range of each sensor's nominal gain (the glove).
+    gain_donning_sd : float
+        S.d. of the gain's change at each donning, a fraction.
+    offset_counts : (float, float)
+        Range of each sensor's offset at each donning.
+    nonlinearity : (float, float)
+        Range of the quadratic term (:class:`SensorParams`, 1/deg * 100).
+    hysteresis_deg : (float, float)
+        Range of the play.
+    noise_counts : (float, float)
+        Range of the noise s.d.
+    slip : (float, float)
+        Range of the extra MCP weight at each donning (the sensor slipping onto the
+        knuckle), plus `slip_per_short` per unit of hand length below 1.
+    slip_per_short : float
+    distal_weight_sd : float
+        S.d. of the placement error of the distal joint's weight.
+
+    Raises
+    ------
+    InvalidInputError
+        A range that is not two finite numbers, low before high, or a spread below 0
+        (naming the field).
+    """
+
+    label: str = "tuning"
+    gain_counts_per_deg: tuple[float, float] = (3.0, 5.0)
+    gain_donning_sd: float = 0.05
+    offset_counts: tuple[float, float] = (1200.0, 1800.0)
+    nonlinearity: tuple[float, float] = (0.0, 0.2)
+    hysteresis_deg: tuple[float, float] = (2.0, 5.0)
+    noise_counts: tuple[float, float] = (1.5, 3.0)
+    slip: tuple[float, float] = (0.02, 0.10)
+    slip_per_short: float = 0.8
+    distal_weight_sd: float = 0.05
+
+    def __post_init__(self) -> None:
+        for name in ("gain_counts_per_deg", "offset_counts", "nonlinearity", "hysteresis_deg",
+                     "noise_counts", "slip"):
+            v = getattr(self, name)
+            try:
+                lo, hi = (as_number(x, f"GloveConfig.{name}") for x in v)
+            except (TypeError, ValueError):
+                raise InvalidInputError(f"GloveConfig.{name} must be two numbers (low, high), "
+                                        f"got {v!r}") from None
+            if not 0 <= lo <= hi:
+                raise InvalidInputError(f"GloveConfig.{name} must be a range 0 <= low <= high, "
+                                        f"got {v!r}")
+            object.__setattr__(self, name, (lo, hi))
+        for name in ("gain_donning_sd", "slip_per_short", "distal_weight_sd"):
+            v = as_number(getattr(self, name), f"GloveConfig.{name}")
+            if v < 0:
+                raise InvalidInputError(f"GloveConfig.{name} must be >= 0, got {v!r}")
+            object.__setattr__(self, name, v)
+        if self.gain_counts_per_deg[0] <= 0:
+            raise InvalidInputError(f"GloveConfig.gain_counts_per_deg must be above 0, got "
+                                    f"{self.gain_counts_per_deg!r}")
+
+
+#: The configuration the estimators' options were chosen on.
+GLOVE_TUNING = GloveConfig()
+#: Other figures for every spread (assumptions too, chosen before any figure was measured
+#: on them): gains over a wider range and changing by 10 % at each donning, offsets over a
+#: wider range, more nonlinearity (0.1-0.35), play (4-8 deg) and noise (3-6 counts), more
+#: slip and a distal placement error of 10 %.
+GLOVE_HELDOUT = GloveConfig("heldout", gain_counts_per_deg=(2.0, 6.0), gain_donning_sd=0.10,
+                            offset_counts=(1000.0, 2200.0), nonlinearity=(0.1, 0.35),
+                            hysteresis_deg=(4.0, 8.0), noise_counts=(3.0, 6.0),
+                            slip=(0.05, 0.15), slip_per_short=0.8, distal_weight_sd=0.10)
 
 
 @dataclass(frozen=True, eq=False)
@@ -155,7 +240,8 @@ def make_user(seed: int, *, name: str | None = None,
     )
 
 
-def don_glove(user: GloveUser, kind: str, *, seed: int, glove_seed: int = 0) -> SensorParams:
+def don_glove(user: GloveUser, kind: str, *, seed: int, glove_seed: int = 0,
+              config: GloveConfig | None = None) -> SensorParams:
     """Sensor parameters of glove `kind` number `glove_seed` as worn by `user` once.
 
     The glove itself (`glove_seed`) fixes each sensor's nominal gain 3-5
@@ -184,6 +270,9 @@ def don_glove(user: GloveUser, kind: str, *, seed: int, glove_seed: int = 0) -> 
     glove_seed : int, keyword-only
         Seed of the glove itself (nominal gain, nonlinearity, hysteresis,
         noise): the same `glove_seed` is the same physical glove.
+    config : GloveConfig, keyword-only, optional
+        The spreads drawn from (the figures above are :data:`GLOVE_TUNING`'s, the
+        default; :data:`GLOVE_HELDOUT` sets others).
 
     Returns
     -------
@@ -196,18 +285,19 @@ def don_glove(user: GloveUser, kind: str, *, seed: int, glove_seed: int = 0) -> 
     InvalidInputError
         `kind` not one of :data:`GLOVE_KINDS` (from :class:`SensorParams`).
     """
+    c = check_options(config, GloveConfig, name="config")
     g = np.random.default_rng([int(glove_seed), 23])
     rng = np.random.default_rng([int(seed), 37])
-    slip = rng.uniform(0.02, 0.10, 5) + 0.8 * max(0.0, 1.0 - user.hand_length)
+    slip = rng.uniform(*c.slip, 5) + c.slip_per_short * max(0.0, 1.0 - user.hand_length)
     return SensorParams(
         kind=kind,
-        gain=g.uniform(3.0, 5.0, 5) * rng.normal(1.0, 0.05, 5),
-        offset=rng.uniform(1200.0, 1800.0, 5),
-        nonlinearity=g.uniform(0.0, 0.2, 5),
-        hysteresis_deg=g.uniform(2.0, 5.0, 5),
-        noise_counts=g.uniform(1.5, 3.0, 5),
+        gain=g.uniform(*c.gain_counts_per_deg, 5) * rng.normal(1.0, c.gain_donning_sd, 5),
+        offset=rng.uniform(*c.offset_counts, 5),
+        nonlinearity=g.uniform(*c.nonlinearity, 5),
+        hysteresis_deg=g.uniform(*c.hysteresis_deg, 5),
+        noise_counts=g.uniform(*c.noise_counts, 5),
         crosstalk=slip,
-        distal_weight_error=rng.normal(0.0, 0.05, 5),
+        distal_weight_error=rng.normal(0.0, c.distal_weight_sd, 5),
     )
 
 

@@ -90,6 +90,9 @@ def test_calibration_options_must_be_calibration_options():
     with pytest.raises(InvalidInputError, match="EvalOptions.calibration must be "
                                                 "CalibrationOptions, got dict"):
         EvalOptions(calibration={"pooled": False})
+    with pytest.raises(InvalidInputError, match="EvalOptions.config must be a GloveConfig "
+                                                r"\(GLOVE_TUNING, GLOVE_HELDOUT\), got str"):
+        EvalOptions(config="heldout")
 
 
 def test_the_tables_do_not_repeat_the_off_range_warning(recwarn):

@@ -95,3 +95,38 @@ def test_a_motion_given_twice_or_none_is_refused(user, dg5):
         simulate_session(user, dg5, ["tripod", "tripod"], trials=1)
     with pytest.raises(InvalidInputError, match="at least one motion"):
         simulate_session(user, dg5, [], trials=1)
+
+
+def test_the_held_out_configuration_draws_other_gloves():
+    from handsynth.sensors.glove import GLOVE_HELDOUT, GLOVE_TUNING
+
+    user = make_user(3, hand_length=1.0)
+    # the tuning configuration is the default, draw for draw
+    plain, tuning = don_glove(user, "dg5", seed=4), don_glove(user, "dg5", seed=4,
+                                                             config=GLOVE_TUNING)
+    np.testing.assert_array_equal(plain.gain, tuning.gain)
+    np.testing.assert_array_equal(plain.hysteresis_deg, tuning.hysteresis_deg)
+    held = [don_glove(user, "5dt", seed=s, glove_seed=s, config=GLOVE_HELDOUT) for s in range(20)]
+    hyst = np.concatenate([h.hysteresis_deg for h in held])
+    noise = np.concatenate([h.noise_counts for h in held])
+    nonlin = np.concatenate([h.nonlinearity for h in held])
+    assert hyst.min() >= 4.0 and hyst.max() <= 8.0 and hyst.max() > 5.0  # beyond tuning's 2-5
+    assert noise.min() >= 3.0 and noise.max() <= 6.0
+    assert nonlin.min() >= 0.1 and nonlin.max() > 0.2
+    assert GLOVE_HELDOUT.label == "heldout" and GLOVE_TUNING.label == "tuning"
+
+
+@pytest.mark.parametrize(("kwargs", "match"), [
+    ({"hysteresis_deg": (5.0, 2.0)}, r"GloveConfig.hysteresis_deg must be a range"),
+    ({"noise_counts": 3.0}, r"GloveConfig.noise_counts must be two numbers"),
+    ({"slip": (0.1, float("nan"))}, r"GloveConfig.slip"),
+    ({"gain_donning_sd": -0.1}, r"GloveConfig.gain_donning_sd must be >= 0"),
+    ({"gain_counts_per_deg": (0.0, 4.0)}, r"GloveConfig.gain_counts_per_deg must be above 0"),
+])
+def test_glove_config_refuses_what_is_no_spread(kwargs, match):
+    from handsynth.sensors.glove import GloveConfig
+
+    with pytest.raises(InvalidInputError, match=match):
+        GloveConfig(**kwargs)
+    with pytest.raises(InvalidInputError, match="config"):
+        don_glove(make_user(0), "dg5", seed=0, config={"label": "heldout"})
