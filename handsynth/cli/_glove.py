@@ -190,7 +190,8 @@ def apply(calibration, readings, out, name, motion, range_csv, adc_max):
               default="tuning", show_default=True,
               help="Simulator configuration: the spreads the estimators' options were chosen "
                    "on, or other figures for each (larger play, noise, nonlinearity, slip, "
-                   "gain and offset spreads).")
+                   "gain and offset spreads; users' rest postures, grasp styles and DIP/PIP "
+                   "ratios spread farther).")
 @click.option("--json", "json_out", type=click.Path(dir_okay=False),
               help="Write every table as JSON.")
 def eval_(kind, trials, test_trials, seed, seeds, config_name, json_out):

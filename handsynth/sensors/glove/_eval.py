@@ -404,8 +404,8 @@ def eval_setup(options: EvalOptions | None = None, seed: int | None = None) -> E
     """
     o = check_options(options, EvalOptions)
     seed = o.seed if seed is None else int(seed)
-    user_a = make_user(seed, name="calibration user", hand_length=1.04)
-    user_b = make_user(seed + 1000, name="second user", hand_length=0.94)
+    user_a = make_user(seed, name="calibration user", hand_length=1.04, config=o.config)
+    user_b = make_user(seed + 1000, name="second user", hand_length=0.94, config=o.config)
     don_a1 = don_glove(user_a, o.kind, seed=seed + 1, glove_seed=seed, config=o.config)
     don_a2 = don_glove(user_a, o.kind, seed=seed + 2, glove_seed=seed, config=o.config)
     don_b = don_glove(user_b, o.kind, seed=seed + 3, glove_seed=seed, config=o.config)

@@ -44,9 +44,10 @@ HAND_LENGTH_RANGE = (0.5, 2.0)
 
 @dataclass(frozen=True)
 class GloveConfig:
-    """The spreads a glove and its donnings are drawn from (:func:`don_glove`), frozen.
+    """The spreads users, a glove and its donnings are drawn from, frozen.
 
-    Every figure is an assumption (no datasheet gives them; see :func:`don_glove`).
+    Every figure is an assumption (no datasheet or survey gives them; see
+    :func:`make_user`, :func:`don_glove`).
     :data:`GLOVE_TUNING` is the configuration every estimator's options were chosen on;
     :data:`GLOVE_HELDOUT` sets other figures for each, so that no estimator is scored on
     the spreads it was tuned with.
@@ -72,6 +73,14 @@ class GloveConfig:
     slip_per_short : float
     distal_weight_sd : float
         S.d. of the placement error of the distal joint's weight.
+    rest_sd_deg : float
+        S.d. of a user's rest posture at every joint (:func:`make_user`).
+    style_scale_sd, style_offset_sd_deg : float
+        S.d. of a user's grasp style: posture scale and offset, per joint.
+    mcp_lead, other_lead : (float, float)
+        Ranges of the exponents of the MCPs' and the other joints' progress along a motion.
+    dip_ratio : (float, float)
+        Range of a user's DIP/PIP ratio per finger.
 
     Raises
     ------
@@ -90,10 +99,16 @@ class GloveConfig:
     slip: tuple[float, float] = (0.02, 0.10)
     slip_per_short: float = 0.8
     distal_weight_sd: float = 0.05
+    rest_sd_deg: float = 3.0
+    style_scale_sd: float = 0.08
+    style_offset_sd_deg: float = 4.0
+    mcp_lead: tuple[float, float] = (0.6, 1.0)
+    other_lead: tuple[float, float] = (0.9, 1.5)
+    dip_ratio: tuple[float, float] = (0.55, 0.80)
 
     def __post_init__(self) -> None:
         for name in ("gain_counts_per_deg", "offset_counts", "nonlinearity", "hysteresis_deg",
-                     "noise_counts", "slip"):
+                     "noise_counts", "slip", "mcp_lead", "other_lead", "dip_ratio"):
             v = getattr(self, name)
             try:
                 lo, hi = (as_number(x, f"GloveConfig.{name}") for x in v)
@@ -104,14 +119,16 @@ class GloveConfig:
                 raise InvalidInputError(f"GloveConfig.{name} must be a range 0 <= low <= high, "
                                         f"got {v!r}")
             object.__setattr__(self, name, (lo, hi))
-        for name in ("gain_donning_sd", "slip_per_short", "distal_weight_sd"):
+        for name in ("gain_donning_sd", "slip_per_short", "distal_weight_sd", "rest_sd_deg",
+                     "style_scale_sd", "style_offset_sd_deg"):
             v = as_number(getattr(self, name), f"GloveConfig.{name}")
             if v < 0:
                 raise InvalidInputError(f"GloveConfig.{name} must be >= 0, got {v!r}")
             object.__setattr__(self, name, v)
-        if self.gain_counts_per_deg[0] <= 0:
-            raise InvalidInputError(f"GloveConfig.gain_counts_per_deg must be above 0, got "
-                                    f"{self.gain_counts_per_deg!r}")
+        for name in ("gain_counts_per_deg", "mcp_lead", "other_lead", "dip_ratio"):
+            if getattr(self, name)[0] <= 0:
+                raise InvalidInputError(f"GloveConfig.{name} must be above 0, got "
+                                        f"{getattr(self, name)!r}")
 
 
 #: The configuration the estimators' options were chosen on.
@@ -119,11 +136,15 @@ GLOVE_TUNING = GloveConfig()
 #: Other figures for every spread (assumptions too, chosen before any figure was measured
 #: on them): gains over a wider range and changing by 10 % at each donning, offsets over a
 #: wider range, more nonlinearity (0.1-0.35), play (4-8 deg) and noise (3-6 counts), more
-#: slip and a distal placement error of 10 %.
+#: slip and a distal placement error of 10 %; users whose rest postures and grasp styles
+#: spread half as far again, who lead and lag over wider ranges, and whose DIP/PIP ratios
+#: span 0.45-0.85.
 GLOVE_HELDOUT = GloveConfig("heldout", gain_counts_per_deg=(2.0, 6.0), gain_donning_sd=0.10,
                             offset_counts=(1000.0, 2200.0), nonlinearity=(0.1, 0.35),
                             hysteresis_deg=(4.0, 8.0), noise_counts=(3.0, 6.0),
-                            slip=(0.05, 0.15), slip_per_short=0.8, distal_weight_sd=0.10)
+                            slip=(0.05, 0.15), slip_per_short=0.8, distal_weight_sd=0.10,
+                            rest_sd_deg=4.5, style_scale_sd=0.12, style_offset_sd_deg=6.0,
+                            mcp_lead=(0.5, 1.0), other_lead=(0.8, 1.7), dip_ratio=(0.45, 0.85))
 
 
 @dataclass(frozen=True, eq=False)
@@ -180,8 +201,8 @@ class GloveUser:
         return replace(self, **changes)
 
 
-def make_user(seed: int, *, name: str | None = None,
-              hand_length: float | None = None) -> GloveUser:
+def make_user(seed: int, *, name: str | None = None, hand_length: float | None = None,
+              config: GloveConfig | None = None) -> GloveUser:
     """A random wearer drawn from `seed`.
 
     Style spreads (assumptions, chosen so two users differ by several
@@ -206,6 +227,9 @@ def make_user(seed: int, *, name: str | None = None,
         skips that draw, so the style scale, style offset and DIP/PIP ratios
         drawn after it differ from those of ``make_user(seed)`` (the rest
         posture and lead exponents, drawn before, do not).
+    config : GloveConfig, keyword-only, optional
+        The spreads drawn from (the figures above are :data:`GLOVE_TUNING`'s, the
+        default; :data:`GLOVE_HELDOUT` sets others).
 
     Returns
     -------
@@ -221,22 +245,23 @@ def make_user(seed: int, *, name: str | None = None,
         raise InvalidInputError(f"seed must be a non-negative integer, got {seed!r}")
     if name is not None and not isinstance(name, str):
         raise InvalidInputError(f"name must be a string, got {name!r}")
+    c = check_options(config, GloveConfig, name="config")
     rng = np.random.default_rng([int(seed), 19])
     n = len(JOINT_NAMES)
-    rest = rng.normal(0.0, 3.0, n)
+    rest = rng.normal(0.0, c.rest_sd_deg, n)
     rest[_MCP] += 5.0
     lead = np.ones(n)
-    lead[_MCP] = rng.uniform(0.6, 1.0, _MCP.size)
+    lead[_MCP] = rng.uniform(*c.mcp_lead, _MCP.size)
     other = np.setdiff1d(np.arange(n), _MCP)
-    lead[other] = rng.uniform(0.9, 1.5, other.size)
+    lead[other] = rng.uniform(*c.other_lead, other.size)
     return GloveUser(
         name=name or f"user{seed}",
         hand_length=hand_length if hand_length is not None else float(rng.uniform(0.92, 1.08)),
         rest_deg=rest,
-        style_scale=rng.normal(1.0, 0.08, n),
-        style_offset_deg=rng.normal(0.0, 4.0, n),
+        style_scale=rng.normal(1.0, c.style_scale_sd, n),
+        style_offset_deg=rng.normal(0.0, c.style_offset_sd_deg, n),
         lead=lead,
-        dip_ratio=rng.uniform(0.55, 0.80, 5),
+        dip_ratio=rng.uniform(*c.dip_ratio, 5),
     )
 
 

@@ -114,6 +114,15 @@ def test_the_held_out_configuration_draws_other_gloves():
     assert noise.min() >= 3.0 and noise.max() <= 6.0
     assert nonlin.min() >= 0.1 and nonlin.max() > 0.2
     assert GLOVE_HELDOUT.label == "heldout" and GLOVE_TUNING.label == "tuning"
+    # and other users: the tuning configuration's draw for draw, the held-out's wider
+    a, b = make_user(5), make_user(5, config=GLOVE_TUNING)
+    np.testing.assert_array_equal(a.style_scale, b.style_scale)
+    np.testing.assert_array_equal(a.dip_ratio, b.dip_ratio)
+    users = [make_user(s, config=GLOVE_HELDOUT) for s in range(40)]
+    dip = np.concatenate([u.dip_ratio for u in users])
+    assert dip.min() >= 0.45 and dip.max() <= 0.85 and (dip.min() < 0.55 or dip.max() > 0.80)
+    style = np.concatenate([u.style_offset_deg for u in users])
+    assert 5.0 < style.std() < 7.0  # 6 deg s.d. (tuning 4)
 
 
 @pytest.mark.parametrize(("kwargs", "match"), [
@@ -122,6 +131,8 @@ def test_the_held_out_configuration_draws_other_gloves():
     ({"slip": (0.1, float("nan"))}, r"GloveConfig.slip"),
     ({"gain_donning_sd": -0.1}, r"GloveConfig.gain_donning_sd must be >= 0"),
     ({"gain_counts_per_deg": (0.0, 4.0)}, r"GloveConfig.gain_counts_per_deg must be above 0"),
+    ({"dip_ratio": (0.0, 0.8)}, r"GloveConfig.dip_ratio must be above 0"),
+    ({"style_offset_sd_deg": float("inf")}, r"GloveConfig.style_offset_sd_deg"),
 ])
 def test_glove_config_refuses_what_is_no_spread(kwargs, match):
     from handsynth.sensors.glove import GloveConfig
