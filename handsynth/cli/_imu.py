@@ -300,13 +300,17 @@ def calibrate(recording, segments_path, acc_units, gyr_units, mag_units, rate_hz
 
 def _static_pose_calibration(rec):
     """The sensor calibration of `rec`'s static poses (``acc_pose_<k>``), or None with too
-    few of them or where its fit fails (``calibrate`` then says so, naming the file)."""
-    from ..errors import EstimationError, InvalidInputError
+    few of them or where its fit fails: fitted before the recording is checked, so whatever
+    stops it here is left to ``check_recording`` and ``calibrate``, which name it."""
+    import warnings
+
     from ..sensors.imu import fit_sensor_calibration
 
     try:
-        return fit_sensor_calibration(rec)
-    except (EstimationError, InvalidInputError):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # a fit that warns: calibrate refits it and says so
+            return fit_sensor_calibration(rec)
+    except Exception:  # bad readings are named by the checks that follow
         return None
 
 

@@ -34,6 +34,7 @@ from ._axes import (
     parse_axes,
 )
 from ._model import GRAVITY_MPS2
+from ._motion import CALIBRATION_PLAN
 
 __all__ = [
     "UNITS",
@@ -258,6 +259,7 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
     Raises
     ------
     RecordingError
+        `sensor_calibration` no :class:`SensorCalibration`;
         `acc_full_scale` or `gyr_full_scale` not a finite number > 0, a
         `static_s` or rate that is not one; non-finite samples; shapes that
         disagree; fewer than 2 samples; samples lost by the logger
@@ -289,6 +291,11 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
         (:func:`_check_mag_axes`).
     """
     check_instance(rec, ImuRecording, name=f"{source}: rec", error=RecordingError)
+    if sensor_calibration is not None:
+        from ._sensorcal import SensorCalibration  # it reads this module
+
+        check_instance(sensor_calibration, SensorCalibration, name="sensor_calibration",
+                       error=RecordingError)
     rate = check_rate(rec.rate_hz, source=source)
     static_s = check_static(static_s, source=source)
     for arg, value in (("acc_full_scale", acc_full_scale), ("gyr_full_scale", gyr_full_scale)):
@@ -559,8 +566,6 @@ def _outside_rotations(rec: ImuRecording) -> np.ndarray | None:
     axis reversed carried gravity's direction 1.33-1.54 times closer than as read (a false
     alarm at the 1.5 pooled), with static poses 0.31-0.34.
     """
-    from ._motion import CALIBRATION_PLAN
-
     rotations = {label for label, *_ in CALIBRATION_PLAN}
     spans = [(a, b) for label, a, b in rec.labelled() if label in rotations]
     if not spans:

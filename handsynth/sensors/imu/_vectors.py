@@ -394,7 +394,7 @@ def calibrate_vectors(rec: ImuRecording, *, hold_s: float = 0.5, static_pose: bo
                                                       static_pose=static_pose))
     if hinge_plane:
         out = _hinge_plane(rec, out, hold_s=hold_s, static_pose=static_pose)
-        for sensor, point in CLOSING_VECTORS:  # the ulnar fingers' view of the wrist (notes)
+        for sensor, point in sorted(CLOSING_VECTORS):  # the ulnar fingers' view of the wrist
             out.setdefault((sensor, point), rotation_vector(rec, sensor, point, hold_s=hold_s,
                                                             static_pose=static_pose))
     return out

@@ -476,3 +476,8 @@ def test_columns_named_by_their_meaning_are_read_with_a_warning(tmp_path, style)
     with pytest.raises(RecordingError, match=rf"columns '{re.escape(names[1])}' and "
                                              rf"'{re.escape(again)}' both read as"):
         read_imu_csv(twice)
+
+
+def test_check_recording_refuses_a_sensor_calibration_of_another_kind(free_rec):
+    with pytest.raises(RecordingError, match="sensor_calibration must be a SensorCalibration"):
+        check_recording(free_rec, sensor_calibration={"acc_matrix": None})
