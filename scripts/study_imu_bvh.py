@@ -35,7 +35,6 @@ from handsynth.sensors.imu import (
     POINTS,
     ImuHand,
     bone_lengths_mm,
-    fingertip_positions,
     hand_attitude,
     truth_hand_attitude,
 )
@@ -108,12 +107,12 @@ def _draw(seed: int, random_shape: bool) -> dict[str, float]:
     true_att = Rotation.from_matrix(truth_hand_attitude(rec, hand))
     err = np.degrees((est.inv() * true_att).magnitude())
     held_att = np.degrees((est[0].inv() * true_att).magnitude())  # the first attitude held
-    wrist = fingertip_positions(res["quat"], calib.sensors, calib.model)["index_joints"][:, 0]
+    wrist = res["chains"]["index_joints"][:, 0]
     kp = rec.truth.keypoints
     elbow = kp[:, POINTS.index("elbow")]
     wrist_err = np.linalg.norm(wrist - (kp[:, POINTS.index("wrist")] - elbow), axis=1) * 1e3
     args = (res["angles"], q, wrist, kp, elbow, rec.rate_hz)
-    lengths = bone_lengths_mm(res["quat"], calib.sensors, calib.model)
+    lengths = bone_lengths_mm(res["chains"])
     true_bones = _bones_mm(kp[0], POINTS)
     standard = HandModel(HandShape(), forearm=False)
     standard_bones = _bones_mm(standard.keypoints(), KEYPOINT_SITES)  # the open hand

@@ -314,7 +314,7 @@ def _static_pose_calibration(rec):
         return None
 
 
-def _write_track_bvh(path, angles, quats, sensors, cal, tips, rate_hz, shape, inputs) -> None:
+def _write_track_bvh(path, angles, quats, sensors, cal, chains, rate_hz, shape, inputs) -> None:
     """The BVH file of ``track --bvh-out``: the hand's joint angles, attitude and wrist, on the
     skeleton of `shape`, or (None) the standard hand's with the bones the link model measures."""
     import numpy as np
@@ -326,8 +326,8 @@ def _write_track_bvh(path, angles, quats, sensors, cal, tips, rate_hz, shape, in
     if unknown:  # the thumb's CMC of a calibration without its two rotations
         click.echo(f"handsynth: warning: --bvh-out: {', '.join(unknown)} not measured by this "
                    "calibration, written as 0", err=True)
-    wrist_mm = 1e3 * tips["index_joints"][:, 0]
-    bones = bone_lengths_mm(quats, sensors, cal.model) if shape is None else None
+    wrist_mm = 1e3 * chains["index_joints"][:, 0]
+    bones = bone_lengths_mm(chains) if shape is None else None
     write_bvh(path, np.nan_to_num(angles), rate_hz=rate_hz, shape=shape, side=cal.side,
               root_quat=hand_attitude(quats, sensors, cal.frames), root_position_mm=wrist_mm,
               bone_lengths_mm=bones, inputs=inputs)
@@ -379,7 +379,6 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
         ImuCalibration,
         StaticStart,
         check_recording,
-        fingertip_positions,
         make_filter,
         sample_times,
     )
@@ -439,14 +438,12 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
         if angles_out:
             _write_table(angles_out, ["time_s", *JOINT_NAMES], np.column_stack([t, res["angles"]]),
                          inputs=inputs)
-        if tips_out or bvh_out:
-            tips = fingertip_positions(q, sensors, cal.model)
         if tips_out:
-            fingers = [f for f in tips if not f.endswith("_joints")]
-            _write_table(tips_out, ["time_s", *(f"{f}_tip_{c}_mm" for f in fingers for c in "xyz")],
-                         np.column_stack([t, *(1e3 * tips[f] for f in fingers)]), inputs=inputs)
+            tips = res["tips"]
+            _write_table(tips_out, ["time_s", *(f"{f}_tip_{c}_mm" for f in tips for c in "xyz")],
+                         np.column_stack([t, *(1e3 * v for v in tips.values())]), inputs=inputs)
         if bvh_out:
-            _write_track_bvh(bvh_out, res["angles"], q, sensors, cal, tips, rec.rate_hz,
+            _write_track_bvh(bvh_out, res["angles"], q, sensors, cal, res["chains"], rec.rate_hz,
                              skeleton, inputs)
     else:
         name = filter_name or "vqf"

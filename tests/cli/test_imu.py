@@ -343,12 +343,12 @@ def _check_track_bvh_bones(tmp_path, q_csv, model) -> dict[str, float]:
     it wrote), near the standard hand's, on which it was simulated; returns the standard
     hand's bones, mm."""
     from handsynth.models import BVH_BONE_STARTS, BVH_BONES, KEYPOINT_SITES, HandModel, HandShape
-    from handsynth.sensors.imu import ImuCalibration, bone_lengths_mm
+    from handsynth.sensors.imu import ImuCalibration, bone_lengths_mm, fingertip_positions
 
     cal = ImuCalibration.load(model)
     table = np.genfromtxt(q_csv, delimiter=",", names=True)
     quats = np.stack([np.column_stack([table[f"{s}_q{c}"] for c in "wxyz"]) for s in cal.sensors])
-    want = bone_lengths_mm(quats, cal.sensors, cal.model)
+    want = bone_lengths_mm(fingertip_positions(quats, cal.sensors, cal.model))
     got = _bvh_bones_mm(tmp_path / "hand.bvh")
     np.testing.assert_allclose([got[b] for b in BVH_BONES], [want[b] for b in BVH_BONES],
                                atol=1e-3)

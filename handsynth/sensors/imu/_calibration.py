@@ -363,8 +363,9 @@ class ImuCalibration:
         -------
         dict
             ``quat`` (S, N, 4), ``angles`` (N, 20) degrees, ``tips``
-            finger -> (N, 3) metres from the elbow, ``sensor_calibration``
-            whether a sensor calibration was applied.
+            finger -> (N, 3) metres from the elbow, ``chains`` all of
+            :func:`fingertip_positions` (each chain's joints too),
+            ``sensor_calibration`` whether a sensor calibration was applied.
 
         Warns
         -----
@@ -399,9 +400,10 @@ class ImuCalibration:
         late = late_sensors(sub, self.frames, static_n=int(static.static_s * sub.rate_hz))
         if late is not None:
             warnings.warn(late, UserWarning, stacklevel=2)
-        tips = {f: v for f, v in fingertip_positions(q, sub.sensors, self.model).items()
-                if not f.endswith("_joints")}
-        return {"quat": q, "angles": angles, "tips": tips, "sensor_calibration": applied}
+        chains = fingertip_positions(q, sub.sensors, self.model)
+        tips = {f: v for f, v in chains.items() if not f.endswith("_joints")}
+        return {"quat": q, "angles": angles, "tips": tips, "chains": chains,
+                "sensor_calibration": applied}
 
     def to_dict(self) -> dict:
         return {"format": "handsynth-imu-calibration", "version": _VERSION,

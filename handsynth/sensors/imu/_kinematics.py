@@ -306,7 +306,7 @@ def _euler_zyx(r):
     return phi, theta, psi
 
 
-def bone_lengths_mm(quats, sensors, model: ChainModel) -> dict[str, float]:
+def bone_lengths_mm(chains: dict) -> dict[str, float]:
     """The hand's bone lengths as the link model measures them, mm (a BVH skeleton's).
 
     Each bone of :data:`~handsynth.models.BVH_BONES` runs from its proximal joint centre
@@ -317,10 +317,9 @@ def bone_lengths_mm(quats, sensors, model: ChainModel) -> dict[str, float]:
 
     Parameters
     ----------
-    quats : ndarray, shape (S, N, 4)
-        Sensor-to-world unit quaternions (w, x, y, z), as :func:`fingertip_positions`.
-    sensors : sequence of str, length S
-    model : ChainModel
+    chains : dict
+        As :func:`fingertip_positions` returns it (or ``ImuCalibration.track``'s
+        ``"chains"``): its ``"<finger>_joints"`` entries, (N, L, 3) metres, are read.
 
     Returns
     -------
@@ -331,13 +330,15 @@ def bone_lengths_mm(quats, sensors, model: ChainModel) -> dict[str, float]:
     Raises
     ------
     InvalidInputError
-        As :func:`fingertip_positions`.
+        A finger's joints missing from `chains`, or of another shape than its chain's.
     """
-    chains = fingertip_positions(quats, sensors, model)
     where = {}
     for f, chain in CHAINS.items():
-        joints = chains[f"{f}_joints"]
-        where.update({b: joints[:, i] for i, (_, _, b) in enumerate(chain)})
+        joints = chains.get(f"{f}_joints") if isinstance(chains, dict) else None
+        if joints is None or np.ndim(joints) != 3 or np.shape(joints)[1:] != (len(chain), 3):
+            raise InvalidInputError(f"chains must hold '{f}_joints' of shape (N, {len(chain)}, 3), "
+                                    "as fingertip_positions returns it")
+        where.update({b: np.asarray(joints)[:, i] for i, (_, _, b) in enumerate(chain)})
     return {bone: float(np.median(np.linalg.norm(where[bone] - where[start], axis=1)) * 1e3)
             for bone, start in BVH_BONE_STARTS.items()}
 

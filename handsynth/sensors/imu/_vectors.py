@@ -393,10 +393,12 @@ def calibrate_vectors(rec: ImuRecording, *, hold_s: float = 0.5, static_pose: bo
         out.setdefault((tip, j_prox), rotation_vector(rec, tip, j_prox, hold_s=hold_s,
                                                       static_pose=static_pose))
     if hinge_plane:
+        # the ulnar fingers' view of the wrist (the module's notes); first, so that the
+        # hinge plane of their carpometacarpal vectors, paired with the wrist, reads it
+        for sensor, point in sorted(CLOSING_VECTORS):
+            out[(sensor, point)] = rotation_vector(rec, sensor, point, hold_s=hold_s,
+                                                   static_pose=static_pose)
         out = _hinge_plane(rec, out, hold_s=hold_s, static_pose=static_pose)
-        for sensor, point in sorted(CLOSING_VECTORS):  # the ulnar fingers' view of the wrist
-            out.setdefault((sensor, point), rotation_vector(rec, sensor, point, hold_s=hold_s,
-                                                            static_pose=static_pose))
     return out
 
 

@@ -53,7 +53,7 @@ def _true_bones_mm(keypoints, names) -> dict[str, np.ndarray]:
 
 def test_bone_lengths_of_exact_links_are_the_hands(ideal_rec):
     model = truth_chain_model(ideal_rec)
-    got = bone_lengths_mm(ideal_rec.truth.quat, ideal_rec.sensors, model)
+    got = bone_lengths_mm(fingertip_positions(ideal_rec.truth.quat, ideal_rec.sensors, model))
     true = _true_bones_mm(ideal_rec.truth.keypoints, POINTS)
     assert sorted(got) == sorted(true)
     for bone, lengths in true.items():
@@ -91,7 +91,7 @@ def test_bone_lengths_measured_by_a_calibration_of_a_short_hand():
         rec = simulate_imu(free_motion(6.0, seed=23), hand=ImuHand(shape, placement=placement),
                            skin=skin, seed=24, device_seed=22)
     res = cal.track(rec)
-    got = bone_lengths_mm(res["quat"], cal.sensors, cal.model)
+    got = bone_lengths_mm(res["chains"])
     true = {b: float(np.median(v))
             for b, v in _true_bones_mm(rec.truth.keypoints, POINTS).items()}
     standard = _true_bones_mm(HandModel(HandShape(), forearm=False).keypoints(),
