@@ -41,12 +41,10 @@ from handsynth.sensors.imu import (
     ImuHand,
     calibrate,
     calibrate_vectors,
-    calibration_motion,
     chain_model,
     fingertip_positions,
-    simulate_imu,
 )
-from handsynth.sensors.imu._eval import _device_seed, free_trials
+from handsynth.sensors.imu._eval import _calibration_recording, free_trials
 from handsynth.sensors.imu._vectors import CLOSING_VECTORS
 
 _FINGERS = ("thumb", "index", "middle", "ring", "little")
@@ -64,11 +62,7 @@ def _tips_mm(quats, sensors, model, kp) -> np.ndarray:
 def _draw(seed: int, shape: HandShape, static_poses: bool) -> dict[str, np.ndarray] | None:
     config = dataclasses.replace(HELDOUT, seed=seed, shape=shape)
     placement = config.placement()
-    quiet = dataclasses.replace(config.noise, disturbances=())
-    hand = ImuHand(shape, placement=placement, tip_sensors=True)
-    rec_cal = simulate_imu(calibration_motion(acc_poses=static_poses), hand=hand, noise=quiet,
-                           skin=config.skin, seed=config.seed + 7,
-                           device_seed=_device_seed(config))
+    rec_cal = _calibration_recording(config, placement, acc_poses=static_poses)
     try:
         cal = calibrate(rec_cal)
     except EstimationError as exc:  # counted, and said

@@ -178,11 +178,20 @@ def _device_seed(config: SimConfig) -> int:
     return config.seed + 900
 
 
-def _calibrate(config: SimConfig, placement: ImuPlacement, *, six_axis: bool = False):
-    hand = ImuHand(config.shape, placement=placement, tip_sensors=True)
+def _calibration_recording(config: SimConfig, placement: ImuPlacement | None = None, *,
+                           acc_poses: bool = True) -> ImuRecording:
+    """The configuration's calibration recording as the eval simulates it: its hand with the
+    fingertip sensors, its noise without the magnet, its skin motion and physical sensors
+    (``device_seed``); with the static poses, or without them (the thesis' protocol)."""
+    hand = ImuHand(config.shape, placement=config.placement() if placement is None else placement,
+                   tip_sensors=True)
     quiet = dataclasses.replace(config.noise, disturbances=())
-    cal = simulate_imu(calibration_motion(acc_poses=True), hand=hand, noise=quiet,
-                       skin=config.skin, seed=config.seed + 7, device_seed=_device_seed(config))
+    return simulate_imu(calibration_motion(acc_poses=acc_poses), hand=hand, noise=quiet,
+                        skin=config.skin, seed=config.seed + 7, device_seed=_device_seed(config))
+
+
+def _calibrate(config: SimConfig, placement: ImuPlacement, *, six_axis: bool = False):
+    cal = _calibration_recording(config, placement)
     if six_axis:  # the same sensors' accelerometers and gyros only
         cal = dataclasses.replace(cal, mag=None)
     # accelerometer, gyro and magnetometer corrections from the static poses, kept in

@@ -91,20 +91,13 @@ def test_a_calibration_s_oscillations_are_not_read_as_gravity():
 
     from handsynth.sensors.imu import (
         HELDOUT,
-        ImuHand,
-        calibration_motion,
-        simulate_imu,
     )
-    from handsynth.sensors.imu._eval import _device_seed
+    from handsynth.sensors.imu._eval import _calibration_recording
 
     config = dataclasses.replace(HELDOUT, seed=2)
-    quiet = dataclasses.replace(config.noise, disturbances=())
-    hand = ImuHand(config.shape, placement=config.placement(), tip_sensors=True)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the still-start notes
-        recs = {poses: simulate_imu(calibration_motion(acc_poses=poses), noise=quiet,
-                                    skin=config.skin, seed=config.seed + 7, hand=hand,
-                                    device_seed=_device_seed(config)) for poses in (False, True)}
+        recs = {poses: _calibration_recording(config, acc_poses=poses) for poses in (False, True)}
 
     def axes_warnings(rec):
         return [w for w in check_recording(rec) if "gravity's direction" in w]

@@ -494,17 +494,12 @@ def test_a_refused_calibration_without_static_poses_names_the_uncorrected_sensor
     import warnings
 
     from handsynth.errors import EstimationError
-    from handsynth.sensors.imu import HELDOUT, ImuHand, calibrate, calibration_motion, simulate_imu
-    from handsynth.sensors.imu._eval import _device_seed
+    from handsynth.sensors.imu import HELDOUT, calibrate
+    from handsynth.sensors.imu._eval import _calibration_recording
 
-    config = dataclasses.replace(HELDOUT, seed=2)
-    quiet = dataclasses.replace(config.noise, disturbances=())
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the still-start notes
-        rec = simulate_imu(calibration_motion(), noise=quiet, skin=config.skin, seed=config.seed + 7,
-                           hand=ImuHand(config.shape, placement=config.placement(),
-                                        tip_sensors=True),
-                           device_seed=_device_seed(config))
+        rec = _calibration_recording(dataclasses.replace(HELDOUT, seed=2), acc_poses=False)
     with pytest.warns(UserWarning, match="no static poses"), \
             pytest.raises(EstimationError, match=r"^cal.csv: at the calibration's static start "
                                                  r".* reads .* deg, not about 0 .*; or, more likely "

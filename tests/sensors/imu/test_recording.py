@@ -87,16 +87,13 @@ def test_a_magnetometer_s_own_iron_is_no_disturbance_once_corrected():
     still told, and only it."""
     import warnings as _w
 
-    from handsynth.sensors.imu import HELDOUT, ImuHand, calibration_motion, fit_sensor_calibration
-    from handsynth.sensors.imu._eval import _device_seed
+    from handsynth.sensors.imu import HELDOUT, ImuHand, fit_sensor_calibration
+    from handsynth.sensors.imu._eval import _calibration_recording, _device_seed
 
     config = dataclasses.replace(HELDOUT, seed=3)
-    quiet = dataclasses.replace(config.noise, disturbances=())
-    hand = ImuHand(config.shape, placement=config.placement(), tip_sensors=True)
     with _w.catch_warnings():
         _w.simplefilter("ignore")  # the still-start notes
-        cal = simulate_imu(calibration_motion(acc_poses=True), noise=quiet, skin=config.skin,
-                           seed=10, hand=hand, device_seed=_device_seed(config))
+        cal = _calibration_recording(config)  # its static poses
         trial = simulate_imu(free_motion(20.0, seed=4), noise=config.noise, skin=config.skin,
                              seed=11, hand=ImuHand(config.shape, placement=config.placement()),
                              device_seed=_device_seed(config))
