@@ -377,7 +377,6 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
     from ..sensors.imu import (
         FILTER4B,
         ImuCalibration,
-        StaticStart,
         check_recording,
         make_filter,
         sample_times,
@@ -399,13 +398,7 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
     check_outputs([("--out", out_path), ("--angles-out", angles_out), ("--tips-out", tips_out),
                    ("--bvh-out", bvh_out)], inputs=inputs)
     skeleton = shape_option(bvh_shape, "--bvh-shape") if bvh_shape is not None else None
-    a = b = None
-    if align:
-        try:
-            a, b = (float(x) for x in align.split(","))
-        except ValueError:
-            raise InvalidInputError(f"--align must be START,END in seconds, got {align!r}") from None
-    static = StaticStart(static_s=static_s, align_start_s=a, align_end_s=b)
+    static = _static_start(static_s, align)
     full_scale = _full_scale(acc_range_g, gyr_range_dps)
     rec = _read(recording, acc_units=acc_units, gyr_units=gyr_units, mag_units=mag_units,
                 rate_hz=rate_hz, bridge_lost=bridge_lost, bridge_max_s=bridge_max_s,
@@ -456,6 +449,80 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
         name += ", 6-axis: headings from the common rotation"
     click.echo(f"{len(sensors)} sensors, {rec.n} samples ({rec.duration_s:.1f} s) at "
                f"{rec.rate_hz:g} Hz -> {out_path} ({name})")
+
+
+def _static_start(static_s, align):
+    """``--static`` and ``--align START,END`` as a :class:`StaticStart`."""
+    from ..errors import InvalidInputError
+    from ..sensors.imu import StaticStart
+
+    a = b = None
+    if align:
+        try:
+            a, b = (float(x) for x in align.split(","))
+        except ValueError:
+            raise InvalidInputError(f"--align must be START,END in seconds, got {align!r}") from None
+    return StaticStart(static_s=static_s, align_start_s=a, align_end_s=b)
+
+
+@imu.command()
+@click.option("--calibration", "calibration_path", type=click.Path(dir_okay=False), required=True,
+              help="Calibration JSON from 'handsynth imu calibrate'.")
+@click.option("--rate", "rate_hz", type=float, required=True,
+              help="The sensors' sampling rate, Hz (the lines are taken to come at it).")
+@click.option("--acc-units", type=click.Choice(("m/s2", "g", "mg")), default="m/s2",
+              show_default=True)
+@click.option("--gyr-units", type=click.Choice(("rad/s", "deg/s")), default="rad/s",
+              show_default=True)
+@click.option("--mag-units", type=click.Choice(("uT", "mT", "G", "nT")), default="uT",
+              show_default=True)
+@click.option("--static", "static_s", type=float, default=2.0, show_default=True,
+              help="Length of the still start, s: no line is answered before it is read.")
+@click.option("--align", default=None, metavar="START,END",
+              help="Common rotation for the compass azimuth alignment, s (answers start "
+                   "after END).")
+@click.option("--filter", "filter_name", type=click.Choice(_CHAIN_FILTERS), default="filter4",
+              show_default=True, help="Filter 4, or filter4b (learning drifting gyro biases).")
+@click.option("--input", "source", type=click.File("r"), default="-", show_default=True,
+              help="CSV lines to read (- : standard input).")
+@click.option("--out", "out", type=click.File("w"), default="-", show_default=True,
+              help="Joint angles CSV to write as they come (- : standard output).")
+@click.option("--max-hold", "max_hold_s", type=float, default=None, metavar="SECONDS",
+              help="Longest loss of one sensor's readings held before the stream stops, s "
+                   "[default: 0.25].")
+@click.option("--no-sensor-calibration", is_flag=True,
+              help="Do not apply the calibration file's accelerometer/gyro/magnetometer "
+                   "corrections (for readings already corrected).")
+def stream(calibration_path, rate_hz, acc_units, gyr_units, mag_units, static_s, align,
+           filter_name, source, out, max_hold_s, no_sensor_calibration) -> None:
+    """Joint angles of live CSV lines (a logger's output piped in), one line out per sample.
+
+    The input is 'imu track's CSV one line at a time (a header first); each sample's joint
+    angles (time_s, the 20 joints in degrees, and held_sensors: how many sensors' readings
+    were lost there and held) are written and flushed as soon as the next sample has come.
+    A reading lost (an empty or non-finite cell) is held for up to --max-hold.
+    """
+    from ..models import JOINT_NAMES
+    from ..sensors.imu import FILTER4B, ImuCalibration, stream_csv
+
+    cal = ImuCalibration.load(calibration_path)
+    name = getattr(source, "name", "stdin")
+    out.write(",".join(["time_s", *JOINT_NAMES, "held_sensors"]) + "\n")
+    out.flush()
+    rows = 0
+    for done in stream_csv(source, cal, rate_hz=rate_hz, acc_units=acc_units,
+                           gyr_units=gyr_units, mag_units=mag_units,
+                           source="standard input" if name == "<stdin>" else name,
+                           static=_static_start(static_s, align),
+                           options=FILTER4B if filter_name == "filter4b" else None,
+                           sensor_calibration=not no_sensor_calibration,
+                           **({} if max_hold_s is None else {"max_hold_s": max_hold_s})):
+        for t, row, held in zip(done.t_s, done.angles_deg, done.held.sum(axis=0)):
+            out.write(f"{t:.6f}," + ",".join(f"{v:.4f}" for v in row) + f",{held}\n")
+        rows += len(done)
+        if len(done):
+            out.flush()
+    click.echo(f"{rows} samples tracked ({filter_name})", err=True)
 
 
 @imu.command()

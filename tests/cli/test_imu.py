@@ -904,3 +904,44 @@ def test_track_names_the_files_and_a_sensor_named_differently(tmp_path, sim):
                                  "index_middle_acc_x .. index_middle_mag_z); it has sensor(s) "
                                  "the calibration does not know: index_mid")
     assert not out.exists()
+
+
+def test_stream_writes_what_track_writes_line_by_line(tmp_path):
+    """Lines piped in one by one come out as track's joint angles; bad lines are one line."""
+    import warnings
+
+    from handsynth.sensors.imu import ImuHand, calibrate, calibration_motion
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        cal = calibrate(simulate_imu(calibration_motion(), hand=ImuHand(tip_sensors=True), seed=1,
+                                     device_seed=2), sensor_calibration=False)
+    cal_path = cal.save(tmp_path / "cal.json")
+    rec = simulate_imu(free_motion(6.0, seed=3), hand=ImuHand(), seed=4, device_seed=2)
+    csv = tmp_path / "rec.csv"
+    write_imu_csv(rec, csv)
+    res = CliRunner().invoke(cli, ["imu", "track", str(csv), "--calibration", str(cal_path),
+                                   "--out", str(tmp_path / "q.csv"),
+                                   "--angles-out", str(tmp_path / "a.csv")])
+    assert res.exit_code == 0, res.output
+    tracked = np.loadtxt(tmp_path / "a.csv", delimiter=",", skiprows=1)
+    lines = csv.read_text().splitlines()
+    res = CliRunner().invoke(cli, ["imu", "stream", "--calibration", str(cal_path), "--rate", "100"],
+                             input="\n".join(lines) + "\n")
+    assert res.exit_code == 0, res.output
+    out = res.stdout.splitlines()
+    assert out[0].startswith("time_s,thumb_cmc_flex")
+    streamed = np.array([[float(v) for v in line.split(",")] for line in out[1:]])
+    assert streamed.shape == (600, 22) and tracked.shape == (600, 21)
+    np.testing.assert_allclose(streamed[:, :21], tracked, rtol=0, atol=6e-5)  # 4 decimals
+    assert out[0].endswith(",little_dip_flex,held_sensors") and not streamed[:, 21].any()
+    assert "600 samples tracked (filter4)" in res.stderr
+    # a damaged line is one line naming it, after the answers already written
+    bad = lines[:300] + [lines[300].replace(lines[300].split(",")[5], "x1.5", 1)] + lines[301:]
+    res = CliRunner().invoke(cli, ["imu", "stream", "--calibration", str(cal_path), "--rate", "100"],
+                             input="\n".join(bad) + "\n")
+    assert res.exit_code != 0
+    assert len(res.stdout.splitlines()) == 1 + 297  # line 301 is sample 298 (a comment, a header)
+    column = lines[1].split(",")[5]
+    assert f"standard input, line 301: {column} is 'x1.5', not a number" in res.stderr
+    assert "Traceback" not in res.output

@@ -112,6 +112,7 @@ from ._recording import (
 )
 from ._sensorcal import SensorCalibration, fit_sensor_calibration
 from ._simulate import SkinMotion, simulate_imu
+from ._stream import ImuStream, TrackedSamples, stream_csv
 from ._swaps import SWAP_FLOOR_MPS2, SWAP_RATIO, swap_ratios, swapped_sensors
 from ._vectors import (
     ROTATIONS,
@@ -178,6 +179,7 @@ __all__ = [
     "ImuNoise",
     "ImuPlacement",
     "ImuRecording",
+    "ImuStream",
     "ImuTruth",
     "KalmanDenoiser",
     "LostStretch",
@@ -194,6 +196,7 @@ __all__ = [
     "SkinMotion",
     "StaticStart",
     "ThumbCmcModel",
+    "TrackedSamples",
     "VQFEstimator",
     "VectorEstimate",
     "allan_deviation",
@@ -251,6 +254,7 @@ __all__ = [
     "simulate_imu",
     "smoothed_motion",
     "static_motion",
+    "stream_csv",
     "swap_ratios",
     "swapped_sensors",
     "thumb_cmc_model",

@@ -55,7 +55,7 @@ from ._quat import qexp, qmul, qnormalize, quat_to_mat
 from ._recording import ImuRecording
 from ._vectors import ChainModel
 
-__all__ = ["FILTER4B", "ChainEKF", "ChainEKFOptions", "sensor_tree"]
+__all__ = ["FILTER4B", "ChainEKF", "ChainEKFOptions", "FilterStart", "fast_turns", "sensor_tree"]
 
 
 @dataclass(frozen=True)
@@ -149,6 +149,35 @@ class ChainEKFOptions:
 #: during 120-s recordings (``python scripts/study_imu_drift.py``; docs/imu.md,
 #: "A gyro bias that drifts").
 FILTER4B = ChainEKFOptions(bias_tau_s=3.0)
+
+
+@dataclass(frozen=True, eq=False)
+class FilterStart:
+    """What Filter 4 takes from a recording's static start (:meth:`ChainEKF.prepare`).
+
+    Attributes
+    ----------
+    tree : _Tree
+        The sensors' link tree.
+    gyro_bias : ndarray, shape (S, 3), rad/s
+        Each gyro's mean over the static start (seed 003 section 4.2.4).
+    q0 : ndarray, shape (S, 4)
+        Initial attitudes (eqs. 2.9-2.11, 4.22).
+    covariance : ndarray, shape (3S + 3, 3S + 3)
+        The first covariance: attitudes 1e-4 rad^2, the elbow's acceleration (eq. 4.38).
+    mh, fnorm0 : ndarray, shape (S,)
+        The static compass's horizontal magnitude (eq. 4.33), uT, and its field strength.
+    rz : ndarray, shape (S, 2, 3)
+        The azimuth corrections as rows of a rotation (eq. 4.35).
+    """
+
+    tree: _Tree
+    gyro_bias: np.ndarray
+    q0: np.ndarray
+    covariance: np.ndarray
+    mh: np.ndarray
+    fnorm0: np.ndarray
+    rz: np.ndarray
 
 
 def sensor_tree(sensors) -> tuple[list[int], list[tuple[str, str]]]:
@@ -366,40 +395,55 @@ class ChainEKF:
         with threadpool_limits(limits=1):
             return self._run(rec)
 
-    def _run(self, rec: ImuRecording) -> np.ndarray:
-        o = self.options
-        s_n, n = len(rec.sensors), rec.n
-        dt = 1.0 / rec.rate_hz
-        tree = _tree(rec.sensors, self.model)
-        gyr = rec.gyr - gyro_bias(rec, self.static)[:, None]
-        dgyr = np.gradient(gyr, dt, axis=1)
+    def prepare(self, rec: ImuRecording) -> FilterStart:
+        """What the filter takes from the static start (and the common rotation) of `rec`.
+
+        `rec` holds at least the static start (and the common rotation, if any); the
+        filter's arithmetic after it depends on no later sample but the next one (the gyro's
+        derivative), so :class:`ImuStream` runs the same filter on samples as they come.
+        """
+        s_n = len(rec.sensors)
+        n0 = max(1, int(self.static.static_s * rec.rate_hz))
         q = initial_attitude(rec, self.static)
         cor = azimuth_correction(rec, self.static)
-        n0 = max(1, int(self.static.static_s * rec.rate_hz))
         mag = rec.mag
-        if mag is None:  # 6-axis sensors: a zero field that the gate below never passes, so
+        if mag is None:  # 6-axis sensors: a zero field that the gate never passes, so
             mag = np.zeros_like(rec.gyr)  # H3 observes nothing (its rows carry zero weight)
         m_static = np.einsum("sij,sj->si", quat_to_mat(q), mag[:, :n0].mean(axis=1))
-        mh = np.hypot(m_static[:, 0], m_static[:, 1])                      # eq. 4.33
         fnorm0 = np.linalg.norm(mag[:, :n0].mean(axis=1), axis=-1)
         fnorm0[fnorm0 == 0] = 1.0
         rz = np.zeros((s_n, 2, 3))                                          # eq. 4.35
         c, s_ = np.cos(-cor), np.sin(-cor)
         rz[:, 0, 0], rz[:, 0, 1], rz[:, 1, 0], rz[:, 1, 1] = c, -s_, s_, c
-        nx = 3 * s_n + 3
-        p_cov = np.eye(nx) * 1e-4
-        p_cov[-3:, -3:] = np.eye(3) * o.elbow_acc_sd**2
-        qn = (o.gyro_noise * dt) ** 2
-        qn_filled = qn + (o.filled_rate * dt) ** 2
+        p_cov = np.eye(3 * s_n + 3) * 1e-4
+        p_cov[-3:, -3:] = np.eye(3) * self.options.elbow_acc_sd**2
+        return FilterStart(tree=_tree(rec.sensors, self.model), gyro_bias=gyro_bias(rec, self.static),
+                           q0=q, covariance=p_cov,
+                           mh=np.hypot(m_static[:, 0], m_static[:, 1]),           # eq. 4.33
+                           fnorm0=fnorm0, rz=rz)
+
+    def _run(self, rec: ImuRecording) -> np.ndarray:
+        o = self.options
+        s_n, n = len(rec.sensors), rec.n
+        dt = 1.0 / rec.rate_hz
+        start = self.prepare(rec)
+        tree, mh, fnorm0, rz = start.tree, start.mh, start.fnorm0, start.rz
+        gyr = rec.gyr - start.gyro_bias[:, None]
+        dgyr = np.gradient(gyr, dt, axis=1)
+        q, p_cov = start.q0, start.covariance
+        mag = np.zeros_like(rec.gyr) if rec.mag is None else rec.mag
         filled = np.zeros((s_n, n), bool) if rec.filled is None else rec.filled
-        fast_w = np.degrees(np.linalg.norm(gyr, axis=-1)) >= (o.switch_dps or np.inf)
+        fast_w = fast_turns(gyr, o)
+        bias = np.zeros((s_n, 3))                          # learnt beyond the static start's
         if self.fast:
             from ._ekf_numba import run_fast
 
-            return run_fast(tree, q, gyr, dgyr, rec.acc, mag, dt, mh, fnorm0, rz, fast_w, filled, o)
+            return run_fast(tree, q, (p_cov, bias), gyr, dgyr, rec.acc, mag, dt, mh, fnorm0, rz,
+                            fast_w, filled, o)[0]
+        qn = (o.gyro_noise * dt) ** 2
+        qn_filled = qn + (o.filled_rate * dt) ** 2
         out = np.empty((s_n, n, 4))
         out[:, 0] = q
-        bias = np.zeros((s_n, 3))                          # learnt beyond the static start's
         for i in range(1, n):
             w = 0.5 * (gyr[:, i] + gyr[:, i - 1]) - bias
             q = qnormalize(qmul(q, qexp(w * dt)))                           # eq. 5.10
@@ -422,6 +466,14 @@ class ChainEKF:
                 bias -= np.einsum("sji,sj->si", r, dx[:3 * s_n].reshape(s_n, 3)) / o.bias_tau_s
             out[:, i] = q
         return out
+
+
+def fast_turns(gyr: np.ndarray, options: ChainEKFOptions) -> np.ndarray:
+    """Samples at or above Filter 4's angular-speed switch (Table 4.3), shape (S, N), bool.
+
+    `gyr` (S, N, 3), rad/s, the static start's bias removed.
+    """
+    return np.degrees(np.linalg.norm(gyr, axis=-1)) >= (options.switch_dps or np.inf)
 
 
 def _ancestors(j: int, parent) -> list[int]:

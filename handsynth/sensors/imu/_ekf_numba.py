@@ -129,19 +129,16 @@ def observe_fast(tree, r, w, dw, a, mag, mh, fnorm0, rz, fast, options):
 
 
 @njit(cache=True)
-def _loop(q0, gyr, dgyr, acc, mag, dt, parent, order, anc, via, own, vpar, ppar, children, roots,
-          mh, fnorm0, rz, fast, use_h2, switch, acc_sd, demoted, mag_sd, mag_gate, qn, qn_filled,
-          filled, elbow_var, bias_tau):
+def _loop(q0, p0, bias0, gyr, dgyr, acc, mag, dt, parent, order, anc, via, own, vpar, ppar,
+          children, roots, mh, fnorm0, rz, fast, use_h2, switch, acc_sd, demoted, mag_sd,
+          mag_gate, qn, qn_filled, filled, elbow_var, bias_tau):
     s_n, n = gyr.shape[0], gyr.shape[1]
-    nx = 3 * s_n + 3
     out = np.empty((s_n, n, 4))
     q = q0.copy()
     out[:, 0] = q
-    bias = np.zeros((s_n, 3))
+    bias = bias0.copy()
     w_i = np.empty((s_n, 3))
-    p = np.eye(nx) * 1e-4
-    for k in range(3):
-        p[3 * s_n + k, 3 * s_n + k] = elbow_var
+    p = p0.copy()
     r = np.empty((s_n, 3, 3))
     for i in range(1, n):
         for j in range(s_n):                                   # eq. 5.10
@@ -173,16 +170,24 @@ def _loop(q0, gyr, dgyr, acc, mag, dt, parent, order, anc, via, own, vpar, ppar,
             if bias_tau > 0.0:
                 bias[j] -= (r[j].T @ dx[3 * j:3 * j + 3]) / bias_tau
         out[:, i] = q
-    return out
+    return out, p, bias
 
 
-def run_fast(tree, q0, gyr, dgyr, acc, mag, dt, mh, fnorm0, rz, fast, filled, options):
-    """The whole filter loop compiled; the same arithmetic as :meth:`ChainEKF._run` with ``fast=False``."""
+def run_fast(tree, q0, state, gyr, dgyr, acc, mag, dt, mh, fnorm0, rz, fast, filled, options):
+    """The whole filter loop compiled; the same arithmetic as :meth:`ChainEKF._run` with ``fast=False``.
+
+    Sample 0 of the arrays is the one `q0` and `state`, ``(covariance, learnt gyro bias)``,
+    belong to.  Returns the quaternions (S, N, 4) and the state after the last sample.
+    """
     o = options
-    return _loop(np.ascontiguousarray(q0), np.ascontiguousarray(gyr), np.ascontiguousarray(dgyr),
-                 np.ascontiguousarray(acc), np.ascontiguousarray(mag), dt, tree.parent, tree.order,
-                 tree.anc, tree.via, tree.own, tree.vpar, tree.ppar, tree.children, tree.roots,
-                 mh, fnorm0, rz, np.ascontiguousarray(fast), o.use_h2, o.switch_dps is not None,
-                 o.acc_sd, o.demoted, o.mag_sd, o.mag_gate, (o.gyro_noise * dt) ** 2,
-                 (o.gyro_noise * dt) ** 2 + (o.filled_rate * dt) ** 2,
-                 np.ascontiguousarray(filled), o.elbow_acc_sd**2, o.bias_tau_s or 0.0)
+    p0, bias0 = state
+    out, p, bias = _loop(
+        np.ascontiguousarray(q0), np.ascontiguousarray(p0), np.ascontiguousarray(bias0),
+        np.ascontiguousarray(gyr), np.ascontiguousarray(dgyr), np.ascontiguousarray(acc),
+        np.ascontiguousarray(mag), dt, tree.parent, tree.order, tree.anc, tree.via, tree.own,
+        tree.vpar, tree.ppar, tree.children, tree.roots, mh, fnorm0, rz,
+        np.ascontiguousarray(fast), o.use_h2, o.switch_dps is not None, o.acc_sd, o.demoted,
+        o.mag_sd, o.mag_gate, (o.gyro_noise * dt) ** 2,
+        (o.gyro_noise * dt) ** 2 + (o.filled_rate * dt) ** 2, np.ascontiguousarray(filled),
+        o.elbow_acc_sd**2, o.bias_tau_s or 0.0)
+    return out, (p, bias)

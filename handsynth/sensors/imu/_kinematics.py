@@ -247,7 +247,8 @@ def thumb_cmc_model(cal: ImuRecording, frames: dict, *, static=None,
             x = -x
         axes.append(frames["thumb_metacarpal"] @ x)
     q0 = initial_attitude(cal, static or _calibration_static(cal))
-    rest = _relative(q0[:, None], cal.sensors, frames, "hand_radial", "thumb_metacarpal")[0]
+    rest = _relative(quat_to_mat(q0[:, None]), cal.sensors, frames, "hand_radial",
+                     "thumb_metacarpal")[0]
     return ThumbCmcModel(np.stack(axes), rest)
 
 
@@ -343,15 +344,17 @@ def bone_lengths_mm(chains: dict) -> dict[str, float]:
             for bone, start in BVH_BONE_STARTS.items()}
 
 
-def _world_link(quats, sensors, frames, sensor):
-    """Rotation G_R_L from `sensor`'s link frame to the world, (N, 3, 3)."""
-    return quat_to_mat(quats[sensors.index(sensor)]) @ np.asarray(frames[sensor], float).T
+def _world_link(rot, sensors, frames, sensor):
+    """Rotation G_R_L from `sensor`'s link frame to the world, (N, 3, 3), from the sensors'
+    rotation matrices `rot` (S, N, 3, 3) (:func:`quat_to_mat` of their quaternions)."""
+    return rot[sensors.index(sensor)] @ np.asarray(frames[sensor], float).T
 
 
-def _relative(quats, sensors, frames, prox, dist):
-    """Rotation Lj_R_L(j+1) from the proximal to the distal link frame (eq. 5.4)."""
-    rp = _world_link(quats, sensors, frames, prox)                           # G_R_Lj
-    rd = _world_link(quats, sensors, frames, dist)
+def _relative(rot, sensors, frames, prox, dist):
+    """Rotation Lj_R_L(j+1) from the proximal to the distal link frame (eq. 5.4); `rot` as
+    :func:`_world_link`'s."""
+    rp = _world_link(rot, sensors, frames, prox)                             # G_R_Lj
+    rd = _world_link(rot, sensors, frames, dist)
     return np.einsum("nji,njk->nik", rp, rd)                                 # Lj_R_L(j+1), eq. 5.4
 
 
@@ -409,8 +412,9 @@ def joint_angles(quats, sensors, frames: dict, *, side: str = "right",
     out = np.full((n, len(JOINT_NAMES)), np.nan)
     sign = 1.0 if side == "right" else -1.0
     extra = {}
+    rot = quat_to_mat(quats)
     for joint, (prox, dist) in JOINT_LINKS.items():
-        rel = _relative(quats, sensors, frames, prox, dist)
+        rel = _relative(rot, sensors, frames, prox, dist)
         phi, theta, psi = (np.degrees(a) for a in _euler_zyx(rel))
         if joint == "thumb_cmc":
             extra["thumb_cmc_euler"] = np.stack([phi, theta, psi], axis=1)
@@ -461,7 +465,7 @@ def hand_attitude(quats, sensors, frames: dict) -> np.ndarray:
     if "hand_radial" not in sensors or "hand_radial" not in frames:
         raise InvalidInputError("the hand's attitude needs sensor 'hand_radial' in sensors and "
                                 "its link frame in frames (see link_frames)")
-    return mat_to_quat(_world_link(quats, sensors, frames, "hand_radial"))
+    return mat_to_quat(_world_link(quat_to_mat(quats), sensors, frames, "hand_radial"))
 
 
 def truth_hand_attitude(rec: ImuRecording, hand) -> np.ndarray:
@@ -663,6 +667,7 @@ def fingertip_positions(quats, sensors, model: ChainModel) -> dict:
     sensors = tuple(sensors)
     quats = check_quats(quats, sensors)
     out = {}
+    rot = quat_to_mat(quats)
     for f, chain in CHAINS.items():
         pos = np.zeros((quats.shape[1], 3))
         joints = []
@@ -670,7 +675,7 @@ def fingertip_positions(quats, sensors, model: ChainModel) -> dict:
             if s not in sensors:
                 raise InvalidInputError(f"fingertip of {f} needs sensor {s!r}")
             v = model.links[(s, a, b)]
-            pos = pos + np.einsum("nij,j->ni", quat_to_mat(quats[sensors.index(s)]), v)
+            pos = pos + np.einsum("nij,j->ni", rot[sensors.index(s)], v)
             joints.append(pos.copy())
         out[f] = pos
         out[f"{f}_joints"] = np.stack(joints, axis=1)

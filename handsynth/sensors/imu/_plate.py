@@ -136,7 +136,8 @@ def fuse_plate(quats, sensors, rotations: dict, *, disagree_deg: float = 10.0) -
         r = np.asarray(rotations[s], dtype=float)
         if r.shape != (3, 3) or not np.allclose(r.T @ r, np.eye(3), atol=1e-6):
             raise InvalidInputError(f"plate rotation of {s!r} is not a rotation matrix")
-    rel = {s: mat_to_quat(rotations[s]) for s in present}                   # ref <- sensor
+    rel = dict(zip(present, mat_to_quat(np.stack([np.asarray(rotations[s], dtype=float)
+                                                  for s in present]))))  # ref <- sensor
     # each sensor's estimate of the reference frame's attitude, world <- ref
     ref = np.stack([qmul(quats[sensors.index(s)], qconj(rel[s])) for s in present])
     weight = np.ones(ref.shape[:2])

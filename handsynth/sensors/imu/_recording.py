@@ -236,7 +236,8 @@ class ImuRecording:
 
 def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_MPS2,
                     gyr_full_scale: float = np.radians(2000.0), static_s: float = 1.0,
-                    source: str = "recording", sensor_calibration=None) -> list[str]:
+                    source: str = "recording", sensor_calibration=None,
+                    axes: bool = True) -> list[str]:
     """Check a recording; raise on unusable data, return warnings otherwise.
 
     Parameters
@@ -255,6 +256,10 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
         magnetometer's own hard and soft iron, which it removes, are not called a
         disturbance (on the held-out configuration's calibration recording 13 of 25
         sensors were, none of them near a magnet).  The other checks read `rec` as given.
+    axes : bool, keyword-only
+        Judge whether the gyro's and the magnetometer's axes are the accelerometer's
+        (False: a stretch too short to tell, such as a static start and one common
+        rotation, whose single axis of turning leaves the others unseen).
 
     Raises
     ------
@@ -397,7 +402,7 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
                 f"start while its accelerometer is still; deg/s given as rad/s? (use gyro units "
                 f"'deg/s', --gyr-units deg/s)")
     _check_gyro_turns(rec, n0, source)
-    warnings, gyro_off = _check_gyro_axes(rec, n0)
+    warnings, gyro_off = _check_gyro_axes(rec, n0) if axes else ([], frozenset())
     # deg/s read as rad/s where the gyro's bias is small (a logger that takes it off): the
     # mean stays under 0.5 "rad/s", but the gyro's noise at rest is 57 times too large
     # (0.18 "rad/s" in the simulated start against 0.003) while the accelerometer, which
@@ -417,7 +422,7 @@ def check_recording(rec: ImuRecording, *, acc_full_scale: float = 16 * GRAVITY_M
     if rec.mag is not None:
         strength = None if sensor_calibration is None else _corrected_mag(rec, sensor_calibration)
         warnings.extend(_check_mag_field(rec, source, n0=n0, gyro_off=gyro_off,
-                                         corrected_ut=strength))
+                                         corrected_ut=strength, axes=axes))
     # what was reported for this object, so that an estimator's run does not repeat it
     object.__setattr__(rec, "reported", (rec.reported or frozenset()) | frozenset(warnings))
     return warnings
@@ -451,7 +456,7 @@ def _corrected_mag(rec: ImuRecording, sensor_calibration) -> np.ndarray:
 
 
 def _check_mag_field(rec: ImuRecording, source: str, *, n0: int, gyro_off: frozenset[str],
-                     corrected_ut: np.ndarray | None = None) -> list[str]:
+                     corrected_ut: np.ndarray | None = None, axes: bool = True) -> list[str]:
     """Refuse dead magnetometers and a field of the wrong units; warn about disturbances and
     magnetometer axes that are not the gyro's (of the sensors not in `gyro_off`).  The
     disturbances are judged on `corrected_ut` where given (the readings corrected by the
@@ -475,7 +480,8 @@ def _check_mag_field(rec: ImuRecording, source: str, *, n0: int, gyro_off: froze
             f"{source}: the magnetometers read a median field of {med:.4g} uT; the Earth's is "
             f"25-65 uT (indoors {_EARTH_FIELD_UT[0]:g}-{_EARTH_FIELD_UT[1]:g} taken as "
             "possible): check the magnetometer units (--mag-units)")
-    warnings.extend(_check_mag_axes(rec, n0, gyro_off))
+    if axes:
+        warnings.extend(_check_mag_axes(rec, n0, gyro_off))
     if corrected_ut is not None:
         field_norm = np.sqrt(np.einsum("snk,snk->sn", corrected_ut, corrected_ut))
         med = np.median(field_norm)

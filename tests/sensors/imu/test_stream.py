@@ -1,0 +1,116 @@
+import warnings
+
+import numpy as np
+import pytest
+
+from handsynth.errors import RecordingError
+from handsynth.sensors.imu import FILTER4B, ImuStream, StaticStart, TrackedSamples
+
+
+def _feed(stream, rec, sizes):
+    """Push `rec` in packets of `sizes` (cycled); return everything finished, closed."""
+    out, i, k = [], 0, 0
+    while i < rec.n:
+        n = sizes[k % len(sizes)]
+        out.append(stream.push(rec.acc[:, i:i + n], rec.gyr[:, i:i + n],
+                               None if rec.mag is None else rec.mag[:, i:i + n]))
+        i, k = i + n, k + 1
+    out.append(stream.close())
+    return out
+
+
+def _joined(parts):
+    return (np.concatenate([p.t_s for p in parts]), np.concatenate([p.quat for p in parts], axis=1),
+            np.concatenate([p.angles_deg for p in parts]),
+            {f: np.concatenate([p.tips_m[f] for p in parts if len(p)]) for f in parts[-1].tips_m})
+
+
+@pytest.mark.parametrize("options", [None, FILTER4B], ids=["filter4", "filter4b"])
+def test_a_stream_reads_what_track_reads(worn, options):
+    """Sample by sample and in uneven packets, the stream's answers are track's."""
+    cal, rec = worn
+    rec = rec.slice(0, 700)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # track's notes on the simulated recording
+        whole = cal.track(rec, options=options)
+    sub = rec.subset(cal.sensors)
+    for sizes in ([1], [3, 1, 37, 2, 150, 5]):
+        stream = ImuStream(cal, rate_hz=rec.rate_hz, options=options, start_s=2.5)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # the warm-up of this recording warns of nothing
+            parts = _feed(stream, sub, sizes)
+        t, q, angles, tips = _joined(parts)
+        # nothing before the static start and the common rotation (4 s), then everything
+        first = next(k for k, p in enumerate(parts) if len(p))
+        assert sum(sizes[k % len(sizes)] for k in range(first + 1)) >= stream.warmup_n == 401
+        np.testing.assert_allclose(t, 2.5 + np.arange(rec.n) / rec.rate_hz)
+        np.testing.assert_allclose(q, whole["quat"], rtol=0, atol=1e-9)
+        np.testing.assert_allclose(angles, whole["angles"], rtol=0, atol=1e-7)
+        for f, v in whole["tips"].items():
+            np.testing.assert_allclose(tips[f], v, rtol=0, atol=1e-9)
+    assert isinstance(parts[-1], TrackedSamples) and len(parts[-1]) == 1  # close: the last
+
+
+def test_lost_readings_are_held_then_refused(worn):
+    cal, rec = worn
+    sub = rec.subset(cal.sensors).slice(0, 800)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        clean = _joined(_feed(ImuStream(cal, rate_hz=rec.rate_hz), sub, [10]))[2]
+    k = cal.sensors.index("index_middle")
+    acc, gyr, mag = sub.acc.copy(), sub.gyr.copy(), sub.mag.copy()
+    gyr[k, 600:620] = np.nan            # 0.2 s lost
+    acc[k, 650, 1] = np.inf
+    lost = type(sub)(sub.rate_hz, sub.sensors, acc, gyr, mag)
+    stream = ImuStream(cal, rate_hz=rec.rate_hz)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        parts = _feed(stream, lost, [10])
+    held = _joined(parts)[2]
+    assert stream.filled_count[k] == 21 and stream.filled_count.sum() == 21
+    flags = np.concatenate([p.held for p in parts], axis=1)
+    assert flags.shape == (20, 800) and flags.sum() == 21
+    assert flags[k, 600:620].all() and flags[k, 650]
+    assert np.isfinite(held).all()
+    # the index PIP and DIP (the sensor's joints) drift while held (8.0 deg at the gap's end
+    # here) and come back within a second; the other joints hardly move
+    err = np.abs(held - clean)
+    assert np.abs(held[:599] - clean[:599]).max() == 0.0  # 599 reads 600 (its derivative)
+    others = [j for j in range(20) if j not in (6, 7)]
+    assert 3.0 < err[600:625, 6:8].max() < 12.0 and err[:, others].max() < 0.5
+    assert err[720:, 6:8].max() < 2.0
+    gyr[k, 600:630] = np.nan            # 0.3 s: more than max_hold_s
+    stream = ImuStream(cal, rate_hz=rec.rate_hz)
+    with pytest.raises(RecordingError, match=r"sensor index_middle: readings not finite for "
+                                             r"more than 0.25 s .* t = 6.250 s: a sensor lost"):
+        _feed(stream, type(sub)(sub.rate_hz, sub.sensors, acc, gyr, mag), [10])
+
+
+def test_a_stream_says_what_it_lacks(worn):
+    cal, rec = worn
+    sub = rec.subset(cal.sensors)
+    stream = ImuStream(cal, rate_hz=rec.rate_hz, static=StaticStart(1.0, None, None))
+    assert stream.warmup_n == 101 and not stream.tracking
+    assert len(stream.push(sub.acc[:, :50], sub.gyr[:, :50], sub.mag[:, :50])) == 0
+    with pytest.raises(RecordingError, match=r"mag given in some pushes and not in others"):
+        stream.push(sub.acc[:, 50], sub.gyr[:, 50])
+    with pytest.raises(RecordingError, match=r"gyr has shape \(19, 3\), expected \(20, 3\) or "
+                                             r"\(20, n, 3\) with n = 1: one row per sensor"):
+        stream.push(sub.acc[:, 50], sub.gyr[1:, 50], sub.mag[:, 50])
+    with pytest.raises(RecordingError, match=r"ended after 50 samples, before its static start "
+                                             r"and common rotation \(101 samples at 100 Hz\)"):
+        stream.close()
+    with pytest.raises(RecordingError, match="the stream is closed"):
+        stream.push(sub.acc[:, 50], sub.gyr[:, 50], sub.mag[:, 50])
+
+
+def test_a_start_that_moves_is_refused_when_the_warm_up_is_read(worn):
+    cal, rec = worn
+    sub = rec.subset(cal.sensors)
+    gyr = sub.gyr.copy()
+    gyr[:, :100] += np.radians(60.0)  # deg/s read as rad/s: a turning "still" start
+    stream = ImuStream(cal, rate_hz=rec.rate_hz, static=StaticStart(1.0, None, None))
+    assert len(stream.push(sub.acc[:, :100], gyr[:, :100], sub.mag[:, :100])) == 0
+    with pytest.raises(RecordingError, match=r"stream: sensor .* gyro reads .* rad/s during the "
+                                             r"static start"):
+        stream.push(sub.acc[:, 100], gyr[:, 100], sub.mag[:, 100])
