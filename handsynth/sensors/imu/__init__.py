@@ -112,7 +112,7 @@ from ._recording import (
 )
 from ._sensorcal import SensorCalibration, fit_sensor_calibration
 from ._simulate import SkinMotion, simulate_imu
-from ._stream import ImuStream, TrackedSamples, stream_csv
+from ._stream import ImuStream, StreamState, TrackedSamples, stream_csv
 from ._swaps import SWAP_FLOOR_MPS2, SWAP_RATIO, swap_ratios, swapped_sensors
 from ._vectors import (
     ROTATIONS,
@@ -195,6 +195,7 @@ __all__ = [
     "SimConfig",
     "SkinMotion",
     "StaticStart",
+    "StreamState",
     "ThumbCmcModel",
     "TrackedSamples",
     "VQFEstimator",

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import dataclasses
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -38,7 +38,7 @@ from ._kinematics import fingertip_positions, joint_angles
 from ._recording import UNITS, ImuRecording, check_rate, check_recording
 from ._recording import _columns as _csv_columns
 
-__all__ = ["ImuStream", "TrackedSamples", "stream_csv"]
+__all__ = ["ImuStream", "StreamState", "TrackedSamples", "stream_csv"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -68,6 +68,50 @@ class TrackedSamples:
 
     def __len__(self) -> int:
         return len(self.t_s)
+
+
+@dataclass(eq=False)
+class StreamState:
+    """The running state of an :class:`ImuStream` (its options stay in the stream).
+
+    Attributes
+    ----------
+    six_axis : bool or None
+        Whether the pushes carry no magnetometer (None before the first).
+    warmup : list of tuple
+        The raw (acc, gyr, mag) blocks of the static start, until it is read.
+    start : FilterStart or None
+        What the filter took from the static start, once read.
+    filter : tuple
+        The filter's state after the last sample finished: attitudes (S, 4), covariance
+        (3S + 3, 3S + 3), learnt gyro biases (S, 3).
+    done : int
+        Samples finished.
+    tail : dict
+        ``acc``, ``gyr`` (bias removed), ``mag``, ``filled``: the samples from the last
+        finished one on, corrected.
+    last_raw : tuple of ndarray
+        Each sensor's last reading that was finite (acc, gyr[, mag]), shape (S, 3) each.
+    held_run : ndarray, shape (S,), int
+        Readings held in a row now, per sensor.
+    held_count : ndarray, shape (S,), int
+        Readings held since the start, per sensor.
+    warned : set of str
+        Warnings of the plate fusion given once already.
+    closed : bool
+    """
+
+    held_run: np.ndarray
+    held_count: np.ndarray
+    six_axis: bool | None = None
+    warmup: list = field(default_factory=list)
+    start: FilterStart | None = None
+    filter: tuple = ()
+    done: int = 0
+    tail: dict = field(default_factory=dict)
+    last_raw: tuple = ()
+    warned: set = field(default_factory=set)
+    closed: bool = False
 
 
 class ImuStream:
@@ -127,17 +171,8 @@ class ImuStream:
         #: samples read before the filter starts: the static start and the common rotation
         #: (as many as :func:`gyro_bias` and :func:`azimuth_correction` read), and one more
         self.warmup_n = max(max(1, round(t * self.rate_hz)) for t in ends) + 1
-        self._six_axis: bool | None = None
-        self._raw: list[tuple[np.ndarray, np.ndarray, np.ndarray | None]] = []
-        self._start: FilterStart | None = None   # once the warm-up is read
-        self._state: tuple = ()                  # (q, covariance, learnt bias) after `_done`
-        self._done = 0                           # samples finished
-        self._tail: dict = {}                    # the samples from the last finished one on
-        self._last_raw: tuple = ()               # each sensor's last finite reading
-        self._held = np.zeros(len(calibration.sensors), int)
-        self.filled_count = np.zeros(len(calibration.sensors), int)
-        self._warned: set[str] = set()
-        self._closed = False
+        self.state = StreamState(held_run=np.zeros(len(calibration.sensors), int),
+                                 held_count=np.zeros(len(calibration.sensors), int))
 
     @property
     def sensors(self) -> tuple:
@@ -147,7 +182,7 @@ class ImuStream:
     @property
     def tracking(self) -> bool:
         """Whether the static start has been read and the filter runs."""
-        return self._start is not None
+        return self.state.start is not None
 
     # -- input -----------------------------------------------------------------------
 
@@ -188,23 +223,23 @@ class ImuStream:
             that completes it); a sensor's readings not finite for longer than
             `max_hold_s`; a push after :meth:`close`.
         """
-        if self._closed:
+        if self.state.closed:
             raise RecordingError("the stream is closed: make a new ImuStream")
         acc = self._as_block("acc", acc, None)
         n = acc.shape[1]
         gyr = self._as_block("gyr", gyr, n)
         six = mag is None
-        if self._six_axis is None:
-            self._six_axis = six
-        elif six != self._six_axis:
+        if self.state.six_axis is None:
+            self.state.six_axis = six
+        elif six != self.state.six_axis:
             raise RecordingError("mag given in some pushes and not in others: give every "
                                  "sensor's magnetometer in every push, or never (6-axis)")
         mag = None if six else self._as_block("mag", mag, n)
         if n == 0:
             return self._empty()
-        if self._start is None:
-            self._raw.append((acc, gyr, mag))
-            if sum(a.shape[1] for a, _, _ in self._raw) < self.warmup_n:
+        if self.state.start is None:
+            self.state.warmup.append((acc, gyr, mag))
+            if sum(a.shape[1] for a, _, _ in self.state.warmup) < self.warmup_n:
                 return self._empty()
             return self._begin()
         block, filled = self._hold(acc, gyr, mag)
@@ -218,11 +253,11 @@ class ImuStream:
         RecordingError
             The stream ended before its static start (and common rotation) were read.
         """
-        if self._closed:
+        if self.state.closed:
             return self._empty()
-        self._closed = True
-        if self._start is None:
-            got = sum(a.shape[1] for a, _, _ in self._raw)
+        self.state.closed = True
+        if self.state.start is None:
+            got = sum(a.shape[1] for a, _, _ in self.state.warmup)
             raise RecordingError(
                 f"the stream ended after {got} samples, before its static start and common "
                 f"rotation ({self.warmup_n} samples at {self.rate_hz:g} Hz) were read")
@@ -249,33 +284,33 @@ class ImuStream:
             chans = [c.copy() for c in chans]
             for i in range(acc.shape[1]):
                 for k in np.flatnonzero(bad[:, i]):
-                    self._held[k] += 1
-                    if self._held[k] > self.max_hold:
-                        index = self._done - 1 + self._tail["gyr"].shape[1] + i
+                    self.state.held_run[k] += 1
+                    if self.state.held_run[k] > self.max_hold:
+                        index = self.state.done - 1 + self.state.tail["gyr"].shape[1] + i
                         t = self.start_s + index / self.rate_hz
                         raise RecordingError(
                             f"sensor {self.sensors[k]}: readings not finite for more than "
                             f"{self.max_hold / self.rate_hz:g} s (max_hold_s), at t = {t:.3f} s: "
                             "a sensor lost; the stream stops")
-                    for c, last in zip(chans, self._last_raw):
+                    for c, last in zip(chans, self.state.last_raw):
                         c[k, i] = last[k]
                 for k in np.flatnonzero(~bad[:, i]):
-                    self._held[k] = 0
-                self._last_raw = tuple(c[:, i].copy() for c in chans)
-            self.filled_count += bad.sum(axis=1)
+                    self.state.held_run[k] = 0
+                self.state.last_raw = tuple(c[:, i].copy() for c in chans)
+            self.state.held_count += bad.sum(axis=1)
         else:
-            self._held[:] = 0
-            self._last_raw = tuple(c[:, -1].copy() for c in chans)
+            self.state.held_run[:] = 0
+            self.state.last_raw = tuple(c[:, -1].copy() for c in chans)
         rec = ImuRecording(self.rate_hz, self.sensors, chans[0], chans[1],
                            None if mag is None else chans[2])
         return rec, bad
 
     def _begin(self) -> TrackedSamples:
         """The warm-up read: check it, prepare the filter, filter it but its last sample."""
-        acc = np.concatenate([a for a, _, _ in self._raw], axis=1)
-        gyr = np.concatenate([g for _, g, _ in self._raw], axis=1)
-        mag = None if self._six_axis else np.concatenate([m for _, _, m in self._raw], axis=1)
-        self._raw = []
+        blocks, self.state.warmup = self.state.warmup, []
+        acc = np.concatenate([a for a, _, _ in blocks], axis=1)
+        gyr = np.concatenate([g for _, g, _ in blocks], axis=1)
+        mag = None if self.state.six_axis else np.concatenate([m for _, _, m in blocks], axis=1)
         raw = ImuRecording(self.rate_hz, self.sensors, acc, gyr, mag, start_s=self.start_s)
         rec = self._correct(raw, None)
         static_s = self._filter.static.static_s
@@ -284,16 +319,17 @@ class ImuStream:
         # and one common rotation turn about one axis, which leaves the others unseen
         for w in check_recording(rec, static_s=static_s, axes=False, source="stream"):
             warnings.warn(w, UserWarning, stacklevel=3)
-        self._last_raw = (acc[:, -1].copy(), gyr[:, -1].copy()) + (
+        self.state.last_raw = (acc[:, -1].copy(), gyr[:, -1].copy()) + (
             () if mag is None else (mag[:, -1].copy(),))
         start = self._filter.prepare(rec)
-        self._start = start
-        self._state = (start.q0, start.covariance, np.zeros((len(self.sensors), 3)))
+        self.state.start = start
+        self.state.filter = (start.q0, start.covariance, np.zeros((len(self.sensors), 3)))
         first = self._outputs(start.q0[:, None], 0, np.zeros((len(self.sensors), 1), bool))
-        self._tail = {"acc": rec.acc[:, :1], "gyr": rec.gyr[:, :1] - start.gyro_bias[:, None],
-                      "mag": (np.zeros_like(rec.gyr) if rec.mag is None else rec.mag)[:, :1],
-                      "filled": np.zeros((len(self.sensors), 1), bool)}
-        self._done = 1
+        self.state.tail = {
+            "acc": rec.acc[:, :1], "gyr": rec.gyr[:, :1] - start.gyro_bias[:, None],
+            "mag": (np.zeros_like(rec.gyr) if rec.mag is None else rec.mag)[:, :1],
+            "filled": np.zeros((len(self.sensors), 1), bool)}
+        self.state.done = 1
         rest = self._advance(rec.slice(1, rec.n))
         return _join(first, rest)
 
@@ -301,7 +337,7 @@ class ImuStream:
         """Append `rec` (None: the end) and filter every sample whose next one is read."""
         from ._ekf_numba import run_fast
 
-        tail, start, o = self._tail, self._start, self._filter.options
+        tail, start, o = self.state.tail, self.state.start, self._filter.options
         assert start is not None  # push and close call this once the warm-up is read
         if rec is not None:
             tail["acc"] = np.concatenate([tail["acc"], rec.acc], axis=1)
@@ -324,17 +360,17 @@ class ImuStream:
         dg[:, 1:c + 1] = (g[:, 2:c + 2] - g[:, 0:c]) / (2.0 * dt)
         if rec is None:
             dg[:, m] = (g[:, m] - g[:, m - 1]) / dt
-        q, p, bias = self._state
+        q, p, bias = self.state.filter
         out, (p, bias) = run_fast(start.tree, q, (p, bias), g[:, : m + 1], dg,
                                   tail["acc"][:, : m + 1], tail["mag"][:, : m + 1], dt, start.mh,
                                   start.fnorm0, start.rz, fast_turns(g[:, : m + 1], o),
                                   tail["filled"][:, : m + 1], o)
-        self._state = (out[:, -1], p, bias)
+        self.state.filter = (out[:, -1], p, bias)
         held = tail["filled"][:, 1:m + 1]
         for k in tail:
             tail[k] = tail[k][:, m:]
-        done = self._outputs(out[:, 1:], self._done, held)
-        self._done += m
+        done = self._outputs(out[:, 1:], self.state.done, held)
+        self.state.done += m
         return done
 
     def _outputs(self, q: np.ndarray, first: int, held: np.ndarray) -> TrackedSamples:
@@ -345,8 +381,8 @@ class ImuStream:
             q = cal.fuse(q, self.sensors, plate_fusion=self.plate_fusion)
         for w in caught:                     # a plate sensor straying: said once a stream
             key = str(w.message).split("(")[0]
-            if key not in self._warned:
-                self._warned.add(key)
+            if key not in self.state.warned:
+                self.state.warned.add(key)
                 warnings.warn(f"{w.message} (said once for this stream)", UserWarning,
                               stacklevel=4)
         angles, _ = joint_angles(q, self.sensors, cal.frames, side=cal.side, zero=cal.zero,

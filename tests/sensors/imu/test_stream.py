@@ -67,7 +67,7 @@ def test_lost_readings_are_held_then_refused(worn):
         warnings.simplefilter("ignore")
         parts = _feed(stream, lost, [10])
     held = _joined(parts)[2]
-    assert stream.filled_count[k] == 21 and stream.filled_count.sum() == 21
+    assert stream.state.held_count[k] == 21 and stream.state.held_count.sum() == 21
     flags = np.concatenate([p.held for p in parts], axis=1)
     assert flags.shape == (20, 800) and flags.sum() == 21
     assert flags[k, 600:620].all() and flags[k, 650]
@@ -114,3 +114,16 @@ def test_a_start_that_moves_is_refused_when_the_warm_up_is_read(worn):
     with pytest.raises(RecordingError, match=r"stream: sensor .* gyro reads .* rad/s during the "
                                              r"static start"):
         stream.push(sub.acc[:, 100], gyr[:, 100], sub.mag[:, 100])
+
+
+def test_six_axis_sensors_stream_as_they_track(worn):
+    """Without magnetometers (headings from the common rotation) the answers are track's."""
+    import dataclasses
+
+    cal, rec = worn
+    rec = dataclasses.replace(rec.subset(cal.sensors).slice(0, 600), mag=None)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        whole = cal.track(rec)["angles"]
+        streamed = _joined(_feed(ImuStream(cal, rate_hz=rec.rate_hz), rec, [7]))[2]
+    np.testing.assert_allclose(streamed, whole, rtol=0, atol=1e-7)
