@@ -488,8 +488,8 @@ def _static_start(static_s, align):
 @click.option("--out", "out", type=click.File("w"), default="-", show_default=True,
               help="Joint angles CSV to write as they come (- : standard output).")
 @click.option("--max-hold", "max_hold_s", type=float, default=None, metavar="SECONDS",
-              help="Longest loss of one sensor's readings held before the stream stops, s "
-                   "[default: 0.25].")
+              help="Longest loss of one sensor's readings filled in (predicted from the "
+                   "other sensors') before the stream stops, s [default: 0.5].")
 @click.option("--no-sensor-calibration", is_flag=True,
               help="Do not apply the calibration file's accelerometer/gyro/magnetometer "
                    "corrections (for readings already corrected).")
@@ -499,8 +499,8 @@ def stream(calibration_path, rate_hz, acc_units, gyr_units, mag_units, static_s,
 
     The input is 'imu track's CSV one line at a time (a header first); each sample's joint
     angles (time_s, the 20 joints in degrees, and held_sensors: how many sensors' readings
-    were lost there and held) are written and flushed as soon as the next sample has come.
-    A reading lost (an empty or non-finite cell) is held for up to --max-hold.
+    were lost there and filled in) are written and flushed as soon as the next sample has
+    come. A reading lost (an empty or non-finite cell) is filled in for up to --max-hold.
     """
     from ..models import JOINT_NAMES
     from ..sensors.imu import FILTER4B, ImuCalibration, stream_csv

@@ -173,18 +173,32 @@ def _predicted(arrays: dict, k: int, ok: np.ndarray) -> dict:
 
     Fitted on the samples `ok` (at most :data:`_MAX_FIT_ROWS` of them, evenly spread):
     each of its six values from the same channel's three values of every other sensor
-    and a constant.  With no other sensor, the constant alone (its mean).
+    and a constant (:func:`prediction_coefficients`).  With no other sensor, the constant
+    alone (its mean).
     """
     rows = np.nonzero(ok)[0]
     rows = rows[:: max(1, rows.size // _MAX_FIT_ROWS)]
+    coef = prediction_coefficients(arrays, k, rows)
+    return {name: prediction_regressors(arrays[name], k) @ c for name, c in coef.items()}
+
+
+def prediction_regressors(a: np.ndarray, k: int) -> np.ndarray:
+    """What sensor `k`'s channel is predicted from: the same channel's three values of every
+    other sensor and a constant, shape (N, 3 (S - 1) + 1), from `a` (S, N, 3)."""
+    n = a.shape[1]
+    return np.concatenate([np.delete(a, k, axis=0).transpose(1, 0, 2).reshape(n, -1),
+                           np.ones((n, 1))], axis=1)
+
+
+def prediction_coefficients(arrays: dict, k: int, rows) -> dict:
+    """Least-squares coefficients that predict sensor `k`'s ``acc`` and ``gyr`` from
+    :func:`prediction_regressors`, fitted on the samples `rows` of `arrays` (name ->
+    (S, N, 3)); name -> (3 (S - 1) + 1, 3)."""
     out = {}
     for name in ("acc", "gyr"):
         a = arrays[name]
-        n = a.shape[1]
-        x = np.concatenate([np.delete(a, k, axis=0).transpose(1, 0, 2).reshape(n, -1),
-                            np.ones((n, 1))], axis=1)
-        coef, *_ = np.linalg.lstsq(x[rows], a[k, rows], rcond=None)
-        out[name] = x @ coef
+        coef, *_ = np.linalg.lstsq(prediction_regressors(a, k)[rows], a[k, rows], rcond=None)
+        out[name] = coef
     return out
 
 

@@ -7,17 +7,18 @@ common rotation, if one is set), takes from it what the filter takes (gyro biase
 initial attitudes, the compass's static field; :meth:`ChainEKF.prepare`), then filters
 every sample as soon as the next one has come, since the gyro's derivative at a sample
 is the central difference of its neighbours, as in :func:`numpy.gradient`.  The answers
-equal :meth:`ImuCalibration.track`'s on the same readings (tested to 1e-9); the last
+equal :meth:`ImuCalibration.track`'s on the same readings (tested to 1e-7 deg); the last
 sample, which has no next one, is finished by :meth:`ImuStream.close` with the one-sided
 difference, as :func:`numpy.gradient` does at a recording's end.
 
 What a whole recording allows and a stream does not: the checks that compare stretches of
 a recording (sensors exchanged, streams out of step, angles beyond the range of motion in
-a share of the samples) and the bridging of lost samples from both sides.  The static
-start is checked as :func:`check_recording` checks a recording; afterwards a reading that
-is not finite (a lost packet) is replaced by the sensor's previous reading and marked as
-filled in (Filter 4 loosens that sensor's attitude meanwhile, as for a bridged gap), up
-to `max_hold_s`, beyond which the stream stops with an error naming the sensor.
+a share of the samples, the axes' conventions) and the bridging of lost samples from both
+sides.  The static start is checked as :func:`check_recording` checks a recording;
+afterwards a reading that is not finite (a lost packet) is filled in from the other
+sensors' readings (`max_hold_s`) and marked (Filter 4 loosens that sensor's attitude
+meanwhile, as for a bridged gap); a longer loss stops the stream with an error naming the
+sensor.
 """
 
 from __future__ import annotations
@@ -35,10 +36,17 @@ from ._attitude import StaticStart, check_static_fits
 from ._calibration import ImuCalibration
 from ._ekf import ChainEKF, ChainEKFOptions, FilterStart, fast_turns
 from ._kinematics import fingertip_positions, joint_angles
+from ._lost import prediction_coefficients, prediction_regressors
 from ._recording import UNITS, ImuRecording, check_rate, check_recording
 from ._recording import _columns as _csv_columns
 
 __all__ = ["ImuStream", "StreamState", "TrackedSamples", "stream_csv"]
+
+#: Seconds of readings (every sensor read) a lost sensor's prediction is fitted on, and the
+#: fewest samples it is fitted on (below, the reading is held): three per coefficient of
+#: 20 sensors' regression (58).
+_HISTORY_S = 10.0
+_MIN_FIT_SAMPLES = 174
 
 
 @dataclass(frozen=True, eq=False)
@@ -56,8 +64,8 @@ class TrackedSamples:
     tips_m : dict
         Finger -> (M, 3) fingertip positions from the elbow, metres (eq. 3.12).
     held : ndarray, shape (S, M), bool
-        The sensors whose readings were lost at that sample and held (the answers there
-        rest on the others and on the sensor's last reading).
+        The sensors whose readings were lost at that sample and filled in (predicted from
+        the other sensors', or held), on which the answers there rest.
     """
 
     t_s: np.ndarray
@@ -98,6 +106,12 @@ class StreamState:
         Readings held since the start, per sensor.
     warned : set of str
         Warnings of the plate fusion given once already.
+    history : dict
+        ``acc``, ``gyr`` (S, H, 3): the last H samples in which every sensor read (a ring,
+        ``next`` the count written), which a lost sensor's readings are predicted from.
+    models : dict
+        Lost sensor -> its prediction's coefficients and what they missed at its last
+        reading, while it is lost.
     closed : bool
     """
 
@@ -111,6 +125,8 @@ class StreamState:
     tail: dict = field(default_factory=dict)
     last_raw: tuple = ()
     warned: set = field(default_factory=set)
+    history: dict = field(default_factory=dict)
+    models: dict = field(default_factory=dict)
     closed: bool = False
 
 
@@ -134,14 +150,17 @@ class ImuStream:
     start_s : float, keyword-only
         Time of the first sample, s.
     max_hold_s : float, keyword-only
-        Longest run of readings of one sensor that are not finite which the stream
-        bridges by holding the sensor's last reading, s (default 0.25).  On the held-out
-        configuration (``python scripts/study_imu_stream.py``: 15-s free motions, one sensor
-        lost at a random time, 12 losses of each length) the worst joint's RMSE over the
-        trial was 1.88 deg as recorded, 1.88 with 0.1 s lost, 1.97 with 0.2 s (up to 2.72),
-        2.63 with 0.3 s (up to 4.04) and 6.40 with 0.5 s (up to 25.1), where bridging
-        the whole recording afterwards (:func:`bridge_lost`, both sides of the gap) gave
-        1.88-1.98.
+        Longest run of readings of one sensor that are not finite which the stream fills
+        in, s (default 0.5, as :func:`bridge_lost`'s): its accelerometer and gyro predicted
+        from the other sensors' readings of the last 10 s by :func:`bridge_lost`'s
+        regression, plus what the prediction missed at its last reading; its magnetometer
+        (and, before 174 samples were read, everything) held at its last reading.  On the
+        held-out configuration (``python scripts/study_imu_stream.py``: 15-s free motions,
+        one sensor lost at a random time, 12 losses of each length) the worst joint's RMSE
+        over the trial was 1.88 deg as recorded, 1.88 with 0.1 or 0.2 s lost, 1.93 with 0.3 s,
+        2.33 with 0.5 s (up to 4.76) and 2.46 with 1 s; bridging the whole recording
+        afterwards (both sides of the gap) 1.88-2.35.  Holding the last reading instead
+        read 1.97 with 0.2 s, 2.63 with 0.3 s and 6.40 with 0.5 s (up to 25.1).
 
     Examples
     --------
@@ -155,7 +174,7 @@ class ImuStream:
     def __init__(self, calibration: ImuCalibration, *, rate_hz: float,
                  static: StaticStart | None = None, options: ChainEKFOptions | None = None,
                  sensor_calibration: bool = True, plate_fusion: bool = True,
-                 start_s: float = 0.0, max_hold_s: float = 0.25) -> None:
+                 start_s: float = 0.0, max_hold_s: float = 0.5) -> None:
         check_instance(calibration, ImuCalibration, name="calibration")
         self.calibration = calibration
         self.rate_hz = check_rate(rate_hz, source="ImuStream")
@@ -171,8 +190,11 @@ class ImuStream:
         #: samples read before the filter starts: the static start and the common rotation
         #: (as many as :func:`gyro_bias` and :func:`azimuth_correction` read), and one more
         self.warmup_n = max(max(1, round(t * self.rate_hz)) for t in ends) + 1
-        self.state = StreamState(held_run=np.zeros(len(calibration.sensors), int),
-                                 held_count=np.zeros(len(calibration.sensors), int))
+        s = len(calibration.sensors)
+        h = max(1, round(_HISTORY_S * self.rate_hz))
+        self.state = StreamState(held_run=np.zeros(s, int), held_count=np.zeros(s, int),
+                                 history={"acc": np.zeros((s, h, 3)), "gyr": np.zeros((s, h, 3)),
+                                          "next": 0})
 
     @property
     def sensors(self) -> tuple:
@@ -237,13 +259,19 @@ class ImuStream:
         mag = None if six else self._as_block("mag", mag, n)
         if n == 0:
             return self._empty()
-        if self.state.start is None:
-            self.state.warmup.append((acc, gyr, mag))
-            if sum(a.shape[1] for a, _, _ in self.state.warmup) < self.warmup_n:
-                return self._empty()
-            return self._begin()
-        block, filled = self._hold(acc, gyr, mag)
-        return self._advance(self._correct(block, filled))
+        if self.state.start is not None:
+            return self._advance(self._correct(*self._hold(acc, gyr, mag)))
+        # the warm-up's samples; any after them in this push go on as later pushes' would
+        need = self.warmup_n - sum(a.shape[1] for a, _, _ in self.state.warmup)
+        self.state.warmup.append((acc[:, :need], gyr[:, :need],
+                                  None if mag is None else mag[:, :need]))
+        if n < need:
+            return self._empty()
+        first = self._begin()
+        if n == need:
+            return first
+        later = self._hold(acc[:, need:], gyr[:, need:], None if mag is None else mag[:, need:])
+        return _join(first, self._advance(self._correct(*later)))
 
     def close(self) -> TrackedSamples:
         """Finish the last sample read (its gyro derivative one-sided) and close the stream.
@@ -275,35 +303,75 @@ class ImuStream:
         return dataclasses.replace(rec, filled=filled)
 
     def _hold(self, acc, gyr, mag) -> tuple[ImuRecording, np.ndarray]:
-        """Readings that are not finite replaced by the sensor's last finite ones."""
+        """Readings that are not finite filled in: the sensor's accelerometer and gyro
+        predicted from the other sensors' readings (:meth:`_fill`), its magnetometer held."""
         chans = [acc, gyr] + ([] if mag is None else [mag])
         bad = np.zeros(acc.shape[:2], bool)
         for c in chans:
             bad |= ~np.isfinite(c).all(axis=-1)
+        st = self.state
         if bad.any():
             chans = [c.copy() for c in chans]
             for i in range(acc.shape[1]):
                 for k in np.flatnonzero(bad[:, i]):
-                    self.state.held_run[k] += 1
-                    if self.state.held_run[k] > self.max_hold:
-                        index = self.state.done - 1 + self.state.tail["gyr"].shape[1] + i
+                    st.held_run[k] += 1
+                    if st.held_run[k] > self.max_hold:
+                        index = st.done - 1 + st.tail["gyr"].shape[1] + i
                         t = self.start_s + index / self.rate_hz
                         raise RecordingError(
                             f"sensor {self.sensors[k]}: readings not finite for more than "
                             f"{self.max_hold / self.rate_hz:g} s (max_hold_s), at t = {t:.3f} s: "
                             "a sensor lost; the stream stops")
-                    for c, last in zip(chans, self.state.last_raw):
+                    for c, last in zip(chans, st.last_raw):
                         c[k, i] = last[k]
+                if bad[:, i].any():
+                    self._fill(chans, i, bad[:, i])
+                else:
+                    self._remember(chans, i)
                 for k in np.flatnonzero(~bad[:, i]):
-                    self.state.held_run[k] = 0
-                self.state.last_raw = tuple(c[:, i].copy() for c in chans)
-            self.state.held_count += bad.sum(axis=1)
+                    st.held_run[k] = 0
+                    st.models.pop(int(k), None)
+                st.last_raw = tuple(c[:, i].copy() for c in chans)
+            st.held_count += bad.sum(axis=1)
         else:
-            self.state.held_run[:] = 0
-            self.state.last_raw = tuple(c[:, -1].copy() for c in chans)
+            st.held_run[:] = 0
+            st.models.clear()
+            for i in range(max(0, acc.shape[1] - st.history["acc"].shape[1]), acc.shape[1]):
+                self._remember(chans, i)
+            st.last_raw = tuple(c[:, -1].copy() for c in chans)
         rec = ImuRecording(self.rate_hz, self.sensors, chans[0], chans[1],
                            None if mag is None else chans[2])
         return rec, bad
+
+    def _remember(self, chans, i: int) -> None:
+        """Sample `i` of the readings (every sensor read) kept for the predictions."""
+        h = self.state.history
+        j = h["next"] % h["acc"].shape[1]
+        h["acc"][:, j], h["gyr"][:, j] = chans[0][:, i], chans[1][:, i]
+        h["next"] += 1
+
+    def _fill(self, chans, i: int, bad: np.ndarray) -> None:
+        """Sample `i` of the lost sensors `bad` predicted from the others (the regression of
+        :func:`bridge_lost`, fitted on the last :data:`_HISTORY_S` seconds in which every
+        sensor read, when there are enough of them), plus what the prediction missed at
+        the sensor's last reading; else held (as filled in by the caller)."""
+        st, h = self.state, self.state.history
+        n = min(h["next"], h["acc"].shape[1])
+        arrays = {"acc": h["acc"][:, :n], "gyr": h["gyr"][:, :n]}
+        for k in map(int, np.flatnonzero(bad)):
+            if k not in st.models:
+                if n < _MIN_FIT_SAMPLES:
+                    continue                 # too little seen yet: the reading held
+                coef = prediction_coefficients(arrays, k, slice(None))
+                # what the prediction misses at the last reading, carried on
+                miss = {c: st.last_raw[m][k] - prediction_regressors(
+                    st.last_raw[m][:, None], k)[0] @ coef[c]
+                    for m, c in enumerate(("acc", "gyr"))}
+                st.models[k] = (coef, miss)
+            coef, miss = st.models[k]
+            for m, c in enumerate(("acc", "gyr")):
+                x = prediction_regressors(chans[m][:, i:i + 1], k)[0]
+                chans[m][k, i] = x @ coef[c] + miss[c]
 
     def _begin(self) -> TrackedSamples:
         """The warm-up read: check it, prepare the filter, filter it but its last sample."""
@@ -321,6 +389,8 @@ class ImuStream:
             warnings.warn(w, UserWarning, stacklevel=3)
         self.state.last_raw = (acc[:, -1].copy(), gyr[:, -1].copy()) + (
             () if mag is None else (mag[:, -1].copy(),))
+        for i in range(max(0, acc.shape[1] - self.state.history["acc"].shape[1]), acc.shape[1]):
+            self._remember((acc, gyr), i)
         start = self._filter.prepare(rec)
         self.state.start = start
         self.state.filter = (start.q0, start.covariance, np.zeros((len(self.sensors), 3)))
@@ -395,8 +465,8 @@ class ImuStream:
 
 
 def _join(a: TrackedSamples, b: TrackedSamples) -> TrackedSamples:
-    if not len(b):
-        return a
+    if not len(a) or not len(b):
+        return b if len(b) else a
     return TrackedSamples(np.concatenate([a.t_s, b.t_s]), np.concatenate([a.quat, b.quat], axis=1),
                           np.concatenate([a.angles_deg, b.angles_deg]),
                           {f: np.concatenate([a.tips_m[f], b.tips_m[f]]) for f in a.tips_m},
@@ -411,7 +481,7 @@ def stream_csv(lines, calibration: ImuCalibration, *, rate_hz: float, acc_units:
     The columns are :func:`read_imu_csv`'s (``<sensor>_acc_x`` .. ``_mag_z`` of every
     sensor of the calibration, in any order; other columns, a time column among them,
     are passed over: samples are taken to come at `rate_hz`).  An empty cell is a reading
-    lost (held, :class:`ImuStream`).
+    lost (filled in, :class:`ImuStream`).
 
     Parameters
     ----------
