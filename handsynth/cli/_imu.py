@@ -469,7 +469,8 @@ def _static_start(static_s, align):
 @click.option("--calibration", "calibration_path", type=click.Path(dir_okay=False), required=True,
               help="Calibration JSON from 'handsynth imu calibrate'.")
 @click.option("--rate", "rate_hz", type=float, required=True,
-              help="The sensors' sampling rate, Hz (the lines are taken to come at it).")
+              help="The sensors' sampling rate, Hz (the lines are taken to come at it; where "
+                   "a time column skips samples, they were lost).")
 @click.option("--acc-units", type=click.Choice(("m/s2", "g", "mg")), default="m/s2",
               show_default=True)
 @click.option("--gyr-units", type=click.Choice(("rad/s", "deg/s")), default="rad/s",
@@ -500,7 +501,8 @@ def stream(calibration_path, rate_hz, acc_units, gyr_units, mag_units, static_s,
     The input is 'imu track's CSV one line at a time (a header first); each sample's joint
     angles (time_s, the 20 joints in degrees, and held_sensors: how many sensors' readings
     were lost there and filled in) are written and flushed as soon as the next sample has
-    come. A reading lost (an empty or non-finite cell) is filled in for up to --max-hold.
+    come. A reading lost (an empty or non-finite cell, or a line a time column says was
+    dropped) is filled in for up to --max-hold.
     """
     from ..models import JOINT_NAMES
     from ..sensors.imu import FILTER4B, ImuCalibration, stream_csv

@@ -945,3 +945,39 @@ def test_stream_writes_what_track_writes_line_by_line(tmp_path):
     column = lines[1].split(",")[5]
     assert f"standard input, line 301: {column} is 'x1.5', not a number" in res.stderr
     assert "Traceback" not in res.output
+
+
+def test_stream_fills_in_lines_a_logger_dropped(tmp_path):
+    """Time stamps that skip samples are samples lost: filled in, marked, or refused."""
+    import warnings
+
+    from handsynth.sensors.imu import ImuHand, calibrate, calibration_motion
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        cal = calibrate(simulate_imu(calibration_motion(), hand=ImuHand(tip_sensors=True), seed=1,
+                                     device_seed=2), sensor_calibration=False)
+    cal_path = cal.save(tmp_path / "cal.json")
+    csv = tmp_path / "rec.csv"
+    write_imu_csv(simulate_imu(free_motion(6.0, seed=3), hand=ImuHand(), seed=4, device_seed=2), csv)
+    lines = csv.read_text().splitlines()  # a comment, the header, samples 0..599
+    run = ["imu", "stream", "--calibration", str(cal_path), "--rate", "100"]
+    whole = CliRunner().invoke(cli, run, input="\n".join(lines) + "\n")
+    assert whole.exit_code == 0, whole.output
+    dropped = lines[:2 + 500] + lines[2 + 510:]  # samples 500-509 never arrive
+    res = CliRunner().invoke(cli, run, input="\n".join(dropped) + "\n")
+    assert res.exit_code == 0, res.output
+    full = np.array([[float(v) for v in line.split(",")] for line in whole.stdout.splitlines()[1:]])
+    got = np.array([[float(v) for v in line.split(",")] for line in res.stdout.splitlines()[1:]])
+    assert got.shape == full.shape == (600, 22)
+    np.testing.assert_allclose(got[:, 0], full[:, 0])  # every sample's time, the lost too
+    assert (got[500:510, 21] == 20).all() and got[:500, 21].sum() == got[510:, 21].sum() == 0
+    assert np.abs(got[:499, 1:21] - full[:499, 1:21]).max() < 1e-3
+    assert np.abs(got[:, 1:21] - full[:, 1:21]).max() < 10.0
+    # more than --max-hold lost, and stamps that go back: one line each
+    res = CliRunner().invoke(cli, run + ["--max-hold", "0.05"], input="\n".join(dropped) + "\n")
+    assert res.exit_code != 0 and "Traceback" not in res.output
+    assert "line 503: 10 samples missing before this line (time_s 5.1" in res.stderr
+    back = lines[:2 + 450] + [lines[2 + 440]] + lines[2 + 451:]
+    res = CliRunner().invoke(cli, run, input="\n".join(back) + "\n")
+    assert res.exit_code != 0 and "line 453: time stamps do not increase (time_s 4.4" in res.stderr

@@ -479,9 +479,11 @@ def stream_csv(lines, calibration: ImuCalibration, *, rate_hz: float, acc_units:
     """Track CSV lines as they come: a header, then one sample a line.
 
     The columns are :func:`read_imu_csv`'s (``<sensor>_acc_x`` .. ``_mag_z`` of every
-    sensor of the calibration, in any order; other columns, a time column among them,
-    are passed over: samples are taken to come at `rate_hz`).  An empty cell is a reading
-    lost (filled in, :class:`ImuStream`).
+    sensor of the calibration, in any order; other columns are passed over).  Samples are
+    taken to come at `rate_hz`; with a time column (``time_s`` or ``time_ms``) the first
+    stamp is the stream's ``start_s`` and a step of more than half a period over the
+    sampling period is samples lost, filled in as :class:`ImuStream` fills a sensor's
+    lost readings (all sensors' here).  An empty cell is a reading lost.
 
     Parameters
     ----------
@@ -494,7 +496,8 @@ def stream_csv(lines, calibration: ImuCalibration, *, rate_hz: float, acc_units:
     source : str, keyword-only
         The input's name, for messages.
     **options
-        Passed to :class:`ImuStream` (``static``, ``options``, ``sensor_calibration``, ...).
+        Passed to :class:`ImuStream` (``static``, ``options``, ``sensor_calibration``,
+        ``max_hold_s``, ...).
 
     Yields
     ------
@@ -506,14 +509,18 @@ def stream_csv(lines, calibration: ImuCalibration, *, rate_hz: float, acc_units:
     RecordingError
         Unknown units; a header without a calibrated sensor's columns; a line whose
         number of cells is not the header's, or a cell that is no number (naming the line
-        and the column); what :class:`ImuStream` raises.
+        and the column); time stamps that go back or repeat, or that leave out more than
+        `max_hold_s`; what :class:`ImuStream` raises.
     """
     for ch, u in (("acc", acc_units), ("gyr", gyr_units), ("mag", mag_units)):
         if u not in UNITS[ch]:
             raise RecordingError(f"unknown {ch} units {u!r}; expected one of {', '.join(UNITS[ch])}")
-    stream = ImuStream(calibration, rate_hz=rate_hz, **options)
+    units = {"acc": acc_units, "gyr": gyr_units, "mag": mag_units}
+    stream: ImuStream | None = None
     header: list[str] | None = None
     idx: dict = {}
+    time_col: int | None = None
+    last_t, scale = 0.0, 1.0
     for number, line in enumerate(lines, start=1):
         text = line.strip()
         if not text or text.startswith("#"):
@@ -522,7 +529,7 @@ def stream_csv(lines, calibration: ImuCalibration, *, rate_hz: float, acc_units:
         if header is None:
             header = cells
             col = column_index(header, path=source, line=number)
-            col, sensors, _, _, _ = _csv_columns(header, col, source)
+            col, sensors, time_name, _, _ = _csv_columns(header, col, source)
             missing = [s for s in calibration.sensors if s not in sensors]
             if missing:
                 raise RecordingError(f"{source}, line {number}: no columns of the calibration's "
@@ -530,22 +537,56 @@ def stream_csv(lines, calibration: ImuCalibration, *, rate_hz: float, acc_units:
             six = not any(f"{s}_mag_x" in col for s in sensors)
             idx = {ch: np.array([[col[f"{s}_{ch}_{a}"] for a in "xyz"] for s in calibration.sensors])
                    for ch in (("acc", "gyr") if six else ("acc", "gyr", "mag"))}
+            time_col = None if time_name is None else col[time_name]
+            scale = 1e-3 if time_name == "time_ms" else 1.0
             continue
         if len(cells) != len(header):
             raise RecordingError(f"{source}, line {number}: {len(cells)} values but "
                                  f"{len(header)} columns")
-        got = {}
-        for ch, where in idx.items():
-            try:
-                got[ch] = np.array([[float(cells[j]) if cells[j] else np.nan for j in row]
-                                    for row in where]) * UNITS[ch][{"acc": acc_units,
-                                                                     "gyr": gyr_units,
-                                                                     "mag": mag_units}[ch]]
-            except ValueError:
-                bad = next(j for j in where.ravel() if cells[j] and not reads_as_number(cells[j]))
-                raise RecordingError(f"{source}, line {number}: {header[bad]} is "
-                                     f"{cells[bad]!r:.40}, not a number") from None
+        got = {ch: _cells(cells, where, header, source, number) * UNITS[ch][units[ch]]
+               for ch, where in idx.items()}
+        t, stamp = None, ""
+        if time_col is not None:
+            t = _cells(cells, np.array([time_col]), header, source, number)[0] * scale
+            stamp = f"{header[time_col]} {cells[time_col]} after {last_t / scale:.6g}"
+            if not np.isfinite(t):
+                raise RecordingError(f"{source}, line {number}: {header[time_col]} is "
+                                     f"{cells[time_col]!r:.40}, not a time")
+        if stream is None:
+            if t is not None and "start_s" not in options:
+                options["start_s"] = float(t)
+            stream = ImuStream(calibration, rate_hz=rate_hz, **options)
+        elif t is not None:
+            step = (t - last_t) * rate_hz
+            if step < 0.5:
+                raise RecordingError(f"{source}, line {number}: time stamps do not increase "
+                                     f"({stamp})")
+            lost = int(round(step)) - 1
+            if lost > stream.max_hold:
+                raise RecordingError(
+                    f"{source}, line {number}: {lost} samples missing before this line "
+                    f"({stamp}, at {rate_hz:g} Hz): more than max_hold_s fills in; the stream "
+                    "stops")
+            if lost > 0:
+                gap = np.full((len(calibration.sensors), lost, 3), np.nan)
+                yield stream.push(gap, gap, None if "mag" not in got else gap)
+        if t is not None:
+            last_t = float(t)
         yield stream.push(got["acc"], got["gyr"], got.get("mag"))
     if header is None:
         raise RecordingError(f"{source}: no header line (time_s, <sensor>_acc_x .. _mag_z)")
+    if stream is None:
+        raise RecordingError(f"{source}: no sample after the header")
     yield stream.close()
+
+
+def _cells(cells: list[str], where: np.ndarray, header: list[str], source: str,
+           number: int) -> np.ndarray:
+    """The numbers of the columns `where` (any shape) of one line; an empty cell is NaN."""
+    try:
+        return np.array([float(cells[j]) if cells[j] else np.nan for j in where.ravel()]
+                        ).reshape(where.shape)
+    except ValueError:
+        bad = next(j for j in where.ravel() if cells[j] and not reads_as_number(cells[j]))
+        raise RecordingError(f"{source}, line {number}: {header[bad]} is {cells[bad]!r:.40}, "
+                             "not a number") from None
