@@ -388,10 +388,8 @@ class ImuCalibration:
             check_recording(sub, static_s=static.static_s)
         applied = sensor_calibration and self.sensor_calibration is not None
         est = ChainEKF(self.model, options=options, static=static)
-        q = self.fuse(est.run(sub), sub.sensors, plate_fusion=plate_fusion)
-        angles, _ = joint_angles(q, sub.sensors, self.frames, side=self.side, zero=self.zero,
-                                 cmc=self.cmc)
-        beyond = angles_beyond_range(angles)
+        out = self.read_attitudes(est.run(sub), sub.sensors, plate_fusion=plate_fusion)
+        beyond = angles_beyond_range(out["angles"])
         if beyond is not None:
             warnings.warn(beyond, UserWarning, stacklevel=2)
         exchanged = swapped_sensors(sub, self.model)
@@ -400,10 +398,31 @@ class ImuCalibration:
         late = late_sensors(sub, self.frames, static_n=int(static.static_s * sub.rate_hz))
         if late is not None:
             warnings.warn(late, UserWarning, stacklevel=2)
-        chains = fingertip_positions(q, sub.sensors, self.model)
+        return {**out, "sensor_calibration": applied}
+
+    def read_attitudes(self, quats, sensors, *, plate_fusion: bool = True) -> dict:
+        """Joint angles and fingertips of sensor attitudes (what :meth:`track` returns).
+
+        Parameters
+        ----------
+        quats : ndarray, shape (S, N, 4)
+            Sensor-to-world quaternions of the calibration's sensors.
+        sensors : sequence of str, length S
+        plate_fusion : bool, keyword-only
+            As :meth:`fuse`.
+
+        Returns
+        -------
+        dict
+            ``quat`` (S, N, 4) fused, ``angles`` (N, 20) degrees, ``tips`` finger ->
+            (N, 3) metres from the elbow, ``chains`` all of :func:`fingertip_positions`.
+        """
+        q = self.fuse(quats, sensors, plate_fusion=plate_fusion)
+        angles, _ = joint_angles(q, sensors, self.frames, side=self.side, zero=self.zero,
+                                 cmc=self.cmc)
+        chains = fingertip_positions(q, sensors, self.model)
         tips = {f: v for f, v in chains.items() if not f.endswith("_joints")}
-        return {"quat": q, "angles": angles, "tips": tips, "chains": chains,
-                "sensor_calibration": applied}
+        return {"quat": q, "angles": angles, "tips": tips, "chains": chains}
 
     def to_dict(self) -> dict:
         return {"format": "handsynth-imu-calibration", "version": _VERSION,

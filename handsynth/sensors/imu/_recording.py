@@ -1013,6 +1013,13 @@ def with_axes(rec: ImuRecording, *, gyr: str | None = None, mag: str | None = No
     return dataclasses.replace(rec, truth=None, **changes) if changes else rec
 
 
+def check_units(**units: str) -> None:
+    """Refuse a unit of a channel (``acc=``, ``gyr=``, ``mag=``) that :data:`UNITS` lacks."""
+    for ch, u in units.items():
+        if u not in UNITS[ch]:
+            raise RecordingError(f"unknown {ch} units {u!r}; expected one of {', '.join(UNITS[ch])}")
+
+
 def read_imu_csv(path, *, acc_units: str = "m/s2", gyr_units: str = "rad/s",
                  mag_units: str = "uT", rate_hz: float | None = None,
                  max_gap: float = 1.5) -> ImuRecording:
@@ -1068,9 +1075,7 @@ def read_imu_csv(path, *, acc_units: str = "m/s2", gyr_units: str = "rad/s",
     """
     path = check_path(path, "path")
     max_gap = check_number(max_gap, "max_gap", above=0.0)
-    for ch, u in (("acc", acc_units), ("gyr", gyr_units), ("mag", mag_units)):
-        if u not in UNITS[ch]:
-            raise RecordingError(f"unknown {ch} units {u!r}; expected one of {', '.join(UNITS[ch])}")
+    check_units(acc=acc_units, gyr=gyr_units, mag=mag_units)
     if rate_hz is not None:
         rate_hz = check_rate(rate_hz, source=str(path))
     if not path.is_file():

@@ -35,9 +35,8 @@ from ...errors import RecordingError
 from ._attitude import StaticStart, check_static_fits
 from ._calibration import ImuCalibration
 from ._ekf import ChainEKF, ChainEKFOptions, FilterStart, fast_turns
-from ._kinematics import fingertip_positions, joint_angles
 from ._lost import prediction_coefficients, prediction_regressors
-from ._recording import UNITS, ImuRecording, check_rate, check_recording
+from ._recording import UNITS, ImuRecording, check_rate, check_recording, check_units
 from ._recording import _columns as _csv_columns
 
 __all__ = ["ImuStream", "StreamState", "TrackedSamples", "stream_csv"]
@@ -445,23 +444,17 @@ class ImuStream:
 
     def _outputs(self, q: np.ndarray, first: int, held: np.ndarray) -> TrackedSamples:
         """Fused attitudes, joint angles and fingertips of samples ``first ..``."""
-        cal = self.calibration
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            q = cal.fuse(q, self.sensors, plate_fusion=self.plate_fusion)
+            out = self.calibration.read_attitudes(q, self.sensors, plate_fusion=self.plate_fusion)
         for w in caught:                     # a plate sensor straying: said once a stream
             key = str(w.message).split("(")[0]
             if key not in self.state.warned:
                 self.state.warned.add(key)
                 warnings.warn(f"{w.message} (said once for this stream)", UserWarning,
                               stacklevel=4)
-        angles, _ = joint_angles(q, self.sensors, cal.frames, side=cal.side, zero=cal.zero,
-                                 cmc=cal.cmc)
-        chains = fingertip_positions(q, self.sensors, cal.model)
         t = self.start_s + (first + np.arange(q.shape[1])) / self.rate_hz
-        return TrackedSamples(t, q, angles,
-                              {f: v for f, v in chains.items() if not f.endswith("_joints")},
-                              held)
+        return TrackedSamples(t, out["quat"], out["angles"], out["tips"], held)
 
 
 def _join(a: TrackedSamples, b: TrackedSamples) -> TrackedSamples:
@@ -512,10 +505,8 @@ def stream_csv(lines, calibration: ImuCalibration, *, rate_hz: float, acc_units:
         and the column); time stamps that go back or repeat, or that leave out more than
         `max_hold_s`; what :class:`ImuStream` raises.
     """
-    for ch, u in (("acc", acc_units), ("gyr", gyr_units), ("mag", mag_units)):
-        if u not in UNITS[ch]:
-            raise RecordingError(f"unknown {ch} units {u!r}; expected one of {', '.join(UNITS[ch])}")
     units = {"acc": acc_units, "gyr": gyr_units, "mag": mag_units}
+    check_units(**units)
     stream: ImuStream | None = None
     header: list[str] | None = None
     idx: dict = {}
