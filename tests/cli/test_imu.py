@@ -906,20 +906,26 @@ def test_track_names_the_files_and_a_sensor_named_differently(tmp_path, sim):
     assert not out.exists()
 
 
-def test_stream_writes_what_track_writes_line_by_line(tmp_path):
-    """Lines piped in one by one come out as track's joint angles; bad lines are one line."""
+@pytest.fixture(scope="module")
+def streamed_files(tmp_path_factory):
+    """A calibration file and a 6-s recording CSV of the same simulated sensors."""
     import warnings
 
     from handsynth.sensors.imu import ImuHand, calibrate, calibration_motion
 
+    folder = tmp_path_factory.mktemp("stream")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         cal = calibrate(simulate_imu(calibration_motion(), hand=ImuHand(tip_sensors=True), seed=1,
                                      device_seed=2), sensor_calibration=False)
-    cal_path = cal.save(tmp_path / "cal.json")
-    rec = simulate_imu(free_motion(6.0, seed=3), hand=ImuHand(), seed=4, device_seed=2)
-    csv = tmp_path / "rec.csv"
-    write_imu_csv(rec, csv)
+    csv = folder / "rec.csv"
+    write_imu_csv(simulate_imu(free_motion(6.0, seed=3), hand=ImuHand(), seed=4, device_seed=2), csv)
+    return cal.save(folder / "cal.json"), csv
+
+
+def test_stream_writes_what_track_writes_line_by_line(tmp_path, streamed_files):
+    """Lines piped in one by one come out as track's joint angles; bad lines are one line."""
+    cal_path, csv = streamed_files
     res = CliRunner().invoke(cli, ["imu", "track", str(csv), "--calibration", str(cal_path),
                                    "--out", str(tmp_path / "q.csv"),
                                    "--angles-out", str(tmp_path / "a.csv")])
@@ -947,19 +953,9 @@ def test_stream_writes_what_track_writes_line_by_line(tmp_path):
     assert "Traceback" not in res.output
 
 
-def test_stream_fills_in_lines_a_logger_dropped(tmp_path):
+def test_stream_fills_in_lines_a_logger_dropped(streamed_files):
     """Time stamps that skip samples are samples lost: filled in, marked, or refused."""
-    import warnings
-
-    from handsynth.sensors.imu import ImuHand, calibrate, calibration_motion
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        cal = calibrate(simulate_imu(calibration_motion(), hand=ImuHand(tip_sensors=True), seed=1,
-                                     device_seed=2), sensor_calibration=False)
-    cal_path = cal.save(tmp_path / "cal.json")
-    csv = tmp_path / "rec.csv"
-    write_imu_csv(simulate_imu(free_motion(6.0, seed=3), hand=ImuHand(), seed=4, device_seed=2), csv)
+    cal_path, csv = streamed_files
     lines = csv.read_text().splitlines()  # a comment, the header, samples 0..599
     run = ["imu", "stream", "--calibration", str(cal_path), "--rate", "100"]
     whole = CliRunner().invoke(cli, run, input="\n".join(lines) + "\n")
