@@ -6,7 +6,8 @@ as Allan-deviation figures; Allan variance; orientation estimators sharing
 one :class:`OrientationEstimator` protocol (gyro integration, the thesis'
 Filter 1 and EKF "Filter 4", and the VQF, Madgwick, Mahony and ahrs-EKF
 baselines); sensor-to-joint vectors; the forearm plate's three sensors fused
-into one attitude; joint angles and fingertip positions.
+into one attitude; joint angles and fingertip positions, from whole recordings
+(:meth:`ImuCalibration.track`) or live (:class:`ImuStream`).
 """
 
 from ._allan import KalmanDenoiser, NoiseCoefficients, allan_deviation, noise_coefficients
