@@ -31,7 +31,7 @@ import numpy as np
 
 from ..._checks import check_instance, check_number, check_options
 from ..._csv import column_index, reads_as_number
-from ...errors import RecordingError
+from ...errors import HandsynthError, RecordingError
 from ._attitude import StaticStart, check_static_fits
 from ._calibration import ImuCalibration
 from ._ekf import ChainEKF, ChainEKFOptions, FilterStart, fast_turns
@@ -242,10 +242,15 @@ class ImuStream:
             Arrays of the wrong shape; a magnetometer given in some pushes and not in
             others; the static start refused by :func:`check_recording` (raised by the push
             that completes it); a sensor's readings not finite for longer than
-            `max_hold_s`; a push after :meth:`close`.
+            `max_hold_s`; a push after :meth:`close` or after an error other than the
+            arrays' shapes (which closes the stream).
+        EstimationError
+            The static start gives no attitudes (6-axis sensors without a common
+            rotation; :func:`initial_attitude`).
         """
         if self.state.closed:
-            raise RecordingError("the stream is closed: make a new ImuStream")
+            raise RecordingError("the stream is closed (by close(), or by the error that "
+                                 "stopped it): make a new ImuStream")
         acc = self._as_block("acc", acc, None)
         n = acc.shape[1]
         gyr = self._as_block("gyr", gyr, n)
@@ -258,6 +263,13 @@ class ImuStream:
         mag = None if six else self._as_block("mag", mag, n)
         if n == 0:
             return self._empty()
+        try:
+            return self._read(acc, gyr, mag, n)
+        except HandsynthError:
+            self.state.closed = True         # its state is part-way through a sample
+            raise
+
+    def _read(self, acc, gyr, mag, n: int) -> TrackedSamples:
         if self.state.start is not None:
             return self._advance(self._correct(*self._hold(acc, gyr, mag)))
         # the warm-up's samples; any after them in this push go on as later pushes' would

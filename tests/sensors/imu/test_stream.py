@@ -82,6 +82,9 @@ def test_lost_readings_are_predicted_then_refused(worn):
     with pytest.raises(RecordingError, match=r"sensor index_middle: readings not finite for "
                                              r"more than 0.25 s .* t = 6.250 s: a sensor lost"):
         _feed(stream, type(sub)(sub.rate_hz, sub.sensors, acc, gyr, mag), [10])
+    with pytest.raises(RecordingError, match=r"closed \(by close\(\), or by the error that "
+                                             r"stopped it\)"):
+        stream.push(sub.acc[:, 700], sub.gyr[:, 700], sub.mag[:, 700])
 
 
 def test_a_sensor_lost_before_enough_was_seen_is_held(worn):
