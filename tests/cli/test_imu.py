@@ -941,6 +941,13 @@ def test_stream_writes_what_track_writes_line_by_line(tmp_path, streamed_files):
     assert streamed.shape == (600, 22) and tracked.shape == (600, 21)
     np.testing.assert_allclose(streamed[:, :21], tracked, rtol=0, atol=6e-5)  # 4 decimals
     assert out[0].endswith(",little_dip_flex,held_sensors") and not streamed[:, 21].any()
+    # a spreadsheet's export: semicolons, decimal commas, quoted names
+    sheet = [lines[1].replace(",", ";").replace("time_s", '"time_s"')] + [
+        line.replace(",", ";").replace(".", ",") for line in lines[2:]]
+    res = CliRunner().invoke(cli, ["imu", "stream", "--calibration", str(cal_path), "--rate", "100"],
+                             input="\n".join(sheet) + "\n")
+    assert res.exit_code == 0, res.output
+    assert res.stdout == "\n".join(out) + "\n"
     assert "600 samples tracked (filter4)" in res.stderr
     # a damaged line is one line naming it, after the answers already written
     bad = lines[:300] + [lines[300].replace(lines[300].split(",")[5], "x1.5", 1)] + lines[301:]

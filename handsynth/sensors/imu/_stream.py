@@ -484,7 +484,9 @@ def stream_csv(lines, calibration: ImuCalibration, *, rate_hz: float, acc_units:
     """Track CSV lines as they come: a header, then one sample a line.
 
     The columns are :func:`read_imu_csv`'s (``<sensor>_acc_x`` .. ``_mag_z`` of every
-    sensor of the calibration, in any order; other columns are passed over).  Samples are
+    sensor of the calibration, in any order; other columns are passed over), separated by
+    commas, or as the header is: by semicolons (decimal commas then read as points) or tabs;
+    quotes around a cell are dropped.  Samples are
     taken to come at `rate_hz`; with a time column (``time_s`` or ``time_ms``) the first
     stamp is the stream's ``start_s`` and a step of more than half a period over the
     sampling period is samples lost, filled in as :class:`ImuStream` fills a sensor's
@@ -524,11 +526,16 @@ def stream_csv(lines, calibration: ImuCalibration, *, rate_hz: float, acc_units:
     idx: dict = {}
     time_col: int | None = None
     last_t, scale = 0.0, 1.0
+    delimiter = ","
     for number, line in enumerate(lines, start=1):
-        text = line.strip()
+        text = line.strip().lstrip("\ufeff")
         if not text or text.startswith("#"):
             continue
-        cells = [c.strip() for c in text.split(",")]
+        if header is None:  # a spreadsheet's ";" (with decimal commas) or tab, as the header has
+            delimiter = next((d for d in (",", ";", "\t") if d in text), ",")
+        cells = [c.strip().strip('"') for c in text.split(delimiter)]
+        if delimiter != ",":
+            cells = [c.replace(",", ".") for c in cells]
         if header is None:
             header = cells
             col = column_index(header, path=source, line=number)
