@@ -347,3 +347,17 @@ def read_number_table(path, *, what: str, usecols) -> NumberTable | None:
     except ValueError:  # a cell that is not a number: read_rows names it
         return None
     return NumberTable(header, nos[1:], table)
+
+
+def line_delimiter(header: str) -> str:
+    """The delimiter of a stream of lines, as its header line has it: ``,``, else a
+    spreadsheet's ``;`` (whose numbers have decimal commas), else a tab."""
+    return next((d for d in (",", ";", "\t") if d in header), ",")
+
+
+def split_line(text: str, delimiter: str) -> list[str]:
+    """One line's cells, stripped of spaces, quotes and a byte-order mark; with a delimiter
+    other than ``,`` a decimal comma is read as a point."""
+    cells = [c.strip().strip('"') for c in text.strip().lstrip("\ufeff").split(delimiter)]
+    return cells if delimiter == "," else [c.replace(",", ".") for c in cells]
+

@@ -176,6 +176,49 @@ def apply(calibration, readings, out, name, motion, range_csv, adc_max):
                + (f", motion {motion}" if motion else ", mixed over motions") + ")")
 
 
+@glove.command()
+@click.argument("calibration", type=click.Path(dir_okay=False))
+@click.option("--model", "name", default="model4", show_default=True,
+              help="Estimator in the calibration file: model1..model4, pooled_model4, "
+                   "synergy, model4+synergy or constant.")
+@click.option("--motion", default=None,
+              help="The representative motion, when known; default mix over all (eqs. 4-6).")
+@click.option("--range", "range_csv", type=click.Path(dir_okay=False),
+              help="CSV with open-hand and fist holds of this wearing (motions 'range_open', "
+                   "'range_fist'): map the readings onto the calibration's first.")
+@click.option("--adc-max", type=float, default=4095.0, show_default=True,
+              help="Full scale of the readings, counts.")
+@click.option("--input", "source", type=click.File("r"), default="-", show_default=True,
+              help="Glove CSV lines to read (- : standard input).")
+@click.option("--out", type=click.File("w"), default="-", show_default=True,
+              help="Joint angles CSV to write as they come (- : standard output).")
+def stream(calibration, name, motion, range_csv, adc_max, source, out):
+    """Joint angles of live glove lines (a glove's output piped in), one line out per line.
+
+    The input is 'glove apply's CSV one line at a time (a header first); each line's 20
+    joint angles (degrees, after time_s, or the line's sample number from 0 where the input
+    has no time column) are written and flushed at once, the same as 'glove apply' writes.
+    """
+    import math
+
+    from ..models import JOINT_NAMES
+    from ..sensors.glove import stream_glove_csv
+
+    name_in = getattr(source, "name", "<stdin>")
+    rows = 0
+    for t, angles in stream_glove_csv(source, calibration, model=name, motion=motion,
+                                      range_csv=range_csv, adc_max=adc_max,
+                                      source="standard input" if name_in == "<stdin>" else name_in):
+        if rows == 0:
+            out.write(",".join(["sample" if t is None else "time_s", *JOINT_NAMES]) + "\n")
+        out.write((str(rows) if t is None else f"{t:.6f}") + ","
+                  + ",".join("nan" if math.isnan(v) else f"{v:.4f}" for v in angles) + "\n")
+        out.flush()
+        rows += 1
+    click.echo(f"{rows} samples ({name}" + (f", motion {motion}" if motion else
+                                             ", mixed over motions") + ")", err=True)
+
+
 @glove.command("eval")
 @click.option("--kind", type=click.Choice(("dg5", "5dt", "both")), default="dg5",
               show_default=True, help="Glove design(s) to evaluate.")

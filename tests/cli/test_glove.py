@@ -678,3 +678,47 @@ def test_readings_that_hold_their_own_range_are_read_and_warned_about_once(files
     assert _run("glove", "apply", files["cal"], files["wear"], "-o", plain, "--range",
                 files["wear"]).exit_code == 0
     assert out.read_text() == plain.read_text()  # the same angles either way
+
+
+def test_stream_writes_what_apply_writes_line_by_line(files):
+    """Lines piped in come out as apply's angles; bad readings are NaN rows, said once."""
+    out = files["dir"] / "applied.csv"
+    for extra in ([], ["--model", "model1", "--motion", "tripod"], ["--model", "synergy"]):
+        res = _run("glove", "apply", files["cal"], files["wear"], "-o", out, "--range",
+                   files["wear"], *extra)
+        assert res.exit_code == 0, res.output
+        res = CliRunner().invoke(cli, ["glove", "stream", str(files["cal"]), "--range",
+                                       str(files["wear"]), *extra],
+                                 input=files["wear"].read_text())
+        assert res.exit_code == 0, res.output
+        assert res.stdout.splitlines()[0] == "time_s," + ",".join(JOINT_NAMES)
+        applied = np.loadtxt(out, delimiter=",", skiprows=1)
+        streamed = np.array([[float(v) for v in line.split(",")]
+                             for line in res.stdout.splitlines()[1:]])
+        assert streamed.shape == applied.shape
+        np.testing.assert_allclose(streamed, applied, rtol=0, atol=6e-5)  # 4 decimals
+    # readings beyond the converter and at its end, a damaged cell: NaN row, one warning
+    # each, one line naming the cell
+    lines = files["wear"].read_text().splitlines()
+    header = lines[0].split(",")
+    k = header.index("sensor_index")
+
+    def with_reading(line, value):
+        cells = line.split(",")
+        cells[k] = value
+        return ",".join(cells)
+
+    bad = [lines[0], with_reading(lines[1], "5000"), with_reading(lines[2], "6000"),
+           with_reading(lines[3], "4095"), lines[4]]
+    res = CliRunner().invoke(cli, ["glove", "stream", str(files["cal"])],
+                             input="\n".join(bad) + "\n")
+    assert res.exit_code == 0, res.output
+    rows = [line.split(",") for line in res.stdout.splitlines()[1:]]
+    assert len(rows) == 4 and rows[0][1:] == rows[1][1:] == ["nan"] * 20
+    assert "nan" not in rows[2] + rows[3]
+    assert res.stderr.count("outside the converter's range 0-4095") == 1
+    assert res.stderr.count("sensor_index reads 4095, the end of the converter's range") == 1
+    res = CliRunner().invoke(cli, ["glove", "stream", str(files["cal"])],
+                             input="\n".join([lines[0], with_reading(lines[1], "x7")]) + "\n")
+    assert res.exit_code != 0 and "Traceback" not in res.output
+    assert "standard input, line 2: sensor_index is 'x7', not a number" in res.stderr

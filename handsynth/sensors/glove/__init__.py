@@ -87,6 +87,7 @@ from ._simulate import (
     simulate_range_holds,
     simulate_session,
 )
+from ._stream import stream_glove_csv
 from ._synergy import Synergies, fit_synergies
 
 __all__ = [
@@ -154,6 +155,7 @@ __all__ = [
     "simulate_range_holds",
     "simulate_sensors",
     "simulate_session",
+    "stream_glove_csv",
     "write_angles_csv",
     "write_glove_csv",
 ]

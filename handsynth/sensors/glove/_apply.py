@@ -10,7 +10,7 @@ from ..._io import check_output, same_file
 from ...errors import EstimationError, InvalidInputError
 from ._calibrate import load_calibration, range_readings
 from ._checks import check_sensors, refuse_unreadable
-from ._estimators import RangeNormalizer
+from ._estimators import GloveEstimator, RangeNormalizer
 from ._recording import read_glove_csv, write_angles_csv
 
 __all__ = ["apply_calibration"]
@@ -90,33 +90,64 @@ def apply_calibration(calibration, readings, out, *, model: str = "model4",
     check_path_names((("calibration", calibration), ("readings", readings), ("out", out),
                       ("range_csv", range_csv)))
     check_output(out, what="angles file", inputs=[calibration, readings, range_csv])
-    cal = load_calibration(calibration)
-    est = cal["estimators"].get(model)
-    if est is None:
-        raise InvalidInputError(f"{calibration}: no estimator {model!r}; it holds "
-                                f"{', '.join(cal['estimators'])}")
+    cal, est = load_estimator(calibration, model)
     rec = read_glove_csv(readings, kind=cal["kind"], adc_max=adc_max)
     sensors = rec.sensors
     check = check_sensors(sensors, adc_max=adc_max, where=str(readings), lines=rec.lines)
     refuse_unreadable(sensors, check, adc_max=adc_max, where=str(readings))
     if range_csv is not None:
-        if cal["range_reference"] is None:
-            raise InvalidInputError(f"{calibration}: the calibration had no range_open/"
-                                    "range_fist holds, so range_csv (--range) cannot be used")
         # the holds are often in the readings' own file: read once, warned about once
-        held = rec if same_file(range_csv, readings) else read_glove_csv(range_csv, adc_max=adc_max)
-        src = range_readings(held, where=str(range_csv))
-        if src is None:
-            raise InvalidInputError(f"{range_csv}: needs rows with motion 'range_open' "
-                                    "and rows with motion 'range_fist'")
-        tgt = cal["range_reference"]
-        try:
-            normalizer = RangeNormalizer(src[0], src[1], tgt[0], tgt[1])
-        except EstimationError as exc:
-            raise EstimationError(f"{range_csv}: {exc}") from None
-        sensors = normalizer.apply(sensors)
+        held = rec if same_file(range_csv, readings) else None
+        sensors = range_normalizer(cal, calibration, range_csv, adc_max=adc_max,
+                                   held=held).apply(sensors)
     angles = est.predict(sensors, motion=motion)  # warns of readings off the calibration's range
     # a file without a time column gets the row index, not that index written as seconds
     timed = rec.meta.get("time_column", True)
     write_angles_csv(out, angles, time_s=rec.time_s if timed else None)
     return angles
+
+
+def load_estimator(calibration, model: str) -> tuple[dict, GloveEstimator]:
+    """The calibration file's contents (:func:`load_calibration`) and its estimator `model`.
+
+    Raises
+    ------
+    InvalidInputError
+        The file is unreadable or malformed, or holds no estimator `model`.
+    """
+    cal = load_calibration(calibration)
+    est = cal["estimators"].get(model)
+    if est is None:
+        raise InvalidInputError(f"{calibration}: no estimator {model!r}; it holds "
+                                f"{', '.join(cal['estimators'])}")
+    return cal, est
+
+
+def range_normalizer(cal: dict, calibration, range_csv, *, adc_max: float,
+                     held=None) -> RangeNormalizer:
+    """The map of this wearing's open-hand and fist holds (`range_csv`, or `held` read
+    from it already) onto the calibration's (:class:`RangeNormalizer`).
+
+    Raises
+    ------
+    InvalidInputError
+        The calibration had no range holds; `range_csv` has no ``range_open`` and
+        ``range_fist`` rows.
+    RecordingError, EstimationError
+        As :func:`apply_calibration` says.
+    """
+    if cal["range_reference"] is None:
+        raise InvalidInputError(f"{calibration}: the calibration had no range_open/"
+                                "range_fist holds, so range_csv (--range) cannot be used")
+    if held is None:
+        held = read_glove_csv(range_csv, adc_max=adc_max)
+    src = range_readings(held, where=str(range_csv))
+    if src is None:
+        raise InvalidInputError(f"{range_csv}: needs rows with motion 'range_open' "
+                                "and rows with motion 'range_fist'")
+    tgt = cal["range_reference"]
+    try:
+        return RangeNormalizer(src[0], src[1], tgt[0], tgt[1])
+    except EstimationError as exc:
+        raise EstimationError(f"{range_csv}: {exc}") from None
+

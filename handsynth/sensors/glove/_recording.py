@@ -316,6 +316,42 @@ def _fmt(v: float) -> str:
     return "nan" if not np.isfinite(v) else f"{v:.4f}"
 
 
+def glove_columns(header: list[str], *, path, line: int) -> tuple[list[str], dict[str, int],
+                                                                  int | None]:
+    """A glove CSV's header read: its names (a glove's own read by their meaning, with a
+    warning), the column of each name, and the column of a time in milliseconds (None
+    where the header has ``time_s`` or no such column; warned of when read).
+
+    Raises
+    ------
+    RecordingError
+        A header of numbers (no header), a missing sensor column, a name given twice.
+    """
+    first = header
+    if not any(c in header for c in SENSOR_NAMES):  # a glove's own names, read by meaning
+        given = "time_s" in header
+        header, renamed = names_by_meaning(header, lambda h: _meaning(h, time_given=given),
+                                           path=path)
+        if renamed:
+            shown = ", ".join(f"{name!r} as {canon}" for name, canon in renamed)
+            warnings.warn(f"{path}: {len(renamed)} columns read by their meaning "
+                          f"({shown})", GloveWarning, stacklevel=3)
+    missing = [c for c in SENSOR_NAMES if c not in header]
+    if missing and sum(reads_as_number(c) for c in first) >= len(SENSOR_NAMES):
+        raise RecordingError(f"{path}, line {line}: the first line holds numbers, "
+                             "not column names; a glove CSV starts with a header line naming "
+                             f"its columns ({', '.join(('time_s', 'motion', 'trial', *SENSOR_NAMES))})")
+    if missing:
+        raise RecordingError(f"{path}: missing sensor column(s) {', '.join(missing)}; "
+                             f"header is {', '.join(header)}")
+    col = column_index(header, path=path, line=line)
+    ms_col = None if "time_s" in col else _time_ms_column(header)
+    if ms_col is not None:
+        warnings.warn(f"{path}: column {header[ms_col]!r} read as time_s (milliseconds / 1000)",
+                      GloveWarning, stacklevel=3)
+    return header, col, ms_col
+
+
 def read_glove_csv(path, *, kind: str = "", adc_max: float = 4095.0) -> GloveRecording:
     """Read a glove CSV written by :func:`write_glove_csv` or by hand.
 
@@ -359,33 +395,12 @@ def read_glove_csv(path, *, kind: str = "", adc_max: float = 4095.0) -> GloveRec
     rows = content.rows
     if not rows:
         raise RecordingError(f"{path}: empty file, expected a header line")
-    header = rows[0]
-    if not any(c in header for c in SENSOR_NAMES):  # a glove's own names, read by meaning
-        given = "time_s" in header
-        header, renamed = names_by_meaning(header, lambda h: _meaning(h, time_given=given),
-                                           path=path)
-        if renamed:
-            shown = ", ".join(f"{name!r} as {canon}" for name, canon in renamed)
-            warnings.warn(f"{path}: {len(renamed)} columns read by their meaning "
-                          f"({shown})", GloveWarning, stacklevel=2)
-    missing = [c for c in SENSOR_NAMES if c not in header]
-    if missing and sum(reads_as_number(c) for c in rows[0]) >= len(SENSOR_NAMES):
-        raise RecordingError(f"{path}, line {content.lines[0]}: the first line holds numbers, "
-                             "not column names; a glove CSV starts with a header line naming "
-                             f"its columns ({', '.join(('time_s', 'motion', 'trial', *SENSOR_NAMES))})")
-    if missing:
-        raise RecordingError(f"{path}: missing sensor column(s) {', '.join(missing)}; "
-                             f"header is {', '.join(header)}")
+    header, col, ms_col = glove_columns(rows[0], path=path, line=content.lines[0])
     joints = [c for c in JOINT_NAMES if c in header]
     if joints and len(joints) != len(JOINT_NAMES):
         absent = [c for c in JOINT_NAMES if c not in header]
         raise RecordingError(f"{path}: joint columns are incomplete, missing "
                              f"{', '.join(absent)}")
-    col = column_index(header, path=path, line=content.lines[0])
-    ms_col = None if "time_s" in col else _time_ms_column(header)
-    if ms_col is not None:
-        warnings.warn(f"{path}: column {header[ms_col]!r} read as time_s (milliseconds / 1000)",
-                      GloveWarning, stacklevel=2)
     body = rows[1:]
     if not body:
         raise RecordingError(f"{path}: no data rows after the header")

@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..._checks import check_instance, check_number, check_options
-from ..._csv import column_index, reads_as_number
+from ..._csv import column_index, line_delimiter, reads_as_number, split_line
 from ...errors import HandsynthError, RecordingError
 from ._attitude import StaticStart, check_static_fits
 from ._calibration import ImuCalibration
@@ -531,11 +531,9 @@ def stream_csv(lines, calibration: ImuCalibration, *, rate_hz: float, acc_units:
         text = line.strip().lstrip("\ufeff")
         if not text or text.startswith("#"):
             continue
-        if header is None:  # a spreadsheet's ";" (with decimal commas) or tab, as the header has
-            delimiter = next((d for d in (",", ";", "\t") if d in text), ",")
-        cells = [c.strip().strip('"') for c in text.split(delimiter)]
-        if delimiter != ",":
-            cells = [c.replace(",", ".") for c in cells]
+        if header is None:
+            delimiter = line_delimiter(text)
+        cells = split_line(text, delimiter)
         if header is None:
             header = cells
             col = column_index(header, path=source, line=number)
