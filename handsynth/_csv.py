@@ -349,15 +349,26 @@ def read_number_table(path, *, what: str, usecols) -> NumberTable | None:
     return NumberTable(header, nos[1:], table)
 
 
-def line_delimiter(header: str) -> str:
-    """The delimiter of a stream of lines, as its header line has it: ``,``, else a
-    spreadsheet's ``;`` (whose numbers have decimal commas), else a tab."""
-    return next((d for d in (",", ";", "\t") if d in header), ",")
+def stream_rows(lines):
+    """The cells of each line of a stream of delimited text, as it comes.
 
+    Blank lines and lines starting with ``#`` are passed over; the first other line (the
+    header) sets the delimiter: ``,``, else a spreadsheet's ``;`` (whose numbers then have
+    decimal commas, read as points), else a tab.  Cells are stripped of spaces, quotes and
+    a byte-order mark.
 
-def split_line(text: str, delimiter: str) -> list[str]:
-    """One line's cells, stripped of spaces, quotes and a byte-order mark; with a delimiter
-    other than ``,`` a decimal comma is read as a point."""
-    cells = [c.strip().strip('"') for c in text.strip().lstrip("\ufeff").split(delimiter)]
-    return cells if delimiter == "," else [c.replace(",", ".") for c in cells]
-
+    Yields
+    ------
+    number : int
+        The line's number, from 1.
+    cells : list of str
+    """
+    delimiter = None
+    for number, line in enumerate(lines, start=1):
+        text = line.strip().lstrip("\ufeff")
+        if not text or text.startswith("#"):
+            continue
+        if delimiter is None:
+            delimiter = next((d for d in (",", ";", "\t") if d in text), ",")
+        cells = [c.strip().strip('"') for c in text.split(delimiter)]
+        yield number, (cells if delimiter == "," else [c.replace(",", ".") for c in cells])

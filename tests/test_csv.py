@@ -2,7 +2,7 @@ import warnings
 
 import pytest
 
-from handsynth._csv import column_index, read_rows
+from handsynth._csv import column_index, read_rows, stream_rows
 from handsynth.errors import RecordingError
 
 
@@ -121,3 +121,13 @@ def test_names_are_replaced_by_what_they_mean_and_two_of_one_meaning_refused():
     with pytest.raises(RecordingError, match=r"^f.csv: columns 'acc_x' and 'accel-x' both read "
                                              r"as acc_x: which one holds the data is unknown$"):
         names_by_meaning(["acc_x", "accel-x"], meaning, path="f.csv")
+
+
+def test_stream_rows_take_the_header_s_delimiter():
+    lines = ["\ufeff# a logger's note", "", 'time_s;"a x";b', "0,5;1,25;-2", "# later", "1;2,5;"]
+    assert list(stream_rows(lines)) == [(3, ["time_s", "a x", "b"]), (4, ["0.5", "1.25", "-2"]),
+                                        (6, ["1", "2.5", ""])]
+    assert list(stream_rows(["t\tx", "0.5\t1,5"])) == [(1, ["t", "x"]), (2, ["0.5", "1.5"])]
+    # commas stay delimiters (decimal points) once the header has them
+    assert list(stream_rows(["t,x;y", "1.5,2"])) == [(1, ["t", "x;y"]), (2, ["1.5", "2"])]
+    assert list(stream_rows([])) == []

@@ -151,21 +151,28 @@ def calibrate(recording, out, kind, models, t_threshold, n_points, synergy_k, sy
     click.echo(f"wrote {out}")
 
 
+def _estimator_options(f):
+    """``--model``, ``--motion``, ``--range`` and ``--adc-max`` of apply and stream."""
+    f = click.option("--adc-max", type=float, default=4095.0, show_default=True,
+                     help="Full scale of the readings, counts.")(f)
+    f = click.option("--range", "range_csv", type=click.Path(dir_okay=False),
+                     help="CSV with open-hand and fist holds of this wearing (motions "
+                          "'range_open', 'range_fist'): map the readings onto the "
+                          "calibration's first.")(f)
+    f = click.option("--motion", default=None,
+                     help="The representative motion, when known; default mix over all "
+                          "(eqs. 4-6).")(f)
+    return click.option("--model", "name", default="model4", show_default=True,
+                        help="Estimator in the calibration file: model1..model4, "
+                             "pooled_model4, synergy, model4+synergy or constant.")(f)
+
+
 @glove.command()
 @click.argument("calibration", type=click.Path(dir_okay=False))
 @click.argument("readings", type=click.Path(dir_okay=False))
 @click.option("-o", "--out", "out", type=click.Path(dir_okay=False), required=True,
               help="Joint angles to write (CSV, canonical joint names, degrees).")
-@click.option("--model", "name", default="model4", show_default=True,
-              help="Estimator in the calibration file: model1..model4, pooled_model4, "
-                   "synergy, model4+synergy or constant.")
-@click.option("--motion", default=None,
-              help="The representative motion, when known; default mix over all (eqs. 4-6).")
-@click.option("--range", "range_csv", type=click.Path(dir_okay=False),
-              help="CSV with open-hand and fist holds of this wearing (motions 'range_open', "
-                   "'range_fist'): map its readings onto the calibration's first.")
-@click.option("--adc-max", type=float, default=4095.0, show_default=True,
-              help="Full scale of the readings, counts.")
+@_estimator_options
 def apply(calibration, readings, out, name, motion, range_csv, adc_max):
     """Estimate joint angles from READINGS (CSV) with CALIBRATION (JSON)."""
     from ..sensors.glove import apply_calibration
@@ -178,16 +185,7 @@ def apply(calibration, readings, out, name, motion, range_csv, adc_max):
 
 @glove.command()
 @click.argument("calibration", type=click.Path(dir_okay=False))
-@click.option("--model", "name", default="model4", show_default=True,
-              help="Estimator in the calibration file: model1..model4, pooled_model4, "
-                   "synergy, model4+synergy or constant.")
-@click.option("--motion", default=None,
-              help="The representative motion, when known; default mix over all (eqs. 4-6).")
-@click.option("--range", "range_csv", type=click.Path(dir_okay=False),
-              help="CSV with open-hand and fist holds of this wearing (motions 'range_open', "
-                   "'range_fist'): map the readings onto the calibration's first.")
-@click.option("--adc-max", type=float, default=4095.0, show_default=True,
-              help="Full scale of the readings, counts.")
+@_estimator_options
 @click.option("--input", "source", type=click.File("r"), default="-", show_default=True,
               help="Glove CSV lines to read (- : standard input).")
 @click.option("--out", type=click.File("w"), default="-", show_default=True,

@@ -19,7 +19,7 @@ import warnings
 
 import numpy as np
 
-from ..._csv import line_delimiter, reads_as_number, split_line
+from ..._csv import reads_as_number, stream_rows
 from ...errors import RecordingError
 from ._apply import load_estimator, range_normalizer
 from ._models import GloveWarning
@@ -78,21 +78,15 @@ def stream_glove_csv(lines, calibration, *, model: str = "model4", motion: str |
     header: list[str] | None = None
     where = np.zeros(5, int)
     time_col: int | None = None
-    scale, delimiter = 1.0, ","
+    scale = 1.0
     said: set[str] = set()
-    for number, line in enumerate(lines, start=1):
-        text = line.strip().lstrip("\ufeff")
-        if not text or text.startswith("#"):
-            continue
+    for number, cells in stream_rows(lines):
         if header is None:
-            delimiter = line_delimiter(text)
-            header, col, ms_col = glove_columns(split_line(text, delimiter), path=source,
-                                                line=number)
+            header, col, ms_col = glove_columns(cells, path=source, line=number)
             where = np.array([col[name] for name in SENSOR_NAMES])
             time_col = col.get("time_s", ms_col)
             scale = 1.0 if "time_s" in col else 1e-3
             continue
-        cells = split_line(text, delimiter)
         while len(cells) > len(header) and cells[-1] == "":  # a delimiter after each row
             cells.pop()
         if len(cells) != len(header):

@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..._checks import check_instance, check_number, check_options
-from ..._csv import column_index, line_delimiter, reads_as_number, split_line
+from ..._csv import column_index, reads_as_number, stream_rows
 from ...errors import HandsynthError, RecordingError
 from ._attitude import StaticStart, check_static_fits
 from ._calibration import ImuCalibration
@@ -526,14 +526,7 @@ def stream_csv(lines, calibration: ImuCalibration, *, rate_hz: float, acc_units:
     idx: dict = {}
     time_col: int | None = None
     last_t, scale = 0.0, 1.0
-    delimiter = ","
-    for number, line in enumerate(lines, start=1):
-        text = line.strip().lstrip("\ufeff")
-        if not text or text.startswith("#"):
-            continue
-        if header is None:
-            delimiter = line_delimiter(text)
-        cells = split_line(text, delimiter)
+    for number, cells in stream_rows(lines):
         if header is None:
             header = cells
             col = column_index(header, path=source, line=number)
