@@ -433,7 +433,7 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
                          inputs=inputs)
         if tips_out:
             tips = res["tips"]
-            _write_table(tips_out, ["time_s", *(f"{f}_tip_{c}_mm" for f in tips for c in "xyz")],
+            _write_table(tips_out, ["time_s", *_tip_columns(tips)],
                          np.column_stack([t, *(1e3 * v for v in tips.values())]), inputs=inputs)
         if bvh_out:
             _write_track_bvh(bvh_out, res["angles"], q, sensors, cal, res["chains"], rec.rate_hz,
@@ -449,6 +449,11 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
         name += ", 6-axis: headings from the common rotation"
     click.echo(f"{len(sensors)} sensors, {rec.n} samples ({rec.duration_s:.1f} s) at "
                f"{rec.rate_hz:g} Hz -> {out_path} ({name})")
+
+
+def _tip_columns(fingers) -> list[str]:
+    """The columns of fingertip positions, mm: ``<finger>_tip_x_mm`` .."""
+    return [f"{f}_tip_{c}_mm" for f in fingers for c in "xyz"]
 
 
 def _static_start(static_s, align):
@@ -491,11 +496,14 @@ def _static_start(static_s, align):
 @click.option("--max-hold", "max_hold_s", type=float, default=None, metavar="SECONDS",
               help="Longest loss of one sensor's readings filled in (predicted from the "
                    "other sensors') before the stream stops, s [default: 0.5].")
+@click.option("--tips", is_flag=True,
+              help="Also write the fingertips from the elbow centre, mm (as track's "
+                   "--tips-out), after the joint angles.")
 @click.option("--no-sensor-calibration", is_flag=True,
               help="Do not apply the calibration file's accelerometer/gyro/magnetometer "
                    "corrections (for readings already corrected).")
 def stream(calibration_path, rate_hz, acc_units, gyr_units, mag_units, static_s, align,
-           filter_name, source, out, max_hold_s, no_sensor_calibration) -> None:
+           filter_name, source, out, max_hold_s, tips, no_sensor_calibration) -> None:
     """Joint angles of live CSV lines (a logger's output piped in), one line out per sample.
 
     The input is 'imu track's CSV one line at a time (a header first); each sample's joint
@@ -504,12 +512,15 @@ def stream(calibration_path, rate_hz, acc_units, gyr_units, mag_units, static_s,
     come. A reading lost (an empty or non-finite cell, or a line a time column says was
     dropped) is filled in for up to --max-hold.
     """
+    import numpy as np
+
     from ..models import JOINT_NAMES
-    from ..sensors.imu import FILTER4B, ImuCalibration, stream_csv
+    from ..sensors.imu import CHAINS, FILTER4B, ImuCalibration, stream_csv
 
     cal = ImuCalibration.load(calibration_path)
     name = getattr(source, "name", "stdin")
-    out.write(",".join(["time_s", *JOINT_NAMES, "held_sensors"]) + "\n")
+    out.write(",".join(["time_s", *JOINT_NAMES, *(_tip_columns(CHAINS) if tips else ()),
+                        "held_sensors"]) + "\n")
     out.flush()
     rows = 0
     for done in stream_csv(source, cal, rate_hz=rate_hz, acc_units=acc_units,
@@ -519,8 +530,10 @@ def stream(calibration_path, rate_hz, acc_units, gyr_units, mag_units, static_s,
                            options=FILTER4B if filter_name == "filter4b" else None,
                            sensor_calibration=not no_sensor_calibration,
                            **({} if max_hold_s is None else {"max_hold_s": max_hold_s})):
-        for t, row, held in zip(done.t_s, done.angles_deg, done.held.sum(axis=0)):
-            out.write(f"{t:.6f}," + ",".join(f"{v:.4f}" for v in row) + f",{held}\n")
+        where = (np.column_stack([1e3 * done.tips_m[f] for f in CHAINS]) if tips and len(done)
+                 else np.empty((len(done), 0)))
+        for t, row, at, held in zip(done.t_s, done.angles_deg, where, done.held.sum(axis=0)):
+            out.write(f"{t:.6f}," + ",".join(f"{v:.4f}" for v in (*row, *at)) + f",{held}\n")
         rows += len(done)
         if len(done):
             out.flush()

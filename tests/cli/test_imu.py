@@ -928,9 +928,18 @@ def test_stream_writes_what_track_writes_line_by_line(tmp_path, streamed_files):
     cal_path, csv = streamed_files
     res = CliRunner().invoke(cli, ["imu", "track", str(csv), "--calibration", str(cal_path),
                                    "--out", str(tmp_path / "q.csv"),
-                                   "--angles-out", str(tmp_path / "a.csv")])
+                                   "--angles-out", str(tmp_path / "a.csv"),
+                                   "--tips-out", str(tmp_path / "t.csv")])
     assert res.exit_code == 0, res.output
     tracked = np.loadtxt(tmp_path / "a.csv", delimiter=",", skiprows=1)
+    tips = tmp_path / "t.csv"
+    res = CliRunner().invoke(cli, ["imu", "stream", "--calibration", str(cal_path), "--rate",
+                                   "100", "--tips", "--input", str(csv)])
+    assert res.exit_code == 0, res.output
+    with_tips = [line.split(",") for line in res.stdout.splitlines()]
+    assert with_tips[0][21:] == tips.read_text().splitlines()[0].split(",")[1:] + ["held_sensors"]
+    np.testing.assert_allclose(np.array(with_tips[1:], float)[:, 21:36],
+                               np.loadtxt(tips, delimiter=",", skiprows=1)[:, 1:], atol=6e-5)
     lines = csv.read_text().splitlines()
     res = CliRunner().invoke(cli, ["imu", "stream", "--calibration", str(cal_path), "--rate", "100"],
                              input="\n".join(lines) + "\n")
