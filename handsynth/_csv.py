@@ -372,3 +372,24 @@ def stream_rows(lines):
             delimiter = next((d for d in (",", ";", "\t") if d in text), ",")
         cells = [c.strip().strip('"') for c in text.split(delimiter)]
         yield number, (cells if delimiter == "," else [c.replace(",", ".") for c in cells])
+
+
+def row_numbers(cells: list[str], where, header: list[str], *, source: str,
+                line: int) -> np.ndarray:
+    """The numbers in the columns `where` (an index array of any shape) of one streamed row
+    (:func:`stream_rows`), float64 of `where`'s shape; an empty cell is NaN (a reading lost).
+
+    Raises
+    ------
+    RecordingError
+        A cell that is no number, naming `source`, the line and the column.
+    """
+    where = np.asarray(where)
+    try:
+        return np.array([float(cells[j]) if cells[j] else np.nan for j in where.ravel()]
+                        ).reshape(where.shape)
+    except ValueError:
+        bad = next(j for j in where.ravel() if cells[j] and not reads_as_number(cells[j]))
+        raise RecordingError(f"{source}, line {line}: {header[bad]} is {cells[bad]!r:.40}, "
+                             "not a number") from None
+

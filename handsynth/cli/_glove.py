@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from ._main import cli
+from ._main import cli, input_name
 
 _MODELS = ("model1", "model2", "model3", "model4")
 
@@ -202,11 +202,10 @@ def stream(calibration, name, motion, range_csv, adc_max, source, out):
     from ..models import JOINT_NAMES
     from ..sensors.glove import stream_glove_csv
 
-    name_in = getattr(source, "name", "<stdin>")
     rows = 0
     for t, angles in stream_glove_csv(source, calibration, model=name, motion=motion,
                                       range_csv=range_csv, adc_max=adc_max,
-                                      source="standard input" if name_in == "<stdin>" else name_in):
+                                      source=input_name(source)):
         if rows == 0:
             out.write(",".join(["sample" if t is None else "time_s", *JOINT_NAMES]) + "\n")
         out.write((str(rows) if t is None else f"{t:.6f}") + ","

@@ -10,11 +10,18 @@ import click
 
 from .._io import check_outputs, make_folder, write_json
 from ._hand import shape_option
-from ._main import cli
+from ._main import cli, input_name
 
 _TRACK_FILTERS = ("raw", "filter1", "gated", "vqf", "vqf_online", "madgwick", "mahony", "ahrs_ekf",
                   "constant")
 _CHAIN_FILTERS = ("filter4", "filter4b")  # need the link model of a calibration
+
+
+#: ``--no-sensor-calibration`` of the commands that apply a calibration file to readings.
+_no_sensor_calibration = click.option(
+    "--no-sensor-calibration", is_flag=True,
+    help="Do not apply the calibration file's accelerometer/gyro/magnetometer corrections "
+         "(for readings already corrected).")
 
 
 def _unit_options(f):
@@ -363,9 +370,7 @@ def _write_track_bvh(path, angles, quats, sensors, cal, chains, rate_hz, shape, 
               help="With --bvh-out, the handsynth hand whose skeleton, bones included, the "
                    "file carries instead (e.g. L1.050_W0.900_P1.000_T1.000, standard) "
                    "[default: the standard hand's directions, the bones measured].")
-@click.option("--no-sensor-calibration", is_flag=True,
-              help="Do not apply the calibration file's accelerometer/gyro/magnetometer "
-                   "corrections (for readings already corrected).")
+@_no_sensor_calibration
 def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_units, rate_hz,
           acc_range_g, gyr_range_dps, bridge_lost, bridge_max_s, gyr_axes, mag_axes, static_s,
           align, out_path, angles_out, tips_out, bvh_out, bvh_shape, no_sensor_calibration) -> None:
@@ -499,9 +504,7 @@ def _static_start(static_s, align):
 @click.option("--tips", is_flag=True,
               help="Also write the fingertips from the elbow centre, mm (as track's "
                    "--tips-out), after the joint angles.")
-@click.option("--no-sensor-calibration", is_flag=True,
-              help="Do not apply the calibration file's accelerometer/gyro/magnetometer "
-                   "corrections (for readings already corrected).")
+@_no_sensor_calibration
 def stream(calibration_path, rate_hz, acc_units, gyr_units, mag_units, static_s, align,
            filter_name, source, out, max_hold_s, tips, no_sensor_calibration) -> None:
     """Joint angles of live CSV lines (a logger's output piped in), one line out per sample.
@@ -518,14 +521,13 @@ def stream(calibration_path, rate_hz, acc_units, gyr_units, mag_units, static_s,
     from ..sensors.imu import CHAINS, FILTER4B, ImuCalibration, stream_csv
 
     cal = ImuCalibration.load(calibration_path)
-    name = getattr(source, "name", "stdin")
     out.write(",".join(["time_s", *JOINT_NAMES, *(_tip_columns(CHAINS) if tips else ()),
                         "held_sensors"]) + "\n")
     out.flush()
     rows = 0
     for done in stream_csv(source, cal, rate_hz=rate_hz, acc_units=acc_units,
                            gyr_units=gyr_units, mag_units=mag_units,
-                           source="standard input" if name == "<stdin>" else name,
+                           source=input_name(source),
                            static=_static_start(static_s, align),
                            options=FILTER4B if filter_name == "filter4b" else None,
                            sensor_calibration=not no_sensor_calibration,

@@ -81,6 +81,12 @@ def renamed_message(message: str, names: Mapping[str, str]) -> str | None:
     return None
 
 
+def input_name(stream) -> str:
+    """How messages name a ``click.File`` input: its path, or "standard input" for ``-``."""
+    name = getattr(stream, "name", "<stdin>")
+    return "standard input" if name == "<stdin>" else str(name)
+
+
 def option_names(names: Mapping[str, str]) -> Callable:
     """Decorator of a command's function: its errors name the options, not the library's fields.
 

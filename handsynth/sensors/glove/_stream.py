@@ -19,7 +19,7 @@ import warnings
 
 import numpy as np
 
-from ..._csv import reads_as_number, stream_rows
+from ..._csv import row_numbers, stream_rows
 from ...errors import RecordingError
 from ._apply import load_estimator, range_normalizer
 from ._models import GloveWarning
@@ -92,8 +92,9 @@ def stream_glove_csv(lines, calibration, *, model: str = "model4", motion: str |
         if len(cells) != len(header):
             raise RecordingError(f"{source}, line {number}: {len(cells)} fields, header has "
                                  f"{len(header)}")
-        readings = np.array([_number(cells, j, header, source, number) for j in where])
-        t = None if time_col is None else _number(cells, time_col, header, source, number) * scale
+        readings = row_numbers(cells, where, header, source=source, line=number)
+        t = None if time_col is None else \
+            float(row_numbers(cells, time_col, header, source=source, line=number)) * scale
         outside = ~((readings >= 0) & (readings <= adc_max))
         for k in np.flatnonzero(((readings == 0) | (readings == adc_max)) & ~outside):
             _once(said, f"{SENSOR_NAMES[k]} saturated",
@@ -117,16 +118,6 @@ def stream_glove_csv(lines, calibration, *, model: str = "model4", motion: str |
         yield t, angles
     if header is None:
         raise RecordingError(f"{source}: no header line ({', '.join(('time_s', *SENSOR_NAMES))})")
-
-
-def _number(cells: list[str], j: int, header: list[str], source: str, number: int) -> float:
-    """Cell `j` as a number: NaN where empty."""
-    if not cells[j]:
-        return float("nan")
-    if not reads_as_number(cells[j]):
-        raise RecordingError(f"{source}, line {number}: {header[j]} is {cells[j]!r:.40}, "
-                             "not a number")
-    return float(cells[j])
 
 
 def _once(said: set, key: str, message: str) -> None:

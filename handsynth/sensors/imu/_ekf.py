@@ -55,7 +55,8 @@ from ._quat import qexp, qmul, qnormalize, quat_to_mat
 from ._recording import ImuRecording
 from ._vectors import ChainModel
 
-__all__ = ["FILTER4B", "ChainEKF", "ChainEKFOptions", "FilterStart", "fast_turns", "sensor_tree"]
+__all__ = ["FILTER4B", "ChainEKF", "ChainEKFOptions", "FilterStart", "fast_turns", "observed_field",
+           "sensor_tree"]
 
 
 @dataclass(frozen=True)
@@ -406,9 +407,7 @@ class ChainEKF:
         n0 = max(1, int(self.static.static_s * rec.rate_hz))
         q = initial_attitude(rec, self.static)
         cor = azimuth_correction(rec, self.static)
-        mag = rec.mag
-        if mag is None:  # 6-axis sensors: a zero field that the gate never passes, so
-            mag = np.zeros_like(rec.gyr)  # H3 observes nothing (its rows carry zero weight)
+        mag = observed_field(rec)
         m_static = np.einsum("sij,sj->si", quat_to_mat(q), mag[:, :n0].mean(axis=1))
         fnorm0 = np.linalg.norm(mag[:, :n0].mean(axis=1), axis=-1)
         fnorm0[fnorm0 == 0] = 1.0
@@ -431,7 +430,7 @@ class ChainEKF:
         gyr = rec.gyr - start.gyro_bias[:, None]
         dgyr = np.gradient(gyr, dt, axis=1)
         q, p_cov = start.q0, start.covariance
-        mag = np.zeros_like(rec.gyr) if rec.mag is None else rec.mag
+        mag = observed_field(rec)
         filled = np.zeros((s_n, n), bool) if rec.filled is None else rec.filled
         fast_w = fast_turns(gyr, o)
         bias = np.zeros((s_n, 3))                          # learnt beyond the static start's
@@ -466,6 +465,13 @@ class ChainEKF:
                 bias -= np.einsum("sji,sj->si", r, dx[:3 * s_n].reshape(s_n, 3)) / o.bias_tau_s
             out[:, i] = q
         return out
+
+
+def observed_field(rec: ImuRecording) -> np.ndarray:
+    """The magnetometer readings H3 observes, (S, N, 3) uT: for 6-axis sensors a zero field,
+    which the field-strength gate never passes, so that H3 observes nothing (its rows carry
+    zero weight)."""
+    return np.zeros_like(rec.gyr) if rec.mag is None else rec.mag
 
 
 def fast_turns(gyr: np.ndarray, options: ChainEKFOptions) -> np.ndarray:

@@ -30,11 +30,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..._checks import check_instance, check_number, check_options
-from ..._csv import column_index, reads_as_number, stream_rows
+from ..._csv import column_index, row_numbers, stream_rows
 from ...errors import HandsynthError, RecordingError
 from ._attitude import StaticStart, check_static_fits
 from ._calibration import ImuCalibration
-from ._ekf import ChainEKF, ChainEKFOptions, FilterStart, fast_turns
+from ._ekf import ChainEKF, ChainEKFOptions, FilterStart, fast_turns, observed_field
 from ._lost import prediction_coefficients, prediction_regressors
 from ._recording import UNITS, ImuRecording, check_rate, check_recording, check_units
 from ._recording import _columns as _csv_columns
@@ -406,13 +406,12 @@ class ImuStream:
         self.state.start = start
         self.state.filter = (start.q0, start.covariance, np.zeros((len(self.sensors), 3)))
         first = self._outputs(start.q0[:, None], 0, np.zeros((len(self.sensors), 1), bool))
-        self.state.tail = {
-            "acc": rec.acc[:, :1], "gyr": rec.gyr[:, :1] - start.gyro_bias[:, None],
-            "mag": (np.zeros_like(rec.gyr) if rec.mag is None else rec.mag)[:, :1],
-            "filled": np.zeros((len(self.sensors), 1), bool)}
+        # sample 0 is the first finished one (its attitude q0), the last of an empty tail
+        s = len(self.sensors)
+        self.state.tail = {"acc": np.empty((s, 0, 3)), "gyr": np.empty((s, 0, 3)),
+                           "mag": np.empty((s, 0, 3)), "filled": np.empty((s, 0), bool)}
         self.state.done = 1
-        rest = self._advance(rec.slice(1, rec.n))
-        return _join(first, rest)
+        return _join(first, self._advance(rec))
 
     def _advance(self, rec: ImuRecording | None) -> TrackedSamples:
         """Append `rec` (None: the end) and filter every sample whose next one is read."""
@@ -425,8 +424,7 @@ class ImuStream:
             filled = np.zeros(rec.gyr.shape[:2], bool) if rec.filled is None else rec.filled
             gyr = rec.gyr - start.gyro_bias[:, None]
             tail["gyr"] = np.concatenate([tail["gyr"], gyr], axis=1)
-            mag = np.zeros_like(rec.gyr) if rec.mag is None else rec.mag
-            tail["mag"] = np.concatenate([tail["mag"], mag], axis=1)
+            tail["mag"] = np.concatenate([tail["mag"], observed_field(rec)], axis=1)
             tail["filled"] = np.concatenate([tail["filled"], filled], axis=1)
         g = tail["gyr"]
         n = g.shape[1]                       # sample 0: the last finished one
@@ -544,11 +542,12 @@ def stream_csv(lines, calibration: ImuCalibration, *, rate_hz: float, acc_units:
         if len(cells) != len(header):
             raise RecordingError(f"{source}, line {number}: {len(cells)} values but "
                                  f"{len(header)} columns")
-        got = {ch: _cells(cells, where, header, source, number) * UNITS[ch][units[ch]]
+        got = {ch: row_numbers(cells, where, header, source=source, line=number)
+               * UNITS[ch][units[ch]]
                for ch, where in idx.items()}
         t, stamp = None, ""
         if time_col is not None:
-            t = _cells(cells, np.array([time_col]), header, source, number)[0] * scale
+            t = float(row_numbers(cells, time_col, header, source=source, line=number)) * scale
             stamp = f"{header[time_col]} {cells[time_col]} after {last_t / scale:.6g}"
             if not np.isfinite(t):
                 raise RecordingError(f"{source}, line {number}: {header[time_col]} is "
@@ -579,15 +578,3 @@ def stream_csv(lines, calibration: ImuCalibration, *, rate_hz: float, acc_units:
     if stream is None:
         raise RecordingError(f"{source}: no sample after the header")
     yield stream.close()
-
-
-def _cells(cells: list[str], where: np.ndarray, header: list[str], source: str,
-           number: int) -> np.ndarray:
-    """The numbers of the columns `where` (any shape) of one line; an empty cell is NaN."""
-    try:
-        return np.array([float(cells[j]) if cells[j] else np.nan for j in where.ravel()]
-                        ).reshape(where.shape)
-    except ValueError:
-        bad = next(j for j in where.ravel() if cells[j] and not reads_as_number(cells[j]))
-        raise RecordingError(f"{source}, line {number}: {header[bad]} is {cells[bad]!r:.40}, "
-                             "not a number") from None
