@@ -48,6 +48,17 @@ def _streamed(calib, rec, packet: int = 5) -> np.ndarray:
     return np.concatenate([p.angles_deg for p in parts])
 
 
+def heldout_draw(seed: int):
+    """The held-out configuration's draw `seed`: (config, calibration, sensor calibration,
+    hand), calibrated as ``handsynth imu eval`` calibrates it."""
+    config = dataclasses.replace(HELDOUT, seed=seed)
+    placement = config.placement()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the configuration's magnet, on purpose
+        _, calib, sensor_cal = _calibrate(config, placement)
+    return config, calib, sensor_cal, ImuHand(config.shape, placement=placement)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", default="1,2", help="held-out seeds, comma-separated")
@@ -56,12 +67,7 @@ def main() -> None:
     rows: dict = {h: [] for h in _HOLDS_S}
     recorded = []
     for seed in (int(s) for s in args.seeds.split(",")):
-        config = dataclasses.replace(HELDOUT, seed=seed)
-        placement = config.placement()
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # the configuration's magnet, on purpose
-            _, calib, sensor_cal = _calibrate(config, placement)
-        hand = ImuHand(config.shape, placement=placement)
+        config, calib, sensor_cal, hand = heldout_draw(seed)
         for n, (_, elbow, rec) in enumerate(free_trials(config, hand, durations=(15.0,))):
             rec = sensor_cal.apply(rec)
             with warnings.catch_warnings():

@@ -47,14 +47,12 @@ def _exchanged(rec, a: str, b: str):
     return dataclasses.replace(rec, acc=rec.acc[order], gyr=rec.gyr[order], mag=rec.mag[order])
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--seeds", default="1,2,3,4,5,6", help="held-out seeds, comma-separated")
-    ap.add_argument("--exchanges", type=int, default=8, help="random pairs per recording")
-    args = ap.parse_args()
+def recordings(seeds: str):
+    """(config, calibration, label, recording corrected by the draw's sensor calibration) of
+    the tuning configuration and the held-out draws of `seeds` (comma-separated), as the
+    module docstring says."""
     configs = [TUNING] + [dataclasses.replace(HELDOUT, seed=int(s), shape=shape)
-                          for s in args.seeds.split(",") for shape in SHAPES]
-    alarms = recordings = caught = named = exchanged = 0
+                          for s in seeds.split(",") for shape in SHAPES]
     for config in configs:
         placement = config.placement()
         _, calib, sensor_cal = _calibrate(config, placement)
@@ -72,29 +70,37 @@ def main() -> None:
                 static_motion(10.0), hand=hand, noise=config.noise, skin=config.skin, seed=77,
                 device_seed=_device_seed(config))))
         for label, rec in recs:
-            rec = sensor_cal.apply(rec)
-            shares = swap_ratios(rec, calib.model)
-            low = min(shares, key=lambda p: shares[p][0])
-            warned = swapped_sensors(rec, calib.model) is not None
-            alarms += warned
-            recordings += 1
-            rng = np.random.default_rng([config.seed, recordings])
-            sensors = sorted({s for pair in shares for s in pair}, key=rec.index)
-            got = first = 0
-            for _ in range(args.exchanges):
-                a, b = (str(s) for s in rng.choice(sensors, 2, replace=False))
-                said = swapped_sensors(_exchanged(rec, a, b), calib.model)
-                got += said is not None
-                head = "" if said is None else said.split("(")[0]
-                first += f"{a} and {b}" in head or f"{b} and {a}" in head
-            caught, named, exchanged = caught + got, named + first, exchanged + args.exchanges
-            print(f"{config.label} seed {config.seed} {config.shape.name} {label}: smallest share "
-                  f"as labelled {shares[low][0]:.2f} ({low[0]}, {low[1]}; {shares[low][1]:.3f} "
-                  f"m/s^2){' WARNED' if warned else ''}; exchanged {got} of {args.exchanges} "
-                  f"told, {first} named first", flush=True)
-    print(f"false_alarms={alarms} recordings={recordings} caught={caught} named_first={named} "
-          f"exchanged={exchanged}")
+            yield config, calib, label, sensor_cal.apply(rec)
 
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seeds", default="1,2,3,4,5,6", help="held-out seeds, comma-separated")
+    ap.add_argument("--exchanges", type=int, default=8, help="random pairs per recording")
+    args = ap.parse_args()
+    alarms = count = caught = named = exchanged = 0
+    for config, calib, label, rec in recordings(args.seeds):
+        shares = swap_ratios(rec, calib.model)
+        low = min(shares, key=lambda p: shares[p][0])
+        warned = swapped_sensors(rec, calib.model) is not None
+        alarms += warned
+        count += 1
+        rng = np.random.default_rng([config.seed, count])
+        sensors = sorted({s for pair in shares for s in pair}, key=rec.index)
+        got = first = 0
+        for _ in range(args.exchanges):
+            a, b = (str(s) for s in rng.choice(sensors, 2, replace=False))
+            said = swapped_sensors(_exchanged(rec, a, b), calib.model)
+            got += said is not None
+            head = "" if said is None else said.split("(")[0]
+            first += f"{a} and {b}" in head or f"{b} and {a}" in head
+        caught, named, exchanged = caught + got, named + first, exchanged + args.exchanges
+        print(f"{config.label} seed {config.seed} {config.shape.name} {label}: smallest share "
+              f"as labelled {shares[low][0]:.2f} ({low[0]}, {low[1]}; {shares[low][1]:.3f} "
+              f"m/s^2){' WARNED' if warned else ''}; exchanged {got} of {args.exchanges} "
+              f"told, {first} named first", flush=True)
+    print(f"false_alarms={alarms} recordings={count} caught={caught} named_first={named} "
+          f"exchanged={exchanged}")
 
 if __name__ == "__main__":
     main()

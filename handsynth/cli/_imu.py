@@ -504,16 +504,23 @@ def _static_start(static_s, align):
 @click.option("--tips", is_flag=True,
               help="Also write the fingertips from the elbow centre, mm (as track's "
                    "--tips-out), after the joint angles.")
+@click.option("--check-every", "check_s", type=float, default=20.0, show_default=True,
+              metavar="SECONDS",
+              help="Check each stretch of this many seconds as track checks a recording "
+                   "(sensors exchanged, streams out of step, joints beyond range), warning "
+                   "once of each finding; 0: never.")
 @_no_sensor_calibration
 def stream(calibration_path, rate_hz, acc_units, gyr_units, mag_units, static_s, align,
-           filter_name, source, out, max_hold_s, tips, no_sensor_calibration) -> None:
+           filter_name, source, out, max_hold_s, tips, check_s, no_sensor_calibration) -> None:
     """Joint angles of live CSV lines (a logger's output piped in), one line out per sample.
 
     The input is 'imu track's CSV one line at a time (a header first); each sample's joint
     angles (time_s, the 20 joints in degrees, and held_sensors: how many sensors' readings
     were lost there and filled in) are written and flushed as soon as the next sample has
     come. A reading lost (an empty or non-finite cell, or a line a time column says was
-    dropped) is filled in for up to --max-hold.
+    dropped) is filled in for up to --max-hold. Each stretch of --check-every seconds is
+    checked as 'imu track' checks a recording, and what is found is warned of on standard
+    error once.
     """
     import numpy as np
 
@@ -531,6 +538,7 @@ def stream(calibration_path, rate_hz, acc_units, gyr_units, mag_units, static_s,
                            static=_static_start(static_s, align),
                            options=FILTER4B if filter_name == "filter4b" else None,
                            sensor_calibration=not no_sensor_calibration,
+                           check_s=check_s or None,
                            **({} if max_hold_s is None else {"max_hold_s": max_hold_s})):
         where = (np.column_stack([1e3 * done.tips_m[f] for f in CHAINS]) if tips and len(done)
                  else np.empty((len(done), 0)))

@@ -993,3 +993,25 @@ def test_stream_fills_in_lines_a_logger_dropped(streamed_files):
     back = lines[:2 + 450] + [lines[2 + 440]] + lines[2 + 451:]
     res = CliRunner().invoke(cli, run, input="\n".join(back) + "\n")
     assert res.exit_code != 0 and "line 453: time stamps do not increase (time_s 4.4" in res.stderr
+
+
+def test_stream_warns_of_sensors_exchanged_in_a_stretch(streamed_files):
+    """Two sensors' columns exchanged: the first stretch checked says so, once, on stderr."""
+    cal_path, csv = streamed_files
+    lines = csv.read_text().splitlines()
+    header = (lines[1].replace("index_proximal_", "tmp_").replace("middle_proximal_", "index_proximal_")
+              .replace("tmp_", "middle_proximal_"))
+    text = "\n".join([lines[0], header] + lines[2:]) + "\n"
+    run = ["imu", "stream", "--calibration", str(cal_path), "--rate", "100"]
+    res = CliRunner().invoke(cli, run + ["--check-every", "5"], input=text)
+    assert res.exit_code == 0, res.output
+    assert len(res.stdout.splitlines()) == 601
+    assert res.stderr.count("sensors read as exchanged") == 1
+    assert ("the stream's 0.0-5.0 s: sensors read as exchanged since the calibration: "
+            "index_proximal and middle_proximal") in res.stderr.replace("\n", " ")
+    # 20 s, longer than the stream: what is left checked at its end; 0: never
+    res = CliRunner().invoke(cli, run, input=text)
+    assert res.exit_code == 0, res.output
+    assert "the stream's 0.0-6.0 s: sensors read as exchanged" in res.stderr.replace("\n", " ")
+    res = CliRunner().invoke(cli, run + ["--check-every", "0"], input=text)
+    assert res.exit_code == 0 and "exchanged" not in res.stderr, res.output

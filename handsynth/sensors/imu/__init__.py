@@ -114,7 +114,18 @@ from ._recording import (
 from ._sensorcal import SensorCalibration, fit_sensor_calibration
 from ._simulate import SkinMotion, simulate_imu
 from ._stream import ImuStream, StreamState, TrackedSamples, stream_csv
-from ._swaps import SWAP_FLOOR_MPS2, SWAP_RATIO, swap_ratios, swapped_sensors
+from ._swaps import (
+    HINGE_FLOOR_RADPS,
+    HINGE_TURN_RATIO,
+    SWAP_FLOOR_MPS2,
+    SWAP_RATIO,
+    TURNS,
+    misplaced_sensors,
+    swap_ratios,
+    swapped_sensors,
+    turn_ratios,
+    turned_sensors,
+)
 from ._vectors import (
     ROTATIONS,
     ChainModel,
@@ -147,6 +158,8 @@ __all__ = [
     "HELD_MIN_S",
     "HELD_TURNING_RADPS",
     "HINGES",
+    "HINGE_FLOOR_RADPS",
+    "HINGE_TURN_RATIO",
     "JOINT_LINKS",
     "LATE_S",
     "LINKS",
@@ -164,6 +177,7 @@ __all__ = [
     "SWAP_RATIO",
     "TIP_SENSORS",
     "TUNING",
+    "TURNS",
     "UNITS",
     "AhrsEKFEstimator",
     "AxisNoise",
@@ -238,6 +252,7 @@ __all__ = [
     "link_vectors",
     "lost_stretches",
     "make_filter",
+    "misplaced_sensors",
     "noise_coefficients",
     "parse_axes",
     "plate_rotations",
@@ -263,6 +278,8 @@ __all__ = [
     "truth_chain_model",
     "truth_hand_attitude",
     "truth_link_frames",
+    "turn_ratios",
+    "turned_sensors",
     "with_axes",
     "write_imu_csv",
     "zero_offsets",

@@ -37,7 +37,7 @@ from ._model import TIP_SENSORS
 from ._plate import PLATE_SENSORS, fuse_plate, plate_rotations
 from ._recording import ImuRecording, check_recording
 from ._sensorcal import POSE_PREFIX, SensorCalibration, fit_sensor_calibration
-from ._swaps import swapped_sensors
+from ._swaps import misplaced_sensors
 from ._vectors import CLOSING_VECTORS, ChainModel, _min_rotation_samples, calibrate_vectors, chain_model
 
 __all__ = ["ImuCalibration", "calibrate", "check_stretches", "segments_from_seconds"]
@@ -374,7 +374,9 @@ class ImuCalibration:
             naming the joints and the sensor they point to (:func:`angles_beyond_range`):
             a sensor turned on its segment since the calibration.  Pairs of sensors whose
             joints agree better with the two exchanged (:func:`swapped_sensors`): sensors
-            put back on each other's segments, or columns exchanged.  Sensors whose streams
+            put back on each other's segments, or columns exchanged.  Sensors whose joints
+            agree better with the sensor turned back (:func:`turned_sensors`): a sensor put
+            back turned on its segment.  Sensors whose streams
             are 15 ms or more out of step with their neighbours' across a finger's hinge
             joint (the thumb's MCP included), on the forearm plate or on the hand
             (:func:`late_sensors`).
@@ -392,9 +394,8 @@ class ImuCalibration:
         beyond = angles_beyond_range(out["angles"])
         if beyond is not None:
             warnings.warn(beyond, UserWarning, stacklevel=2)
-        exchanged = swapped_sensors(sub, self.model)
-        if exchanged is not None:
-            warnings.warn(exchanged, UserWarning, stacklevel=2)
+        for misplaced in misplaced_sensors(sub, self.model, self.frames):
+            warnings.warn(misplaced, UserWarning, stacklevel=2)
         late = late_sensors(sub, self.frames, static_n=int(static.static_s * sub.rate_hz))
         if late is not None:
             warnings.warn(late, UserWarning, stacklevel=2)

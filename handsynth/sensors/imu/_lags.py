@@ -62,7 +62,7 @@ _MIN_CORRELATION = 0.9
 _FIELD_ANGLE_DEG = 5.0
 
 
-def sensor_lags(rec, frames: dict, *, static_n: int) -> dict:
+def sensor_lags(rec, frames: dict, *, static_n: int, still=None) -> dict:
     """How late each hinge's distal sensor reads against its proximal one, each forearm
     plate sensor against ``forearm_1`` and ``hand_ulnar`` against ``hand_radial``.
 
@@ -74,6 +74,10 @@ def sensor_lags(rec, frames: dict, *, static_n: int) -> dict:
         ``frames``).
     static_n : int, keyword-only
         Samples of the still start (the gyros' bias).
+    still : ImuRecording, keyword-only, optional
+        The still start's readings (of `rec`'s sensors, at least) where `rec` does not begin
+        with them (a later stretch of a stream): the gyros' bias and the carried axis are
+        read from its first `static_n` samples instead of `rec`'s.
 
     Returns
     -------
@@ -86,6 +90,7 @@ def sensor_lags(rec, frames: dict, *, static_n: int) -> dict:
         fraction of a sample, by a parabola through the peak) and the peak's correlation.
     """
     n = rec.n
+    base = rec if still is None else still
     max_lag = max(1, int(round(_MAX_LAG_S * rec.rate_hz)))
     out: dict[tuple[str, str], tuple[float, float]] = {}
     if n < 4 * max_lag:
@@ -95,7 +100,7 @@ def sensor_lags(rec, frames: dict, *, static_n: int) -> dict:
         """The length of the sensor's rate, less its part about `axis` (its own frame),
         centred."""
         k = rec.sensors.index(name)
-        w = rec.gyr[k] - rec.gyr[k, :max(1, static_n)].mean(axis=0)
+        w = rec.gyr[k] - base.gyr[base.sensors.index(name), :max(1, static_n)].mean(axis=0)
         if axis is not None:
             w = w - np.outer(w @ axis, axis)
         v = np.linalg.norm(w, axis=1)
@@ -107,7 +112,7 @@ def sensor_lags(rec, frames: dict, *, static_n: int) -> dict:
             continue
         axis = np.asarray(frames[dist], float)[0]  # the link frame's x: the flexion axis
         if (prox, dist) in CARRIED:
-            turn = _still_turn(rec, prox, dist, static_n)
+            turn = _still_turn(base, prox, dist, static_n)
             if turn is None:
                 continue
             prox_axis = turn @ axis
@@ -155,14 +160,15 @@ def _still_turn(rec, a: str, b: str, static_n: int) -> np.ndarray | None:
     return None if abs(dip_a - dip_b) > _FIELD_ANGLE_DEG else ta @ tb.T
 
 
-def late_sensors(rec, frames: dict, *, static_n: int) -> str | None:
+def late_sensors(rec, frames: dict, *, static_n: int, still=None) -> str | None:
     """A warning naming the sensors whose streams are late or early, or None.
 
+    `rec`, `frames`, `static_n` and `still` are :func:`sensor_lags`'.
     Pairs whose correlation peaks under 0.9 are not judged (the hand did not turn enough);
     a lag of :data:`LATE_S` or more is named.  A sensor in two such pairs (a middle
     phalanx, between its PIP and DIP) is named as the one off.
     """
-    lags = sensor_lags(rec, frames, static_n=static_n)
+    lags = sensor_lags(rec, frames, static_n=static_n, still=still)
     off = {pair: lag for pair, (lag, cor) in lags.items()
            if cor >= _MIN_CORRELATION and abs(lag) >= LATE_S}
     if not off:

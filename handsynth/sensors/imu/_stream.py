@@ -11,10 +11,14 @@ equal :meth:`ImuCalibration.track`'s on the same readings (tested to 1e-7 deg); 
 sample, which has no next one, is finished by :meth:`ImuStream.close` with the one-sided
 difference, as :func:`numpy.gradient` does at a recording's end.
 
-What a whole recording allows and a stream does not: the checks that compare stretches of
-a recording (sensors exchanged, streams out of step, angles beyond the range of motion in
-a share of the samples, the axes' conventions) and the bridging of lost samples from both
-sides.  The static start is checked as :func:`check_recording` checks a recording;
+The checks :meth:`ImuCalibration.track` makes of a whole recording (sensors exchanged
+since the calibration, streams out of step, joint angles beyond the hand's range in a share
+of the samples) are made of each stretch of `check_s` seconds of the stream as soon as it
+has been read, and what they find is warned of once, with the stretch's times.  What a
+whole recording allows and a stream does not: the check of the axes' conventions (it
+needs turns about every axis, which one stretch may lack; run ``imu track`` on one
+recording of the logger) and the bridging of lost samples from both sides.  The static
+start is checked as :func:`check_recording` checks a recording;
 afterwards a reading that is not finite (a lost packet) is filled in from the other
 sensors' readings (`max_hold_s`) and marked (Filter 4 loosens that sensor's attitude
 meanwhile, as for a bridged gap); a longer loss stops the stream with an error naming the
@@ -24,6 +28,7 @@ sensor.
 from __future__ import annotations
 
 import dataclasses
+import re
 import warnings
 from dataclasses import dataclass, field
 
@@ -35,9 +40,12 @@ from ...errors import HandsynthError, RecordingError
 from ._attitude import StaticStart, check_static_fits
 from ._calibration import ImuCalibration
 from ._ekf import ChainEKF, ChainEKFOptions, FilterStart, fast_turns, observed_field
+from ._kinematics import angles_beyond_range
+from ._lags import late_sensors
 from ._lost import prediction_coefficients, prediction_regressors
 from ._recording import UNITS, ImuRecording, check_rate, check_recording, check_units
 from ._recording import _columns as _csv_columns
+from ._swaps import misplaced_sensors
 
 __all__ = ["ImuStream", "StreamState", "TrackedSamples", "stream_csv"]
 
@@ -46,6 +54,8 @@ __all__ = ["ImuStream", "StreamState", "TrackedSamples", "stream_csv"]
 #: 20 sensors' regression (58).
 _HISTORY_S = 10.0
 _MIN_FIT_SAMPLES = 174
+#: The shortest stretch checked, s (``check_s``; at the end of a stream, what is left).
+_MIN_CHECK_S = 5.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -104,13 +114,21 @@ class StreamState:
     held_count : ndarray, shape (S,), int
         Readings held since the start, per sensor.
     warned : set of str
-        Warnings of the plate fusion given once already.
+        Warnings given once already (the plate fusion's, the stretches' checks').
     history : dict
         ``acc``, ``gyr`` (S, H, 3): the last H samples in which every sensor read (a ring,
         ``next`` the count written), which a lost sensor's readings are predicted from.
     models : dict
         Lost sensor -> its prediction's coefficients and what they missed at its last
         reading, while it is lost.
+    still : ImuRecording or None
+        The static start's readings, corrected, once read (the checks' gyro biases).
+    stretch : dict
+        The stretch being gathered for the checks: ``first`` (its first sample's index),
+        ``acc``, ``gyr`` (lists of (S, n, 3) blocks, corrected) and ``angles`` (the answers
+        given of it so far, (n, 20) blocks).
+    read : int
+        Samples read since the start.
     closed : bool
     """
 
@@ -126,6 +144,9 @@ class StreamState:
     warned: set = field(default_factory=set)
     history: dict = field(default_factory=dict)
     models: dict = field(default_factory=dict)
+    still: ImuRecording | None = None
+    stretch: dict = field(default_factory=lambda: {"first": 0, "acc": [], "gyr": [], "angles": []})
+    read: int = 0
     closed: bool = False
 
 
@@ -160,6 +181,22 @@ class ImuStream:
         2.33 with 0.5 s (up to 4.76) and 2.46 with 1 s; bridging the whole recording
         afterwards (both sides of the gap) 1.88-2.35.  Holding the last reading instead
         read 1.97 with 0.2 s, 2.63 with 0.3 s and 6.40 with 0.5 s (up to 25.1).
+    check_s : float or None, keyword-only
+        Length of the stretches checked as ``track`` checks a recording, s (default 20;
+        at least 5; None: not checked).  The push that completes a stretch checks it
+        (about 0.15 s for 20 sensors over 20 s, most of it the exchanged sensors' check),
+        and :meth:`close` what is left of the last one if it spans 5 s or more; each
+        finding is warned of once for the stream.
+
+    Warns
+    -----
+    UserWarning
+        What the checks of :meth:`ImuCalibration.track` find in a stretch of `check_s`
+        seconds: sensors exchanged (:func:`swapped_sensors`) or turned on their segments
+        (:func:`turned_sensors`), streams out of step
+        (:func:`late_sensors`), joint angles beyond the hand's range
+        (:func:`angles_beyond_range`); the static start's findings
+        (:func:`check_recording`); a plate sensor straying from the others.
 
     Examples
     --------
@@ -173,7 +210,8 @@ class ImuStream:
     def __init__(self, calibration: ImuCalibration, *, rate_hz: float,
                  static: StaticStart | None = None, options: ChainEKFOptions | None = None,
                  sensor_calibration: bool = True, plate_fusion: bool = True,
-                 start_s: float = 0.0, max_hold_s: float = 0.5) -> None:
+                 start_s: float = 0.0, max_hold_s: float = 0.5,
+                 check_s: float | None = 20.0) -> None:
         check_instance(calibration, ImuCalibration, name="calibration")
         self.calibration = calibration
         self.rate_hz = check_rate(rate_hz, source="ImuStream")
@@ -184,6 +222,8 @@ class ImuStream:
         self.start_s = check_number(start_s, "start_s")
         self.max_hold = max(1, int(round(check_number(max_hold_s, "max_hold_s", above=0)
                                          * self.rate_hz)))
+        self.check_n = None if check_s is None else int(round(
+            check_number(check_s, "check_s", minimum=_MIN_CHECK_S) * self.rate_hz))
         static = self._filter.static
         ends = [static.static_s] + ([] if static.align_end_s is None else [static.align_end_s])
         #: samples read before the filter starts: the static start and the common rotation
@@ -286,6 +326,8 @@ class ImuStream:
 
     def close(self) -> TrackedSamples:
         """Finish the last sample read (its gyro derivative one-sided) and close the stream.
+
+        What is left of the last stretch is checked if it spans 5 s or more (`check_s`).
 
         Raises
         ------
@@ -402,6 +444,9 @@ class ImuStream:
             () if mag is None else (mag[:, -1].copy(),))
         for i in range(max(0, acc.shape[1] - self.state.history["acc"].shape[1]), acc.shape[1]):
             self._remember((acc, gyr), i)
+        n = max(1, round(static_s * self.rate_hz))
+        self.state.still = ImuRecording(self.rate_hz, self.sensors, rec.acc[:, :n], rec.gyr[:, :n],
+                                        None if rec.mag is None else rec.mag[:, :n])
         start = self._filter.prepare(rec)
         self.state.start = start
         self.state.filter = (start.q0, start.covariance, np.zeros((len(self.sensors), 3)))
@@ -420,6 +465,10 @@ class ImuStream:
         tail, start, o = self.state.tail, self.state.start, self._filter.options
         assert start is not None  # push and close call this once the warm-up is read
         if rec is not None:
+            self.state.read += rec.n
+            if self.check_n is not None:
+                self.state.stretch["acc"].append(rec.acc)
+                self.state.stretch["gyr"].append(rec.gyr)
             tail["acc"] = np.concatenate([tail["acc"], rec.acc], axis=1)
             filled = np.zeros(rec.gyr.shape[:2], bool) if rec.filled is None else rec.filled
             gyr = rec.gyr - start.gyro_bias[:, None]
@@ -450,7 +499,34 @@ class ImuStream:
             tail[k] = tail[k][:, m:]
         done = self._outputs(out[:, 1:], self.state.done, held)
         self.state.done += m
+        if self.check_n is not None:
+            self.state.stretch["angles"].append(done.angles_deg)
+            left = self.state.read - self.state.stretch["first"]
+            # a stretch is checked once read; at the end, what is left if it is long enough
+            if left >= self.check_n or (rec is None and left >= _MIN_CHECK_S * self.rate_hz):
+                self._check()
         return done
+
+    def _check(self) -> None:
+        """The checks of :meth:`ImuCalibration.track` on the stretch read since the last;
+        each finding warned of once for the stream."""
+        st, cal = self.state, self.calibration
+        stretch, first = st.stretch, st.stretch["first"]
+        st.stretch = {"first": st.read, "acc": [], "gyr": [], "angles": []}
+        rec = ImuRecording(self.rate_hz, self.sensors, np.concatenate(stretch["acc"], axis=1),
+                           np.concatenate(stretch["gyr"], axis=1), None)
+        assert st.still is not None  # the warm-up is read before any stretch
+        said = (angles_beyond_range(np.concatenate(stretch["angles"])),
+                *misplaced_sensors(rec, cal.model, cal.frames),
+                late_sensors(rec, cal.frames, static_n=st.still.n, still=st.still))
+        t0, t1 = (self.start_s + i / self.rate_hz for i in (first, st.read))
+        for message in filter(None, said):
+            # one finding, whatever the figures it measured in each stretch
+            key = re.sub(r"(?<![\w.])[-+]?\d[\d.]*", "#", message)
+            if key not in st.warned:
+                st.warned.add(key)
+                warnings.warn(f"the stream's {t0:.1f}-{t1:.1f} s: {message} (said once for "
+                              "this stream)", UserWarning, stacklevel=5)
 
     def _outputs(self, q: np.ndarray, first: int, held: np.ndarray) -> TrackedSamples:
         """Fused attitudes, joint angles and fingertips of samples ``first ..``."""

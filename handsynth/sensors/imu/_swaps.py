@@ -37,11 +37,13 @@ from itertools import combinations
 
 import numpy as np
 
+from ._lags import HINGES
 from ._layout import LINKS
 from ._recording import ImuRecording
 from ._vectors import ChainModel, _child, smoothed_motion
 
-__all__ = ["SWAP_FLOOR_MPS2", "SWAP_RATIO", "swap_ratios", "swapped_sensors"]
+__all__ = ["HINGE_FLOOR_RADPS", "HINGE_TURN_RATIO", "SWAP_FLOOR_MPS2", "SWAP_RATIO", "TURNS",
+           "misplaced_sensors", "swap_ratios", "swapped_sensors", "turn_ratios", "turned_sensors"]
 
 #: A pair reads as exchanged when, with its two sensors' readings exchanged, its joints'
 #: residual is less than this share of the residual as labelled: the exchange must fit 1.5
@@ -58,6 +60,43 @@ SWAP_RATIO = 0.66
 SWAP_FLOOR_MPS2 = 0.05
 
 
+def _turn(axis: int, quarters: int) -> np.ndarray:
+    c, s = ((1, 0), (0, 1), (-1, 0), (0, -1))[quarters % 4]
+    i, j = [k for k in range(3) if k != axis]
+    m = np.eye(3)
+    m[i, i], m[i, j], m[j, i], m[j, j] = c, -s, s, c
+    return m
+
+
+#: A hinge's sensor reads as turned a quarter turn about its z axis when its hinges agree
+#: better with its flexion axis turned so by more than this share (1 / 4).  The rates of
+#: the two phalanges either side of a hinge differ only about its axis (the module
+#: :mod:`._lags`): with a sensor turned a quarter turn its calibrated axis is another, and
+#: the parts of the rates off the axis part ways.  A first look at the recordings of
+#: ``python scripts/study_imu_turns.py`` (the tuning configuration and held-out seeds 1-3,
+#: free motions and grasp reaches): as labelled no quarter turn fit better than 27 times
+#: worse; a sensor turned a quarter turn fit 25 times better or more turned back (a share of
+#: 0.04 at most), and a neighbour of the turned sensor on its finger 0.26 at least (not
+#: named after it).
+HINGE_TURN_RATIO = 0.25
+#: ... and when its hinges' residual as labelled is at least this, rad/s (mean per hinge, RMS
+#: about the median): a still hold agrees to the noise.
+HINGE_FLOOR_RADPS = 0.05
+
+#: The turns of a sensor on its segment that are told: name -> the rotation of the sensor's
+#: frame (its columns are the turned sensor's axes in its calibrated frame; its readings of a
+#: vector v are then R^T v).  Clipped on back to front (half a turn about z, out of the
+#: segment's back), upside down (half a turn about x or y), or a square housing put on a
+#: quarter turn round (about z, counter-clockwise seen from +z, or clockwise).
+TURNS: dict[str, np.ndarray] = {
+    "half a turn about its z axis": _turn(2, 2),
+    "half a turn about its x axis": _turn(0, 2),
+    "half a turn about its y axis": _turn(1, 2),
+    "a quarter turn about its z axis (counter-clockwise seen from +z)": _turn(2, 1),
+    "a quarter turn about its z axis (clockwise seen from +z)": _turn(2, -1),
+}
+
+
 def _joints(model: ChainModel, sensors) -> list[tuple[str, str, np.ndarray, np.ndarray]]:
     """(proximal sensor, distal sensor, o_proximal, o_distal) of every joint both measure."""
     out = []
@@ -67,6 +106,86 @@ def _joints(model: ChainModel, sensors) -> list[tuple[str, str, np.ndarray, np.n
             continue
         out.append((s1, s2, model.links[(s1, j1, j2)] - model.own[s1], -model.own[s2]))
     return out
+
+
+class _JointResiduals:
+    """The joints' residuals r(t) of a recording (module docstring), with any sensor's
+    readings read as another's or turned."""
+
+    def __init__(self, rec: ImuRecording, model: ChainModel) -> None:
+        self.joints = _joints(model, rec.sensors)
+        self.sensors = {x for j in self.joints for x in j[:2]}
+        self.motion = {s: smoothed_motion(rec, rec.index(s)) for s in self.sensors}
+        self._norms: dict = {}
+
+    def norm(self, n: int, end: int, sensor: str, turn: str | None = None) -> np.ndarray:
+        """|a + G o| at joint `n`'s centre from `sensor`'s readings (turned by ``TURNS[turn]``),
+        with the vector `o` of the joint's proximal (`end` 0) or distal (1) sensor."""
+        key = (n, end, sensor, turn)
+        if key not in self._norms:
+            w, dw, a = self.motion[sensor]
+            o = self.joints[n][3] if end else self.joints[n][2]
+            if turn is not None:
+                # readings turned by R read with o are the readings read with R^T o (the
+                # norm does not see a rotation)
+                o = TURNS[turn].T @ o
+            self._norms[key] = np.linalg.norm(a + np.cross(w, np.cross(w, o)) + np.cross(dw, o),
+                                              axis=1)
+        return self._norms[key]
+
+    def residual(self, of: dict, among: set, turn: dict | None = None) -> tuple[float, int]:
+        """Summed RMS residual of the joints of the sensors `among` and their count, each
+        sensor read as ``of.get(s, s)``'s readings, turned by ``turn.get(s)``."""
+        turn = turn or {}
+        total, count = 0.0, 0
+        for n, (s1, s2, _, _) in enumerate(self.joints):
+            if s1 in among or s2 in among:
+                r = (self.norm(n, 0, of.get(s1, s1), turn.get(s1))
+                     - self.norm(n, 1, of.get(s2, s2), turn.get(s2)))
+                r = r - np.median(r)  # a constant: two sensors' scale errors, not the motion
+                total += float(np.sqrt(np.mean(r * r)))
+                count += 1
+        return total, count
+
+
+def _hinge_shares(rec: ImuRecording, frames: dict) -> dict[str, tuple[float, float]]:
+    """Sensor -> (share, residual) of the quarter turn about z: the RMS residual of its
+    hinges (:data:`HINGES`) with its flexion axis turned a quarter turn about its z axis
+    over that as labelled, and the latter as the mean per hinge, rad/s.
+
+    Across a hinge the parts of the two phalanges' rates off its axis have one length
+    (:mod:`._lags`): r(t) = |w1 - (w1.x1) x1| - |w2 - (w2.x2) x2|, x the link frame's x
+    axis (the calibration's flexion axis) in each sensor's frame, about its median.  Either
+    quarter turn puts x on the sensor's y axis, one length: the residual does not tell
+    which way the sensor was turned.
+    """
+    pairs = [(p, d) for p, d in HINGES if {p, d} <= set(rec.sensors) and {p, d} <= set(frames)]
+    rates = {s: smoothed_motion(rec, rec.index(s))[0] for pair in pairs for s in pair}
+
+    def off_axis(sensor: str, axis: np.ndarray) -> np.ndarray:
+        w = rates[sensor]
+        return np.linalg.norm(w - np.outer(w @ axis, axis), axis=1)
+
+    quarter = _turn(2, 1)
+    out = {}
+    for s in sorted({x for pair in pairs for x in pair}, key=rec.index):
+        sums = [0.0, 0.0]
+        mine = [pair for pair in pairs if s in pair]
+        for k, turned in enumerate((False, True)):
+            for p, d in mine:
+                axes = {x: np.asarray(frames[x], float)[0] for x in (p, d)}
+                if turned:
+                    axes[s] = quarter.T @ axes[s]
+                r = off_axis(p, axes[p]) - off_axis(d, axes[d])
+                r = r - np.median(r)
+                sums[k] += float(np.sqrt(np.mean(r * r)))
+        out[s] = (sums[1] / sums[0] if sums[0] > 0 else 1.0, sums[0] / len(mine))
+    return out
+
+
+def _measured(res: _JointResiduals, rec: ImuRecording) -> list[str]:
+    """The sensors judged: those a joint joins, the forearm plate's left out."""
+    return sorted((s for s in res.sensors if not s.startswith("forearm")), key=rec.index)
 
 
 def swap_ratios(rec: ImuRecording, model: ChainModel) -> dict[tuple[str, str], tuple[float, float]]:
@@ -89,36 +208,44 @@ def swap_ratios(rec: ImuRecording, model: ChainModel) -> dict[tuple[str, str], t
         the two exchanged over that as labelled, and the latter as the mean per joint,
         m/s^2 (module docstring).
     """
-    joints = _joints(model, rec.sensors)
-    measured = sorted({s for s1, s2, _, _ in joints for s in (s1, s2)
-                       if not s.startswith("forearm")}, key=rec.index)
-    motion = {s: smoothed_motion(rec, rec.index(s)) for s in {x for j in joints for x in j[:2]}}
-    norms: dict = {}
+    return _swap_shares(_JointResiduals(rec, model), rec)
 
-    def norm(n: int, end: int, sensor: str) -> np.ndarray:
-        key = (n, end, sensor)
-        if key not in norms:
-            w, dw, a = motion[sensor]
-            o = joints[n][3] if end else joints[n][2]
-            norms[key] = np.linalg.norm(a + np.cross(w, np.cross(w, o)) + np.cross(dw, o),
-                                        axis=1)
-        return norms[key]
 
-    def residual(of: dict, pair: set) -> tuple[float, int]:
-        total, count = 0.0, 0
-        for n, (s1, s2, _, _) in enumerate(joints):
-            if s1 in pair or s2 in pair:
-                r = norm(n, 0, of.get(s1, s1)) - norm(n, 1, of.get(s2, s2))
-                r = r - np.median(r)  # a constant: two sensors' scale errors, not the motion
-                total += float(np.sqrt(np.mean(r * r)))
-                count += 1
-        return total, count
+def turn_ratios(rec: ImuRecording, model: ChainModel) -> dict[str, dict[str, tuple[float, float]]]:
+    """How much better each sensor's joints agree with its readings turned back.
 
+    Parameters
+    ----------
+    rec, model
+        As :func:`swap_ratios`'s.
+
+    Returns
+    -------
+    dict
+        ``sensor -> {turn: (share, residual)}`` for every sensor :func:`swap_ratios`
+        judges and every turn of :data:`TURNS`: the RMS residual of its joints with its
+        readings turned back (as though the sensor, turned so on its segment since the
+        calibration, were put back) over that as labelled, and the latter as the mean per
+        joint, m/s^2.
+    """
+    return _turn_shares(_JointResiduals(rec, model), rec)
+
+
+def _swap_shares(res: _JointResiduals, rec: ImuRecording) -> dict:
     out = {}
-    for a, b in combinations(measured, 2):
-        labelled, count = residual({}, {a, b})
-        exchanged, _ = residual({a: b, b: a}, {a, b})
+    for a, b in combinations(_measured(res, rec), 2):
+        labelled, count = res.residual({}, {a, b})
+        exchanged, _ = res.residual({a: b, b: a}, {a, b})
         out[(a, b)] = (exchanged / labelled if labelled > 0 else 1.0, labelled / max(count, 1))
+    return out
+
+
+def _turn_shares(res: _JointResiduals, rec: ImuRecording) -> dict:
+    out: dict = {}
+    for s in _measured(res, rec):
+        labelled, count = res.residual({}, {s})
+        out[s] = {name: ((res.residual({}, {s}, {s: name})[0] / labelled) if labelled > 0
+                         else 1.0, labelled / max(count, 1)) for name in TURNS}
     return out
 
 
@@ -142,8 +269,67 @@ def swapped_sensors(rec: ImuRecording, model: ChainModel, *, ratio: float = SWAP
         least `floor_mps2`, the most telling first (at most three), with what each
         measured; None when there is none.
     """
-    found = sorted((share, resid, pair) for pair, (share, resid) in swap_ratios(rec, model).items()
-                   if share < ratio and resid >= floor_mps2)
+    return _exchanges_said(_exchanges(swap_ratios(rec, model), ratio, floor_mps2))
+
+
+def turned_sensors(rec: ImuRecording, model: ChainModel, frames: dict | None = None, *,
+                   ratio: float = SWAP_RATIO, floor_mps2: float = SWAP_FLOOR_MPS2) -> str | None:
+    """A warning naming the sensors that read as turned on their segments, or None.
+
+    A sensor reads as turned by one of :data:`TURNS` when its joints agree better with its
+    readings turned back by more than `ratio` allows (the exchanges' rule,
+    :data:`SWAP_RATIO`) and agree as labelled no better than `floor_mps2`; with `frames`, a
+    finger's or the thumb's phalanx also when its hinges agree better with its flexion
+    axis turned a quarter turn about z by more than :data:`HINGE_TURN_RATIO` allows
+    (:data:`HINGE_FLOOR_RADPS`), the way it turned read from its joints.
+
+    Parameters
+    ----------
+    rec, model
+        As :func:`swap_ratios`'s.
+    frames : dict, optional
+        The calibration's link frames (``ImuCalibration.frames``), for the hinges.
+    ratio, floor_mps2 : float, keyword-only
+        As :func:`swapped_sensors`'.
+
+    Returns
+    -------
+    str or None
+        Each such sensor with the turn that fits best and what it measured, the most
+        telling first (at most three); None when there is none.
+    """
+    hinges = {} if frames is None else _hinge_shares(rec, frames)
+    return _turns_said(_turns(turn_ratios(rec, model), hinges, ratio, floor_mps2, ()))
+
+
+def misplaced_sensors(rec: ImuRecording, model: ChainModel, frames: dict | None = None) -> list[str]:
+    """The warnings of :func:`swapped_sensors` and :func:`turned_sensors` (what ``track``
+    runs), the joints' motion read once; a sensor named as exchanged is not named as turned.
+
+    Parameters
+    ----------
+    rec, model, frames
+        As :func:`turned_sensors`'.
+
+    Returns
+    -------
+    list of str
+        None, one or both warnings.
+    """
+    res = _JointResiduals(rec, model)
+    exchanges = _exchanges(_swap_shares(res, rec), SWAP_RATIO, SWAP_FLOOR_MPS2)
+    named = {s for _, _, pair in exchanges for s in pair}
+    hinges = {} if frames is None else _hinge_shares(rec, frames)
+    turns = _turns(_turn_shares(res, rec), hinges, SWAP_RATIO, SWAP_FLOOR_MPS2, named)
+    return [m for m in (_exchanges_said(exchanges), _turns_said(turns)) if m is not None]
+
+
+def _exchanges(shares: dict, ratio: float, floor_mps2: float) -> list:
+    return sorted((share, resid, pair) for pair, (share, resid) in shares.items()
+                  if share < ratio and resid >= floor_mps2)
+
+
+def _exchanges_said(found: list) -> str | None:
     if not found:
         return None
     said = "; ".join(f"{a} and {b} (their joints agree {1 / share:.1f} times better exchanged: "
@@ -152,3 +338,43 @@ def swapped_sensors(rec: ImuRecording, model: ChainModel, *, ratio: float = SWAP
     more = f"; {len(found) - 3} pair(s) more" if len(found) > 3 else ""
     return (f"sensors read as exchanged since the calibration: {said}{more}. Is each sensor on "
             "the segment it was calibrated on, and each column of the recording its own?")
+
+
+_QUARTERS = tuple(name for name in TURNS if name.startswith("a quarter turn"))
+
+
+def _turns(shares: dict, hinges: dict, ratio: float, floor_mps2: float, exclude) -> list:
+    """(share, sensor, turn, words) of the sensors read as turned, the most telling first;
+    a hinge neighbour of a sensor its hinges tell is not told by its own hinges."""
+    found = []
+    for sensor, turns in shares.items():
+        if sensor in exclude:
+            continue
+        share, resid = hinges.get(sensor, (1.0, 0.0))
+        if share < HINGE_TURN_RATIO and resid >= HINGE_FLOOR_RADPS:
+            name = min(_QUARTERS, key=lambda q: turns[q][0])   # which way: the joints say
+            found.append((share, sensor, name, f"its hinges agree {1 / share:.0f} times better "
+                          f"with its flexion axis turned so: {resid * share:.3f} against "
+                          f"{resid:.3f} rad/s as it is", True))
+            continue
+        name, (share, resid) = min(turns.items(), key=lambda kv: kv[1][0])
+        if share < ratio and resid >= floor_mps2:
+            found.append((share, sensor, name, f"its joints agree {1 / share:.1f} times better "
+                          f"turned back: {resid * share:.2f} against {resid:.2f} m/s^2 as it is",
+                          False))
+    kept: list = []
+    for share, sensor, name, words, by_hinge in sorted(found):
+        if by_hinge and any(k[4] and ((sensor, k[1]) in HINGES or (k[1], sensor) in HINGES)
+                            for k in kept):
+            continue
+        kept.append((share, sensor, name, words, by_hinge))
+    return kept
+
+
+def _turns_said(found: list) -> str | None:
+    if not found:
+        return None
+    said = "; ".join(f"{sensor} {name} ({words})" for _, sensor, name, words, _ in found[:3])
+    more = f"; {len(found) - 3} sensor(s) more" if len(found) > 3 else ""
+    return (f"sensors read as turned on their segments since the calibration: {said}{more}. "
+            "Put each back as it was when calibrated (or calibrate again).")

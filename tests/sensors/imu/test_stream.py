@@ -3,7 +3,7 @@ import warnings
 import numpy as np
 import pytest
 
-from handsynth.errors import RecordingError
+from handsynth.errors import InvalidInputError, RecordingError
 from handsynth.sensors.imu import FILTER4B, ImuStream, StaticStart, TrackedSamples
 
 
@@ -143,3 +143,71 @@ def test_six_axis_sensors_stream_as_they_track(worn):
         whole = cal.track(rec)["angles"]
         streamed = _joined(_feed(ImuStream(cal, rate_hz=rec.rate_hz), rec, [7]))[2]
     np.testing.assert_allclose(streamed, whole, rtol=0, atol=1e-7)
+
+
+def _copied(rec):
+    import dataclasses
+
+    return dataclasses.replace(rec, acc=rec.acc.copy(), gyr=rec.gyr.copy(), mag=rec.mag.copy())
+
+
+def _exchanged(rec, a, b):
+    i, j = rec.sensors.index(a), rec.sensors.index(b)
+    out = _copied(rec)
+    for c in (out.acc, out.gyr, out.mag):
+        c[[i, j]] = c[[j, i]]
+    return out
+
+
+def _said(rec, cal, **options):
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        _feed(ImuStream(cal, rate_hz=rec.rate_hz, **options), rec, [25])
+    return [str(w.message) for w in caught if "the stream's" in str(w.message)]
+
+
+def test_each_stretch_is_checked_as_track_checks_a_recording(worn):
+    """Sensors exchanged and a stream late are told in the stretch they are read in, once."""
+    from handsynth.sensors.imu import delayed
+
+    cal, rec = worn
+    sub = rec.subset(cal.sensors)
+    assert _said(sub, cal, check_s=5.0) == []                      # as worn: nothing
+    said = _said(_exchanged(sub, "index_proximal", "middle_proximal"), cal, check_s=5.0)
+    assert len(said) == 1 and said[0].startswith(                   # two stretches, said once
+        "the stream's 0.0-5.0 s: sensors read as exchanged since the calibration: "
+        "index_proximal and middle_proximal (their joints agree")
+    said = _said(delayed(sub, "ring_middle", 3), cal, check_s=5.0)
+    assert len(said) == 1 and "out of step: ring_middle 30 ms behind" in said[0]
+    turned = _copied(sub)                          # the thumb's phalanx clipped on back to front
+    for c in (turned.acc, turned.gyr, turned.mag):
+        c[sub.index("thumb_proximal"), :, :2] *= -1.0
+    said = _said(turned, cal, check_s=5.0)
+    assert len(said) == 1 and said[0].startswith(
+        "the stream's 0.0-5.0 s: sensors read as turned on their segments since the calibration: "
+        "thumb_proximal half a turn about its z axis")
+    # late from 5 s on: told in the second stretch, its gyro biases from the still start
+    late, k = _copied(sub), sub.sensors.index("ring_middle")
+    d = delayed(sub, "ring_middle", 3)
+    for c, v in ((late.acc, d.acc), (late.gyr, d.gyr), (late.mag, d.mag)):
+        c[k, 500:] = v[k, 500:]
+    said = _said(late, cal, check_s=5.0, start_s=10.0)
+    assert len(said) == 1 and said[0].startswith(
+        "the stream's 15.0-20.0 s: sensor streams out of step: ring_middle 30 ms behind")
+    assert _said(_exchanged(sub, "index_proximal", "middle_proximal"), cal, check_s=None) == []
+    with pytest.raises(InvalidInputError, match=r"check_s must be a finite number >= 5, got 2.0"):
+        ImuStream(cal, rate_hz=100.0, check_s=2.0)
+
+
+def test_a_later_stretch_reads_its_lags_from_the_still_start(worn):
+    """A stretch that does not begin still reads the gyros' biases from the still start given."""
+    from handsynth.sensors.imu import delayed, sensor_lags
+
+    cal, rec = worn
+    late = delayed(cal.correct(rec.subset(cal.sensors)), "ring_middle", 3)
+    later = late.slice(600, 1100)
+    got = sensor_lags(later, cal.frames, static_n=200, still=late.slice(0, 200))
+    assert got[("ring_proximal", "ring_middle")][0] == pytest.approx(0.03, abs=0.004)
+    # read from the stretch's own first samples (moving) instead, the biases are off
+    own = sensor_lags(later, cal.frames, static_n=200)
+    assert own != got

@@ -61,3 +61,72 @@ def test_track_warns_of_exchanged_sensors_and_a_still_hold_says_nothing(worn):
                            cal.model) is None
     residuals = np.array([r for _, r in swap_ratios(still, cal.model).values()])
     assert residuals.max() < 0.05
+
+
+def _turned(rec, sensor, turn):
+    """`sensor` turned by ``TURNS[turn]`` on its segment: it reads R^T v."""
+    from handsynth.sensors.imu import TURNS
+
+    k = rec.index(sensor)
+    out = dataclasses.replace(rec, acc=rec.acc.copy(), gyr=rec.gyr.copy(), mag=rec.mag.copy())
+    for c in (out.acc, out.gyr, out.mag):
+        c[k] = c[k] @ TURNS[turn]
+    return out
+
+
+def test_the_turns_are_the_rotations_they_name():
+    from handsynth.sensors.imu import TURNS
+
+    x, y, z = np.eye(3)
+    half_z = TURNS["half a turn about its z axis"]
+    quarter = TURNS["a quarter turn about its z axis (counter-clockwise seen from +z)"]
+    np.testing.assert_array_equal(half_z @ x, -x)
+    np.testing.assert_array_equal(quarter @ x, y)            # x turned toward y
+    np.testing.assert_array_equal(TURNS["a quarter turn about its z axis (clockwise seen from "
+                                        "+z)"] @ x, -y)
+    np.testing.assert_array_equal(TURNS["half a turn about its x axis"] @ z, -z)
+    for m in TURNS.values():
+        np.testing.assert_array_equal(m @ m.T, np.eye(3))
+        assert np.linalg.det(m) == 1.0
+
+
+def test_sensors_as_calibrated_are_not_called_turned(worn):
+    from handsynth.sensors.imu import misplaced_sensors, turn_ratios, turned_sensors
+
+    cal, rec = worn
+    shares = turn_ratios(rec, cal.model)
+    assert "thumb_proximal" in shares and not any(s.startswith("forearm") for s in shares)
+    # no turn fits much better than as calibrated (0.95 at best here), far above the rule's 0.66
+    assert min(share for turns in shares.values() for share, _ in turns.values()) > 0.9
+    assert turned_sensors(rec, cal.model, cal.frames) is None
+    assert misplaced_sensors(rec, cal.model, cal.frames) == []
+
+
+@pytest.mark.parametrize(("sensor", "turn"), [
+    ("thumb_proximal", "half a turn about its z axis"),   # its angles stay within range
+    ("index_middle", "half a turn about its x axis"),
+    ("hand_radial", "a quarter turn about its z axis (clockwise seen from +z)"),
+    ("ring_proximal", "a quarter turn about its z axis (counter-clockwise seen from +z)"),
+    ("little_distal", "a quarter turn about its z axis (clockwise seen from +z)")])
+def test_a_sensor_turned_is_named_with_its_turn(worn, sensor, turn):
+    from handsynth.sensors.imu import misplaced_sensors, turned_sensors
+
+    cal, rec = worn
+    said = turned_sensors(_turned(rec, sensor, turn), cal.model, cal.frames)
+    assert said is not None and said.startswith(
+        f"sensors read as turned on their segments since the calibration: {sensor} {turn} (its "
+        f"{'hinges' if 'quarter' in turn and sensor != 'hand_radial' else 'joints'} agree"), said
+    assert said.count("(its ") == 1              # its neighbours on the finger not named
+    assert misplaced_sensors(_turned(rec, sensor, turn), cal.model, cal.frames) == [said]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")  # (the angles' check tells three of the four too)
+        cal.track(_turned(rec, sensor, turn), sensor_calibration=False)
+    assert [str(w.message) for w in caught if "read as turned" in str(w.message)] == [said]
+
+
+def test_sensors_exchanged_are_not_also_called_turned(worn):
+    from handsynth.sensors.imu import misplaced_sensors
+
+    cal, rec = worn
+    said = misplaced_sensors(_exchanged(rec, "index_proximal", "middle_proximal"), cal.model)
+    assert len(said) == 1 and said[0].startswith("sensors read as exchanged")
