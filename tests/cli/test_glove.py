@@ -722,3 +722,26 @@ def test_stream_writes_what_apply_writes_line_by_line(files):
                              input="\n".join([lines[0], with_reading(lines[1], "x7")]) + "\n")
     assert res.exit_code != 0 and "Traceback" not in res.output
     assert "standard input, line 2: sensor_index is 'x7', not a number" in res.stderr
+
+
+def test_stream_warns_once_of_a_sensor_stuck_while_the_others_move(files):
+    """A sensor that stops changing (a broken lead) while the hand moves is warned of."""
+    lines = files["wear"].read_text().splitlines()
+    k = lines[0].split(",").index("sensor_middle")
+    cells = [line.split(",") for line in lines[1:]]
+    held = cells[20][k]
+    for row in cells[20:]:
+        row[k] = held                     # stuck from the 21st sample on
+    stuck = [lines[0]] + [",".join(row) for row in cells]
+    assert len(stuck) > 140
+    res = CliRunner().invoke(cli, ["glove", "stream", str(files["cal"])],
+                             input="\n".join(stuck) + "\n")
+    assert res.exit_code == 0, res.output
+    said = res.stderr.replace("\n", " ")
+    assert said.count("has read") == 1, said
+    assert (f"standard input, line 121: sensor_middle has read {float(held):g} for the last 100 "
+            "lines while sensor_") in said
+    assert len(res.stdout.splitlines()) == len(stuck)   # every line still answered
+    res = CliRunner().invoke(cli, ["glove", "stream", str(files["cal"])],
+                             input="\n".join(lines) + "\n")
+    assert res.exit_code == 0 and "has read" not in res.stderr, res.output

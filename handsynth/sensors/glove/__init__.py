@@ -87,7 +87,7 @@ from ._simulate import (
     simulate_range_holds,
     simulate_session,
 )
-from ._stream import stream_glove_csv
+from ._stream import STUCK_LINES, stream_glove_csv
 from ._synergy import Synergies, fit_synergies
 
 __all__ = [
@@ -106,6 +106,7 @@ __all__ = [
     "RANGE_LABELS",
     "REPRESENTATIVE_MOTIONS",
     "SENSOR_NAMES",
+    "STUCK_LINES",
     "CalibrationOptions",
     "ConstantEstimator",
     "EvalOptions",

@@ -6,10 +6,13 @@ line as it comes with the same estimator, which reads every sample on its own (t
 regressions, the mixing over motions of seed 004 eqs. 4-6 and the synergy baseline look at
 no other sample), so the answers are :func:`apply_calibration`'s on the same lines.
 
-What a whole recording allows and a stream does not: judging a sensor dead, saturated or
-off its range over the recording (:func:`check_sensors`).  Line by line, a reading that is
+What a whole recording allows and a stream does not: judging a sensor saturated or off its
+range over the whole recording (:func:`check_sensors`).  Line by line, a reading that is
 missing or outside the converter's range (0 to `adc_max`) gives a row of NaN, and a
-reading at either end of the range is warned of, once per sensor.
+reading at either end of the range is warned of, once per sensor.  A sensor that reads one
+value for :data:`STUCK_LINES` lines while another sensor moves is warned of as dead (once
+per sensor): a live sensor shows a count or two of noise, the assumption of
+:func:`check_sensors`' dead sensor, which a stream cannot wait for the end to judge.
 """
 
 from __future__ import annotations
@@ -26,7 +29,15 @@ from ._models import GloveWarning
 from ._recording import _check_adc_max, glove_columns
 from ._sensors import SENSOR_NAMES
 
-__all__ = ["stream_glove_csv"]
+__all__ = ["STUCK_LINES", "stream_glove_csv"]
+
+#: Lines a sensor must read one value for, while another sensor moves by
+#: :data:`_MOVED_SHARE` of the converter's range, to be warned of as dead: under 2 s at
+#: the 60 Hz of the seed's glove, and more than three times the 30 samples
+#: :func:`check_sensors` asks of a whole recording's dead sensor.
+STUCK_LINES = 100
+#: ... and that motion, a share of `adc_max` (1 %: 41 counts at 12 bits, 10 at 10 bits).
+_MOVED_SHARE = 0.01
 
 
 def stream_glove_csv(lines, calibration, *, model: str = "model4", motion: str | None = None,
@@ -65,8 +76,9 @@ def stream_glove_csv(lines, calibration, *, model: str = "model4", motion: str |
     Warns
     -----
     GloveWarning
-        Once per sensor: a reading at either end of the converter's range (saturated); the
-        estimator's warnings (readings off the calibration's range), once each.
+        Once per sensor: a reading at either end of the converter's range (saturated); a
+        sensor that reads one value for :data:`STUCK_LINES` lines while another moves
+        (dead); the estimator's warnings (readings off the calibration's range), once each.
     """
     _check_adc_max(adc_max)
     cal, est = load_estimator(calibration, model)
@@ -80,6 +92,7 @@ def stream_glove_csv(lines, calibration, *, model: str = "model4", motion: str |
     time_col: int | None = None
     scale = 1.0
     said: set[str] = set()
+    stuck = _StuckSensors(adc_max)
     for number, cells in stream_rows(lines):
         if header is None:
             header, col, ms_col = glove_columns(cells, path=source, line=number)
@@ -95,6 +108,11 @@ def stream_glove_csv(lines, calibration, *, model: str = "model4", motion: str |
         readings = row_numbers(cells, where, header, source=source, line=number)
         t = None if time_col is None else \
             float(row_numbers(cells, time_col, header, source=source, line=number)) * scale
+        for held, other, span in stuck.push(readings):
+            _once(said, f"{SENSOR_NAMES[held]} stuck",
+                  f"{source}, line {number}: {SENSOR_NAMES[held]} has read {readings[held]:g} for the "
+                  f"last {STUCK_LINES} lines while {SENSOR_NAMES[other]} moved {span:g} counts: "
+                  "dead or disconnected? Its joints are read as held there")
         outside = ~((readings >= 0) & (readings <= adc_max))
         for k in np.flatnonzero(((readings == 0) | (readings == adc_max)) & ~outside):
             _once(said, f"{SENSOR_NAMES[k]} saturated",
@@ -125,3 +143,34 @@ def _once(said: set, key: str, message: str) -> None:
     if key not in said:
         said.add(key)
         warnings.warn(f"{message} (said once)", GloveWarning, stacklevel=4)
+
+
+class _StuckSensors:
+    """Each sensor's run of one value, and how far every sensor moved meanwhile."""
+
+    def __init__(self, adc_max: float) -> None:
+        self.adc_max = adc_max
+        self.moved = _MOVED_SHARE * adc_max
+        self.value = np.full(5, np.nan)
+        self.run = np.zeros(5, int)
+        self.low = np.full((5, 5), np.inf)    # [k, j]: sensor j's range during k's run
+        self.high = np.full((5, 5), -np.inf)
+
+    def push(self, readings: np.ndarray) -> list[tuple[int, int, float]]:
+        """(sensor, the sensor that moved most, its span) of each sensor stuck now inside
+        the converter's range (at either end it is saturated, warned of as such)."""
+        same = readings == self.value
+        self.run = np.where(same, self.run + 1, 1)
+        self.value = readings.copy()
+        self.low[~same], self.high[~same] = np.inf, -np.inf
+        with np.errstate(invalid="ignore"):
+            self.low = np.fmin(self.low, readings)
+            self.high = np.fmax(self.high, readings)
+        out = []
+        inside = (readings > 0) & (readings < self.adc_max)
+        for k in np.flatnonzero((self.run >= STUCK_LINES) & inside):
+            span = self.high[k] - self.low[k]
+            j = int(np.nanargmax(np.where(np.arange(5) == k, -np.inf, span)))
+            if span[j] >= self.moved:
+                out.append((int(k), j, float(span[j])))
+        return out
