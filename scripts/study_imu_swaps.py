@@ -47,6 +47,17 @@ def _exchanged(rec, a: str, b: str):
     return dataclasses.replace(rec, acc=rec.acc[order], gyr=rec.gyr[order], mag=rec.mag[order])
 
 
+def grasp_reaches(config, hand):
+    """(label, recording) of the grasp reaches of ``scripts/study_imu_motions.py`` with the
+    elbow fixed and moving, uncorrected."""
+    grasps = tuple(g for g in GRASP_POSES if g != "open")
+    for k, elbow in enumerate(("fixed", "moving")):
+        seed = config.seed * 100 + 50 + k
+        yield f"grasp reaches, elbow {elbow}", simulate_imu(
+            grasp_motion(grasps, elbow=elbow, seed=seed), hand=hand, noise=config.noise,
+            skin=config.skin, seed=seed + 7, device_seed=_device_seed(config))
+
+
 def recordings(seeds: str):
     """(config, calibration, label, recording corrected by the draw's sensor calibration) of
     the tuning configuration and the held-out draws of `seeds` (comma-separated), as the
@@ -60,12 +71,7 @@ def recordings(seeds: str):
         recs = [(f"15 s, elbow {elbow}", rec)
                 for _, elbow, rec in free_trials(config, hand, durations=(15.0,))]
         if config.seed == 1 and config.shape == HandShape():
-            grasps = tuple(g for g in GRASP_POSES if g != "open")
-            for k, elbow in enumerate(("fixed", "moving")):
-                seed = config.seed * 100 + 50 + k
-                recs.append((f"grasp reaches, elbow {elbow}", simulate_imu(
-                    grasp_motion(grasps, elbow=elbow, seed=seed), hand=hand, noise=config.noise,
-                    skin=config.skin, seed=seed + 7, device_seed=_device_seed(config))))
+            recs += list(grasp_reaches(config, hand))
             recs.append(("10 s still", simulate_imu(
                 static_motion(10.0), hand=hand, noise=config.noise, skin=config.skin, seed=77,
                 device_seed=_device_seed(config))))
