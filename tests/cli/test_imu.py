@@ -1015,3 +1015,19 @@ def test_stream_warns_of_sensors_exchanged_in_a_stretch(streamed_files):
     assert "the stream's 0.0-6.0 s: sensors read as exchanged" in res.stderr.replace("\n", " ")
     res = CliRunner().invoke(cli, run + ["--check-every", "0"], input=text)
     assert res.exit_code == 0 and "exchanged" not in res.stderr, res.output
+
+
+def test_stream_refuses_a_rate_its_time_stamps_deny(streamed_files):
+    """--rate half or double the logger's (or under half its period) stops before any answer."""
+    cal_path, csv = streamed_files
+    text = csv.read_text()                                     # 100 Hz, time_s
+    for rate, said in (("50", "the 50 Hz given (--rate)"),     # (steps of half its period)
+                       ("200", "the time stamps step by 0.01 s (the median of the first 20 "
+                                "steps), 100 Hz, not the 200 Hz given (--rate)"),
+                       ("30", "line 4: time stamps step by 0.01 s (time_s 0.010000 after 0), under "
+                              "half the period of the 30 Hz given (--rate)")):
+        res = CliRunner().invoke(cli, ["imu", "stream", "--calibration", str(cal_path), "--rate",
+                                       rate], input=text)
+        assert res.exit_code != 0 and "Traceback" not in res.output, res.output
+        assert said in res.stderr.replace("\n", " "), res.stderr
+        assert len(res.stdout.splitlines()) == 1                # the header, no answer

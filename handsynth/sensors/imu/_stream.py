@@ -56,6 +56,11 @@ _HISTORY_S = 10.0
 _MIN_FIT_SAMPLES = 174
 #: The shortest stretch checked, s (``check_s``; at the end of a stream, what is left).
 _MIN_CHECK_S = 5.0
+#: Time steps a streamed CSV's rate is judged on, and the largest share its median step may
+#: differ by from the period of the rate given (a logger's jitter and millisecond stamps
+#: stay well within it; a rate given as half or double the logger's does not).
+_RATE_STEPS = 20
+_RATE_TOLERANCE = 0.1
 
 
 @dataclass(frozen=True, eq=False)
@@ -562,9 +567,11 @@ def stream_csv(lines, calibration: ImuCalibration, *, rate_hz: float, acc_units:
     commas, or as the header is: by semicolons (decimal commas then read as points) or tabs;
     quotes around a cell are dropped.  Samples are
     taken to come at `rate_hz`; with a time column (``time_s`` or ``time_ms``) the first
-    stamp is the stream's ``start_s`` and a step of more than half a period over the
+    stamp is the stream's ``start_s``, a step of more than half a period over the
     sampling period is samples lost, filled in as :class:`ImuStream` fills a sensor's
-    lost readings (all sensors' here).  An empty cell is a reading lost.
+    lost readings (all sensors' here), and the median of the first 20 steps must be within
+    10 % of the period (a rate given wrong is refused before any answer).  An empty cell is
+    a reading lost.
 
     Parameters
     ----------
@@ -591,7 +598,8 @@ def stream_csv(lines, calibration: ImuCalibration, *, rate_hz: float, acc_units:
         Unknown units; a header without a calibrated sensor's columns; a line whose
         number of cells is not the header's, or a cell that is no number (naming the line
         and the column); time stamps that go back or repeat, or that leave out more than
-        `max_hold_s`; what :class:`ImuStream` raises.
+        `max_hold_s`; time stamps that step by under half the period of `rate_hz`, or whose
+        first 20 steps' median is more than 10 % off it; what :class:`ImuStream` raises.
     """
     units = {"acc": acc_units, "gyr": gyr_units, "mag": mag_units}
     check_units(**units)
@@ -600,6 +608,7 @@ def stream_csv(lines, calibration: ImuCalibration, *, rate_hz: float, acc_units:
     idx: dict = {}
     time_col: int | None = None
     last_t, scale = 0.0, 1.0
+    steps: list[float] = []
     for number, cells in stream_rows(lines):
         if header is None:
             header = cells
@@ -634,9 +643,24 @@ def stream_csv(lines, calibration: ImuCalibration, *, rate_hz: float, acc_units:
             stream = ImuStream(calibration, rate_hz=rate_hz, **options)
         elif t is not None:
             step = (t - last_t) * rate_hz
+            if step < 0.5 and t > last_t:
+                raise RecordingError(
+                    f"{source}, line {number}: time stamps step by {(t - last_t):.6g} s ({stamp}), "
+                    f"under half the period of the {rate_hz:g} Hz given (--rate): is that the "
+                    "logger's rate?")
             if step < 0.5:
                 raise RecordingError(f"{source}, line {number}: time stamps do not increase "
                                      f"({stamp})")
+            steps.append(t - last_t)
+            if len(steps) == _RATE_STEPS:
+                # a rate given wrong (a half or a double) reads every step as a half sample or
+                # as one lost: judged before the static start is read, so before any answer
+                median = float(np.median(steps))
+                if abs(median * rate_hz - 1.0) > _RATE_TOLERANCE:
+                    raise RecordingError(
+                        f"{source}, line {number}: the time stamps step by {median:.6g} s (the "
+                        f"median of the first {_RATE_STEPS} steps), {1.0 / median:.5g} Hz, not the "
+                        f"{rate_hz:g} Hz given (--rate): give the logger's rate")
             lost = int(round(step)) - 1
             if lost > stream.max_hold:
                 raise RecordingError(
