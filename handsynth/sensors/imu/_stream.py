@@ -11,9 +11,9 @@ equal :meth:`ImuCalibration.track`'s on the same readings (tested to 1e-7 deg); 
 sample, which has no next one, is finished by :meth:`ImuStream.close` with the one-sided
 difference, as :func:`numpy.gradient` does at a recording's end.
 
-The checks :meth:`ImuCalibration.track` makes of a whole recording (sensors exchanged
-since the calibration, streams out of step, joint angles beyond the hand's range in a share
-of the samples) are made of each stretch of `check_s` seconds of the stream as soon as it
+The checks :meth:`ImuCalibration.track` makes of a whole recording (sensors exchanged or
+turned since the calibration, streams out of step, joint angles beyond the hand's range in
+a share of the samples) are made of each stretch of `check_s` seconds of the stream as soon as it
 has been read, and what they find is warned of once, with the stretch's times.  What a
 whole recording allows and a stream does not: the check of the axes' conventions (it
 needs turns about every axis, which one stretch may lack; run ``imu track`` on one
@@ -198,9 +198,8 @@ class ImuStream:
     UserWarning
         What the checks of :meth:`ImuCalibration.track` find in a stretch of `check_s`
         seconds: sensors exchanged (:func:`swapped_sensors`) or turned on their segments
-        (:func:`turned_sensors`), streams out of step
-        (:func:`late_sensors`), joint angles beyond the hand's range
-        (:func:`angles_beyond_range`); the static start's findings
+        (:func:`turned_sensors`), streams out of step (:func:`late_sensors`), joint angles
+        beyond the hand's range (:func:`angles_beyond_range`); the static start's findings
         (:func:`check_recording`); a plate sensor straying from the others.
 
     Examples
@@ -654,7 +653,8 @@ def stream_csv(lines, calibration: ImuCalibration, *, rate_hz: float, acc_units:
             steps.append(t - last_t)
             if len(steps) == _RATE_STEPS:
                 # a rate given wrong (a half or a double) reads every step as a half sample or
-                # as one lost: judged before the static start is read, so before any answer
+                # as one lost: judged within the static start (2 s by default), before any
+                # answer
                 median = float(np.median(steps))
                 if abs(median * rate_hz - 1.0) > _RATE_TOLERANCE:
                     raise RecordingError(

@@ -1,4 +1,5 @@
-"""Sensors exchanged since the calibration, told by the centres of their joints.
+"""Sensors exchanged or turned since the calibration, told by the centres of their joints
+(and, for a turned phalanx, by its hinges).
 
 Sensors taken off and put back on the wrong phalanges (or two channels exchanged in a
 recording) are read by the calibration of the places they left: where the joints stay
@@ -29,6 +30,13 @@ of the held-out one, free motions with the elbow fixed and moving, grasp reaches
 hold; 8 random pairs exchanged in each): no recording as labelled was warned of; of the
 320 exchanges in recordings that move 318 were, 308 named first (the still hold's 8 are
 not, as meant).
+
+A sensor turned on its segment (:data:`TURNS`) is told the same way, its readings turned
+back instead of exchanged (:func:`turn_ratios`, :func:`turned_sensors`); a quarter turn
+about z of a finger's phalanx also by its hinges (:data:`HINGE_TURN_RATIO`).  ``python
+scripts/study_imu_turns.py`` (the same 41 recordings, 8 random turns each): no recording as
+labelled warned of; of 320 turns in recordings that move 301 told, 300 named first with the
+turn made (docs/imu.md, "Sensors turned on their segments since the calibration").
 """
 
 from __future__ import annotations
@@ -80,7 +88,9 @@ def _turn(axis: int, quarters: int) -> np.ndarray:
 #: named after it).
 HINGE_TURN_RATIO = 0.25
 #: ... and when its hinges' residual as labelled is at least this, rad/s (mean per hinge, RMS
-#: about the median): a still hold agrees to the noise.
+#: about the median): as calibrated the hinges of the first look agreed to 0.03 rad/s or
+#: better, a still hold to the noise; a ring proximal sensor turned a quarter turn read 0.54
+#: (``tests/sensors/imu/test_swaps.py``).
 HINGE_FLOOR_RADPS = 0.05
 
 #: The turns of a sensor on its segment that are told: name -> the rotation of the sensor's
