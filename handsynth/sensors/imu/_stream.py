@@ -189,7 +189,7 @@ class ImuStream:
     check_s : float or None, keyword-only
         Length of the stretches checked as ``track`` checks a recording, s (default 20;
         at least 5; None: not checked).  The push that completes a stretch checks it
-        (about 0.15 s for 20 sensors over 20 s, most of it the exchanged sensors' check),
+        (about 0.3 s for 20 sensors over 20 s, two thirds of it the exchanged sensors' check),
         and :meth:`close` what is left of the last one if it spans 5 s or more; each
         finding is warned of once for the stream.
 

@@ -1,4 +1,5 @@
 import dataclasses
+import re
 import warnings
 
 import numpy as np
@@ -130,3 +131,25 @@ def test_sensors_exchanged_are_not_also_called_turned(worn):
     cal, rec = worn
     said = misplaced_sensors(_exchanged(rec, "index_proximal", "middle_proximal"), cal.model)
     assert len(said) == 1 and said[0].startswith("sensors read as exchanged")
+
+
+@pytest.mark.parametrize(("sensor", "deg"), [("index_proximal", 20.0), ("ring_middle", -12.0),
+                                             ("thumb_proximal", 35.0), ("little_distal", -40.0)])
+def test_a_sensor_slipped_round_its_finger_is_named_with_the_angle(worn, sensor, deg):
+    """A strap turned about the phalanx's long axis: its hinges tell it and by how much."""
+    from scipy.spatial.transform import Rotation
+
+    from handsynth.sensors.imu import turned_sensors
+
+    cal, rec = worn
+    long_axis = np.asarray(cal.frames[sensor])[1]          # the link frame's y, in the sensor's
+    turn = Rotation.from_rotvec(np.radians(deg) * long_axis).as_matrix()
+    slipped = dataclasses.replace(rec, acc=rec.acc.copy(), gyr=rec.gyr.copy(), mag=rec.mag.copy())
+    for c in (slipped.acc, slipped.gyr, slipped.mag):
+        c[rec.index(sensor)] = c[rec.index(sensor)] @ turn  # it reads R^T v
+    said = turned_sensors(slipped, cal.model, cal.frames)
+    way = "counter-clockwise" if deg > 0 else "clockwise"
+    assert said is not None and said.count("(its ") == 1, said
+    got = re.search(rf": {sensor} (\d+) deg about its phalanx's long axis \({way} seen from the "
+                    r"fingertip\) \(its hinges agree", said)
+    assert got is not None and abs(int(got.group(1)) - abs(deg)) <= 2, said   # the angle, to 2 deg
