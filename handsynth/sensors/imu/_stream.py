@@ -526,11 +526,14 @@ class ImuStream:
         t0, t1 = (self.start_s + i / self.rate_hz for i in (first, st.read))
         for message in filter(None, said):
             # one finding, whatever the figures it measured in each stretch
-            key = re.sub(r"(?<![\w.])[-+]?\d[\d.]*", "#", message)
-            if key not in st.warned:
-                st.warned.add(key)
-                warnings.warn(f"the stream's {t0:.1f}-{t1:.1f} s: {message} (said once for "
-                              "this stream)", UserWarning, stacklevel=5)
+            self._say_once(re.sub(r"(?<![\w.])[-+]?\d[\d.]*", "#", message),
+                           f"the stream's {t0:.1f}-{t1:.1f} s: {message}")
+
+    def _say_once(self, key: str, message: str) -> None:
+        """Warn of `message` unless a message of the same `key` was warned of already."""
+        if key not in self.state.warned:
+            self.state.warned.add(key)
+            warnings.warn(f"{message} (said once for this stream)", UserWarning, stacklevel=5)
 
     def _outputs(self, q: np.ndarray, first: int, held: np.ndarray) -> TrackedSamples:
         """Fused attitudes, joint angles and fingertips of samples ``first ..``."""
@@ -538,11 +541,7 @@ class ImuStream:
             warnings.simplefilter("always")
             out = self.calibration.read_attitudes(q, self.sensors, plate_fusion=self.plate_fusion)
         for w in caught:                     # a plate sensor straying: said once a stream
-            key = str(w.message).split("(")[0]
-            if key not in self.state.warned:
-                self.state.warned.add(key)
-                warnings.warn(f"{w.message} (said once for this stream)", UserWarning,
-                              stacklevel=4)
+            self._say_once(str(w.message).split("(")[0], str(w.message))
         t = self.start_s + (first + np.arange(q.shape[1])) / self.rate_hz
         return TrackedSamples(t, out["quat"], out["angles"], out["tips"], held)
 
@@ -650,13 +649,13 @@ def stream_csv(lines, calibration: ImuCalibration, *, rate_hz: float, acc_units:
             if step < 0.5:
                 raise RecordingError(f"{source}, line {number}: time stamps do not increase "
                                      f"({stamp})")
-            steps.append(t - last_t)
-            if len(steps) == _RATE_STEPS:
+            if len(steps) < _RATE_STEPS:       # the first steps only, judged once
+                steps.append(t - last_t)
                 # a rate given wrong (a half or a double) reads every step as a half sample or
                 # as one lost: judged within the static start (2 s by default), before any
                 # answer
                 median = float(np.median(steps))
-                if abs(median * rate_hz - 1.0) > _RATE_TOLERANCE:
+                if len(steps) == _RATE_STEPS and abs(median * rate_hz - 1.0) > _RATE_TOLERANCE:
                     raise RecordingError(
                         f"{source}, line {number}: the time stamps step by {median:.6g} s (the "
                         f"median of the first {_RATE_STEPS} steps), {1.0 / median:.5g} Hz, not the "

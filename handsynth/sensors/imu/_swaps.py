@@ -184,8 +184,8 @@ class _HingeFit:
     residual: float
 
 
-def _hinge_fits(rec: ImuRecording, frames: dict) -> dict[str, _HingeFit]:
-    """Each hinge sensor's :class:`_HingeFit`.
+def _hinge_fits(res: _JointResiduals, frames: dict) -> dict[str, _HingeFit]:
+    """Each hinge sensor's :class:`_HingeFit`, from the rates `res` smoothed.
 
     Across a hinge (:data:`HINGES`) the parts of the two phalanges' rates off its axis have
     one length (:mod:`._lags`): r(t) = |w1 - (w1.x1) x1| - |w2 - (w2.x2) x2|, x the link
@@ -195,8 +195,8 @@ def _hinge_fits(rec: ImuRecording, frames: dict) -> dict[str, _HingeFit]:
     alike (the two quarter turns about z, when the axis lies near the sensor's x) are told
     apart by the joints' centres (:func:`_turns`).
     """
-    pairs = [(p, d) for p, d in HINGES if {p, d} <= set(rec.sensors) and {p, d} <= set(frames)]
-    rates = {s: smoothed_motion(rec, rec.index(s))[0] for pair in pairs for s in pair}
+    pairs = [(p, d) for p, d in HINGES if {p, d} <= res.sensors and {p, d} <= set(frames)]
+    rates = {s: res.motion[s][0] for pair in pairs for s in pair}
 
     def off_axis(sensor: str, turn: np.ndarray | None = None) -> np.ndarray:
         w, axis = rates[sensor], np.asarray(frames[sensor], float)[0]
@@ -216,7 +216,7 @@ def _hinge_fits(rec: ImuRecording, frames: dict) -> dict[str, _HingeFit]:
         return total
 
     out = {}
-    for s in sorted({x for pair in pairs for x in pair}, key=rec.index):
+    for s in sorted({x for pair in pairs for x in pair}):
         labelled = residual(s, None)
         long_axis = np.asarray(frames[s], float)[1]
         rolls = np.array([residual(s, _about(long_axis, deg)) if deg else labelled
@@ -359,8 +359,9 @@ def turned_sensors(rec: ImuRecording, model: ChainModel, frames: dict | None = N
         Each such sensor with the turn that fits best and what it measured, the most
         telling first (at most three); None when there is none.
     """
-    hinges = {} if frames is None else _hinge_fits(rec, frames)
-    return _turns_said(_turns(_JointResiduals(rec, model), rec, hinges, ratio, floor_mps2, ()))
+    res = _JointResiduals(rec, model)
+    hinges = {} if frames is None else _hinge_fits(res, frames)
+    return _turns_said(_turns(res, rec, hinges, ratio, floor_mps2, ()))
 
 
 def misplaced_sensors(rec: ImuRecording, model: ChainModel, frames: dict | None = None) -> list[str]:
@@ -380,7 +381,7 @@ def misplaced_sensors(rec: ImuRecording, model: ChainModel, frames: dict | None 
     res = _JointResiduals(rec, model)
     exchanges = _exchanges(_swap_shares(res, rec), SWAP_RATIO, SWAP_FLOOR_MPS2)
     named = {s for _, _, pair in exchanges for s in pair}
-    hinges = {} if frames is None else _hinge_fits(rec, frames)
+    hinges = {} if frames is None else _hinge_fits(res, frames)
     turns = _turns(res, rec, hinges, SWAP_RATIO, SWAP_FLOOR_MPS2, named)
     return [m for m in (_exchanges_said(exchanges), _turns_said(turns)) if m is not None]
 
