@@ -437,12 +437,27 @@ def test_calibrate_then_track_joint_angles(tmp_path):
     swapped_csv = tmp_path / "swapped.csv"
     swapped_csv.write_text("\n".join(lines))
     res = CliRunner().invoke(cli, ["imu", "track", str(swapped_csv), "--calibration", str(model),
-                                   "--align", "2,4", "--out", str(tmp_path / "q2.csv")])
+                                   "--align", "2,4", "--out", str(tmp_path / "q2.csv"),
+                                   "--angles-out", str(tmp_path / "a2.csv")])
     assert res.exit_code == 0, res.output
     assert "handsynth: warning: sensors read as exchanged since the calibration: " in res.output
     assert re.search(r"(index_proximal and middle_proximal|middle_proximal and index_proximal) "
                      r"\(their joints agree [0-9.]+ times better exchanged", res.output), res.output
     assert "out of step" not in res.output
+    # ... read as put back: the angles of the recording as made, and no warning of them left
+    res = CliRunner().invoke(cli, ["imu", "track", str(swapped_csv), "--calibration", str(model),
+                                   "--align", "2,4", "--out", str(tmp_path / "q4.csv"),
+                                   "--angles-out", str(tmp_path / "a4.csv"), "--undo-misplaced"])
+    assert res.exit_code == 0, res.output
+    # (the columns, not the sensors: each column read with its own sensor's calibration)
+    assert ("handsynth: warning: read as put back: index_proximal and middle_proximal exchanged "
+            "back (as columns of the recording exchanged, not sensors: their magnetometers read "
+            "a steadier field so, ") in res.output
+    assert "read as exchanged" not in res.output
+    made, faulty, undone = (np.loadtxt(tmp_path / f, delimiter=",", skiprows=1)[:, 1:]
+                            for f in ("a.csv", "a2.csv", "a4.csv"))
+    assert np.nanmax(np.abs(faulty - made)) > 10.0
+    assert np.nanmax(np.abs(undone - made)) < 1e-6
     # one sensor's stream 30 ms late (a wireless logger's latency): named
     late_csv = tmp_path / "late.csv"
     write_imu_csv(delayed(rec, "ring_middle", 3), late_csv)

@@ -37,7 +37,7 @@ from ._model import TIP_SENSORS
 from ._plate import PLATE_SENSORS, fuse_plate, plate_rotations
 from ._recording import ImuRecording, check_recording
 from ._sensorcal import POSE_PREFIX, SensorCalibration, fit_sensor_calibration
-from ._swaps import misplaced_sensors
+from ._swaps import Misplaced, misplaced_sensors, put_back, undo_misplaced
 from ._vectors import CLOSING_VECTORS, ChainModel, _min_rotation_samples, calibrate_vectors, chain_model
 
 __all__ = ["ImuCalibration", "calibrate", "check_stretches", "segments_from_seconds"]
@@ -341,7 +341,8 @@ class ImuCalibration:
             raise RecordingError(f"calibration file inconsistent: {exc}") from None
 
     def track(self, rec: ImuRecording, *, static=None, sensor_calibration: bool = True,
-              plate_fusion: bool = True, options: ChainEKFOptions | None = None) -> dict:
+              plate_fusion: bool = True, options: ChainEKFOptions | None = None,
+              undo_misplaced: bool = False) -> dict:
         """Attitudes (Filter 4), joint angles and fingertips of a recording.
 
         Parameters
@@ -358,6 +359,12 @@ class ImuCalibration:
         options : ChainEKFOptions, keyword-only, optional
             Filter 4's options (its defaults, the thesis' filter, if None;
             :data:`~handsynth.sensors.imu.FILTER4B` learns drifting gyro biases).
+        undo_misplaced : bool, keyword-only
+            Read the sensors that read as exchanged or turned since the calibration
+            (:func:`find_misplaced`) as put back, one at a time (:func:`put_back`, after
+            the sensor calibration: each sensor's own travels with it), with a warning
+            naming what was undone; the checks after the filter are then made of the
+            readings as put back.  Off: they are warned of and read as they are.
 
         Returns
         -------
@@ -365,7 +372,9 @@ class ImuCalibration:
             ``quat`` (S, N, 4), ``angles`` (N, 20) degrees, ``tips``
             finger -> (N, 3) metres from the elbow, ``chains`` all of
             :func:`fingertip_positions` (each chain's joints too),
-            ``sensor_calibration`` whether a sensor calibration was applied.
+            ``sensor_calibration`` whether a sensor calibration was applied,
+            ``undone`` the :class:`Misplaced` put back (empty when nothing was, or
+            `undo_misplaced` is off).
 
         Warns
         -----
@@ -384,6 +393,15 @@ class ImuCalibration:
         static = check_options(static, StaticStart, name="static")
         options = check_options(options, ChainEKFOptions)
         sub = self.correct(rec, sensor_calibration=sensor_calibration)
+        undone = left = Misplaced()
+        if undo_misplaced:
+            sub, undone, left = put_back(sub, self.model, self.frames)
+            how = ""
+            if undone.exchanged and self.sensor_calibration is not None and sensor_calibration:
+                sub, how = self._columns_or_sensors(rec, sub, undone)
+            if undone:
+                warnings.warn(f"read as put back: {undone.describe()}{how} (undo_misplaced)",
+                              UserWarning, stacklevel=2)
         if rec.reported is not None:
             # the caller has had check_recording's warnings of `rec`: the filter's run
             # does not repeat them for the corrected copy
@@ -394,12 +412,36 @@ class ImuCalibration:
         beyond = angles_beyond_range(out["angles"])
         if beyond is not None:
             warnings.warn(beyond, UserWarning, stacklevel=2)
-        for misplaced in misplaced_sensors(sub, self.model, self.frames):
+        # (put back, the last round's reading of what is left stands)
+        for misplaced in (left.warnings if undo_misplaced else
+                          misplaced_sensors(sub, self.model, self.frames)):
             warnings.warn(misplaced, UserWarning, stacklevel=2)
         late = late_sensors(sub, self.frames, static_n=int(static.static_s * sub.rate_hz))
         if late is not None:
             warnings.warn(late, UserWarning, stacklevel=2)
-        return {**out, "sensor_calibration": applied}
+        return {**out, "sensor_calibration": applied, "undone": undone}
+
+    def _columns_or_sensors(self, rec: ImuRecording, sub: ImuRecording,
+                            undone: Misplaced) -> tuple[ImuRecording, str]:
+        """`sub` (`rec` corrected, then put back as `undone`: sensors put back on each other's
+        segments, each read with its own calibration) or `rec`'s pairs exchanged first, then
+        corrected (the recording's columns exchanged, not the sensors: each column's
+        calibration is another sensor's), whichever's exchanged magnetometers read the
+        steadier field strength (the calibration makes each sensor's constant), and the
+        words that say which."""
+        columns = undo_misplaced(
+            self.correct(undo_misplaced(rec, Misplaced(exchanged=undone.exchanged))),
+            Misplaced(turned=undone.turned))
+        if columns.mag is None or sub.mag is None:   # 6-axis sensors: nothing tells
+            return sub, ""
+        rows = [sub.index(s) for pair in undone.exchanged for s in pair]
+        as_sensors, as_columns = (float(sum(np.std(np.linalg.norm(mag[k], axis=1)) for k in rows))
+                                  for mag in (sub.mag, columns.mag))
+        if as_columns < as_sensors:
+            return columns, (f" (as columns of the recording exchanged, not sensors: their "
+                             f"magnetometers read a steadier field so, {as_columns:.1f} against "
+                             f"{as_sensors:.1f} uT s.d.)")
+        return sub, ""
 
     def read_attitudes(self, quats, sensors, *, plate_fusion: bool = True) -> dict:
         """Joint angles and fingertips of sensor attitudes (what :meth:`track` returns).

@@ -43,7 +43,7 @@ made, and of 136 slips round the finger of 10-40 deg every one, the angle to 1.1
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from itertools import combinations
 
 import numpy as np
@@ -53,8 +53,23 @@ from ._layout import LINKS
 from ._recording import ImuRecording
 from ._vectors import ChainModel, _child, smoothed_motion
 
-__all__ = ["HINGE_FLOOR_RADPS", "HINGE_TURN_RATIO", "SWAP_FLOOR_MPS2", "SWAP_RATIO", "TURNS",
-           "misplaced_sensors", "swap_ratios", "swapped_sensors", "turn_ratios", "turned_sensors"]
+__all__ = [
+    "HINGE_FLOOR_RADPS",
+    "HINGE_TURN_RATIO",
+    "MAX_PUT_BACK",
+    "SWAP_FLOOR_MPS2",
+    "SWAP_RATIO",
+    "TURNS",
+    "Misplaced",
+    "find_misplaced",
+    "misplaced_sensors",
+    "put_back",
+    "swap_ratios",
+    "swapped_sensors",
+    "turn_ratios",
+    "turned_sensors",
+    "undo_misplaced",
+]
 
 #: A pair reads as exchanged when, with its two sensors' readings exchanged, its joints'
 #: residual is less than this share of the residual as labelled: the exchange must fit 1.5
@@ -364,9 +379,47 @@ def turned_sensors(rec: ImuRecording, model: ChainModel, frames: dict | None = N
     return _turns_said(_turns(res, rec, hinges, ratio, floor_mps2, ()))
 
 
-def misplaced_sensors(rec: ImuRecording, model: ChainModel, frames: dict | None = None) -> list[str]:
-    """The warnings of :func:`swapped_sensors` and :func:`turned_sensors` (what ``track``
-    runs), the joints' motion read once; a sensor named as exchanged is not named as turned.
+@dataclass(frozen=True)
+class Misplaced:
+    """Sensors a recording reads as misplaced since the calibration (:func:`find_misplaced`).
+
+    Attributes
+    ----------
+    exchanged : tuple of (str, str)
+        Pairs read as exchanged, no sensor in two pairs, the one whose exchange leaves the
+        joints' centres agreeing best over every joint first (the warning names them by
+        their own joints' share).
+    turned : tuple of (str, str, ndarray of shape (3, 3))
+        Sensors read as turned on their segments: the sensor, the turn in words (as the
+        warning names it) and its rotation (columns: the turned sensor's axes in its
+        calibrated frame, as :data:`TURNS`'), the most telling first.
+    warnings : tuple of str
+        What :func:`misplaced_sensors` says (none, one or both of the exchanges' and the
+        turns' warnings).
+    """
+
+    exchanged: tuple = ()
+    turned: tuple = ()
+    warnings: tuple = ()
+
+    def __bool__(self) -> bool:
+        return bool(self.exchanged or self.turned)
+
+    def __add__(self, other: Misplaced) -> Misplaced:
+        return Misplaced(self.exchanged + other.exchanged, self.turned + other.turned,
+                         self.warnings + other.warnings)
+
+    def describe(self) -> str:
+        """What :func:`undo_misplaced` undoes, in words (empty when nothing)."""
+        said = [f"{a} and {b} exchanged back" for a, b in self.exchanged]
+        said += [f"{sensor} turned back by {name}" for sensor, name, _ in self.turned]
+        return "; ".join(said)
+
+
+def find_misplaced(rec: ImuRecording, model: ChainModel, frames: dict | None = None) -> Misplaced:
+    """The sensors :func:`swapped_sensors` and :func:`turned_sensors` read as misplaced (what
+    ``track`` checks), the joints' motion read once; a sensor named as exchanged is not named
+    as turned.
 
     Parameters
     ----------
@@ -375,15 +428,157 @@ def misplaced_sensors(rec: ImuRecording, model: ChainModel, frames: dict | None 
 
     Returns
     -------
-    list of str
-        None, one or both warnings.
+    Misplaced
+        The pairs and turns found, and the warnings that name them.
     """
+    return _read(rec, model, frames)[0]
+
+
+def _read(rec: ImuRecording, model: ChainModel, frames: dict | None) -> tuple[Misplaced, list]:
+    """:func:`find_misplaced`'s answer, and every single put back it allows (each pair found,
+    each sensor found turned, its exchanged ones too) as a :class:`Misplaced` with the summed
+    residual of every joint left once it is put back, the least first."""
     res = _JointResiduals(rec, model)
     exchanges = _exchanges(_swap_shares(res, rec), SWAP_RATIO, SWAP_FLOOR_MPS2)
     named = {s for _, _, pair in exchanges for s in pair}
     hinges = {} if frames is None else _hinge_fits(res, frames)
-    turns = _turns(res, rec, hinges, SWAP_RATIO, SWAP_FLOOR_MPS2, named)
-    return [m for m in (_exchanges_said(exchanges), _turns_said(turns)) if m is not None]
+    every_turn = _turns(res, rec, hinges, SWAP_RATIO, SWAP_FLOOR_MPS2, ())
+    turns = _turns(res, rec, hinges, SWAP_RATIO, SWAP_FLOOR_MPS2, named) if named else every_turn
+    every = set(res.sensors)
+    singles = [(res.residual({a: b, b: a}, every)[0], Misplaced(exchanged=((a, b),)))
+               for _, _, (a, b) in exchanges]
+    shares = _turn_shares(res, rec) if every_turn else {}
+    for k in every_turn:
+        # the turn named, and every other its joints' centres or its hinges allow (a half
+        # turn about z hardly moves a flexion axis near the sensor's x: its hinges may
+        # allow a slip instead, and the centres tell)
+        sensor, fit = k[1], hinges.get(k[1])
+        options = {k[2]: k[5], **{name: TURNS[name] for name, (share, _) in
+                                  shares.get(sensor, {}).items() if share < SWAP_RATIO}}
+        if fit is not None:
+            options.update({name: fit.roll_turn if name == fit.roll else TURNS[name]
+                            for name, share in fit.shares.items() if share < HINGE_TURN_RATIO})
+        for name, rotation in options.items():
+            key = f"{sensor} put back {name}"
+            res.turns[key] = rotation
+            singles.append((res.residual({}, every, {sensor: key})[0],
+                            Misplaced(turned=((sensor, name, rotation),))))
+    singles.sort(key=lambda c: c[0])
+    pairs: list = []
+    for _, one in singles:      # a sensor in one pair at most
+        if one.exchanged and not any(set(one.exchanged[0]) & set(p) for p in pairs):
+            pairs.append(one.exchanged[0])
+    said = tuple(m for m in (_exchanges_said(exchanges), _turns_said(turns)) if m is not None)
+    return Misplaced(tuple(pairs), tuple((k[1], k[2], k[5]) for k in turns), said), singles
+
+
+def misplaced_sensors(rec: ImuRecording, model: ChainModel, frames: dict | None = None) -> list[str]:
+    """:func:`find_misplaced`'s warnings as a list (what ``track`` warns of): none, one or
+    both of :func:`swapped_sensors`' and :func:`turned_sensors`'."""
+    return list(find_misplaced(rec, model, frames).warnings)
+
+
+def undo_misplaced(rec: ImuRecording, found: Misplaced) -> ImuRecording:
+    """`rec` with the sensors `found` misplaced put back: each pair's readings exchanged back,
+    each turned sensor's readings turned back into its calibrated frame.
+
+    A sensor's own calibration (biases, scales, the magnetometer's iron) travels with the
+    sensor, not with its place: give `rec` corrected by the sensor calibration (as
+    ``track(..., undo_misplaced=True)`` does).  Where a logger's columns, not the sensors,
+    were exchanged since the calibration, put the columns right in the file instead.
+
+    Parameters
+    ----------
+    rec : ImuRecording
+    found : Misplaced
+        What :func:`find_misplaced` read of `rec`.
+
+    Returns
+    -------
+    ImuRecording
+        A copy (its ``filled`` samples exchanged with their readings; unchecked, as a copy
+        made with :func:`dataclasses.replace` is).
+    """
+    order = list(range(len(rec.sensors)))
+    for a, b in found.exchanged:
+        i, j = rec.index(a), rec.index(b)
+        order[i], order[j] = order[j], order[i]
+    acc, gyr = rec.acc[order], rec.gyr[order]
+    mag = None if rec.mag is None else rec.mag[order]
+    for sensor, _, rotation in found.turned:
+        k = rec.index(sensor)
+        for c in (acc, gyr, mag):
+            if c is not None:
+                c[k] = c[k] @ np.asarray(rotation).T   # it read r = R^T v: v = R r
+    filled = None if rec.filled is None else rec.filled[order]
+    return replace(rec, acc=acc, gyr=gyr, mag=mag, filled=filled)
+
+
+_PUT_BACK_HINT = ("A recording made so can be read as though they were put back: imu track "
+                  "--undo-misplaced (library: track(..., undo_misplaced=True), put_back).")
+
+#: Most misplacements :func:`put_back` undoes in one recording (one at a time).
+MAX_PUT_BACK = 4
+
+
+def put_back(rec: ImuRecording, model: ChainModel, frames: dict | None = None, *,
+             rounds: int = MAX_PUT_BACK) -> tuple[ImuRecording, Misplaced, Misplaced]:
+    """`rec` with its misplaced sensors put back, one at a time, the one that fits best first.
+
+    Each round reads the recording as put back so far (:func:`find_misplaced`) and undoes
+    one of its findings alone: of the pairs found exchanged and the sensors found turned
+    (those in a pair too; each by the turn named, or any other its joints' centres or its
+    hinges allow), the one that leaves the joints' centres agreeing best over every joint
+    (the residual of the module docstring, summed), never the one just put back undone
+    again.  A pair exchanged makes its
+    neighbours' joints agree worse too, so a pair beside it may be named (on a held-out draw,
+    the thumb's distal and the index finger's middle sensors exchanged also named the two
+    proximal ones), even first by its own joints' share (on one recording, 8 of the 136
+    pairs of phalanx and hand sensors exchanged: a distal pair named before the middle
+    pair exchanged), and a sensor turned may read as exchanged with a neighbour (the hand's
+    radial sensor turned half a turn about z, with the thumb's metacarpal); the next round,
+    with the one that fits best put back, no longer names them.
+
+    Parameters
+    ----------
+    rec : ImuRecording
+        Corrected by the sensor calibration, as :func:`undo_misplaced` wants it.
+    model, frames
+        As :func:`turned_sensors`'.
+    rounds : int, keyword-only
+        At most this many put back (:data:`MAX_PUT_BACK`).
+
+    Returns
+    -------
+    recording : ImuRecording
+        `rec` put back (`rec` itself when nothing was found).
+    undone : Misplaced
+        What was put back, in order (no warnings).
+    left : Misplaced
+        What the recording as put back still reads as misplaced (after `rounds`), with
+        its warnings: empty unless `rounds` ran out.
+    """
+    undone = last = Misplaced()
+    found, singles = _read(rec, model, frames)
+    for _ in range(rounds):
+        # never the one just put back undone again (two readings that each prefer the other)
+        one = next((c for _, c in singles if not _reverses(c, last)), None)
+        if one is None:
+            break
+        rec, undone, last = undo_misplaced(rec, one), undone + one, one
+        found, singles = _read(rec, model, frames)
+    return rec, undone, found
+
+
+def _reverses(one: Misplaced, last: Misplaced) -> bool:
+    """Whether putting back `one` undoes `last` (one finding each)."""
+    if one.exchanged and last.exchanged:
+        return set(one.exchanged[0]) == set(last.exchanged[0])
+    if one.turned and last.turned:
+        (s1, _, r1), (s2, _, r2) = one.turned[0], last.turned[0]
+        return s1 == s2 and bool(np.allclose(np.asarray(r1) @ np.asarray(r2), np.eye(3),
+                                             atol=1e-6))
+    return False
 
 
 def _exchanges(shares: dict, ratio: float, floor_mps2: float) -> list:
@@ -399,12 +594,13 @@ def _exchanges_said(found: list) -> str | None:
                      for share, resid, (a, b) in found[:3])
     more = f"; {len(found) - 3} pair(s) more" if len(found) > 3 else ""
     return (f"sensors read as exchanged since the calibration: {said}{more}. Is each sensor on "
-            "the segment it was calibrated on, and each column of the recording its own?")
+            "the segment it was calibrated on, and each column of the recording its own? "
+            f"{_PUT_BACK_HINT}")
 
 
 def _turns(res: _JointResiduals, rec: ImuRecording, hinges: dict, ratio: float,
            floor_mps2: float, exclude) -> list:
-    """(share, sensor, turn, words, by its hinges) of the sensors read as turned, the most
+    """(share, sensor, turn, words, by its hinges, rotation) of the sensors read as turned, the most
     telling first; a hinge neighbour of a sensor its hinges tell is not told by its own.
 
     Where a sensor's hinges allow turns (a share under :data:`HINGE_TURN_RATIO`), its
@@ -427,26 +623,28 @@ def _turns(res: _JointResiduals, rec: ImuRecording, hinges: dict, ratio: float,
             share = fit.shares[name]
             found.append((share, sensor, name, f"its hinges agree {1 / share:.0f} times better "
                           f"turned back so: {fit.residual * share:.3f} against "
-                          f"{fit.residual:.3f} rad/s as it is", True))
+                          f"{fit.residual:.3f} rad/s as it is", True,
+                          fit.roll_turn if name == fit.roll else TURNS[name]))
             continue
         name, (share, resid) = min(turns.items(), key=lambda kv: kv[1][0])
         if share < ratio and resid >= floor_mps2:
             found.append((share, sensor, name, f"its joints agree {1 / share:.1f} times better "
                           f"turned back: {resid * share:.2f} against {resid:.2f} m/s^2 as it is",
-                          False))
+                          False, TURNS[name]))
     kept: list = []
-    for share, sensor, name, words, by_hinge in sorted(found):
-        if by_hinge and any(k[4] and ((sensor, k[1]) in HINGES or (k[1], sensor) in HINGES)
-                            for k in kept):
+    for k in sorted(found, key=lambda k: k[:2]):
+        sensor, by_hinge = k[1], k[4]
+        if by_hinge and any(o[4] and ((sensor, o[1]) in HINGES or (o[1], sensor) in HINGES)
+                            for o in kept):
             continue
-        kept.append((share, sensor, name, words, by_hinge))
+        kept.append(k)
     return kept
 
 
 def _turns_said(found: list) -> str | None:
     if not found:
         return None
-    said = "; ".join(f"{sensor} {name} ({words})" for _, sensor, name, words, _ in found[:3])
+    said = "; ".join(f"{sensor} {name} ({words})" for _, sensor, name, words, *_ in found[:3])
     more = f"; {len(found) - 3} sensor(s) more" if len(found) > 3 else ""
     return (f"sensors read as turned on their segments since the calibration: {said}{more}. "
-            "Put each back as it was when calibrated (or calibrate again).")
+            f"Put each back as it was when calibrated (or calibrate again). {_PUT_BACK_HINT}")
