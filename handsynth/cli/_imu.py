@@ -374,11 +374,16 @@ def _write_track_bvh(path, angles, quats, sensors, cal, chains, rate_hz, shape, 
               help="Read sensors that read as exchanged or turned on their segments since the "
                    "calibration as put back, one at a time, with a warning naming each "
                    "(needs --calibration); without it they are warned of and read as they are.")
+@click.option("--realign-late", is_flag=True,
+              help="Read sensors whose streams read late or early against their neighbours "
+                   "(a wireless logger's latency) as realigned by the lag found, with a warning "
+                   "naming each (needs --calibration); the hand's two sensors against each "
+                   "other are not told apart and stay warned of.")
 @_no_sensor_calibration
 def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_units, rate_hz,
           acc_range_g, gyr_range_dps, bridge_lost, bridge_max_s, gyr_axes, mag_axes, static_s,
           align, out_path, angles_out, tips_out, bvh_out, bvh_shape, undo_misplaced,
-          no_sensor_calibration) -> None:
+          realign_late, no_sensor_calibration) -> None:
     """Orientation of every sensor of a CSV RECORDING (columns <sensor>_acc_x .. _mag_z)."""
     import numpy as np
 
@@ -394,6 +399,7 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
 
     for flag, given in (("--angles-out", angles_out), ("--tips-out", tips_out),
                         ("--bvh-out", bvh_out), ("--undo-misplaced", undo_misplaced),
+                        ("--realign-late", realign_late),
                         ("--no-sensor-calibration", no_sensor_calibration),
                         (f"--filter {filter_name}", filter_name in _CHAIN_FILTERS)):
         if given and not calibration_path:
@@ -433,7 +439,7 @@ def track(recording, filter_name, calibration_path, acc_units, gyr_units, mag_un
         name = filter_name or "filter4"
         res = cal.track(rec, static=static, sensor_calibration=not no_sensor_calibration,
                         options=FILTER4B if name == "filter4b" else None,
-                        undo_misplaced=undo_misplaced)
+                        undo_misplaced=undo_misplaced, realign_late=realign_late)
         q, sensors = res["quat"], cal.sensors
         if res["sensor_calibration"]:
             name += ", sensor calibration applied"

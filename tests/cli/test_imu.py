@@ -466,6 +466,16 @@ def test_calibrate_then_track_joint_angles(tmp_path):
     assert res.exit_code == 0, res.output
     assert re.search(r"handsynth: warning: sensor streams out of step: ring_middle \d+ ms behind "
                      r"ring_(proximal|distal).*\(ring_middle in two pairs", res.output), res.output
+    # ... read realigned: no stream left out of step
+    res = CliRunner().invoke(cli, ["imu", "track", str(late_csv), "--calibration", str(model),
+                                   "--align", "2,4", "--out", str(tmp_path / "q5.csv"),
+                                   "--angles-out", str(tmp_path / "a5.csv"), "--realign-late"])
+    assert res.exit_code == 0, res.output
+    assert re.search(r"handsynth: warning: read realigned: ring_middle (29|30|31) ms earlier "
+                     r"\(realign_late\)", res.output), res.output
+    assert "out of step" not in res.output
+    realigned = np.loadtxt(tmp_path / "a5.csv", delimiter=",", skiprows=1)[:, 1:]
+    assert np.nanmax(np.sqrt(np.nanmean((realigned - made) ** 2, axis=0))) < 0.2
     with open(tmp_path / "tips.csv", encoding="utf-8") as fh:
         header = fh.readline().strip().split(",")
     assert header[:4] == ["time_s", "thumb_tip_x_mm", "thumb_tip_y_mm", "thumb_tip_z_mm"]

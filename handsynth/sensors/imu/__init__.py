@@ -54,7 +54,17 @@ from ._kinematics import (
     truth_link_frames,
     zero_offsets,
 )
-from ._lags import CARRIED, HINGES, LATE_S, RIGID, delayed, late_sensors, sensor_lags
+from ._lags import (
+    CARRIED,
+    HINGES,
+    LATE_S,
+    RIGID,
+    delayed,
+    late_offsets,
+    late_sensors,
+    realign_late,
+    sensor_lags,
+)
 from ._layout import CHAINS, FLEX_JOINT, LINKS, POINTS
 from ._lost import (
     HELD_MIN_S,
@@ -255,6 +265,7 @@ __all__ = [
     "initial_attitude",
     "integrate_gyro",
     "joint_angles",
+    "late_offsets",
     "late_sensors",
     "link_frames",
     "link_vectors",
@@ -270,6 +281,7 @@ __all__ = [
     "put_back",
     "read_broad_trial",
     "read_imu_csv",
+    "realign_late",
     "rotation_vector",
     "run_broad",
     "sample_times",

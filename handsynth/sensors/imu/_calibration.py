@@ -31,7 +31,8 @@ from ._kinematics import (
     thumb_cmc_model,
     zero_offsets,
 )
-from ._lags import late_sensors
+from ._lags import late_offsets, late_sensors
+from ._lags import realign_late as _realign
 from ._layout import FLEX_JOINT
 from ._model import TIP_SENSORS
 from ._plate import PLATE_SENSORS, fuse_plate, plate_rotations
@@ -342,7 +343,7 @@ class ImuCalibration:
 
     def track(self, rec: ImuRecording, *, static=None, sensor_calibration: bool = True,
               plate_fusion: bool = True, options: ChainEKFOptions | None = None,
-              undo_misplaced: bool = False) -> dict:
+              undo_misplaced: bool = False, realign_late: bool = False) -> dict:
         """Attitudes (Filter 4), joint angles and fingertips of a recording.
 
         Parameters
@@ -365,6 +366,13 @@ class ImuCalibration:
             the sensor calibration: each sensor's own travels with it), with a warning
             naming what was undone; the checks after the filter are then made of the
             readings as put back.  Off: they are warned of and read as they are.
+        realign_late : bool, keyword-only
+            Read the streams that read late or early against their neighbours
+            (:func:`late_offsets`: the fewest sensors off along each chain of sensors the
+            lag check joins) as realigned (:func:`realign_late`), after any put back, with
+            a warning naming each and its lag; the check of the streams after the filter is
+            then made of the readings as realigned.  Off: they are warned of and read as
+            they are.
 
         Returns
         -------
@@ -374,7 +382,8 @@ class ImuCalibration:
             :func:`fingertip_positions` (each chain's joints too),
             ``sensor_calibration`` whether a sensor calibration was applied,
             ``undone`` the :class:`Misplaced` put back (empty when nothing was, or
-            `undo_misplaced` is off).
+            `undo_misplaced` is off), ``realigned`` sensor -> the lag its stream was read
+            earlier by, s (empty likewise).
 
         Warns
         -----
@@ -402,6 +411,15 @@ class ImuCalibration:
             if undone:
                 warnings.warn(f"read as put back: {undone.describe()}{how} (undo_misplaced)",
                               UserWarning, stacklevel=2)
+        static_n = int(static.static_s * sub.rate_hz)
+        realigned: dict[str, float] = {}
+        if realign_late:
+            realigned, _ = late_offsets(sub, self.frames, static_n=static_n)
+            if realigned:
+                sub = _realign(sub, realigned)
+                said = "; ".join(f"{s} {abs(lag) * 1e3:.0f} ms {'earlier' if lag > 0 else 'later'}"
+                                 for s, lag in realigned.items())
+                warnings.warn(f"read realigned: {said} (realign_late)", UserWarning, stacklevel=2)
         if rec.reported is not None:
             # the caller has had check_recording's warnings of `rec`: the filter's run
             # does not repeat them for the corrected copy
@@ -416,10 +434,10 @@ class ImuCalibration:
         for misplaced in (left.warnings if undo_misplaced else
                           misplaced_sensors(sub, self.model, self.frames)):
             warnings.warn(misplaced, UserWarning, stacklevel=2)
-        late = late_sensors(sub, self.frames, static_n=int(static.static_s * sub.rate_hz))
+        late = late_sensors(sub, self.frames, static_n=static_n)
         if late is not None:
             warnings.warn(late, UserWarning, stacklevel=2)
-        return {**out, "sensor_calibration": applied, "undone": undone}
+        return {**out, "sensor_calibration": applied, "undone": undone, "realigned": realigned}
 
     def _columns_or_sensors(self, rec: ImuRecording, sub: ImuRecording,
                             undone: Misplaced) -> tuple[ImuRecording, str]:

@@ -29,7 +29,8 @@ import numpy as np
 from ..._checks import check_integer
 from ...errors import InvalidInputError
 
-__all__ = ["CARRIED", "HINGES", "LATE_S", "RIGID", "delayed", "late_sensors", "sensor_lags"]
+__all__ = ["CARRIED", "HINGES", "LATE_S", "RIGID", "delayed", "late_offsets", "late_sensors",
+           "realign_late", "sensor_lags"]
 
 #: The sensor pairs either side of a one-axis joint (proximal, distal).
 HINGES: tuple[tuple[str, str], ...] = (
@@ -188,6 +189,114 @@ def late_sensors(rec, frames: dict, *, static_n: int, still=None) -> str | None:
             "the hand's two, by their common turn); a late stream reads its joints "
             "several degrees off (20 ms: 2-3 deg, 100 ms: 9-13 deg at the joint): keep the "
             "sensors' clocks within about 15 ms of each other")
+
+
+def late_offsets(rec, frames: dict, *, static_n: int) -> tuple[dict[str, float], list]:
+    """How late each sensor's stream is, s, where the pairs :func:`sensor_lags` judges tell it.
+
+    The pairs join the sensors into chains (a finger's phalanges, the thumb's metacarpal and
+    phalanges, the forearm plate about ``forearm_1``, the hand's two sensors); a lag says
+    only how much later one sensor of a pair reads than the other, so each chain's times are
+    read as the fewest sensors off: with each sensor of the chain in turn taken as on time,
+    the lags of the others follow along the chain, and the assignment that puts the fewest
+    of them :data:`LATE_S` or more off is kept, where it is the only one so (a middle
+    phalanx late reads late against both neighbours: it alone is off; a proximal phalanx
+    late reads early against the middle one and the middle and distal ones agree: it alone
+    is off).  A chain of two sensors whose lag is off (the hand's two, or a finger of which
+    one pair was judged) has two such readings and is left as it is.
+
+    Parameters
+    ----------
+    rec, frames, static_n
+        As :func:`sensor_lags`'.
+
+    Returns
+    -------
+    offsets : dict
+        Sensor -> how late its stream reads, s (positive: late), for the sensors read as
+        off.
+    undecided : list of tuple of str
+        The chains with a lag off that could not be assigned to one reading.
+    """
+    lags = {pair: lag for pair, (lag, cor) in sensor_lags(rec, frames, static_n=static_n).items()
+            if cor >= _MIN_CORRELATION}
+    links: dict[str, list[tuple[str, float]]] = {}
+    for (prox, dist), lag in lags.items():   # lag: how much later `dist` reads than `prox`
+        links.setdefault(prox, []).append((dist, lag))
+        links.setdefault(dist, []).append((prox, -lag))
+    offsets: dict[str, float] = {}
+    undecided: list = []
+    seen: set = set()
+    for start in sorted(links, key=rec.index):
+        if start in seen:
+            continue
+        chain = _reach(links, start)
+        seen |= set(chain)
+        if all(abs(lag) < LATE_S for (a, _), lag in lags.items() if a in chain):
+            continue
+        readings: dict[frozenset, list[dict]] = {}
+        for ref in chain:       # `ref` on time: the others' lags along the chain
+            late = {s: t for s, t in _reach(links, ref).items() if abs(t) >= LATE_S}
+            readings.setdefault(frozenset(late), []).append(late)
+        fewest = min(len(off) for off in readings)
+        best = [off for off in readings if len(off) == fewest]
+        if len(best) == 1:    # (the lags as the references that read so read them, averaged)
+            offsets.update({s: float(np.mean([r[s] for r in readings[best[0]]])) for s in best[0]})
+        else:
+            undecided.append(tuple(sorted(chain, key=rec.index)))
+    return offsets, undecided
+
+
+def _reach(links: dict, start: str) -> dict[str, float]:
+    """Every sensor `links` joins to `start`, with its lag against `start` (0 for `start`)."""
+    out = {start: 0.0}
+    todo = [start]
+    while todo:
+        a = todo.pop()
+        for b, lag in links.get(a, ()):
+            if b not in out:
+                out[b] = out[a] + lag
+                todo.append(b)
+    return out
+
+
+def realign_late(rec, offsets: dict):
+    """`rec` with the streams of `offsets` read earlier by their lags (:func:`late_offsets`).
+
+    Each sensor's accelerometer, gyro and magnetometer readings are read `offset` seconds
+    later in its stream (linearly between samples); where that runs past the recording's
+    end (or, for a stream early, before its start) the stream is read back from the end
+    (the start) as in a mirror, not held (a reading held for 0.1 s reads as samples lost),
+    and those samples are marked filled (:attr:`ImuRecording.filled`: Filter 4 loosens the
+    sensor's attitude over them).
+
+    Parameters
+    ----------
+    rec : ImuRecording
+    offsets : dict
+        Sensor -> how late its stream reads, s (negative: early).
+
+    Returns
+    -------
+    ImuRecording
+        A copy (unchecked, as a copy made with :func:`dataclasses.replace` is).
+    """
+    n = rec.n
+    t = np.arange(n, dtype=float)
+    out = {name: getattr(rec, name).copy() for name in ("acc", "gyr", "mag")
+           if getattr(rec, name) is not None}
+    filled = np.zeros((len(rec.sensors), n), bool) if rec.filled is None else rec.filled.copy()
+    for sensor, lag_s in offsets.items():
+        k = rec.index(sensor)
+        src = t + float(lag_s) * rec.rate_hz
+        beyond = (src > n - 1) | (src < 0)
+        src = np.abs(src)
+        src = np.where(src > n - 1, 2 * (n - 1) - src, src)
+        for name, a in out.items():
+            old = getattr(rec, name)[k]
+            a[k] = np.column_stack([np.interp(src, t, old[:, c]) for c in range(3)])
+        filled[k] |= beyond
+    return dataclasses.replace(rec, **out, filled=filled if filled.any() else rec.filled)
 
 
 def delayed(rec, sensor: str, samples: int):

@@ -109,3 +109,67 @@ def test_delayed_refuses_what_it_cannot_delay(free_rec):
         delayed(free_rec, "index_distal", 0)
     with pytest.raises(InvalidInputError, match="samples"):
         delayed(free_rec, "index_distal", free_rec.n)
+
+
+@pytest.mark.parametrize("name, lag", [("index_middle", 3), ("ring_distal", 2),
+                                       ("little_proximal", 5), ("forearm_1", 2),
+                                       ("forearm_3", 4)])
+def test_the_late_sensor_is_read_as_the_fewest_off(free_rec, frames, name, lag):
+    """A proximal phalanx late reads early against the middle one only; the middle and distal
+    agree: it alone is off, as a middle phalanx is when it reads late against both."""
+    from handsynth.sensors.imu import late_offsets
+
+    offsets, undecided = late_offsets(_late(free_rec, name, lag), frames, static_n=100)
+    assert list(offsets) == [name] and undecided == []
+    assert offsets[name] == pytest.approx(lag / 100, abs=0.002)
+
+
+def test_the_hands_two_sensors_are_not_told_apart(free_rec, frames):
+    from handsynth.sensors.imu import late_offsets
+
+    assert late_offsets(free_rec, frames, static_n=100) == ({}, [])
+    offsets, undecided = late_offsets(_late(free_rec, "hand_radial", 3), frames, static_n=100)
+    assert offsets == {} and [set(c) for c in undecided] == [{"hand_radial", "hand_ulnar"}]
+
+
+def test_realign_late_reads_a_stream_earlier_by_a_fraction_of_a_sample():
+    import numpy as np
+
+    from handsynth.sensors.imu import ImuRecording, realign_late
+
+    t = np.arange(50.0)
+    ramp = np.stack([np.column_stack([t, 2 * t, t * t])] * 2)
+    rec = ImuRecording(100.0, ("a", "b"), ramp, ramp.copy(), ramp.copy())
+    got = realign_late(rec, {"a": 0.025, "b": -0.01})   # a 2.5 samples late, b 1 sample early
+    for c in (got.acc, got.gyr, got.mag):
+        np.testing.assert_allclose(c[0, :47, 0], t[:47] + 2.5)
+        np.testing.assert_allclose(c[1, 1:, 1], 2 * (t[1:] - 1))
+    # past the end (before the start) read back as in a mirror, not held, and marked
+    np.testing.assert_allclose(got.acc[0, 47:, 0], [49 - 0.5, 49 - 1.5, 49 - 2.5])
+    assert got.acc[1, 0, 0] == 1.0
+    assert got.filled[0].sum() == 3 and got.filled[0, 47:].all()
+    assert got.filled[1].sum() == 1 and got.filled[1, 0]
+    np.testing.assert_array_equal(realign_late(rec, {}).acc, rec.acc)
+
+
+def test_track_reads_a_late_stream_realigned(worn):
+    import warnings
+
+    import numpy as np
+
+    cal, rec = worn
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        made = cal.track(rec, sensor_calibration=False)["angles"]
+        late = cal.track(_late(rec, "index_distal", 5), sensor_calibration=False)["angles"]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        out = cal.track(_late(rec, "index_distal", 5), sensor_calibration=False,
+                        realign_late=True)
+    said = [str(w.message) for w in caught]
+    assert out["realigned"] == {"index_distal": pytest.approx(0.05, abs=0.002)}
+    assert [m for m in said if "realigned" in m or "out of step" in m] == [
+        "read realigned: index_distal 50 ms earlier (realign_late)"], said
+    err_late = np.nanmax(np.abs(late - made))
+    err = np.nanmax(np.sqrt(np.nanmean((out["angles"] - made) ** 2, axis=0)))
+    assert err_late > 2.0 and err < 0.1, (err_late, err)
