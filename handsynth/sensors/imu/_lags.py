@@ -188,7 +188,9 @@ def late_sensors(rec, frames: dict, *, static_n: int, still=None) -> str | None:
             "phalanges either side of a finger's hinge joint (of the forearm plate's sensors and "
             "the hand's two, by their common turn); a late stream reads its joints "
             "several degrees off (20 ms: 2-3 deg, 100 ms: 9-13 deg at the joint): keep the "
-            "sensors' clocks within about 15 ms of each other")
+            "sensors' clocks within about 15 ms of each other. A recording made so can be read "
+            "realigned by the lags found: imu track --realign-late (library: track(..., "
+            "realign_late=True); not the hand's two sensors against each other)")
 
 
 def late_offsets(rec, frames: dict, *, static_n: int) -> tuple[dict[str, float], list]:

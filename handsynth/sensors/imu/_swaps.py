@@ -442,12 +442,13 @@ def _read(rec: ImuRecording, model: ChainModel, frames: dict | None) -> tuple[Mi
     exchanges = _exchanges(_swap_shares(res, rec), SWAP_RATIO, SWAP_FLOOR_MPS2)
     named = {s for _, _, pair in exchanges for s in pair}
     hinges = {} if frames is None else _hinge_fits(res, frames)
-    every_turn = _turns(res, rec, hinges, SWAP_RATIO, SWAP_FLOOR_MPS2, ())
-    turns = _turns(res, rec, hinges, SWAP_RATIO, SWAP_FLOOR_MPS2, named) if named else every_turn
+    shares = _turn_shares(res, rec)
+    every_turn = _turns(res, rec, hinges, SWAP_RATIO, SWAP_FLOOR_MPS2, (), shares)
+    turns = (_turns(res, rec, hinges, SWAP_RATIO, SWAP_FLOOR_MPS2, named, shares) if named
+             else every_turn)
     every = set(res.sensors)
     singles = [(res.residual({a: b, b: a}, every)[0], Misplaced(exchanged=((a, b),)))
                for _, _, (a, b) in exchanges]
-    shares = _turn_shares(res, rec) if every_turn else {}
     for k in every_turn:
         # the turn named, and every other its joints' centres or its hinges allow (a half
         # turn about z hardly moves a flexion axis near the sensor's x: its hinges may
@@ -599,14 +600,14 @@ def _exchanges_said(found: list) -> str | None:
 
 
 def _turns(res: _JointResiduals, rec: ImuRecording, hinges: dict, ratio: float,
-           floor_mps2: float, exclude) -> list:
+           floor_mps2: float, exclude, shares: dict | None = None) -> list:
     """(share, sensor, turn, words, by its hinges, rotation) of the sensors read as turned, the most
     telling first; a hinge neighbour of a sensor its hinges tell is not told by its own.
 
     Where a sensor's hinges allow turns (a share under :data:`HINGE_TURN_RATIO`), its
     joints' centres choose among them; elsewhere the centres' own rule decides."""
     found = []
-    for sensor, turns in _turn_shares(res, rec).items():
+    for sensor, turns in (_turn_shares(res, rec) if shares is None else shares).items():
         if sensor in exclude:
             continue
         fit = hinges.get(sensor)

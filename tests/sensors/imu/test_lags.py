@@ -173,3 +173,27 @@ def test_track_reads_a_late_stream_realigned(worn):
     err_late = np.nanmax(np.abs(late - made))
     err = np.nanmax(np.sqrt(np.nanmean((out["angles"] - made) ** 2, axis=0)))
     assert err_late > 2.0 and err < 0.1, (err_late, err)
+
+
+def test_sensors_exchanged_and_a_stream_late_are_read_as_made_together(worn):
+    """Put back first, then realigned: either alone leaves the other fault's error."""
+    import warnings
+
+    import numpy as np
+
+    cal, rec = worn
+    i, j = rec.index("index_proximal"), rec.index("middle_proximal")
+    order = list(range(len(rec.sensors)))
+    order[i], order[j] = j, i
+    swapped = dataclasses.replace(rec, acc=rec.acc[order], gyr=rec.gyr[order], mag=rec.mag[order])
+    faulty = _late(swapped, "ring_middle", 4)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        made = cal.track(rec, sensor_calibration=False)["angles"]
+        worst = {}
+        for undo, realign in ((True, False), (False, True), (True, True)):
+            got = cal.track(faulty, sensor_calibration=False, undo_misplaced=undo,
+                            realign_late=realign)["angles"]
+            worst[undo, realign] = np.nanmax(np.sqrt(np.nanmean((got - made) ** 2, axis=0)))
+    assert worst[True, True] < 0.05, worst
+    assert min(worst[True, False], worst[False, True]) > 1.0, worst
