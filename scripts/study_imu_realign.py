@@ -20,6 +20,10 @@ RMSE against the truth over the motion (mean over the 20 joints, and the worst j
 sensor and lag read, and whether it was the sensor made late (to 3 ms).  The constant
 answer (every joint at the calibration's zero) beside them.  About 6 min on one core.
 
+The faults are drawn per run (by the count of draws so far), so one run of six seeds draws
+other faults than two runs of three; docs/imu.md's figures are two runs, ``--seeds
+19,20,21`` and ``--seeds 22,23,24``.
+
 Last line: ``recordings=<n> realigned_as_recorded=<n> faults=<n> realigned=<n>
 realigned_right=<n> hand_pair=<n> mean_as_recorded=<deg> mean_late=<deg>
 mean_realigned=<deg> worst_late=<deg> worst_realigned=<deg> constant=<deg>`` (hand_pair:

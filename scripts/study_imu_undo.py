@@ -3,9 +3,12 @@
 Usage::
 
     python scripts/study_imu_undo.py [--seeds 19,20,21,22,23,24] [--faults 2]
+                                     [--motion free|elbow-moving|grasps]
 
 Per draw of the held-out configuration (``--seeds``, each in the three hand sizes of
-``scripts/study_imu_draws.py``; a 15-s free motion with the elbow fixed; the calibration
+``scripts/study_imu_draws.py``; a 15-s free motion with the elbow fixed, or with
+``--motion elbow-moving`` moving, or with ``--motion grasps`` the grasp reaches of
+``scripts/study_imu_motions.py`` with the elbow fixed; the calibration
 ``handsynth imu eval`` makes, the recordings corrected by its sensor calibration), the
 recording as calibrated and ``--faults`` recordings of each misplacement, made in the
 simulator where it can be (not by turning the readings, which is what the undoing does):
@@ -26,6 +29,10 @@ calibration's zero, the open hand) beside them.  About 7 min for six seeds on on
 Seeds 7-18 chose how the put back is made (docs/imu.md, "Reading misplaced sensors as put
 back"); the default seeds chose nothing.
 
+The faults are drawn per run (by the count of draws so far), so one run of six seeds draws
+other faults than two runs of three; docs/imu.md's free-motion figures are two runs,
+``--seeds 19,20,21`` and ``--seeds 22,23,24``, its grasp reaches' one run of the six.
+
 Last line: ``recordings=<n> undone_as_calibrated=<n> faults=<n> put_back=<n>
 put_back_right=<n> mean_as_calibrated=<deg> mean_faulty=<deg> mean_undone=<deg>
 worst_faulty=<deg> worst_undone=<deg> constant=<deg>`` (means of the per-recording mean
@@ -41,6 +48,7 @@ import warnings
 import numpy as np
 from scipy.spatial.transform import Rotation
 from study_imu_draws import SHAPES  # the same three hand sizes
+from study_imu_swaps import grasp_reaches
 
 from handsynth.sensors.imu import HELDOUT, TURNS, ImuHand, turn_ratios
 from handsynth.sensors.imu._eval import _calibrate, free_trials
@@ -62,8 +70,17 @@ def _track(calib, rec, undo: bool):
     return _rmse(out["angles"], rec), out["undone"]
 
 
-def _moved(config, placement, sensor: str, turn: np.ndarray, *, about_long_axis: bool):
-    """The configuration's 15-s free motion (elbow fixed) with `sensor` turned by `turn` on
+def _recording(config, hand, motion: str):
+    """The draw's recording of `motion` (as the module docstring says), uncorrected."""
+    if motion == "grasps":
+        return next(rec for label, rec in grasp_reaches(config, hand) if label.endswith("fixed"))
+    elbow = "moving" if motion == "elbow-moving" else "fixed"
+    return next(rec for _, _, rec in free_trials(config, hand, durations=(15.0,), elbows=(elbow,)))
+
+
+def _moved(config, placement, sensor: str, turn: np.ndarray, motion: str, *,
+           about_long_axis: bool):
+    """The draw's recording of `motion` with `sensor` turned by `turn` on
     its segment: in place (`turn` in the sensor's frame) or, `about_long_axis`, turned and
     carried round the phalanx's long axis (`turn` in its body's frame, about the body's y
     axis through its origin, the joint's centre)."""
@@ -80,15 +97,15 @@ def _moved(config, placement, sensor: str, turn: np.ndarray, *, about_long_axis:
         new = mount * Rotation.from_matrix(turn)
     tilts[sensor] = tuple(np.degrees(new.as_rotvec()))
     moved = dataclasses.replace(placement, tilts_deg=tilts, offsets_mm=offsets)
-    hand = ImuHand(config.shape, placement=moved)
-    return next(rec for _, elbow, rec in free_trials(config, hand, durations=(15.0,),
-                                                      elbows=("fixed",)))
+    return _recording(config, ImuHand(config.shape, placement=moved), motion)
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", default="19,20,21,22,23,24", help="held-out seeds, comma-separated")
     ap.add_argument("--faults", type=int, default=2, help="recordings of each misplacement a draw")
+    ap.add_argument("--motion", choices=("free", "elbow-moving", "grasps"), default="free",
+                    help="the recording's motion (module docstring)")
     args = ap.parse_args()
     names = list(TURNS)
     rows: list = []      # (kind, mean as it is, worst as it is, mean undone, worst undone, right)
@@ -101,9 +118,7 @@ def main() -> None:
             placement = config.placement()
             _, calib, sensor_cal = _calibrate(config, placement)
             hand = ImuHand(config.shape, placement=placement)
-            rec = next(r for _, _, r in free_trials(config, hand, durations=(15.0,),
-                                                    elbows=("fixed",)))
-            rec = sensor_cal.apply(rec)
+            rec = sensor_cal.apply(_recording(config, hand, args.motion))
             clean, undone = _track(calib, rec, True)
             count += 1
             undone_clean += bool(undone)
@@ -127,7 +142,7 @@ def main() -> None:
                                  and not u.turned))
                 sensor, name = str(rng.choice(judged)), names[int(rng.integers(len(names)))]
                 faulty = sensor_cal.apply(_moved(config, placement, sensor, TURNS[name],
-                                                 about_long_axis=False))
+                                                 args.motion, about_long_axis=False))
                 rows.append(_run(calib, "turned", faulty, f"{sensor} {name}",
                                  lambda u, s=sensor, n=name: [(t[0], t[1]) for t in u.turned]
                                  == [(s, n)] and not u.exchanged))
@@ -135,7 +150,7 @@ def main() -> None:
                 deg = float(rng.uniform(10.0, 40.0) * rng.choice((-1, 1)))
                 spin = Rotation.from_rotvec(np.radians(deg) * np.array([0.0, 1.0, 0.0]))
                 faulty = sensor_cal.apply(_moved(config, placement, sensor, spin.as_matrix(),
-                                                 about_long_axis=True))
+                                                 args.motion, about_long_axis=True))
                 rows.append(_run(calib, "slipped", faulty, f"{sensor} slipped {deg:+.0f} deg",
                                  lambda u, s=sensor: [t[0] for t in u.turned] == [s]
                                  and not u.exchanged))
