@@ -486,7 +486,9 @@ def undo_misplaced(rec: ImuRecording, found: Misplaced) -> ImuRecording:
     A sensor's own calibration (biases, scales, the magnetometer's iron) travels with the
     sensor, not with its place: give `rec` corrected by the sensor calibration (as
     ``track(..., undo_misplaced=True)`` does).  Where a logger's columns, not the sensors,
-    were exchanged since the calibration, put the columns right in the file instead.
+    were exchanged, each column wants the other sensor's calibration: exchange the raw
+    readings first, then correct them (``track`` tells the two cases apart by the
+    magnetometers' field strength).
 
     Parameters
     ----------
